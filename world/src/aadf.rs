@@ -1,0 +1,367 @@
+//! Axis-aligned distance fields (NAADF-REFERENCE §2.4–§2.5).
+//!
+//! Every empty cell stores, per direction (−x, +x, −y, +y, −z, +z), how many further cells
+//! of its level are empty in a box around it. All levels grow their fields in **lock
+//! step**: level `k` (0-based), then axis x, y, z; a field grows by one only while it equals
+//! `k`, and only if the neighbour on that side is empty and its box is at least as large on
+//! the five other fields (the *merge test*). The neighbour's box then covers the new slab,
+//! so every box stays empty. Each (level, axis) phase reads the state from before the phase
+//! (double buffering), which makes the result deterministic.
+//!
+//! - voxel and block AADFs: 4³ cells, fields 0..=3, the box never leaves the parent
+//!   ([`cell_aadf4`], a bit-sliced implementation of [`grid_aadf`]);
+//! - chunk AADFs: the whole chunk grid, fields 0..=31, outside the world counts as empty,
+//!   chunks with entities block growth ([`build_chunk_aadf`]).
+
+use crate::cell::{self, Aadf, CHUNK_FIELD_BITS, MAX_CHUNK_FIELD, State};
+use crate::size::WorldSize;
+use rayon::prelude::*;
+
+/// What lies next to a cell in the direction it wants to grow.
+#[derive(Clone, Copy, Debug)]
+pub enum Neighbour {
+    /// Outside the grid. Chunk grids treat this as empty; 4³ cells and entity grids as a wall.
+    Outside,
+    /// A cell that is not empty (or is a chunk with entities).
+    Blocked,
+    /// An empty cell with its current fields.
+    Free(Aadf),
+}
+
+/// Whether an empty cell with fields `cur` may grow field `dir` (0..6) at `level`.
+///
+/// ```
+/// use naadf_world::aadf::{may_grow, Neighbour};
+/// use naadf_world::cell::Aadf;
+/// let cur = Aadf([0, 0, 1, 1, 0, 0]);
+/// assert!(may_grow(&cur, Neighbour::Free(Aadf([0, 0, 1, 1, 0, 0])), 1, 0, false));
+/// assert!(!may_grow(&cur, Neighbour::Free(Aadf([0, 0, 0, 1, 0, 0])), 1, 0, false));
+/// ```
+#[inline]
+pub fn may_grow(
+    cur: &Aadf,
+    neighbour: Neighbour,
+    dir: usize,
+    level: u8,
+    outside_empty: bool,
+) -> bool {
+    if cur.0[dir] != level {
+        return false;
+    }
+    match neighbour {
+        Neighbour::Outside => outside_empty,
+        Neighbour::Blocked => false,
+        Neighbour::Free(n) => (0..6).all(|k| k == (dir ^ 1) || n.0[k] >= cur.0[k]),
+    }
+}
+
+/// Lock-step AADF of a dense grid (x fastest), `levels` levels, walls outside unless
+/// `outside_empty`. Non-empty cells get all-zero fields. This is the plain reference
+/// implementation; the fast paths below must equal it.
+pub fn grid_aadf(dims: [usize; 3], empty: &[bool], levels: u8, outside_empty: bool) -> Vec<Aadf> {
+    let n = dims[0] * dims[1] * dims[2];
+    assert_eq!(
+        empty.len(),
+        n,
+        "grid_aadf: {} flags for {dims:?}",
+        empty.len()
+    );
+    let stride = [1, dims[0], dims[0] * dims[1]];
+    let mut fields = vec![Aadf::default(); n];
+    for level in 0..levels {
+        let mut grew = false;
+        for axis in 0..3 {
+            let old = fields.clone();
+            for i in (0..n).filter(|&i| empty[i]) {
+                let p = (i / stride[axis]) % dims[axis];
+                for side in 0..2 {
+                    let dir = 2 * axis + side;
+                    let neighbour = match (side, p) {
+                        (0, 0) => Neighbour::Outside,
+                        (1, p) if p + 1 == dims[axis] => Neighbour::Outside,
+                        _ => {
+                            let j = if side == 0 {
+                                i - stride[axis]
+                            } else {
+                                i + stride[axis]
+                            };
+                            if empty[j] {
+                                Neighbour::Free(old[j])
+                            } else {
+                                Neighbour::Blocked
+                            }
+                        }
+                    };
+                    if may_grow(&old[i], neighbour, dir, level, outside_empty) {
+                        fields[i].0[dir] += 1;
+                        grew = true;
+                    }
+                }
+            }
+        }
+        if !grew {
+            break;
+        }
+    }
+    fields
+}
+
+/// Cells whose neighbour on side `dir` lies inside the 4³ array.
+const fn inner_mask(dir: usize) -> u64 {
+    let mut m = 0u64;
+    let mut i = 0;
+    while i < 64 {
+        let p = [i % 4, (i / 4) % 4, i / 16];
+        let c = p[dir / 2];
+        let ok = if dir % 2 == 0 { c > 0 } else { c < 3 };
+        if ok {
+            m |= 1 << i;
+        }
+        i += 1;
+    }
+    m
+}
+
+const INNER: [u64; 6] = [
+    inner_mask(0),
+    inner_mask(1),
+    inner_mask(2),
+    inner_mask(3),
+    inner_mask(4),
+    inner_mask(5),
+];
+const STRIDE4: [u32; 3] = [1, 4, 16];
+
+/// Moves each cell's bit to the cell that has it as its `dir` neighbour: bit `i` of the
+/// result is bit `i ± stride` of `v` (zero where that neighbour is outside).
+#[inline]
+fn neighbour_bits(v: u64, dir: usize) -> u64 {
+    let s = STRIDE4[dir / 2];
+    let moved = if dir % 2 == 0 { v << s } else { v >> s };
+    moved & INNER[dir]
+}
+
+/// Voxel- or block-level AADFs of a 4³ cell array, given the bitmask of its empty cells
+/// (bit `x + 4y + 16z`). Returns each cell's six 2-bit fields packed into 12 bits (0 for
+/// non-empty cells). Equal to `grid_aadf([4; 3], .., 3, false)`, computed bit-sliced: two
+/// bit planes per field, 64 cells per machine word.
+pub fn cell_aadf4(empty: u64) -> [u16; 64] {
+    // lo[f] / hi[f]: bit planes of field f's 2-bit value.
+    let mut lo = [0u64; 6];
+    let mut hi = [0u64; 6];
+    for level in 0..3u8 {
+        let mut grew = 0u64;
+        for axis in 0..3 {
+            let (olo, ohi) = (lo, hi);
+            for side in 0..2 {
+                let dir = 2 * axis + side;
+                let l0 = if level & 1 != 0 { !0 } else { 0 };
+                let l1 = if level & 2 != 0 { !0 } else { 0 };
+                let at_level = !(olo[dir] ^ l0) & !(ohi[dir] ^ l1);
+                let mut grow = empty & at_level & neighbour_bits(empty, dir);
+                for k in (0..6).filter(|&k| k != dir ^ 1) {
+                    let (a0, a1) = (neighbour_bits(olo[k], dir), neighbour_bits(ohi[k], dir));
+                    let (b0, b1) = (olo[k], ohi[k]);
+                    grow &= (a1 & !b1) | (!(a1 ^ b1) & (a0 | !b0));
+                }
+                let next = level + 1;
+                let n0 = if next & 1 != 0 { grow } else { 0 };
+                let n1 = if next & 2 != 0 { grow } else { 0 };
+                lo[dir] = (lo[dir] & !grow) | n0;
+                hi[dir] = (hi[dir] & !grow) | n1;
+                grew |= grow;
+            }
+        }
+        if grew == 0 {
+            break;
+        }
+    }
+    let mut out = [0u16; 64];
+    if empty == 0 {
+        return out;
+    }
+    for (i, o) in out.iter_mut().enumerate() {
+        let mut w = 0u16;
+        for f in 0..6 {
+            let v = ((lo[f] >> i) & 1) | (((hi[f] >> i) & 1) << 1);
+            w |= (v as u16) << (2 * f);
+        }
+        *o = w;
+    }
+    out
+}
+
+/// Whether a chunk may carry (and grow into) a chunk AADF: empty and without entities.
+#[inline]
+pub fn chunk_is_free(cell: u32, entities: u32) -> bool {
+    cell::state(cell) == State::Empty && entities == 0
+}
+
+/// Builds all chunk AADFs from scratch, level-major (31 levels × 3 axes), treating the
+/// outside of the world as empty. Fields of empty chunks are reset first. Deterministic:
+/// each phase reads the state before the phase, whatever the thread count.
+pub fn build_chunk_aadf(size: WorldSize, chunks: &mut [u32], entities: &[u32]) {
+    let n = size.chunk_count();
+    assert!(
+        chunks.len() == n && entities.len() == n,
+        "chunk buffers do not match {size}"
+    );
+    let mut active: Vec<u32> = (0..n as u32)
+        .filter(|&i| chunk_is_free(chunks[i as usize], entities[i as usize]))
+        .collect();
+    for &i in &active {
+        chunks[i as usize] = 0;
+    }
+    for level in 0..MAX_CHUNK_FIELD {
+        let mut next = Vec::new();
+        for axis in 0..3 {
+            let grown = grow_chunks(size, chunks, entities, &active, level, axis);
+            next.extend(grown.iter().map(|&(i, _)| i));
+            for (i, w) in grown {
+                chunks[i as usize] = w;
+            }
+        }
+        next.sort_unstable();
+        next.dedup();
+        if next.is_empty() {
+            break;
+        }
+        active = next;
+    }
+}
+
+/// One (level, axis) phase over the `active` chunks: the new words of the chunks that grow.
+fn grow_chunks(
+    size: WorldSize,
+    chunks: &[u32],
+    entities: &[u32],
+    active: &[u32],
+    level: u8,
+    axis: usize,
+) -> Vec<(u32, u32)> {
+    let dims = size.chunks();
+    active
+        .par_iter()
+        .with_min_len(1024)
+        .filter_map(|&i| {
+            let w = chunks[i as usize];
+            let cur = Aadf::unpack(w, CHUNK_FIELD_BITS);
+            let mut next = cur;
+            let p = size.chunk_coords(i as usize);
+            for side in 0..2 {
+                let dir = 2 * axis + side;
+                if cur.0[dir] != level {
+                    continue;
+                }
+                let mut q = p;
+                let inside = if side == 0 {
+                    q[axis] = q[axis].wrapping_sub(1);
+                    p[axis] > 0
+                } else {
+                    q[axis] += 1;
+                    q[axis] < dims[axis]
+                };
+                let neighbour = if !inside {
+                    Neighbour::Outside
+                } else {
+                    let j = size.chunk_index(q);
+                    if chunk_is_free(chunks[j], entities[j]) {
+                        Neighbour::Free(Aadf::unpack(chunks[j], CHUNK_FIELD_BITS))
+                    } else {
+                        Neighbour::Blocked
+                    }
+                };
+                if may_grow(&cur, neighbour, dir, level, true) {
+                    next.0[dir] += 1;
+                }
+            }
+            (next != cur).then(|| (i, next.pack(CHUNK_FIELD_BITS)))
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn mask_to_flags(m: u64) -> Vec<bool> {
+        (0..64).map(|i| m >> i & 1 == 1).collect()
+    }
+
+    #[test]
+    fn all_empty_4cube_reaches_walls() {
+        let f = cell_aadf4(!0);
+        // Cell (0,0,0): nothing on the − sides, 3 on the + sides.
+        assert_eq!(Aadf::unpack(u32::from(f[0]), 2), Aadf([0, 3, 0, 3, 0, 3]));
+        let c = cell::index4(1, 2, 3);
+        assert_eq!(Aadf::unpack(u32::from(f[c]), 2), Aadf([1, 2, 2, 1, 3, 0]));
+    }
+
+    proptest! {
+        #[test]
+        fn bitsliced_equals_reference(mask in any::<u64>(), sparse in any::<u64>()) {
+            for m in [mask, mask | sparse, mask & sparse] {
+                let fast = cell_aadf4(m);
+                let slow = grid_aadf([4, 4, 4], &mask_to_flags(m), 3, false);
+                for i in 0..64 {
+                    prop_assert_eq!(u32::from(fast[i]), slow[i].pack(2), "cell {} of mask {:#x}", i, m);
+                }
+            }
+        }
+
+        #[test]
+        fn grid_boxes_are_empty(dims in prop::array::uniform3(1usize..7), seed in any::<u64>(), outside in any::<bool>()) {
+            let n = dims[0] * dims[1] * dims[2];
+            let empty: Vec<bool> = (0..n).map(|i| (seed.rotate_left(i as u32 * 7) ^ (i as u64 * 0x9E37)) % 5 != 0).collect();
+            let f = grid_aadf(dims, &empty, 31, outside);
+            for i in 0..n {
+                let p = [i % dims[0], (i / dims[0]) % dims[1], i / (dims[0] * dims[1])];
+                if !empty[i] {
+                    prop_assert_eq!(f[i], Aadf::default());
+                    continue;
+                }
+                let lo: Vec<i64> = (0..3).map(|a| p[a] as i64 - i64::from(f[i].0[2 * a])).collect();
+                let hi: Vec<i64> = (0..3).map(|a| p[a] as i64 + i64::from(f[i].0[2 * a + 1])).collect();
+                for j in 0..n {
+                    let q = [j % dims[0], (j / dims[0]) % dims[1], j / (dims[0] * dims[1])];
+                    let inside = (0..3).all(|a| (lo[a]..=hi[a]).contains(&(q[a] as i64)));
+                    prop_assert!(!inside || empty[j], "cell {:?} box contains solid {:?}", p, q);
+                }
+                if !outside {
+                    prop_assert!((0..3).all(|a| lo[a] >= 0 && hi[a] < dims[a] as i64));
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn chunk_build_equals_grid_reference() {
+        let size = WorldSize::new(128, 64, 192).unwrap();
+        let n = size.chunk_count();
+        let mut chunks: Vec<u32> = (0..n)
+            .map(|i| {
+                if (i * 2654435761) % 11 == 0 {
+                    cell::full(1)
+                } else {
+                    0
+                }
+            })
+            .collect();
+        let mut entities = vec![0u32; n];
+        entities[17] = 1 << 8 | 1;
+        chunks[17] = 0;
+        build_chunk_aadf(size, &mut chunks, &entities);
+        let free: Vec<bool> = (0..n)
+            .map(|i| chunk_is_free(chunks[i], entities[i]))
+            .collect();
+        let d = size.chunks().map(|v| v as usize);
+        let expect = grid_aadf(d, &free, 31, true);
+        for i in 0..n {
+            if free[i] {
+                assert_eq!(chunks[i], expect[i].pack(CHUNK_FIELD_BITS), "chunk {i}");
+            }
+        }
+        assert_eq!(chunks[17], 0, "entity chunk keeps a zero AADF");
+    }
+}

@@ -1,0 +1,57 @@
+//! The reference engine's block hash (NAADF-REFERENCE §2.3).
+//!
+//! `H = C[0] + Σ_{i=0..63} C[i+1]·(v_i & 0x7FFF)` in wrapping `u32` arithmetic, with
+//! `C[k] = 31^(64−k)`. Only the material bits enter the hash; equality is always checked
+//! on the full content.
+
+const fn coefficients() -> [u32; 65] {
+    let mut c = [0u32; 65];
+    c[64] = 1;
+    let mut k = 64;
+    while k > 0 {
+        c[k - 1] = c[k].wrapping_mul(31);
+        k -= 1;
+    }
+    c
+}
+
+const C: [u32; 65] = coefficients();
+
+/// Hash of a block's 64 voxels (material ids, or 16-bit voxel cells: bit 15 is ignored).
+///
+/// ```
+/// assert_eq!(naadf_world::hash::block_hash(&[0; 64]), 0x4DBF7801);
+/// ```
+#[inline]
+pub fn block_hash(voxels: &[u16; 64]) -> u32 {
+    let mut h = C[0];
+    for (i, &v) in voxels.iter().enumerate() {
+        h = h.wrapping_add(C[i + 1].wrapping_mul(u32::from(v & 0x7FFF)));
+    }
+    h
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reference_test_vectors() {
+        assert_eq!(block_hash(&[0; 64]), 0x4DBF7801);
+        let mut v = [0u16; 64];
+        v[0] = 1;
+        assert_eq!(block_hash(&v), 0xCC207BE0);
+        let mut v = [0u16; 64];
+        v[63] = 1;
+        assert_eq!(block_hash(&v), 0x4DBF7802);
+        let v: [u16; 64] = std::array::from_fn(|i| i as u16);
+        assert_eq!(block_hash(&v), 0xCE673821);
+    }
+
+    #[test]
+    fn solid_flag_is_ignored() {
+        let a: [u16; 64] = std::array::from_fn(|i| (i % 3) as u16);
+        let b = a.map(|v| if v == 0 { 0 } else { v | 0x8000 });
+        assert_eq!(block_hash(&a), block_hash(&b));
+    }
+}

@@ -1,0 +1,46 @@
+//! # naadf-world
+//!
+//! The NAADF world model: a voxel world stored as nested 4³ cells (voxels → blocks →
+//! chunks) with axis-aligned distance fields (AADFs) in the empty cells.
+//!
+//! The buffers of [`World`] are exactly the GPU buffers that render clients mirror, byte
+//! for byte. This crate is pure Rust: no async runtime, no GPU.
+//!
+//! Where to start reading:
+//! - [`cell`]: the bit layouts of chunk, block and voxel cells;
+//! - [`build`]: construction from raw voxels, chunk by chunk;
+//! - [`aadf`]: the distance fields;
+//! - [`traverse`]: CPU ray traversal (three methods that must agree exactly);
+//! - [`digest`]: the paged 64-bit digest clients use to verify their mirror;
+//! - [`file`]: the `.naadf` world file.
+//!
+//! ```ignore
+//! use naadf_world::{World, WorldSize, preset};
+//! let source = preset::Preset::parse("test").unwrap().source(WorldSize::new(64, 64, 64).unwrap(), 7);
+//! let world = World::build(source.size(), source.materials(), &*source, &|_| {}).unwrap();
+//! assert_eq!(world.size(), WorldSize::new(64, 64, 64).unwrap());
+//! ```
+
+pub mod aadf;
+pub mod build;
+pub mod cell;
+pub mod dedup;
+pub mod dense;
+pub mod digest;
+pub mod error;
+pub mod file;
+pub mod hash;
+pub mod import;
+pub mod material;
+pub mod model;
+pub mod preset;
+pub mod size;
+pub mod stats;
+pub mod traverse;
+mod world;
+
+pub use build::ChunkSource;
+pub use error::WorldError;
+pub use material::{Material, MaterialKind, MaterialTable};
+pub use size::WorldSize;
+pub use world::World;

@@ -1,0 +1,479 @@
+//! The [`World`]: the mirrored buffers plus the bookkeeping that keeps them canonical.
+
+use crate::aadf::{self, build_chunk_aadf, cell_aadf4, chunk_is_free};
+use crate::build::{self, ChunkPlan, ChunkSource, group_words};
+use crate::cell::{self, Aadf, CHUNK_FIELD_BITS, CHUNK_VOXELS, GROUP_WORDS, State};
+use crate::dedup::GroupStore;
+use crate::digest::{BufferId, Digest, digest_of};
+use crate::error::WorldError;
+use crate::material::MaterialTable;
+use crate::model::ModelTable;
+use crate::size::WorldSize;
+use rayon::prelude::*;
+use std::collections::BTreeSet;
+use std::io::Write;
+
+/// Block cells per chunk (one block array).
+const BLOCK_ARRAY: usize = 64;
+
+/// A NAADF world: the GPU-mirrored buffers (BRIEF §3) and the tables that travel with them.
+///
+/// Invariants, checked on load and kept by every mutation:
+/// - canonical form: no mixed cell whose children are all one uniform value, no full cell
+///   of material 0, every material defined;
+/// - every live voxel group is referenced by the blocks that the dedup map counts, and
+///   free slots (block arrays and voxel groups) are all zero;
+/// - voxel and block AADFs are exactly the lock-step fields of their content;
+/// - every empty chunk's AADF box contains only empty chunks without entities.
+#[derive(Clone)]
+pub struct World {
+    size: WorldSize,
+    version: u64,
+    materials: MaterialTable,
+    models: ModelTable,
+    chunks: Vec<u32>,
+    chunk_entities: Vec<u32>,
+    blocks: Vec<u32>,
+    voxels: Vec<u32>,
+    groups: GroupStore,
+    free_block_arrays: BTreeSet<u32>,
+}
+
+/// The raw contents of a world, as stored in a world file.
+#[derive(Clone, Debug, PartialEq)]
+pub struct WorldParts {
+    /// World size.
+    pub size: WorldSize,
+    /// Number of edit batches applied.
+    pub version: u64,
+    /// Material table.
+    pub materials: MaterialTable,
+    /// Model table.
+    pub models: ModelTable,
+    /// Chunk cells.
+    pub chunks: Vec<u32>,
+    /// Per-chunk entity fields `(pointer << 8) | count`.
+    pub chunk_entities: Vec<u32>,
+    /// Block cells.
+    pub blocks: Vec<u32>,
+    /// Voxel words.
+    pub voxels: Vec<u32>,
+}
+
+impl World {
+    /// Builds a world from a chunk source: construction, voxel/block AADFs, then the full
+    /// chunk-AADF build. `progress` receives the number of chunks done so far.
+    pub fn build(
+        source: &dyn ChunkSource,
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> Result<Self, WorldError> {
+        let size = source.size();
+        let n = size.chunk_count();
+        let mut w = World {
+            size,
+            version: 0,
+            materials: source.materials(),
+            models: source.models(),
+            chunks: vec![0; n],
+            chunk_entities: vec![0; n],
+            blocks: Vec::new(),
+            voxels: Vec::new(),
+            groups: GroupStore::default(),
+            free_block_arrays: BTreeSet::new(),
+        };
+        build::plan_all(source, progress, |i, plan| w.place_chunk(i, plan))?;
+        w.rebuild_chunk_aadf();
+        Ok(w)
+    }
+
+    /// Writes a planned chunk into the buffers, allocating its block array and groups.
+    fn place_chunk(&mut self, i: usize, plan: ChunkPlan) -> Result<(), WorldError> {
+        match plan {
+            ChunkPlan::Uniform(m) => self.chunks[i] = cell::uniform(m),
+            ChunkPlan::Mixed { mut blocks, groups } => {
+                for g in &groups {
+                    let ptr = self.groups.acquire(&mut self.voxels, g.hash, &g.words)?;
+                    blocks[usize::from(g.block)] = cell::mixed(ptr);
+                }
+                let ptr = self.alloc_block_array()?;
+                self.blocks[ptr as usize..][..BLOCK_ARRAY].copy_from_slice(&blocks);
+                self.chunks[i] = cell::mixed(ptr);
+            }
+        }
+        Ok(())
+    }
+
+    /// The lowest free block array, else a new one at the end.
+    fn alloc_block_array(&mut self) -> Result<u32, WorldError> {
+        if let Some(p) = self.free_block_arrays.pop_first() {
+            return Ok(p);
+        }
+        let p = self.blocks.len();
+        if p + BLOCK_ARRAY > cell::PAYLOAD as usize {
+            return Err(WorldError::Capacity(
+                "more block arrays than 30-bit pointers can address".into(),
+            ));
+        }
+        self.blocks.resize(p + BLOCK_ARRAY, 0);
+        Ok(p as u32)
+    }
+
+    /// Recomputes every chunk AADF from scratch (level-major, deterministic).
+    pub fn rebuild_chunk_aadf(&mut self) {
+        build_chunk_aadf(self.size, &mut self.chunks, &self.chunk_entities);
+    }
+
+    /// Rebuilds a world from stored parts, validating everything a traversal or an edit
+    /// relies on. Corrupt or hostile parts give an error, never a panic.
+    pub fn from_parts(p: WorldParts) -> Result<Self, WorldError> {
+        let bad = |m: String| Err(WorldError::BadFile(m));
+        let n = p.size.chunk_count();
+        if p.chunks.len() != n || p.chunk_entities.len() != n {
+            return bad(format!(
+                "{} chunk cells and {} entity fields for a {} world ({n} chunks)",
+                p.chunks.len(),
+                p.chunk_entities.len(),
+                p.size
+            ));
+        }
+        if p.chunk_entities.iter().any(|&e| e != 0) {
+            return bad("chunk entity fields set, but the file holds no entity instances".into());
+        }
+        if p.blocks.len() % BLOCK_ARRAY != 0 || p.voxels.len() % GROUP_WORDS != 0 {
+            return bad(format!(
+                "buffer lengths {} blocks / {} voxel words are not whole arrays",
+                p.blocks.len(),
+                p.voxels.len()
+            ));
+        }
+        let max_id = (p.materials.len() - 1) as u32;
+        let material_ok = |m: u32| (1..=max_id).contains(&m);
+        let full_ok = |c: u32| {
+            (c & cell::PAYLOAD) <= u32::from(cell::MAX_MATERIAL) && material_ok(c & 0x7FFF)
+        };
+
+        // Chunks: states, materials, block-array pointers (each array owned by one chunk).
+        let mut arrays = vec![false; p.blocks.len() / BLOCK_ARRAY];
+        for (i, &c) in p.chunks.iter().enumerate() {
+            match c >> 30 {
+                0 => {}
+                1 if full_ok(c) => {}
+                2 => {
+                    let ptr = cell::pointer(c) as usize;
+                    if ptr % BLOCK_ARRAY != 0
+                        || ptr + BLOCK_ARRAY > p.blocks.len()
+                        || std::mem::replace(&mut arrays[ptr / BLOCK_ARRAY], true)
+                    {
+                        return bad(format!("chunk {i}: bad or shared block pointer {ptr}"));
+                    }
+                }
+                _ => return bad(format!("chunk {i}: invalid cell {c:#010x}")),
+            }
+        }
+        // Block arrays: free ones zero; live ones canonical with exact block AADFs.
+        let mut group_used = vec![false; p.voxels.len() / GROUP_WORDS];
+        let mut block_ptrs = Vec::new();
+        for (a, &live) in arrays.iter().enumerate() {
+            let cells = &p.blocks[a * BLOCK_ARRAY..][..BLOCK_ARRAY];
+            if !live {
+                if cells.iter().any(|&c| c != 0) {
+                    return bad(format!("free block array {a} is not zeroed"));
+                }
+                continue;
+            }
+            let mut empty = 0u64;
+            for (b, &c) in cells.iter().enumerate() {
+                match c >> 30 {
+                    0 => empty |= 1 << b,
+                    1 if full_ok(c) => {}
+                    2 => {
+                        let ptr = cell::pointer(c) as usize;
+                        if ptr % GROUP_WORDS != 0 || ptr + GROUP_WORDS > p.voxels.len() {
+                            return bad(format!("block {b} of array {a}: bad voxel pointer {ptr}"));
+                        }
+                        group_used[ptr / GROUP_WORDS] = true;
+                        block_ptrs.push(ptr as u32);
+                    }
+                    _ => return bad(format!("block {b} of array {a}: invalid cell {c:#010x}")),
+                }
+            }
+            if cells
+                .iter()
+                .all(|&c| c == cells[0] && cell::state(c) != State::Mixed)
+            {
+                return bad(format!(
+                    "block array {a} is uniform and should have collapsed"
+                ));
+            }
+            let fields = cell_aadf4(empty);
+            if let Some(b) =
+                (0..64).find(|&b| empty >> b & 1 == 1 && cells[b] != u32::from(fields[b]))
+            {
+                return bad(format!("block {b} of array {a}: wrong block AADF"));
+            }
+        }
+        // Voxel groups: free ones zero; live ones canonical, known materials, exact AADFs.
+        let group_error = group_used
+            .par_iter()
+            .enumerate()
+            .find_map_any(|(g, &used)| {
+                let words = &p.voxels[g * GROUP_WORDS..][..GROUP_WORDS];
+                if !used {
+                    return words
+                        .iter()
+                        .any(|&w| w != 0)
+                        .then(|| format!("free voxel group {g} is not zeroed"));
+                }
+                let v: [u16; 64] = std::array::from_fn(|i| cell::group_voxel(words, 0, i));
+                let m = v.map(cell::voxel_material);
+                if v.iter().any(|&x| {
+                    cell::voxel_is_solid(x) && !material_ok(u32::from(cell::voxel_material(x)))
+                }) {
+                    return Some(format!("voxel group {g}: undefined material"));
+                }
+                if m.iter().all(|&x| x == m[0]) {
+                    return Some(format!(
+                        "voxel group {g} is uniform and should have collapsed"
+                    ));
+                }
+                (group_words(&m)[..] != words[..])
+                    .then(|| format!("voxel group {g}: wrong voxel AADF"))
+            });
+        if let Some(e) = group_error {
+            return bad(e);
+        }
+        let groups = GroupStore::rebuild(&p.voxels, block_ptrs.into_iter());
+        let free_block_arrays = arrays
+            .iter()
+            .enumerate()
+            .filter(|(_, live)| !**live)
+            .map(|(a, _)| (a * BLOCK_ARRAY) as u32)
+            .collect();
+        let w = World {
+            size: p.size,
+            version: p.version,
+            materials: p.materials,
+            models: p.models,
+            chunks: p.chunks,
+            chunk_entities: p.chunk_entities,
+            blocks: p.blocks,
+            voxels: p.voxels,
+            groups,
+            free_block_arrays,
+        };
+        if let Some(i) = w.unsafe_chunk_aadf() {
+            return bad(format!(
+                "chunk {:?}: its AADF box contains a non-empty chunk",
+                w.size.chunk_coords(i)
+            ));
+        }
+        Ok(w)
+    }
+
+    /// The stored parts (a copy of every buffer and table).
+    pub fn to_parts(&self) -> WorldParts {
+        WorldParts {
+            size: self.size,
+            version: self.version,
+            materials: self.materials.clone(),
+            models: self.models.clone(),
+            chunks: self.chunks.clone(),
+            chunk_entities: self.chunk_entities.clone(),
+            blocks: self.blocks.clone(),
+            voxels: self.voxels.clone(),
+        }
+    }
+
+    /// The first empty chunk whose AADF box holds a non-free chunk (checks the safety
+    /// invariant in O(chunks) with a 3D prefix sum).
+    pub fn unsafe_chunk_aadf(&self) -> Option<usize> {
+        let d = self.size.chunks().map(|v| v as usize);
+        let at = |x: usize, y: usize, z: usize| x + (d[0] + 1) * (y + (d[1] + 1) * z);
+        let mut sum = vec![0u32; (d[0] + 1) * (d[1] + 1) * (d[2] + 1)];
+        for z in 0..d[2] {
+            for y in 0..d[1] {
+                for x in 0..d[0] {
+                    let i = self.size.chunk_index([x as u32, y as u32, z as u32]);
+                    let blocked = u32::from(!chunk_is_free(self.chunks[i], self.chunk_entities[i]));
+                    sum[at(x + 1, y + 1, z + 1)] = blocked
+                        + sum[at(x, y + 1, z + 1)]
+                        + sum[at(x + 1, y, z + 1)]
+                        + sum[at(x + 1, y + 1, z)]
+                        - sum[at(x, y, z + 1)]
+                        - sum[at(x, y + 1, z)]
+                        - sum[at(x + 1, y, z)]
+                        + sum[at(x, y, z)];
+                }
+            }
+        }
+        (0..self.chunks.len()).into_par_iter().find_first(|&i| {
+            if !chunk_is_free(self.chunks[i], self.chunk_entities[i]) {
+                return false;
+            }
+            let f = Aadf::unpack(self.chunks[i], CHUNK_FIELD_BITS);
+            let p = self.size.chunk_coords(i);
+            let lo: [usize; 3] =
+                std::array::from_fn(|a| (p[a] as usize).saturating_sub(usize::from(f.0[2 * a])));
+            let hi: [usize; 3] = std::array::from_fn(|a| {
+                (p[a] as usize + usize::from(f.0[2 * a + 1]) + 1).min(d[a])
+            });
+            let s = sum[at(hi[0], hi[1], hi[2])] as i64
+                - sum[at(lo[0], hi[1], hi[2])] as i64
+                - sum[at(hi[0], lo[1], hi[2])] as i64
+                - sum[at(hi[0], hi[1], lo[2])] as i64
+                + sum[at(lo[0], lo[1], hi[2])] as i64
+                + sum[at(lo[0], hi[1], lo[2])] as i64
+                + sum[at(hi[0], lo[1], lo[2])] as i64
+                - sum[at(lo[0], lo[1], lo[2])] as i64;
+            s != 0
+        })
+    }
+
+    /// World size.
+    pub fn size(&self) -> WorldSize {
+        self.size
+    }
+    /// Number of edit batches applied.
+    pub fn version(&self) -> u64 {
+        self.version
+    }
+    /// The material table.
+    pub fn materials(&self) -> &MaterialTable {
+        &self.materials
+    }
+    /// The model table.
+    pub fn models(&self) -> &ModelTable {
+        &self.models
+    }
+    /// Chunk cells, `x + y·Cx + z·Cx·Cy`.
+    pub fn chunks(&self) -> &[u32] {
+        &self.chunks
+    }
+    /// Per-chunk entity fields.
+    pub fn chunk_entities(&self) -> &[u32] {
+        &self.chunk_entities
+    }
+    /// Block cells.
+    pub fn blocks(&self) -> &[u32] {
+        &self.blocks
+    }
+    /// Voxel words.
+    pub fn voxels(&self) -> &[u32] {
+        &self.voxels
+    }
+    /// The voxel-group store (reference counts, free slots).
+    pub fn groups(&self) -> &GroupStore {
+        &self.groups
+    }
+    /// Start indices of the free block arrays, lowest first.
+    pub fn free_block_arrays(&self) -> impl Iterator<Item = u32> + '_ {
+        self.free_block_arrays.iter().copied()
+    }
+
+    /// The material at voxel `p` (0 = empty). `p` must lie inside the world.
+    pub fn material_at(&self, p: [u32; 3]) -> u16 {
+        let c = self.chunks[self.size.chunk_index(p.map(|v| v / 16))];
+        match cell::state(c) {
+            State::Empty => 0,
+            State::Full => cell::material(c),
+            State::Mixed => {
+                let b = self.blocks[cell::pointer(c) as usize
+                    + cell::index4(p[0] / 4 % 4, p[1] / 4 % 4, p[2] / 4 % 4)];
+                match cell::state(b) {
+                    State::Empty => 0,
+                    State::Full => cell::material(b),
+                    State::Mixed => cell::voxel_material(cell::group_voxel(
+                        &self.voxels,
+                        cell::pointer(b) as usize,
+                        cell::index4(p[0] % 4, p[1] % 4, p[2] % 4),
+                    )),
+                }
+            }
+        }
+    }
+
+    /// Decodes chunk `c` into material ids (`x + 16y + 256z`).
+    pub fn decode_chunk(&self, c: [u32; 3], out: &mut [u16; CHUNK_VOXELS]) {
+        let cellv = self.chunks[self.size.chunk_index(c)];
+        match cell::state(cellv) {
+            State::Empty => out.fill(0),
+            State::Full => out.fill(cell::material(cellv)),
+            State::Mixed => {
+                let ptr = cell::pointer(cellv) as usize;
+                for b in 0..64u32 {
+                    let bc = self.blocks[ptr + b as usize];
+                    let (bx, by, bz) = (b % 4 * 4, b / 4 % 4 * 4, b / 16 * 4);
+                    for i in 0..64u32 {
+                        let m = match cell::state(bc) {
+                            State::Empty => 0,
+                            State::Full => cell::material(bc),
+                            State::Mixed => cell::voxel_material(cell::group_voxel(
+                                &self.voxels,
+                                cell::pointer(bc) as usize,
+                                i as usize,
+                            )),
+                        };
+                        out[cell::index16(bx + i % 4, by + i / 4 % 4, bz + i / 16)] = m;
+                    }
+                }
+            }
+        }
+    }
+
+    /// Writes the dense raw export: little-endian `u16` material ids, x fastest, then y,
+    /// then z. Streams one 16-voxel z-slab at a time.
+    pub fn export_raw(&self, out: &mut dyn Write) -> std::io::Result<()> {
+        let [sx, sy, _] = self.size.voxels().map(|v| v as usize);
+        let [cx, cy, cz] = self.size.chunks();
+        for z in 0..cz {
+            let mut slab = vec![0u16; sx * sy * 16];
+            let rows: Vec<(u32, u32, Box<[u16; CHUNK_VOXELS]>)> = (0..cx * cy)
+                .into_par_iter()
+                .map(|k| {
+                    let mut raw = Box::new([0u16; CHUNK_VOXELS]);
+                    self.decode_chunk([k % cx, k / cx, z], &mut raw);
+                    (k % cx, k / cx, raw)
+                })
+                .collect();
+            for (x, y, raw) in rows {
+                for lz in 0..16usize {
+                    for ly in 0..16usize {
+                        let dst = (x as usize * 16) + sx * ((y as usize * 16 + ly) + sy * lz);
+                        slab[dst..dst + 16].copy_from_slice(&raw[256 * lz + 16 * ly..][..16]);
+                    }
+                }
+            }
+            let bytes: Vec<u8> = slab.iter().flat_map(|v| v.to_le_bytes()).collect();
+            out.write_all(&bytes)?;
+        }
+        Ok(())
+    }
+
+    /// The world digest (BRIEF §3) over every mirrored buffer and table.
+    pub fn digest(&self) -> Digest {
+        let models = self.models.encode();
+        let parts: [(BufferId, &[u8]); 6] = [
+            (BufferId::Chunks, bytemuck_u32(&self.chunks)),
+            (BufferId::ChunkEntities, bytemuck_u32(&self.chunk_entities)),
+            (BufferId::Blocks, bytemuck_u32(&self.blocks)),
+            (BufferId::Voxels, bytemuck_u32(&self.voxels)),
+            (BufferId::Materials, bytemuck_u32(self.materials.words())),
+            (BufferId::Models, &models),
+        ];
+        parts.iter().fold(Digest::default(), |d, &(id, bytes)| {
+            d ^ digest_of(id, bytes)
+        })
+    }
+
+    /// Whether a chunk is empty and free of entities (it may carry a chunk AADF).
+    pub fn chunk_is_free(&self, i: usize) -> bool {
+        aadf::chunk_is_free(self.chunks[i], self.chunk_entities[i])
+    }
+}
+
+/// The little-endian bytes of a `u32` buffer, without copying.
+pub(crate) fn bytemuck_u32(v: &[u32]) -> &[u8] {
+    #[cfg(not(target_endian = "little"))]
+    compile_error!("naadf buffers are little-endian; big-endian hosts are not supported");
+    bytemuck::cast_slice(v)
+}
