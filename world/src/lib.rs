@@ -25,7 +25,6 @@ pub mod aadf;
 pub mod build;
 pub mod cell;
 pub mod dedup;
-pub mod dense;
 pub mod digest;
 pub mod error;
 pub mod file;

@@ -1,1 +1,85 @@
-//! CPU ray traversal.
+//! CPU ray traversal: three methods on the same world that must agree exactly.
+//!
+//! - [`Method::Naadf`]: the multi-axis DDA of NAADF-REFERENCE §3.2 that jumps over the
+//!   empty cuboid given by the chunk, block and voxel AADFs;
+//! - [`Method::Nodf`]: the same hierarchy with the AADFs ignored (empty chunks and blocks
+//!   are skipped only to their own edge);
+//! - [`Method::Grid`]: Amanatides–Woo over a dense decode ([`DenseGrid`]).
+//!
+//! All three are exact views of one event model (see [`ray`]): the ray crosses cell
+//! boundaries at times `t = (b − o)/d` computed in `f64`, and crossings at equal `t` happen
+//! one axis at a time in the order x, y, z. A method may skip a run of events only where
+//! every cell in between is known to be empty, so all three visit the same first solid
+//! cell and report the same voxel, normal, material and `t`.
+
+pub mod grid;
+mod hierarchy;
+pub mod ray;
+
+pub use grid::DenseGrid;
+pub use hierarchy::{trace_naadf, trace_nodf};
+pub use ray::{Hit, Ray};
+
+use crate::world::World;
+
+/// A traversal method.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Method {
+    /// Hierarchical DDA with AADF jumps.
+    Naadf,
+    /// Hierarchical DDA without distance fields.
+    Nodf,
+    /// Dense-grid Amanatides–Woo.
+    Grid,
+}
+
+impl Method {
+    /// All methods, in the order benchmarks report them.
+    pub const ALL: [Method; 3] = [Method::Naadf, Method::Nodf, Method::Grid];
+
+    /// The method's CLI name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Naadf => "naadf",
+            Method::Nodf => "nodf",
+            Method::Grid => "grid",
+        }
+    }
+
+    /// Parses a CLI name.
+    pub fn parse(s: &str) -> Option<Method> {
+        Method::ALL.into_iter().find(|m| m.name() == s)
+    }
+}
+
+/// A ready-to-use tracer for one method (the grid method owns its dense decode).
+pub enum Tracer<'w> {
+    /// See [`Method::Naadf`].
+    Naadf(&'w World),
+    /// See [`Method::Nodf`].
+    Nodf(&'w World),
+    /// See [`Method::Grid`].
+    Grid(DenseGrid),
+}
+
+impl<'w> Tracer<'w> {
+    /// Prepares `method` on `world` (the grid method decodes the world densely, which fails
+    /// if the decode would not fit in memory).
+    pub fn new(world: &'w World, method: Method) -> Result<Self, crate::WorldError> {
+        Ok(match method {
+            Method::Naadf => Tracer::Naadf(world),
+            Method::Nodf => Tracer::Nodf(world),
+            Method::Grid => Tracer::Grid(DenseGrid::from_world(world)?),
+        })
+    }
+
+    /// Traces one ray; `None` is a miss.
+    #[inline]
+    pub fn trace(&self, ray: &Ray) -> Option<Hit> {
+        match self {
+            Tracer::Naadf(w) => trace_naadf(w, ray),
+            Tracer::Nodf(w) => trace_nodf(w, ray),
+            Tracer::Grid(g) => g.trace(ray),
+        }
+    }
+}

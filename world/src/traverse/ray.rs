@@ -1,0 +1,207 @@
+//! Rays and the event model shared by every traversal method.
+//!
+//! A ray `o + t·d` (`d` normalised) crosses the plane `k` of axis `a` at
+//! `t_a(k) = (k − o_a)/d_a`, always computed by [`Ray::t_at`] so that every method sees
+//! bit-identical times. Crossing events are ordered by `(t, axis)`: at equal `t` the ray
+//! steps x first, then y, then z, visiting each cell in between (Amanatides–Woo's order).
+//! The cell the ray is in after an event is therefore a pure function of the event.
+
+use crate::error::WorldError;
+
+/// A ray with a normalised direction.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ray {
+    o: [f64; 3],
+    d: [f64; 3],
+}
+
+/// The first solid voxel along a ray.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    /// World coordinates of the voxel.
+    pub voxel: [u32; 3],
+    /// Normal of the entry face (all zero when the origin is inside the voxel).
+    pub normal: [i32; 3],
+    /// Distance along the normalised direction to the entry face.
+    pub t: f64,
+    /// Material id.
+    pub material: u16,
+    /// Cells visited, the hit cell included.
+    pub steps: u32,
+}
+
+/// Where a ray begins inside the world: its first cell, the time it is entered, and the
+/// axis whose plane it crossed to enter it (`None` when the origin is inside).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Entry {
+    pub cell: [i64; 3],
+    pub t: f64,
+    pub axis: Option<usize>,
+}
+
+/// Far-away cell bound for unconstrained axes.
+const FAR: i64 = 1 << 40;
+
+impl Ray {
+    /// A ray from `origin` along `dir` (normalised here). Fails on a zero or non-finite
+    /// direction or a non-finite origin.
+    ///
+    /// ```
+    /// use naadf_world::traverse::Ray;
+    /// assert!(Ray::new([0.0; 3], [0.0, 0.0, 2.0]).is_ok());
+    /// assert!(Ray::new([0.0; 3], [0.0; 3]).is_err());
+    /// ```
+    pub fn new(origin: [f64; 3], dir: [f64; 3]) -> Result<Self, WorldError> {
+        let len = dir.iter().map(|v| v * v).sum::<f64>().sqrt();
+        if !origin.iter().all(|v| v.is_finite()) || !len.is_finite() || len == 0.0 {
+            return Err(WorldError::InvalidRay(format!("origin {origin:?}, direction {dir:?}: need a finite origin and a finite non-zero direction")));
+        }
+        Ok(Ray { o: origin, d: dir.map(|v| v / len) })
+    }
+
+    /// The origin.
+    pub fn origin(&self) -> [f64; 3] {
+        self.o
+    }
+
+    /// The normalised direction.
+    pub fn dir(&self) -> [f64; 3] {
+        self.d
+    }
+
+    /// Time at which the ray crosses plane `k` of `axis`.
+    #[inline(always)]
+    pub fn t_at(&self, axis: usize, k: i64) -> f64 {
+        (k as f64 - self.o[axis]) / self.d[axis]
+    }
+
+    /// Whether the crossing of plane `k` of axis `b` comes before the event `(t, a)`.
+    #[inline(always)]
+    fn crossed(&self, b: usize, k: i64, t: f64, a: usize) -> bool {
+        let tb = self.t_at(b, k);
+        tb < t || (tb == t && b < a)
+    }
+
+    /// The cell of axis `b` right after event `(t, a)`, known to lie in `lo..=hi`.
+    #[inline(always)]
+    pub(crate) fn cell_after(&self, b: usize, t: f64, a: usize, lo: i64, hi: i64) -> i64 {
+        let d = self.d[b];
+        if lo == hi || d == 0.0 {
+            return lo;
+        }
+        let p = self.o[b] + d * t;
+        let fl = p.floor();
+        let k = (fl as i64).clamp(lo, hi);
+        let f = p - fl;
+        // Far from a plane the floor is certain: time errors are ~1e-12, far below 1e-7.
+        if f > 1e-7 && f < 1.0 - 1e-7 {
+            return k;
+        }
+        let mut k = k;
+        if d > 0.0 {
+            // Plane k separates cell k-1 from cell k.
+            while k < hi && self.crossed(b, k + 1, t, a) {
+                k += 1;
+            }
+            while k > lo && !self.crossed(b, k, t, a) {
+                k -= 1;
+            }
+        } else {
+            while k > lo && self.crossed(b, k, t, a) {
+                k -= 1;
+            }
+            while k < hi && !self.crossed(b, k + 1, t, a) {
+                k += 1;
+            }
+        }
+        k
+    }
+
+    /// The first in-world cell of the ray, or `None` if it never enters the box
+    /// `[0, size)`. Rays start at the world box itself (no inset).
+    pub(crate) fn entry(&self, size: [u32; 3]) -> Option<Entry> {
+        let size = size.map(i64::from);
+        let start = self.o.map(|v| v.floor() as i64);
+        if (0..3).all(|a| start[a] >= 0 && start[a] < size[a]) {
+            return Some(Entry { cell: start, t: 0.0, axis: None });
+        }
+        // The last slab-entry event, in (t, axis) order.
+        let mut best: Option<(f64, usize)> = None;
+        for a in 0..3 {
+            let plane = if start[a] < 0 {
+                if self.d[a] <= 0.0 {
+                    return None;
+                }
+                0
+            } else if start[a] >= size[a] {
+                if self.d[a] >= 0.0 {
+                    return None;
+                }
+                size[a]
+            } else {
+                continue;
+            };
+            let t = self.t_at(a, plane);
+            if best.is_none_or(|(bt, _)| t >= bt) {
+                best = Some((t, a));
+            }
+        }
+        let (t, axis) = best?;
+        let mut cell = [0i64; 3];
+        for b in 0..3 {
+            cell[b] = if b == axis {
+                if self.d[b] > 0.0 { 0 } else { size[b] - 1 }
+            } else if self.d[b] > 0.0 {
+                self.cell_after(b, t, axis, start[b], FAR)
+            } else if self.d[b] < 0.0 {
+                self.cell_after(b, t, axis, -FAR, start[b])
+            } else {
+                start[b]
+            };
+        }
+        (0..3).all(|a| cell[a] >= 0 && cell[a] < size[a]).then_some(Entry { cell, t, axis: Some(axis) })
+    }
+
+    /// Leaves the empty cuboid made of `cell` extended by `skip[a]` cells toward the ray on
+    /// each axis: the exit event `(t, axis)` and the cell entered by it.
+    #[inline(always)]
+    pub(crate) fn exit(&self, cell: [i64; 3], skip: [i64; 3]) -> (f64, usize, [i64; 3]) {
+        let mut bound = [0i64; 3];
+        let mut best = (f64::INFINITY, 0usize);
+        for a in 0..3 {
+            if self.d[a] == 0.0 {
+                continue;
+            }
+            bound[a] = if self.d[a] > 0.0 { cell[a] + 1 + skip[a] } else { cell[a] - skip[a] };
+            let t = self.t_at(a, bound[a]);
+            if t < best.0 {
+                best = (t, a);
+            }
+        }
+        let (t, axis) = best;
+        let mut next = cell;
+        for b in 0..3 {
+            next[b] = if b == axis {
+                if self.d[b] > 0.0 { bound[b] } else { bound[b] - 1 }
+            } else if self.d[b] > 0.0 {
+                self.cell_after(b, t, axis, cell[b], cell[b] + skip[b])
+            } else if self.d[b] < 0.0 {
+                self.cell_after(b, t, axis, cell[b] - skip[b], cell[b])
+            } else {
+                cell[b]
+            };
+        }
+        (t, axis, next)
+    }
+
+    /// The hit record for entering `cell` at `t` through a plane of `axis`.
+    #[inline]
+    pub(crate) fn hit(&self, cell: [i64; 3], t: f64, axis: Option<usize>, material: u16, steps: u32) -> Hit {
+        let mut normal = [0i32; 3];
+        if let Some(a) = axis {
+            normal[a] = if self.d[a] > 0.0 { -1 } else { 1 };
+        }
+        // `+ 0.0` turns a −0.0 (from (o − o)/d with d < 0) into 0.0.
+        Hit { voxel: cell.map(|v| v as u32), normal, t: t + 0.0, material, steps }
+    }
+}
