@@ -113,7 +113,7 @@ const fn inner_mask(dir: usize) -> u64 {
     while i < 64 {
         let p = [i % 4, (i / 4) % 4, i / 16];
         let c = p[dir / 2];
-        let ok = if dir % 2 == 0 { c > 0 } else { c < 3 };
+        let ok = if dir.is_multiple_of(2) { c > 0 } else { c < 3 };
         if ok {
             m |= 1 << i;
         }
@@ -137,7 +137,7 @@ const STRIDE4: [u32; 3] = [1, 4, 16];
 #[inline]
 fn neighbour_bits(v: u64, dir: usize) -> u64 {
     let s = STRIDE4[dir / 2];
-    let moved = if dir % 2 == 0 { v << s } else { v >> s };
+    let moved = if dir.is_multiple_of(2) { v << s } else { v >> s };
     moved & INNER[dir]
 }
 

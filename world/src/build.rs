@@ -63,7 +63,7 @@ pub(crate) enum ChunkPlan {
     Uniform(u16),
     /// Block cells (uniform ones final, mixed ones 0 until placed) and the mixed groups.
     Mixed {
-        blocks: [u32; 64],
+        blocks: Box<[u32; 64]>,
         groups: Vec<GroupPlan>,
     },
 }
@@ -111,7 +111,7 @@ pub(crate) fn plan_chunk(raw: &[u16; CHUNK_VOXELS], max_id: u16) -> Result<Chunk
             blocks[b] = u32::from(fields[b]);
         }
     }
-    Ok(ChunkPlan::Mixed { blocks, groups })
+    Ok(ChunkPlan::Mixed { blocks: Box::new(blocks), groups })
 }
 
 /// The 32 stored words of a voxel group with material ids `v`: solid voxels as

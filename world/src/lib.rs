@@ -23,6 +23,7 @@
 
 pub mod aadf;
 pub mod build;
+pub mod camera;
 pub mod cell;
 pub mod dedup;
 pub mod digest;
@@ -33,6 +34,7 @@ pub mod import;
 pub mod material;
 pub mod model;
 pub mod preset;
+pub mod raysets;
 pub mod size;
 pub mod stats;
 pub mod traverse;

@@ -140,7 +140,7 @@ impl MaterialTable {
     /// Rebuilds a table from its GPU words (a loaded file).
     pub fn from_words(words: Vec<u32>) -> Result<Self, WorldError> {
         if words.len() < 4
-            || words.len() % 4 != 0
+            || !words.len().is_multiple_of(4)
             || words.len() / 4 > usize::from(MAX_MATERIAL) + 1
         {
             return Err(WorldError::InvalidMaterial(format!(

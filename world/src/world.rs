@@ -96,7 +96,7 @@ impl World {
                     blocks[usize::from(g.block)] = cell::mixed(ptr);
                 }
                 let ptr = self.alloc_block_array()?;
-                self.blocks[ptr as usize..][..BLOCK_ARRAY].copy_from_slice(&blocks);
+                self.blocks[ptr as usize..][..BLOCK_ARRAY].copy_from_slice(&blocks[..]);
                 self.chunks[i] = cell::mixed(ptr);
             }
         }
@@ -199,7 +199,7 @@ impl World {
             }
             if cells
                 .iter()
-                .all(|&c| c == cells[0] && cell::state(c) != State::Mixed)
+                .all(|&c| cell::state(c) != State::Mixed && uniform_material(c) == uniform_material(cells[0]))
             {
                 return bad(format!(
                     "block array {a} is uniform and should have collapsed"
@@ -469,6 +469,11 @@ impl World {
     pub fn chunk_is_free(&self, i: usize) -> bool {
         aadf::chunk_is_free(self.chunks[i], self.chunk_entities[i])
     }
+}
+
+/// The material of a non-mixed cell (empty cells carry AADF bits but hold material 0).
+fn uniform_material(c: u32) -> u16 {
+    if cell::state(c) == State::Full { cell::material(c) } else { 0 }
 }
 
 /// The little-endian bytes of a `u32` buffer, without copying.

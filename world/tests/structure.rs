@@ -177,3 +177,19 @@ fn undefined_material_is_rejected() {
     let err = World::build(&raw, &|_| {}).err().expect("material 5 is not defined");
     assert!(err.to_string().contains("material 5"), "{err}");
 }
+
+#[test]
+fn loading_rejects_a_mixed_chunk_of_empty_blocks() {
+    let mut raw = Raw::empty(WorldSize::new(64, 64, 64).unwrap(), 1);
+    raw.set([1, 1, 1], 1);
+    let mut parts = raw.build().to_parts();
+    assert!(World::from_parts(parts.clone()).is_ok());
+    // Chunk 0 keeps pointing at block array 0, now 64 empty blocks with exact AADFs.
+    let fields = naadf_world::aadf::cell_aadf4(!0);
+    for (b, f) in fields.iter().enumerate() {
+        parts.blocks[b] = u32::from(*f);
+    }
+    parts.voxels.fill(0);
+    let err = World::from_parts(parts).err().expect("non-canonical chunk accepted");
+    assert!(err.to_string().contains("collapsed"), "{err}");
+}

@@ -20,7 +20,7 @@ impl DenseGrid {
     pub fn from_world(world: &World) -> Result<Self, WorldError> {
         let n = world.size().voxel_count();
         if n > MAX_DENSE_VOXELS {
-            return Err(WorldError::Capacity(format!("a dense decode of {} voxels ({} GiB) is too large for the grid method", n, n * 2 >> 30)));
+            return Err(WorldError::Capacity(format!("a dense decode of {} voxels ({} GiB) is too large for the grid method", n, (n * 2) >> 30)));
         }
         let size = world.size().voxels();
         let [sx, sy, _] = size.map(|v| v as usize);

@@ -1,0 +1,291 @@
+//! `naadf bench traverse WORLD` and `naadf bench build`: throughput measured in one run, so
+//! that ratios between methods are meaningful on a shared, noisy machine.
+
+use super::generate::parse_size;
+use super::{chunk_progress, load_world, print_json};
+use anyhow::{Result, bail};
+use naadf_world::cell::CHUNK_VOXELS;
+use naadf_world::model::ModelTable;
+use naadf_world::preset::Preset;
+use naadf_world::raysets::{fixed_cameras, primary_rays, secondary_rays};
+use naadf_world::stats::WorldStats;
+use naadf_world::traverse::{Hit, Method, Ray, Tracer};
+use naadf_world::{ChunkSource, MaterialTable, World, WorldSize};
+use rayon::prelude::*;
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// Benchmarks.
+#[derive(clap::Subcommand)]
+pub enum Bench {
+    /// Ray throughput of the three traversal methods on fixed cameras.
+    Traverse(TraverseArgs),
+    /// Generation, construction and chunk-AADF build times of a preset.
+    Build(BuildArgs),
+}
+
+/// Arguments of `bench traverse`.
+#[derive(clap::Args)]
+pub struct TraverseArgs {
+    /// World file.
+    world: PathBuf,
+    /// Image width per camera.
+    #[arg(long, default_value_t = 480)]
+    width: u32,
+    /// Image height per camera.
+    #[arg(long, default_value_t = 270)]
+    height: u32,
+    /// Timed runs per method and ray set; the fastest counts.
+    #[arg(long, default_value_t = 1)]
+    repeat: u32,
+    /// Seed of the secondary-ray directions.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Print one JSON object.
+    #[arg(long)]
+    json: bool,
+}
+
+/// Arguments of `bench build`.
+#[derive(clap::Args)]
+pub struct BuildArgs {
+    /// Preset to generate.
+    #[arg(long, default_value = "terrain")]
+    preset: String,
+    /// World size `X,Y,Z`; default: the preset's.
+    #[arg(long, value_parser = parse_size)]
+    size: Option<WorldSize>,
+    /// Generator seed.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Print one JSON object.
+    #[arg(long)]
+    json: bool,
+}
+
+/// Runs a benchmark.
+pub fn run(b: Bench) -> Result<()> {
+    match b {
+        Bench::Traverse(a) => traverse(a),
+        Bench::Build(a) => build(a),
+    }
+}
+
+#[derive(Serialize)]
+struct TraverseReport {
+    /// Mrays/s per method on primary rays.
+    primary: BTreeMap<&'static str, f64>,
+    /// Mrays/s per method on secondary rays.
+    secondary: BTreeMap<&'static str, f64>,
+    /// Primary rays per run.
+    rays: usize,
+    /// Secondary rays per run.
+    secondary_rays: usize,
+    /// Worker threads.
+    threads: usize,
+    /// Mean cells visited per ray, per method (primary, secondary).
+    steps: BTreeMap<&'static str, [f64; 2]>,
+    /// Rays on which a method disagreed with `naadf` (must be 0).
+    mismatches: usize,
+}
+
+/// Traces `rays` `repeat` times; returns the best Mrays/s, the hits and mean steps.
+fn time_rays(tracer: &Tracer, rays: &[Ray], repeat: u32) -> (f64, Vec<Option<Hit>>, f64) {
+    // Warm caches and the thread pool.
+    rays.par_iter().take(rays.len() / 20).for_each(|r| {
+        std::hint::black_box(tracer.trace(r));
+    });
+    let mut best = f64::INFINITY;
+    let mut hits = Vec::new();
+    for _ in 0..repeat.max(1) {
+        let t0 = Instant::now();
+        hits = rays.par_iter().map(|r| tracer.trace(r)).collect();
+        best = best.min(t0.elapsed().as_secs_f64());
+    }
+    // Steps of missed rays are not reported by the tracer; count hits only.
+    let steps: Vec<u32> = hits.iter().flatten().map(|h| h.steps).collect();
+    let mean = steps.iter().map(|&s| f64::from(s)).sum::<f64>() / steps.len().max(1) as f64;
+    (rays.len() as f64 / best / 1e6, hits, mean)
+}
+
+fn same(a: &Option<Hit>, b: &Option<Hit>) -> bool {
+    match (a, b) {
+        (None, None) => true,
+        (Some(a), Some(b)) => a.voxel == b.voxel && a.normal == b.normal && a.material == b.material && (a.t - b.t).abs() <= 1e-4 * a.t.max(1.0),
+        _ => false,
+    }
+}
+
+fn traverse(a: TraverseArgs) -> Result<()> {
+    let world = load_world(&a.world)?;
+    let primary = primary_rays(&fixed_cameras(world.size()), a.width, a.height);
+    let mut report = TraverseReport {
+        primary: BTreeMap::new(),
+        secondary: BTreeMap::new(),
+        rays: primary.len(),
+        secondary_rays: 0,
+        threads: rayon::current_num_threads(),
+        steps: BTreeMap::new(),
+        mismatches: 0,
+    };
+    let mut reference: Option<(Vec<Option<Hit>>, Vec<Ray>, Vec<Option<Hit>>)> = None;
+    for method in Method::ALL {
+        let tracer = match Tracer::new(&world, method) {
+            Ok(t) => t,
+            Err(e) => {
+                tracing::warn!("skipping {}: {e}", method.name());
+                continue;
+            }
+        };
+        let (p_rate, p_hits, p_steps) = time_rays(&tracer, &primary, a.repeat);
+        let secondary = match &reference {
+            Some((_, s, _)) => s.clone(),
+            None => secondary_rays(&primary, &p_hits, a.seed),
+        };
+        let (s_rate, s_hits, s_steps) = time_rays(&tracer, &secondary, a.repeat);
+        match &reference {
+            None => reference = Some((p_hits, secondary, s_hits)),
+            Some((rp, _, rs)) => {
+                report.mismatches += rp.iter().zip(&p_hits).filter(|(x, y)| !same(x, y)).count();
+                report.mismatches += rs.iter().zip(&s_hits).filter(|(x, y)| !same(x, y)).count();
+            }
+        }
+        report.primary.insert(method.name(), p_rate);
+        report.secondary.insert(method.name(), s_rate);
+        report.steps.insert(method.name(), [p_steps, s_steps]);
+        if !a.json {
+            eprintln!("{:>6}: primary {p_rate:8.2} Mrays/s ({p_steps:.1} steps/hit), secondary {s_rate:8.2} Mrays/s ({s_steps:.1} steps/hit)", method.name());
+        }
+    }
+    report.secondary_rays = reference.as_ref().map_or(0, |r| r.1.len());
+    if a.json {
+        print_json(&report)?;
+    } else {
+        let ratio = |set: &BTreeMap<&str, f64>, other: &str| set.get(other).map_or(f64::NAN, |o| set["naadf"] / o);
+        println!("{} primary + {} secondary rays, {} threads", report.rays, report.secondary_rays, report.threads);
+        println!("naadf/grid: primary {:.1}×, secondary {:.1}×", ratio(&report.primary, "grid"), ratio(&report.secondary, "grid"));
+        println!("naadf/nodf: primary {:.1}×, secondary {:.1}×", ratio(&report.primary, "nodf"), ratio(&report.secondary, "nodf"));
+    }
+    if report.mismatches > 0 {
+        bail!("{} rays differ between methods", report.mismatches);
+    }
+    Ok(())
+}
+
+/// Raw chunks held in memory, so that construction is timed without generation.
+struct MemorySource {
+    size: WorldSize,
+    materials: MaterialTable,
+    models: ModelTable,
+    chunks: Vec<Box<[u16; CHUNK_VOXELS]>>,
+}
+
+impl ChunkSource for MemorySource {
+    fn size(&self) -> WorldSize {
+        self.size
+    }
+    fn materials(&self) -> MaterialTable {
+        self.materials.clone()
+    }
+    fn models(&self) -> ModelTable {
+        self.models.clone()
+    }
+    fn fill_chunk(&self, c: [u32; 3], out: &mut [u16; CHUNK_VOXELS]) {
+        out.copy_from_slice(&self.chunks[self.size.chunk_index(c)][..]);
+    }
+}
+
+#[derive(Serialize)]
+struct BuildReport {
+    preset: String,
+    size: [u32; 3],
+    voxels: u64,
+    threads: usize,
+    /// Generating every raw chunk into memory (the generator's own cost).
+    generation_s: f64,
+    /// Construction from raw chunks in memory (hashing, dedup, voxel/block AADFs), all threads.
+    construction_s: f64,
+    /// The same on one thread.
+    construction_1_thread_s: f64,
+    /// Raw voxels per second per core (from the one-thread run).
+    construction_mvoxels_per_s_per_core: f64,
+    /// Raw voxels per second, all threads.
+    construction_mvoxels_per_s: f64,
+    /// Full chunk-AADF build (31 levels × 3 axes), all threads.
+    chunk_aadf_s: f64,
+    /// Bytes per layer and the dense u16 grid for comparison.
+    bytes: naadf_world::stats::Bytes,
+    dense_u16_bytes: u64,
+    dense_over_structure: f64,
+    stats: WorldStats,
+}
+
+fn build(a: BuildArgs) -> Result<()> {
+    let source = Preset::parse(&a.preset)?.source(a.size, a.seed)?;
+    let size = source.size();
+    let n = size.chunk_count();
+    let bar = chunk_progress(n as u64, "generating");
+    let t0 = Instant::now();
+    let chunks: Vec<Box<[u16; CHUNK_VOXELS]>> = (0..n)
+        .into_par_iter()
+        .map(|i| {
+            let c = size.chunk_coords(i);
+            let mut raw = Box::new([0u16; CHUNK_VOXELS]);
+            match source.uniform_hint(c) {
+                Some(m) => raw.fill(m),
+                None => source.fill_chunk(c, &mut raw),
+            }
+            if i % 4096 == 0 {
+                bar.set_position(i as u64);
+            }
+            raw
+        })
+        .collect();
+    let generation_s = t0.elapsed().as_secs_f64();
+    bar.finish_and_clear();
+    let mem = MemorySource { size, materials: source.materials(), models: source.models(), chunks };
+    let timed_build = |threads: Option<usize>| -> Result<(World, f64, f64)> {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads.unwrap_or(0)).build()?;
+        pool.install(|| {
+            let t0 = Instant::now();
+            let mut w = World::build(&mem, &|_| {})?;
+            let total = t0.elapsed().as_secs_f64();
+            let t1 = Instant::now();
+            w.rebuild_chunk_aadf();
+            let aadf = t1.elapsed().as_secs_f64();
+            Ok((w, total - aadf, aadf))
+        })
+    };
+    let (_, construction_1_thread_s, _) = timed_build(Some(1))?;
+    let (world, construction_s, chunk_aadf_s) = timed_build(None)?;
+    let stats = WorldStats::of(&world);
+    let voxels = size.voxel_count();
+    let dense = voxels * 2;
+    let r = BuildReport {
+        preset: a.preset,
+        size: size.voxels(),
+        voxels,
+        threads: rayon::current_num_threads(),
+        generation_s,
+        construction_s,
+        construction_1_thread_s,
+        construction_mvoxels_per_s_per_core: voxels as f64 / construction_1_thread_s / 1e6,
+        construction_mvoxels_per_s: voxels as f64 / construction_s / 1e6,
+        chunk_aadf_s,
+        bytes: stats.bytes,
+        dense_u16_bytes: dense,
+        dense_over_structure: dense as f64 / stats.bytes.total as f64,
+        stats,
+    };
+    if a.json {
+        return print_json(&r);
+    }
+    println!("{} {:?}: {} voxels, {} threads", r.preset, r.size, r.voxels, r.threads);
+    println!("generation          {:.2} s", r.generation_s);
+    println!("construction        {:.2} s ({:.0} Mvoxels/s); one thread {:.2} s ({:.0} Mvoxels/s per core)", r.construction_s, r.construction_mvoxels_per_s, r.construction_1_thread_s, r.construction_mvoxels_per_s_per_core);
+    println!("chunk AADF build    {:.3} s", r.chunk_aadf_s);
+    println!("structure           {:.1} MiB vs dense u16 {:.1} MiB ({:.1}×)", r.bytes.total as f64 / 1048576.0, dense as f64 / 1048576.0, r.dense_over_structure);
+    Ok(())
+}

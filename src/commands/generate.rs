@@ -1,0 +1,49 @@
+//! `naadf generate --preset NAME [--size X,Y,Z] [--seed N] -o OUT.naadf`
+
+use super::{chunk_progress, print_json, save_world};
+use anyhow::Result;
+use naadf_world::preset::Preset;
+use naadf_world::stats::WorldStats;
+use naadf_world::{World, WorldSize};
+use std::path::PathBuf;
+
+/// Arguments of `generate`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// Preset: `terrain`, `test` or `tiled:<file.vox>`.
+    #[arg(long, default_value = "terrain")]
+    preset: String,
+    /// World size `X,Y,Z` in voxels (multiples of 64); default: the preset's.
+    #[arg(long, value_parser = parse_size)]
+    size: Option<WorldSize>,
+    /// Seed of the generator.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// World file to write.
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Print the new world's `info` as JSON on stdout.
+    #[arg(long)]
+    json: bool,
+}
+
+/// Parses `X,Y,Z` for clap.
+pub fn parse_size(s: &str) -> Result<WorldSize, String> {
+    WorldSize::parse(s).map_err(|e| e.to_string())
+}
+
+/// Generates a preset world and writes it.
+pub fn run(a: Args) -> Result<()> {
+    let world = generate(&a.preset, a.size, a.seed)?;
+    save_world(&world, &a.output)?;
+    if a.json { print_json(&WorldStats::of(&world)) } else { Ok(()) }
+}
+
+/// Builds a preset world with a progress bar.
+pub fn generate(preset: &str, size: Option<WorldSize>, seed: u64) -> Result<World> {
+    let source = Preset::parse(preset)?.source(size, seed)?;
+    let bar = chunk_progress(source.size().chunk_count() as u64, "generating");
+    let world = World::build(&*source, &|n| bar.set_position(n))?;
+    bar.finish_and_clear();
+    Ok(world)
+}

@@ -1,0 +1,68 @@
+//! One module per subcommand, plus the pieces they share: logging, progress bars, world
+//! file I/O with context, and error reporting.
+
+pub mod bench;
+pub mod export;
+pub mod generate;
+pub mod import;
+pub mod info;
+pub mod raycast;
+
+use anyhow::{Context, Result};
+use indicatif::{ProgressBar, ProgressStyle};
+use naadf_world::{World, file};
+use std::path::Path;
+use std::process::ExitCode;
+
+/// Logs go to stderr through `tracing`; `RUST_LOG` selects the level (default `warn`).
+pub fn init_logging() {
+    tracing_subscriber::fmt()
+        .with_writer(std::io::stderr)
+        .with_env_filter(tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "warn".into()))
+        .init();
+}
+
+/// Turns a command's result into an exit code, printing the error chain to stderr.
+pub fn finish(result: Result<()>) -> ExitCode {
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            // A closed stdout (e.g. `| head`) is not an error worth reporting.
+            if e.chain().any(|c| c.downcast_ref::<std::io::Error>().is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)) {
+                return ExitCode::SUCCESS;
+            }
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// A chunk progress bar on stderr (hidden when stderr is not a terminal).
+pub fn chunk_progress(total: u64, what: &str) -> ProgressBar {
+    let bar = ProgressBar::new(total);
+    bar.set_style(
+        ProgressStyle::with_template("{msg} [{elapsed_precise}] {wide_bar} {pos}/{len} chunks ({eta})")
+            .expect("valid template"),
+    );
+    bar.set_message(what.to_string());
+    bar
+}
+
+/// Loads a world file, naming it in any error.
+pub fn load_world(path: &Path) -> Result<World> {
+    file::load(path).with_context(|| format!("cannot load world {}", path.display()))
+}
+
+/// Saves a world file, naming it in any error.
+pub fn save_world(world: &World, path: &Path) -> Result<()> {
+    file::save(world, path).with_context(|| format!("cannot write world {}", path.display()))
+}
+
+/// Prints one JSON value on stdout.
+pub fn print_json(v: &impl serde::Serialize) -> Result<()> {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    serde_json::to_writer(&mut out, v)?;
+    writeln!(out)?;
+    Ok(())
+}

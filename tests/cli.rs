@@ -1,0 +1,184 @@
+//! End-to-end tests of the `naadf` CLI: real processes, real files, worlds made in code.
+
+use std::io::Write;
+use std::path::Path;
+use std::process::{Command, Output, Stdio};
+
+fn naadf(args: &[&str], stdin: Option<&str>) -> Output {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_naadf"))
+        .args(args)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawn naadf");
+    let mut input = child.stdin.take().unwrap();
+    if let Some(s) = stdin {
+        input.write_all(s.as_bytes()).unwrap();
+    }
+    drop(input);
+    child.wait_with_output().unwrap()
+}
+
+fn ok(args: &[&str], stdin: Option<&str>) -> String {
+    let out = naadf(args, stdin);
+    assert!(out.status.success(), "naadf {args:?} failed: {}", String::from_utf8_lossy(&out.stderr));
+    String::from_utf8(out.stdout).unwrap()
+}
+
+/// Runs a command that must fail cleanly: non-zero exit, a message, no panic.
+fn fails(args: &[&str], stdin: Option<&str>, needle: &str) {
+    let out = naadf(args, stdin);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "naadf {args:?} should fail");
+    assert!(!err.contains("panicked"), "naadf {args:?} panicked: {err}");
+    assert!(err.contains(needle), "naadf {args:?}: expected '{needle}' in: {err}");
+}
+
+fn p(dir: &Path, name: &str) -> String {
+    dir.join(name).to_str().unwrap().to_string()
+}
+
+fn read_raw(path: &str) -> Vec<u16> {
+    std::fs::read(path).unwrap().chunks_exact(2).map(|b| u16::from_le_bytes([b[0], b[1]])).collect()
+}
+
+#[test]
+fn generate_info_export_raycast() {
+    let dir = tempfile::tempdir().unwrap();
+    let world = p(dir.path(), "t.naadf");
+    ok(&["generate", "--preset", "test", "--size", "64,64,128", "--seed", "5", "-o", &world], None);
+    let info: serde_json::Value = serde_json::from_str(&ok(&["info", &world, "--json"], None)).unwrap();
+    assert_eq!(info["size"], serde_json::json!([64, 64, 128]));
+    for key in ["solid_voxels", "chunks", "blocks", "voxel_groups"] {
+        assert!(info[key].is_u64(), "info lacks {key}: {info}");
+    }
+    let bytes = &info["bytes"];
+    let sum: u64 = ["chunks", "blocks", "voxels", "materials"].iter().map(|k| bytes[k].as_u64().unwrap()).sum();
+    assert_eq!(bytes["total"].as_u64().unwrap(), sum);
+    let digest = info["digest"].as_str().unwrap();
+    assert!(digest.len() == 16 && digest.chars().all(|c| c.is_ascii_hexdigit() && !c.is_ascii_uppercase()));
+
+    // The same generation gives the same digest.
+    let again = p(dir.path(), "t2.naadf");
+    ok(&["generate", "--preset", "test", "--size", "64,64,128", "--seed", "5", "-o", &again], None);
+    let info2: serde_json::Value = serde_json::from_str(&ok(&["info", &again, "--json"], None)).unwrap();
+    assert_eq!(info2["digest"], info["digest"]);
+
+    let raw_path = p(dir.path(), "t.bin");
+    ok(&["export", &world, "--raw", &raw_path], None);
+    let raw = read_raw(&raw_path);
+    assert_eq!(raw.len(), 64 * 64 * 128);
+    let solid = raw.iter().filter(|&&m| m != 0).count() as u64;
+    assert_eq!(solid, info["solid_voxels"].as_u64().unwrap());
+
+    // Rays: straight down every 3rd column, plus diagonals from outside.
+    let mut rays = String::new();
+    for x in (0..64).step_by(3) {
+        for z in (0..128).step_by(5) {
+            rays += &format!("{{\"o\":[{}.5,80,{}.5],\"d\":[0,-1,0]}}\n", x, z);
+            rays += &format!("{{\"o\":[-10,70,{z}],\"d\":[1,-0.7,0.3]}}\n");
+        }
+    }
+    let outs: Vec<String> = ["naadf", "nodf", "grid"].iter().map(|m| ok(&["raycast", &world, "--method", m], Some(&rays))).collect();
+    assert_eq!(outs[0], outs[1], "naadf and nodf differ");
+    assert_eq!(outs[0], outs[2], "naadf and grid differ");
+    let at = |v: &serde_json::Value| {
+        let c: Vec<usize> = v.as_array().unwrap().iter().map(|x| x.as_u64().unwrap() as usize).collect();
+        raw[c[0] + 64 * (c[1] + 64 * c[2])]
+    };
+    let mut hits = 0;
+    for (line, ray) in outs[0].lines().zip(rays.lines()) {
+        let h: serde_json::Value = serde_json::from_str(line).unwrap();
+        if h["hit"] == true {
+            hits += 1;
+            assert_eq!(u64::from(at(&h["voxel"])), h["material"].as_u64().unwrap(), "{ray} -> {line}");
+            assert!(h["t"].as_f64().unwrap() >= 0.0);
+        } else {
+            assert_eq!(line, "{\"hit\":false}");
+        }
+    }
+    assert!(hits > 100, "only {hits} hits");
+}
+
+/// A one-model .vox file written with dot_vox.
+fn write_vox(path: &Path, size: (u32, u32, u32), voxels: &[(u8, u8, u8, u8)]) {
+    let data = dot_vox::DotVoxData {
+        version: 150,
+        index_map: (0..=255).collect(),
+        models: vec![dot_vox::Model {
+            size: dot_vox::Size { x: size.0, y: size.1, z: size.2 },
+            voxels: voxels.iter().map(|&(x, y, z, i)| dot_vox::Voxel { x, y, z, i }).collect(),
+        }],
+        palette: (0..256).map(|i| dot_vox::Color { r: i as u8, g: 255 - i as u8, b: 7, a: 255 }).collect(),
+        materials: Vec::new(),
+        scenes: Vec::new(),
+        layers: Vec::new(),
+    };
+    let mut f = std::fs::File::create(path).unwrap();
+    data.write_vox(&mut f).unwrap();
+}
+
+#[test]
+fn import_vox_maps_axes_and_colour_indices() {
+    let dir = tempfile::tempdir().unwrap();
+    let vox = dir.path().join("m.vox");
+    // vox (x, y, z) → world (x, z, y); dot_vox's `i` is the file's colour index minus one.
+    let voxels = [(0, 0, 0, 0), (3, 1, 2, 4), (9, 7, 5, 254), (9, 0, 5, 10)];
+    write_vox(&vox, (10, 8, 6), &voxels);
+    let world = p(dir.path(), "m.naadf");
+    ok(&["import", vox.to_str().unwrap(), "-o", &world], None);
+    let info: serde_json::Value = serde_json::from_str(&ok(&["info", &world, "--json"], None)).unwrap();
+    assert_eq!(info["size"], serde_json::json!([64, 64, 64]));
+    assert_eq!(info["solid_voxels"], 4);
+    let raw_path = p(dir.path(), "m.bin");
+    ok(&["export", &world, "--raw", &raw_path], None);
+    let raw = read_raw(&raw_path);
+    for &(x, y, z, i) in &voxels {
+        let (wx, wy, wz) = (x as usize, z as usize, y as usize);
+        assert_eq!(raw[wx + 64 * (wy + 64 * wz)], u16::from(i) + 1, "vox voxel {x},{y},{z}");
+    }
+}
+
+#[test]
+fn errors_are_clean() {
+    let dir = tempfile::tempdir().unwrap();
+    fails(&["info", &p(dir.path(), "missing.naadf")], None, "error:");
+    let junk = p(dir.path(), "junk.naadf");
+    std::fs::write(&junk, b"this is not a world").unwrap();
+    fails(&["info", &junk], None, "error:");
+    let vox_junk = p(dir.path(), "junk.vox");
+    std::fs::write(&vox_junk, b"VOX \x96\x00\x00\x00MAIN\xff\xff\xff\xff").unwrap();
+    fails(&["import", &vox_junk, "-o", &p(dir.path(), "x.naadf")], None, "error:");
+    fails(&["generate", "--preset", "nope", "-o", &p(dir.path(), "x.naadf")], None, "error:");
+    fails(&["generate", "--preset", "test", "--size", "100,64,64", "-o", &p(dir.path(), "x.naadf")], None, "64");
+
+    let world = p(dir.path(), "t.naadf");
+    ok(&["generate", "--preset", "test", "-o", &world], None);
+    fails(&["raycast", &world], Some("{\"o\":[1,2,3],\"d\":[0,1,0]}\n{\"o\":[1,2]}\n"), "line 2");
+    fails(&["raycast", &world], Some("{\"o\":[1,2,3],\"d\":[0,0,0]}\n"), "line 1");
+    fails(&["raycast", &world, "--method", "octree"], Some(""), "octree");
+    // A truncated world file is rejected, not half-loaded.
+    let bytes = std::fs::read(&world).unwrap();
+    let cut = p(dir.path(), "cut.naadf");
+    std::fs::write(&cut, &bytes[..bytes.len() / 2]).unwrap();
+    fails(&["info", &cut], None, "error:");
+}
+
+#[test]
+fn bench_traverse_reports_the_contract() {
+    let dir = tempfile::tempdir().unwrap();
+    let world = p(dir.path(), "t.naadf");
+    ok(&["generate", "--preset", "test", "-o", &world], None);
+    let out = ok(&["bench", "traverse", &world, "--json", "--width", "32", "--height", "18"], None);
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    for set in ["primary", "secondary"] {
+        for m in ["naadf", "nodf", "grid"] {
+            assert!(v[set][m].as_f64().unwrap() > 0.0, "{set}.{m} missing: {v}");
+        }
+    }
+    assert_eq!(v["rays"], 4 * 32 * 18);
+    assert!(v["threads"].as_u64().unwrap() >= 1);
+    assert_eq!(v["mismatches"], 0);
+}
+

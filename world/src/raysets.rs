@@ -1,0 +1,70 @@
+//! Fixed, reproducible ray sets for benchmarks: primary rays from fixed cameras placed
+//! relative to the world size, and cosine-distributed secondary rays from primary hits.
+
+use crate::camera::Camera;
+use crate::size::WorldSize;
+use crate::traverse::{Hit, Ray};
+
+/// Four fixed cameras: above the world's middle height, looking across and down at it from
+/// different sides.
+pub fn fixed_cameras(size: WorldSize) -> Vec<Camera> {
+    let s = size.voxels().map(f64::from);
+    let at = |fx: f64, fy: f64, fz: f64| [fx * s[0], fy * s[1], fz * s[2]];
+    vec![
+        Camera { pos: at(0.5, 0.7, 0.05), yaw: 0.0, pitch: -15.0, fov_y: 70.0 },
+        Camera { pos: at(0.95, 0.6, 0.5), yaw: -90.0, pitch: -10.0, fov_y: 70.0 },
+        Camera { pos: at(0.2, 0.9, 0.8), yaw: 135.0, pitch: -35.0, fov_y: 70.0 },
+        Camera { pos: at(0.5, 0.45, 0.5), yaw: 45.0, pitch: -5.0, fov_y: 90.0 },
+    ]
+}
+
+/// Primary rays of every camera at `w × h` pixels, camera by camera, row by row.
+pub fn primary_rays(cameras: &[Camera], w: u32, h: u32) -> Vec<Ray> {
+    cameras
+        .iter()
+        .flat_map(|c| {
+            let b = c.basis();
+            (0..h).flat_map(move |y| (0..w).map(move |x| c.ray(&b, x, y, w, h)))
+        })
+        .collect()
+}
+
+/// SplitMix64 step: a small, well-mixed deterministic generator.
+fn splitmix(state: &mut u64) -> u64 {
+    *state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    let mut z = *state;
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+fn unit(state: &mut u64) -> f64 {
+    (splitmix(state) >> 11) as f64 / (1u64 << 53) as f64
+}
+
+/// One cosine-distributed secondary ray per primary hit that has a face normal, leaving
+/// the hit face (offset 1e-3 along the normal). Deterministic in `seed` and the hit order.
+pub fn secondary_rays(primary: &[Ray], hits: &[Option<Hit>], seed: u64) -> Vec<Ray> {
+    let mut out = Vec::new();
+    for (i, (ray, hit)) in primary.iter().zip(hits).enumerate() {
+        let Some(h) = hit else { continue };
+        let Some(axis) = (0..3).find(|&a| h.normal[a] != 0) else { continue };
+        let n = h.normal.map(f64::from);
+        let mut st = seed ^ (i as u64).wrapping_mul(0xD1B5_4A32_D192_ED03);
+        let (u1, u2) = (unit(&mut st), unit(&mut st));
+        let (r, phi) = (u1.sqrt(), std::f64::consts::TAU * u2);
+        // Tangent axes: the two axes other than the normal's.
+        let (ta, tb) = ((axis + 1) % 3, (axis + 2) % 3);
+        let mut d = [0.0; 3];
+        d[axis] = n[axis] * (1.0 - u1).max(0.0).sqrt();
+        d[ta] = r * phi.cos();
+        d[tb] = r * phi.sin();
+        let o = ray.origin();
+        let dir = ray.dir();
+        let p: [f64; 3] = std::array::from_fn(|a| o[a] + dir[a] * h.t + n[a] * 1e-3);
+        if let Ok(s) = Ray::new(p, d) {
+            out.push(s);
+        }
+    }
+    out
+}
