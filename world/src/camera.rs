@@ -74,13 +74,14 @@ impl Camera {
         Basis { forward, right, up }
     }
 
-    /// The primary ray through pixel `(px, py)` of a `w × h` image.
-    pub fn ray(&self, basis: &Basis, px: u32, py: u32, w: u32, h: u32) -> Ray {
+    /// The primary ray through pixel `(px, py)` of a `w × h` image. Fails only for a
+    /// position beyond [`crate::traverse::ray::MAX_COORD`].
+    pub fn ray(&self, basis: &Basis, px: u32, py: u32, w: u32, h: u32) -> Result<Ray, WorldError> {
         let a = (self.fov_y.to_radians() / 2.0).tan();
         let sx = (2.0 * (f64::from(px) + 0.5) / f64::from(w) - 1.0) * a * f64::from(w) / f64::from(h);
         let sy = (1.0 - 2.0 * (f64::from(py) + 0.5) / f64::from(h)) * a;
         let d: [f64; 3] = std::array::from_fn(|i| basis.forward[i] + sx * basis.right[i] + sy * basis.up[i]);
-        Ray::new(self.pos, normalize(d)).expect("camera rays have finite non-zero directions")
+        Ray::new(self.pos, normalize(d))
     }
 }
 
@@ -96,7 +97,7 @@ mod tests {
         // Yaw 90 looks along +X; right is then −Z.
         assert!((b.forward[0] - 1.0).abs() < 1e-12 && (b.right[2] + 1.0).abs() < 1e-12);
         // The top-left pixel of a square image looks up and to the left.
-        let r = c.ray(&b, 0, 0, 2, 2);
+        let r = c.ray(&b, 0, 0, 2, 2).unwrap();
         assert!(r.dir()[1] > 0.0 && r.dir()[2] > 0.0);
         assert!(Camera::from_json(r#"{"pos":[0,0],"yaw":0,"pitch":0}"#).is_err());
         assert!(Camera::from_json(r#"{"pos":[0,0,0],"yaw":0,"pitch":0,"fov_y":180}"#).is_err());

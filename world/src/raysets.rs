@@ -18,13 +18,14 @@ pub fn fixed_cameras(size: WorldSize) -> Vec<Camera> {
     ]
 }
 
-/// Primary rays of every camera at `w × h` pixels, camera by camera, row by row.
+/// Primary rays of every camera at `w × h` pixels, camera by camera, row by row (pixels
+/// whose ray is invalid, i.e. cameras absurdly far away, are left out).
 pub fn primary_rays(cameras: &[Camera], w: u32, h: u32) -> Vec<Ray> {
     cameras
         .iter()
         .flat_map(|c| {
             let b = c.basis();
-            (0..h).flat_map(move |y| (0..w).map(move |x| c.ray(&b, x, y, w, h)))
+            (0..h).flat_map(move |y| (0..w).filter_map(move |x| c.ray(&b, x, y, w, h).ok()))
         })
         .collect()
 }

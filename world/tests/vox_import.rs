@@ -874,28 +874,3 @@ fn shared_vox_files() {
         println!("  {MUTATIONS} mutations: {ok} imported, {err} refused");
     }
 }
-#[test]
-fn zz_perf() {
-    let mut scenes = vec![trn(1, &[]), grp(&[])];
-    let mut ch = vec![];
-    for i in 0..27u32 {
-        let id = scenes.len() as u32; ch.push(id);
-        let t = format!("{} {} {}", (i % 3) * 200, (i / 3 % 3) * 200, (i / 9) * 200);
-        scenes.push(trn(id + 1, &[("_t", &t), ("_r", &["4", "17", "116"][i as usize % 3].to_string())]));
-        scenes.push(shp(i % 2));
-    }
-    scenes[1] = grp(&ch);
-    let d = file(vec![noisy_model([256, 256, 200], 1), noisy_model([180, 220, 256], 2)], scenes);
-    let s = VoxScene::from_bytes(&bytes(&d)).unwrap();
-    let size = s.world_size().unwrap();
-    let t0 = std::time::Instant::now();
-    let mut out = [0u16; 4096];
-    let mut acc = 0u64;
-    for i in 0..size.chunk_count() { let c = size.chunk_coords(i); if s.uniform_hint(c).is_none() { s.fill_chunk(c, &mut out); acc += out[5] as u64; } }
-    println!("fill all chunks (1 thread) {:?} {acc}", t0.elapsed());
-    let t = TiledVox::new(s.clone(), WorldSize::new(2048, 704, 2048).unwrap());
-    let t0 = std::time::Instant::now();
-    let size = t.size();
-    for i in (0..size.chunk_count()).step_by(7) { let c = size.chunk_coords(i); if t.uniform_hint(c).is_none() { t.fill_chunk(c, &mut out); acc += out[5] as u64; } }
-    println!("tiled 1/7 chunks {:?} {acc}", t0.elapsed());
-}

@@ -345,7 +345,7 @@ impl Terrain {
     fn overhang(&self, x: i32, y: i32, z: i32) -> f32 {
         let l = self.p.over_len;
         let n = fbm3(self.s.overhang, x as f32 / l, y as f32 / (0.6 * l), z as f32 / l, 2);
-        (3.0 * n).clamp(-1.0, 1.0)
+        (5.0 * n).clamp(-1.0, 1.0)
     }
 
     /// Cave fields at a 3D lattice point: two tunnel noises and the cavern noise.
@@ -948,5 +948,30 @@ mod scratch_tmp {
             if lat.a[2][2] > 0.0 { cols += 1; }
         }}
         eprintln!("overhang bottoms {n}, chunk columns with A>0 {cols}/1024, amax {amax}, best {best:?}");
+    }
+}
+#[cfg(test)]
+mod scratch_tmp2 {
+    use super::*;
+    #[test]
+    #[ignore]
+    fn profile() {
+        let t = Terrain::new(WorldSize::new(512, 256, 512).unwrap(), 1);
+        let mut shown = 0;
+        'o: for x in (0..512).step_by(4) { for z in (0..512).step_by(4) {
+            let (h, a) = t.lattice_point(x, z);
+            if a > 10.0 {
+                let ns: Vec<String> = ((h - 20.0) as i32..(h + 20.0) as i32).step_by(4).map(|y| format!("{:.2}", t.overhang(x, y, z))).collect();
+                eprintln!("x{x} z{z} h{h:.1} a{a:.1} n: {}", ns.join(" "));
+                let mut out = Box::new([0u16; CHUNK_VOXELS]);
+                let mut col = String::new();
+                for y in (h - 20.0) as i32..(h + 20.0) as i32 {
+                    t.fill_chunk([(x / 16) as u32, (y / 16) as u32, (z / 16) as u32], &mut out);
+                    col.push_str(&format!("{} ", out[(x % 16) as usize + 16 * (y % 16) as usize + 256 * (z % 16) as usize]));
+                }
+                eprintln!("   {col}");
+                shown += 1; if shown > 8 { break 'o; }
+            }
+        }}
     }
 }

@@ -39,6 +39,10 @@ pub(crate) struct Entry {
     pub axis: Option<usize>,
 }
 
+/// Largest accepted origin coordinate: far beyond any world, small enough that cell
+/// indices and boundary times stay exact in `i64` and `f64`.
+pub const MAX_COORD: f64 = (1u64 << 30) as f64;
+
 /// Far-away cell bound for unconstrained axes.
 const FAR: i64 = 1 << 40;
 
@@ -53,8 +57,8 @@ impl Ray {
     /// ```
     pub fn new(origin: [f64; 3], dir: [f64; 3]) -> Result<Self, WorldError> {
         let len = dir.iter().map(|v| v * v).sum::<f64>().sqrt();
-        if !origin.iter().all(|v| v.is_finite()) || !len.is_finite() || len == 0.0 {
-            return Err(WorldError::InvalidRay(format!("origin {origin:?}, direction {dir:?}: need a finite origin and a finite non-zero direction")));
+        if !origin.iter().all(|v| v.is_finite() && v.abs() <= MAX_COORD) || !len.is_finite() || len == 0.0 {
+            return Err(WorldError::InvalidRay(format!("origin {origin:?}, direction {dir:?}: need a finite origin within ±2^30 and a finite non-zero direction")));
         }
         Ok(Ray { o: origin, d: dir.map(|v| v / len) })
     }
