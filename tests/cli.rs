@@ -22,7 +22,11 @@ fn naadf(args: &[&str], stdin: Option<&str>) -> Output {
 
 fn ok(args: &[&str], stdin: Option<&str>) -> String {
     let out = naadf(args, stdin);
-    assert!(out.status.success(), "naadf {args:?} failed: {}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "naadf {args:?} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     String::from_utf8(out.stdout).unwrap()
 }
 
@@ -40,28 +44,61 @@ fn p(dir: &Path, name: &str) -> String {
 }
 
 fn read_raw(path: &str) -> Vec<u16> {
-    std::fs::read(path).unwrap().chunks_exact(2).map(|b| u16::from_le_bytes([b[0], b[1]])).collect()
+    std::fs::read(path)
+        .unwrap()
+        .chunks_exact(2)
+        .map(|b| u16::from_le_bytes([b[0], b[1]]))
+        .collect()
 }
 
 #[test]
 fn generate_info_export_raycast() {
     let dir = tempfile::tempdir().unwrap();
     let world = p(dir.path(), "t.naadf");
-    ok(&["generate", "--preset", "test", "--size", "64,64,128", "--seed", "5", "-o", &world], None);
+    ok(
+        &[
+            "generate",
+            "--preset",
+            "test",
+            "--size",
+            "64,64,128",
+            "--seed",
+            "5",
+            "-o",
+            &world,
+        ],
+        None,
+    );
     let info: serde_json::Value = serde_json::from_str(&ok(&["info", &world, "--json"], None)).unwrap();
     assert_eq!(info["size"], serde_json::json!([64, 64, 128]));
     for key in ["solid_voxels", "chunks", "blocks", "voxel_groups"] {
         assert!(info[key].is_u64(), "info lacks {key}: {info}");
     }
     let bytes = &info["bytes"];
-    let sum: u64 = ["chunks", "blocks", "voxels", "materials"].iter().map(|k| bytes[k].as_u64().unwrap()).sum();
+    let sum: u64 = ["chunks", "blocks", "voxels", "materials"]
+        .iter()
+        .map(|k| bytes[k].as_u64().unwrap())
+        .sum();
     assert_eq!(bytes["total"].as_u64().unwrap(), sum);
     let digest = info["digest"].as_str().unwrap();
     assert!(digest.len() == 16 && digest.chars().all(|c| c.is_ascii_hexdigit() && !c.is_ascii_uppercase()));
 
     // The same generation gives the same digest.
     let again = p(dir.path(), "t2.naadf");
-    ok(&["generate", "--preset", "test", "--size", "64,64,128", "--seed", "5", "-o", &again], None);
+    ok(
+        &[
+            "generate",
+            "--preset",
+            "test",
+            "--size",
+            "64,64,128",
+            "--seed",
+            "5",
+            "-o",
+            &again,
+        ],
+        None,
+    );
     let info2: serde_json::Value = serde_json::from_str(&ok(&["info", &again, "--json"], None)).unwrap();
     assert_eq!(info2["digest"], info["digest"]);
 
@@ -80,11 +117,19 @@ fn generate_info_export_raycast() {
             rays += &format!("{{\"o\":[-10,70,{z}],\"d\":[1,-0.7,0.3]}}\n");
         }
     }
-    let outs: Vec<String> = ["naadf", "nodf", "grid"].iter().map(|m| ok(&["raycast", &world, "--method", m], Some(&rays))).collect();
+    let outs: Vec<String> = ["naadf", "nodf", "grid"]
+        .iter()
+        .map(|m| ok(&["raycast", &world, "--method", m], Some(&rays)))
+        .collect();
     assert_eq!(outs[0], outs[1], "naadf and nodf differ");
     assert_eq!(outs[0], outs[2], "naadf and grid differ");
     let at = |v: &serde_json::Value| {
-        let c: Vec<usize> = v.as_array().unwrap().iter().map(|x| x.as_u64().unwrap() as usize).collect();
+        let c: Vec<usize> = v
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|x| x.as_u64().unwrap() as usize)
+            .collect();
         raw[c[0] + 64 * (c[1] + 64 * c[2])]
     };
     let mut hits = 0;
@@ -92,7 +137,11 @@ fn generate_info_export_raycast() {
         let h: serde_json::Value = serde_json::from_str(line).unwrap();
         if h["hit"] == true {
             hits += 1;
-            assert_eq!(u64::from(at(&h["voxel"])), h["material"].as_u64().unwrap(), "{ray} -> {line}");
+            assert_eq!(
+                u64::from(at(&h["voxel"])),
+                h["material"].as_u64().unwrap(),
+                "{ray} -> {line}"
+            );
             assert!(h["t"].as_f64().unwrap() >= 0.0);
         } else {
             assert_eq!(line, "{\"hit\":false}");
@@ -107,10 +156,24 @@ fn write_vox(path: &Path, size: (u32, u32, u32), voxels: &[(u8, u8, u8, u8)]) {
         version: 150,
         index_map: (0..=255).collect(),
         models: vec![dot_vox::Model {
-            size: dot_vox::Size { x: size.0, y: size.1, z: size.2 },
-            voxels: voxels.iter().map(|&(x, y, z, i)| dot_vox::Voxel { x, y, z, i }).collect(),
+            size: dot_vox::Size {
+                x: size.0,
+                y: size.1,
+                z: size.2,
+            },
+            voxels: voxels
+                .iter()
+                .map(|&(x, y, z, i)| dot_vox::Voxel { x, y, z, i })
+                .collect(),
         }],
-        palette: (0..256).map(|i| dot_vox::Color { r: i as u8, g: 255 - i as u8, b: 7, a: 255 }).collect(),
+        palette: (0..256)
+            .map(|i| dot_vox::Color {
+                r: i as u8,
+                g: 255 - i as u8,
+                b: 7,
+                a: 255,
+            })
+            .collect(),
         materials: Vec::new(),
         scenes: Vec::new(),
         layers: Vec::new(),
@@ -150,12 +213,32 @@ fn errors_are_clean() {
     let vox_junk = p(dir.path(), "junk.vox");
     std::fs::write(&vox_junk, b"VOX \x96\x00\x00\x00MAIN\xff\xff\xff\xff").unwrap();
     fails(&["import", &vox_junk, "-o", &p(dir.path(), "x.naadf")], None, "error:");
-    fails(&["generate", "--preset", "nope", "-o", &p(dir.path(), "x.naadf")], None, "error:");
-    fails(&["generate", "--preset", "test", "--size", "100,64,64", "-o", &p(dir.path(), "x.naadf")], None, "64");
+    fails(
+        &["generate", "--preset", "nope", "-o", &p(dir.path(), "x.naadf")],
+        None,
+        "error:",
+    );
+    fails(
+        &[
+            "generate",
+            "--preset",
+            "test",
+            "--size",
+            "100,64,64",
+            "-o",
+            &p(dir.path(), "x.naadf"),
+        ],
+        None,
+        "64",
+    );
 
     let world = p(dir.path(), "t.naadf");
     ok(&["generate", "--preset", "test", "-o", &world], None);
-    fails(&["raycast", &world], Some("{\"o\":[1,2,3],\"d\":[0,1,0]}\n{\"o\":[1,2]}\n"), "line 2");
+    fails(
+        &["raycast", &world],
+        Some("{\"o\":[1,2,3],\"d\":[0,1,0]}\n{\"o\":[1,2]}\n"),
+        "line 2",
+    );
     fails(&["raycast", &world], Some("{\"o\":[1,2,3],\"d\":[0,0,0]}\n"), "line 1");
     fails(&["raycast", &world, "--method", "octree"], Some(""), "octree");
     // A truncated world file is rejected, not half-loaded.
@@ -170,7 +253,10 @@ fn bench_traverse_reports_the_contract() {
     let dir = tempfile::tempdir().unwrap();
     let world = p(dir.path(), "t.naadf");
     ok(&["generate", "--preset", "test", "-o", &world], None);
-    let out = ok(&["bench", "traverse", &world, "--json", "--width", "32", "--height", "18"], None);
+    let out = ok(
+        &["bench", "traverse", &world, "--json", "--width", "32", "--height", "18"],
+        None,
+    );
     let v: serde_json::Value = serde_json::from_str(&out).unwrap();
     for set in ["primary", "secondary"] {
         for m in ["naadf", "nodf", "grid"] {
@@ -181,4 +267,3 @@ fn bench_traverse_reports_the_contract() {
     assert!(v["threads"].as_u64().unwrap() >= 1);
     assert_eq!(v["mismatches"], 0);
 }
-

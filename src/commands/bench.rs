@@ -9,7 +9,7 @@ use naadf_world::model::ModelTable;
 use naadf_world::preset::Preset;
 use naadf_world::raysets::{fixed_cameras, primary_rays, secondary_rays};
 use naadf_world::stats::WorldStats;
-use naadf_world::traverse::{Hit, Method, Ray, Tracer};
+use naadf_world::traverse::{Hit, Method, Ray, Tracer, same_result};
 use naadf_world::{ChunkSource, MaterialTable, World, WorldSize};
 use rayon::prelude::*;
 use serde::Serialize;
@@ -110,12 +110,11 @@ fn time_rays(tracer: &Tracer, rays: &[Ray], repeat: u32) -> (f64, Vec<Option<Hit
     (rays.len() as f64 / best / 1e6, hits, mean)
 }
 
-fn same(a: &Option<Hit>, b: &Option<Hit>) -> bool {
-    match (a, b) {
-        (None, None) => true,
-        (Some(a), Some(b)) => a.voxel == b.voxel && a.normal == b.normal && a.material == b.material && (a.t - b.t).abs() <= 1e-4 * a.t.max(1.0),
-        _ => false,
-    }
+/// The results of the first method run, which the other methods must reproduce.
+struct Reference {
+    primary_hits: Vec<Option<Hit>>,
+    secondary: Vec<Ray>,
+    secondary_hits: Vec<Option<Hit>>,
 }
 
 fn traverse(a: TraverseArgs) -> Result<()> {
@@ -130,7 +129,8 @@ fn traverse(a: TraverseArgs) -> Result<()> {
         steps: BTreeMap::new(),
         mismatches: 0,
     };
-    let mut reference: Option<(Vec<Option<Hit>>, Vec<Ray>, Vec<Option<Hit>>)> = None;
+    // The first method's results, which the others must reproduce.
+    let mut reference: Option<Reference> = None;
     for method in Method::ALL {
         let tracer = match Tracer::new(&world, method) {
             Ok(t) => t,
@@ -141,32 +141,62 @@ fn traverse(a: TraverseArgs) -> Result<()> {
         };
         let (p_rate, p_hits, p_steps) = time_rays(&tracer, &primary, a.repeat);
         let secondary = match &reference {
-            Some((_, s, _)) => s.clone(),
+            Some(r) => r.secondary.clone(),
             None => secondary_rays(&primary, &p_hits, a.seed),
         };
         let (s_rate, s_hits, s_steps) = time_rays(&tracer, &secondary, a.repeat);
         match &reference {
-            None => reference = Some((p_hits, secondary, s_hits)),
-            Some((rp, _, rs)) => {
-                report.mismatches += rp.iter().zip(&p_hits).filter(|(x, y)| !same(x, y)).count();
-                report.mismatches += rs.iter().zip(&s_hits).filter(|(x, y)| !same(x, y)).count();
+            None => {
+                reference = Some(Reference {
+                    primary_hits: p_hits,
+                    secondary,
+                    secondary_hits: s_hits,
+                })
+            }
+            Some(r) => {
+                report.mismatches += r
+                    .primary_hits
+                    .iter()
+                    .zip(&p_hits)
+                    .filter(|(x, y)| !same_result(x, y))
+                    .count();
+                report.mismatches += r
+                    .secondary_hits
+                    .iter()
+                    .zip(&s_hits)
+                    .filter(|(x, y)| !same_result(x, y))
+                    .count();
             }
         }
         report.primary.insert(method.name(), p_rate);
         report.secondary.insert(method.name(), s_rate);
         report.steps.insert(method.name(), [p_steps, s_steps]);
         if !a.json {
-            eprintln!("{:>6}: primary {p_rate:8.2} Mrays/s ({p_steps:.1} steps/hit), secondary {s_rate:8.2} Mrays/s ({s_steps:.1} steps/hit)", method.name());
+            eprintln!(
+                "{:>6}: primary {p_rate:8.2} Mrays/s ({p_steps:.1} steps/hit), secondary {s_rate:8.2} Mrays/s ({s_steps:.1} steps/hit)",
+                method.name()
+            );
         }
     }
-    report.secondary_rays = reference.as_ref().map_or(0, |r| r.1.len());
+    report.secondary_rays = reference.as_ref().map_or(0, |r| r.secondary.len());
     if a.json {
         print_json(&report)?;
     } else {
         let ratio = |set: &BTreeMap<&str, f64>, other: &str| set.get(other).map_or(f64::NAN, |o| set["naadf"] / o);
-        println!("{} primary + {} secondary rays, {} threads", report.rays, report.secondary_rays, report.threads);
-        println!("naadf/grid: primary {:.1}×, secondary {:.1}×", ratio(&report.primary, "grid"), ratio(&report.secondary, "grid"));
-        println!("naadf/nodf: primary {:.1}×, secondary {:.1}×", ratio(&report.primary, "nodf"), ratio(&report.secondary, "nodf"));
+        println!(
+            "{} primary + {} secondary rays, {} threads",
+            report.rays, report.secondary_rays, report.threads
+        );
+        println!(
+            "naadf/grid: primary {:.1}×, secondary {:.1}×",
+            ratio(&report.primary, "grid"),
+            ratio(&report.secondary, "grid")
+        );
+        println!(
+            "naadf/nodf: primary {:.1}×, secondary {:.1}×",
+            ratio(&report.primary, "nodf"),
+            ratio(&report.secondary, "nodf")
+        );
     }
     if report.mismatches > 0 {
         bail!("{} rays differ between methods", report.mismatches);
@@ -245,9 +275,16 @@ fn build(a: BuildArgs) -> Result<()> {
         .collect();
     let generation_s = t0.elapsed().as_secs_f64();
     bar.finish_and_clear();
-    let mem = MemorySource { size, materials: source.materials(), models: source.models(), chunks };
+    let mem = MemorySource {
+        size,
+        materials: source.materials(),
+        models: source.models(),
+        chunks,
+    };
     let timed_build = |threads: Option<usize>| -> Result<(World, f64, f64)> {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads.unwrap_or(0)).build()?;
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads.unwrap_or(0))
+            .build()?;
         pool.install(|| {
             let t0 = Instant::now();
             let mut w = World::build(&mem, &|_| {})?;
@@ -284,8 +321,19 @@ fn build(a: BuildArgs) -> Result<()> {
     }
     println!("{} {:?}: {} voxels, {} threads", r.preset, r.size, r.voxels, r.threads);
     println!("generation          {:.2} s", r.generation_s);
-    println!("construction        {:.2} s ({:.0} Mvoxels/s); one thread {:.2} s ({:.0} Mvoxels/s per core)", r.construction_s, r.construction_mvoxels_per_s, r.construction_1_thread_s, r.construction_mvoxels_per_s_per_core);
+    println!(
+        "construction        {:.2} s ({:.0} Mvoxels/s); one thread {:.2} s ({:.0} Mvoxels/s per core)",
+        r.construction_s,
+        r.construction_mvoxels_per_s,
+        r.construction_1_thread_s,
+        r.construction_mvoxels_per_s_per_core
+    );
     println!("chunk AADF build    {:.3} s", r.chunk_aadf_s);
-    println!("structure           {:.1} MiB vs dense u16 {:.1} MiB ({:.1}×)", r.bytes.total as f64 / 1048576.0, dense as f64 / 1048576.0, r.dense_over_structure);
+    println!(
+        "structure           {:.1} MiB vs dense u16 {:.1} MiB ({:.1}×)",
+        r.bytes.total as f64 / 1048576.0,
+        dense as f64 / 1048576.0,
+        r.dense_over_structure
+    );
     Ok(())
 }

@@ -36,7 +36,11 @@ pub fn parse_size(s: &str) -> Result<WorldSize, String> {
 pub fn run(a: Args) -> Result<()> {
     let world = generate(&a.preset, a.size, a.seed)?;
     save_world(&world, &a.output)?;
-    if a.json { print_json(&WorldStats::of(&world)) } else { Ok(()) }
+    if a.json {
+        print_json(&WorldStats::of(&world))
+    } else {
+        Ok(())
+    }
 }
 
 /// Builds a preset world with a progress bar.

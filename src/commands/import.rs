@@ -29,5 +29,9 @@ pub fn run(a: Args) -> Result<()> {
     bar.finish_and_clear();
     save_world(&world, &a.output)?;
     tracing::info!(size = %size, "imported {}", a.input.display());
-    if a.json { print_json(&WorldStats::of(&world)) } else { Ok(()) }
+    if a.json {
+        print_json(&WorldStats::of(&world))
+    } else {
+        Ok(())
+    }
 }

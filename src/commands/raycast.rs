@@ -40,7 +40,13 @@ struct HitLine {
 
 impl From<Option<Hit>> for HitLine {
     fn from(h: Option<Hit>) -> Self {
-        HitLine { hit: h.is_some(), voxel: h.map(|h| h.voxel), normal: h.map(|h| h.normal), t: h.map(|h| h.t), material: h.map(|h| h.material) }
+        HitLine {
+            hit: h.is_some(),
+            voxel: h.map(|h| h.voxel),
+            normal: h.map(|h| h.normal),
+            t: h.map(|h| h.t),
+            material: h.map(|h| h.material),
+        }
     }
 }
 
@@ -62,7 +68,8 @@ pub fn run(a: Args) -> Result<()> {
             if line.trim().is_empty() {
                 continue;
             }
-            let r: RayLine = serde_json::from_str(&line).with_context(|| format!("line {}: expected {{\"o\":[x,y,z],\"d\":[x,y,z]}}", n + 1))?;
+            let r: RayLine = serde_json::from_str(&line)
+                .with_context(|| format!("line {}: expected {{\"o\":[x,y,z],\"d\":[x,y,z]}}", n + 1))?;
             match Ray::new(r.o, r.d) {
                 Ok(ray) => rays.push(ray),
                 Err(e) => bail!("line {}: {e}", n + 1),

@@ -14,11 +14,15 @@ use std::hint::black_box;
 fn cells(c: &mut Criterion) {
     let voxels: [u16; 64] = std::array::from_fn(|i| if (i * 7) % 5 == 0 { 3 } else { 0 });
     c.bench_function("block_hash", |b| b.iter(|| block_hash(black_box(&voxels))));
-    c.bench_function("group_words (hash-free encode + voxel AADF)", |b| b.iter(|| group_words(black_box(&voxels))));
+    c.bench_function("group_words (hash-free encode + voxel AADF)", |b| {
+        b.iter(|| group_words(black_box(&voxels)))
+    });
     let mask = 0x0F0F_00FF_F0F0_FF00u64;
     c.bench_function("cell_aadf4 bit-sliced", |b| b.iter(|| cell_aadf4(black_box(mask))));
     let flags: Vec<bool> = (0..64).map(|i| mask >> i & 1 == 1).collect();
-    c.bench_function("cell_aadf4 scalar reference", |b| b.iter(|| grid_aadf([4, 4, 4], black_box(&flags), 3, false)));
+    c.bench_function("cell_aadf4 scalar reference", |b| {
+        b.iter(|| grid_aadf([4, 4, 4], black_box(&flags), 3, false))
+    });
 }
 
 fn build_and_trace(c: &mut Criterion) {
@@ -27,7 +31,9 @@ fn build_and_trace(c: &mut Criterion) {
     let mut g = c.benchmark_group("terrain 256×128×256");
     g.sample_size(10);
     g.throughput(Throughput::Elements(size.voxel_count()));
-    g.bench_function("build (generation included)", |b| b.iter(|| World::build(&*source, &|_| {}).unwrap()));
+    g.bench_function("build (generation included)", |b| {
+        b.iter(|| World::build(&*source, &|_| {}).unwrap())
+    });
     let world = World::build(&*source, &|_| {}).unwrap();
     let rays = primary_rays(&fixed_cameras(size), 64, 36);
     g.throughput(Throughput::Elements(rays.len() as u64));

@@ -111,7 +111,10 @@ pub(crate) fn plan_chunk(raw: &[u16; CHUNK_VOXELS], max_id: u16) -> Result<Chunk
             blocks[b] = u32::from(fields[b]);
         }
     }
-    Ok(ChunkPlan::Mixed { blocks: Box::new(blocks), groups })
+    Ok(ChunkPlan::Mixed {
+        blocks: Box::new(blocks),
+        groups,
+    })
 }
 
 /// The 32 stored words of a voxel group with material ids `v`: solid voxels as
@@ -122,13 +125,7 @@ pub fn group_words(v: &[u16; 64]) -> [u32; GROUP_WORDS] {
         .enumerate()
         .fold(0u64, |m, (i, &x)| m | (u64::from(x == 0) << i));
     let fields = cell_aadf4(empty);
-    let cellv = |i: usize| {
-        u32::from(if v[i] == 0 {
-            fields[i]
-        } else {
-            cell::voxel(v[i])
-        })
-    };
+    let cellv = |i: usize| u32::from(if v[i] == 0 { fields[i] } else { cell::voxel(v[i]) });
     std::array::from_fn(|w| cellv(2 * w) | (cellv(2 * w + 1) << 16))
 }
 
@@ -152,11 +149,7 @@ pub(crate) fn plan_all(
                 |raw, i| {
                     let c = size.chunk_coords(i);
                     if let Some(m) = source.uniform_hint(c) {
-                        return if m > max_id {
-                            Err(m)
-                        } else {
-                            Ok(ChunkPlan::Uniform(m))
-                        };
+                        return if m > max_id { Err(m) } else { Ok(ChunkPlan::Uniform(m)) };
                     }
                     source.fill_chunk(c, raw);
                     plan_chunk(raw, max_id)

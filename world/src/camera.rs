@@ -44,7 +44,11 @@ fn normalize(v: [f64; 3]) -> [f64; 3] {
 }
 
 fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
 }
 
 impl Camera {
@@ -53,7 +57,9 @@ impl Camera {
         let c: Camera = serde_json::from_str(s).map_err(|e| WorldError::InvalidRay(format!("camera JSON: {e}")))?;
         let finite = c.pos.iter().chain([&c.yaw, &c.pitch, &c.fov_y]).all(|v| v.is_finite());
         if !(finite && c.fov_y > 0.0 && c.fov_y < 180.0) {
-            return Err(WorldError::InvalidRay(format!("camera {s}: values must be finite and 0 < fov_y < 180")));
+            return Err(WorldError::InvalidRay(format!(
+                "camera {s}: values must be finite and 0 < fov_y < 180"
+            )));
         }
         Ok(c)
     }

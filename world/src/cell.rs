@@ -102,11 +102,7 @@ pub fn voxel_is_solid(v: u16) -> bool {
 /// Material of a 16-bit voxel (0 when empty).
 #[inline]
 pub fn voxel_material(v: u16) -> u16 {
-    if voxel_is_solid(v) {
-        v & MAX_MATERIAL
-    } else {
-        0
-    }
+    if voxel_is_solid(v) { v & MAX_MATERIAL } else { 0 }
 }
 
 /// Voxel `i` of the group starting at word `ptr`.

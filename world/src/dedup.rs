@@ -40,13 +40,7 @@ struct GroupMap {
 impl GroupMap {
     fn with_bits(bits: u32) -> Self {
         Self {
-            slots: vec![
-                Slot {
-                    group: EMPTY,
-                    hash: 0
-                };
-                1 << bits
-            ],
+            slots: vec![Slot { group: EMPTY, hash: 0 }; 1 << bits],
             bits,
             live: 0,
             used: 0,
@@ -61,12 +55,7 @@ impl GroupMap {
 
     /// The group holding exactly `words`, or where to insert it (`None` if the probe
     /// limit was hit without a free slot).
-    fn find(
-        &self,
-        hash: u32,
-        words: &[u32; GROUP_WORDS],
-        voxels: &[u32],
-    ) -> Result<u32, Option<usize>> {
+    fn find(&self, hash: u32, words: &[u32; GROUP_WORDS], voxels: &[u32]) -> Result<u32, Option<usize>> {
         let mask = self.slots.len() - 1;
         let mut at = self.home(hash);
         let mut vacant = None;
@@ -154,8 +143,7 @@ impl Default for GroupStore {
 
 /// Hash of a stored group: the reference hash of its material ids.
 pub fn stored_group_hash(voxels: &[u32], ptr: usize) -> u32 {
-    let raw: [u16; 64] =
-        std::array::from_fn(|i| cell::voxel_material(cell::group_voxel(voxels, ptr, i)));
+    let raw: [u16; 64] = std::array::from_fn(|i| cell::voxel_material(cell::group_voxel(voxels, ptr, i)));
     block_hash(&raw)
 }
 
@@ -163,12 +151,7 @@ impl GroupStore {
     /// Takes a reference to the group with content `words` (final cells, AADF bits set),
     /// storing it in the lowest free slot (else appending) if it is new. Returns the group's
     /// word pointer.
-    pub fn acquire(
-        &mut self,
-        voxels: &mut Vec<u32>,
-        hash: u32,
-        words: &[u32; GROUP_WORDS],
-    ) -> Result<u32, WorldError> {
+    pub fn acquire(&mut self, voxels: &mut Vec<u32>, hash: u32, words: &[u32; GROUP_WORDS]) -> Result<u32, WorldError> {
         self.map.reserve_one();
         let vacant = match self.map.find(hash, words, voxels) {
             Ok(g) => {
@@ -231,9 +214,7 @@ impl GroupStore {
                 continue;
             }
             let hash = stored_group_hash(voxels, g * GROUP_WORDS);
-            let words: &[u32; GROUP_WORDS] = voxels[g * GROUP_WORDS..][..GROUP_WORDS]
-                .try_into()
-                .expect("32 words");
+            let words: &[u32; GROUP_WORDS] = voxels[g * GROUP_WORDS..][..GROUP_WORDS].try_into().expect("32 words");
             s.map.reserve_one();
             // An identical earlier group keeps the map entry; this one stays unshared.
             if let Err(Some(at)) = s.map.find(hash, words, voxels) {
@@ -245,10 +226,7 @@ impl GroupStore {
 
     /// Live references to the group at word pointer `ptr`.
     pub fn refs(&self, ptr: u32) -> u32 {
-        self.refs
-            .get(ptr as usize / GROUP_WORDS)
-            .copied()
-            .unwrap_or(0)
+        self.refs.get(ptr as usize / GROUP_WORDS).copied().unwrap_or(0)
     }
 
     /// Number of live (referenced) groups.
@@ -291,11 +269,7 @@ mod tests {
         // b is still found through the tombstone left by a.
         assert_eq!(s.acquire(&mut voxels, hb, &b).unwrap(), pb);
         let (c, hc) = group(3);
-        assert_eq!(
-            s.acquire(&mut voxels, hc, &c).unwrap(),
-            0,
-            "lowest free slot first"
-        );
+        assert_eq!(s.acquire(&mut voxels, hc, &c).unwrap(), 0, "lowest free slot first");
     }
 
     #[test]

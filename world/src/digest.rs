@@ -57,16 +57,10 @@ impl fmt::Display for Digest {
 impl FromStr for Digest {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
-        if s.len() != 16
-            || !s
-                .bytes()
-                .all(|b| b.is_ascii_digit() || (b'a'..=b'f').contains(&b))
-        {
+        if s.len() != 16 || !s.bytes().all(|b| b.is_ascii_digit() || (b'a'..=b'f').contains(&b)) {
             return Err(format!("'{s}' is not 16 lowercase hex digits"));
         }
-        u64::from_str_radix(s, 16)
-            .map(Digest)
-            .map_err(|e| e.to_string())
+        u64::from_str_radix(s, 16).map(Digest).map_err(|e| e.to_string())
     }
 }
 
@@ -121,8 +115,7 @@ impl PagedDigest {
         let kept = pages.len();
         pages.resize(new_pages, 0);
         // Dirty pages, plus everything from the old end on if the length changed.
-        let mut todo: Vec<usize> =
-            (dirty.start / PAGE_BYTES..dirty.end.div_ceil(PAGE_BYTES).min(new_pages)).collect();
+        let mut todo: Vec<usize> = (dirty.start / PAGE_BYTES..dirty.end.div_ceil(PAGE_BYTES).min(new_pages)).collect();
         if *old_bytes != bytes.len() {
             todo.extend((*old_bytes).min(bytes.len()) / PAGE_BYTES..new_pages);
         }
@@ -160,10 +153,7 @@ mod tests {
         let mut msg = 3u32.to_le_bytes().to_vec();
         msg.extend_from_slice(&0u32.to_le_bytes());
         msg.extend_from_slice(&bytes);
-        assert_eq!(
-            digest_of(BufferId::Voxels, &bytes).0,
-            xxhash_rust::xxh3::xxh3_64(&msg)
-        );
+        assert_eq!(digest_of(BufferId::Voxels, &bytes).0, xxhash_rust::xxh3::xxh3_64(&msg));
     }
 
     proptest! {

@@ -95,10 +95,7 @@ impl Material {
 
     /// Checks that every value is finite and in range.
     pub fn validate(&self) -> Result<(), WorldError> {
-        let ok = self
-            .albedo
-            .iter()
-            .all(|c| c.is_finite() && (0.0..=1.0).contains(c))
+        let ok = self.albedo.iter().all(|c| c.is_finite() && (0.0..=1.0).contains(c))
             && self.emission.is_finite()
             && (0.0..=65504.0).contains(&self.emission)
             && self.roughness.is_finite()
@@ -139,10 +136,7 @@ impl MaterialTable {
 
     /// Rebuilds a table from its GPU words (a loaded file).
     pub fn from_words(words: Vec<u32>) -> Result<Self, WorldError> {
-        if words.len() < 4
-            || !words.len().is_multiple_of(4)
-            || words.len() / 4 > usize::from(MAX_MATERIAL) + 1
-        {
+        if words.len() < 4 || !words.len().is_multiple_of(4) || words.len() / 4 > usize::from(MAX_MATERIAL) + 1 {
             return Err(WorldError::InvalidMaterial(format!(
                 "material table of {} words",
                 words.len()
@@ -158,9 +152,7 @@ impl MaterialTable {
     /// diffuse entries if `id` is past the end.
     pub fn set(&mut self, id: u16, m: Material) -> Result<(), WorldError> {
         if id == 0 || id > MAX_MATERIAL {
-            return Err(WorldError::InvalidMaterial(format!(
-                "id {id} outside 1..=32767"
-            )));
+            return Err(WorldError::InvalidMaterial(format!("id {id} outside 1..=32767")));
         }
         m.validate()?;
         let filler = Material::diffuse([0.5; 3]).encode();

@@ -30,9 +30,7 @@ impl Model {
             )));
         }
         if let Some(m) = voxels.iter().find(|&&m| m > MAX_MATERIAL) {
-            return Err(WorldError::InvalidMaterial(format!(
-                "model voxel material {m}"
-            )));
+            return Err(WorldError::InvalidMaterial(format!("model voxel material {m}")));
         }
         Ok(Self { size, voxels })
     }
@@ -110,8 +108,7 @@ impl ModelTable {
             if len > 4096 {
                 return Err(bad("name too long"));
             }
-            let name =
-                String::from_utf8(take(len, &mut bytes)?).map_err(|_| bad("name is not UTF-8"))?;
+            let name = String::from_utf8(take(len, &mut bytes)?).map_err(|_| bad("name is not UTF-8"))?;
             let mut size = [0u32; 3];
             for s in &mut size {
                 *s = u32_at(take(4, &mut bytes)?);
@@ -121,10 +118,7 @@ impl ModelTable {
             }
             let n = size.iter().map(|&v| v as usize).product::<usize>();
             let raw = take(2 * n, &mut bytes)?;
-            let voxels = raw
-                .chunks_exact(2)
-                .map(|c| u16::from_le_bytes([c[0], c[1]]))
-                .collect();
+            let voxels = raw.chunks_exact(2).map(|c| u16::from_le_bytes([c[0], c[1]])).collect();
             if t.models.contains_key(&name) {
                 return Err(bad("duplicate model name"));
             }

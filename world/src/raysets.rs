@@ -11,10 +11,30 @@ pub fn fixed_cameras(size: WorldSize) -> Vec<Camera> {
     let s = size.voxels().map(f64::from);
     let at = |fx: f64, fy: f64, fz: f64| [fx * s[0], fy * s[1], fz * s[2]];
     vec![
-        Camera { pos: at(0.5, 0.7, 0.05), yaw: 0.0, pitch: -15.0, fov_y: 70.0 },
-        Camera { pos: at(0.95, 0.6, 0.5), yaw: -90.0, pitch: -10.0, fov_y: 70.0 },
-        Camera { pos: at(0.2, 0.9, 0.8), yaw: 135.0, pitch: -35.0, fov_y: 70.0 },
-        Camera { pos: at(0.5, 0.45, 0.5), yaw: 45.0, pitch: -5.0, fov_y: 90.0 },
+        Camera {
+            pos: at(0.5, 0.7, 0.05),
+            yaw: 0.0,
+            pitch: -15.0,
+            fov_y: 70.0,
+        },
+        Camera {
+            pos: at(0.95, 0.6, 0.5),
+            yaw: -90.0,
+            pitch: -10.0,
+            fov_y: 70.0,
+        },
+        Camera {
+            pos: at(0.2, 0.9, 0.8),
+            yaw: 135.0,
+            pitch: -35.0,
+            fov_y: 70.0,
+        },
+        Camera {
+            pos: at(0.5, 0.45, 0.5),
+            yaw: 45.0,
+            pitch: -5.0,
+            fov_y: 90.0,
+        },
     ]
 }
 
@@ -49,7 +69,9 @@ pub fn secondary_rays(primary: &[Ray], hits: &[Option<Hit>], seed: u64) -> Vec<R
     let mut out = Vec::new();
     for (i, (ray, hit)) in primary.iter().zip(hits).enumerate() {
         let Some(h) = hit else { continue };
-        let Some(axis) = (0..3).find(|&a| h.normal[a] != 0) else { continue };
+        let Some(axis) = (0..3).find(|&a| h.normal[a] != 0) else {
+            continue;
+        };
         let n = h.normal.map(f64::from);
         let mut st = seed ^ (i as u64).wrapping_mul(0xD1B5_4A32_D192_ED03);
         let (u1, u2) = (unit(&mut st), unit(&mut st));

@@ -26,7 +26,7 @@ impl WorldSize {
     pub fn new(x: u32, y: u32, z: u32) -> Result<Self, WorldError> {
         let v = [x, y, z];
         for a in 0..3 {
-            if v[a] == 0 || v[a] % GROUP_EDGE != 0 || v[a] > MAX_SIZE[a] {
+            if v[a] == 0 || !v[a].is_multiple_of(GROUP_EDGE) || v[a] > MAX_SIZE[a] {
                 return Err(WorldError::InvalidSize(format!(
                     "{x}×{y}×{z}: each axis must be a positive multiple of {GROUP_EDGE}, at most {}×{}×{}",
                     MAX_SIZE[0], MAX_SIZE[1], MAX_SIZE[2]
@@ -117,14 +117,8 @@ mod tests {
         assert!(WorldSize::new(16384 + 64, 64, 64).is_err());
         assert!(WorldSize::new(64, 4160, 64).is_err());
         assert!(WorldSize::new(0, 64, 64).is_err());
-        assert_eq!(
-            WorldSize::round_up(65, 1, 64).unwrap().voxels(),
-            [128, 64, 64]
-        );
-        assert_eq!(
-            WorldSize::parse("64,128,192").unwrap().voxels(),
-            [64, 128, 192]
-        );
+        assert_eq!(WorldSize::round_up(65, 1, 64).unwrap().voxels(), [128, 64, 64]);
+        assert_eq!(WorldSize::parse("64,128,192").unwrap().voxels(), [64, 128, 192]);
         assert!(WorldSize::parse("64,128").is_err());
     }
 

@@ -63,10 +63,7 @@ pub struct WorldParts {
 impl World {
     /// Builds a world from a chunk source: construction, voxel/block AADFs, then the full
     /// chunk-AADF build. `progress` receives the number of chunks done so far.
-    pub fn build(
-        source: &dyn ChunkSource,
-        progress: &(dyn Fn(u64) + Sync),
-    ) -> Result<Self, WorldError> {
+    pub fn build(source: &dyn ChunkSource, progress: &(dyn Fn(u64) + Sync)) -> Result<Self, WorldError> {
         let size = source.size();
         let n = size.chunk_count();
         let mut w = World {
@@ -139,7 +136,7 @@ impl World {
         if p.chunk_entities.iter().any(|&e| e != 0) {
             return bad("chunk entity fields set, but the file holds no entity instances".into());
         }
-        if p.blocks.len() % BLOCK_ARRAY != 0 || p.voxels.len() % GROUP_WORDS != 0 {
+        if !p.blocks.len().is_multiple_of(BLOCK_ARRAY) || !p.voxels.len().is_multiple_of(GROUP_WORDS) {
             return bad(format!(
                 "buffer lengths {} blocks / {} voxel words are not whole arrays",
                 p.blocks.len(),
@@ -148,9 +145,7 @@ impl World {
         }
         let max_id = (p.materials.len() - 1) as u32;
         let material_ok = |m: u32| (1..=max_id).contains(&m);
-        let full_ok = |c: u32| {
-            (c & cell::PAYLOAD) <= u32::from(cell::MAX_MATERIAL) && material_ok(c & 0x7FFF)
-        };
+        let full_ok = |c: u32| (c & cell::PAYLOAD) <= u32::from(cell::MAX_MATERIAL) && material_ok(c & 0x7FFF);
 
         // Chunks: states, materials, block-array pointers (each array owned by one chunk).
         let mut arrays = vec![false; p.blocks.len() / BLOCK_ARRAY];
@@ -160,7 +155,7 @@ impl World {
                 1 if full_ok(c) => {}
                 2 => {
                     let ptr = cell::pointer(c) as usize;
-                    if ptr % BLOCK_ARRAY != 0
+                    if !ptr.is_multiple_of(BLOCK_ARRAY)
                         || ptr + BLOCK_ARRAY > p.blocks.len()
                         || std::mem::replace(&mut arrays[ptr / BLOCK_ARRAY], true)
                     {
@@ -188,7 +183,7 @@ impl World {
                     1 if full_ok(c) => {}
                     2 => {
                         let ptr = cell::pointer(c) as usize;
-                        if ptr % GROUP_WORDS != 0 || ptr + GROUP_WORDS > p.voxels.len() {
+                        if !ptr.is_multiple_of(GROUP_WORDS) || ptr + GROUP_WORDS > p.voxels.len() {
                             return bad(format!("block {b} of array {a}: bad voxel pointer {ptr}"));
                         }
                         group_used[ptr / GROUP_WORDS] = true;
@@ -201,44 +196,34 @@ impl World {
                 .iter()
                 .all(|&c| cell::state(c) != State::Mixed && uniform_material(c) == uniform_material(cells[0]))
             {
-                return bad(format!(
-                    "block array {a} is uniform and should have collapsed"
-                ));
+                return bad(format!("block array {a} is uniform and should have collapsed"));
             }
             let fields = cell_aadf4(empty);
-            if let Some(b) =
-                (0..64).find(|&b| empty >> b & 1 == 1 && cells[b] != u32::from(fields[b]))
-            {
+            if let Some(b) = (0..64).find(|&b| empty >> b & 1 == 1 && cells[b] != u32::from(fields[b])) {
                 return bad(format!("block {b} of array {a}: wrong block AADF"));
             }
         }
         // Voxel groups: free ones zero; live ones canonical, known materials, exact AADFs.
-        let group_error = group_used
-            .par_iter()
-            .enumerate()
-            .find_map_any(|(g, &used)| {
-                let words = &p.voxels[g * GROUP_WORDS..][..GROUP_WORDS];
-                if !used {
-                    return words
-                        .iter()
-                        .any(|&w| w != 0)
-                        .then(|| format!("free voxel group {g} is not zeroed"));
-                }
-                let v: [u16; 64] = std::array::from_fn(|i| cell::group_voxel(words, 0, i));
-                let m = v.map(cell::voxel_material);
-                if v.iter().any(|&x| {
-                    cell::voxel_is_solid(x) && !material_ok(u32::from(cell::voxel_material(x)))
-                }) {
-                    return Some(format!("voxel group {g}: undefined material"));
-                }
-                if m.iter().all(|&x| x == m[0]) {
-                    return Some(format!(
-                        "voxel group {g} is uniform and should have collapsed"
-                    ));
-                }
-                (group_words(&m)[..] != words[..])
-                    .then(|| format!("voxel group {g}: wrong voxel AADF"))
-            });
+        let group_error = group_used.par_iter().enumerate().find_map_any(|(g, &used)| {
+            let words = &p.voxels[g * GROUP_WORDS..][..GROUP_WORDS];
+            if !used {
+                return words
+                    .iter()
+                    .any(|&w| w != 0)
+                    .then(|| format!("free voxel group {g} is not zeroed"));
+            }
+            let v: [u16; 64] = std::array::from_fn(|i| cell::group_voxel(words, 0, i));
+            let m = v.map(cell::voxel_material);
+            if v.iter()
+                .any(|&x| cell::voxel_is_solid(x) && !material_ok(u32::from(cell::voxel_material(x))))
+            {
+                return Some(format!("voxel group {g}: undefined material"));
+            }
+            if m.iter().all(|&x| x == m[0]) {
+                return Some(format!("voxel group {g} is uniform and should have collapsed"));
+            }
+            (group_words(&m)[..] != words[..]).then(|| format!("voxel group {g}: wrong voxel AADF"))
+        });
         if let Some(e) = group_error {
             return bad(e);
         }
@@ -295,14 +280,12 @@ impl World {
                 for x in 0..d[0] {
                     let i = self.size.chunk_index([x as u32, y as u32, z as u32]);
                     let blocked = u32::from(!chunk_is_free(self.chunks[i], self.chunk_entities[i]));
-                    sum[at(x + 1, y + 1, z + 1)] = blocked
-                        + sum[at(x, y + 1, z + 1)]
-                        + sum[at(x + 1, y, z + 1)]
-                        + sum[at(x + 1, y + 1, z)]
-                        - sum[at(x, y, z + 1)]
-                        - sum[at(x, y + 1, z)]
-                        - sum[at(x + 1, y, z)]
-                        + sum[at(x, y, z)];
+                    sum[at(x + 1, y + 1, z + 1)] =
+                        blocked + sum[at(x, y + 1, z + 1)] + sum[at(x + 1, y, z + 1)] + sum[at(x + 1, y + 1, z)]
+                            - sum[at(x, y, z + 1)]
+                            - sum[at(x, y + 1, z)]
+                            - sum[at(x + 1, y, z)]
+                            + sum[at(x, y, z)];
                 }
             }
         }
@@ -312,11 +295,8 @@ impl World {
             }
             let f = Aadf::unpack(self.chunks[i], CHUNK_FIELD_BITS);
             let p = self.size.chunk_coords(i);
-            let lo: [usize; 3] =
-                std::array::from_fn(|a| (p[a] as usize).saturating_sub(usize::from(f.0[2 * a])));
-            let hi: [usize; 3] = std::array::from_fn(|a| {
-                (p[a] as usize + usize::from(f.0[2 * a + 1]) + 1).min(d[a])
-            });
+            let lo: [usize; 3] = std::array::from_fn(|a| (p[a] as usize).saturating_sub(usize::from(f.0[2 * a])));
+            let hi: [usize; 3] = std::array::from_fn(|a| (p[a] as usize + usize::from(f.0[2 * a + 1]) + 1).min(d[a]));
             let s = sum[at(hi[0], hi[1], hi[2])] as i64
                 - sum[at(lo[0], hi[1], hi[2])] as i64
                 - sum[at(hi[0], lo[1], hi[2])] as i64
@@ -377,8 +357,7 @@ impl World {
             State::Empty => 0,
             State::Full => cell::material(c),
             State::Mixed => {
-                let b = self.blocks[cell::pointer(c) as usize
-                    + cell::index4(p[0] / 4 % 4, p[1] / 4 % 4, p[2] / 4 % 4)];
+                let b = self.blocks[cell::pointer(c) as usize + cell::index4(p[0] / 4 % 4, p[1] / 4 % 4, p[2] / 4 % 4)];
                 match cell::state(b) {
                     State::Empty => 0,
                     State::Full => cell::material(b),
@@ -460,9 +439,9 @@ impl World {
             (BufferId::Materials, bytemuck_u32(self.materials.words())),
             (BufferId::Models, &models),
         ];
-        parts.iter().fold(Digest::default(), |d, &(id, bytes)| {
-            d ^ digest_of(id, bytes)
-        })
+        parts
+            .iter()
+            .fold(Digest::default(), |d, &(id, bytes)| d ^ digest_of(id, bytes))
     }
 
     /// Whether a chunk is empty and free of entities (it may carry a chunk AADF).
@@ -473,7 +452,11 @@ impl World {
 
 /// The material of a non-mixed cell (empty cells carry AADF bits but hold material 0).
 fn uniform_material(c: u32) -> u16 {
-    if cell::state(c) == State::Full { cell::material(c) } else { 0 }
+    if cell::state(c) == State::Full {
+        cell::material(c)
+    } else {
+        0
+    }
 }
 
 /// The little-endian bytes of a `u32` buffer, without copying.

@@ -10,7 +10,11 @@ use naadf_world::{World, WorldSize};
 use std::collections::HashMap;
 
 fn sizes() -> Vec<WorldSize> {
-    vec![WorldSize::new(64, 64, 64).unwrap(), WorldSize::new(128, 64, 64).unwrap(), WorldSize::new(64, 128, 192).unwrap()]
+    vec![
+        WorldSize::new(64, 64, 64).unwrap(),
+        WorldSize::new(128, 64, 64).unwrap(),
+        WorldSize::new(64, 128, 192).unwrap(),
+    ]
 }
 
 fn assert_roundtrip(raw: &Raw, w: &World, what: &str) {
@@ -19,7 +23,10 @@ fn assert_roundtrip(raw: &Raw, w: &World, what: &str) {
     }
     let mut bytes = Vec::new();
     w.export_raw(&mut bytes).unwrap();
-    let exported: Vec<u16> = bytes.chunks_exact(2).map(|b| u16::from_le_bytes([b[0], b[1]])).collect();
+    let exported: Vec<u16> = bytes
+        .chunks_exact(2)
+        .map(|b| u16::from_le_bytes([b[0], b[1]]))
+        .collect();
     assert!(exported == raw.v, "{what}: export differs from the raw volume");
 }
 
@@ -35,11 +42,16 @@ fn assert_canonical(w: &World, what: &str) {
             continue;
         }
         let blocks = &w.blocks()[cell::pointer(c) as usize..][..64];
-        assert!(!blocks.iter().all(|&b| b == blocks[0] && cell::state(b) != State::Mixed), "{what}: uniform mixed chunk");
+        assert!(
+            !blocks.iter().all(|&b| b == blocks[0] && cell::state(b) != State::Mixed),
+            "{what}: uniform mixed chunk"
+        );
         for &b in blocks {
             if cell::state(b) == State::Mixed {
                 *refs.entry(cell::pointer(b)).or_default() += 1;
-                let g: Vec<u16> = (0..64).map(|i| cell::voxel_material(cell::group_voxel(w.voxels(), cell::pointer(b) as usize, i))).collect();
+                let g: Vec<u16> = (0..64)
+                    .map(|i| cell::voxel_material(cell::group_voxel(w.voxels(), cell::pointer(b) as usize, i)))
+                    .collect();
                 assert!(!g.iter().all(|&m| m == g[0]), "{what}: uniform voxel group");
             }
         }
@@ -81,7 +93,10 @@ fn assert_aadf_valid(raw: &Raw, w: &World, what: &str) {
             let f = Aadf::unpack(c, 5);
             let lo: [i64; 3] = std::array::from_fn(|a| (cp[a] - i64::from(f.0[2 * a])) * 16);
             let hi: [i64; 3] = std::array::from_fn(|a| (cp[a] + 1 + i64::from(f.0[2 * a + 1])) * 16);
-            assert!(!solid_in(lo, hi), "{what}: chunk {cp:?} box {f:?} contains solid voxels");
+            assert!(
+                !solid_in(lo, hi),
+                "{what}: chunk {cp:?} box {f:?} contains solid voxels"
+            );
             continue;
         }
         if cell::state(c) != State::Mixed {
@@ -96,7 +111,10 @@ fn assert_aadf_valid(raw: &Raw, w: &World, what: &str) {
                 assert_eq!(bc >> 12, 0, "{what}: stray bits in an empty block");
                 let lo: [i64; 3] = std::array::from_fn(|a| base[a] - 4 * i64::from(f.0[2 * a]));
                 let hi: [i64; 3] = std::array::from_fn(|a| base[a] + 4 + 4 * i64::from(f.0[2 * a + 1]));
-                assert!((0..3).all(|a| bp[a] - i64::from(f.0[2 * a]) >= 0 && bp[a] + i64::from(f.0[2 * a + 1]) <= 3), "{what}: block box leaves its chunk");
+                assert!(
+                    (0..3).all(|a| bp[a] - i64::from(f.0[2 * a]) >= 0 && bp[a] + i64::from(f.0[2 * a + 1]) <= 3),
+                    "{what}: block box leaves its chunk"
+                );
                 assert!(!solid_in(lo, hi), "{what}: block box contains solid voxels");
             } else if cell::state(bc) == State::Mixed {
                 for v in 0..64usize {
@@ -107,7 +125,10 @@ fn assert_aadf_valid(raw: &Raw, w: &World, what: &str) {
                     assert_eq!(vv >> 12, 0, "{what}: stray bits in an empty voxel");
                     let f = Aadf::unpack(u32::from(vv), 2);
                     let vp = [v as i64 % 4, v as i64 / 4 % 4, v as i64 / 16];
-                    assert!((0..3).all(|a| vp[a] - i64::from(f.0[2 * a]) >= 0 && vp[a] + i64::from(f.0[2 * a + 1]) <= 3), "{what}: voxel box leaves its block");
+                    assert!(
+                        (0..3).all(|a| vp[a] - i64::from(f.0[2 * a]) >= 0 && vp[a] + i64::from(f.0[2 * a + 1]) <= 3),
+                        "{what}: voxel box leaves its block"
+                    );
                     let lo: [i64; 3] = std::array::from_fn(|a| base[a] + vp[a] - i64::from(f.0[2 * a]));
                     let hi: [i64; 3] = std::array::from_fn(|a| base[a] + vp[a] + 1 + i64::from(f.0[2 * a + 1]));
                     assert!(!solid_in(lo, hi), "{what}: voxel box contains solid voxels");

@@ -5,7 +5,7 @@ mod common;
 
 use common::{Raw, Rng, adversarial, random_world};
 use naadf_world::WorldSize;
-use naadf_world::traverse::{DenseGrid, Hit, Method, Ray, Tracer, trace_naadf, trace_nodf};
+use naadf_world::traverse::{DenseGrid, Hit, Method, Ray, Tracer, same_result, trace_naadf, trace_nodf};
 
 /// Rays of every awkward kind for a world of size `s`.
 fn rays(s: [u32; 3], rng: &mut Rng, n: usize) -> Vec<Ray> {
@@ -16,11 +16,19 @@ fn rays(s: [u32; 3], rng: &mut Rng, n: usize) -> Vec<Ray> {
             out.push(r);
         }
     };
-    let axis_dirs = [[1.0, 0.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, -1.0, 0.0], [0.0, 0.0, 1.0], [0.0, 0.0, -1.0]];
+    let axis_dirs = [
+        [1.0, 0.0, 0.0],
+        [-1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, -1.0, 0.0],
+        [0.0, 0.0, 1.0],
+        [0.0, 0.0, -1.0],
+    ];
     for _ in 0..n {
         let inside = |rng: &mut Rng| [0, 1, 2].map(|a| rng.unit() * sf[a]);
         let around = |rng: &mut Rng| [0, 1, 2].map(|a| (rng.unit() * 1.6 - 0.3) * sf[a]);
-        let lattice = |rng: &mut Rng, step: u64| [0, 1, 2].map(|a| (rng.below(u64::from(s[a]) / step + 1) * step) as f64);
+        let lattice =
+            |rng: &mut Rng, step: u64| [0, 1, 2].map(|a| (rng.below(u64::from(s[a]) / step + 1) * step) as f64);
         let unit_dir = |rng: &mut Rng| [0, 1, 2].map(|_| rng.unit() * 2.0 - 1.0);
         let small_int_dir = |rng: &mut Rng| [0, 1, 2].map(|_| rng.below(5) as f64 - 2.0);
         match rng.below(9) {
@@ -51,16 +59,6 @@ fn rays(s: [u32; 3], rng: &mut Rng, n: usize) -> Vec<Ray> {
     out
 }
 
-fn same(a: &Option<Hit>, b: &Option<Hit>) -> bool {
-    match (a, b) {
-        (None, None) => true,
-        (Some(a), Some(b)) => {
-            a.voxel == b.voxel && a.normal == b.normal && a.material == b.material && (a.t - b.t).abs() <= 1e-4 * a.t.abs().max(1.0)
-        }
-        _ => false,
-    }
-}
-
 /// Brute-force checks of a hit: the voxel is solid with that material, the entry point
 /// lies on the reported face, and no solid voxel lies on the ray before it.
 fn check_hit(raw: &Raw, ray: &Ray, hit: &Option<Hit>) {
@@ -73,7 +71,10 @@ fn check_hit(raw: &Raw, ray: &Ray, hit: &Option<Hit>) {
             let c = p.map(|v| v.floor() as i64);
             if raw.size.contains(c) {
                 let frac_ok = (0..3).all(|a| (p[a] - p[a].round()).abs() > 1e-6);
-                assert!(!frac_ok || raw.get(c.map(|v| v as u32)) == 0, "miss, but {c:?} is solid on the ray at t={t}");
+                assert!(
+                    !frac_ok || raw.get(c.map(|v| v as u32)) == 0,
+                    "miss, but {c:?} is solid on the ray at t={t}"
+                );
             }
         }
         return;
@@ -83,10 +84,19 @@ fn check_hit(raw: &Raw, ray: &Ray, hit: &Option<Hit>) {
     let p = [0, 1, 2].map(|a| o[a] + d[a] * h.t);
     for a in 0..3 {
         let lo = f64::from(h.voxel[a]);
-        assert!(p[a] >= lo - 1e-6 && p[a] <= lo + 1.0 + 1e-6, "entry point {p:?} not on voxel {:?}", h.voxel);
+        assert!(
+            p[a] >= lo - 1e-6 && p[a] <= lo + 1.0 + 1e-6,
+            "entry point {p:?} not on voxel {:?}",
+            h.voxel
+        );
         if h.normal[a] != 0 {
             let face = if h.normal[a] < 0 { lo } else { lo + 1.0 };
-            assert!((p[a] - face).abs() < 1e-6, "entry point {p:?} not on face {:?} of {:?}", h.normal, h.voxel);
+            assert!(
+                (p[a] - face).abs() < 1e-6,
+                "entry point {p:?} not on face {:?} of {:?}",
+                h.normal,
+                h.voxel
+            );
         }
     }
     // Nothing solid strictly before the hit (sampled between cell boundaries).
@@ -96,7 +106,12 @@ fn check_hit(raw: &Raw, ray: &Ray, hit: &Option<Hit>) {
         let c = q.map(|v| v.floor() as i64);
         let clear_of_planes = (0..3).all(|a| (q[a] - q[a].round()).abs() > 1e-6);
         if clear_of_planes && raw.size.contains(c) && c != h.voxel.map(i64::from) {
-            assert_eq!(raw.get(c.map(|v| v as u32)), 0, "solid voxel {c:?} before the hit at t={t} < {}", h.t);
+            assert_eq!(
+                raw.get(c.map(|v| v as u32)),
+                0,
+                "solid voxel {c:?} before the hit at t={t} < {}",
+                h.t
+            );
         }
     }
 }
@@ -110,12 +125,20 @@ fn agree_on(raw: &Raw, seed: u64, n: usize) {
         let a = trace_naadf(&w, ray);
         let b = trace_nodf(&w, ray);
         let c = grid.trace(ray);
-        assert!(same(&a, &b) && same(&a, &c), "ray {i} {ray:?}: naadf {a:?} / nodf {b:?} / grid {c:?}");
+        assert!(
+            same_result(&a, &b) && same_result(&a, &c),
+            "ray {i} {ray:?}: naadf {a:?} / nodf {b:?} / grid {c:?}"
+        );
         if i % 8 == 0 {
             check_hit(raw, ray, &a);
         }
         if let (Some(x), Some(y)) = (a, b) {
-            assert!(x.steps <= y.steps, "AADF jumps never take more steps: {} > {}", x.steps, y.steps);
+            assert!(
+                x.steps <= y.steps,
+                "AADF jumps never take more steps: {} > {}",
+                x.steps,
+                y.steps
+            );
         }
         hits += usize::from(a.is_some());
     }
@@ -125,7 +148,14 @@ fn agree_on(raw: &Raw, seed: u64, n: usize) {
 #[test]
 fn methods_agree_on_random_worlds() {
     for seed in 0..6u64 {
-        let size = [WorldSize::new(64, 64, 64), WorldSize::new(128, 64, 64), WorldSize::new(64, 128, 192)][seed as usize % 3].as_ref().copied().unwrap();
+        let size = [
+            WorldSize::new(64, 64, 64),
+            WorldSize::new(128, 64, 64),
+            WorldSize::new(64, 128, 192),
+        ][seed as usize % 3]
+            .as_ref()
+            .copied()
+            .unwrap();
         agree_on(&random_world(size, seed * 31 + 1), seed, 1500);
     }
 }
@@ -157,15 +187,27 @@ fn contract_cases() {
     for m in Method::ALL {
         let t = Tracer::new(&w, m).unwrap();
         // Origin inside a solid voxel: t = 0, zero normal.
-        let h = t.trace(&Ray::new([10.5, 10.2, 10.9], [0.3, 1.0, 0.0]).unwrap()).unwrap();
-        assert_eq!((h.voxel, h.normal, h.t, h.material), ([10, 10, 10], [0, 0, 0], 0.0, 3), "{m:?}");
+        let h = t
+            .trace(&Ray::new([10.5, 10.2, 10.9], [0.3, 1.0, 0.0]).unwrap())
+            .unwrap();
+        assert_eq!(
+            (h.voxel, h.normal, h.t, h.material),
+            ([10, 10, 10], [0, 0, 0], 0.0, 3),
+            "{m:?}"
+        );
         // Straight at a face; t is along the normalised direction.
         let h = t.trace(&Ray::new([10.5, 10.5, 2.0], [0.0, 0.0, 5.0]).unwrap()).unwrap();
         assert_eq!((h.voxel, h.normal, h.t), ([10, 10, 10], [0, 0, -1], 8.0), "{m:?}");
         // From outside the world: enters through the box itself, no inset.
         let h = t.trace(&Ray::new([-3.0, 0.5, 0.5], [1.0, 0.0, 0.0]).unwrap()).unwrap();
-        assert_eq!((h.voxel, h.normal, h.t, h.material), ([0, 0, 0], [-1, 0, 0], 3.0, 2), "{m:?}");
-        let h = t.trace(&Ray::new([100.0, 5.5, 5.5], [-1.0, 0.0, 0.0]).unwrap()).unwrap();
+        assert_eq!(
+            (h.voxel, h.normal, h.t, h.material),
+            ([0, 0, 0], [-1, 0, 0], 3.0, 2),
+            "{m:?}"
+        );
+        let h = t
+            .trace(&Ray::new([100.0, 5.5, 5.5], [-1.0, 0.0, 0.0]).unwrap())
+            .unwrap();
         assert_eq!((h.voxel, h.normal, h.t), ([63, 5, 5], [1, 0, 0], 36.0), "{m:?}");
         // Missing the box entirely, and leaving it.
         assert_eq!(t.trace(&Ray::new([-1.0, 70.0, 5.0], [1.0, 0.0, 0.0]).unwrap()), None);

@@ -652,7 +652,7 @@ struct Flaky<'a> {
 impl std::io::Read for Flaky<'_> {
     fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
         self.calls += 1;
-        if self.calls % 2 == 0 {
+        if self.calls.is_multiple_of(2) {
             return Err(std::io::ErrorKind::Interrupted.into());
         }
         if self.at >= self.fail_at {

@@ -20,8 +20,6 @@
 mod field;
 mod terrain;
 mod test;
-#[cfg(test)]
-mod scratch;
 
 use crate::build::ChunkSource;
 use crate::error::WorldError;
@@ -45,6 +43,9 @@ const TILED_MIN_XZ: u32 = 1024;
 
 impl Preset {
     /// Parses `terrain`, `test` or `tiled:<file.vox>`.
+    ///
+    /// # Errors
+    /// [`WorldError::Preset`], listing the valid names, for anything else.
     ///
     /// ```
     /// use naadf_world::preset::Preset;
@@ -80,6 +81,9 @@ impl Preset {
     /// The size a preset generates when none is given: terrain 1024×512×2048, test
     /// 64×64×64; tiled: the model's extent rounded up to 64, and at least 1024 in X and
     /// Z (this reads the `.vox` file).
+    ///
+    /// # Errors
+    /// The `.vox` file's read or import error (tiled only).
     pub fn default_size(&self) -> Result<WorldSize, WorldError> {
         match self {
             Preset::Terrain => WorldSize::new(1024, 512, 2048),
@@ -90,6 +94,9 @@ impl Preset {
 
     /// The chunk source of this preset at `size` (`None`: [`Preset::default_size`]),
     /// deterministic in `seed`.
+    ///
+    /// # Errors
+    /// The `.vox` file's read or import error (tiled only), or an invalid default size.
     pub fn source(&self, size: Option<WorldSize>, seed: u64) -> Result<Box<dyn ChunkSource>, WorldError> {
         Ok(match self {
             Preset::Terrain => {
@@ -216,6 +223,7 @@ mod tests {
             (size(128, 128, 128), 1),
             (size(192, 64, 128), 2),
             (size(256, 256, 128), 3),
+            (size(128, 512, 128), 4),
         ] {
             let t = Preset::Terrain.source(Some(s), seed).unwrap();
             assert!(check_source(&*t) > 0, "terrain {s}: no hints");
@@ -275,5 +283,35 @@ mod tests {
             assert!(block_kinds.iter().all(|&n| n > 0), "{s}: {block_kinds:?}");
             assert_eq!(world.material_at([40, 30, 40]), 0, "hollow box is hollow");
         }
+    }
+
+    #[test]
+    fn tiled_preset_reads_the_model() {
+        use dot_vox::{DotVoxData, Model, Size, Voxel};
+        let model = Model {
+            size: Size { x: 8, y: 6, z: 70 },
+            voxels: (0..70).map(|z| Voxel { x: 1, y: 2, z, i: 4 }).collect(),
+        };
+        let data = DotVoxData {
+            version: 150,
+            index_map: dot_vox::DEFAULT_INDEX_MAP.to_vec(),
+            models: vec![model],
+            palette: dot_vox::DEFAULT_PALETTE.to_vec(),
+            materials: vec![],
+            scenes: vec![],
+            layers: vec![],
+        };
+        let path = std::env::temp_dir().join(format!("naadf-preset-{}.vox", std::process::id()));
+        data.write_vox(&mut std::fs::File::create(&path).unwrap()).unwrap();
+        let preset = Preset::parse(&format!("tiled:{}", path.display())).unwrap();
+        assert_eq!(preset.default_size().unwrap(), size(1024, 128, 1024));
+        let src = preset.source(Some(size(64, 128, 64)), 0).unwrap();
+        assert_eq!(src.size(), size(64, 128, 64));
+        let world = World::build(&*src, &|_| {}).unwrap();
+        // The column at vox (1, 2) repeats every 8 voxels in X and 6 in Z, 70 high.
+        assert_ne!(world.material_at([1 + 8 * 3, 69, 2 + 6 * 5]), 0);
+        assert_eq!(world.material_at([1 + 8 * 3, 70, 2 + 6 * 5]), 0);
+        assert_eq!(world.material_at([2, 10, 2]), 0);
+        std::fs::remove_file(&path).unwrap();
     }
 }

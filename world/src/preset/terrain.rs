@@ -22,6 +22,10 @@ use crate::build::ChunkSource;
 use crate::cell::CHUNK_VOXELS;
 use crate::material::{Material, MaterialKind, MaterialTable};
 use crate::size::WorldSize;
+use rayon::prelude::*;
+use std::cell::RefCell;
+use std::rc::Rc;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 /// Material ids of the terrain preset (1-based, as in [`materials`]).
 pub(crate) mod mat {
@@ -154,7 +158,7 @@ impl Params {
     fn new(size: WorldSize) -> Self {
         let sy = size.voxels()[1] as f32;
         let h_cap = 0.74 * sy;
-        let a_max = (0.07 * sy).max(3.0);
+        let a_max = (0.10 * sy).max(3.0);
         let headroom = ((0.22 * sy) as i32).clamp(10, 32);
         let s = (sy / 512.0).clamp(0.15, 2.0);
         let top = (h_cap.ceil() as i32 + headroom.max(a_max.ceil() as i32) + 3).min(sy as i32);
@@ -164,7 +168,7 @@ impl Params {
             h_cap,
             a_max,
             headroom,
-            cave_min: ((0.03 * sy) as i32).max(3),
+            cave_min: ((0.04 * sy) as i32).max(3),
             snow: 0.60 * sy,
             lambda: 320.0 * s,
             over_len: 28.0 * s.clamp(0.5, 1.5),
@@ -242,8 +246,32 @@ struct Building {
     hi: [i32; 3],
 }
 
+/// What every chunk of one chunk column needs: the field lattice, its bounds, and the
+/// trees that meet the column (at any height).
+struct Column {
+    lat: Lattice,
+    lo: f32,
+    hi: f32,
+    trees: Vec<Tree>,
+}
+
+/// Slots of the per-thread column cache (direct-mapped).
+const CACHE_SLOTS: usize = 512;
+
+/// A cached column: terrain instance id, column corner, data.
+type CacheSlot = Option<(u64, i32, i32, Rc<Column>)>;
+
+thread_local! {
+    /// Recently used columns. Chunks are generated in linear order, so the chunks of one
+    /// column come close together; the cache saves recomputing its 2D fields and trees
+    /// for each of them. It holds pure function values only, so it never changes results.
+    static COLUMNS: RefCell<Vec<CacheSlot>> = RefCell::new(vec![None; CACHE_SLOTS]);
+}
+
 /// The terrain chunk source.
 pub(crate) struct Terrain {
+    /// Unique per instance: keys the per-thread column cache.
+    id: u64,
     size: WorldSize,
     p: Params,
     s: Seeds,
@@ -263,7 +291,9 @@ impl Terrain {
     /// A terrain world of `size`, deterministic in `seed`.
     pub(crate) fn new(size: WorldSize, seed: u64) -> Self {
         let [sx, _, sz] = size.voxels();
+        static NEXT_ID: AtomicU64 = AtomicU64::new(0);
         let mut t = Terrain {
+            id: NEXT_ID.fetch_add(1, Ordering::Relaxed),
             size,
             p: Params::new(size),
             s: Seeds::new(seed),
@@ -274,7 +304,6 @@ impl Terrain {
         let cells: Vec<(i32, i32)> = (0..t.cells_z)
             .flat_map(|z| (0..t.cells_x).map(move |x| (x, z)))
             .collect();
-        use rayon::prelude::*;
         t.buildings = cells.par_iter().map(|&(x, z)| t.building_in_cell(x, z)).collect();
         t
     }
@@ -344,8 +373,8 @@ impl Terrain {
     /// Overhang noise at a 3D lattice point, in `[-1, 1]`.
     fn overhang(&self, x: i32, y: i32, z: i32) -> f32 {
         let l = self.p.over_len;
-        let n = fbm3(self.s.overhang, x as f32 / l, y as f32 / (0.6 * l), z as f32 / l, 2);
-        (5.0 * n).clamp(-1.0, 1.0)
+        let n = fbm3(self.s.overhang, x as f32 / l, y as f32 / (0.5 * l), z as f32 / l, 2);
+        (4.0 * n).clamp(-1.0, 1.0)
     }
 
     /// Cave fields at a 3D lattice point: two tunnel noises and the cavern noise.
@@ -400,7 +429,7 @@ impl Terrain {
         }
         let base = (hmax - 0.5).ceil() as i32;
         let gable = w.min(d) <= 15 && range(h, 5, 0, 2) == 0;
-        let roof_h = if gable { 1 + (d - 1) / 2 } else { 2 };
+        let roof_h = if gable { 1 + (w.min(d) - 1) / 2 } else { 2 };
         let mut floors = range(h, 6, 1, 5);
         while floors > 0 && floors * FLOOR_H + roof_h + 1 > p.headroom {
             floors -= 1;
@@ -523,6 +552,24 @@ impl Terrain {
         Some(t)
     }
 
+    /// The column data of the chunk column at corner `(x0, z0)`, from the cache if there.
+    fn column_data(&self, x0: i32, z0: i32) -> Rc<Column> {
+        let slot = ((x0 / 16) as usize).wrapping_add((z0 / 16) as usize * 61) % CACHE_SLOTS;
+        let hit = COLUMNS.with(|c| match &c.borrow()[slot] {
+            Some((id, x, z, col)) if *id == self.id && *x == x0 && *z == z0 => Some(col.clone()),
+            _ => None,
+        });
+        if let Some(col) = hit {
+            return col;
+        }
+        let lat = self.lattice(x0, z0);
+        let (lo, hi) = lat.bounds();
+        let trees = self.trees_near([x0, i32::MIN / 2, z0], [x0 + 16, i32::MAX / 2, z0 + 16]);
+        let col = Rc::new(Column { lat, lo, hi, trees });
+        COLUMNS.with(|c| c.borrow_mut()[slot] = Some((self.id, x0, z0, col.clone())));
+        col
+    }
+
     /// Trees whose bounding boxes meet the box `[lo, hi)`, in global cell order.
     fn trees_near(&self, lo: [i32; 3], hi: [i32; 3]) -> Vec<Tree> {
         let cells =
@@ -613,20 +660,31 @@ impl Terrain {
                 let b = |g: &[[f32; 5]; 5]| bilerp(g[i][k], g[i + 1][k], g[i][k + 1], g[i + 1][k + 1], fx, fz);
                 let h = b(&lat.h);
                 let a = b(&lat.a);
-                let slope = [
-                    (lat.h[i + 1][k] - lat.h[i][k]).abs(),
-                    (lat.h[i][k + 1] - lat.h[i][k]).abs(),
-                    (lat.h[i + 1][k + 1] - lat.h[i][k + 1]).abs(),
-                    (lat.h[i + 1][k + 1] - lat.h[i + 1][k]).abs(),
-                ]
-                .into_iter()
-                .fold(0.0f32, f32::max)
-                    / STEP as f32;
+                let column = lx + 256 * lz;
+                if y0f >= h + a {
+                    // Nothing solid from here up: sky, or sea below the sea level.
+                    for ly in 0..16 {
+                        out[column + 16 * ly] = if y0 + (ly as i32) < sea { mat::WATER } else { 0 };
+                    }
+                    continue;
+                }
+                let col_cells = cave_cells >> (i + 16 * k) & 0x1111;
+                if col_cells == 0 && y0f + 20.0 < h - a {
+                    for ly in 0..16 {
+                        out[column + 16 * ly] = mat::STONE;
+                    }
+                    continue;
+                }
+                let h = &lat.h;
+                let gx = (h[i + 1][k] - h[i][k]) + (h[i + 1][k + 1] - h[i][k + 1] - h[i + 1][k] + h[i][k]) * fz;
+                let gz = (h[i][k + 1] - h[i][k]) + (h[i + 1][k + 1] - h[i + 1][k] - h[i][k + 1] + h[i][k]) * fx;
+                let slope = (gx * gx + gz * gz).sqrt() / STEP as f32;
+                let h = b(&lat.h);
                 let (top, sub) = if h < sea as f32 + 2.5 {
                     (mat::SAND, mat::SAND)
                 } else if h > snow {
                     (mat::SNOW, mat::STONE)
-                } else if slope > 1.1 {
+                } else if slope > 1.0 {
                     (mat::STONE, mat::STONE)
                 } else {
                     (mat::GRASS, mat::DIRT)
@@ -644,7 +702,6 @@ impl Terrain {
                         );
                     }
                 }
-                let col_cells = cave_cells >> (i + 16 * k) & 0x1111;
                 let mut cv = [[0.0f32; 3]; 5];
                 if col_cells != 0 {
                     for (j, v) in cv.iter_mut().enumerate() {
@@ -704,9 +761,9 @@ impl Terrain {
     }
 
     /// Paints the trees and the building that meet the chunk at voxel corner `o`.
-    fn paint_features(&self, o: [i32; 3], out: &mut [u16; CHUNK_VOXELS]) {
+    fn paint_features(&self, o: [i32; 3], trees: &[Tree], out: &mut [u16; CHUNK_VOXELS]) {
         let hi = [o[0] + 16, o[1] + 16, o[2] + 16];
-        for t in self.trees_near(o, hi) {
+        for t in trees.iter().filter(|t| overlaps(t.lo, t.hi, o, hi)) {
             paint_box(o, t.lo, t.hi, out, |x, y, z, cur| t.voxel(x, y, z, cur));
         }
         if let Some(b) = self.building(o[0].div_euclid(BUILDING_CELL), o[2].div_euclid(BUILDING_CELL))
@@ -837,11 +894,16 @@ impl Building {
         }
         let i = rel - top - 1;
         if self.gable {
-            let m = v.min(d - 1 - v);
+            // The ridge runs along the longer side.
+            let (m, end) = if d <= w {
+                (v.min(d - 1 - v), u == 0 || u == w - 1)
+            } else {
+                (u.min(w - 1 - u), v == 0 || v == d - 1)
+            };
             if m == i {
                 mat::ROOF
             } else if m > i {
-                if u == 0 || u == w - 1 { wall } else { 0 }
+                if end { wall } else { 0 }
             } else {
                 cur
             }
@@ -869,21 +931,20 @@ impl ChunkSource for Terrain {
         if o[1] >= self.p.top {
             return Some(0);
         }
-        let lat = self.lattice(o[0], o[2]);
-        let (lo, hi) = lat.bounds();
+        let col = self.column_data(o[0], o[2]);
         let y0 = o[1] as f32;
-        if o[1] + 16 <= self.p.cave_min && y0 + 20.0 < lo {
+        if o[1] + 16 <= self.p.cave_min && y0 + 20.0 < col.lo {
             // Features only write into air below their ground, and there is none here.
             return Some(mat::STONE);
         }
-        if y0 < hi || o[1] < self.p.sea {
+        if y0 < col.hi || o[1] < self.p.sea {
             return None;
         }
         let top = [o[0] + 16, o[1] + 16, o[2] + 16];
         let building = self
             .building(o[0].div_euclid(BUILDING_CELL), o[2].div_euclid(BUILDING_CELL))
             .is_some_and(|b| overlaps(b.lo, b.hi, o, top));
-        if building || !self.trees_near(o, top).is_empty() {
+        if building || col.trees.iter().any(|t| overlaps(t.lo, t.hi, o, top)) {
             return None;
         }
         Some(0)
@@ -895,9 +956,9 @@ impl ChunkSource for Terrain {
             out.fill(0);
             return;
         }
-        let lat = self.lattice(o[0], o[2]);
-        self.fill_ground(o, &lat, out);
-        self.paint_features(o, out);
+        let col = self.column_data(o[0], o[2]);
+        self.fill_ground(o, &col.lat, out);
+        self.paint_features(o, &col.trees, out);
     }
 }
 
@@ -915,63 +976,5 @@ mod tests {
             assert!(p.sea > p.cave_min);
         }
         assert_eq!(mat::COUNT as usize + 1, materials().len());
-    }
-}
-
-#[cfg(test)]
-mod scratch_tmp {
-    use super::*;
-    #[test]
-    #[ignore]
-    fn count_overhangs() {
-        let t = Terrain::new(WorldSize::new(512, 256, 512).unwrap(), 1);
-        let mut n = 0;
-        let mut cols = 0;
-        let mut amax = 0.0f32;
-        let mut out = Box::new([0u16; CHUNK_VOXELS]);
-        let mut best = (0, [0i32; 2]);
-        for cz in 0..32 { for cx in 0..32 {
-            let lat = t.lattice(cx * 16, cz * 16);
-            amax = amax.max(lat.a.iter().flatten().fold(0.0, |m: f32, &v| m.max(v)));
-            let mut here = 0;
-            for cy in 4..16 {
-                t.fill_chunk([cx as u32, cy as u32, cz as u32], &mut out);
-                for lz in 0..16 { for lx in 0..16 {
-                    let (h, _) = t.column(cx * 16 + lx as i32, cz * 16 + lz as i32);
-                    for ly in 1..16 {
-                        let y = cy * 16 + ly as i32;
-                        if matches!(out[lx + 16 * ly + 256 * lz], 1 | 2 | 3 | 6) && out[lx + 16 * (ly - 1) + 256 * lz] == 0 && (y as f32) > h - 2.0 { n += 1; here += 1; }
-                    }
-                }}
-            }
-            if here > best.0 { best = (here, [cx * 16, cz * 16]); }
-            if lat.a[2][2] > 0.0 { cols += 1; }
-        }}
-        eprintln!("overhang bottoms {n}, chunk columns with A>0 {cols}/1024, amax {amax}, best {best:?}");
-    }
-}
-#[cfg(test)]
-mod scratch_tmp2 {
-    use super::*;
-    #[test]
-    #[ignore]
-    fn profile() {
-        let t = Terrain::new(WorldSize::new(512, 256, 512).unwrap(), 1);
-        let mut shown = 0;
-        'o: for x in (0..512).step_by(4) { for z in (0..512).step_by(4) {
-            let (h, a) = t.lattice_point(x, z);
-            if a > 10.0 {
-                let ns: Vec<String> = ((h - 20.0) as i32..(h + 20.0) as i32).step_by(4).map(|y| format!("{:.2}", t.overhang(x, y, z))).collect();
-                eprintln!("x{x} z{z} h{h:.1} a{a:.1} n: {}", ns.join(" "));
-                let mut out = Box::new([0u16; CHUNK_VOXELS]);
-                let mut col = String::new();
-                for y in (h - 20.0) as i32..(h + 20.0) as i32 {
-                    t.fill_chunk([(x / 16) as u32, (y / 16) as u32, (z / 16) as u32], &mut out);
-                    col.push_str(&format!("{} ", out[(x % 16) as usize + 16 * (y % 16) as usize + 256 * (z % 16) as usize]));
-                }
-                eprintln!("   {col}");
-                shown += 1; if shown > 8 { break 'o; }
-            }
-        }}
     }
 }

@@ -249,7 +249,7 @@ impl ChunkSource for TestWorld {
         for lz in 0..16 {
             for lx in 0..16 {
                 let (x, z) = (o[0] + lx, o[2] + lz);
-                let bump = hash3(self.seed, x, z, 3) % 5 == 0;
+                let bump = hash3(self.seed, x, z, 3).is_multiple_of(5);
                 for ly in 0..16 {
                     let y = o[1] + ly;
                     out[(lx + 16 * ly + 256 * lz) as usize] = if y < GROUND {

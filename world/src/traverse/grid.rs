@@ -20,7 +20,11 @@ impl DenseGrid {
     pub fn from_world(world: &World) -> Result<Self, WorldError> {
         let n = world.size().voxel_count();
         if n > MAX_DENSE_VOXELS {
-            return Err(WorldError::Capacity(format!("a dense decode of {} voxels ({} GiB) is too large for the grid method", n, (n * 2) >> 30)));
+            return Err(WorldError::Capacity(format!(
+                "a dense decode of {} voxels ({} GiB) is too large for the grid method",
+                n,
+                (n * 2) >> 30
+            )));
         }
         let size = world.size().voxels();
         let [sx, sy, _] = size.map(|v| v as usize);
@@ -58,7 +62,13 @@ impl DenseGrid {
         let d = ray.dir();
         let step: [i64; 3] = d.map(|v| if v > 0.0 { 1 } else { -1 });
         let next_plane = |c: i64, a: usize| if d[a] > 0.0 { c + 1 } else { c };
-        let mut tmax: [f64; 3] = std::array::from_fn(|a| if d[a] == 0.0 { f64::INFINITY } else { ray.t_at(a, next_plane(cell[a], a)) });
+        let mut tmax: [f64; 3] = std::array::from_fn(|a| {
+            if d[a] == 0.0 {
+                f64::INFINITY
+            } else {
+                ray.t_at(a, next_plane(cell[a], a))
+            }
+        });
         let size = self.size.map(i64::from);
         let mut steps = 0u32;
         loop {

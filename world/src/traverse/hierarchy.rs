@@ -41,7 +41,13 @@ fn trace<const DF: bool>(world: &World, ray: &Ray) -> Option<Hit> {
     // The AADF field facing the ray on each axis: −a for negative directions, +a otherwise.
     let facing: [usize; 3] = std::array::from_fn(|a| 2 * a + usize::from(dir[a] > 0.0));
     let neg: [bool; 3] = std::array::from_fn(|a| dir[a] <= 0.0);
-    let to_edge = |c: i64, a: usize, edge: i64| if neg[a] { c & (edge - 1) } else { edge - 1 - (c & (edge - 1)) };
+    let to_edge = |c: i64, a: usize, edge: i64| {
+        if neg[a] {
+            c & (edge - 1)
+        } else {
+            edge - 1 - (c & (edge - 1))
+        }
+    };
     for steps in 1..=MAX_STEPS {
         let p = cell.map(|v| v as u32);
         let probe = probe::<DF>(world, p, &facing, &to_edge);
@@ -60,7 +66,12 @@ fn trace<const DF: bool>(world: &World, ray: &Ray) -> Option<Hit> {
 }
 
 #[inline(always)]
-fn probe<const DF: bool>(world: &World, p: [u32; 3], facing: &[usize; 3], to_edge: &impl Fn(i64, usize, i64) -> i64) -> Probe {
+fn probe<const DF: bool>(
+    world: &World,
+    p: [u32; 3],
+    facing: &[usize; 3],
+    to_edge: &impl Fn(i64, usize, i64) -> i64,
+) -> Probe {
     let edges = |edge: i64| -> [i64; 3] { std::array::from_fn(|a| to_edge(i64::from(p[a]), a, edge)) };
     let size = world.size();
     let chunk = world.chunks()[size.chunk_index([p[0] >> 4, p[1] >> 4, p[2] >> 4])];
@@ -68,7 +79,13 @@ fn probe<const DF: bool>(world: &World, p: [u32; 3], facing: &[usize; 3], to_edg
         State::Full => Probe::Solid(cell::material(chunk)),
         State::Empty => {
             let e = edges(16);
-            Probe::Empty(std::array::from_fn(|a| if DF { e[a] + 16 * i64::from(Aadf::field(chunk, facing[a], CHUNK_FIELD_BITS)) } else { e[a] }))
+            Probe::Empty(std::array::from_fn(|a| {
+                if DF {
+                    e[a] + 16 * i64::from(Aadf::field(chunk, facing[a], CHUNK_FIELD_BITS))
+                } else {
+                    e[a]
+                }
+            }))
         }
         State::Mixed => {
             let bi = cell::index4(p[0] >> 2 & 3, p[1] >> 2 & 3, p[2] >> 2 & 3);
@@ -77,14 +94,26 @@ fn probe<const DF: bool>(world: &World, p: [u32; 3], facing: &[usize; 3], to_edg
                 State::Full => Probe::Solid(cell::material(block)),
                 State::Empty => {
                     let e = edges(4);
-                    Probe::Empty(std::array::from_fn(|a| if DF { e[a] + 4 * i64::from(Aadf::field(block, facing[a], CELL_FIELD_BITS)) } else { e[a] }))
+                    Probe::Empty(std::array::from_fn(|a| {
+                        if DF {
+                            e[a] + 4 * i64::from(Aadf::field(block, facing[a], CELL_FIELD_BITS))
+                        } else {
+                            e[a]
+                        }
+                    }))
                 }
                 State::Mixed => {
-                    let v = cell::group_voxel(world.voxels(), cell::pointer(block) as usize, cell::index4(p[0] & 3, p[1] & 3, p[2] & 3));
+                    let v = cell::group_voxel(
+                        world.voxels(),
+                        cell::pointer(block) as usize,
+                        cell::index4(p[0] & 3, p[1] & 3, p[2] & 3),
+                    );
                     if cell::voxel_is_solid(v) {
                         Probe::Solid(cell::voxel_material(v))
                     } else if DF {
-                        Probe::Empty(std::array::from_fn(|a| i64::from(Aadf::field(u32::from(v), facing[a], CELL_FIELD_BITS))))
+                        Probe::Empty(std::array::from_fn(|a| {
+                            i64::from(Aadf::field(u32::from(v), facing[a], CELL_FIELD_BITS))
+                        }))
                     } else {
                         Probe::Empty([0; 3])
                     }

@@ -30,6 +30,21 @@ pub struct Hit {
     pub steps: u32,
 }
 
+/// Whether two traversal results agree as the contract requires: both miss, or both hit
+/// the same voxel through the same face with the same material, `t` within 1e-4 relative.
+pub fn same_result(a: &Option<Hit>, b: &Option<Hit>) -> bool {
+    match (a, b) {
+        (None, None) => true,
+        (Some(a), Some(b)) => {
+            a.voxel == b.voxel
+                && a.normal == b.normal
+                && a.material == b.material
+                && (a.t - b.t).abs() <= 1e-4 * a.t.abs().max(1.0)
+        }
+        _ => false,
+    }
+}
+
 /// Where a ray begins inside the world: its first cell, the time it is entered, and the
 /// axis whose plane it crossed to enter it (`None` when the origin is inside).
 #[derive(Clone, Copy, Debug)]
@@ -58,9 +73,14 @@ impl Ray {
     pub fn new(origin: [f64; 3], dir: [f64; 3]) -> Result<Self, WorldError> {
         let len = dir.iter().map(|v| v * v).sum::<f64>().sqrt();
         if !origin.iter().all(|v| v.is_finite() && v.abs() <= MAX_COORD) || !len.is_finite() || len == 0.0 {
-            return Err(WorldError::InvalidRay(format!("origin {origin:?}, direction {dir:?}: need a finite origin within ±2^30 and a finite non-zero direction")));
+            return Err(WorldError::InvalidRay(format!(
+                "origin {origin:?}, direction {dir:?}: need a finite origin within ±2^30 and a finite non-zero direction"
+            )));
         }
-        Ok(Ray { o: origin, d: dir.map(|v| v / len) })
+        Ok(Ray {
+            o: origin,
+            d: dir.map(|v| v / len),
+        })
     }
 
     /// The origin.
@@ -127,7 +147,11 @@ impl Ray {
         let size = size.map(i64::from);
         let start = self.o.map(|v| v.floor() as i64);
         if (0..3).all(|a| start[a] >= 0 && start[a] < size[a]) {
-            return Some(Entry { cell: start, t: 0.0, axis: None });
+            return Some(Entry {
+                cell: start,
+                t: 0.0,
+                axis: None,
+            });
         }
         // The last slab-entry event, in (t, axis) order.
         let mut best: Option<(f64, usize)> = None;
@@ -163,7 +187,11 @@ impl Ray {
                 start[b]
             };
         }
-        (0..3).all(|a| cell[a] >= 0 && cell[a] < size[a]).then_some(Entry { cell, t, axis: Some(axis) })
+        (0..3).all(|a| cell[a] >= 0 && cell[a] < size[a]).then_some(Entry {
+            cell,
+            t,
+            axis: Some(axis),
+        })
     }
 
     /// Leaves the empty cuboid made of `cell` extended by `skip[a]` cells toward the ray on
@@ -176,7 +204,11 @@ impl Ray {
             if self.d[a] == 0.0 {
                 continue;
             }
-            bound[a] = if self.d[a] > 0.0 { cell[a] + 1 + skip[a] } else { cell[a] - skip[a] };
+            bound[a] = if self.d[a] > 0.0 {
+                cell[a] + 1 + skip[a]
+            } else {
+                cell[a] - skip[a]
+            };
             let t = self.t_at(a, bound[a]);
             if t < best.0 {
                 best = (t, a);
@@ -206,6 +238,12 @@ impl Ray {
             normal[a] = if self.d[a] > 0.0 { -1 } else { 1 };
         }
         // `+ 0.0` turns a −0.0 (from (o − o)/d with d < 0) into 0.0.
-        Hit { voxel: cell.map(|v| v as u32), normal, t: t + 0.0, material, steps }
+        Hit {
+            voxel: cell.map(|v| v as u32),
+            normal,
+            t: t + 0.0,
+            material,
+            steps,
+        }
     }
 }

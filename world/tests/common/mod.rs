@@ -14,7 +14,11 @@ pub struct Raw {
 
 impl Raw {
     pub fn empty(size: WorldSize, materials: u16) -> Self {
-        Raw { size, v: vec![0; size.voxel_count() as usize], materials }
+        Raw {
+            size,
+            v: vec![0; size.voxel_count() as usize],
+            materials,
+        }
     }
 
     pub fn idx(&self, p: [u32; 3]) -> usize {
@@ -47,7 +51,9 @@ impl ChunkSource for Raw {
         self.size
     }
     fn materials(&self) -> MaterialTable {
-        let ms: Vec<Material> = (1..=self.materials).map(|i| Material::diffuse([f32::from(i % 7) / 7.0, 0.5, 0.25])).collect();
+        let ms: Vec<Material> = (1..=self.materials)
+            .map(|i| Material::diffuse([f32::from(i % 7) / 7.0, 0.5, 0.25]))
+            .collect();
         MaterialTable::from_materials(&ms).unwrap()
     }
     fn fill_chunk(&self, c: [u32; 3], out: &mut [u16; CHUNK_VOXELS]) {
@@ -139,7 +145,7 @@ pub fn adversarial(size: WorldSize) -> Vec<(&'static str, Raw)> {
     out.push(("checkerboard", checker));
     let mut corners = Raw::empty(size, 3);
     for p in corners.coords().collect::<Vec<_>>() {
-        let at_corner = |n: u32, e: u32| n % e == 0 || n % e == e - 1;
+        let at_corner = |n: u32, e: u32| n.is_multiple_of(e) || n % e == e - 1;
         if (0..3).all(|a| at_corner(p[a], 16)) && (p[0] / 16 + p[1] / 16 * 3 + p[2] / 16 * 5) % 3 == 0 {
             corners.set(p, 1);
         }
