@@ -33,6 +33,11 @@ if ! command -v cargo >/dev/null 2>&1; then
     fi
 fi
 
+# The checks need rustfmt and clippy; rustup's minimal profile lacks them.
+if ! cargo fmt --version >/dev/null 2>&1 || ! cargo clippy --version >/dev/null 2>&1; then
+    rustup component add rustfmt clippy >&2
+fi
+
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-/tmp/xdg-$(id -u)}"
 mkdir -p -m 700 "$XDG_RUNTIME_DIR"
 export LP_NUM_THREADS="${LP_NUM_THREADS:-8}"

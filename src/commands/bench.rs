@@ -1,12 +1,11 @@
 //! `naadf bench traverse WORLD` and `naadf bench build`: throughput measured in one run, so
 //! that ratios between methods are meaningful on a shared, noisy machine.
 
-use super::generate::parse_size;
+use super::generate::PresetArgs;
 use super::{chunk_progress, load_world, print_json};
 use anyhow::{Result, bail};
 use naadf_world::cell::CHUNK_VOXELS;
 use naadf_world::model::ModelTable;
-use naadf_world::preset::Preset;
 use naadf_world::raysets::{fixed_cameras, primary_rays, secondary_rays};
 use naadf_world::stats::WorldStats;
 use naadf_world::traverse::{Hit, Method, Ray, Tracer, same_result};
@@ -51,15 +50,8 @@ pub struct TraverseArgs {
 /// Arguments of `bench build`.
 #[derive(clap::Args)]
 pub struct BuildArgs {
-    /// Preset to generate.
-    #[arg(long, default_value = "terrain")]
-    preset: String,
-    /// World size `X,Y,Z`; default: the preset's.
-    #[arg(long, value_parser = parse_size)]
-    size: Option<WorldSize>,
-    /// Generator seed.
-    #[arg(long, default_value_t = 1)]
-    seed: u64,
+    #[command(flatten)]
+    preset: PresetArgs,
     /// Print one JSON object.
     #[arg(long)]
     json: bool,
@@ -253,7 +245,7 @@ struct BuildReport {
 }
 
 fn build(a: BuildArgs) -> Result<()> {
-    let source = Preset::parse(&a.preset)?.source(a.size, a.seed)?;
+    let source = a.preset.source()?;
     let size = source.size();
     let n = size.chunk_count();
     let bar = chunk_progress(n as u64, "generating");
@@ -301,7 +293,7 @@ fn build(a: BuildArgs) -> Result<()> {
     let voxels = size.voxel_count();
     let dense = voxels * 2;
     let r = BuildReport {
-        preset: a.preset,
+        preset: a.preset.preset,
         size: size.voxels(),
         voxels,
         threads: rayon::current_num_threads(),

@@ -4,21 +4,35 @@ use super::{chunk_progress, print_json, save_world};
 use anyhow::Result;
 use naadf_world::preset::Preset;
 use naadf_world::stats::WorldStats;
-use naadf_world::{World, WorldSize};
+use naadf_world::{ChunkSource, World, WorldSize};
 use std::path::PathBuf;
+
+/// Which procedural world to make (shared by `generate` and `bench build`).
+#[derive(clap::Args)]
+pub struct PresetArgs {
+    /// Preset: `terrain`, `test` or `tiled:<file.vox>`.
+    #[arg(long, default_value = "terrain")]
+    pub preset: String,
+    /// World size `X,Y,Z` in voxels (multiples of 64); default: the preset's.
+    #[arg(long, value_parser = parse_size)]
+    pub size: Option<WorldSize>,
+    /// Seed of the generator.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+}
+
+impl PresetArgs {
+    /// The chunk source these arguments describe.
+    pub fn source(&self) -> Result<Box<dyn ChunkSource>> {
+        Ok(Preset::parse(&self.preset)?.source(self.size, self.seed)?)
+    }
+}
 
 /// Arguments of `generate`.
 #[derive(clap::Args)]
 pub struct Args {
-    /// Preset: `terrain`, `test` or `tiled:<file.vox>`.
-    #[arg(long, default_value = "terrain")]
-    preset: String,
-    /// World size `X,Y,Z` in voxels (multiples of 64); default: the preset's.
-    #[arg(long, value_parser = parse_size)]
-    size: Option<WorldSize>,
-    /// Seed of the generator.
-    #[arg(long, default_value_t = 1)]
-    seed: u64,
+    #[command(flatten)]
+    preset: PresetArgs,
     /// World file to write.
     #[arg(short, long)]
     output: PathBuf,
@@ -34,7 +48,7 @@ pub fn parse_size(s: &str) -> Result<WorldSize, String> {
 
 /// Generates a preset world and writes it.
 pub fn run(a: Args) -> Result<()> {
-    let world = generate(&a.preset, a.size, a.seed)?;
+    let world = generate(&a.preset)?;
     save_world(&world, &a.output)?;
     if a.json {
         print_json(&WorldStats::of(&world))
@@ -44,8 +58,8 @@ pub fn run(a: Args) -> Result<()> {
 }
 
 /// Builds a preset world with a progress bar.
-pub fn generate(preset: &str, size: Option<WorldSize>, seed: u64) -> Result<World> {
-    let source = Preset::parse(preset)?.source(size, seed)?;
+pub fn generate(preset: &PresetArgs) -> Result<World> {
+    let source = preset.source()?;
     let bar = chunk_progress(source.size().chunk_count() as u64, "generating");
     let world = World::build(&*source, &|n| bar.set_position(n))?;
     bar.finish_and_clear();

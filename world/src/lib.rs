@@ -14,11 +14,18 @@
 //! - [`digest`]: the paged 64-bit digest clients use to verify their mirror;
 //! - [`file`]: the `.naadf` world file.
 //!
-//! ```ignore
-//! use naadf_world::{World, WorldSize, preset};
-//! let source = preset::Preset::parse("test").unwrap().source(WorldSize::new(64, 64, 64).unwrap(), 7);
-//! let world = World::build(source.size(), source.materials(), &*source, &|_| {}).unwrap();
-//! assert_eq!(world.size(), WorldSize::new(64, 64, 64).unwrap());
+//! ```
+//! use naadf_world::preset::Preset;
+//! use naadf_world::traverse::{trace_naadf, Ray};
+//! use naadf_world::{World, WorldSize};
+//!
+//! let size = WorldSize::new(64, 64, 64).unwrap();
+//! let source = Preset::parse("test").unwrap().source(Some(size), 7).unwrap();
+//! let world = World::build(&*source, &|_chunks_done| {}).unwrap();
+//! assert_eq!(world.size(), size);
+//! let hit = trace_naadf(&world, &Ray::new([32.5, 63.5, 32.5], [0.0, -1.0, 0.0]).unwrap());
+//! assert!(hit.is_some_and(|h| h.material != 0));
+//! println!("digest {}", world.digest());
 //! ```
 
 pub mod aadf;

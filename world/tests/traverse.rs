@@ -218,3 +218,30 @@ fn contract_cases() {
         assert_eq!((h.voxel, h.normal), ([10, 10, 10], [0, -1, 0]), "{m:?}");
     }
 }
+
+#[test]
+fn methods_agree_on_preset_worlds_from_fixed_cameras() {
+    use naadf_world::preset::Preset;
+    use naadf_world::raysets::{fixed_cameras, primary_rays, secondary_rays};
+    for (preset, size) in [("terrain", [256, 128, 256]), ("test", [64, 64, 128])] {
+        let size = WorldSize::new(size[0], size[1], size[2]).unwrap();
+        let source = Preset::parse(preset).unwrap().source(Some(size), 3).unwrap();
+        let w = naadf_world::World::build(&*source, &|_| {}).unwrap();
+        let grid = DenseGrid::from_world(&w).unwrap();
+        let primary = primary_rays(&fixed_cameras(size), 48, 27);
+        let hits: Vec<Option<Hit>> = primary.iter().map(|r| trace_naadf(&w, r)).collect();
+        assert!(
+            hits.iter().filter(|h| h.is_some()).count() > primary.len() / 4,
+            "{preset}: cameras see little"
+        );
+        let secondary = secondary_rays(&primary, &hits, 9);
+        for ray in primary.iter().chain(&secondary) {
+            let a = trace_naadf(&w, ray);
+            let (b, c) = (trace_nodf(&w, ray), grid.trace(ray));
+            assert!(
+                same_result(&a, &b) && same_result(&a, &c),
+                "{preset} {ray:?}: {a:?} / {b:?} / {c:?}"
+            );
+        }
+    }
+}

@@ -513,19 +513,16 @@ fn palette_becomes_materials() {
 // ---------------------------------------------------------------------------------------
 // Tiling and the file path.
 
-#[test]
-fn tiled_scene_repeats_in_x_and_z() {
-    let d = file(vec![noisy_model([5, 7, 3], 21)], vec![]);
-    let scene = import(&d);
+/// Builds `scene` tiled into a world of `size` and checks every voxel: the scene repeats
+/// with its extent as period in X and Z, and appears once in Y.
+fn assert_tiles(scene: &VoxScene, size: WorldSize) {
     let e = scene.extent();
-    assert_eq!(e, [5, 3, 7]);
-    let size = WorldSize::new(128, 64, 64).unwrap();
-    let tiled = TiledVox::new(scene.clone(), size);
-    let w = World::build(&tiled, &|_| {}).unwrap();
+    let w = World::build(&TiledVox::new(scene.clone(), size), &|_| {}).unwrap();
     assert_eq!(w.size(), size);
-    for z in 0..64 {
-        for y in 0..64 {
-            for x in 0..128 {
+    let [sx, sy, sz] = size.voxels();
+    for z in 0..sz {
+        for y in 0..sy {
+            for x in 0..sx {
                 let want = if y < e[1] {
                     scene.material_at([x % e[0], y, z % e[2]])
                 } else {
@@ -538,24 +535,16 @@ fn tiled_scene_repeats_in_x_and_z() {
 }
 
 #[test]
+fn tiled_scene_repeats_in_x_and_z() {
+    let scene = import(&file(vec![noisy_model([5, 7, 3], 21)], vec![]));
+    assert_eq!(scene.extent(), [5, 3, 7]);
+    assert_tiles(&scene, WorldSize::new(128, 64, 64).unwrap());
+}
+
+#[test]
 fn tiled_scene_with_wide_period() {
-    let d = file(vec![noisy_model([40, 20, 17], 5)], vec![]);
-    let scene = import(&d);
-    let e = scene.extent();
-    let tiled = TiledVox::new(scene.clone(), WorldSize::new(128, 64, 128).unwrap());
-    let w = World::build(&tiled, &|_| {}).unwrap();
-    for z in 0..128 {
-        for y in 0..64 {
-            for x in 0..128 {
-                let want = if y < e[1] {
-                    scene.material_at([x % e[0], y, z % e[2]])
-                } else {
-                    0
-                };
-                assert_eq!(w.material_at([x, y, z]), want, "{x},{y},{z}");
-            }
-        }
-    }
+    let scene = import(&file(vec![noisy_model([40, 20, 17], 5)], vec![]));
+    assert_tiles(&scene, WorldSize::new(128, 64, 128).unwrap());
 }
 
 #[test]
