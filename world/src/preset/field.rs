@@ -3,6 +3,11 @@
 //! Everything here is a pure function of its integer or `f32` inputs (no tables, no
 //! state), so generated worlds depend only on the seed and the voxel position, on every
 //! platform: the arithmetic is plain IEEE `f32` without fused operations.
+//!
+//! Why not the `noise` crate: its generators carry a permutation table built per seed,
+//! while the presets draw from dozens of derived seeds (`subseed`) inside per-voxel code;
+//! a table-free hash-based gradient noise keeps every sample a pure function of
+//! (seed, position) with no per-seed setup.
 
 /// Mixes a seed and three integer coordinates into 64 well-distributed bits.
 #[inline]
