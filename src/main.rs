@@ -25,6 +25,8 @@ enum Command {
     Info(commands::info::Args),
     /// Export a world as raw voxels.
     Export(commands::export::Args),
+    /// Apply ops (JSON lines) to a world offline, through the server's code path.
+    Apply(commands::apply::Args),
     /// Trace rays read as JSON lines from standard input.
     Raycast(commands::raycast::Args),
     /// Benchmarks.
@@ -41,6 +43,7 @@ fn main() -> ExitCode {
         Command::Info(a) => commands::info::run(a),
         Command::Export(a) => commands::export::run(a),
         Command::Raycast(a) => commands::raycast::run(a),
+        Command::Apply(a) => commands::apply::run(a),
         Command::Bench(b) => commands::bench::run(b),
     };
     commands::finish(result)

@@ -1,6 +1,7 @@
 //! One module per subcommand, plus the pieces they share: logging, progress bars, world
 //! file I/O with context, and error reporting.
 
+pub mod apply;
 pub mod bench;
 pub mod export;
 pub mod generate;

@@ -183,35 +183,98 @@ pub fn chunk_is_free(cell: u32, entities: u32) -> bool {
 }
 
 /// Builds all chunk AADFs from scratch, level-major (31 levels × 3 axes), treating the
-/// outside of the world as empty. Fields of empty chunks are reset first. Deterministic:
-/// each phase reads the state before the phase, whatever the thread count.
-pub fn build_chunk_aadf(size: WorldSize, chunks: &mut [u32], entities: &[u32]) {
+/// outside of the world as empty. Deterministic: each phase reads the state before the
+/// phase, whatever the thread count.
+pub fn build_chunk_aadf(size: WorldSize, chunks: &mut Vec<u32>, entities: &[u32]) {
     let n = size.chunk_count();
     assert!(
         chunks.len() == n && entities.len() == n,
         "chunk buffers do not match {size}"
     );
-    let mut active: Vec<u32> = (0..n as u32)
+    let region: Vec<u32> = (0..n as u32)
         .filter(|&i| chunk_is_free(chunks[i as usize], entities[i as usize]))
         .collect();
-    for &i in &active {
-        chunks[i as usize] = 0;
+    let mut job = GrowthJob::new(std::mem::take(chunks), region);
+    while !job.step(size, entities) {}
+    *chunks = job.into_shadow();
+}
+
+/// A resumable from-scratch recomputation of the chunk AADFs of a region.
+///
+/// The job works on a shadow copy of the chunk cells: the free chunks of the region start
+/// at zero and grow in lock step, while every chunk outside the region keeps its current
+/// value. For a chunk outside the region whose value is final, comparing against that final
+/// value at level `k` is the same as comparing against its level-`k` value (a lock-step
+/// field is `min(final, k)` after `k` levels, and the merge test only asks `≥ cur ≤ k`), so
+/// the region converges to exactly what a build of the whole world would give — provided
+/// the region holds every chunk whose final field may have changed.
+#[derive(Clone, Debug)]
+pub struct GrowthJob {
+    shadow: Vec<u32>,
+    region: Vec<u32>,
+    active: Vec<u32>,
+    grown: Vec<u32>,
+    level: u8,
+    axis: usize,
+}
+
+impl GrowthJob {
+    /// Starts a job on a copy of the chunk cells; `region` lists the chunks to recompute
+    /// (free chunks, ascending).
+    pub fn new(mut shadow: Vec<u32>, region: Vec<u32>) -> Self {
+        for &i in &region {
+            shadow[i as usize] = 0;
+        }
+        GrowthJob {
+            shadow,
+            active: region.clone(),
+            region,
+            grown: Vec::new(),
+            level: 0,
+            axis: 0,
+        }
     }
-    for level in 0..MAX_CHUNK_FIELD {
-        let mut next = Vec::new();
-        for axis in 0..3 {
-            let grown = grow_chunks(size, chunks, entities, &active, level, axis);
-            next.extend(grown.iter().map(|&(i, _)| i));
-            for (i, w) in grown {
-                chunks[i as usize] = w;
-            }
+
+    /// Runs one (level, axis) phase; returns whether the job has converged.
+    pub fn step(&mut self, size: WorldSize, entities: &[u32]) -> bool {
+        if self.is_done() {
+            return true;
         }
-        next.sort_unstable();
-        next.dedup();
-        if next.is_empty() {
-            break;
+        let grown = grow_chunks(size, &self.shadow, entities, &self.active, self.level, self.axis);
+        self.grown.extend(grown.iter().map(|&(i, _)| i));
+        for (i, w) in grown {
+            self.shadow[i as usize] = w;
         }
-        active = next;
+        self.axis += 1;
+        if self.axis == 3 {
+            self.axis = 0;
+            self.level += 1;
+            // Only fields that grew at this level can equal the next one.
+            self.active = std::mem::take(&mut self.grown);
+            self.active.sort_unstable();
+            self.active.dedup();
+        }
+        self.is_done()
+    }
+
+    /// Whether no field can grow any more.
+    pub fn is_done(&self) -> bool {
+        self.active.is_empty() || self.level >= MAX_CHUNK_FIELD
+    }
+
+    /// The recomputed chunks, ascending.
+    pub fn region(&self) -> &[u32] {
+        &self.region
+    }
+
+    /// The shadow value of chunk `i`.
+    pub fn value(&self, i: u32) -> u32 {
+        self.shadow[i as usize]
+    }
+
+    /// The shadow copy of the chunk cells.
+    pub fn into_shadow(self) -> Vec<u32> {
+        self.shadow
     }
 }
 

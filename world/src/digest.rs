@@ -37,6 +37,20 @@ pub enum BufferId {
     EntityInstances = 7,
 }
 
+impl BufferId {
+    /// Every buffer and table of a world, in id order.
+    pub const WORLD: [BufferId; 8] = [
+        BufferId::Chunks,
+        BufferId::ChunkEntities,
+        BufferId::Blocks,
+        BufferId::Voxels,
+        BufferId::Materials,
+        BufferId::Models,
+        BufferId::EntityTypes,
+        BufferId::EntityInstances,
+    ];
+}
+
 /// A 64-bit world digest.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub struct Digest(pub u64);

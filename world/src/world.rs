@@ -4,7 +4,8 @@ use crate::aadf::{self, build_chunk_aadf, cell_aadf4, chunk_is_free};
 use crate::build::{self, ChunkPlan, ChunkSource, group_words};
 use crate::cell::{self, Aadf, CHUNK_FIELD_BITS, CHUNK_VOXELS, GROUP_WORDS, State};
 use crate::dedup::GroupStore;
-use crate::digest::{BufferId, Digest, digest_of};
+use crate::digest::{BufferId, Digest, PagedDigest};
+use crate::edit::Growth;
 use crate::error::WorldError;
 use crate::material::MaterialTable;
 use crate::model::ModelTable;
@@ -27,16 +28,20 @@ const BLOCK_ARRAY: usize = 64;
 /// - every empty chunk's AADF box contains only empty chunks without entities.
 #[derive(Clone)]
 pub struct World {
-    size: WorldSize,
-    version: u64,
-    materials: MaterialTable,
-    models: ModelTable,
-    chunks: Vec<u32>,
-    chunk_entities: Vec<u32>,
-    blocks: Vec<u32>,
-    voxels: Vec<u32>,
-    groups: GroupStore,
-    free_block_arrays: BTreeSet<u32>,
+    pub(crate) size: WorldSize,
+    pub(crate) version: u64,
+    pub(crate) materials: MaterialTable,
+    pub(crate) models: ModelTable,
+    pub(crate) chunks: Vec<u32>,
+    pub(crate) chunk_entities: Vec<u32>,
+    pub(crate) blocks: Vec<u32>,
+    pub(crate) voxels: Vec<u32>,
+    pub(crate) groups: GroupStore,
+    pub(crate) free_block_arrays: BTreeSet<u32>,
+    /// Page hashes of every buffer, updated with each change.
+    pub(crate) digest: PagedDigest,
+    /// Background chunk-AADF growth: queued work and the job in progress.
+    pub(crate) growth: Growth,
 }
 
 /// The raw contents of a world, as stored in a world file.
@@ -77,6 +82,8 @@ impl World {
             voxels: Vec::new(),
             groups: GroupStore::default(),
             free_block_arrays: BTreeSet::new(),
+            digest: PagedDigest::default(),
+            growth: Growth::default(),
         };
         build::plan_all(source, progress, |i, plan| w.place_chunk(i, plan))?;
         w.rebuild_chunk_aadf();
@@ -101,7 +108,7 @@ impl World {
     }
 
     /// The lowest free block array, else a new one at the end.
-    fn alloc_block_array(&mut self) -> Result<u32, WorldError> {
+    pub(crate) fn alloc_block_array(&mut self) -> Result<u32, WorldError> {
         if let Some(p) = self.free_block_arrays.pop_first() {
             return Ok(p);
         }
@@ -115,9 +122,43 @@ impl World {
         Ok(p as u32)
     }
 
-    /// Recomputes every chunk AADF from scratch (level-major, deterministic).
+    /// Recomputes every chunk AADF from scratch (level-major, deterministic), dropping any
+    /// queued background growth, and refreshes the digest.
     pub fn rebuild_chunk_aadf(&mut self) {
         build_chunk_aadf(self.size, &mut self.chunks, &self.chunk_entities);
+        self.growth = Growth::default();
+        self.refresh_digest();
+    }
+
+    /// Recomputes every page hash from scratch.
+    pub(crate) fn refresh_digest(&mut self) {
+        let mut digest = PagedDigest::default();
+        for id in BufferId::WORLD {
+            let bytes = self.buffer_bytes(id);
+            digest.update(id, &bytes, 0..bytes.len());
+        }
+        self.digest = digest;
+    }
+
+    /// Records that `range` (in bytes) of buffer `id` changed, or that its length did.
+    pub(crate) fn touch_digest(&mut self, id: BufferId, range: std::ops::Range<usize>) {
+        let mut digest = std::mem::take(&mut self.digest);
+        digest.update(id, &self.buffer_bytes(id), range);
+        self.digest = digest;
+    }
+
+    /// The bytes of a digested buffer or table.
+    pub(crate) fn buffer_bytes(&self, id: BufferId) -> std::borrow::Cow<'_, [u8]> {
+        use std::borrow::Cow;
+        match id {
+            BufferId::Chunks => Cow::Borrowed(bytemuck_u32(&self.chunks)),
+            BufferId::ChunkEntities => Cow::Borrowed(bytemuck_u32(&self.chunk_entities)),
+            BufferId::Blocks => Cow::Borrowed(bytemuck_u32(&self.blocks)),
+            BufferId::Voxels => Cow::Borrowed(bytemuck_u32(&self.voxels)),
+            BufferId::Materials => Cow::Borrowed(bytemuck_u32(self.materials.words())),
+            BufferId::Models => Cow::Owned(self.models.encode()),
+            BufferId::EntityTypes | BufferId::EntityInstances => Cow::Borrowed(&[]),
+        }
     }
 
     /// Rebuilds a world from stored parts, validating everything a traversal or an edit
@@ -234,7 +275,7 @@ impl World {
             .filter(|(_, live)| !**live)
             .map(|(a, _)| (a * BLOCK_ARRAY) as u32)
             .collect();
-        let w = World {
+        let mut w = World {
             size: p.size,
             version: p.version,
             materials: p.materials,
@@ -245,6 +286,8 @@ impl World {
             voxels: p.voxels,
             groups,
             free_block_arrays,
+            digest: PagedDigest::default(),
+            growth: Growth::default(),
         };
         if let Some(i) = w.unsafe_chunk_aadf() {
             return bad(format!(
@@ -252,6 +295,7 @@ impl World {
                 w.size.chunk_coords(i)
             ));
         }
+        w.refresh_digest();
         Ok(w)
     }
 
@@ -428,20 +472,10 @@ impl World {
         Ok(())
     }
 
-    /// The world digest (BRIEF §3) over every mirrored buffer and table.
+    /// The world digest (BRIEF §3) over every mirrored buffer and table, kept
+    /// incrementally: O(1) to read, O(changed pages) to maintain.
     pub fn digest(&self) -> Digest {
-        let models = self.models.encode();
-        let parts: [(BufferId, &[u8]); 6] = [
-            (BufferId::Chunks, bytemuck_u32(&self.chunks)),
-            (BufferId::ChunkEntities, bytemuck_u32(&self.chunk_entities)),
-            (BufferId::Blocks, bytemuck_u32(&self.blocks)),
-            (BufferId::Voxels, bytemuck_u32(&self.voxels)),
-            (BufferId::Materials, bytemuck_u32(self.materials.words())),
-            (BufferId::Models, &models),
-        ];
-        parts
-            .iter()
-            .fold(Digest::default(), |d, &(id, bytes)| d ^ digest_of(id, bytes))
+        self.digest.digest()
     }
 
     /// Whether a chunk is empty and free of entities (it may carry a chunk AADF).

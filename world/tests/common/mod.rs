@@ -2,8 +2,10 @@
 
 #![allow(dead_code)]
 
-use naadf_world::cell::CHUNK_VOXELS;
+use naadf_world::aadf::chunk_is_free;
+use naadf_world::cell::{self, Aadf, CHUNK_VOXELS, State};
 use naadf_world::{ChunkSource, Material, MaterialTable, World, WorldSize};
+use std::collections::HashMap;
 
 /// A dense raw volume (material ids, x fastest): both the source and the oracle.
 pub struct Raw {
@@ -163,4 +165,146 @@ pub fn adversarial(size: WorldSize) -> Vec<(&'static str, Raw)> {
     }
     out.push(("world borders", borders));
     out
+}
+
+pub fn assert_roundtrip(raw: &Raw, w: &World, what: &str) {
+    for p in raw.coords() {
+        assert_eq!(w.material_at(p), raw.get(p), "{what}: voxel {p:?}");
+    }
+    let mut bytes = Vec::new();
+    w.export_raw(&mut bytes).unwrap();
+    let exported: Vec<u16> = bytes
+        .chunks_exact(2)
+        .map(|b| u16::from_le_bytes([b[0], b[1]]))
+        .collect();
+    assert!(exported == raw.v, "{what}: export differs from the raw volume");
+}
+
+/// Canonical form, reference counts and pointer sanity.
+pub fn assert_canonical(w: &World, what: &str) {
+    let mut refs: HashMap<u32, u32> = HashMap::new();
+    for &c in w.chunks() {
+        assert_ne!(c >> 30, 3, "{what}: state 3");
+        if cell::state(c) == State::Full {
+            assert_ne!(cell::material(c), 0, "{what}: full chunk of material 0");
+        }
+        if cell::state(c) != State::Mixed {
+            continue;
+        }
+        let blocks = &w.blocks()[cell::pointer(c) as usize..][..64];
+        assert!(
+            !blocks.iter().all(|&b| b == blocks[0] && cell::state(b) != State::Mixed),
+            "{what}: uniform mixed chunk"
+        );
+        for &b in blocks {
+            if cell::state(b) == State::Mixed {
+                *refs.entry(cell::pointer(b)).or_default() += 1;
+                let g: Vec<u16> = (0..64)
+                    .map(|i| cell::voxel_material(cell::group_voxel(w.voxels(), cell::pointer(b) as usize, i)))
+                    .collect();
+                assert!(!g.iter().all(|&m| m == g[0]), "{what}: uniform voxel group");
+            }
+        }
+    }
+    assert_eq!(refs.len(), w.groups().live_groups(), "{what}: live group count");
+    for (&ptr, &n) in &refs {
+        assert_eq!(w.groups().refs(ptr), n, "{what}: refcount of group {ptr}");
+    }
+    // After a fresh build no two live groups are identical.
+    let mut seen = HashMap::new();
+    for &ptr in refs.keys() {
+        let words = &w.voxels()[ptr as usize..][..32];
+        assert!(seen.insert(words.to_vec(), ptr).is_none(), "{what}: duplicate groups");
+    }
+    for free in w.groups().free_slots() {
+        assert!(!refs.contains_key(&free), "{what}: live pointer into a free slot");
+        assert!(
+            w.voxels()[free as usize..][..32].iter().all(|&v| v == 0),
+            "{what}: free group not zeroed"
+        );
+    }
+    let live_arrays: Vec<u32> = w
+        .chunks()
+        .iter()
+        .filter(|&&c| cell::state(c) == State::Mixed)
+        .map(|&c| cell::pointer(c))
+        .collect();
+    for arr in w.free_block_arrays() {
+        assert!(
+            !live_arrays.contains(&arr),
+            "{what}: live chunk points into free block array {arr}"
+        );
+        assert!(
+            w.blocks()[arr as usize..][..64].iter().all(|&b| b == 0),
+            "{what}: free block array not zeroed"
+        );
+    }
+}
+
+/// No empty cell's box (at any level) contains a solid cell: brute force over voxels.
+pub fn assert_aadf_valid(raw: &Raw, w: &World, what: &str) {
+    let s = raw.size.voxels().map(i64::from);
+    let solid_in = |lo: [i64; 3], hi: [i64; 3]| -> bool {
+        for z in lo[2].max(0)..hi[2].min(s[2]) {
+            for y in lo[1].max(0)..hi[1].min(s[1]) {
+                for x in lo[0].max(0)..hi[0].min(s[0]) {
+                    if raw.get([x as u32, y as u32, z as u32]) != 0 {
+                        return true;
+                    }
+                }
+            }
+        }
+        false
+    };
+    let size = raw.size;
+    for (i, &c) in w.chunks().iter().enumerate() {
+        let cp = size.chunk_coords(i).map(i64::from);
+        if chunk_is_free(c, w.chunk_entities()[i]) {
+            let f = Aadf::unpack(c, 5);
+            let lo: [i64; 3] = std::array::from_fn(|a| (cp[a] - i64::from(f.0[2 * a])) * 16);
+            let hi: [i64; 3] = std::array::from_fn(|a| (cp[a] + 1 + i64::from(f.0[2 * a + 1])) * 16);
+            assert!(
+                !solid_in(lo, hi),
+                "{what}: chunk {cp:?} box {f:?} contains solid voxels"
+            );
+            continue;
+        }
+        if cell::state(c) != State::Mixed {
+            continue;
+        }
+        for b in 0..64usize {
+            let bc = w.blocks()[cell::pointer(c) as usize + b];
+            let bp = [b as i64 % 4, b as i64 / 4 % 4, b as i64 / 16];
+            let base: [i64; 3] = std::array::from_fn(|a| cp[a] * 16 + bp[a] * 4);
+            if cell::state(bc) == State::Empty {
+                let f = Aadf::unpack(bc, 2);
+                assert_eq!(bc >> 12, 0, "{what}: stray bits in an empty block");
+                let lo: [i64; 3] = std::array::from_fn(|a| base[a] - 4 * i64::from(f.0[2 * a]));
+                let hi: [i64; 3] = std::array::from_fn(|a| base[a] + 4 + 4 * i64::from(f.0[2 * a + 1]));
+                assert!(
+                    (0..3).all(|a| bp[a] - i64::from(f.0[2 * a]) >= 0 && bp[a] + i64::from(f.0[2 * a + 1]) <= 3),
+                    "{what}: block box leaves its chunk"
+                );
+                assert!(!solid_in(lo, hi), "{what}: block box contains solid voxels");
+            } else if cell::state(bc) == State::Mixed {
+                for v in 0..64usize {
+                    let vv = cell::group_voxel(w.voxels(), cell::pointer(bc) as usize, v);
+                    if cell::voxel_is_solid(vv) {
+                        continue;
+                    }
+                    assert_eq!(vv >> 12, 0, "{what}: stray bits in an empty voxel");
+                    let f = Aadf::unpack(u32::from(vv), 2);
+                    let vp = [v as i64 % 4, v as i64 / 4 % 4, v as i64 / 16];
+                    assert!(
+                        (0..3).all(|a| vp[a] - i64::from(f.0[2 * a]) >= 0 && vp[a] + i64::from(f.0[2 * a + 1]) <= 3),
+                        "{what}: voxel box leaves its block"
+                    );
+                    let lo: [i64; 3] = std::array::from_fn(|a| base[a] + vp[a] - i64::from(f.0[2 * a]));
+                    let hi: [i64; 3] = std::array::from_fn(|a| base[a] + vp[a] + 1 + i64::from(f.0[2 * a + 1]));
+                    assert!(!solid_in(lo, hi), "{what}: voxel box contains solid voxels");
+                }
+            }
+        }
+    }
+    assert_eq!(w.unsafe_chunk_aadf(), None, "{what}: prefix-sum safety check disagrees");
 }

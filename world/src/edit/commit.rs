@@ -1,0 +1,114 @@
+//! Writing new chunk contents into the structure: dedup reference counts, copy-on-write of
+//! shared voxel groups, free lists, and collapse/expansion of uniform cells.
+
+use super::writes::Writes;
+use crate::aadf::chunk_is_free;
+use crate::build::{ChunkPlan, plan_chunk};
+use crate::cell::{self, CHUNK_VOXELS, GROUP_WORDS, State};
+use crate::digest::BufferId;
+use crate::error::WorldError;
+use crate::world::World;
+
+const BLOCK_ARRAY: usize = 64;
+
+impl World {
+    /// Replaces chunk `i`'s content with `raw` (material ids, all defined). Returns whether
+    /// the chunk's freedom (empty and without entities) changed.
+    ///
+    /// Shared groups are never modified: a block whose content changes acquires the group
+    /// for its new content (deduplicated, or a new slot) and releases the old one, so other
+    /// blocks pointing at the old group keep it. New groups are acquired before old ones are
+    /// released, so a group that survives keeps its slot; both steps go in block order, which
+    /// makes slot reuse deterministic.
+    pub(crate) fn commit_chunk(
+        &mut self,
+        i: usize,
+        raw: &[u16; CHUNK_VOXELS],
+        w: &mut Writes,
+    ) -> Result<bool, WorldError> {
+        let max_id = (self.materials.len() - 1) as u16;
+        let plan = plan_chunk(raw, max_id)
+            .map_err(|m| WorldError::InvalidMaterial(format!("material {m} is not defined (1..={max_id})")))?;
+        let old = self.chunks[i];
+        let was_free = chunk_is_free(old, self.chunk_entities[i]);
+        let new = match plan {
+            ChunkPlan::Uniform(m) => {
+                if cell::state(old) == State::Mixed {
+                    self.free_block_array(cell::pointer(old), w);
+                }
+                // An empty chunk that stays empty keeps its AADF.
+                if m == 0 && cell::state(old) == State::Empty {
+                    old
+                } else {
+                    cell::uniform(m)
+                }
+            }
+            ChunkPlan::Mixed { mut blocks, groups } => {
+                for g in &groups {
+                    let ptr = self.groups.acquire(&mut self.voxels, g.hash, &g.words)?;
+                    if self.groups.refs(ptr) == 1 {
+                        w.push(BufferId::Voxels, ptr as usize, GROUP_WORDS);
+                    }
+                    blocks[usize::from(g.block)] = cell::mixed(ptr);
+                }
+                let arr = if cell::state(old) == State::Mixed {
+                    let arr = cell::pointer(old);
+                    for b in 0..BLOCK_ARRAY {
+                        let bc = self.blocks[arr as usize + b];
+                        if cell::state(bc) == State::Mixed {
+                            self.release_group(cell::pointer(bc), w);
+                        }
+                    }
+                    arr
+                } else {
+                    self.alloc_block_array()?
+                };
+                let cells = &mut self.blocks[arr as usize..][..BLOCK_ARRAY];
+                if cells[..] != blocks[..] {
+                    cells.copy_from_slice(&blocks[..]);
+                    w.push(BufferId::Blocks, arr as usize, BLOCK_ARRAY);
+                }
+                cell::mixed(arr)
+            }
+        };
+        if new != old {
+            self.chunks[i] = new;
+            w.push(BufferId::Chunks, i, 1);
+        }
+        Ok(was_free != chunk_is_free(new, self.chunk_entities[i]))
+    }
+
+    /// Drops one reference to a group, recording the zeroed slot if it was the last.
+    fn release_group(&mut self, ptr: u32, w: &mut Writes) {
+        self.groups.release(&mut self.voxels, ptr);
+        if self.groups.refs(ptr) == 0 {
+            w.push(BufferId::Voxels, ptr as usize, GROUP_WORDS);
+        }
+    }
+
+    /// Releases a block array's groups, zeroes it and puts it on the free list.
+    fn free_block_array(&mut self, arr: u32, w: &mut Writes) {
+        for b in 0..BLOCK_ARRAY {
+            let bc = self.blocks[arr as usize + b];
+            if cell::state(bc) == State::Mixed {
+                self.release_group(cell::pointer(bc), w);
+            }
+        }
+        self.blocks[arr as usize..][..BLOCK_ARRAY].fill(0);
+        self.free_block_arrays.insert(arr);
+        w.push(BufferId::Blocks, arr as usize, BLOCK_ARRAY);
+    }
+
+    /// Fails if committing `chunks` touched chunks could outgrow the 30-bit pointers, so
+    /// that a batch is refused whole before anything is written.
+    pub(crate) fn check_capacity(&self, chunks: usize) -> Result<(), WorldError> {
+        let groups = self.voxels.len() + chunks * BLOCK_ARRAY * GROUP_WORDS;
+        let blocks = self.blocks.len() + chunks * BLOCK_ARRAY;
+        if groups > cell::PAYLOAD as usize || blocks > cell::PAYLOAD as usize {
+            return Err(WorldError::Capacity(format!(
+                "an edit of {chunks} chunks could exceed the 30-bit buffer pointers"
+            )));
+        }
+        Ok(())
+    }
+}

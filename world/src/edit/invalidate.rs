@@ -1,0 +1,121 @@
+//! Keeping chunk AADFs safe across edits, and queueing their regrowth.
+//!
+//! When chunks stop being free (they gain solid voxels, or entities), every free chunk
+//! whose AADF box contains one of them is reset to a zero AADF in the same version; that
+//! keeps the safety invariant. When chunks change freedom either way, the chunks around
+//! them are recomputed from scratch in the background ([`crate::aadf::GrowthJob`]).
+
+use super::writes::Writes;
+use crate::aadf::chunk_is_free;
+use crate::cell::{Aadf, CHUNK_FIELD_BITS, MAX_CHUNK_FIELD};
+use crate::digest::BufferId;
+use crate::size::WorldSize;
+use crate::world::World;
+use rayon::prelude::*;
+
+/// Chunks around a change whose converged AADF may differ: a lock-step field depends on
+/// chunks at most 31 levels plus one neighbour away; two more for margin.
+pub const REGROW_RADIUS: u32 = MAX_CHUNK_FIELD as u32 + 3;
+
+impl World {
+    /// Resets every free chunk whose AADF box contains one of `origins` (chunks that just
+    /// stopped being free). Uses a prefix sum of the origins over their bounding box, grown
+    /// by the largest possible box extent.
+    pub(crate) fn clamp_around(&mut self, origins: &[usize], w: &mut Writes) {
+        if origins.is_empty() {
+            return;
+        }
+        let size = self.size;
+        let dims = size.chunks();
+        let reach = u32::from(MAX_CHUNK_FIELD);
+        let coords: Vec<[u32; 3]> = origins.iter().map(|&i| size.chunk_coords(i)).collect();
+        let lo: [u32; 3] =
+            std::array::from_fn(|a| coords.iter().map(|c| c[a]).min().unwrap_or(0).saturating_sub(reach));
+        let hi: [u32; 3] =
+            std::array::from_fn(|a| (coords.iter().map(|c| c[a]).max().unwrap_or(0) + reach + 1).min(dims[a]));
+        let d: [usize; 3] = std::array::from_fn(|a| (hi[a] - lo[a]) as usize);
+        let at = |x: usize, y: usize, z: usize| x + (d[0] + 1) * (y + (d[1] + 1) * z);
+        let mut sum = vec![0u32; (d[0] + 1) * (d[1] + 1) * (d[2] + 1)];
+        for c in &coords {
+            sum[at(
+                (c[0] - lo[0]) as usize + 1,
+                (c[1] - lo[1]) as usize + 1,
+                (c[2] - lo[2]) as usize + 1,
+            )] = 1;
+        }
+        for z in 1..=d[2] {
+            for y in 1..=d[1] {
+                for x in 1..=d[0] {
+                    sum[at(x, y, z)] += sum[at(x - 1, y, z)] + sum[at(x, y - 1, z)] + sum[at(x, y, z - 1)]
+                        - sum[at(x - 1, y - 1, z)]
+                        - sum[at(x - 1, y, z - 1)]
+                        - sum[at(x, y - 1, z - 1)]
+                        + sum[at(x - 1, y - 1, z - 1)];
+                }
+            }
+        }
+        let count = |a: [usize; 3], b: [usize; 3]| {
+            sum[at(b[0], b[1], b[2])] as i64
+                - sum[at(a[0], b[1], b[2])] as i64
+                - sum[at(b[0], a[1], b[2])] as i64
+                - sum[at(b[0], b[1], a[2])] as i64
+                + sum[at(a[0], a[1], b[2])] as i64
+                + sum[at(a[0], b[1], a[2])] as i64
+                + sum[at(b[0], a[1], a[2])] as i64
+                - sum[at(a[0], a[1], a[2])] as i64
+        };
+        let cells: Vec<[u32; 3]> = (lo[2]..hi[2])
+            .flat_map(|z| (lo[1]..hi[1]).flat_map(move |y| (lo[0]..hi[0]).map(move |x| [x, y, z])))
+            .collect();
+        let reset: Vec<usize> = cells
+            .par_iter()
+            .filter_map(|&p| {
+                let i = size.chunk_index(p);
+                let c = self.chunks[i];
+                if !chunk_is_free(c, self.chunk_entities[i]) || c == 0 {
+                    return None;
+                }
+                let f = Aadf::unpack(c, CHUNK_FIELD_BITS);
+                // The box in prefix-sum coordinates, clipped to the bounding box.
+                let a: [usize; 3] = std::array::from_fn(|k| {
+                    (i64::from(p[k]) - i64::from(f.0[2 * k]) - i64::from(lo[k])).clamp(0, d[k] as i64) as usize
+                });
+                let b: [usize; 3] = std::array::from_fn(|k| {
+                    (i64::from(p[k]) + i64::from(f.0[2 * k + 1]) + 1 - i64::from(lo[k])).clamp(0, d[k] as i64) as usize
+                });
+                (count(a, b) > 0).then_some(i)
+            })
+            .collect();
+        for i in reset {
+            self.chunks[i] = 0;
+            w.push(BufferId::Chunks, i, 1);
+        }
+    }
+}
+
+/// The free chunks within [`REGROW_RADIUS`] (Chebyshev) of any seed chunk, ascending:
+/// a separable dilation of the seed mask, O(chunks) whatever the number of seeds.
+pub(crate) fn regrow_region(size: WorldSize, seeds: &[u32], free: impl Fn(usize) -> bool) -> Vec<u32> {
+    let d = size.chunks().map(|v| v as usize);
+    let n = size.chunk_count();
+    let mut mask = vec![false; n];
+    for &s in seeds {
+        mask[s as usize] = true;
+    }
+    let r = REGROW_RADIUS as usize;
+    let stride = [1, d[0], d[0] * d[1]];
+    for axis in 0..3 {
+        let mut out = vec![false; n];
+        for (i, _) in mask.iter().enumerate().filter(|(_, m)| **m) {
+            let p = (i / stride[axis]) % d[axis];
+            let base = i - p * stride[axis];
+            for q in p.saturating_sub(r)..(p + r + 1).min(d[axis]) {
+                out[base + q * stride[axis]] = true;
+            }
+        }
+        mask = out;
+    }
+    (0..n as u32)
+        .filter(|&i| mask[i as usize] && free(i as usize))
+        .collect()
+}
