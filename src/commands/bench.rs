@@ -23,6 +23,8 @@ pub enum Bench {
     Traverse(TraverseArgs),
     /// Generation, construction and chunk-AADF build times of a preset.
     Build(BuildArgs),
+    /// Edit latency, change-set sizes, regrowth and replayed edit streams.
+    Edit(super::bench_edit::EditArgs),
 }
 
 /// Arguments of `bench traverse`.
@@ -62,6 +64,7 @@ pub fn run(b: Bench) -> Result<()> {
     match b {
         Bench::Traverse(a) => traverse(a),
         Bench::Build(a) => build(a),
+        Bench::Edit(a) => super::bench_edit::run(a),
     }
 }
 

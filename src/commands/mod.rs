@@ -3,6 +3,7 @@
 
 pub mod apply;
 pub mod bench;
+pub mod bench_edit;
 pub mod export;
 pub mod generate;
 pub mod import;

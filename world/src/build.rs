@@ -61,16 +61,38 @@ pub(crate) struct GroupPlan {
 pub(crate) enum ChunkPlan {
     /// One material throughout (0 = empty).
     Uniform(u16),
-    /// Block cells (uniform ones final, mixed ones 0 until placed) and the mixed groups.
+    /// Block cells (uniform ones final, new mixed ones 0 until placed), the new mixed
+    /// groups, and the mask of blocks whose existing mixed cell was kept.
     Mixed {
         blocks: Box<[u32; 64]>,
         groups: Vec<GroupPlan>,
+        kept: u64,
     },
 }
 
 /// Classifies a raw chunk (material ids, `x + 16y + 256z`). Fails with the offending id
 /// on ids above `max_id`.
 pub(crate) fn plan_chunk(raw: &[u16; CHUNK_VOXELS], max_id: u16) -> Result<ChunkPlan, u16> {
+    plan_chunk_keeping(raw, max_id, &|_| None)
+}
+
+/// The 64 material ids of block `b` (`x + 4y + 16z` inside the block) of a raw chunk.
+#[inline]
+pub(crate) fn gather_block(raw: &[u16; CHUNK_VOXELS], b: u32) -> [u16; 64] {
+    let (bx, by, bz) = (b % 4 * 4, b / 4 % 4 * 4, b / 16 * 4);
+    std::array::from_fn(|i| {
+        let i = i as u32;
+        raw[cell::index16(bx + i % 4, by + i / 4 % 4, bz + i / 16)]
+    })
+}
+
+/// [`plan_chunk`] for an edited chunk: `keep(b)` gives the existing mixed cell of a block
+/// whose content did not change, which is kept as is (no rehash, no new reference).
+pub(crate) fn plan_chunk_keeping(
+    raw: &[u16; CHUNK_VOXELS],
+    max_id: u16,
+    keep: &dyn Fn(usize) -> Option<u32>,
+) -> Result<ChunkPlan, u16> {
     let first = raw[0];
     if raw.iter().all(|&v| v == first) {
         return if first > max_id {
@@ -82,13 +104,14 @@ pub(crate) fn plan_chunk(raw: &[u16; CHUNK_VOXELS], max_id: u16) -> Result<Chunk
     let mut blocks = [0u32; 64];
     let mut groups = Vec::new();
     let mut empty_blocks = 0u64;
+    let mut kept = 0u64;
     for b in 0..64u32 {
-        let (bx, by, bz) = (b % 4 * 4, b / 4 % 4 * 4, b / 16 * 4);
-        let mut v = [0u16; 64];
-        for (i, slot) in v.iter_mut().enumerate() {
-            let i = i as u32;
-            *slot = raw[cell::index16(bx + i % 4, by + i / 4 % 4, bz + i / 16)];
+        if let Some(c) = keep(b as usize) {
+            blocks[b as usize] = c;
+            kept |= 1 << b;
+            continue;
         }
+        let v = gather_block(raw, b);
         if let Some(&bad) = v.iter().find(|&&m| m > max_id) {
             return Err(bad);
         }
@@ -114,6 +137,7 @@ pub(crate) fn plan_chunk(raw: &[u16; CHUNK_VOXELS], max_id: u16) -> Result<Chunk
     Ok(ChunkPlan::Mixed {
         blocks: Box::new(blocks),
         groups,
+        kept,
     })
 }
 

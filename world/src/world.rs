@@ -94,7 +94,7 @@ impl World {
     fn place_chunk(&mut self, i: usize, plan: ChunkPlan) -> Result<(), WorldError> {
         match plan {
             ChunkPlan::Uniform(m) => self.chunks[i] = cell::uniform(m),
-            ChunkPlan::Mixed { mut blocks, groups } => {
+            ChunkPlan::Mixed { mut blocks, groups, .. } => {
                 for g in &groups {
                     let ptr = self.groups.acquire(&mut self.voxels, g.hash, &g.words)?;
                     blocks[usize::from(g.block)] = cell::mixed(ptr);

@@ -1,10 +1,11 @@
 //! Writing new chunk contents into the structure: dedup reference counts, copy-on-write of
 //! shared voxel groups, free lists, and collapse/expansion of uniform cells.
 
+use super::overlay::Touched;
 use super::writes::Writes;
 use crate::aadf::chunk_is_free;
-use crate::build::{ChunkPlan, plan_chunk};
-use crate::cell::{self, CHUNK_VOXELS, GROUP_WORDS, State};
+use crate::build::{ChunkPlan, gather_block, plan_chunk_keeping};
+use crate::cell::{self, GROUP_WORDS, State};
 use crate::digest::BufferId;
 use crate::error::WorldError;
 use crate::world::World;
@@ -12,24 +13,30 @@ use crate::world::World;
 const BLOCK_ARRAY: usize = 64;
 
 impl World {
-    /// Replaces chunk `i`'s content with `raw` (material ids, all defined). Returns whether
-    /// the chunk's freedom (empty and without entities) changed.
+    /// Replaces a touched chunk's content with its new content (material ids, all defined).
+    /// Returns whether the chunk's freedom (empty and without entities) changed.
+    ///
+    /// Blocks whose content did not change keep their cells untouched; only changed blocks
+    /// are rehashed.
     ///
     /// Shared groups are never modified: a block whose content changes acquires the group
     /// for its new content (deduplicated, or a new slot) and releases the old one, so other
     /// blocks pointing at the old group keep it. New groups are acquired before old ones are
     /// released, so a group that survives keeps its slot; both steps go in block order, which
     /// makes slot reuse deterministic.
-    pub(crate) fn commit_chunk(
-        &mut self,
-        i: usize,
-        raw: &[u16; CHUNK_VOXELS],
-        w: &mut Writes,
-    ) -> Result<bool, WorldError> {
+    pub(crate) fn commit_chunk(&mut self, t: &Touched, w: &mut Writes) -> Result<bool, WorldError> {
+        let i = t.index;
         let max_id = (self.materials.len() - 1) as u16;
-        let plan = plan_chunk(raw, max_id)
-            .map_err(|m| WorldError::InvalidMaterial(format!("material {m} is not defined (1..={max_id})")))?;
         let old = self.chunks[i];
+        let old_blocks: Option<[u32; BLOCK_ARRAY]> = (cell::state(old) == State::Mixed)
+            .then(|| self.blocks[cell::pointer(old) as usize..][..BLOCK_ARRAY].try_into().expect("64 cells"));
+        let keep = |b: usize| {
+            let c = old_blocks?[b];
+            (cell::state(c) == State::Mixed && gather_block(&t.old, b as u32) == gather_block(&t.new, b as u32))
+                .then_some(c)
+        };
+        let plan = plan_chunk_keeping(&t.new, max_id, &keep)
+            .map_err(|m| WorldError::InvalidMaterial(format!("material {m} is not defined (1..={max_id})")))?;
         let was_free = chunk_is_free(old, self.chunk_entities[i]);
         let new = match plan {
             ChunkPlan::Uniform(m) => {
@@ -43,7 +50,7 @@ impl World {
                     cell::uniform(m)
                 }
             }
-            ChunkPlan::Mixed { mut blocks, groups } => {
+            ChunkPlan::Mixed { mut blocks, groups, kept } => {
                 for g in &groups {
                     let ptr = self.groups.acquire(&mut self.voxels, g.hash, &g.words)?;
                     if self.groups.refs(ptr) == 1 {
@@ -53,7 +60,7 @@ impl World {
                 }
                 let arr = if cell::state(old) == State::Mixed {
                     let arr = cell::pointer(old);
-                    for b in 0..BLOCK_ARRAY {
+                    for b in (0..BLOCK_ARRAY).filter(|&b| kept >> b & 1 == 0) {
                         let bc = self.blocks[arr as usize + b];
                         if cell::state(bc) == State::Mixed {
                             self.release_group(cell::pointer(bc), w);

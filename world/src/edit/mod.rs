@@ -87,7 +87,7 @@ impl World {
         let mut models = self.models.clone();
         let mut overlay = Overlay::new(self);
         ops::apply_batch(batch, &mut overlay, &mut materials, &mut models, limits)?;
-        let touched = overlay.into_chunks();
+        let touched = overlay.into_touched();
         self.check_capacity(touched.len()).map_err(|e| EditError::Limit {
             index: 0,
             op: batch.ops.first().map_or("batch", |o| o.name()),
@@ -106,13 +106,13 @@ impl World {
         }
         let mut blocked = Vec::new();
         let mut changed = Vec::new();
-        for (i, raw) in &touched {
-            let was_free = self.chunk_is_free(*i);
-            let flipped = self.commit_chunk(*i, raw, &mut w).expect("validated batches commit");
+        for t in &touched {
+            let was_free = self.chunk_is_free(t.index);
+            let flipped = self.commit_chunk(t, &mut w).expect("validated batches commit");
             if flipped {
-                changed.push(*i as u32);
+                changed.push(t.index as u32);
                 if was_free {
-                    blocked.push(*i);
+                    blocked.push(t.index);
                 }
             }
         }

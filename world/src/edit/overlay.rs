@@ -10,10 +10,18 @@ use rustc_hash::FxHashMap;
 /// Raw material ids of one chunk, `x + 16y + 256z`.
 pub(crate) type RawChunk = Box<[u16; CHUNK_VOXELS]>;
 
+/// A chunk a batch wrote to: its content before and after.
+pub(crate) struct Touched {
+    pub index: usize,
+    pub old: RawChunk,
+    pub new: RawChunk,
+}
+
 /// A copy-on-write view of the world's voxels for one batch.
 pub(crate) struct Overlay<'w> {
     world: &'w World,
-    chunks: FxHashMap<usize, RawChunk>,
+    /// Per touched chunk: (content before the batch, content now).
+    chunks: FxHashMap<usize, (RawChunk, RawChunk)>,
 }
 
 impl<'w> Overlay<'w> {
@@ -24,10 +32,15 @@ impl<'w> Overlay<'w> {
         }
     }
 
-    /// The touched chunks, by chunk index, ascending.
-    pub(crate) fn into_chunks(self) -> Vec<(usize, RawChunk)> {
-        let mut v: Vec<_> = self.chunks.into_iter().collect();
-        v.sort_unstable_by_key(|(i, _)| *i);
+    /// The chunks whose content changed, by chunk index, ascending.
+    pub(crate) fn into_touched(self) -> Vec<Touched> {
+        let mut v: Vec<Touched> = self
+            .chunks
+            .into_iter()
+            .filter(|(_, (old, new))| old != new)
+            .map(|(index, (old, new))| Touched { index, old, new })
+            .collect();
+        v.sort_unstable_by_key(|t| t.index);
         v
     }
 
@@ -47,7 +60,7 @@ impl Canvas for Overlay<'_> {
     fn get(&self, p: [u32; 3]) -> u16 {
         let (ci, vi) = self.split(p);
         match self.chunks.get(&ci) {
-            Some(raw) => raw[vi],
+            Some((_, raw)) => raw[vi],
             None => self.world.material_at(p),
         }
     }
@@ -56,10 +69,10 @@ impl Canvas for Overlay<'_> {
     fn set(&mut self, p: [u32; 3], material: u16) {
         let (ci, vi) = self.split(p);
         let world = self.world;
-        let raw = self.chunks.entry(ci).or_insert_with(|| {
+        let (_, raw) = self.chunks.entry(ci).or_insert_with(|| {
             let mut raw = Box::new([0u16; CHUNK_VOXELS]);
             world.decode_chunk(world.size.chunk_coords(ci), &mut raw);
-            raw
+            (raw.clone(), raw)
         });
         raw[vi] = material;
     }

@@ -1,7 +1,7 @@
 //! Content-level undo records (BRIEF §4): what a batch overwrote, and the batch that puts
 //! it back where nobody has changed it since.
 
-use super::overlay::RawChunk;
+use super::overlay::Touched;
 use crate::ops::{Batch, Op};
 use crate::world::World;
 
@@ -13,21 +13,15 @@ pub struct UndoRecord {
 }
 
 impl UndoRecord {
-    /// Compares the touched chunks' new content with the world's current content.
-    pub(crate) fn diff(world: &World, touched: &[(usize, RawChunk)]) -> Self {
+    /// The voxels that differ between the touched chunks' old and new content.
+    pub(crate) fn diff(world: &World, touched: &[Touched]) -> Self {
         let mut voxels = Vec::new();
-        let mut old = [0u16; crate::cell::CHUNK_VOXELS];
-        for (i, raw) in touched {
-            let c = world.size().chunk_coords(*i);
-            world.decode_chunk(c, &mut old);
-            for (k, (&before, &after)) in old.iter().zip(raw.iter()).enumerate() {
+        for t in touched {
+            let c = world.size().chunk_coords(t.index);
+            for (k, (&before, &after)) in t.old.iter().zip(t.new.iter()).enumerate() {
                 if before != after {
                     let k = k as u32;
-                    voxels.push((
-                        [c[0] * 16 + (k & 15), c[1] * 16 + (k >> 4 & 15), c[2] * 16 + (k >> 8)],
-                        before,
-                        after,
-                    ));
+                    voxels.push(([c[0] * 16 + (k & 15), c[1] * 16 + (k >> 4 & 15), c[2] * 16 + (k >> 8)], before, after));
                 }
             }
         }

@@ -383,9 +383,10 @@ impl Ball {
                 let dy = y as f64 + 0.5 - cy;
                 let dy2 = dy * dy;
                 // fl(fl(dx² + dy²) + dz²) ≥ fl(dy² + dz²) (rounding is monotone), so no
-                // voxel of this row can pass when the latter already fails.
+                // voxel of this row can pass when the latter already fails. (No NaN here:
+                // the inputs are finite, so the sums are at worst +inf.)
                 let yz = dy2 + dz2;
-                if !(yz < r2) {
+                if yz >= r2 {
                     continue;
                 }
                 let inside = |x: i64| {

@@ -26,7 +26,7 @@
 mod apply;
 mod dense;
 
-pub use apply::apply_batch;
+pub use apply::{MAX_MODEL_NAME, apply_batch};
 pub use dense::DenseCanvas;
 
 use crate::material::MaterialKind;

@@ -1,0 +1,230 @@
+//! `naadf bench edit`: edit latency, change-set sizes, background regrowth and a real
+//! edit stream (HashDAG `EditSphere` replays), on a generated world.
+
+use super::generate::{PresetArgs, generate};
+use super::print_json;
+use anyhow::{Context, Result, bail};
+use naadf_world::World;
+use naadf_world::ops::{Batch, Limits, Op};
+use naadf_world::traverse::{Ray, trace_naadf};
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// Arguments of `bench edit`.
+#[derive(clap::Args)]
+pub struct EditArgs {
+    #[command(flatten)]
+    preset: PresetArgs,
+    /// Edits per kind (single voxel, spheres of radius 4 and 16); radius 64 uses a quarter.
+    #[arg(long, default_value_t = 200)]
+    edits: usize,
+    /// A HashDAG replay CSV whose `EditSphere` rows are scaled into the world and applied.
+    #[arg(long)]
+    replay: Option<PathBuf>,
+    /// Print one JSON object.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Serialize, Default)]
+struct KindReport {
+    edits: usize,
+    median_us: f64,
+    p99_us: f64,
+    /// Encoded change record, bytes (median).
+    record_bytes: usize,
+    /// The record after zstd level 3, bytes (median).
+    record_zstd_bytes: usize,
+    /// Buffer words the change wrote (median): what a GPU mirror uploads.
+    words_written: u64,
+}
+
+#[derive(Serialize)]
+struct ReplayReport {
+    file: String,
+    edits: usize,
+    scale: f64,
+    /// `World::apply` only (invalidation included).
+    edits_per_s: f64,
+    /// Growth to quiescence after the whole stream.
+    growth_ms: f64,
+}
+
+#[derive(Serialize)]
+struct EditReport {
+    size: [u32; 3],
+    kinds: BTreeMap<&'static str, KindReport>,
+    /// Background growth until quiescent after an edit that empties whole chunks (median).
+    regrow_after_emptying_ms: f64,
+    regrow_samples: usize,
+    replay: Option<ReplayReport>,
+}
+
+/// SplitMix64, for reproducible edit positions.
+struct Rng(u64);
+
+impl Rng {
+    fn below(&mut self, n: u32) -> u32 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) % u64::from(n.max(1))) as u32
+    }
+}
+
+/// The first solid voxel below the top of the world at column (x, z), if any.
+fn surface(world: &World, x: u32, z: u32) -> Option<[u32; 3]> {
+    let top = f64::from(world.size().voxels()[1]) - 0.5;
+    let ray = Ray::new([f64::from(x) + 0.5, top, f64::from(z) + 0.5], [0.0, -1.0, 0.0]).ok()?;
+    trace_naadf(world, &ray).map(|h| h.voxel)
+}
+
+fn percentile(sorted: &[f64], q: f64) -> f64 {
+    sorted.get(((sorted.len() as f64 - 1.0) * q).round() as usize).copied().unwrap_or(f64::NAN)
+}
+
+fn median<T: Copy + Ord + Default>(mut v: Vec<T>) -> T {
+    v.sort_unstable();
+    v.get(v.len() / 2).copied().unwrap_or_default()
+}
+
+/// Times `batches` one by one, converging growth (untimed) after each.
+fn time_batches(world: &mut World, batches: &[Batch]) -> Result<KindReport> {
+    let limits = Limits::default();
+    let (mut times, mut bytes, mut zbytes, mut words) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for b in batches {
+        let t0 = Instant::now();
+        let applied = world.apply(b, &limits)?;
+        times.push(t0.elapsed().as_secs_f64() * 1e6);
+        let rec = applied.change.encode();
+        zbytes.push(zstd::bulk::compress(&rec, 3)?.len());
+        bytes.push(rec.len());
+        words.push(applied.change.writes.words());
+        world.grow_until_quiescent();
+    }
+    times.sort_by(f64::total_cmp);
+    Ok(KindReport {
+        edits: batches.len(),
+        median_us: percentile(&times, 0.5),
+        p99_us: percentile(&times, 0.99),
+        record_bytes: median(bytes),
+        record_zstd_bytes: median(zbytes),
+        words_written: median(words),
+    })
+}
+
+/// Runs the edit benchmark.
+pub fn run(a: EditArgs) -> Result<()> {
+    let mut world = generate(&a.preset)?;
+    let size = world.size().voxels();
+    let mut rng = Rng(a.preset.seed);
+    let mut points = Vec::new();
+    while points.len() < a.edits.max(8) {
+        if let Some(p) = surface(&world, rng.below(size[0]), rng.below(size[2])) {
+            points.push(p);
+        }
+    }
+    let mut kinds = BTreeMap::new();
+    let voxel_batches: Vec<Batch> = points
+        .iter()
+        .enumerate()
+        .map(|(k, p)| Batch { ops: vec![Op::Set { voxels: vec![[p[0], p[1] + 1, p[2], (k % 2) as u32 * 2].map(i64::from)] }] })
+        .collect();
+    kinds.insert("voxel", time_batches(&mut world, &voxel_batches)?);
+    for (name, r, n) in [("sphere_r4", 4.0, a.edits), ("sphere_r16", 16.0, a.edits), ("sphere_r64", 64.0, a.edits / 4)] {
+        let batches: Vec<Batch> = points
+            .iter()
+            .take(n.max(2))
+            .enumerate()
+            .map(|(k, p)| Batch {
+                ops: vec![Op::Sphere { center: p.map(|v| f64::from(v) + 0.5), radius: r, material: if k % 2 == 0 { 0 } else { 3 } }],
+            })
+            .collect();
+        kinds.insert(name, time_batches(&mut world, &batches)?);
+    }
+    // Erasing a 48³ box under the surface empties whole chunks; time the regrowth.
+    let mut regrow = Vec::new();
+    for p in points.iter().take(5) {
+        let c = [p[0].saturating_sub(24), p[1].saturating_sub(60), p[2].saturating_sub(24)].map(i64::from);
+        let b = Batch { ops: vec![Op::Box { min: c, max: c.map(|v| v + 48), material: 0 }] };
+        world.apply(&b, &Limits::default())?;
+        let t0 = Instant::now();
+        world.grow_until_quiescent();
+        regrow.push(t0.elapsed().as_secs_f64() * 1e3);
+    }
+    regrow.sort_by(f64::total_cmp);
+    let replay = a.replay.as_ref().map(|path| replay_hashdag(&mut world, path)).transpose()?;
+    let report = EditReport {
+        size,
+        kinds,
+        regrow_after_emptying_ms: percentile(&regrow, 0.5),
+        regrow_samples: regrow.len(),
+        replay,
+    };
+    if a.json {
+        return print_json(&report);
+    }
+    for (name, k) in &report.kinds {
+        println!(
+            "{name:>10}: median {:8.1} µs, p99 {:8.1} µs, record {} B ({} B zstd), {} words written",
+            k.median_us, k.p99_us, k.record_bytes, k.record_zstd_bytes, k.words_written
+        );
+    }
+    println!("regrowth after emptying chunks: {:.1} ms (median of {})", report.regrow_after_emptying_ms, report.regrow_samples);
+    if let Some(r) = &report.replay {
+        println!("replay {}: {} edits at {:.0} edits/s (scale {:.4}), growth {:.1} ms", r.file, r.edits, r.edits_per_s, r.scale, r.growth_ms);
+    }
+    Ok(())
+}
+
+/// Applies the `EditSphere,x,y,z,radius,add` rows of a HashDAG replay, scaled uniformly so
+/// that the edited region fits the world (radii scaled alike, at least 1.5 voxels).
+fn replay_hashdag(world: &mut World, path: &std::path::Path) -> Result<ReplayReport> {
+    let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let mut spheres = Vec::new();
+    for (n, line) in text.lines().enumerate() {
+        let f: Vec<&str> = line.split(',').collect();
+        if f.first() != Some(&"EditSphere") {
+            continue;
+        }
+        let num = |i: usize| -> Result<f64> {
+            f.get(i).and_then(|s| s.trim().parse().ok()).with_context(|| format!("{}:{}: bad EditSphere row", path.display(), n + 1))
+        };
+        spheres.push(([num(1)?, num(2)?, num(3)?], num(4)?, f.get(5).is_some_and(|s| s.trim() == "true")));
+    }
+    if spheres.is_empty() {
+        bail!("{}: no EditSphere rows", path.display());
+    }
+    let lo: [f64; 3] = std::array::from_fn(|a| spheres.iter().map(|s| s.0[a]).fold(f64::INFINITY, f64::min));
+    let hi: [f64; 3] = std::array::from_fn(|a| spheres.iter().map(|s| s.0[a]).fold(f64::NEG_INFINITY, f64::max));
+    let size = world.size().voxels().map(f64::from);
+    let scale = (0..3).map(|a| size[a] / (hi[a] - lo[a]).max(1.0)).fold(f64::INFINITY, f64::min);
+    let batches: Vec<Batch> = spheres
+        .iter()
+        .map(|(c, r, add)| Batch {
+            ops: vec![Op::Sphere {
+                center: std::array::from_fn(|a| (c[a] - lo[a]) * scale),
+                radius: (r * scale).max(1.5),
+                material: if *add { 4 } else { 0 },
+            }],
+        })
+        .collect();
+    let limits = Limits::default();
+    let t0 = Instant::now();
+    for b in &batches {
+        world.apply(b, &limits)?;
+    }
+    let apply_s = t0.elapsed().as_secs_f64();
+    let t1 = Instant::now();
+    world.grow_until_quiescent();
+    Ok(ReplayReport {
+        file: path.display().to_string(),
+        edits: batches.len(),
+        scale,
+        edits_per_s: batches.len() as f64 / apply_s,
+        growth_ms: t1.elapsed().as_secs_f64() * 1e3,
+    })
+}
