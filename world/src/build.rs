@@ -86,6 +86,16 @@ pub(crate) fn gather_block(raw: &[u16; CHUNK_VOXELS], b: u32) -> [u16; 64] {
     })
 }
 
+/// Whether block `b` holds the same ids in two raw chunks (compared row by row).
+#[inline]
+pub(crate) fn block_equal(a: &[u16; CHUNK_VOXELS], b: &[u16; CHUNK_VOXELS], block: u32) -> bool {
+    let base = cell::index16(block % 4 * 4, block / 4 % 4 * 4, block / 16 * 4);
+    (0..16).all(|row| {
+        let at = base + 16 * (row % 4) + 256 * (row / 4);
+        a[at..at + 4] == b[at..at + 4]
+    })
+}
+
 /// [`plan_chunk`] for an edited chunk: `keep(b)` gives the existing mixed cell of a block
 /// whose content did not change, which is kept as is (no rehash, no new reference).
 pub(crate) fn plan_chunk_keeping(

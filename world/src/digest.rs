@@ -121,6 +121,12 @@ impl PagedDigest {
     /// Records that buffer `id` now holds `bytes`, of which only the byte range `dirty`
     /// (plus any change of length) differs from what was last recorded.
     pub fn update(&mut self, id: BufferId, bytes: &[u8], dirty: std::ops::Range<usize>) {
+        self.update_ranges(id, bytes, std::slice::from_ref(&dirty));
+    }
+
+    /// [`PagedDigest::update`] for several dirty byte ranges at once; the pages they touch
+    /// are rehashed in parallel.
+    pub fn update_ranges(&mut self, id: BufferId, bytes: &[u8], dirty: &[std::ops::Range<usize>]) {
         let (old_bytes, pages) = self.buffers.entry(id).or_default();
         let new_pages = bytes.len().div_ceil(PAGE_BYTES);
         for h in pages.drain(new_pages.min(pages.len())..) {
@@ -129,19 +135,25 @@ impl PagedDigest {
         let kept = pages.len();
         pages.resize(new_pages, 0);
         // Dirty pages, plus everything from the old end on if the length changed.
-        let mut todo: Vec<usize> = (dirty.start / PAGE_BYTES..dirty.end.div_ceil(PAGE_BYTES).min(new_pages)).collect();
+        let mut todo: Vec<usize> = dirty
+            .iter()
+            .flat_map(|r| r.start / PAGE_BYTES..r.end.div_ceil(PAGE_BYTES).min(new_pages))
+            .collect();
         if *old_bytes != bytes.len() {
             todo.extend((*old_bytes).min(bytes.len()) / PAGE_BYTES..new_pages);
         }
         todo.sort_unstable();
         todo.dedup();
-        for k in todo {
+        let hashes: Vec<u64> = todo
+            .par_iter()
+            .map(|&k| page_hash(id, k, &bytes[k * PAGE_BYTES..((k + 1) * PAGE_BYTES).min(bytes.len())]))
+            .collect();
+        for (&k, h) in todo.iter().zip(hashes) {
             if k < kept {
                 self.total ^= pages[k];
             }
-            let end = ((k + 1) * PAGE_BYTES).min(bytes.len());
-            pages[k] = page_hash(id, k, &bytes[k * PAGE_BYTES..end]);
-            self.total ^= pages[k];
+            pages[k] = h;
+            self.total ^= h;
         }
         *old_bytes = bytes.len();
     }

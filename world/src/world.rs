@@ -140,10 +140,10 @@ impl World {
         self.digest = digest;
     }
 
-    /// Records that `range` (in bytes) of buffer `id` changed, or that its length did.
-    pub(crate) fn touch_digest(&mut self, id: BufferId, range: std::ops::Range<usize>) {
+    /// Records that the byte `ranges` of buffer `id` changed, or that its length did.
+    pub(crate) fn touch_digest(&mut self, id: BufferId, ranges: &[std::ops::Range<usize>]) {
         let mut digest = std::mem::take(&mut self.digest);
-        digest.update(id, &self.buffer_bytes(id), range);
+        digest.update_ranges(id, &self.buffer_bytes(id), ranges);
         self.digest = digest;
     }
 
@@ -425,18 +425,25 @@ impl World {
                 let ptr = cell::pointer(cellv) as usize;
                 for b in 0..64u32 {
                     let bc = self.blocks[ptr + b as usize];
-                    let (bx, by, bz) = (b % 4 * 4, b / 4 % 4 * 4, b / 16 * 4);
-                    for i in 0..64u32 {
-                        let m = match cell::state(bc) {
-                            State::Empty => 0,
-                            State::Full => cell::material(bc),
-                            State::Mixed => cell::voxel_material(cell::group_voxel(
-                                &self.voxels,
-                                cell::pointer(bc) as usize,
-                                i as usize,
-                            )),
-                        };
-                        out[cell::index16(bx + i % 4, by + i / 4 % 4, bz + i / 16)] = m;
+                    let base = cell::index16(b % 4 * 4, b / 4 % 4 * 4, b / 16 * 4);
+                    let uniform = match cell::state(bc) {
+                        State::Empty => Some(0),
+                        State::Full => Some(cell::material(bc)),
+                        State::Mixed => None,
+                    };
+                    // 16 rows of 4 voxels: x is contiguous in the chunk layout.
+                    for row in 0..16usize {
+                        let at = base + 16 * (row % 4) + 256 * (row / 4);
+                        let dst = &mut out[at..at + 4];
+                        match uniform {
+                            Some(m) => dst.fill(m),
+                            None => {
+                                let g = cell::pointer(bc) as usize;
+                                for (x, d) in dst.iter_mut().enumerate() {
+                                    *d = cell::voxel_material(cell::group_voxel(&self.voxels, g, 4 * row + x));
+                                }
+                            }
+                        }
                     }
                 }
             }

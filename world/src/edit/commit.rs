@@ -4,7 +4,7 @@
 use super::overlay::Touched;
 use super::writes::Writes;
 use crate::aadf::chunk_is_free;
-use crate::build::{ChunkPlan, gather_block, plan_chunk_keeping};
+use crate::build::{ChunkPlan, block_equal, plan_chunk_keeping};
 use crate::cell::{self, GROUP_WORDS, State};
 use crate::digest::BufferId;
 use crate::error::WorldError;
@@ -32,7 +32,7 @@ impl World {
             .then(|| self.blocks[cell::pointer(old) as usize..][..BLOCK_ARRAY].try_into().expect("64 cells"));
         let keep = |b: usize| {
             let c = old_blocks?[b];
-            (cell::state(c) == State::Mixed && gather_block(&t.old, b as u32) == gather_block(&t.new, b as u32))
+            (cell::state(c) == State::Mixed && block_equal(&t.old, &t.new, b as u32))
                 .then_some(c)
         };
         let plan = plan_chunk_keeping(&t.new, max_id, &keep)

@@ -134,12 +134,21 @@ impl World {
     /// Rehashes the written pages and wraps the writes into a change set.
     fn publish(&mut self, record: Record, mut w: Writes) -> ChangeSet {
         w.normalize();
-        for (id, r) in w.ranges().to_vec() {
-            let bytes = match id {
-                BufferId::Models => 0..usize::MAX,
-                _ => 4 * r.start as usize..4 * r.end as usize,
-            };
-            self.touch_digest(id, bytes.start..bytes.end.min(self.buffer_bytes(id).len()));
+        for id in BufferId::WORLD {
+            let len = self.buffer_bytes(id).len();
+            let ranges: Vec<std::ops::Range<usize>> = w
+                .ranges()
+                .iter()
+                .filter(|(rid, _)| *rid == id)
+                .map(|(_, r)| match id {
+                    // Tables are rewritten whole.
+                    BufferId::Materials | BufferId::Models => 0..len,
+                    _ => (4 * r.start as usize).min(len)..(4 * r.end as usize).min(len),
+                })
+                .collect();
+            if !ranges.is_empty() {
+                self.touch_digest(id, &ranges);
+            }
         }
         ChangeSet {
             version: self.version,

@@ -1,0 +1,362 @@
+//! Dynamic entities (BRIEF §4, NAADF-REFERENCE §3.4 and §5): rigid voxel models placed at
+//! arbitrary positions and rotations on top of the voxel world.
+//!
+//! - An **entity type** is made from a model of the world's [`ModelTable`] the first time an
+//!   entity of that model is spawned; types keep that order of first use (they are never
+//!   removed, and a type follows its model if the model is redefined). A type is a dense
+//!   grid of `u32` voxels, x fastest: solid = `0x8000_0000 | material`; empty = a 5-bit-per-
+//!   direction AADF in the chunk layout (bits `5k`, order −x, +x, −y, +y, −z, +z), the lock-
+//!   step field of the grid bounded by the grid ([`crate::aadf::grid_aadf`], 31 levels).
+//!   Types are laid out one after the other in the **entity-type buffer**, each starting at
+//!   a multiple of 64 voxels (`voxelStart` counts units of 64).
+//! - An **instance** has an id (`0..=16382`; 16383 = `0x3FFF` is the GPU's "no entity"), a
+//!   model, a position (world coordinates of the model's local-origin corner) and a rotation
+//!   (unit quaternion `[x, y, z, w]`, local → world). The world keeps the **quantised**
+//!   pose, exactly what the packed record decodes to ([`pack::quantise_pose`]), so every CPU
+//!   test and every GPU mirror sees the same entity.
+//! - **Chunk lists**: an instance overlaps the chunks of its world AABB (the 8 rotated
+//!   corners of `[0, size]`, plus `pos`, padded by 1e-6 voxel against rounding), clipped to
+//!   the world. Each chunk with entities lists their ids ascending; identical lists are
+//!   stored once in the **instance buffer** as consecutive 5-word records
+//!   ([`pack::InstanceRecord`]), in ascending chunk order of first occurrence, and the
+//!   chunk's entity field is `(first record << 8) | count`. At most 255 entities per chunk.
+//!   The lists and the buffer are rebuilt from scratch after every batch that changes
+//!   entities or models, so they are a pure function of the entity table, the type order
+//!   and the models.
+
+pub mod pack;
+pub(crate) mod trace;
+
+use crate::aadf::grid_aadf;
+use crate::cell::CHUNK_FIELD_BITS;
+use crate::material::MaterialTable;
+use crate::model::{MAX_MODEL_EDGE, Model, ModelTable};
+use crate::ops::{EditError, Op};
+use crate::size::WorldSize;
+use pack::{InstanceRecord, MAX_VOXEL_START, RECORD_WORDS, quantise_pose, rotate};
+use rustc_hash::FxHashMap;
+use std::collections::BTreeMap;
+
+/// Largest entity id (14 bits; `0x3FFF` means "no entity" on the GPU).
+pub const MAX_ENTITY_ID: u32 = 0x3FFE;
+/// Most entities listed in one chunk (8-bit count).
+pub const MAX_PER_CHUNK: usize = 255;
+/// Entity-type grids start at multiples of this many voxels.
+pub const TYPE_ALIGN: usize = 64;
+/// Padding of the world AABB of an instance, in voxels: absorbs rounding between the AABB
+/// and the ray test's own transform.
+const AABB_PAD: f64 = 1e-6;
+/// Bit of a solid entity voxel.
+pub const ENTITY_SOLID: u32 = 0x8000_0000;
+
+/// The state of one entity: model and quantised pose.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Pose {
+    /// Model name (its entity type).
+    pub model: String,
+    /// World position of the local-origin corner, a multiple of 1/128.
+    pub pos: [f64; 3],
+    /// Rotation `[x, y, z, w]` (local → world), as decoded from the packed record.
+    pub rot: [f64; 4],
+}
+
+/// Everything that defines a world's entities: the entity types in order of first use
+/// (model names) and the instances by id. The buffers are derived from it.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct EntityTable {
+    /// Model names of the entity types, in type order.
+    pub types: Vec<String>,
+    /// Instances by id.
+    pub instances: BTreeMap<u32, Pose>,
+}
+
+/// The entity table and the buffers derived from it.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Entities {
+    pub table: EntityTable,
+    /// Entity-type voxels (the entity-type buffer).
+    pub type_voxels: Vec<u32>,
+    /// Per type: `voxelStart` (units of 64 voxels).
+    pub type_starts: Vec<u32>,
+    /// The instance buffer: 5-word records.
+    pub instances: Vec<u32>,
+    /// Chunks with entities and their fields `(pointer << 8) | count`, ascending chunk.
+    pub occupied: Vec<(u32, u32)>,
+}
+
+/// The voxels of an entity type made from `model`.
+pub fn type_grid(model: &Model) -> Vec<u32> {
+    let s = model.size().map(|v| v as usize);
+    let empty: Vec<bool> = model.voxels().iter().map(|&m| m == 0).collect();
+    let fields = grid_aadf(s, &empty, 31, false);
+    model
+        .voxels()
+        .iter()
+        .zip(fields)
+        .map(|(&m, f)| if m != 0 { ENTITY_SOLID | u32::from(m) } else { f.pack(CHUNK_FIELD_BITS) })
+        .collect()
+}
+
+/// The inclusive chunk range an instance of `size` at `pos`/`rot` overlaps, clipped to the
+/// world; `None` if its AABB misses the world.
+pub fn chunk_range(world: WorldSize, size: [u32; 3], pos: [f64; 3], rot: [f64; 4]) -> Option<([u32; 3], [u32; 3])> {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for c in 0..8 {
+        let corner = [0, 1, 2].map(|a| if c >> a & 1 == 1 { f64::from(size[a]) } else { 0.0 });
+        let p = rotate(rot, corner);
+        for a in 0..3 {
+            lo[a] = lo[a].min(p[a] + pos[a]);
+            hi[a] = hi[a].max(p[a] + pos[a]);
+        }
+    }
+    let dims = world.chunks();
+    let mut out = ([0u32; 3], [0u32; 3]);
+    for a in 0..3 {
+        let a0 = ((lo[a] - AABB_PAD) / 16.0).floor();
+        let a1 = ((hi[a] + AABB_PAD) / 16.0).floor();
+        if a1 < 0.0 || a0 >= f64::from(dims[a]) {
+            return None;
+        }
+        out.0[a] = a0.max(0.0) as u32;
+        out.1[a] = a1.min(f64::from(dims[a] - 1)) as u32;
+    }
+    Some(out)
+}
+
+/// Why a set of entities cannot be laid out.
+#[derive(Debug)]
+pub(crate) struct LayoutError(pub String);
+
+/// Validates an op's pose and returns the quantised one.
+pub(crate) fn checked_pose(pos: [f64; 3], rot: [f64; 4]) -> Result<([f64; 3], [f64; 4]), String> {
+    let n2: f64 = rot.iter().map(|v| v * v).sum();
+    if rot.iter().any(|v| !v.is_finite()) || !n2.is_finite() || n2 == 0.0 {
+        return Err(format!("rot {rot:?} must be a non-zero finite quaternion [x,y,z,w]"));
+    }
+    match quantise_pose(pos, rot) {
+        Some((p, r, _, _)) => Ok((p, r)),
+        None => Err(format!(
+            "pos {pos:?} must lie in [0, 16384) × [0, 4096) × [0, 16384) once rounded to 1/128 voxel \
+             (the packed entity position)"
+        )),
+    }
+}
+
+/// Checks a model for use as an entity type: edges within 7 bits, materials defined.
+pub(crate) fn check_model(name: &str, model: &Model, materials: &MaterialTable) -> Result<(), String> {
+    if model.size().iter().any(|&e| e == 0 || e > MAX_MODEL_EDGE) {
+        return Err(format!("model '{name}' of size {:?} is too large for an entity", model.size()));
+    }
+    let mut checked = 0u16;
+    for &m in model.voxels() {
+        if m != 0 && m != checked {
+            if !materials.contains(m) {
+                return Err(format!("model '{name}' uses material {m}, which is not defined"));
+            }
+            checked = m;
+        }
+    }
+    Ok(())
+}
+
+impl Entities {
+    /// Whether any chunk lists an entity (traversals test entities only then).
+    #[inline]
+    pub fn present(&self) -> bool {
+        !self.instances.is_empty()
+    }
+
+    /// Derives every buffer for `table` from scratch (types made from `models`).
+    pub fn build(table: EntityTable, models: &ModelTable, size: WorldSize) -> Result<Self, LayoutError> {
+        Self::default().rebuild(table, &ModelTable::default(), models, size)
+    }
+
+    /// Derives the buffers for `table` and `models`, reusing the grids of this state's
+    /// types whose model is unchanged (`old_models` are the models this state was built
+    /// with).
+    pub fn rebuild(
+        &self,
+        table: EntityTable,
+        old_models: &ModelTable,
+        models: &ModelTable,
+        size: WorldSize,
+    ) -> Result<Self, LayoutError> {
+        // Types, in order, each at a multiple of 64 voxels.
+        let mut type_voxels = Vec::new();
+        let mut type_starts = Vec::with_capacity(table.types.len());
+        let mut type_of: FxHashMap<&str, (u32, [u32; 3])> = FxHashMap::default();
+        for (k, name) in table.types.iter().enumerate() {
+            let model = models
+                .get(name)
+                .ok_or_else(|| LayoutError(format!("entity type {k}: model '{name}' is not defined")))?;
+            if type_of.contains_key(name.as_str()) {
+                return Err(LayoutError(format!("entity type {k}: model '{name}' has two types")));
+            }
+            let start = type_voxels.len() / TYPE_ALIGN;
+            if start > MAX_VOXEL_START as usize {
+                return Err(LayoutError(format!(
+                    "the entity types need more than the {} voxels a 20-bit voxelStart can address",
+                    (MAX_VOXEL_START as usize + 1) * TYPE_ALIGN
+                )));
+            }
+            let n = model.voxels().len();
+            let reuse = self.table.types.get(k) == Some(name) && old_models.get(name) == Some(model);
+            if reuse {
+                let at = self.type_starts[k] as usize * TYPE_ALIGN;
+                type_voxels.extend_from_slice(&self.type_voxels[at..at + n]);
+            } else {
+                type_voxels.extend(type_grid(model));
+            }
+            type_voxels.resize(type_voxels.len().next_multiple_of(TYPE_ALIGN), 0);
+            type_starts.push(start as u32);
+            type_of.insert(name, (start as u32, model.size()));
+        }
+        // Per instance: its record and the chunks it overlaps.
+        let mut records: Vec<[u32; RECORD_WORDS]> = Vec::with_capacity(table.instances.len());
+        let mut pairs: Vec<(u32, u32)> = Vec::new();
+        for (k, (&id, pose)) in table.instances.iter().enumerate() {
+            let &(voxel_start, msize) = type_of.get(pose.model.as_str()).ok_or_else(|| {
+                LayoutError(format!("entity {id}: model '{}' has no entity type", pose.model))
+            })?;
+            let (_, _, fixed, inv) = quantise_pose(pose.pos, pose.rot)
+                .ok_or_else(|| LayoutError(format!("entity {id}: position {:?} out of range", pose.pos)))?;
+            records.push(
+                InstanceRecord {
+                    id,
+                    size: msize,
+                    voxel_start,
+                    pos: fixed,
+                    inv_rot: inv,
+                }
+                .pack(),
+            );
+            if let Some((lo, hi)) = chunk_range(size, msize, pose.pos, pose.rot) {
+                for z in lo[2]..=hi[2] {
+                    for y in lo[1]..=hi[1] {
+                        for x in lo[0]..=hi[0] {
+                            pairs.push((size.chunk_index([x, y, z]) as u32, k as u32));
+                        }
+                    }
+                }
+            }
+        }
+        // Per chunk, ascending; within a chunk, ascending id (= ascending k).
+        pairs.sort_unstable();
+        let mut instances: Vec<u32> = Vec::new();
+        let mut occupied = Vec::new();
+        let mut lists: FxHashMap<Vec<u32>, u32> = FxHashMap::default();
+        for run in pairs.chunk_by(|a, b| a.0 == b.0) {
+            let chunk = run[0].0;
+            if run.len() > MAX_PER_CHUNK {
+                return Err(LayoutError(format!(
+                    "chunk {:?} would hold {} entities; at most {MAX_PER_CHUNK} fit in one chunk",
+                    size.chunk_coords(chunk as usize),
+                    run.len()
+                )));
+            }
+            let list: Vec<u32> = run.iter().map(|&(_, k)| k).collect();
+            let ptr = match lists.get(&list) {
+                Some(&p) => p,
+                None => {
+                    let p = (instances.len() / RECORD_WORDS) as u32;
+                    if p + run.len() as u32 > 1 << 24 {
+                        return Err(LayoutError(
+                            "the chunk instance lists need more than 2^24 records (24-bit pointers)".into(),
+                        ));
+                    }
+                    for &k in &list {
+                        instances.extend_from_slice(&records[k as usize]);
+                    }
+                    lists.insert(list, p);
+                    p
+                }
+            };
+            occupied.push((chunk, ptr << 8 | run.len() as u32));
+        }
+        Ok(Entities {
+            table,
+            type_voxels,
+            type_starts,
+            instances,
+            occupied,
+        })
+    }
+}
+
+/// Applies one entity op (spawn, move, despawn) to a batch's working entity table.
+///
+/// Checks, besides [`Op::validate_entity`]: ids `0..=16382`; spawn needs a free id, move and
+/// despawn an existing one; the model fits an entity (edges ≤ 127, defined materials); the
+/// position, once rounded to 1/128 voxel, fits the packed record (`0 ≤ x, z < 16384`,
+/// `0 ≤ y < 4096`); and the entity's world AABB touches the world (an entity entirely
+/// outside could never be seen or hit, so placing it there is treated as a mistake).
+pub(crate) fn apply_op(
+    index: usize,
+    op: &Op,
+    table: &mut EntityTable,
+    models: &ModelTable,
+    materials: &MaterialTable,
+    size: WorldSize,
+) -> Result<(), EditError> {
+    op.validate_entity(index, models)?;
+    let invalid = |reason: String| EditError::Invalid {
+        index,
+        op: op.name(),
+        reason,
+    };
+    let id_ok = |id: u32| {
+        if id > MAX_ENTITY_ID {
+            Err(invalid(format!("entity id {id} outside 0..={MAX_ENTITY_ID}")))
+        } else {
+            Ok(())
+        }
+    };
+    let place = |id: u32, model: &str, pos: [f64; 3], rot: [f64; 4]| -> Result<Pose, EditError> {
+        let m = models
+            .get(model)
+            .ok_or_else(|| invalid(format!("model '{model}' is not defined")))?;
+        check_model(model, m, materials).map_err(invalid)?;
+        let (pos, rot) = checked_pose(pos, rot).map_err(invalid)?;
+        if chunk_range(size, m.size(), pos, rot).is_none() {
+            return Err(invalid(format!(
+                "entity {id} of model '{model}' at {pos:?} would lie entirely outside the {size} world"
+            )));
+        }
+        Ok(Pose {
+            model: model.to_owned(),
+            pos,
+            rot,
+        })
+    };
+    match op {
+        Op::SpawnEntity { id, model, pos, rot } => {
+            id_ok(*id)?;
+            if table.instances.contains_key(id) {
+                return Err(invalid(format!("entity {id} already exists")));
+            }
+            let pose = place(*id, model, *pos, *rot)?;
+            if !table.types.iter().any(|t| t == model) {
+                table.types.push(model.clone());
+            }
+            table.instances.insert(*id, pose);
+        }
+        Op::MoveEntity { id, pos, rot } => {
+            id_ok(*id)?;
+            let Some(old) = table.instances.get(id) else {
+                return Err(invalid(format!("entity {id} does not exist")));
+            };
+            let model = old.model.clone();
+            let pose = place(*id, &model, *pos, *rot)?;
+            table.instances.insert(*id, pose);
+        }
+        Op::DespawnEntity { id } => {
+            id_ok(*id)?;
+            if table.instances.remove(id).is_none() {
+                return Err(invalid(format!("entity {id} does not exist")));
+            }
+        }
+        _ => unreachable!("apply_op is called with entity ops only"),
+    }
+    Ok(())
+}
