@@ -6,6 +6,7 @@ use super::{chunk_progress, load_world, print_json};
 use anyhow::{Result, bail};
 use naadf_world::cell::CHUNK_VOXELS;
 use naadf_world::model::ModelTable;
+use naadf_world::ops::{Batch, Limits, Op};
 use naadf_world::raysets::{fixed_cameras, primary_rays, secondary_rays};
 use naadf_world::stats::WorldStats;
 use naadf_world::traverse::{Hit, Method, Ray, Tracer, same_result};
@@ -44,6 +45,10 @@ pub struct TraverseArgs {
     /// Seed of the secondary-ray directions.
     #[arg(long, default_value_t = 1)]
     seed: u64,
+    /// After the plain run, spawn this many entities (8³ models at random poses) and
+    /// measure again, reporting the ratio.
+    #[arg(long, default_value_t = 0)]
+    entities: u32,
     /// Print one JSON object.
     #[arg(long)]
     json: bool,
@@ -113,7 +118,125 @@ struct Reference {
 }
 
 fn traverse(a: TraverseArgs) -> Result<()> {
-    let world = load_world(&a.world)?;
+    let mut world = load_world(&a.world)?;
+    let plain = measure(&world, &a)?;
+    let with_entities = if a.entities > 0 {
+        spawn_entities(&mut world, a.entities, a.seed)?;
+        Some(measure(&world, &a)?)
+    } else {
+        None
+    };
+    let mismatches = plain.mismatches + with_entities.as_ref().map_or(0, |r| r.mismatches);
+    if a.json {
+        #[derive(Serialize)]
+        struct Out {
+            #[serde(flatten)]
+            plain: TraverseReport,
+            #[serde(skip_serializing_if = "Option::is_none")]
+            with_entities: Option<TraverseReport>,
+        }
+        print_json(&Out { plain, with_entities })?;
+    } else {
+        print_report("", &plain);
+        if let Some(r) = &with_entities {
+            print_report(&format!("with {} entities: ", a.entities), r);
+            println!(
+                "entity cost: primary {:.1}%, secondary {:.1}% (naadf)",
+                100.0 * (1.0 - r.primary["naadf"] / plain.primary["naadf"]),
+                100.0 * (1.0 - r.secondary["naadf"] / plain.secondary["naadf"])
+            );
+        }
+    }
+    if mismatches > 0 {
+        bail!("{mismatches} rays differ between methods");
+    }
+    Ok(())
+}
+
+fn print_report(prefix: &str, r: &TraverseReport) {
+    for (m, p) in &r.primary {
+        let st = r.steps[m];
+        eprintln!(
+            "{prefix}{m:>6}: primary {p:8.2} Mrays/s ({:.1} steps/hit), secondary {:8.2} Mrays/s ({:.1} steps/hit)",
+            st[0], r.secondary[m], st[1]
+        );
+    }
+    let ratio = |set: &BTreeMap<&str, f64>, other: &str| set.get(other).map_or(f64::NAN, |o| set["naadf"] / o);
+    println!(
+        "{prefix}{} primary + {} secondary rays, {} threads",
+        r.rays, r.secondary_rays, r.threads
+    );
+    println!(
+        "{prefix}naadf/grid: primary {:.1}×, secondary {:.1}×",
+        ratio(&r.primary, "grid"),
+        ratio(&r.secondary, "grid")
+    );
+    println!(
+        "{prefix}naadf/nodf: primary {:.1}×, secondary {:.1}×",
+        ratio(&r.primary, "nodf"),
+        ratio(&r.secondary, "nodf")
+    );
+}
+
+/// Spawns `n` 8³ entities (a hollow box) at random poses inside the world, in one batch.
+fn spawn_entities(world: &mut World, n: u32, seed: u64) -> Result<()> {
+    let model = entity_model_op();
+    let s = world.size().voxels().map(f64::from);
+    let mut st = seed ^ 0xE171;
+    let mut unit = || {
+        st = st.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = st;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let mut ops = vec![model];
+    for id in 0..n {
+        let pos = [
+            unit() * (s[0] - 16.0) + 4.0,
+            (0.3 + 0.6 * unit()) * s[1],
+            unit() * (s[2] - 16.0) + 4.0,
+        ];
+        let rot = [unit() - 0.5, unit() - 0.5, unit() - 0.5, unit() - 0.5];
+        ops.push(Op::SpawnEntity {
+            id,
+            model: "bench_box".into(),
+            pos,
+            rot,
+        });
+    }
+    world.apply(
+        &Batch { ops },
+        &Limits {
+            max_ops: n as usize + 1,
+            ..Limits::default()
+        },
+    )?;
+    world.grow_until_quiescent();
+    Ok(())
+}
+
+/// Defines the 8³ hollow-box model used by entity benchmarks.
+pub fn entity_model_op() -> Op {
+    let mut voxels = Vec::new();
+    for z in 0..8i64 {
+        for y in 0..8i64 {
+            for x in 0..8i64 {
+                if [x, y, z].iter().any(|&c| c == 0 || c == 7) {
+                    voxels.push([x, y, z, 1]);
+                }
+            }
+        }
+    }
+    Op::DefineModel {
+        name: "bench_box".into(),
+        size: [8, 8, 8],
+        voxels,
+    }
+}
+
+/// Measures every method on the fixed ray sets of `world`.
+fn measure(world: &World, a: &TraverseArgs) -> Result<TraverseReport> {
     let primary = primary_rays(&fixed_cameras(world.size()), a.width, a.height);
     let mut report = TraverseReport {
         primary: BTreeMap::new(),
@@ -127,7 +250,7 @@ fn traverse(a: TraverseArgs) -> Result<()> {
     // The first method's results, which the others must reproduce.
     let mut reference: Option<Reference> = None;
     for method in Method::ALL {
-        let tracer = match Tracer::new(&world, method) {
+        let tracer = match Tracer::new(world, method) {
             Ok(t) => t,
             Err(e) => {
                 tracing::warn!("skipping {}: {e}", method.name());
@@ -166,37 +289,9 @@ fn traverse(a: TraverseArgs) -> Result<()> {
         report.primary.insert(method.name(), p_rate);
         report.secondary.insert(method.name(), s_rate);
         report.steps.insert(method.name(), [p_steps, s_steps]);
-        if !a.json {
-            eprintln!(
-                "{:>6}: primary {p_rate:8.2} Mrays/s ({p_steps:.1} steps/hit), secondary {s_rate:8.2} Mrays/s ({s_steps:.1} steps/hit)",
-                method.name()
-            );
-        }
     }
     report.secondary_rays = reference.as_ref().map_or(0, |r| r.secondary.len());
-    if a.json {
-        print_json(&report)?;
-    } else {
-        let ratio = |set: &BTreeMap<&str, f64>, other: &str| set.get(other).map_or(f64::NAN, |o| set["naadf"] / o);
-        println!(
-            "{} primary + {} secondary rays, {} threads",
-            report.rays, report.secondary_rays, report.threads
-        );
-        println!(
-            "naadf/grid: primary {:.1}×, secondary {:.1}×",
-            ratio(&report.primary, "grid"),
-            ratio(&report.secondary, "grid")
-        );
-        println!(
-            "naadf/nodf: primary {:.1}×, secondary {:.1}×",
-            ratio(&report.primary, "nodf"),
-            ratio(&report.secondary, "nodf")
-        );
-    }
-    if report.mismatches > 0 {
-        bail!("{} rays differ between methods", report.mismatches);
-    }
-    Ok(())
+    Ok(report)
 }
 
 /// Raw chunks held in memory, so that construction is timed without generation.

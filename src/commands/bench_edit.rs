@@ -59,6 +59,10 @@ struct EditReport {
     /// Background growth until quiescent after an edit that empties whole chunks (median).
     regrow_after_emptying_ms: f64,
     regrow_samples: usize,
+    /// One batch moving all 1,000 entities, invalidation included (median of 10).
+    entity_move_1000_ms: f64,
+    /// Encoded record of that batch, bytes.
+    entity_move_1000_record_bytes: usize,
     replay: Option<ReplayReport>,
 }
 
@@ -83,7 +87,10 @@ fn surface(world: &World, x: u32, z: u32) -> Option<[u32; 3]> {
 }
 
 fn percentile(sorted: &[f64], q: f64) -> f64 {
-    sorted.get(((sorted.len() as f64 - 1.0) * q).round() as usize).copied().unwrap_or(f64::NAN)
+    sorted
+        .get(((sorted.len() as f64 - 1.0) * q).round() as usize)
+        .copied()
+        .unwrap_or(f64::NAN)
 }
 
 fn median<T: Copy + Ord + Default>(mut v: Vec<T>) -> T {
@@ -131,16 +138,28 @@ pub fn run(a: EditArgs) -> Result<()> {
     let voxel_batches: Vec<Batch> = points
         .iter()
         .enumerate()
-        .map(|(k, p)| Batch { ops: vec![Op::Set { voxels: vec![[p[0], p[1] + 1, p[2], (k % 2) as u32 * 2].map(i64::from)] }] })
+        .map(|(k, p)| Batch {
+            ops: vec![Op::Set {
+                voxels: vec![[p[0], p[1] + 1, p[2], (k % 2) as u32 * 2].map(i64::from)],
+            }],
+        })
         .collect();
     kinds.insert("voxel", time_batches(&mut world, &voxel_batches)?);
-    for (name, r, n) in [("sphere_r4", 4.0, a.edits), ("sphere_r16", 16.0, a.edits), ("sphere_r64", 64.0, a.edits / 4)] {
+    for (name, r, n) in [
+        ("sphere_r4", 4.0, a.edits),
+        ("sphere_r16", 16.0, a.edits),
+        ("sphere_r64", 64.0, a.edits / 4),
+    ] {
         let batches: Vec<Batch> = points
             .iter()
             .take(n.max(2))
             .enumerate()
             .map(|(k, p)| Batch {
-                ops: vec![Op::Sphere { center: p.map(|v| f64::from(v) + 0.5), radius: r, material: if k % 2 == 0 { 0 } else { 3 } }],
+                ops: vec![Op::Sphere {
+                    center: p.map(|v| f64::from(v) + 0.5),
+                    radius: r,
+                    material: if k % 2 == 0 { 0 } else { 3 },
+                }],
             })
             .collect();
         kinds.insert(name, time_batches(&mut world, &batches)?);
@@ -148,20 +167,38 @@ pub fn run(a: EditArgs) -> Result<()> {
     // Erasing a 48³ box under the surface empties whole chunks; time the regrowth.
     let mut regrow = Vec::new();
     for p in points.iter().take(5) {
-        let c = [p[0].saturating_sub(24), p[1].saturating_sub(60), p[2].saturating_sub(24)].map(i64::from);
-        let b = Batch { ops: vec![Op::Box { min: c, max: c.map(|v| v + 48), material: 0 }] };
+        let c = [
+            p[0].saturating_sub(24),
+            p[1].saturating_sub(60),
+            p[2].saturating_sub(24),
+        ]
+        .map(i64::from);
+        let b = Batch {
+            ops: vec![Op::Box {
+                min: c,
+                max: c.map(|v| v + 48),
+                material: 0,
+            }],
+        };
         world.apply(&b, &Limits::default())?;
         let t0 = Instant::now();
         world.grow_until_quiescent();
         regrow.push(t0.elapsed().as_secs_f64() * 1e3);
     }
     regrow.sort_by(f64::total_cmp);
-    let replay = a.replay.as_ref().map(|path| replay_hashdag(&mut world, path)).transpose()?;
+    let (entity_move_1000_ms, entity_move_1000_record_bytes) = time_entity_moves(&mut world, &points)?;
+    let replay = a
+        .replay
+        .as_ref()
+        .map(|path| replay_hashdag(&mut world, path))
+        .transpose()?;
     let report = EditReport {
         size,
         kinds,
         regrow_after_emptying_ms: percentile(&regrow, 0.5),
         regrow_samples: regrow.len(),
+        entity_move_1000_ms,
+        entity_move_1000_record_bytes,
         replay,
     };
     if a.json {
@@ -173,11 +210,66 @@ pub fn run(a: EditArgs) -> Result<()> {
             k.median_us, k.p99_us, k.record_bytes, k.record_zstd_bytes, k.words_written
         );
     }
-    println!("regrowth after emptying chunks: {:.1} ms (median of {})", report.regrow_after_emptying_ms, report.regrow_samples);
+    println!(
+        "regrowth after emptying chunks: {:.1} ms (median of {})",
+        report.regrow_after_emptying_ms, report.regrow_samples
+    );
+    println!(
+        "moving 1000 entities in one batch: {:.2} ms, record {} B",
+        report.entity_move_1000_ms, report.entity_move_1000_record_bytes
+    );
     if let Some(r) = &report.replay {
-        println!("replay {}: {} edits at {:.0} edits/s (scale {:.4}), growth {:.1} ms", r.file, r.edits, r.edits_per_s, r.scale, r.growth_ms);
+        println!(
+            "replay {}: {} edits at {:.0} edits/s (scale {:.4}), growth {:.1} ms",
+            r.file, r.edits, r.edits_per_s, r.scale, r.growth_ms
+        );
     }
     Ok(())
+}
+
+/// Spawns 1,000 entities a few voxels above surface points, then times batches that move
+/// all of them by a voxel or two (converging growth, untimed, between batches).
+fn time_entity_moves(world: &mut World, points: &[[u32; 3]]) -> Result<(f64, usize)> {
+    let limits = Limits {
+        max_ops: 2000,
+        ..Limits::default()
+    };
+    let pose = |k: usize, step: usize| {
+        let p = points[k % points.len()];
+        let (x, z) = ((p[0] as usize + 13 * (k / points.len())) % 1000, p[2] as usize);
+        [
+            x as f64 + (step % 3) as f64,
+            f64::from(p[1]) + 6.0,
+            z as f64 + 0.5 * (step % 2) as f64,
+        ]
+    };
+    let mut ops = vec![super::bench::entity_model_op()];
+    ops.extend((0..1000).map(|k| Op::SpawnEntity {
+        id: k as u32,
+        model: "bench_box".into(),
+        pos: pose(k, 0),
+        rot: [0.0, 0.0, 0.0, 1.0],
+    }));
+    world.apply(&Batch { ops }, &limits)?;
+    world.grow_until_quiescent();
+    let mut times = Vec::new();
+    let mut bytes = 0;
+    for step in 1..=10 {
+        let ops = (0..1000)
+            .map(|k| Op::MoveEntity {
+                id: k as u32,
+                pos: pose(k, step),
+                rot: [0.0, (step as f64 * 0.1).sin(), 0.0, (step as f64 * 0.1).cos()],
+            })
+            .collect();
+        let t0 = Instant::now();
+        let applied = world.apply(&Batch { ops }, &limits)?;
+        times.push(t0.elapsed().as_secs_f64() * 1e3);
+        bytes = applied.change.encode().len();
+        world.grow_until_quiescent();
+    }
+    times.sort_by(f64::total_cmp);
+    Ok((percentile(&times, 0.5), bytes))
 }
 
 /// Applies the `EditSphere,x,y,z,radius,add` rows of a HashDAG replay, scaled uniformly so
@@ -191,9 +283,15 @@ fn replay_hashdag(world: &mut World, path: &std::path::Path) -> Result<ReplayRep
             continue;
         }
         let num = |i: usize| -> Result<f64> {
-            f.get(i).and_then(|s| s.trim().parse().ok()).with_context(|| format!("{}:{}: bad EditSphere row", path.display(), n + 1))
+            f.get(i)
+                .and_then(|s| s.trim().parse().ok())
+                .with_context(|| format!("{}:{}: bad EditSphere row", path.display(), n + 1))
         };
-        spheres.push(([num(1)?, num(2)?, num(3)?], num(4)?, f.get(5).is_some_and(|s| s.trim() == "true")));
+        spheres.push((
+            [num(1)?, num(2)?, num(3)?],
+            num(4)?,
+            f.get(5).is_some_and(|s| s.trim() == "true"),
+        ));
     }
     if spheres.is_empty() {
         bail!("{}: no EditSphere rows", path.display());
@@ -201,7 +299,9 @@ fn replay_hashdag(world: &mut World, path: &std::path::Path) -> Result<ReplayRep
     let lo: [f64; 3] = std::array::from_fn(|a| spheres.iter().map(|s| s.0[a]).fold(f64::INFINITY, f64::min));
     let hi: [f64; 3] = std::array::from_fn(|a| spheres.iter().map(|s| s.0[a]).fold(f64::NEG_INFINITY, f64::max));
     let size = world.size().voxels().map(f64::from);
-    let scale = (0..3).map(|a| size[a] / (hi[a] - lo[a]).max(1.0)).fold(f64::INFINITY, f64::min);
+    let scale = (0..3)
+        .map(|a| size[a] / (hi[a] - lo[a]).max(1.0))
+        .fold(f64::INFINITY, f64::min);
     let batches: Vec<Batch> = spheres
         .iter()
         .map(|(c, r, add)| Batch {

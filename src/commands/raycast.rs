@@ -36,6 +36,9 @@ struct HitLine {
     t: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     material: Option<u16>,
+    /// Set for entity hits (the voxel and normal are then entity-local).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    entity: Option<u32>,
 }
 
 impl From<Option<Hit>> for HitLine {
@@ -46,6 +49,7 @@ impl From<Option<Hit>> for HitLine {
             normal: h.map(|h| h.normal),
             t: h.map(|h| h.t),
             material: h.map(|h| h.material),
+            entity: h.and_then(|h| h.entity),
         }
     }
 }

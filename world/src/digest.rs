@@ -31,9 +31,9 @@ pub enum BufferId {
     Materials = 4,
     /// The model table in its canonical encoding.
     Models = 5,
-    /// Entity type voxel grids.
+    /// The entity-type buffer: every type's dense voxel grid (u32 LE, [`crate::entity`]).
     EntityTypes = 6,
-    /// The entity instance buffer.
+    /// The entity instance buffer: the deduplicated chunk lists of 5-word records (u32 LE).
     EntityInstances = 7,
 }
 

@@ -7,7 +7,7 @@
 //!
 //! ```text
 //! header   0  magic            8 bytes  89 4E 41 41 44 46 0D 0A  ("\x89NAADF\r\n")
-//!          8  format version   u32      1
+//!          8  format version   u32      2 (version 1, without entities, is still read)
 //!         12  flags            u32      0 (every bit reserved)
 //!         16  payload length   u64      uncompressed payload bytes
 //!         24  payload xxh3     u64      xxh3_64 of the uncompressed payload
@@ -15,10 +15,15 @@
 //! frame   40  one zstd frame whose content is the payload
 //! trailer     xxh3_64 of the frame's bytes (u64), then end of file
 //!
-//! payload     world size 3×u32 (voxels), edit version u64, then six sections, each a u64
-//!             byte length followed by that many bytes: material words, model table,
-//!             chunks, chunk entities, blocks, voxels
+//! payload     world size 3×u32 (voxels), edit version u64, then seven sections, each a
+//!             u64 byte length followed by that many bytes: material words, model table,
+//!             chunks, chunk entities, blocks, voxels, entity table (version 1: the first
+//!             six only)
 //! ```
+//!
+//! The entity table section holds the entity types (model names, in order of first use)
+//! and the instances with their quantised poses; the entity-type and instance buffers are
+//! derived from it on load, deterministically, so a loaded world has the same digest.
 //!
 //! Reading streams the payload straight into the final buffers: every length is checked
 //! against the header and against what the world size allows before anything is allocated,
@@ -27,6 +32,7 @@
 //! the three checksums together make every change to a file's bytes an error.
 
 use crate::cell::MAX_MATERIAL;
+use crate::entity::EntityTable;
 use crate::error::WorldError;
 use crate::material::{Material, MaterialTable};
 use crate::model::ModelTable;
@@ -45,8 +51,11 @@ pub use crate::world::WorldParts;
 /// catches line-ending conversion in either direction.
 pub const MAGIC: [u8; 8] = *b"\x89NAADF\r\n";
 
-/// The format version this build writes, and the only one it reads.
-pub const FORMAT_VERSION: u32 = 1;
+/// The format version this build writes.
+pub const FORMAT_VERSION: u32 = 2;
+
+/// The format versions this build reads: 1 (no entity section) and 2.
+pub const READ_VERSIONS: [u32; 2] = [1, 2];
 
 /// Bytes in the fixed header.
 pub const HEADER_LEN: usize = 40;
@@ -66,8 +75,14 @@ pub const MAX_BUFFER_WORDS: u64 = 1 << 30;
 /// Slack factor on the per-chunk bounds of `blocks` and `voxels` (see [`section_limits`]).
 const SLACK: u64 = 4;
 
-/// Bytes of the fixed part of the payload: size, version and six section lengths.
-const PAYLOAD_FIXED: u64 = 12 + 8 + 6 * 8;
+/// Bytes of the fixed part of a version-2 payload: size, version and seven section lengths.
+const PAYLOAD_FIXED: u64 = 12 + 8 + 7 * 8;
+
+/// Bytes of the fixed part of a version-1 payload (six sections).
+const PAYLOAD_FIXED_V1: u64 = 12 + 8 + 6 * 8;
+
+/// Largest entity-table section, in bytes (a reader rejects more).
+pub const MAX_ENTITY_BYTES: u64 = 1 << 28;
 
 /// Largest material section, in bytes (32768 entries of 16 bytes).
 const MAX_MATERIAL_BYTES: u64 = 16 * (MAX_MATERIAL as u64 + 1);
@@ -77,8 +92,8 @@ const MAX_MATERIAL_BYTES: u64 = 16 * (MAX_MATERIAL as u64 + 1);
 /// `blocks` holds at most `4 × 64` words per chunk and `voxels` at most `4 × 2048` words
 /// per chunk (four times what a world can hold live at once, as slack for slots freed by
 /// edits), each capped at 2³⁰ words. Returns `[materials, models, chunks, chunk_entities,
-/// blocks, voxels]`; the `chunks` and `chunk_entities` entries are exact sizes.
-pub fn section_limits(chunk_count: u64) -> [u64; 6] {
+/// blocks, voxels, entities]`; the `chunks` and `chunk_entities` entries are exact sizes.
+pub fn section_limits(chunk_count: u64) -> [u64; 7] {
     let chunk_bytes = 4 * chunk_count;
     [
         MAX_MATERIAL_BYTES,
@@ -87,6 +102,7 @@ pub fn section_limits(chunk_count: u64) -> [u64; 6] {
         chunk_bytes,
         4 * (SLACK * 64 * chunk_count).min(MAX_BUFFER_WORDS),
         4 * (SLACK * 2048 * chunk_count).min(MAX_BUFFER_WORDS),
+        MAX_ENTITY_BYTES,
     ]
 }
 
@@ -95,8 +111,16 @@ fn max_payload(chunk_count: u64) -> u64 {
     PAYLOAD_FIXED + section_limits(chunk_count).iter().sum::<u64>()
 }
 
-/// Names of the six sections, in file order.
-const SECTIONS: [&str; 6] = ["materials", "models", "chunks", "chunk_entities", "blocks", "voxels"];
+/// Names of the seven sections, in file order.
+const SECTIONS: [&str; 7] = [
+    "materials",
+    "models",
+    "chunks",
+    "chunk_entities",
+    "blocks",
+    "voxels",
+    "entities",
+];
 
 /// Borrowed contents of a world, in file order.
 struct View<'a> {
@@ -108,6 +132,7 @@ struct View<'a> {
     chunk_entities: &'a [u32],
     blocks: &'a [u32],
     voxels: &'a [u32],
+    entities: Vec<u8>,
 }
 
 /// Writes `world` as a world file to `out` (header, zstd frame, trailer). The payload is
@@ -126,6 +151,7 @@ pub fn write(world: &World, out: &mut dyn Write) -> Result<(), WorldError> {
             chunk_entities: world.chunk_entities(),
             blocks: world.blocks(),
             voxels: world.voxels(),
+            entities: world.entity_table().encode(),
         },
         out,
     )
@@ -145,6 +171,7 @@ pub fn write_parts(parts: &WorldParts, out: &mut dyn Write) -> Result<(), WorldE
             chunk_entities: &parts.chunk_entities,
             blocks: &parts.blocks,
             voxels: &parts.voxels,
+            entities: parts.entities.encode(),
         },
         out,
     )
@@ -152,13 +179,14 @@ pub fn write_parts(parts: &WorldParts, out: &mut dyn Write) -> Result<(), WorldE
 
 fn write_view(v: &View, out: &mut dyn Write) -> Result<(), WorldError> {
     let io = |e| WorldError::io("writing world file", e);
-    let sections: [&[u8]; 6] = [
+    let sections: [&[u8]; 7] = [
         bytemuck_u32(v.materials),
         &v.models,
         bytemuck_u32(v.chunks),
         bytemuck_u32(v.chunk_entities),
         bytemuck_u32(v.blocks),
         bytemuck_u32(v.voxels),
+        &v.entities,
     ];
     let limits = section_limits(v.size.chunk_count() as u64);
     for ((name, s), limit) in SECTIONS.iter().zip(&sections).zip(limits) {
@@ -264,6 +292,7 @@ pub fn read_parts(input: &mut dyn Read) -> Result<WorldParts, WorldError> {
         .map_err(|e| WorldError::io("starting zstd decoder", e))?
         .single_frame();
     let mut p = Payload {
+        format: header.version,
         dec: decoder,
         hasher: Xxh3::new(),
         done: 0,
@@ -298,6 +327,10 @@ pub fn read_parts(input: &mut dyn Read) -> Result<WorldParts, WorldError> {
             .map_err(|e| bad(format!("material {id}: {e}")))?;
     }
     let models = ModelTable::decode(&raw.models).map_err(into_bad_file)?;
+    let entities = match &raw.entities {
+        Some(bytes) => EntityTable::decode(bytes)?,
+        None => EntityTable::default(),
+    };
     Ok(WorldParts {
         size: raw.size,
         version: raw.version,
@@ -307,6 +340,7 @@ pub fn read_parts(input: &mut dyn Read) -> Result<WorldParts, WorldError> {
         chunk_entities: raw.chunk_entities,
         blocks: raw.blocks,
         voxels: raw.voxels,
+        entities,
     })
 }
 
@@ -403,6 +437,7 @@ fn into_bad_file(e: WorldError) -> WorldError {
 
 /// The fields of a checked header.
 struct Header {
+    version: u32,
     payload_len: u64,
     payload_checksum: u64,
 }
@@ -427,13 +462,11 @@ fn read_header(input: &mut dyn Read) -> Result<Header, WorldError> {
     if got == 0 {
         return Err(bad("truncated: the file is empty"));
     }
-    if got >= 12 {
-        let version = u32::from_le_bytes(h[8..12].try_into().expect("4 bytes"));
-        if version != FORMAT_VERSION {
-            return Err(bad(format!(
-                "unsupported format version {version} (this build reads {FORMAT_VERSION})"
-            )));
-        }
+    let version = u32::from_le_bytes(h[8..12].try_into().expect("4 bytes"));
+    if got >= 12 && !READ_VERSIONS.contains(&version) {
+        return Err(bad(format!(
+            "unsupported format version {version} (this build reads 1 and 2)"
+        )));
     }
     if got < HEADER_LEN {
         return Err(bad(format!(
@@ -447,7 +480,7 @@ fn read_header(input: &mut dyn Read) -> Result<Header, WorldError> {
     let flags = u32::from_le_bytes(h[12..16].try_into().expect("4 bytes"));
     if flags != 0 {
         return Err(bad(format!(
-            "unsupported flags {flags:#010x} (format version {FORMAT_VERSION} defines none)"
+            "unsupported flags {flags:#010x} (format version {version} defines none)"
         )));
     }
     let payload_len = u64_at(16);
@@ -456,12 +489,14 @@ fn read_header(input: &mut dyn Read) -> Result<Header, WorldError> {
             .expect("the largest world size is valid")
             .chunk_count() as u64,
     );
-    if payload_len < PAYLOAD_FIXED || payload_len > largest {
+    let fixed = if version == 1 { PAYLOAD_FIXED_V1 } else { PAYLOAD_FIXED };
+    if payload_len < fixed || payload_len > largest {
         return Err(bad(format!(
-            "declared payload length {payload_len} is outside {PAYLOAD_FIXED}..={largest} bytes"
+            "declared payload length {payload_len} is outside {fixed}..={largest} bytes"
         )));
     }
     Ok(Header {
+        version,
         payload_len,
         payload_checksum: u64_at(24),
     })
@@ -565,12 +600,16 @@ struct RawSections {
     chunk_entities: Vec<u32>,
     blocks: Vec<u32>,
     voxels: Vec<u32>,
+    /// The entity section (`None` in a version-1 file).
+    entities: Option<Vec<u8>>,
 }
 
 type Decoder<'a> = zstd::stream::read::Decoder<'static, FrameReader<'a>>;
 
 /// The decompressed payload, read at most up to its declared length and hashed on the way.
 struct Payload<'a> {
+    /// The file's format version.
+    format: u32,
     dec: Decoder<'a>,
     hasher: Xxh3,
     done: u64,
@@ -708,13 +747,18 @@ impl Payload<'_> {
             )));
         }
         let version = self.u64("edit version")?;
-        let [lm, lmod, lc, le, lb, lv] = section_limits(chunk_count);
+        let [lm, lmod, lc, le, lb, lv, lent] = section_limits(chunk_count);
         let materials = self.words("materials", lm, 16, false)?;
         let models = self.bytes("models", lmod)?;
         let chunks = self.words("chunks", lc, 4, true)?;
         let chunk_entities = self.words("chunk_entities", le, 4, true)?;
         let blocks = self.words("blocks", lb, 4 * 64, false)?;
         let voxels = self.words("voxels", lv, 4 * 32, false)?;
+        let entities = if self.format >= 2 {
+            Some(self.bytes("entities", lent)?)
+        } else {
+            None
+        };
         if self.done != self.len {
             return Err(Fail::Structure(format!(
                 "{} unused bytes after the last section (declared payload length {})",
@@ -731,6 +775,7 @@ impl Payload<'_> {
             chunk_entities,
             blocks,
             voxels,
+            entities,
         })
     }
 

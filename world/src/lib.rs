@@ -11,6 +11,7 @@
 //! - [`build`]: construction from raw voxels, chunk by chunk;
 //! - [`aadf`]: the distance fields;
 //! - [`traverse`]: CPU ray traversal (three methods that must agree exactly);
+//! - [`edit`] and [`entity`]: edit batches, dynamic entities;
 //! - [`digest`]: the paged 64-bit digest clients use to verify their mirror;
 //! - [`file`]: the `.naadf` world file.
 //!
@@ -35,6 +36,7 @@ pub mod cell;
 pub mod dedup;
 pub mod digest;
 pub mod edit;
+pub mod entity;
 pub mod error;
 pub mod file;
 pub mod hash;

@@ -6,6 +6,8 @@ use crate::cell::{self, Aadf, CHUNK_FIELD_BITS, CHUNK_VOXELS, GROUP_WORDS, State
 use crate::dedup::GroupStore;
 use crate::digest::{BufferId, Digest, PagedDigest};
 use crate::edit::Growth;
+use crate::entity::trace::EntityView;
+use crate::entity::{Entities, EntityTable, Pose};
 use crate::error::WorldError;
 use crate::material::MaterialTable;
 use crate::model::ModelTable;
@@ -38,6 +40,8 @@ pub struct World {
     pub(crate) voxels: Vec<u32>,
     pub(crate) groups: GroupStore,
     pub(crate) free_block_arrays: BTreeSet<u32>,
+    /// Entity table, types and instance buffer ([`crate::entity`]).
+    pub(crate) entities: Entities,
     /// Page hashes of every buffer, updated with each change.
     pub(crate) digest: PagedDigest,
     /// Background chunk-AADF growth: queued work and the job in progress.
@@ -63,6 +67,8 @@ pub struct WorldParts {
     pub blocks: Vec<u32>,
     /// Voxel words.
     pub voxels: Vec<u32>,
+    /// Entity types and instances (the entity buffers are derived from them).
+    pub entities: EntityTable,
 }
 
 impl World {
@@ -82,6 +88,7 @@ impl World {
             voxels: Vec::new(),
             groups: GroupStore::default(),
             free_block_arrays: BTreeSet::new(),
+            entities: Entities::default(),
             digest: PagedDigest::default(),
             growth: Growth::default(),
         };
@@ -157,7 +164,8 @@ impl World {
             BufferId::Voxels => Cow::Borrowed(bytemuck_u32(&self.voxels)),
             BufferId::Materials => Cow::Borrowed(bytemuck_u32(self.materials.words())),
             BufferId::Models => Cow::Owned(self.models.encode()),
-            BufferId::EntityTypes | BufferId::EntityInstances => Cow::Borrowed(&[]),
+            BufferId::EntityTypes => Cow::Borrowed(bytemuck_u32(&self.entities.type_voxels)),
+            BufferId::EntityInstances => Cow::Borrowed(bytemuck_u32(&self.entities.instances)),
         }
     }
 
@@ -174,9 +182,7 @@ impl World {
                 p.size
             ));
         }
-        if p.chunk_entities.iter().any(|&e| e != 0) {
-            return bad("chunk entity fields set, but the file holds no entity instances".into());
-        }
+        let entities = Self::entities_from_parts(&p)?;
         if !p.blocks.len().is_multiple_of(BLOCK_ARRAY) || !p.voxels.len().is_multiple_of(GROUP_WORDS) {
             return bad(format!(
                 "buffer lengths {} blocks / {} voxel words are not whole arrays",
@@ -286,6 +292,7 @@ impl World {
             voxels: p.voxels,
             groups,
             free_block_arrays,
+            entities,
             digest: PagedDigest::default(),
             growth: Growth::default(),
         };
@@ -310,7 +317,61 @@ impl World {
             chunk_entities: self.chunk_entities.clone(),
             blocks: self.blocks.clone(),
             voxels: self.voxels.clone(),
+            entities: self.entities.table.clone(),
         }
+    }
+
+    /// Validates the entity table of stored parts and derives its buffers; the stored
+    /// chunk entity fields must equal the derived ones, and an empty chunk with entities
+    /// must hold a zero AADF.
+    fn entities_from_parts(p: &WorldParts) -> Result<Entities, WorldError> {
+        let bad = |m: String| Err(WorldError::BadFile(m));
+        let t = &p.entities;
+        for (k, name) in t.types.iter().enumerate() {
+            let Some(model) = p.models.get(name) else {
+                return bad(format!("entity type {k}: model '{name}' is not defined"));
+            };
+            if let Err(e) = crate::entity::check_model(name, model, &p.materials) {
+                return bad(format!("entity type {k}: {e}"));
+            }
+        }
+        for (&id, pose) in &t.instances {
+            if id > crate::entity::MAX_ENTITY_ID {
+                return bad(format!("entity id {id} outside 0..={}", crate::entity::MAX_ENTITY_ID));
+            }
+            if !t.types.contains(&pose.model) {
+                return bad(format!("entity {id}: model '{}' has no entity type", pose.model));
+            }
+            match crate::entity::checked_pose(pose.pos, pose.rot) {
+                Ok((pos, rot)) if pos == pose.pos && rot == pose.rot => {}
+                Ok(_) => return bad(format!("entity {id}: pose {pose:?} is not a quantised pose")),
+                Err(e) => return bad(format!("entity {id}: {e}")),
+            }
+        }
+        let e = Entities::build(t.clone(), &p.models, p.size).or_else(|e| bad(format!("entities: {}", e.0)))?;
+        let mut expect = vec![0u32; p.chunk_entities.len()];
+        for &(c, f) in &e.occupied {
+            expect[c as usize] = f;
+        }
+        if let Some(i) = (0..expect.len()).find(|&i| expect[i] != p.chunk_entities[i]) {
+            return bad(format!(
+                "chunk {:?}: entity field {:#x}, but the entity table gives {:#x}",
+                p.size.chunk_coords(i),
+                p.chunk_entities[i],
+                expect[i]
+            ));
+        }
+        if let Some(&(c, _)) = e
+            .occupied
+            .iter()
+            .find(|&&(c, _)| cell::state(p.chunks[c as usize]) == State::Empty && p.chunks[c as usize] != 0)
+        {
+            return bad(format!(
+                "chunk {:?} holds entities and a non-zero AADF",
+                p.size.chunk_coords(c as usize)
+            ));
+        }
+        Ok(e)
     }
 
     /// The first empty chunk whose AADF box holds a non-free chunk (checks the safety
@@ -483,6 +544,44 @@ impl World {
     /// incrementally: O(1) to read, O(changed pages) to maintain.
     pub fn digest(&self) -> Digest {
         self.digest.digest()
+    }
+
+    /// The entity types and instances.
+    pub fn entity_table(&self) -> &EntityTable {
+        &self.entities.table
+    }
+
+    /// The entity with id `id`.
+    pub fn entity(&self, id: u32) -> Option<&Pose> {
+        self.entities.table.instances.get(&id)
+    }
+
+    /// The entity-type buffer: every type's dense voxel grid, each at a multiple of 64.
+    pub fn entity_type_voxels(&self) -> &[u32] {
+        &self.entities.type_voxels
+    }
+
+    /// Per entity type (in type order): its `voxelStart`, in units of 64 voxels.
+    pub fn entity_type_starts(&self) -> &[u32] {
+        &self.entities.type_starts
+    }
+
+    /// The entity instance buffer: the chunk instance lists, 5-word records.
+    pub fn entity_instances(&self) -> &[u32] {
+        &self.entities.instances
+    }
+
+    /// The entity buffers a ray test reads, or `None` when no chunk lists an entity.
+    #[inline]
+    pub(crate) fn entity_view(&self) -> Option<EntityView<'_>> {
+        self.entities.present().then(|| {
+            EntityView::new(
+                self.size.chunks(),
+                &self.chunk_entities,
+                &self.entities.instances,
+                &self.entities.type_voxels,
+            )
+        })
     }
 
     /// Whether a chunk is empty and free of entities (it may carry a chunk AADF).

@@ -3,61 +3,9 @@
 
 mod common;
 
-use common::{Raw, Rng, adversarial, random_world};
+use common::{Raw, Rng, adversarial, random_world, rays};
 use naadf_world::WorldSize;
 use naadf_world::traverse::{DenseGrid, Hit, Method, Ray, Tracer, same_result, trace_naadf, trace_nodf};
-
-/// Rays of every awkward kind for a world of size `s`.
-fn rays(s: [u32; 3], rng: &mut Rng, n: usize) -> Vec<Ray> {
-    let sf = s.map(f64::from);
-    let mut out = Vec::new();
-    let mut push = |o: [f64; 3], d: [f64; 3]| {
-        if let Ok(r) = Ray::new(o, d) {
-            out.push(r);
-        }
-    };
-    let axis_dirs = [
-        [1.0, 0.0, 0.0],
-        [-1.0, 0.0, 0.0],
-        [0.0, 1.0, 0.0],
-        [0.0, -1.0, 0.0],
-        [0.0, 0.0, 1.0],
-        [0.0, 0.0, -1.0],
-    ];
-    for _ in 0..n {
-        let inside = |rng: &mut Rng| [0, 1, 2].map(|a| rng.unit() * sf[a]);
-        let around = |rng: &mut Rng| [0, 1, 2].map(|a| (rng.unit() * 1.6 - 0.3) * sf[a]);
-        let lattice =
-            |rng: &mut Rng, step: u64| [0, 1, 2].map(|a| (rng.below(u64::from(s[a]) / step + 1) * step) as f64);
-        let unit_dir = |rng: &mut Rng| [0, 1, 2].map(|_| rng.unit() * 2.0 - 1.0);
-        let small_int_dir = |rng: &mut Rng| [0, 1, 2].map(|_| rng.below(5) as f64 - 2.0);
-        match rng.below(9) {
-            // Random origins inside and around the world.
-            0 => push(inside(rng), unit_dir(rng)),
-            1 => push(around(rng), unit_dir(rng)),
-            // Axis-aligned rays, some along cell boundaries.
-            2 => push(inside(rng), axis_dirs[rng.below(6) as usize]),
-            3 => push(lattice(rng, 1), axis_dirs[rng.below(6) as usize]),
-            // Diagonals from lattice points run exactly through edges and corners.
-            4 => push(lattice(rng, 1), small_int_dir(rng)),
-            5 => push(lattice(rng, 4), small_int_dir(rng)),
-            6 => push(lattice(rng, 16), small_int_dir(rng)),
-            // Origins on cell boundaries with random directions.
-            7 => {
-                let mut o = inside(rng);
-                o[rng.below(3) as usize] = rng.below(u64::from(s[0].min(s[1]).min(s[2])) + 1) as f64;
-                push(o, unit_dir(rng));
-            }
-            // From far outside, aimed at the world.
-            _ => {
-                let target = inside(rng);
-                let from = [0, 1, 2].map(|a| target[a] + (rng.unit() * 2.0 - 1.0) * 3.0 * sf[a]);
-                push(from, [0, 1, 2].map(|a| target[a] - from[a]));
-            }
-        }
-    }
-    out
-}
 
 /// Brute-force checks of a hit: the voxel is solid with that material, the entry point
 /// lies on the reported face, and no solid voxel lies on the ray before it.

@@ -210,15 +210,42 @@ fn assert_same(a: &World, b: &World) {
 // An independent encoder/decoder written from docs/FORMAT.md
 // ---------------------------------------------------------------------------------------
 
-/// The payload bytes of `p`, as FORMAT.md specifies them.
+/// The entity-table section of `p`, as FORMAT.md specifies it.
+fn entity_section(p: &WorldParts) -> Vec<u8> {
+    let mut out = Vec::new();
+    let name = |out: &mut Vec<u8>, n: &str| {
+        out.extend_from_slice(&(n.len() as u32).to_le_bytes());
+        out.extend_from_slice(n.as_bytes());
+    };
+    out.extend_from_slice(&(p.entities.types.len() as u32).to_le_bytes());
+    for t in &p.entities.types {
+        name(&mut out, t);
+    }
+    out.extend_from_slice(&(p.entities.instances.len() as u32).to_le_bytes());
+    for (id, e) in &p.entities.instances {
+        out.extend_from_slice(&id.to_le_bytes());
+        name(&mut out, &e.model);
+        for v in e.pos.iter().chain(&e.rot) {
+            out.extend_from_slice(&v.to_le_bytes());
+        }
+    }
+    out
+}
+
+/// The payload bytes of `p`, as FORMAT.md specifies them (version 2; version 1 has no
+/// entity section).
 fn payload_of(p: &WorldParts) -> Vec<u8> {
+    payload_of_version(p, 2)
+}
+
+fn payload_of_version(p: &WorldParts, version: u32) -> Vec<u8> {
     let mut out = Vec::new();
     for n in p.size.voxels() {
         out.extend_from_slice(&n.to_le_bytes());
     }
     out.extend_from_slice(&p.version.to_le_bytes());
     let words = |v: &[u32]| v.iter().flat_map(|w| w.to_le_bytes()).collect::<Vec<u8>>();
-    let sections = [
+    let mut sections = vec![
         words(p.materials.words()),
         p.models.encode(),
         words(&p.chunks),
@@ -226,6 +253,9 @@ fn payload_of(p: &WorldParts) -> Vec<u8> {
         words(&p.blocks),
         words(&p.voxels),
     ];
+    if version >= 2 {
+        sections.push(entity_section(p));
+    }
     for s in sections {
         out.extend_from_slice(&(s.len() as u64).to_le_bytes());
         out.extend_from_slice(&s);
@@ -266,7 +296,7 @@ fn the_file_matches_the_documented_layout() {
     assert_eq!((HEADER_LEN, TRAILER_LEN), (40, 8));
     let u32_at = |at: usize| u32::from_le_bytes(bytes[at..at + 4].try_into().unwrap());
     let u64_at = |at: usize| u64::from_le_bytes(bytes[at..at + 8].try_into().unwrap());
-    assert_eq!(u32_at(8), 1);
+    assert_eq!(u32_at(8), 2);
     assert_eq!(u32_at(12), 0);
     assert_eq!(u64_at(32), xxh3_64(&bytes[..32]));
     let frame = &bytes[40..bytes.len() - 8];
@@ -425,16 +455,41 @@ fn rejects_bad_magic() {
 #[test]
 fn rejects_other_versions() {
     let good = to_bytes(&small_world());
-    for v in [0u32, 2, 7, u32::MAX] {
+    for v in [0u32, 3, 7, u32::MAX] {
         let mut f = good.clone();
         f[8..12].copy_from_slice(&v.to_le_bytes());
         let msg = bad_file(from_bytes(&f));
-        assert_eq!(msg, format!("unsupported format version {v} (this build reads 1)"));
+        assert_eq!(
+            msg,
+            format!("unsupported format version {v} (this build reads 1 and 2)")
+        );
         // Also with a header checksum that matches the new version.
         let own = xxh3_64(&f[..32]);
         f[32..40].copy_from_slice(&own.to_le_bytes());
         assert!(bad_file(from_bytes(&f)).starts_with("unsupported format version"));
     }
+}
+
+#[test]
+fn reads_version_1_files() {
+    // Version 1: the same payload without the entity section.
+    let w = small_world();
+    let payload = payload_of_version(&w.to_parts(), 1);
+    let frame = zstd::stream::encode_all(&payload[..], 3).unwrap();
+    let mut f = header(1, 0, payload.len() as u64, xxh3_64(&payload));
+    f.extend_from_slice(&frame);
+    f.extend_from_slice(&xxh3_64(&frame).to_le_bytes());
+    let back = from_bytes(&f).unwrap();
+    assert_same(&back, &w);
+    assert_eq!(back.digest(), w.digest());
+    // Written back, it is a version-2 file.
+    assert_eq!(to_bytes(&back), to_bytes(&w));
+    // A version-1 payload in a version-2 file is short by the entity section.
+    let msg = bad_file(from_bytes(&file_around(&payload)));
+    assert!(
+        msg.contains("entities section") || msg.contains("declared payload"),
+        "{msg}"
+    );
 }
 
 #[test]
@@ -535,10 +590,10 @@ fn rejects_hostile_sections_with_valid_checksums() {
     let parts = small_world().to_parts();
     let good = payload_of(&parts);
     let sections_at = 20; // after size and version
-    // Offsets of the six length prefixes.
+    // Offsets of the seven length prefixes.
     let mut at = sections_at;
     let mut prefix = Vec::new();
-    for _ in 0..6 {
+    for _ in 0..7 {
         prefix.push(at);
         let len = u64::from_le_bytes(good[at..at + 8].try_into().unwrap());
         at += 8 + len as usize;
@@ -556,6 +611,7 @@ fn rejects_hostile_sections_with_valid_checksums() {
         (set_len(2, 4), "chunks section"),
         (set_len(0, 17), "materials section"),
         (set_len(1, 1 << 31), "models section"),
+        (set_len(6, 1 << 40), "entities section"),
         // A length within bounds that runs past the payload.
         (set_len(1, 200_000), "runs past"),
         // An invalid world size.

@@ -28,12 +28,14 @@ impl World {
         let i = t.index;
         let max_id = (self.materials.len() - 1) as u16;
         let old = self.chunks[i];
-        let old_blocks: Option<[u32; BLOCK_ARRAY]> = (cell::state(old) == State::Mixed)
-            .then(|| self.blocks[cell::pointer(old) as usize..][..BLOCK_ARRAY].try_into().expect("64 cells"));
+        let old_blocks: Option<[u32; BLOCK_ARRAY]> = (cell::state(old) == State::Mixed).then(|| {
+            self.blocks[cell::pointer(old) as usize..][..BLOCK_ARRAY]
+                .try_into()
+                .expect("64 cells")
+        });
         let keep = |b: usize| {
             let c = old_blocks?[b];
-            (cell::state(c) == State::Mixed && block_equal(&t.old, &t.new, b as u32))
-                .then_some(c)
+            (cell::state(c) == State::Mixed && block_equal(&t.old, &t.new, b as u32)).then_some(c)
         };
         let plan = plan_chunk_keeping(&t.new, max_id, &keep)
             .map_err(|m| WorldError::InvalidMaterial(format!("material {m} is not defined (1..={max_id})")))?;
@@ -50,7 +52,11 @@ impl World {
                     cell::uniform(m)
                 }
             }
-            ChunkPlan::Mixed { mut blocks, groups, kept } => {
+            ChunkPlan::Mixed {
+                mut blocks,
+                groups,
+                kept,
+            } => {
                 for g in &groups {
                     let ptr = self.groups.acquire(&mut self.voxels, g.hash, &g.words)?;
                     if self.groups.refs(ptr) == 1 {

@@ -6,6 +6,11 @@
 //! by running the same code ([`World::apply_record`]), because every write an edit makes is
 //! a deterministic function of the previous buffers and the batch. Background growth
 //! publishes its chunk writes explicitly, as sub-steps `(version, growth_seq)`.
+//!
+//! Entity ops (spawn, move, despawn) change a working copy of the entity table, in batch
+//! order with the voxel ops; after the batch the entity buffers are rebuilt from the table
+//! ([`crate::entity`]), and chunks that gain or lose entities are invalidated exactly like
+//! chunks whose emptiness flips (they stop or start being free).
 
 mod commit;
 mod invalidate;
@@ -20,7 +25,9 @@ pub use undo::UndoRecord;
 pub use writes::Writes;
 
 use crate::aadf::{GrowthJob, chunk_is_free};
+use crate::cell::{self, State};
 use crate::digest::{BufferId, Digest};
+use crate::entity::{self, Entities, EntityTable};
 use crate::ops::{self, Batch, EditError, Limits};
 use crate::world::World;
 use overlay::Overlay;
@@ -71,30 +78,71 @@ impl World {
     /// Applies a batch atomically: on any error the world is untouched. Returns the new
     /// version's change set and the undo record.
     pub fn apply(&mut self, batch: &Batch, limits: &Limits) -> Result<Applied, EditError> {
-        if let Some((index, op)) = batch.ops.iter().enumerate().find(|(_, op)| {
-            matches!(
-                op,
-                ops::Op::SpawnEntity { .. } | ops::Op::MoveEntity { .. } | ops::Op::DespawnEntity { .. }
-            )
-        }) {
-            return Err(EditError::Unsupported {
-                index,
-                op: op.name(),
-                reason: "entities are not supported by this world model yet".into(),
-            });
-        }
         let mut materials = self.materials.clone();
         let mut models = self.models.clone();
         let mut overlay = Overlay::new(self);
-        ops::apply_batch(batch, &mut overlay, &mut materials, &mut models, limits)?;
+        // Entity ops change a working copy of the entity table, in batch order with the
+        // voxel and table ops (which go through the ops layer exactly as in `apply_batch`).
+        let mut table: Option<EntityTable> = None;
+        let mut last_entity_op = None;
+        if batch.has_entity_ops() {
+            if batch.ops.len() > limits.max_ops {
+                let index = limits.max_ops;
+                return Err(EditError::Limit {
+                    index,
+                    op: batch.ops[index].name(),
+                    reason: format!(
+                        "a batch holds at most {} ops, this one {}",
+                        limits.max_ops,
+                        batch.ops.len()
+                    ),
+                });
+            }
+            for (i, op) in batch.ops.iter().enumerate() {
+                if op.is_entity_op() {
+                    let t = table.get_or_insert_with(|| self.entities.table.clone());
+                    entity::apply_op(i, op, t, &models, &materials, self.size)?;
+                    last_entity_op = Some(i);
+                } else {
+                    op.apply(i, &mut overlay, &mut materials, &mut models, limits)?;
+                }
+            }
+        } else {
+            ops::apply_batch(batch, &mut overlay, &mut materials, &mut models, limits)?;
+        }
         let touched = overlay.into_touched();
         self.check_capacity(touched.len()).map_err(|e| EditError::Limit {
             index: 0,
             op: batch.ops.first().map_or("batch", |o| o.name()),
             reason: e.to_string(),
         })?;
+        // The entity buffers follow the entity table and the models of the types.
+        let types_changed = || {
+            self.entities
+                .table
+                .types
+                .iter()
+                .any(|n| models.get(n) != self.models.get(n))
+        };
+        let entities = if table.is_some() || types_changed() {
+            let table = table.unwrap_or_else(|| self.entities.table.clone());
+            let index = last_entity_op
+                .or_else(|| batch.ops.iter().rposition(|o| matches!(o, ops::Op::DefineModel { .. })))
+                .unwrap_or(0);
+            let e = self
+                .entities
+                .rebuild(table, &self.models, &models, self.size)
+                .map_err(|e| EditError::Limit {
+                    index,
+                    op: batch.ops.get(index).map_or("batch", |o| o.name()),
+                    reason: e.0,
+                })?;
+            Some(e)
+        } else {
+            None
+        };
 
-        let undo = UndoRecord::diff(self, &touched);
+        let undo = UndoRecord::diff(self, &touched, entities.as_ref().map(|e| &e.table));
         let mut w = Writes::default();
         if materials != self.materials {
             self.materials = materials;
@@ -104,15 +152,29 @@ impl World {
             self.models = models;
             w.push(BufferId::Models, 0, 0);
         }
+        // Chunks whose entity field changes; with the touched ones, those whose freedom
+        // (empty and without entities) may flip.
+        let fields = entities
+            .as_ref()
+            .map_or_else(Vec::new, |e| field_changes(&self.entities.occupied, &e.occupied));
+        let mut check: Vec<usize> = touched.iter().map(|t| t.index).collect();
+        check.extend(fields.iter().map(|&(c, _)| c as usize));
+        check.sort_unstable();
+        check.dedup();
+        let was_free: Vec<bool> = check.iter().map(|&i| self.chunk_is_free(i)).collect();
+        for t in &touched {
+            self.commit_chunk(t, &mut w).expect("validated batches commit");
+        }
+        if let Some(e) = entities {
+            self.install_entities(e, &fields, &mut w);
+        }
         let mut blocked = Vec::new();
         let mut changed = Vec::new();
-        for t in &touched {
-            let was_free = self.chunk_is_free(t.index);
-            let flipped = self.commit_chunk(t, &mut w).expect("validated batches commit");
-            if flipped {
-                changed.push(t.index as u32);
-                if was_free {
-                    blocked.push(t.index);
+        for (&i, &free) in check.iter().zip(&was_free) {
+            if free != self.chunk_is_free(i) {
+                changed.push(i as u32);
+                if free {
+                    blocked.push(i);
                 }
             }
         }
@@ -129,6 +191,25 @@ impl World {
             change: self.publish(record, w),
             undo,
         })
+    }
+
+    /// Replaces the entity state with a rebuilt one: the changed chunk entity fields
+    /// (`fields`), the instance and type buffers (only their changed words are recorded).
+    /// An empty chunk that holds entities gets a zero AADF: the traversal stops in it, and
+    /// growth never enters it.
+    fn install_entities(&mut self, e: Entities, fields: &[(u32, u32)], w: &mut Writes) {
+        for &(c, f) in fields {
+            let c = c as usize;
+            self.chunk_entities[c] = f;
+            w.push(BufferId::ChunkEntities, c, 1);
+            if f != 0 && cell::state(self.chunks[c]) == State::Empty && self.chunks[c] != 0 {
+                self.chunks[c] = 0;
+                w.push(BufferId::Chunks, c, 1);
+            }
+        }
+        diff_buffer(BufferId::EntityInstances, &self.entities.instances, &e.instances, w);
+        diff_buffer(BufferId::EntityTypes, &self.entities.type_voxels, &e.type_voxels, w);
+        self.entities = e;
     }
 
     /// Rehashes the written pages and wraps the writes into a change set.
@@ -266,4 +347,44 @@ impl World {
             d ^ crate::digest::digest_of(id, &self.buffer_bytes(id))
         })
     }
+}
+
+/// The chunks whose entity field differs between two sorted `(chunk, field)` lists, with
+/// the new field (0 where the chunk lost its entities), ascending.
+fn field_changes(old: &[(u32, u32)], new: &[(u32, u32)]) -> Vec<(u32, u32)> {
+    let mut out = Vec::new();
+    let (mut i, mut j) = (0, 0);
+    while i < old.len() || j < new.len() {
+        let a = old.get(i).map_or(u32::MAX, |e| e.0);
+        let b = new.get(j).map_or(u32::MAX, |e| e.0);
+        if a < b {
+            out.push((a, 0));
+            i += 1;
+        } else if b < a {
+            out.push(new[j]);
+            j += 1;
+        } else {
+            if old[i].1 != new[j].1 {
+                out.push(new[j]);
+            }
+            i += 1;
+            j += 1;
+        }
+    }
+    out
+}
+
+/// Records the words of `old` that `new` changes (and a change of length) as one range.
+fn diff_buffer(id: BufferId, old: &[u32], new: &[u32], w: &mut Writes) {
+    if old == new {
+        return;
+    }
+    let common = old.len().min(new.len());
+    let lo = (0..common).find(|&k| old[k] != new[k]).unwrap_or(common);
+    let hi = if old.len() != new.len() {
+        new.len()
+    } else {
+        (lo..common).rev().find(|&k| old[k] != new[k]).map_or(lo, |k| k + 1)
+    };
+    w.push(id, lo, hi.max(lo) - lo);
 }

@@ -31,7 +31,12 @@ pub(crate) struct Overlay<'w> {
 
 impl<'w> Overlay<'w> {
     pub(crate) fn new(world: &'w World) -> Self {
-        Overlay { world, chunks: Vec::new(), slots: FxHashMap::default(), last: Cell::new(usize::MAX) }
+        Overlay {
+            world,
+            chunks: Vec::new(),
+            slots: FxHashMap::default(),
+            last: Cell::new(usize::MAX),
+        }
     }
 
     /// The chunks whose content changed, by chunk index, ascending.

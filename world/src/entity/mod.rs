@@ -29,6 +29,7 @@ pub(crate) mod trace;
 
 use crate::aadf::grid_aadf;
 use crate::cell::CHUNK_FIELD_BITS;
+use crate::error::WorldError;
 use crate::material::MaterialTable;
 use crate::model::{MAX_MODEL_EDGE, Model, ModelTable};
 use crate::ops::{EditError, Op};
@@ -70,6 +71,99 @@ pub struct EntityTable {
     pub instances: BTreeMap<u32, Pose>,
 }
 
+/// Longest model name an entity table stores (the model table's own bound).
+const MAX_NAME_BYTES: usize = 4096;
+
+impl EntityTable {
+    /// Whether there are no types and no instances.
+    pub fn is_empty(&self) -> bool {
+        self.types.is_empty() && self.instances.is_empty()
+    }
+
+    /// Canonical little-endian bytes (the world file's entity section, docs/FORMAT.md):
+    /// `u32` type count, then per type its model name (`u32` length, UTF-8); `u32`
+    /// instance count, then per instance by ascending id: `u32` id, model name, 3 × `f64`
+    /// position, 4 × `f64` rotation `[x, y, z, w]`.
+    pub fn encode(&self) -> Vec<u8> {
+        let mut out = Vec::new();
+        let name = |out: &mut Vec<u8>, n: &str| {
+            out.extend_from_slice(&(n.len() as u32).to_le_bytes());
+            out.extend_from_slice(n.as_bytes());
+        };
+        out.extend_from_slice(&(self.types.len() as u32).to_le_bytes());
+        for t in &self.types {
+            name(&mut out, t);
+        }
+        out.extend_from_slice(&(self.instances.len() as u32).to_le_bytes());
+        for (id, p) in &self.instances {
+            out.extend_from_slice(&id.to_le_bytes());
+            name(&mut out, &p.model);
+            for v in p.pos.iter().chain(&p.rot) {
+                out.extend_from_slice(&v.to_le_bytes());
+            }
+        }
+        out
+    }
+
+    /// Inverse of [`EntityTable::encode`]; malformed bytes give a clear error (the values
+    /// themselves are validated by [`crate::World::from_parts`]).
+    pub fn decode(mut bytes: &[u8]) -> Result<Self, WorldError> {
+        let bad = |what: String| WorldError::BadFile(format!("entity table: {what}"));
+        fn take<'a>(n: usize, bytes: &mut &'a [u8]) -> Result<&'a [u8], WorldError> {
+            if bytes.len() < n {
+                return Err(WorldError::BadFile("entity table: truncated".into()));
+            }
+            let (a, b) = bytes.split_at(n);
+            *bytes = b;
+            Ok(a)
+        }
+        let u32_of = |bytes: &mut &[u8]| -> Result<u32, WorldError> {
+            Ok(u32::from_le_bytes(take(4, bytes)?.try_into().expect("4 bytes")))
+        };
+        let name_of = |bytes: &mut &[u8]| -> Result<String, WorldError> {
+            let len = u32_of(bytes)? as usize;
+            if len > MAX_NAME_BYTES {
+                return Err(bad(format!("model name of {len} bytes")));
+            }
+            String::from_utf8(take(len, bytes)?.to_vec()).map_err(|_| bad("model name is not UTF-8".into()))
+        };
+        let mut t = EntityTable::default();
+        let types = u32_of(&mut bytes)?;
+        for _ in 0..types {
+            let n = name_of(&mut bytes)?;
+            if t.types.contains(&n) {
+                return Err(bad(format!("model '{n}' has two entity types")));
+            }
+            t.types.push(n);
+        }
+        let count = u32_of(&mut bytes)?;
+        if count > MAX_ENTITY_ID + 1 {
+            return Err(bad(format!("{count} instances (at most {})", MAX_ENTITY_ID + 1)));
+        }
+        for _ in 0..count {
+            let id = u32_of(&mut bytes)?;
+            if t.instances.last_key_value().is_some_and(|(&last, _)| last >= id) {
+                return Err(bad(format!("instance ids not strictly ascending at {id}")));
+            }
+            let model = name_of(&mut bytes)?;
+            let mut v = [0f64; 7];
+            for x in &mut v {
+                *x = f64::from_le_bytes(take(8, &mut bytes)?.try_into().expect("8 bytes"));
+            }
+            let pose = Pose {
+                model,
+                pos: [v[0], v[1], v[2]],
+                rot: [v[3], v[4], v[5], v[6]],
+            };
+            t.instances.insert(id, pose);
+        }
+        if !bytes.is_empty() {
+            return Err(bad(format!("{} bytes after the last instance", bytes.len())));
+        }
+        Ok(t)
+    }
+}
+
 /// The entity table and the buffers derived from it.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Entities {
@@ -93,7 +187,13 @@ pub fn type_grid(model: &Model) -> Vec<u32> {
         .voxels()
         .iter()
         .zip(fields)
-        .map(|(&m, f)| if m != 0 { ENTITY_SOLID | u32::from(m) } else { f.pack(CHUNK_FIELD_BITS) })
+        .map(|(&m, f)| {
+            if m != 0 {
+                ENTITY_SOLID | u32::from(m)
+            } else {
+                f.pack(CHUNK_FIELD_BITS)
+            }
+        })
         .collect()
 }
 
@@ -135,7 +235,7 @@ pub(crate) fn checked_pose(pos: [f64; 3], rot: [f64; 4]) -> Result<([f64; 3], [f
         return Err(format!("rot {rot:?} must be a non-zero finite quaternion [x,y,z,w]"));
     }
     match quantise_pose(pos, rot) {
-        Some((p, r, _, _)) => Ok((p, r)),
+        Some(q) => Ok((q.pos, q.rot)),
         None => Err(format!(
             "pos {pos:?} must lie in [0, 16384) × [0, 4096) × [0, 16384) once rounded to 1/128 voxel \
              (the packed entity position)"
@@ -146,7 +246,10 @@ pub(crate) fn checked_pose(pos: [f64; 3], rot: [f64; 4]) -> Result<([f64; 3], [f
 /// Checks a model for use as an entity type: edges within 7 bits, materials defined.
 pub(crate) fn check_model(name: &str, model: &Model, materials: &MaterialTable) -> Result<(), String> {
     if model.size().iter().any(|&e| e == 0 || e > MAX_MODEL_EDGE) {
-        return Err(format!("model '{name}' of size {:?} is too large for an entity", model.size()));
+        return Err(format!(
+            "model '{name}' of size {:?} is too large for an entity",
+            model.size()
+        ));
     }
     let mut checked = 0u16;
     for &m in model.voxels() {
@@ -216,18 +319,18 @@ impl Entities {
         let mut records: Vec<[u32; RECORD_WORDS]> = Vec::with_capacity(table.instances.len());
         let mut pairs: Vec<(u32, u32)> = Vec::new();
         for (k, (&id, pose)) in table.instances.iter().enumerate() {
-            let &(voxel_start, msize) = type_of.get(pose.model.as_str()).ok_or_else(|| {
-                LayoutError(format!("entity {id}: model '{}' has no entity type", pose.model))
-            })?;
-            let (_, _, fixed, inv) = quantise_pose(pose.pos, pose.rot)
+            let &(voxel_start, msize) = type_of
+                .get(pose.model.as_str())
+                .ok_or_else(|| LayoutError(format!("entity {id}: model '{}' has no entity type", pose.model)))?;
+            let q = quantise_pose(pose.pos, pose.rot)
                 .ok_or_else(|| LayoutError(format!("entity {id}: position {:?} out of range", pose.pos)))?;
             records.push(
                 InstanceRecord {
                     id,
                     size: msize,
                     voxel_start,
-                    pos: fixed,
-                    inv_rot: inv,
+                    pos: q.fixed,
+                    inv_rot: q.inv_rot,
                 }
                 .pack(),
             );

@@ -180,10 +180,29 @@ pub fn conjugate(q: [f64; 4]) -> [f64; 4] {
 #[inline]
 pub fn rotate(q: [f64; 4], v: [f64; 3]) -> [f64; 3] {
     let u = [q[0], q[1], q[2]];
-    let cross = |a: [f64; 3], b: [f64; 3]| [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+    let cross = |a: [f64; 3], b: [f64; 3]| {
+        [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ]
+    };
     let t = cross(u, v).map(|c| 2.0 * c);
     let ut = cross(u, t);
     [0, 1, 2].map(|a| v[a] + q[3] * t[a] + ut[a])
+}
+
+/// A pose as packed: the effective values and their packed forms.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Quantised {
+    /// Position, a multiple of 1/128 voxel.
+    pub pos: [f64; 3],
+    /// Rotation `[x, y, z, w]` (local → world), as decoded from `inv_rot`.
+    pub rot: [f64; 4],
+    /// Position in 1/128 voxels.
+    pub fixed: [u32; 3],
+    /// The packed inverse rotation.
+    pub inv_rot: [u32; 2],
 }
 
 /// The pose an entity effectively has once packed: the position rounded to 1/128 voxel and
@@ -191,10 +210,15 @@ pub fn rotate(q: [f64; 4], v: [f64; 3]) -> [f64; 3] {
 /// outside the packed range. `rot` must be finite and non-zero.
 ///
 /// Idempotent: quantising a quantised pose gives it back bit for bit.
-pub fn quantise_pose(pos: [f64; 3], rot: [f64; 4]) -> Option<([f64; 3], [f64; 4], [u32; 3], [u32; 2])> {
-    let p = quantise_pos(pos)?;
-    let inv = encode_quat(conjugate(rot));
-    Some((p.map(|v| f64::from(v) / POS_SCALE), conjugate(decode_quat(inv)), p, inv))
+pub fn quantise_pose(pos: [f64; 3], rot: [f64; 4]) -> Option<Quantised> {
+    let fixed = quantise_pos(pos)?;
+    let inv_rot = encode_quat(conjugate(rot));
+    Some(Quantised {
+        pos: fixed.map(|v| f64::from(v) / POS_SCALE),
+        rot: conjugate(decode_quat(inv_rot)),
+        fixed,
+        inv_rot,
+    })
 }
 
 #[cfg(test)]
@@ -290,7 +314,7 @@ mod tests {
                               pos in [0.0f64..16384.0, 0.0f64..4096.0, 0.0f64..16384.0],
                               q in prop::array::uniform4(-1.0f64..1.0)) {
             prop_assume!(q.iter().map(|v| v * v).sum::<f64>() > 1e-6);
-            let Some((p, rot, fixed, inv)) = quantise_pose(pos, q) else {
+            let Some(Quantised { pos: p, rot, fixed, inv_rot: inv }) = quantise_pose(pos, q) else {
                 // Only positions that round up to the limit are refused.
                 prop_assert!((0..3).any(|a| (pos[a] * 128.0).round() >= f64::from(POS_LIMIT[a])));
                 return Ok(());
@@ -306,7 +330,7 @@ mod tests {
             prop_assert!(distance(unit(q), rot) < 1e-7);
             // Quantising the quantised pose changes nothing.
             let again = quantise_pose(p, rot).unwrap();
-            prop_assert_eq!((again.0, again.1, again.2, again.3), (p, rot, fixed, inv));
+            prop_assert_eq!((again.pos, again.rot, again.fixed, again.inv_rot), (p, rot, fixed, inv));
             // The inverse really is the inverse.
             let v = [1.25, -3.5, 7.0];
             let back_v = rotate(back.inv_rotation(), rotate(rot, v));

@@ -1,8 +1,8 @@
 //! The dense-grid oracle: Amanatides–Woo over a full decode of the world.
 
 use super::ray::{Hit, Ray};
-use crate::entity::trace::{Candidates, OwnedEntities};
 use crate::cell::CHUNK_VOXELS;
+use crate::entity::trace::{Candidates, OwnedEntities};
 use crate::error::WorldError;
 use crate::world::World;
 use rayon::prelude::*;
@@ -162,8 +162,5 @@ pub(crate) fn walk(ray: &Ray, size: [u32; 3], mut visit: impl FnMut([i64; 3], f6
         }
         tmax[a] = ray.t_at(a, next_plane(cell[a], a));
     };
-    Some(Walk {
-        entry_t: entry.t,
-        end,
-    })
+    Some(Walk { entry_t: entry.t, end })
 }

@@ -2,6 +2,7 @@
 
 use super::ray::{Hit, Ray};
 use crate::cell::{self, Aadf, CELL_FIELD_BITS, CHUNK_FIELD_BITS, State};
+use crate::entity::trace::Candidates;
 use crate::world::World;
 
 /// Upper bound on visited cells; unreachable while the AADF safety invariant holds (every
@@ -33,9 +34,41 @@ enum Probe {
 }
 
 fn trace<const DF: bool>(world: &World, ray: &Ray) -> Option<Hit> {
+    // Worlds without entities run a loop with no entity code at all.
+    let Some(view) = world.entity_view() else {
+        return world_loop::<DF, false>(world, ray, &mut Candidates::default(), &mut (0.0, 0.0, 0));
+    };
+    let mut fields = Candidates::default();
+    let mut span = (f64::NAN, f64::NAN, 0);
+    let hit = world_loop::<DF, true>(world, ray, &mut fields, &mut span);
+    let (t_entry, t_end, steps) = match hit {
+        Some(h) => (span.0, h.t, h.steps),
+        // Missed the world, or ran out of steps.
+        None if span.1.is_nan() => return None,
+        None => span,
+    };
+    view.resolve(ray, hit, t_entry, t_end, steps, &fields)
+}
+
+/// The hierarchical DDA through the world: the world hit, if any. With `ENT`, it records
+/// the entity fields of the chunks it visits in `fields` (empty chunks with entities skip
+/// only to their edge), sets `span.0` to the time the ray entered the world and, if it
+/// leaves the world without a hit, `span.1` and `span.2` to the time it left and the cells
+/// visited. (Out-parameters rather than a richer result keep the entity-free instance as
+/// fast as a loop without entity code.)
+#[inline(always)]
+fn world_loop<const DF: bool, const ENT: bool>(
+    world: &World,
+    ray: &Ray,
+    fields: &mut Candidates,
+    span: &mut (f64, f64, u32),
+) -> Option<Hit> {
     let size = world.size();
     let dims = size.voxels();
     let entry = ray.entry(dims)?;
+    if ENT {
+        span.0 = entry.t;
+    }
     let (mut cell, mut t, mut axis) = (entry.cell, entry.t, entry.axis);
     let dir = ray.dir();
     // The AADF field facing the ray on each axis: −a for negative directions, +a otherwise.
@@ -50,12 +83,19 @@ fn trace<const DF: bool>(world: &World, ray: &Ray) -> Option<Hit> {
     };
     for steps in 1..=MAX_STEPS {
         let p = cell.map(|v| v as u32);
-        let probe = probe::<DF>(world, p, &facing, &to_edge);
-        match probe {
+        let with_entities = ENT && {
+            let f = world.chunk_entities()[size.chunk_index([p[0] >> 4, p[1] >> 4, p[2] >> 4])];
+            fields.push(f);
+            f != 0
+        };
+        match probe::<DF>(world, with_entities, p, &facing, &to_edge) {
             Probe::Solid(m) => return Some(ray.hit(cell, t, axis, m, steps)),
             Probe::Empty(skip) => {
                 let (nt, na, next) = ray.exit(cell, skip);
                 if !(0..3).all(|a| next[a] >= 0 && next[a] < i64::from(dims[a])) {
+                    if ENT {
+                        (span.1, span.2) = (nt, steps);
+                    }
                     return None;
                 }
                 (cell, t, axis) = (next, nt, Some(na));
@@ -65,9 +105,12 @@ fn trace<const DF: bool>(world: &World, ray: &Ray) -> Option<Hit> {
     None
 }
 
+/// Looks up voxel `p`. An empty chunk with entities (`with_entities`) skips only to its own
+/// edge, whatever its cell holds (it must hold a zero AADF anyway).
 #[inline(always)]
 fn probe<const DF: bool>(
     world: &World,
+    with_entities: bool,
     p: [u32; 3],
     facing: &[usize; 3],
     to_edge: &impl Fn(i64, usize, i64) -> i64,
@@ -80,7 +123,7 @@ fn probe<const DF: bool>(
         State::Empty => {
             let e = edges(16);
             Probe::Empty(std::array::from_fn(|a| {
-                if DF {
+                if DF && !with_entities {
                     e[a] + 16 * i64::from(Aadf::field(chunk, facing[a], CHUNK_FIELD_BITS))
                 } else {
                     e[a]

@@ -15,28 +15,34 @@ pub struct Ray {
     d: [f64; 3],
 }
 
-/// The first solid voxel along a ray.
+/// The first solid voxel along a ray: a world voxel, or a voxel of an entity.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hit {
-    /// World coordinates of the voxel.
+    /// Coordinates of the voxel: world coordinates, or entity-local ones for an entity hit.
     pub voxel: [u32; 3],
-    /// Normal of the entry face (all zero when the origin is inside the voxel).
+    /// Normal of the entry face (all zero when the origin is inside the voxel); in the
+    /// entity's local frame for an entity hit.
     pub normal: [i32; 3],
     /// Distance along the normalised direction to the entry face.
     pub t: f64,
     /// Material id.
     pub material: u16,
-    /// Cells visited, the hit cell included.
+    /// Cells visited, the hit cell included (world cells plus the cells of the entity
+    /// grids tested).
     pub steps: u32,
+    /// The entity hit (its id), or `None` for a world voxel.
+    pub entity: Option<u32>,
 }
 
 /// Whether two traversal results agree as the contract requires: both miss, or both hit
-/// the same voxel through the same face with the same material, `t` within 1e-4 relative.
+/// the same voxel (of the world, or of the same entity) through the same face with the same
+/// material, `t` within 1e-4 relative.
 pub fn same_result(a: &Option<Hit>, b: &Option<Hit>) -> bool {
     match (a, b) {
         (None, None) => true,
         (Some(a), Some(b)) => {
             a.voxel == b.voxel
+                && a.entity == b.entity
                 && a.normal == b.normal
                 && a.material == b.material
                 && (a.t - b.t).abs() <= 1e-4 * a.t.abs().max(1.0)
@@ -81,6 +87,13 @@ impl Ray {
             o: origin,
             d: dir.map(|v| v / len),
         })
+    }
+
+    /// A ray from raw parts, unchecked and not renormalised (entity-local rays: a rotated
+    /// unit direction, so that `t` stays the world distance).
+    #[inline]
+    pub(crate) fn raw(o: [f64; 3], d: [f64; 3]) -> Self {
+        Ray { o, d }
     }
 
     /// The origin.
@@ -244,6 +257,7 @@ impl Ray {
             t: t + 0.0,
             material,
             steps,
+            entity: None,
         }
     }
 }

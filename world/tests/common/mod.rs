@@ -4,6 +4,7 @@
 
 use naadf_world::aadf::chunk_is_free;
 use naadf_world::cell::{self, Aadf, CHUNK_VOXELS, State};
+use naadf_world::traverse::Ray;
 use naadf_world::{ChunkSource, Material, MaterialTable, World, WorldSize};
 use std::collections::HashMap;
 
@@ -241,8 +242,36 @@ pub fn assert_canonical(w: &World, what: &str) {
     }
 }
 
-/// No empty cell's box (at any level) contains a solid cell: brute force over voxels.
+/// No empty cell's box (at any level) contains a solid cell, and no free chunk's box
+/// contains a chunk with entities (whose own cell, if empty, holds a zero AADF): brute
+/// force over voxels and chunks.
 pub fn assert_aadf_valid(raw: &Raw, w: &World, what: &str) {
+    let dims = raw.size.chunks().map(i64::from);
+    for (i, &c) in w.chunks().iter().enumerate() {
+        if w.chunk_entities()[i] != 0 && cell::state(c) == State::Empty {
+            assert_eq!(c, 0, "{what}: empty chunk {i} with entities has an AADF");
+        }
+        if !chunk_is_free(c, w.chunk_entities()[i]) {
+            continue;
+        }
+        let cp = raw.size.chunk_coords(i).map(i64::from);
+        let f = Aadf::unpack(c, 5);
+        let lo: [i64; 3] = std::array::from_fn(|a| (cp[a] - i64::from(f.0[2 * a])).max(0));
+        let hi: [i64; 3] = std::array::from_fn(|a| (cp[a] + i64::from(f.0[2 * a + 1])).min(dims[a] - 1));
+        for z in lo[2]..=hi[2] {
+            for y in lo[1]..=hi[1] {
+                for x in lo[0]..=hi[0] {
+                    let j = raw.size.chunk_index([x as u32, y as u32, z as u32]);
+                    assert_eq!(
+                        w.chunk_entities()[j],
+                        0,
+                        "{what}: chunk {cp:?} box {f:?} contains chunk {:?} with entities",
+                        [x, y, z]
+                    );
+                }
+            }
+        }
+    }
     let s = raw.size.voxels().map(i64::from);
     let solid_in = |lo: [i64; 3], hi: [i64; 3]| -> bool {
         for z in lo[2].max(0)..hi[2].min(s[2]) {
@@ -307,4 +336,56 @@ pub fn assert_aadf_valid(raw: &Raw, w: &World, what: &str) {
         }
     }
     assert_eq!(w.unsafe_chunk_aadf(), None, "{what}: prefix-sum safety check disagrees");
+}
+
+/// Rays of every awkward kind for a world of size `s`.
+pub fn rays(s: [u32; 3], rng: &mut Rng, n: usize) -> Vec<Ray> {
+    let sf = s.map(f64::from);
+    let mut out = Vec::new();
+    let mut push = |o: [f64; 3], d: [f64; 3]| {
+        if let Ok(r) = Ray::new(o, d) {
+            out.push(r);
+        }
+    };
+    let axis_dirs = [
+        [1.0, 0.0, 0.0],
+        [-1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, -1.0, 0.0],
+        [0.0, 0.0, 1.0],
+        [0.0, 0.0, -1.0],
+    ];
+    for _ in 0..n {
+        let inside = |rng: &mut Rng| [0, 1, 2].map(|a| rng.unit() * sf[a]);
+        let around = |rng: &mut Rng| [0, 1, 2].map(|a| (rng.unit() * 1.6 - 0.3) * sf[a]);
+        let lattice =
+            |rng: &mut Rng, step: u64| [0, 1, 2].map(|a| (rng.below(u64::from(s[a]) / step + 1) * step) as f64);
+        let unit_dir = |rng: &mut Rng| [0, 1, 2].map(|_| rng.unit() * 2.0 - 1.0);
+        let small_int_dir = |rng: &mut Rng| [0, 1, 2].map(|_| rng.below(5) as f64 - 2.0);
+        match rng.below(9) {
+            // Random origins inside and around the world.
+            0 => push(inside(rng), unit_dir(rng)),
+            1 => push(around(rng), unit_dir(rng)),
+            // Axis-aligned rays, some along cell boundaries.
+            2 => push(inside(rng), axis_dirs[rng.below(6) as usize]),
+            3 => push(lattice(rng, 1), axis_dirs[rng.below(6) as usize]),
+            // Diagonals from lattice points run exactly through edges and corners.
+            4 => push(lattice(rng, 1), small_int_dir(rng)),
+            5 => push(lattice(rng, 4), small_int_dir(rng)),
+            6 => push(lattice(rng, 16), small_int_dir(rng)),
+            // Origins on cell boundaries with random directions.
+            7 => {
+                let mut o = inside(rng);
+                o[rng.below(3) as usize] = rng.below(u64::from(s[0].min(s[1]).min(s[2])) + 1) as f64;
+                push(o, unit_dir(rng));
+            }
+            // From far outside, aimed at the world.
+            _ => {
+                let target = inside(rng);
+                let from = [0, 1, 2].map(|a| target[a] + (rng.unit() * 2.0 - 1.0) * 3.0 * sf[a]);
+                push(from, [0, 1, 2].map(|a| target[a] - from[a]));
+            }
+        }
+    }
+    out
 }
