@@ -44,6 +44,7 @@ pub mod import;
 pub mod material;
 pub mod model;
 pub mod ops;
+mod prefix;
 pub mod preset;
 pub mod raysets;
 pub mod size;

@@ -11,6 +11,7 @@ use crate::entity::{Entities, EntityTable, Pose};
 use crate::error::WorldError;
 use crate::material::MaterialTable;
 use crate::model::ModelTable;
+use crate::prefix::PrefixSum3;
 use crate::size::WorldSize;
 use rayon::prelude::*;
 use std::collections::BTreeSet;
@@ -377,40 +378,20 @@ impl World {
     /// The first empty chunk whose AADF box holds a non-free chunk (checks the safety
     /// invariant in O(chunks) with a 3D prefix sum).
     pub fn unsafe_chunk_aadf(&self) -> Option<usize> {
-        let d = self.size.chunks().map(|v| v as usize);
-        let at = |x: usize, y: usize, z: usize| x + (d[0] + 1) * (y + (d[1] + 1) * z);
-        let mut sum = vec![0u32; (d[0] + 1) * (d[1] + 1) * (d[2] + 1)];
-        for z in 0..d[2] {
-            for y in 0..d[1] {
-                for x in 0..d[0] {
-                    let i = self.size.chunk_index([x as u32, y as u32, z as u32]);
-                    let blocked = u32::from(!chunk_is_free(self.chunks[i], self.chunk_entities[i]));
-                    sum[at(x + 1, y + 1, z + 1)] =
-                        blocked + sum[at(x, y + 1, z + 1)] + sum[at(x + 1, y, z + 1)] + sum[at(x + 1, y + 1, z)]
-                            - sum[at(x, y, z + 1)]
-                            - sum[at(x, y + 1, z)]
-                            - sum[at(x + 1, y, z)]
-                            + sum[at(x, y, z)];
-                }
-            }
-        }
+        let size = self.size;
+        let blocked = PrefixSum3::new(size.chunks().map(|v| v as usize), |x, y, z| {
+            let i = size.chunk_index([x as u32, y as u32, z as u32]);
+            u32::from(!chunk_is_free(self.chunks[i], self.chunk_entities[i]))
+        });
         (0..self.chunks.len()).into_par_iter().find_first(|&i| {
             if !chunk_is_free(self.chunks[i], self.chunk_entities[i]) {
                 return false;
             }
             let f = Aadf::unpack(self.chunks[i], CHUNK_FIELD_BITS);
-            let p = self.size.chunk_coords(i);
-            let lo: [usize; 3] = std::array::from_fn(|a| (p[a] as usize).saturating_sub(usize::from(f.0[2 * a])));
-            let hi: [usize; 3] = std::array::from_fn(|a| (p[a] as usize + usize::from(f.0[2 * a + 1]) + 1).min(d[a]));
-            let s = sum[at(hi[0], hi[1], hi[2])] as i64
-                - sum[at(lo[0], hi[1], hi[2])] as i64
-                - sum[at(hi[0], lo[1], hi[2])] as i64
-                - sum[at(hi[0], hi[1], lo[2])] as i64
-                + sum[at(lo[0], lo[1], hi[2])] as i64
-                + sum[at(lo[0], hi[1], lo[2])] as i64
-                + sum[at(hi[0], lo[1], lo[2])] as i64
-                - sum[at(lo[0], lo[1], lo[2])] as i64;
-            s != 0
+            let p = size.chunk_coords(i).map(i64::from);
+            let lo: [i64; 3] = std::array::from_fn(|a| p[a] - i64::from(f.0[2 * a]));
+            let hi: [i64; 3] = std::array::from_fn(|a| p[a] + i64::from(f.0[2 * a + 1]) + 1);
+            blocked.count(lo, hi) != 0
         })
     }
 

@@ -6,7 +6,6 @@
 mod common;
 
 use common::{Raw, Rng, assert_aadf_valid, assert_canonical, random_world, rays};
-use naadf_world::edit::Record;
 use naadf_world::entity::pack::{InstanceRecord, RECORD_WORDS, conjugate, rotate};
 use naadf_world::entity::{EntityTable, MAX_ENTITY_ID};
 use naadf_world::ops::{Batch, EditError, Limits, Op};
@@ -731,17 +730,7 @@ fn mirrors_following_change_records_stay_identical() {
     for ops in batches {
         let mut changes = vec![apply(&mut server, ops).change];
         changes.extend(server.grow_distance_fields(rng.below(100) as usize));
-        for c in changes {
-            let d = Record::decode(&c.encode()).unwrap();
-            let got = mirror.apply_record(d.version, &d.record, &Limits::default()).unwrap();
-            assert_eq!(
-                got.digest, c.digest,
-                "mirror digest at ({}, {})",
-                c.version, c.growth_seq
-            );
-            assert_eq!(got.writes, c.writes, "mirror writes differ");
-        }
-        assert!(mirror.to_parts() == server.to_parts());
+        common::follow(&server, &mut mirror, changes);
         assert_eq!(server.digest(), server.digest_from_scratch());
     }
     assert!(!server.entity_table().instances.is_empty());

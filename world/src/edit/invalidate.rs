@@ -9,6 +9,7 @@ use super::writes::Writes;
 use crate::aadf::chunk_is_free;
 use crate::cell::{Aadf, CHUNK_FIELD_BITS, MAX_CHUNK_FIELD};
 use crate::digest::BufferId;
+use crate::prefix::PrefixSum3;
 use crate::size::WorldSize;
 use crate::world::World;
 use rayon::prelude::*;
@@ -34,36 +35,11 @@ impl World {
         let hi: [u32; 3] =
             std::array::from_fn(|a| (coords.iter().map(|c| c[a]).max().unwrap_or(0) + reach + 1).min(dims[a]));
         let d: [usize; 3] = std::array::from_fn(|a| (hi[a] - lo[a]) as usize);
-        let at = |x: usize, y: usize, z: usize| x + (d[0] + 1) * (y + (d[1] + 1) * z);
-        let mut sum = vec![0u32; (d[0] + 1) * (d[1] + 1) * (d[2] + 1)];
-        for c in &coords {
-            sum[at(
-                (c[0] - lo[0]) as usize + 1,
-                (c[1] - lo[1]) as usize + 1,
-                (c[2] - lo[2]) as usize + 1,
-            )] = 1;
-        }
-        for z in 1..=d[2] {
-            for y in 1..=d[1] {
-                for x in 1..=d[0] {
-                    sum[at(x, y, z)] += sum[at(x - 1, y, z)] + sum[at(x, y - 1, z)] + sum[at(x, y, z - 1)]
-                        - sum[at(x - 1, y - 1, z)]
-                        - sum[at(x - 1, y, z - 1)]
-                        - sum[at(x, y - 1, z - 1)]
-                        + sum[at(x - 1, y - 1, z - 1)];
-                }
-            }
-        }
-        let count = |a: [usize; 3], b: [usize; 3]| {
-            sum[at(b[0], b[1], b[2])] as i64
-                - sum[at(a[0], b[1], b[2])] as i64
-                - sum[at(b[0], a[1], b[2])] as i64
-                - sum[at(b[0], b[1], a[2])] as i64
-                + sum[at(a[0], a[1], b[2])] as i64
-                + sum[at(a[0], b[1], a[2])] as i64
-                + sum[at(b[0], a[1], a[2])] as i64
-                - sum[at(a[0], a[1], a[2])] as i64
-        };
+        let marked: std::collections::HashSet<[usize; 3]> = coords
+            .iter()
+            .map(|c| std::array::from_fn(|a| (c[a] - lo[a]) as usize))
+            .collect();
+        let origins = PrefixSum3::new(d, |x, y, z| u32::from(marked.contains(&[x, y, z])));
         let cells: Vec<[u32; 3]> = (lo[2]..hi[2])
             .flat_map(|z| (lo[1]..hi[1]).flat_map(move |y| (lo[0]..hi[0]).map(move |x| [x, y, z])))
             .collect();
@@ -76,14 +52,11 @@ impl World {
                     return None;
                 }
                 let f = Aadf::unpack(c, CHUNK_FIELD_BITS);
-                // The box in prefix-sum coordinates, clipped to the bounding box.
-                let a: [usize; 3] = std::array::from_fn(|k| {
-                    (i64::from(p[k]) - i64::from(f.0[2 * k]) - i64::from(lo[k])).clamp(0, d[k] as i64) as usize
-                });
-                let b: [usize; 3] = std::array::from_fn(|k| {
-                    (i64::from(p[k]) + i64::from(f.0[2 * k + 1]) + 1 - i64::from(lo[k])).clamp(0, d[k] as i64) as usize
-                });
-                (count(a, b) > 0).then_some(i)
+                // The box in the bounding box's coordinates.
+                let a: [i64; 3] = std::array::from_fn(|k| i64::from(p[k]) - i64::from(f.0[2 * k]) - i64::from(lo[k]));
+                let b: [i64; 3] =
+                    std::array::from_fn(|k| i64::from(p[k]) + i64::from(f.0[2 * k + 1]) + 1 - i64::from(lo[k]));
+                (origins.count(a, b) > 0).then_some(i)
             })
             .collect();
         for i in reset {

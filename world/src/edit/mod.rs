@@ -86,18 +86,7 @@ impl World {
         let mut table: Option<EntityTable> = None;
         let mut last_entity_op = None;
         if batch.has_entity_ops() {
-            if batch.ops.len() > limits.max_ops {
-                let index = limits.max_ops;
-                return Err(EditError::Limit {
-                    index,
-                    op: batch.ops[index].name(),
-                    reason: format!(
-                        "a batch holds at most {} ops, this one {}",
-                        limits.max_ops,
-                        batch.ops.len()
-                    ),
-                });
-            }
+            batch.check_size(limits)?;
             for (i, op) in batch.ops.iter().enumerate() {
                 if op.is_entity_op() {
                     let t = table.get_or_insert_with(|| self.entities.table.clone());

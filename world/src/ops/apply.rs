@@ -181,18 +181,7 @@ pub fn apply_batch(
     models: &mut ModelTable,
     limits: &Limits,
 ) -> Result<(), EditError> {
-    if batch.ops.len() > limits.max_ops {
-        let index = limits.max_ops;
-        return Err(EditError::Limit {
-            index,
-            op: batch.ops[index].name(),
-            reason: format!(
-                "a batch holds at most {} ops, this one {}",
-                limits.max_ops,
-                batch.ops.len()
-            ),
-        });
-    }
+    batch.check_size(limits)?;
     for (i, op) in batch.ops.iter().enumerate() {
         op.apply(i, canvas, materials, models, limits)?;
     }

@@ -176,6 +176,23 @@ struct BatchLineRef<'a> {
 }
 
 impl Batch {
+    /// Fails with a `Limit` error if the batch holds more than `limits.max_ops` ops.
+    pub fn check_size(&self, limits: &Limits) -> Result<(), EditError> {
+        if self.ops.len() <= limits.max_ops {
+            return Ok(());
+        }
+        let index = limits.max_ops;
+        Err(EditError::Limit {
+            index,
+            op: self.ops[index].name(),
+            reason: format!(
+                "a batch holds at most {} ops, this one {}",
+                limits.max_ops,
+                self.ops.len()
+            ),
+        })
+    }
+
     /// Parses one ops-JSON line: a single op object, or `{"batch":[op,...]}`.
     ///
     /// Errors are [`EditError::Parse`] with serde's message, prefixed by the op's index and

@@ -389,3 +389,21 @@ pub fn rays(s: [u32; 3], rng: &mut Rng, n: usize) -> Vec<Ray> {
     }
     out
 }
+
+/// Feeds the server's change sets to a mirror through their encoded records and checks
+/// that the mirror reports the same digest and buffer writes, then the same buffers.
+pub fn follow(server: &World, mirror: &mut World, changes: Vec<naadf_world::edit::ChangeSet>) {
+    use naadf_world::edit::Record;
+    use naadf_world::ops::Limits;
+    for c in changes {
+        let d = Record::decode(&c.encode()).unwrap();
+        let got = mirror.apply_record(d.version, &d.record, &Limits::default()).unwrap();
+        assert_eq!(
+            got.digest, c.digest,
+            "mirror digest at ({}, {})",
+            c.version, c.growth_seq
+        );
+        assert_eq!(got.writes, c.writes, "mirror writes differ");
+    }
+    assert!(mirror.to_parts() == server.to_parts());
+}
