@@ -49,6 +49,10 @@ pub struct TraverseArgs {
     /// measure again, reporting the ratio.
     #[arg(long, default_value_t = 0)]
     entities: u32,
+    /// Where the entities go: resting on the ground (`surface`, like characters and
+    /// vehicles) or anywhere in the air (`air`, the worst case for chunk AADFs).
+    #[arg(long, default_value = "surface", value_parser = ["surface", "air"])]
+    placement: String,
     /// Print one JSON object.
     #[arg(long)]
     json: bool,
@@ -121,7 +125,7 @@ fn traverse(a: TraverseArgs) -> Result<()> {
     let mut world = load_world(&a.world)?;
     let plain = measure(&world, &a)?;
     let with_entities = if a.entities > 0 {
-        spawn_entities(&mut world, a.entities, a.seed)?;
+        spawn_entities(&mut world, a.entities, a.seed, a.placement == "air")?;
         Some(measure(&world, &a)?)
     } else {
         None
@@ -178,8 +182,9 @@ fn print_report(prefix: &str, r: &TraverseReport) {
     );
 }
 
-/// Spawns `n` 8³ entities (a hollow box) at random poses inside the world, in one batch.
-fn spawn_entities(world: &mut World, n: u32, seed: u64) -> Result<()> {
+/// Spawns `n` 8³ entities (a hollow box) at random poses, in one batch: on the ground
+/// (found with a downward ray per column) or, with `air`, at random heights.
+fn spawn_entities(world: &mut World, n: u32, seed: u64, air: bool) -> Result<()> {
     let model = entity_model_op();
     let s = world.size().voxels().map(f64::from);
     let mut st = seed ^ 0xE171;
@@ -192,11 +197,13 @@ fn spawn_entities(world: &mut World, n: u32, seed: u64) -> Result<()> {
     };
     let mut ops = vec![model];
     for id in 0..n {
-        let pos = [
-            unit() * (s[0] - 16.0) + 4.0,
-            (0.3 + 0.6 * unit()) * s[1],
-            unit() * (s[2] - 16.0) + 4.0,
-        ];
+        let (x, z, h) = (unit() * (s[0] - 16.0) + 4.0, unit() * (s[2] - 16.0) + 4.0, unit());
+        let ground = || {
+            let down = Ray::new([x + 4.0, s[1] - 0.5, z + 4.0], [0.0, -1.0, 0.0]).ok()?;
+            naadf_world::traverse::trace_naadf(world, &down).map(|hit| f64::from(hit.voxel[1]) + 2.0)
+        };
+        let y = if air { None } else { ground() }.unwrap_or((0.3 + 0.6 * h) * s[1]);
+        let pos = [x, y.min(s[1] - 12.0), z];
         let rot = [unit() - 0.5, unit() - 0.5, unit() - 0.5, unit() - 0.5];
         ops.push(Op::SpawnEntity {
             id,
