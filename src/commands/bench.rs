@@ -123,10 +123,11 @@ struct Reference {
 
 fn traverse(a: TraverseArgs) -> Result<()> {
     let mut world = load_world(&a.world)?;
-    let plain = measure(&world, &a)?;
+    let (plain, secondary) = measure(&world, &a, None)?;
     let with_entities = if a.entities > 0 {
         spawn_entities(&mut world, a.entities, a.seed, a.placement == "air")?;
-        Some(measure(&world, &a)?)
+        // The same rays as the plain run, so that the difference is the entities' cost.
+        Some(measure(&world, &a, Some(secondary))?.0)
     } else {
         None
     };
@@ -242,8 +243,10 @@ pub fn entity_model_op() -> Op {
     }
 }
 
-/// Measures every method on the fixed ray sets of `world`.
-fn measure(world: &World, a: &TraverseArgs) -> Result<TraverseReport> {
+/// Measures every method on the fixed primary rays of `world` and on `secondary` (by
+/// default, cosine rays from the first method's primary hits). Returns the report and the
+/// secondary rays used.
+fn measure(world: &World, a: &TraverseArgs, secondary: Option<Vec<Ray>>) -> Result<(TraverseReport, Vec<Ray>)> {
     let primary = primary_rays(&fixed_cameras(world.size()), a.width, a.height);
     let mut report = TraverseReport {
         primary: BTreeMap::new(),
@@ -265,9 +268,10 @@ fn measure(world: &World, a: &TraverseArgs) -> Result<TraverseReport> {
             }
         };
         let (p_rate, p_hits, p_steps) = time_rays(&tracer, &primary, a.repeat);
-        let secondary = match &reference {
-            Some(r) => r.secondary.clone(),
-            None => secondary_rays(&primary, &p_hits, a.seed),
+        let secondary = match (&reference, &secondary) {
+            (Some(r), _) => r.secondary.clone(),
+            (None, Some(fixed)) => fixed.clone(),
+            (None, None) => secondary_rays(&primary, &p_hits, a.seed),
         };
         let (s_rate, s_hits, s_steps) = time_rays(&tracer, &secondary, a.repeat);
         match &reference {
@@ -297,8 +301,9 @@ fn measure(world: &World, a: &TraverseArgs) -> Result<TraverseReport> {
         report.secondary.insert(method.name(), s_rate);
         report.steps.insert(method.name(), [p_steps, s_steps]);
     }
-    report.secondary_rays = reference.as_ref().map_or(0, |r| r.secondary.len());
-    Ok(report)
+    let secondary = reference.map(|r| r.secondary).unwrap_or_default();
+    report.secondary_rays = secondary.len();
+    Ok((report, secondary))
 }
 
 /// Raw chunks held in memory, so that construction is timed without generation.

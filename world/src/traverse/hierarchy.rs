@@ -81,12 +81,20 @@ fn world_loop<const DF: bool, const ENT: bool>(
             edge - 1 - (c & (edge - 1))
         }
     };
+    // The chunk whose entity field was read last, and that field: most steps stay in the
+    // chunk of the step before, so the field is read once per chunk visited.
+    let mut last_chunk = usize::MAX;
+    let mut last_field = 0u32;
     for steps in 1..=MAX_STEPS {
         let p = cell.map(|v| v as u32);
         let with_entities = ENT && {
-            let f = world.chunk_entities()[size.chunk_index([p[0] >> 4, p[1] >> 4, p[2] >> 4])];
-            fields.push(f);
-            f != 0
+            let ci = size.chunk_index([p[0] >> 4, p[1] >> 4, p[2] >> 4]);
+            if ci != last_chunk {
+                last_chunk = ci;
+                last_field = world.chunk_entities()[ci];
+                fields.push(last_field);
+            }
+            last_field != 0
         };
         match probe::<DF>(world, with_entities, p, &facing, &to_edge) {
             Probe::Solid(m) => return Some(ray.hit(cell, t, axis, m, steps)),
