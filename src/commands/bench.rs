@@ -7,7 +7,7 @@ use anyhow::{Result, bail};
 use naadf_world::cell::CHUNK_VOXELS;
 use naadf_world::model::ModelTable;
 use naadf_world::ops::{Batch, Limits, Op};
-use naadf_world::raysets::{fixed_cameras, primary_rays, secondary_rays};
+use naadf_world::raysets::{SplitMix64, fixed_cameras, primary_rays, secondary_rays};
 use naadf_world::stats::WorldStats;
 use naadf_world::traverse::{Hit, Method, Ray, Tracer, same_result};
 use naadf_world::{ChunkSource, MaterialTable, World, WorldSize};
@@ -188,14 +188,8 @@ fn print_report(prefix: &str, r: &TraverseReport) {
 fn spawn_entities(world: &mut World, n: u32, seed: u64, air: bool) -> Result<()> {
     let model = entity_model_op();
     let s = world.size().voxels().map(f64::from);
-    let mut st = seed ^ 0xE171;
-    let mut unit = || {
-        st = st.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = st;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut rng = SplitMix64(seed ^ 0xE171);
+    let mut unit = || rng.unit();
     let mut ops = vec![model];
     for id in 0..n {
         let (x, z, h) = (unit() * (s[0] - 16.0) + 4.0, unit() * (s[2] - 16.0) + 4.0, unit());

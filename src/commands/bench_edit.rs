@@ -6,6 +6,7 @@ use super::print_json;
 use anyhow::{Context, Result, bail};
 use naadf_world::World;
 use naadf_world::ops::{Batch, Limits, Op};
+use naadf_world::raysets::SplitMix64;
 use naadf_world::traverse::{Ray, trace_naadf};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -66,19 +67,6 @@ struct EditReport {
     replay: Option<ReplayReport>,
 }
 
-/// SplitMix64, for reproducible edit positions.
-struct Rng(u64);
-
-impl Rng {
-    fn below(&mut self, n: u32) -> u32 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) % u64::from(n.max(1))) as u32
-    }
-}
-
 /// The first solid voxel below the top of the world at column (x, z), if any.
 fn surface(world: &World, x: u32, z: u32) -> Option<[u32; 3]> {
     let top = f64::from(world.size().voxels()[1]) - 0.5;
@@ -127,7 +115,7 @@ fn time_batches(world: &mut World, batches: &[Batch]) -> Result<KindReport> {
 pub fn run(a: EditArgs) -> Result<()> {
     let mut world = generate(&a.preset)?;
     let size = world.size().voxels();
-    let mut rng = Rng(a.preset.seed);
+    let mut rng = SplitMix64(a.preset.seed);
     let mut points = Vec::new();
     while points.len() < a.edits.max(8) {
         if let Some(p) = surface(&world, rng.below(size[0]), rng.below(size[2])) {

@@ -50,17 +50,30 @@ pub fn primary_rays(cameras: &[Camera], w: u32, h: u32) -> Vec<Ray> {
         .collect()
 }
 
-/// SplitMix64 step: a small, well-mixed deterministic generator.
-fn splitmix(state: &mut u64) -> u64 {
-    *state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-    let mut z = *state;
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
-}
+/// SplitMix64: a small, well-mixed deterministic generator for reproducible benchmark
+/// inputs.
+#[derive(Clone, Debug)]
+pub struct SplitMix64(pub u64);
 
-fn unit(state: &mut u64) -> f64 {
-    (splitmix(state) >> 11) as f64 / (1u64 << 53) as f64
+impl SplitMix64 {
+    /// The next 64 random bits.
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+
+    /// Uniform in `[0, 1)` (53 bits).
+    pub fn unit(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    /// Uniform-ish in `0..n` (modulo bias is irrelevant for benchmark inputs).
+    pub fn below(&mut self, n: u32) -> u32 {
+        (self.next_u64() % u64::from(n.max(1))) as u32
+    }
 }
 
 /// One cosine-distributed secondary ray per primary hit that has a face normal, leaving
@@ -73,8 +86,8 @@ pub fn secondary_rays(primary: &[Ray], hits: &[Option<Hit>], seed: u64) -> Vec<R
             continue;
         };
         let n = h.normal.map(f64::from);
-        let mut st = seed ^ (i as u64).wrapping_mul(0xD1B5_4A32_D192_ED03);
-        let (u1, u2) = (unit(&mut st), unit(&mut st));
+        let mut rng = SplitMix64(seed ^ (i as u64).wrapping_mul(0xD1B5_4A32_D192_ED03));
+        let (u1, u2) = (rng.unit(), rng.unit());
         let (r, phi) = (u1.sqrt(), std::f64::consts::TAU * u2);
         // Tangent axes: the two axes other than the normal's.
         let (ta, tb) = ((axis + 1) % 3, (axis + 2) % 3);

@@ -496,29 +496,43 @@ impl World {
     /// then z. Streams one 16-voxel z-slab at a time.
     pub fn export_raw(&self, out: &mut dyn Write) -> std::io::Result<()> {
         let [sx, sy, _] = self.size.voxels().map(|v| v as usize);
-        let [cx, cy, cz] = self.size.chunks();
-        for z in 0..cz {
-            let mut slab = vec![0u16; sx * sy * 16];
-            let rows: Vec<(u32, u32, Box<[u16; CHUNK_VOXELS]>)> = (0..cx * cy)
+        let cz = self.size.chunks()[2] as usize;
+        // A few slabs at a time, decoded in parallel and written in order.
+        let batch = rayon::current_num_threads().max(1);
+        for first in (0..cz).step_by(batch) {
+            let slabs: Vec<Vec<u16>> = (first..(first + batch).min(cz))
                 .into_par_iter()
-                .map(|k| {
-                    let mut raw = Box::new([0u16; CHUNK_VOXELS]);
-                    self.decode_chunk([k % cx, k / cx, z], &mut raw);
-                    (k % cx, k / cx, raw)
+                .map(|z| {
+                    let mut slab = vec![0u16; sx * sy * 16];
+                    self.decode_slab(z as u32, &mut slab);
+                    slab
                 })
                 .collect();
-            for (x, y, raw) in rows {
+            for slab in slabs {
+                let bytes: Vec<u8> = slab.iter().flat_map(|v| v.to_le_bytes()).collect();
+                out.write_all(&bytes)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Decodes the 16 voxel planes of chunk layer `cz` into `slab` (material ids, x fastest,
+    /// then y, then the 16 planes; `size.x · size.y · 16` entries).
+    pub fn decode_slab(&self, cz: u32, slab: &mut [u16]) {
+        let [sx, sy, _] = self.size.voxels().map(|v| v as usize);
+        let [cx, cy, _] = self.size.chunks();
+        let mut raw = [0u16; CHUNK_VOXELS];
+        for y in 0..cy {
+            for x in 0..cx {
+                self.decode_chunk([x, y, cz], &mut raw);
                 for lz in 0..16usize {
                     for ly in 0..16usize {
-                        let dst = (x as usize * 16) + sx * ((y as usize * 16 + ly) + sy * lz);
+                        let dst = x as usize * 16 + sx * (y as usize * 16 + ly + sy * lz);
                         slab[dst..dst + 16].copy_from_slice(&raw[256 * lz + 16 * ly..][..16]);
                     }
                 }
             }
-            let bytes: Vec<u8> = slab.iter().flat_map(|v| v.to_le_bytes()).collect();
-            out.write_all(&bytes)?;
         }
-        Ok(())
     }
 
     /// The world digest (BRIEF §3) over every mirrored buffer and table, kept

@@ -169,14 +169,7 @@ fn run_sequence(size: WorldSize, seed: u64, batches: usize, growth: impl Fn(&mut
 #[test]
 fn random_edit_sequences_match_a_dense_array() {
     for seed in 0..4u64 {
-        let size = [
-            WorldSize::new(64, 64, 64),
-            WorldSize::new(128, 64, 64),
-            WorldSize::new(64, 128, 128),
-        ][seed as usize % 3]
-            .as_ref()
-            .copied()
-            .unwrap();
+        let size = common::size_for(seed, &[[64, 64, 64], [128, 64, 64], [64, 128, 128]]);
         run_sequence(size, seed, 12, |rng| {
             (rng.below(2) == 0).then(|| rng.below(40) as usize)
         });

@@ -221,14 +221,7 @@ fn check_ray(w: &World, world_only: &DenseGrid, grid: &DenseGrid, ray: &Ray) -> 
 #[test]
 fn rays_through_entity_scenes_match_brute_force_and_the_methods_agree() {
     for seed in 0..5u64 {
-        let size = [
-            WorldSize::new(64, 64, 64),
-            WorldSize::new(128, 64, 64),
-            WorldSize::new(64, 128, 64),
-        ][seed as usize % 3]
-            .as_ref()
-            .copied()
-            .unwrap();
+        let size = common::size_for(seed, &[[64, 64, 64], [128, 64, 64], [64, 128, 64]]);
         let (raw, w) = scene(size, seed, 4, 8 + seed as u32 * 3);
         assert_aadf_valid(&raw, &w, "scene");
         let grid = DenseGrid::from_world(&w).unwrap();

@@ -96,14 +96,7 @@ fn agree_on(raw: &Raw, seed: u64, n: usize) {
 #[test]
 fn methods_agree_on_random_worlds() {
     for seed in 0..6u64 {
-        let size = [
-            WorldSize::new(64, 64, 64),
-            WorldSize::new(128, 64, 64),
-            WorldSize::new(64, 128, 192),
-        ][seed as usize % 3]
-            .as_ref()
-            .copied()
-            .unwrap();
+        let size = common::size_for(seed, &[[64, 64, 64], [128, 64, 64], [64, 128, 192]]);
         agree_on(&random_world(size, seed * 31 + 1), seed, 1500);
     }
 }

@@ -3,7 +3,6 @@
 
 use super::overlay::Touched;
 use super::writes::Writes;
-use crate::aadf::chunk_is_free;
 use crate::build::{ChunkPlan, block_equal, plan_chunk_keeping};
 use crate::cell::{self, GROUP_WORDS, State};
 use crate::digest::BufferId;
@@ -14,7 +13,6 @@ const BLOCK_ARRAY: usize = 64;
 
 impl World {
     /// Replaces a touched chunk's content with its new content (material ids, all defined).
-    /// Returns whether the chunk's freedom (empty and without entities) changed.
     ///
     /// Blocks whose content did not change keep their cells untouched; only changed blocks
     /// are rehashed.
@@ -24,7 +22,7 @@ impl World {
     /// blocks pointing at the old group keep it. New groups are acquired before old ones are
     /// released, so a group that survives keeps its slot; both steps go in block order, which
     /// makes slot reuse deterministic.
-    pub(crate) fn commit_chunk(&mut self, t: &Touched, w: &mut Writes) -> Result<bool, WorldError> {
+    pub(crate) fn commit_chunk(&mut self, t: &Touched, w: &mut Writes) -> Result<(), WorldError> {
         let i = t.index;
         let max_id = (self.materials.len() - 1) as u16;
         let old = self.chunks[i];
@@ -39,7 +37,6 @@ impl World {
         };
         let plan = plan_chunk_keeping(&t.new, max_id, &keep)
             .map_err(|m| WorldError::InvalidMaterial(format!("material {m} is not defined (1..={max_id})")))?;
-        let was_free = chunk_is_free(old, self.chunk_entities[i]);
         let new = match plan {
             ChunkPlan::Uniform(m) => {
                 if cell::state(old) == State::Mixed {
@@ -88,7 +85,7 @@ impl World {
             self.chunks[i] = new;
             w.push(BufferId::Chunks, i, 1);
         }
-        Ok(was_free != chunk_is_free(new, self.chunk_entities[i]))
+        Ok(())
     }
 
     /// Drops one reference to a group, recording the zeroed slot if it was the last.

@@ -82,22 +82,18 @@ impl World {
         let mut models = self.models.clone();
         let mut overlay = Overlay::new(self);
         // Entity ops change a working copy of the entity table, in batch order with the
-        // voxel and table ops (which go through the ops layer exactly as in `apply_batch`).
+        // voxel and table ops (which go through the ops layer as in `ops::apply_batch`).
         let mut table: Option<EntityTable> = None;
         let mut last_entity_op = None;
-        if batch.has_entity_ops() {
-            batch.check_size(limits)?;
-            for (i, op) in batch.ops.iter().enumerate() {
-                if op.is_entity_op() {
-                    let t = table.get_or_insert_with(|| self.entities.table.clone());
-                    entity::apply_op(i, op, t, &models, &materials, self.size)?;
-                    last_entity_op = Some(i);
-                } else {
-                    op.apply(i, &mut overlay, &mut materials, &mut models, limits)?;
-                }
+        batch.check_size(limits)?;
+        for (i, op) in batch.ops.iter().enumerate() {
+            if op.is_entity_op() {
+                let t = table.get_or_insert_with(|| self.entities.table.clone());
+                entity::apply_op(i, op, t, &models, &materials, self.size)?;
+                last_entity_op = Some(i);
+            } else {
+                op.apply(i, &mut overlay, &mut materials, &mut models, limits)?;
             }
-        } else {
-            ops::apply_batch(batch, &mut overlay, &mut materials, &mut models, limits)?;
         }
         let touched = overlay.into_touched();
         self.check_capacity(touched.len()).map_err(|e| EditError::Limit {

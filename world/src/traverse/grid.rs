@@ -1,7 +1,6 @@
 //! The dense-grid oracle: Amanatides–Woo over a full decode of the world.
 
 use super::ray::{Hit, Ray};
-use crate::cell::CHUNK_VOXELS;
 use crate::entity::trace::{Candidates, OwnedEntities};
 use crate::error::WorldError;
 use crate::world::World;
@@ -31,23 +30,12 @@ impl DenseGrid {
         }
         let size = world.size().voxels();
         let [sx, sy, _] = size.map(|v| v as usize);
-        let [cx, cy, _] = world.size().chunks();
         let mut voxels = vec![0u16; n as usize];
-        // One z-slab of 16 planes per task: disjoint slices of the output.
-        voxels.par_chunks_mut(sx * sy * 16).enumerate().for_each(|(cz, slab)| {
-            let mut raw = [0u16; CHUNK_VOXELS];
-            for cyy in 0..cy {
-                for cxx in 0..cx {
-                    world.decode_chunk([cxx, cyy, cz as u32], &mut raw);
-                    for lz in 0..16 {
-                        for ly in 0..16 {
-                            let dst = cxx as usize * 16 + sx * (cyy as usize * 16 + ly + sy * lz);
-                            slab[dst..dst + 16].copy_from_slice(&raw[256 * lz + 16 * ly..][..16]);
-                        }
-                    }
-                }
-            }
-        });
+        // One chunk layer (16 planes) per task: disjoint slices of the output.
+        voxels
+            .par_chunks_mut(sx * sy * 16)
+            .enumerate()
+            .for_each(|(cz, slab)| world.decode_slab(cz as u32, slab));
         Ok(Self {
             size,
             voxels,

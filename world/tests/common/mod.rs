@@ -70,6 +70,12 @@ impl ChunkSource for Raw {
     }
 }
 
+/// The `seed`-th of `sizes`, cycling: tests spread their seeds over a few world shapes.
+pub fn size_for(seed: u64, sizes: &[[u32; 3]]) -> WorldSize {
+    let s = sizes[seed as usize % sizes.len()];
+    WorldSize::new(s[0], s[1], s[2]).unwrap()
+}
+
 /// SplitMix64: a tiny deterministic generator for test data.
 pub struct Rng(pub u64);
 
