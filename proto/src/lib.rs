@@ -1,7 +1,44 @@
 //! # naadf-proto
 //!
-//! The gRPC wire of the naadf service: `.proto` definitions compiled with protox and
-//! tonic, and conversions between wire messages and `naadf-world` types.
+//! The gRPC wire of the naadf service: the protobuf definitions in
+//! `proto/naadf/v1/naadf.proto` (documented field by field), the tonic code generated from
+//! them with protox (no `protoc` needed), and the conversions between wire messages and
+//! `naadf-world` types:
 //!
-//! This crate is reserved in the workspace layout (BRIEF §2); the wire protocol is built
-//! together with the server, so it exports nothing yet.
+//! - [`snapshot`]: snapshot pages (64 KiB pages of the transferred buffers, zstd) and the
+//!   assembly of a world from a header, cached buffers and received pages;
+//! - [`requests`]: entity RPCs to and from edit batches.
+//!
+//! The stream itself is specified in the `.proto` file: a `Header`, the pages the client
+//! lacks, then one `Delta` per change, each carrying the digest after it.
+
+pub mod requests;
+pub mod snapshot;
+
+/// The generated messages, client and server of package `naadf.v1`.
+#[allow(missing_docs, clippy::all, clippy::pedantic)]
+pub mod v1 {
+    tonic::include_proto!("naadf.v1");
+}
+
+/// The encoded `FileDescriptorSet` of the protocol, for server reflection.
+pub const FILE_DESCRIPTOR_SET: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/naadf_descriptor.bin"));
+
+/// The protocol version this build speaks; `Join` refuses other versions.
+pub const PROTOCOL_VERSION: u32 = 1;
+
+/// Errors in wire data: a message that does not describe a valid world or request.
+#[derive(Debug, thiserror::Error)]
+pub enum WireError {
+    /// A field is missing, out of range or inconsistent.
+    #[error("bad message: {0}")]
+    Bad(String),
+    /// The world the messages describe failed validation.
+    #[error(transparent)]
+    World(#[from] naadf_world::WorldError),
+}
+
+/// Shorthand for a [`WireError::Bad`].
+pub(crate) fn bad(msg: impl Into<String>) -> WireError {
+    WireError::Bad(msg.into())
+}

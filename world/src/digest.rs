@@ -118,6 +118,11 @@ impl PagedDigest {
         Digest(self.total)
     }
 
+    /// The hash of every page of buffer `id`, in page order (empty if never recorded).
+    pub fn page_hashes(&self, id: BufferId) -> &[u64] {
+        self.buffers.get(&id).map_or(&[], |(_, pages)| pages.as_slice())
+    }
+
     /// Records that buffer `id` now holds `bytes`, of which only the byte range `dirty`
     /// (plus any change of length) differs from what was last recorded.
     pub fn update(&mut self, id: BufferId, bytes: &[u8], dirty: std::ops::Range<usize>) {

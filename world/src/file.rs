@@ -32,6 +32,7 @@
 //! the three checksums together make every change to a file's bytes an error.
 
 use crate::cell::MAX_MATERIAL;
+use crate::digest::BufferId;
 use crate::entity::EntityTable;
 use crate::error::WorldError;
 use crate::material::{Material, MaterialTable};
@@ -318,19 +319,7 @@ pub fn read_parts(input: &mut dyn Read) -> Result<WorldParts, WorldError> {
         return Err(bad("payload checksum mismatch (the file is corrupt)"));
     }
     p.dec.finish().trailer()?;
-    let materials = MaterialTable::from_words(raw.materials).map_err(|e| bad(format!("material table: {e}")))?;
-    for id in 1..materials.len() {
-        let at = id * 4;
-        let w: [u32; 4] = materials.words()[at..at + 4].try_into().expect("four words");
-        Material::decode(w)
-            .validate()
-            .map_err(|e| bad(format!("material {id}: {e}")))?;
-    }
-    let models = ModelTable::decode(&raw.models).map_err(into_bad_file)?;
-    let entities = match &raw.entities {
-        Some(bytes) => EntityTable::decode(bytes)?,
-        None => EntityTable::default(),
-    };
+    let (materials, models, entities) = decode_tables(raw.materials, &raw.models, raw.entities.as_deref())?;
     Ok(WorldParts {
         size: raw.size,
         version: raw.version,
@@ -342,6 +331,72 @@ pub fn read_parts(input: &mut dyn Read) -> Result<WorldParts, WorldError> {
         voxels: raw.voxels,
         entities,
     })
+}
+
+/// The buffers a world is transferred by (a snapshot on the wire): the four cell arrays as
+/// little-endian u32 words, the material table's words and the model table's canonical
+/// encoding. The entity buffers are not among them: they derive from the entity table.
+pub const TRANSFERRED: [BufferId; 6] = [
+    BufferId::Chunks,
+    BufferId::ChunkEntities,
+    BufferId::Blocks,
+    BufferId::Voxels,
+    BufferId::Materials,
+    BufferId::Models,
+];
+
+/// Assembles world parts from the bytes of the [`TRANSFERRED`] buffers (in that order, as
+/// [`World::buffer_bytes`] gives them) and an entity-table encoding. The tables are checked
+/// as when reading a file; [`World::from_parts`] checks the rest.
+pub fn parts_from_buffers(
+    size: WorldSize,
+    version: u64,
+    buffers: [&[u8]; 6],
+    entity_table: &[u8],
+) -> Result<WorldParts, WorldError> {
+    let words = |i: usize| -> Result<Vec<u32>, WorldError> {
+        let b = buffers[i];
+        if !b.len().is_multiple_of(4) {
+            return Err(bad(format!("{} bytes is not whole words", b.len())));
+        }
+        Ok(b.chunks_exact(4)
+            .map(|w| u32::from_le_bytes(w.try_into().expect("four bytes")))
+            .collect())
+    };
+    let (materials, models, entities) = decode_tables(words(4)?, buffers[5], Some(entity_table))?;
+    Ok(WorldParts {
+        size,
+        version,
+        materials,
+        models,
+        chunks: words(0)?,
+        chunk_entities: words(1)?,
+        blocks: words(2)?,
+        voxels: words(3)?,
+        entities,
+    })
+}
+
+/// Decodes and checks the material, model and entity tables.
+fn decode_tables(
+    materials: Vec<u32>,
+    models: &[u8],
+    entities: Option<&[u8]>,
+) -> Result<(MaterialTable, ModelTable, EntityTable), WorldError> {
+    let materials = MaterialTable::from_words(materials).map_err(|e| bad(format!("material table: {e}")))?;
+    for id in 1..materials.len() {
+        let at = id * 4;
+        let w: [u32; 4] = materials.words()[at..at + 4].try_into().expect("four words");
+        Material::decode(w)
+            .validate()
+            .map_err(|e| bad(format!("material {id}: {e}")))?;
+    }
+    let models = ModelTable::decode(models).map_err(into_bad_file)?;
+    let entities = match entities {
+        Some(bytes) => EntityTable::decode(bytes)?,
+        None => EntityTable::default(),
+    };
+    Ok((materials, models, entities))
 }
 
 /// Saves `world` to `path` atomically: the file is written to a temporary file in the

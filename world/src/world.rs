@@ -155,8 +155,9 @@ impl World {
         self.digest = digest;
     }
 
-    /// The bytes of a digested buffer or table.
-    pub(crate) fn buffer_bytes(&self, id: BufferId) -> std::borrow::Cow<'_, [u8]> {
+    /// The bytes of a digested buffer or table, at its logical length (what the digest and
+    /// the wire's snapshot pages cover).
+    pub fn buffer_bytes(&self, id: BufferId) -> std::borrow::Cow<'_, [u8]> {
         use std::borrow::Cow;
         match id {
             BufferId::Chunks => Cow::Borrowed(bytemuck_u32(&self.chunks)),
@@ -539,6 +540,12 @@ impl World {
     /// incrementally: O(1) to read, O(changed pages) to maintain.
     pub fn digest(&self) -> Digest {
         self.digest.digest()
+    }
+
+    /// The digest contribution of every 64 KiB page of buffer `id`, in page order (kept
+    /// incrementally with the digest; a server compares them to find changed pages).
+    pub fn page_hashes(&self, id: BufferId) -> &[u64] {
+        self.digest.page_hashes(id)
     }
 
     /// The entity types and instances.

@@ -319,7 +319,12 @@ impl World {
                     self.chunks[i as usize] = v;
                     w.push(BufferId::Chunks, i as usize, 1);
                 }
-                self.growth.seq += 1;
+                // A published growth step finishes all the work queued so far (it is always
+                // the quiescent one), so a mirror drops its copy of that queue as well.
+                self.growth = Growth {
+                    seq: self.growth.seq + 1,
+                    ..Growth::default()
+                };
                 Ok(self.publish(record.clone(), w))
             }
         }

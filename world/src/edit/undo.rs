@@ -9,7 +9,7 @@ use crate::world::World;
 /// What a batch overwrote: the voxels it changed, `(position, before, after)` in chunk
 /// then voxel order, and the entities it changed, `(id, before, after)` by ascending id
 /// (`None` = no entity with that id; poses are the quantised ones).
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct UndoRecord {
     /// Changed voxels.
     pub voxels: Vec<([u32; 3], u16, u16)>,

@@ -51,7 +51,7 @@ const AABB_PAD: f64 = 1e-6;
 pub const ENTITY_SOLID: u32 = 0x8000_0000;
 
 /// The state of one entity: model and quantised pose.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Pose {
     /// Model name (its entity type).
     pub model: String,

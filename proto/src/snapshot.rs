@@ -1,0 +1,314 @@
+//! Snapshots on the wire: the [`TRANSFERRED`] buffers cut into 64 KiB pages (the digest's
+//! pages, BRIEF §3), each sent as one zstd frame, and the assembly of a world from a
+//! [`Header`], the buffers a client already holds, and the pages it receives.
+//!
+//! A client announces its cache as the page hashes of its buffers ([`cache_of`]); the
+//! server sends only pages whose hash differs. The page hash is the digest contribution,
+//! so after assembly the world's digest must equal the header's, which
+//! [`Assembly::finish`] checks.
+
+use crate::v1::{BufferLength, CachedBuffer, Header, Page};
+use crate::{WireError, bad};
+use naadf_world::digest::{BufferId, Digest, PAGE_BYTES};
+use naadf_world::file::{TRANSFERRED, parts_from_buffers, section_limits};
+use naadf_world::{World, WorldSize};
+
+/// The zstd level of snapshot pages. Pages are compressed once per content and cached by
+/// the server, so a higher level than the world file's costs little.
+pub const PAGE_ZSTD_LEVEL: i32 = 9;
+
+/// Compresses one page for the wire.
+pub fn compress_page(bytes: &[u8]) -> Vec<u8> {
+    zstd::bulk::compress(bytes, PAGE_ZSTD_LEVEL).expect("zstd compresses in memory")
+}
+
+/// The position of a transferred buffer in [`TRANSFERRED`], from its wire id.
+pub fn slot_of(buffer: u32) -> Result<usize, WireError> {
+    TRANSFERRED
+        .iter()
+        .position(|&id| id as u32 == buffer)
+        .ok_or_else(|| bad(format!("buffer id {buffer} is not a transferred buffer")))
+}
+
+/// The cache a client announces when it holds `world`: the page hashes of its transferred
+/// buffers.
+pub fn cache_of(world: &World) -> Vec<CachedBuffer> {
+    TRANSFERRED
+        .iter()
+        .map(|&id| CachedBuffer {
+            buffer: id as u32,
+            page_hashes: world.page_hashes(id).to_vec(),
+        })
+        .collect()
+}
+
+/// The byte lengths a header announces, in [`TRANSFERRED`] order, checked against what a
+/// world of the header's size can hold (so a hostile header cannot make a client allocate
+/// without bound).
+fn lengths(h: &Header, size: WorldSize) -> Result<[u64; 6], WireError> {
+    // section_limits order: materials, models, chunks, chunk_entities, blocks, voxels, entities.
+    let limits = section_limits(size.chunk_count() as u64);
+    let limit_of = [limits[2], limits[3], limits[4], limits[5], limits[0], limits[1]];
+    let mut out = [None; 6];
+    for b in &h.buffers {
+        let slot = slot_of(b.buffer)?;
+        if out[slot].replace(b.bytes).is_some() {
+            return Err(bad(format!("buffer {} has two lengths", b.buffer)));
+        }
+        if b.bytes > limit_of[slot] {
+            return Err(bad(format!(
+                "buffer {} of {} bytes is larger than a {size} world allows",
+                b.buffer, b.bytes
+            )));
+        }
+    }
+    let mut lens = [0; 6];
+    for (slot, l) in out.iter().enumerate() {
+        lens[slot] = l.ok_or_else(|| bad(format!("header lacks the length of buffer {}", TRANSFERRED[slot] as u32)))?;
+    }
+    Ok(lens)
+}
+
+/// The header's buffer lengths for a world whose transferred buffers have these lengths.
+pub fn buffer_lengths(lens: [usize; 6]) -> Vec<BufferLength> {
+    TRANSFERRED
+        .iter()
+        .zip(lens)
+        .map(|(&id, bytes)| BufferLength {
+            buffer: id as u32,
+            bytes: bytes as u64,
+        })
+        .collect()
+}
+
+/// The world size a header announces.
+pub fn header_size(h: &Header) -> Result<WorldSize, WireError> {
+    match h.size.as_slice() {
+        &[x, y, z] => Ok(WorldSize::new(x, y, z)?),
+        s => Err(bad(format!("size needs 3 numbers, got {}", s.len()))),
+    }
+}
+
+/// A snapshot being received: the client's cached buffers, resized to the header's
+/// lengths, with the received pages written over them.
+#[derive(Debug)]
+pub struct Assembly {
+    header: Header,
+    size: WorldSize,
+    buffers: [Vec<u8>; 6],
+    received: u32,
+}
+
+impl Assembly {
+    /// Starts assembling the snapshot `header` describes over `cache` (the client's copy of
+    /// the transferred buffers, in [`TRANSFERRED`] order; empty vectors when it has none).
+    pub fn start(header: Header, cache: [Vec<u8>; 6]) -> Result<Self, WireError> {
+        let size = header_size(&header)?;
+        let lens = lengths(&header, size)?;
+        let mut buffers = cache;
+        for (b, &len) in buffers.iter_mut().zip(&lens) {
+            b.resize(len as usize, 0);
+        }
+        Ok(Self {
+            header,
+            size,
+            buffers,
+            received: 0,
+        })
+    }
+
+    /// Writes one received page.
+    pub fn page(&mut self, p: &Page) -> Result<(), WireError> {
+        if self.received >= self.header.pages {
+            return Err(bad(format!("more pages than the {} announced", self.header.pages)));
+        }
+        let slot = slot_of(p.buffer)?;
+        let buf = &mut self.buffers[slot];
+        let start = p.index as usize * PAGE_BYTES;
+        if start >= buf.len() {
+            return Err(bad(format!(
+                "page {} of buffer {} lies past its {} bytes",
+                p.index,
+                p.buffer,
+                buf.len()
+            )));
+        }
+        let end = (start + PAGE_BYTES).min(buf.len());
+        let bytes = zstd::bulk::decompress(&p.zstd, PAGE_BYTES)
+            .map_err(|e| bad(format!("page {} of buffer {}: {e}", p.index, p.buffer)))?;
+        if bytes.len() != end - start {
+            return Err(bad(format!(
+                "page {} of buffer {} holds {} bytes, expected {}",
+                p.index,
+                p.buffer,
+                bytes.len(),
+                end - start
+            )));
+        }
+        buf[start..end].copy_from_slice(&bytes);
+        self.received += 1;
+        Ok(())
+    }
+
+    /// Whether every announced page has arrived.
+    pub fn is_complete(&self) -> bool {
+        self.received == self.header.pages
+    }
+
+    /// The header being assembled.
+    pub fn header(&self) -> &Header {
+        &self.header
+    }
+
+    /// Builds and validates the world, and checks its digest against the header's.
+    pub fn finish(self) -> Result<World, WireError> {
+        if !self.is_complete() {
+            return Err(bad(format!(
+                "snapshot ended after {} of {} pages",
+                self.received, self.header.pages
+            )));
+        }
+        let [a, b, c, d, e, f] = &self.buffers;
+        let parts = parts_from_buffers(
+            self.size,
+            self.header.version,
+            [a, b, c, d, e, f],
+            &self.header.entity_table,
+        )?;
+        let world = World::from_parts(parts)?;
+        let want = Digest(self.header.digest);
+        if world.digest() != want {
+            return Err(bad(format!(
+                "snapshot digest {} does not match the header's {want}",
+                world.digest()
+            )));
+        }
+        Ok(world)
+    }
+}
+
+/// The transferred buffers of `world`, copied (a client's cache for [`Assembly::start`]).
+pub fn buffers_of(world: &World) -> [Vec<u8>; 6] {
+    TRANSFERRED.map(|id: BufferId| world.buffer_bytes(id).into_owned())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use naadf_world::preset::Preset;
+
+    fn world() -> World {
+        let size = WorldSize::new(128, 64, 128).unwrap();
+        let source = Preset::Terrain.source(Some(size), 3).unwrap();
+        World::build(&*source, &|_| {}).unwrap()
+    }
+
+    /// Every page of `world` that differs from `cache` (hash by hash), as the server sends them.
+    fn pages_for(world: &World, cache: &[CachedBuffer]) -> Vec<Page> {
+        let mut out = Vec::new();
+        for &id in &TRANSFERRED {
+            let bytes = world.buffer_bytes(id);
+            let have = cache
+                .iter()
+                .find(|c| c.buffer == id as u32)
+                .map_or(&[][..], |c| &c.page_hashes[..]);
+            for (k, &h) in world.page_hashes(id).iter().enumerate() {
+                if have.get(k) != Some(&h) {
+                    let page = &bytes[k * PAGE_BYTES..((k + 1) * PAGE_BYTES).min(bytes.len())];
+                    out.push(Page {
+                        buffer: id as u32,
+                        index: k as u32,
+                        zstd: compress_page(page),
+                    });
+                }
+            }
+        }
+        out
+    }
+
+    fn header_of(world: &World, pages: u32) -> Header {
+        Header {
+            protocol_version: crate::PROTOCOL_VERSION,
+            size: world.size().voxels().to_vec(),
+            version: world.version(),
+            growth_seq: 0,
+            quiescent: true,
+            digest: world.digest().0,
+            buffers: buffer_lengths(TRANSFERRED.map(|id| world.buffer_bytes(id).len())),
+            entity_table: world.entity_table().encode(),
+            pages,
+            resync: false,
+        }
+    }
+
+    #[test]
+    fn a_snapshot_rebuilds_the_world_and_a_cache_skips_equal_pages() {
+        let w = world();
+        let pages = pages_for(&w, &[]);
+        let mut a = Assembly::start(header_of(&w, pages.len() as u32), Default::default()).unwrap();
+        for p in &pages {
+            a.page(p).unwrap();
+        }
+        let got = a.finish().unwrap();
+        assert_eq!(got.digest(), w.digest());
+        assert_eq!(got.blocks(), w.blocks());
+
+        // Edit, then resend against the old world's cache: only changed pages travel.
+        let mut w2 = w.clone();
+        let b = naadf_world::ops::Batch::parse_line(r#"{"op":"sphere","center":[60,40,60],"radius":6,"material":2}"#)
+            .unwrap();
+        w2.apply(&b, &Default::default()).unwrap();
+        w2.grow_until_quiescent();
+        let delta = pages_for(&w2, &cache_of(&got));
+        assert!(!delta.is_empty() && delta.len() < pages.len(), "{} of {}", delta.len(), pages.len());
+        let mut a = Assembly::start(header_of(&w2, delta.len() as u32), buffers_of(&got)).unwrap();
+        for p in &delta {
+            a.page(p).unwrap();
+        }
+        assert_eq!(a.finish().unwrap().digest(), w2.digest());
+    }
+
+    #[test]
+    fn bad_snapshots_are_errors() {
+        let w = world();
+        let pages = pages_for(&w, &[]);
+        // Missing a page.
+        let mut a = Assembly::start(header_of(&w, pages.len() as u32), Default::default()).unwrap();
+        for p in &pages[1..] {
+            a.page(p).unwrap();
+        }
+        assert!(a.finish().err().unwrap().to_string().contains("pages"));
+        // A page with the wrong content: the digest check catches it.
+        let mut a = Assembly::start(header_of(&w, pages.len() as u32), Default::default()).unwrap();
+        for (i, p) in pages.iter().enumerate() {
+            let mut p = p.clone();
+            if i == 0 {
+                let mut raw = zstd::bulk::decompress(&p.zstd, PAGE_BYTES).unwrap();
+                raw[5] ^= 1;
+                p.zstd = compress_page(&raw);
+            }
+            a.page(&p).unwrap();
+        }
+        assert!(a.finish().is_err());
+        // Hostile headers and pages.
+        let mut h = header_of(&w, 1);
+        h.buffers[3].bytes = u64::MAX;
+        assert!(Assembly::start(h, Default::default()).is_err());
+        let mut h = header_of(&w, 1);
+        h.size = vec![64, 64];
+        assert!(Assembly::start(h, Default::default()).is_err());
+        let mut a = Assembly::start(header_of(&w, 1), Default::default()).unwrap();
+        let junk = Page {
+            buffer: 2,
+            index: 0,
+            zstd: vec![1, 2, 3],
+        };
+        assert!(a.page(&junk).is_err());
+        let past = Page {
+            buffer: 0,
+            index: 1 << 20,
+            zstd: compress_page(&[0; 4]),
+        };
+        assert!(a.page(&past).is_err());
+    }
+}
