@@ -1,6 +1,77 @@
 //! # naadf-server
 //!
-//! The authoritative server: the world actor, gRPC streaming of world deltas, edits,
-//! persistence (WAL + snapshots), auth, limits, metrics and render routing.
+//! The authoritative server (`naadf serve`): one world actor applies every edit in one total
+//! order; a committer makes batches durable (write-ahead log with group commit) before it
+//! publishes their deltas and acknowledges them; each joined client gets a cache-aware
+//! snapshot and then every delta over gRPC. axum serves health, metrics and a status page.
 //!
-//! This crate is reserved in the workspace layout (BRIEF §2) and exports nothing yet.
+//! Where to start reading: [`serve`] wires everything; [`actor`] is the world's owner;
+//! [`committer`] the durability point; [`join`] one client's stream.
+//!
+//! ```text
+//! gRPC Edit ──▶ service (auth, roles, rate) ──▶ actor (apply, undo, growth) ──▶ committer
+//!                                                                        │ WAL append + fsync
+//!                                       join tasks ◀── broadcast deltas ◀┘ then ack the sender
+//! ```
+
+pub mod actor;
+pub mod auth;
+pub mod committer;
+pub mod history;
+pub mod http;
+pub mod join;
+pub mod metrics;
+pub mod pages;
+mod serve;
+pub mod service;
+pub mod store;
+pub mod wal;
+
+pub use serve::{Bound, ServerConfig, serve};
+
+use actor::{Request, StatusInfo};
+use governor::{DefaultKeyedRateLimiter, Quota};
+use std::num::NonZeroU32;
+use std::sync::Arc;
+use tokio::sync::{mpsc, oneshot, watch};
+
+/// What the service, the join tasks and the HTTP side share.
+pub struct Shared {
+    /// Metrics.
+    pub metrics: Arc<metrics::Metrics>,
+    /// Clients and recent edits for the status page.
+    pub activity: Arc<metrics::Activity>,
+    /// Compressed snapshot pages.
+    pub page_cache: pages::PageCache,
+    /// Tokens and roles.
+    pub auth: auth::Auth,
+    /// Per-user edit rate limiter.
+    pub limiter: DefaultKeyedRateLimiter<String>,
+    /// The configured rate (edits per second per user).
+    pub rate: u32,
+    /// Becomes true when the server shuts down (join streams end).
+    pub shutdown: watch::Receiver<bool>,
+}
+
+impl Shared {
+    /// Shared state with a per-user limit of `rate` edits per second (bursts of `rate`).
+    pub fn new(auth: auth::Auth, rate: u32, shutdown: watch::Receiver<bool>) -> Self {
+        let rate = rate.max(1);
+        Self {
+            metrics: Arc::default(),
+            activity: Arc::default(),
+            page_cache: pages::PageCache::default(),
+            auth,
+            limiter: DefaultKeyedRateLimiter::keyed(Quota::per_second(NonZeroU32::new(rate).expect("rate ≥ 1"))),
+            rate,
+            shutdown,
+        }
+    }
+}
+
+/// Asks the actor for its state (`None` when it is gone).
+pub async fn status(actor: &mpsc::Sender<Request>) -> Option<StatusInfo> {
+    let (reply, rx) = oneshot::channel();
+    actor.send(Request::Status { reply }).await.ok()?;
+    rx.await.ok()
+}

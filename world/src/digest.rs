@@ -123,6 +123,11 @@ impl PagedDigest {
         self.buffers.get(&id).map_or(&[], |(_, pages)| pages.as_slice())
     }
 
+    /// The byte length of buffer `id` as last recorded.
+    pub fn len(&self, id: BufferId) -> usize {
+        self.buffers.get(&id).map_or(0, |(len, _)| *len)
+    }
+
     /// Records that buffer `id` now holds `bytes`, of which only the byte range `dirty`
     /// (plus any change of length) differs from what was last recorded.
     pub fn update(&mut self, id: BufferId, bytes: &[u8], dirty: std::ops::Range<usize>) {

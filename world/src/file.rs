@@ -404,6 +404,16 @@ fn decode_tables(
 /// directory is fsynced). A crash leaves either the old file or the new one, never a mix;
 /// on error the temporary file is removed.
 pub fn save(world: &World, path: &Path) -> Result<(), WorldError> {
+    save_with(path, &mut |out| write(world, out))
+}
+
+/// [`save`] for raw parts (what a server snapshots while its world moves on).
+pub fn save_parts(parts: &WorldParts, path: &Path) -> Result<(), WorldError> {
+    save_with(path, &mut |out| write_parts(parts, out))
+}
+
+/// Writes a file atomically with `write` (see [`save`]).
+fn save_with(path: &Path, write: &mut dyn FnMut(&mut dyn Write) -> Result<(), WorldError>) -> Result<(), WorldError> {
     let name = path.file_name().ok_or_else(|| {
         WorldError::io(
             format!("cannot save world to {}", path.display()),
@@ -422,7 +432,7 @@ pub fn save(world: &World, path: &Path) -> Result<(), WorldError> {
         .map_err(|e| WorldError::io(format!("cannot create {}", tmp.display()), e))?;
     let result = (|| {
         let mut w = BufWriter::with_capacity(1 << 20, file);
-        write(world, &mut w).map_err(|e| recontext(e, &tmp))?;
+        write(&mut w).map_err(|e| recontext(e, &tmp))?;
         let file = w
             .into_inner()
             .map_err(|e| WorldError::io(format!("cannot write {}", tmp.display()), e.into_error()))?;

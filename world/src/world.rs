@@ -548,6 +548,11 @@ impl World {
         self.digest.page_hashes(id)
     }
 
+    /// The byte length of buffer `id` (without encoding it, unlike [`World::buffer_bytes`]).
+    pub fn buffer_len(&self, id: BufferId) -> usize {
+        self.digest.len(id)
+    }
+
     /// The entity types and instances.
     pub fn entity_table(&self) -> &EntityTable {
         &self.entities.table

@@ -226,6 +226,11 @@ impl World {
         }
     }
 
+    /// The growth sub-step of the latest change (0 right after a batch).
+    pub fn growth_seq(&self) -> u32 {
+        self.growth.seq
+    }
+
     /// Whether no distance-field work is queued.
     pub fn is_quiescent(&self) -> bool {
         self.growth.seeds.is_empty()

@@ -291,6 +291,20 @@ pub struct Limits {
     pub max_model_voxels: u64,
 }
 
+impl Limits {
+    /// No limits beyond what the world itself allows: for re-applying batches that a
+    /// server already accepted (log replay, mirrors), whatever limits it was configured with.
+    pub fn unbounded() -> Self {
+        Self {
+            max_ops: usize::MAX,
+            max_set_voxels: usize::MAX,
+            max_fill_volume: u64::MAX,
+            max_flood_limit: u64::MAX,
+            max_model_voxels: u64::MAX,
+        }
+    }
+}
+
 impl Default for Limits {
     fn default() -> Self {
         Self {

@@ -1,0 +1,358 @@
+//! The world actor: the one thread that owns the world and applies every request in one
+//! total order. Between requests it runs background distance-field growth.
+//!
+//! The actor never waits for disk or network. Everything it produces (applied batches with
+//! their log records, growth steps, acknowledgements, join subscriptions, checkpoints) goes
+//! in order to the [committer](crate::committer), which makes batches durable before it
+//! publishes them or answers their senders.
+
+use crate::committer::Outgoing;
+use crate::history::Histories;
+use crate::metrics::Metrics;
+use crate::pages::{PageStore, SnapshotView};
+use crate::store::ServerState;
+use crate::wal::{Entry, EntryKind};
+use naadf_proto::v1::{Delta, EditReply, WorldMessage, world_message};
+use naadf_world::World;
+use naadf_world::edit::ChangeSet;
+use naadf_world::ops::{Batch, EditError, Limits};
+use std::sync::Arc;
+use tokio::sync::{mpsc, oneshot};
+use tonic::Status;
+
+/// Growth phases run between two looks at the request queue (keeps edit latency low).
+const GROWTH_SLICE: usize = 4;
+
+/// What an edit request asks for.
+#[derive(Debug)]
+pub enum Action {
+    /// Apply this batch.
+    Batch(Batch),
+    /// Undo the caller's latest edit.
+    Undo,
+    /// Redo the caller's latest undo.
+    Redo,
+}
+
+/// The answer to an edit request.
+pub type EditResult = Result<EditReply, Status>;
+
+/// A request to the actor.
+#[derive(Debug)]
+pub enum Request {
+    /// An edit, entity request, undo or redo.
+    Edit {
+        /// The caller's user name.
+        user: String,
+        /// The request's client sequence number (0: none).
+        client_seq: u64,
+        /// What to do.
+        action: Action,
+        /// Where the answer goes (after the batch is durable).
+        reply: oneshot::Sender<EditResult>,
+    },
+    /// A snapshot and a subscription to the changes after it.
+    Join {
+        /// Where the snapshot and subscription go.
+        reply: oneshot::Sender<crate::committer::Subscription>,
+    },
+    /// The current state.
+    Status {
+        /// Where it goes.
+        reply: oneshot::Sender<StatusInfo>,
+    },
+    /// Converge growth, then write a snapshot and truncate the log behind it.
+    Checkpoint {
+        /// Answered with the snapshot's version once it is durable.
+        reply: Option<oneshot::Sender<Result<u64, String>>>,
+    },
+}
+
+/// The actor's state as `Status` reports it.
+#[derive(Clone, Debug)]
+pub struct StatusInfo {
+    /// World size.
+    pub size: [u32; 3],
+    /// Edit version.
+    pub version: u64,
+    /// Growth sub-step.
+    pub growth_seq: u32,
+    /// No distance-field work queued.
+    pub quiescent: bool,
+    /// Digest.
+    pub digest: naadf_world::digest::Digest,
+}
+
+/// One published change, as every join task forwards it.
+#[derive(Debug)]
+pub struct Event {
+    /// Edit version after the change.
+    pub version: u64,
+    /// Growth sub-step.
+    pub growth_seq: u32,
+    /// The `Delta` message.
+    pub message: WorldMessage,
+    /// The snapshot pages the change altered.
+    pub changes: Vec<crate::pages::PageChange>,
+    /// The transferred buffers' lengths after it.
+    pub lens: [usize; 6],
+}
+
+/// The actor.
+pub struct Actor {
+    world: World,
+    histories: Histories,
+    pages: PageStore,
+    limits: Limits,
+    out: mpsc::Sender<Outgoing>,
+    metrics: Arc<Metrics>,
+    activity: Arc<crate::metrics::Activity>,
+    view: Option<Arc<SnapshotView>>,
+    checkpoint_every: u64,
+    since_checkpoint: u64,
+}
+
+/// The gRPC status for an edit error.
+pub fn edit_status(e: &EditError) -> Status {
+    match e {
+        EditError::Limit { .. } => Status::resource_exhausted(e.to_string()),
+        _ => Status::invalid_argument(e.to_string()),
+    }
+}
+
+impl Actor {
+    /// An actor for `world` (quiescent or not) with the persisted `state`.
+    pub fn new(
+        world: World,
+        state: ServerState,
+        limits: Limits,
+        out: mpsc::Sender<Outgoing>,
+        shared: &crate::Shared,
+        checkpoint_every: u64,
+    ) -> Self {
+        let pages = PageStore::new(&world);
+        shared.metrics.version.set(world.version() as i64);
+        Self {
+            world,
+            histories: state.histories,
+            pages,
+            limits,
+            out,
+            metrics: shared.metrics.clone(),
+            activity: shared.activity.clone(),
+            view: None,
+            checkpoint_every,
+            since_checkpoint: 0,
+        }
+    }
+
+    /// Re-applies a logged batch at startup (rebuilding undo history and retry answers).
+    pub fn replay(&mut self, e: &Entry) -> Result<(), String> {
+        let batch = Batch::parse_line(&e.ops).map_err(|err| format!("log entry {}: {err}", e.version))?;
+        let applied = self
+            .world
+            .apply(&batch, &Limits::unbounded())
+            .map_err(|err| format!("log entry {}: {err}", e.version))?;
+        if applied.change.version != e.version {
+            return Err(format!(
+                "log entry {} replayed as version {}",
+                e.version, applied.change.version
+            ));
+        }
+        self.record(&e.user, e.client_seq, e.kind, applied.undo);
+        Ok(())
+    }
+
+    /// Runs growth until quiescent without publishing (after replay, before serving).
+    pub fn settle(&mut self) {
+        self.world.grow_until_quiescent();
+        self.pages = PageStore::new(&self.world);
+        self.metrics.version.set(self.world.version() as i64);
+    }
+
+    fn record(&mut self, user: &str, client_seq: u64, kind: EntryKind, undo: naadf_world::edit::UndoRecord) {
+        match kind {
+            EntryKind::Edit => self.histories.edited(user, undo),
+            EntryKind::Undo => self.histories.undone(user, undo),
+            EntryKind::Redo => self.histories.redone(user, undo),
+        }
+        self.histories.answer(user, client_seq, self.world.version());
+    }
+
+    /// Runs the actor until every request sender is gone.
+    pub fn run(mut self, mut rx: mpsc::Receiver<Request>) {
+        loop {
+            let req = if self.world.is_quiescent() {
+                match rx.blocking_recv() {
+                    Some(r) => r,
+                    None => break,
+                }
+            } else {
+                match rx.try_recv() {
+                    Ok(r) => r,
+                    Err(mpsc::error::TryRecvError::Empty) => {
+                        self.grow(GROWTH_SLICE);
+                        continue;
+                    }
+                    Err(mpsc::error::TryRecvError::Disconnected) => break,
+                }
+            };
+            self.handle(req);
+        }
+    }
+
+    fn send(&self, o: Outgoing) {
+        // The committer only stops when the process is going down.
+        let _ = self.out.blocking_send(o);
+    }
+
+    fn grow(&mut self, budget: usize) {
+        if let Some(cs) = self.world.grow_distance_fields(budget) {
+            self.metrics.growth_steps.inc();
+            let event = self.event(&cs);
+            self.send(Outgoing::Growth { event });
+        }
+    }
+
+    /// The event publishing change set `cs` (the page store is updated on the way).
+    fn event(&mut self, cs: &ChangeSet) -> Arc<Event> {
+        self.view = None;
+        let changes = self.pages.update(&self.world);
+        Arc::new(Event {
+            version: cs.version,
+            growth_seq: cs.growth_seq,
+            message: WorldMessage {
+                kind: Some(world_message::Kind::Delta(Delta {
+                    change: cs.encode(),
+                    digest: cs.digest.0,
+                })),
+            },
+            changes,
+            lens: self.pages.lens(),
+        })
+    }
+
+    fn handle(&mut self, req: Request) {
+        match req {
+            Request::Edit {
+                user,
+                client_seq,
+                action,
+                reply,
+            } => self.edit(user, client_seq, action, reply),
+            Request::Join { reply } => {
+                let view = self.view().clone();
+                self.send(Outgoing::Join { view, reply });
+            }
+            Request::Status { reply } => {
+                let _ = reply.send(StatusInfo {
+                    size: self.world.size().voxels(),
+                    version: self.world.version(),
+                    growth_seq: self.view().growth_seq,
+                    quiescent: self.world.is_quiescent(),
+                    digest: self.world.digest(),
+                });
+            }
+            Request::Checkpoint { reply } => self.checkpoint(reply),
+        }
+    }
+
+    fn view(&mut self) -> &Arc<SnapshotView> {
+        let w = &self.world;
+        let growth_seq = self.last_growth_seq();
+        self.view.get_or_insert_with(|| {
+            Arc::new(SnapshotView {
+                size: w.size().voxels(),
+                version: w.version(),
+                growth_seq,
+                quiescent: w.is_quiescent(),
+                digest: w.digest(),
+                lens: self.pages.lens(),
+                pages: self.pages.pages(),
+                entity_table: w.entity_table().encode(),
+            })
+        })
+    }
+
+    fn last_growth_seq(&self) -> u32 {
+        self.world.growth_seq()
+    }
+
+    fn edit(&mut self, user: String, client_seq: u64, action: Action, reply: oneshot::Sender<EditResult>) {
+        if let Some(version) = self.histories.answered(&user, client_seq) {
+            // Answered once it is durable: the original may still be in the committer's queue.
+            self.send(Outgoing::Ack {
+                reply,
+                result: Ok(EditReply {
+                    version,
+                    duplicate: true,
+                }),
+            });
+            return;
+        }
+        let (batch, kind) = match action {
+            Action::Batch(b) => (b, EntryKind::Edit),
+            Action::Undo => match self.histories.next_undo(&user) {
+                Some(r) => (r.undo_batch(&self.world), EntryKind::Undo),
+                None => {
+                    let _ = reply.send(Err(Status::failed_precondition(format!("user '{user}' has nothing to undo"))));
+                    return;
+                }
+            },
+            Action::Redo => match self.histories.next_redo(&user) {
+                Some(r) => (r.undo_batch(&self.world), EntryKind::Redo),
+                None => {
+                    let _ = reply.send(Err(Status::failed_precondition(format!("user '{user}' has nothing to redo"))));
+                    return;
+                }
+            },
+        };
+        let applied = match self.world.apply(&batch, &self.limits) {
+            Ok(a) => a,
+            Err(e) => {
+                self.metrics.refused.inc();
+                let _ = reply.send(Err(edit_status(&e)));
+                return;
+            }
+        };
+        let version = applied.change.version;
+        self.record(&user, client_seq, kind, applied.undo);
+        let ops = batch.to_json_line();
+        self.activity.edit(version, &user, &ops);
+        let entry = Entry {
+            version,
+            user,
+            client_seq,
+            kind,
+            ops,
+        };
+        let event = self.event(&applied.change);
+        self.metrics.edits.inc();
+        self.metrics.version.set(version as i64);
+        self.send(Outgoing::Batch {
+            frame: entry.frame(),
+            event,
+            reply,
+        });
+        self.since_checkpoint += 1;
+        if self.since_checkpoint >= self.checkpoint_every {
+            self.checkpoint(None);
+        }
+    }
+
+    fn checkpoint(&mut self, reply: Option<oneshot::Sender<Result<u64, String>>>) {
+        while !self.world.is_quiescent() {
+            self.grow(usize::MAX);
+        }
+        self.since_checkpoint = 0;
+        let state = ServerState {
+            version: self.world.version(),
+            histories: self.histories.clone(),
+        };
+        self.send(Outgoing::Checkpoint {
+            parts: Box::new(self.world.to_parts()),
+            state: Box::new(state),
+            reply,
+        });
+    }
+}

@@ -1,0 +1,151 @@
+//! Prometheus metrics (`/metrics`) and the activity the status page shows.
+
+use prometheus_client::encoding::text::encode;
+use prometheus_client::metrics::counter::Counter;
+use prometheus_client::metrics::gauge::Gauge;
+use prometheus_client::metrics::histogram::{Histogram, exponential_buckets};
+use prometheus_client::registry::Registry;
+use std::collections::{BTreeMap, VecDeque};
+use std::sync::Mutex;
+use std::sync::atomic::AtomicU64;
+use std::time::SystemTime;
+
+/// Recent edits the status page lists.
+const RECENT_EDITS: usize = 32;
+
+/// The server's metrics.
+#[derive(Debug)]
+pub struct Metrics {
+    registry: Registry,
+    /// Clients joined now.
+    pub clients: Gauge,
+    /// The current edit version.
+    pub version: Gauge,
+    /// Applied edit batches (rate() gives edits per second).
+    pub edits: Counter,
+    /// Refused edit requests.
+    pub refused: Counter,
+    /// Bytes of stream messages sent to clients.
+    pub bytes_sent: Counter,
+    /// Snapshots re-sent to clients that fell behind.
+    pub resyncs: Counter,
+    /// Background growth steps published.
+    pub growth_steps: Counter,
+    /// WAL fsync latency, seconds.
+    pub fsync: Histogram,
+    /// Snapshots written.
+    pub snapshots: Counter,
+}
+
+impl Default for Metrics {
+    fn default() -> Self {
+        let mut registry = Registry::with_prefix("naadf");
+        let m = Metrics {
+            clients: Gauge::default(),
+            version: Gauge::default(),
+            edits: Counter::default(),
+            refused: Counter::default(),
+            bytes_sent: Counter::default(),
+            resyncs: Counter::default(),
+            growth_steps: Counter::default(),
+            fsync: Histogram::new(exponential_buckets(0.000_05, 2.0, 16)),
+            snapshots: Counter::default(),
+            registry: Registry::default(),
+        };
+        registry.register("clients", "Clients joined now", m.clients.clone());
+        registry.register("version", "Current edit version", m.version.clone());
+        registry.register("edits", "Applied edit batches", m.edits.clone());
+        registry.register("refused_requests", "Refused edit requests", m.refused.clone());
+        registry.register("bytes_sent", "Bytes of stream messages sent to clients", m.bytes_sent.clone());
+        registry.register("resyncs", "Snapshots re-sent to clients that fell behind", m.resyncs.clone());
+        registry.register("growth_steps", "Background distance-field growth steps published", m.growth_steps.clone());
+        registry.register("wal_fsync_seconds", "Write-ahead log fsync latency", m.fsync.clone());
+        registry.register("snapshots", "Snapshots written", m.snapshots.clone());
+        Metrics { registry, ..m }
+    }
+}
+
+impl Metrics {
+    /// The Prometheus text exposition of every metric.
+    pub fn render(&self) -> String {
+        let mut out = String::new();
+        encode(&mut out, &self.registry).expect("writing to a String cannot fail");
+        out
+    }
+}
+
+/// One recent edit.
+#[derive(Clone, Debug)]
+pub struct RecentEdit {
+    /// The version it produced.
+    pub version: u64,
+    /// Who sent it.
+    pub user: String,
+    /// When it was applied.
+    pub at: SystemTime,
+    /// The ops, shortened.
+    pub summary: String,
+}
+
+/// One joined client.
+#[derive(Clone, Debug)]
+pub struct ClientInfo {
+    /// The user.
+    pub user: String,
+    /// When it joined.
+    pub since: SystemTime,
+}
+
+/// Activity for the status page.
+#[derive(Debug, Default)]
+pub struct Activity {
+    recent: Mutex<VecDeque<RecentEdit>>,
+    clients: Mutex<BTreeMap<u64, ClientInfo>>,
+    next_client: AtomicU64,
+}
+
+impl Activity {
+    /// Notes an applied edit.
+    pub fn edit(&self, version: u64, user: &str, ops: &str) {
+        let mut summary: String = ops.chars().take(120).collect();
+        if summary.len() < ops.len() {
+            summary.push('…');
+        }
+        let mut r = self.recent.lock().expect("activity lock");
+        r.push_front(RecentEdit {
+            version,
+            user: user.to_owned(),
+            at: SystemTime::now(),
+            summary,
+        });
+        r.truncate(RECENT_EDITS);
+    }
+
+    /// Registers a joined client; returns its handle for [`Activity::left`].
+    pub fn joined(&self, user: &str) -> u64 {
+        let id = self.next_client.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        self.clients.lock().expect("activity lock").insert(
+            id,
+            ClientInfo {
+                user: user.to_owned(),
+                since: SystemTime::now(),
+            },
+        );
+        id
+    }
+
+    /// Removes a client.
+    pub fn left(&self, id: u64) {
+        self.clients.lock().expect("activity lock").remove(&id);
+    }
+
+    /// The recent edits, newest first.
+    pub fn recent(&self) -> Vec<RecentEdit> {
+        self.recent.lock().expect("activity lock").iter().cloned().collect()
+    }
+
+    /// The joined clients.
+    pub fn clients(&self) -> Vec<ClientInfo> {
+        self.clients.lock().expect("activity lock").values().cloned().collect()
+    }
+}

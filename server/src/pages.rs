@@ -1,0 +1,169 @@
+//! Snapshot pages on the server: the current 64 KiB pages of every transferred buffer,
+//! kept incrementally, and a cache of their zstd frames shared by all joining clients.
+//!
+//! The actor updates the [`PageStore`] after every change by comparing the world's page
+//! hashes (kept by its incremental digest) with the stored ones, so only changed pages are
+//! copied. A join takes a [`SnapshotView`]: the pages as `Arc`s, so views are cheap and stay
+//! valid while the world moves on.
+
+use naadf_proto::snapshot::compress_page;
+use naadf_world::World;
+use naadf_world::digest::{Digest, PAGE_BYTES};
+use naadf_world::file::TRANSFERRED;
+use rayon::prelude::*;
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
+
+/// One page: its hash (the digest contribution) and its bytes.
+#[derive(Clone, Debug)]
+pub struct StoredPage {
+    /// xxh3 digest contribution of the page (unique per buffer, index and content).
+    pub hash: u64,
+    /// The raw page bytes.
+    pub bytes: Arc<[u8]>,
+}
+
+/// A page that changed: `(slot in TRANSFERRED, page index, new hash)`.
+pub type PageChange = (u8, u32, u64);
+
+/// The current pages of the transferred buffers.
+#[derive(Debug)]
+pub struct PageStore {
+    pages: [Vec<StoredPage>; 6],
+    lens: [usize; 6],
+}
+
+impl PageStore {
+    /// All pages of `world`.
+    pub fn new(world: &World) -> Self {
+        let mut s = Self {
+            pages: Default::default(),
+            lens: [0; 6],
+        };
+        s.update(world);
+        s
+    }
+
+    /// Brings the store up to date with `world`; returns the pages that changed (pages
+    /// that vanished because a buffer shrank are implied by the new lengths).
+    pub fn update(&mut self, world: &World) -> Vec<PageChange> {
+        let mut changes = Vec::new();
+        for (slot, &id) in TRANSFERRED.iter().enumerate() {
+            let hashes = world.page_hashes(id);
+            self.lens[slot] = world.buffer_len(id);
+            let pages = &mut self.pages[slot];
+            pages.truncate(hashes.len());
+            let first_diff = (0..hashes.len()).find(|&k| pages.get(k).is_none_or(|p| p.hash != hashes[k]));
+            let Some(first) = first_diff else {
+                continue;
+            };
+            let bytes = world.buffer_bytes(id);
+            for (k, &h) in hashes.iter().enumerate().skip(first) {
+                if pages.get(k).is_some_and(|p| p.hash == h) {
+                    continue;
+                }
+                let page = StoredPage {
+                    hash: h,
+                    bytes: bytes[k * PAGE_BYTES..((k + 1) * PAGE_BYTES).min(bytes.len())].into(),
+                };
+                if k < pages.len() {
+                    pages[k] = page;
+                } else {
+                    pages.push(page);
+                }
+                changes.push((slot as u8, k as u32, h));
+            }
+        }
+        changes
+    }
+
+    /// The byte lengths of the buffers.
+    pub fn lens(&self) -> [usize; 6] {
+        self.lens
+    }
+
+    /// A view of the current pages.
+    pub fn pages(&self) -> [Vec<StoredPage>; 6] {
+        self.pages.clone()
+    }
+}
+
+/// A consistent snapshot of the world at one point of the change sequence.
+#[derive(Debug)]
+pub struct SnapshotView {
+    /// World size in voxels.
+    pub size: [u32; 3],
+    /// Edit version.
+    pub version: u64,
+    /// Growth sub-step.
+    pub growth_seq: u32,
+    /// Whether the world was quiescent.
+    pub quiescent: bool,
+    /// The digest.
+    pub digest: Digest,
+    /// The transferred buffers' byte lengths.
+    pub lens: [usize; 6],
+    /// The pages.
+    pub pages: [Vec<StoredPage>; 6],
+    /// The entity table's encoding.
+    pub entity_table: Vec<u8>,
+}
+
+/// zstd frames of pages by hash, compressed once and shared by every join.
+#[derive(Debug, Default)]
+pub struct PageCache {
+    frames: Mutex<HashMap<u64, Arc<Vec<u8>>>>,
+}
+
+impl PageCache {
+    /// The zstd frames of `pages`, compressing (in parallel) those not cached yet. Entries
+    /// no longer in `view` are dropped when the cache grows past twice the view's pages.
+    pub fn frames(&self, pages: &[&StoredPage], view: &SnapshotView) -> Vec<Arc<Vec<u8>>> {
+        let missing: Vec<&StoredPage> = {
+            let map = self.frames.lock().expect("page cache lock");
+            pages.iter().copied().filter(|p| !map.contains_key(&p.hash)).collect()
+        };
+        let made: Vec<(u64, Arc<Vec<u8>>)> = missing
+            .par_iter()
+            .map(|p| (p.hash, Arc::new(compress_page(&p.bytes))))
+            .collect();
+        let mut map = self.frames.lock().expect("page cache lock");
+        map.extend(made);
+        let out = pages.iter().map(|p| map[&p.hash].clone()).collect();
+        let live: usize = view.pages.iter().map(Vec::len).sum();
+        if map.len() > 2 * live + 64 {
+            let keep: std::collections::HashSet<u64> = view.pages.iter().flatten().map(|p| p.hash).collect();
+            map.retain(|h, _| keep.contains(h));
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use naadf_world::WorldSize;
+    use naadf_world::ops::{Batch, Limits};
+    use naadf_world::preset::Preset;
+
+    #[test]
+    fn the_store_follows_the_world_page_for_page() {
+        let source = Preset::Terrain.source(Some(WorldSize::new(128, 64, 128).unwrap()), 2).unwrap();
+        let mut w = World::build(&*source, &|_| {}).unwrap();
+        let mut store = PageStore::new(&w);
+        let b = Batch::parse_line(r#"{"batch":[{"op":"sphere","center":[30,30,30],"radius":9,"material":3},{"op":"define_material","id":300,"kind":"metal","albedo":[1,0.5,0.25],"roughness":0.2}]}"#).unwrap();
+        w.apply(&b, &Limits::default()).unwrap();
+        w.grow_until_quiescent();
+        let changes = store.update(&w);
+        assert!(!changes.is_empty());
+        let fresh = PageStore::new(&w);
+        assert_eq!(store.lens(), fresh.lens());
+        for (a, b) in store.pages().iter().zip(fresh.pages().iter()) {
+            assert_eq!(a.len(), b.len());
+            for (p, q) in a.iter().zip(b) {
+                assert_eq!((p.hash, &p.bytes[..]), (q.hash, &q.bytes[..]));
+            }
+        }
+        assert!(store.update(&w).is_empty());
+    }
+}

@@ -1,0 +1,244 @@
+//! Wiring: data directory recovery, the actor and committer threads, the gRPC and HTTP
+//! listeners, periodic checkpoints and graceful shutdown.
+
+use crate::actor::{Actor, Request};
+use crate::auth::Auth;
+use crate::committer::Committer;
+use crate::service::WorldServer;
+use crate::store::{DataDir, ServerState};
+use crate::wal::Wal;
+use crate::{Shared, http};
+use anyhow::{Context, Result, bail};
+use naadf_proto::FILE_DESCRIPTOR_SET;
+use naadf_proto::v1::world_service_server::WorldServiceServer;
+use naadf_world::World;
+use naadf_world::ops::Limits;
+use std::net::SocketAddr;
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::Duration;
+use tokio::sync::{broadcast, mpsc, oneshot, watch};
+use tokio_stream::wrappers::TcpListenerStream;
+use tonic::codec::CompressionEncoding;
+use tonic::transport::{Identity, Server, ServerTlsConfig};
+
+/// Everything `naadf serve` can configure.
+#[derive(Clone, Debug)]
+pub struct ServerConfig {
+    /// gRPC listen address.
+    pub grpc: SocketAddr,
+    /// HTTP listen address.
+    pub http: SocketAddr,
+    /// Data directory (snapshots and write-ahead log).
+    pub data: PathBuf,
+    /// Tokens and roles (empty: open, loopback only).
+    pub auth: Auth,
+    /// Per-request edit limits.
+    pub limits: Limits,
+    /// Largest gRPC message accepted, in bytes.
+    pub max_message_bytes: usize,
+    /// Edits per second per user.
+    pub rate: u32,
+    /// Write a snapshot after this many edits.
+    pub checkpoint_every: u64,
+    /// And at least this often while edits arrive.
+    pub checkpoint_interval: Duration,
+    /// Deltas a client may fall behind before it is re-sent a snapshot.
+    pub slow_client_events: usize,
+    /// TLS certificate and key (PEM), if any.
+    pub tls: Option<(PathBuf, PathBuf)>,
+}
+
+impl ServerConfig {
+    /// The documented defaults: gRPC on 127.0.0.1:50051, HTTP on 127.0.0.1:8080, data in
+    /// `./naadf-data`, open (no tokens).
+    pub fn new(data: PathBuf) -> Self {
+        Self {
+            grpc: "127.0.0.1:50051".parse().expect("address"),
+            http: "127.0.0.1:8080".parse().expect("address"),
+            data,
+            auth: Auth::open(),
+            limits: Limits::default(),
+            max_message_bytes: 16 << 20,
+            rate: 1000,
+            checkpoint_every: 10_000,
+            checkpoint_interval: Duration::from_secs(300),
+            slow_client_events: 4096,
+            tls: None,
+        }
+    }
+}
+
+/// The addresses a running server listens on.
+#[derive(Clone, Copy, Debug)]
+pub struct Bound {
+    /// gRPC.
+    pub grpc: SocketAddr,
+    /// HTTP.
+    pub http: SocketAddr,
+}
+
+/// Opens the data directory: the newest snapshot plus the log after it, or a fresh
+/// directory started from `initial()`.
+fn recover(data: &DataDir, initial: impl FnOnce() -> Result<World>) -> Result<(World, ServerState, Wal, Vec<crate::wal::Entry>)> {
+    let (world, state) = match data.snapshots()?.last() {
+        Some(&v) => {
+            tracing::info!(version = v, dir = %data.path().display(), "loading snapshot");
+            data.load(v)?
+        }
+        None => {
+            let world = initial()?;
+            let state = ServerState {
+                version: world.version(),
+                ..ServerState::default()
+            };
+            data.save(&world.to_parts(), &state)?;
+            tracing::info!(version = world.version(), dir = %data.path().display(), "started a new data directory");
+            (world, state)
+        }
+    };
+    let (wal, entries) = Wal::open(data.path(), world.version())?;
+    Ok((world, state, wal, entries))
+}
+
+/// Runs the server until `shutdown` resolves, then stops accepting, ends the streams and
+/// writes a final snapshot. `initial` supplies the world of a fresh data directory;
+/// `ready` is told the bound addresses.
+pub async fn serve(
+    config: ServerConfig,
+    initial: impl FnOnce() -> Result<World> + Send + 'static,
+    ready: impl FnOnce(Bound),
+    shutdown: impl std::future::Future<Output = ()>,
+) -> Result<()> {
+    if config.auth.is_open() {
+        if !config.grpc.ip().is_loopback() || !config.http.ip().is_loopback() {
+            bail!(
+                "refusing to serve on a non-loopback address ({} / {}) without tokens: \
+                 configure --auth FILE or NAADF_TOKENS",
+                config.grpc,
+                config.http
+            );
+        }
+        tracing::warn!("no tokens configured: serving open (every caller is an admin) on loopback only");
+    }
+    let data = Arc::new(DataDir::open(&config.data)?);
+    let (world, state, wal, entries) = {
+        let data = data.clone();
+        tokio::task::spawn_blocking(move || recover(&data, initial)).await??
+    };
+    let (shutdown_tx, shutdown_rx) = watch::channel(false);
+    let shared = Arc::new(Shared::new(config.auth.clone(), config.rate, shutdown_rx));
+
+    let (out_tx, out_rx) = mpsc::channel(4096);
+    let (events, _) = broadcast::channel(config.slow_client_events.max(16));
+    let mut actor = Actor::new(world, state, config.limits.clone(), out_tx, &shared, config.checkpoint_every);
+    let replayed = entries.len();
+    let actor = tokio::task::spawn_blocking(move || -> Result<Actor> {
+        for e in &entries {
+            actor.replay(e).map_err(anyhow::Error::msg)?;
+        }
+        actor.settle();
+        Ok(actor)
+    })
+    .await??;
+    tracing::info!(replayed, "write-ahead log replayed");
+
+    let committer = Committer {
+        wal,
+        data: data.clone(),
+        events,
+        metrics: shared.metrics.clone(),
+    };
+    let committer = std::thread::Builder::new()
+        .name("naadf-committer".into())
+        .spawn(move || committer.run(out_rx))?;
+    let (req_tx, req_rx) = mpsc::channel::<Request>(1024);
+    let actor = std::thread::Builder::new()
+        .name("naadf-actor".into())
+        .spawn(move || actor.run(req_rx))?;
+
+    let grpc_listener = tokio::net::TcpListener::bind(config.grpc)
+        .await
+        .with_context(|| format!("cannot listen on {}", config.grpc))?;
+    let http_listener = tokio::net::TcpListener::bind(config.http)
+        .await
+        .with_context(|| format!("cannot listen on {}", config.http))?;
+    let bound = Bound {
+        grpc: grpc_listener.local_addr()?,
+        http: http_listener.local_addr()?,
+    };
+    tracing::info!(grpc = %bound.grpc, http = %bound.http, "serving");
+
+    let reflection_v1 = tonic_reflection::server::Builder::configure()
+        .register_encoded_file_descriptor_set(FILE_DESCRIPTOR_SET)
+        .build_v1()?;
+    let reflection_v1alpha = tonic_reflection::server::Builder::configure()
+        .register_encoded_file_descriptor_set(FILE_DESCRIPTOR_SET)
+        .build_v1alpha()?;
+    let svc = WorldServiceServer::new(WorldServer::new(shared.clone(), req_tx.clone()))
+        .max_decoding_message_size(config.max_message_bytes)
+        .max_encoding_message_size(usize::MAX)
+        .accept_compressed(CompressionEncoding::Zstd);
+    let mut builder = Server::builder();
+    if let Some((cert, key)) = &config.tls {
+        let cert = std::fs::read(cert).with_context(|| format!("cannot read {}", cert.display()))?;
+        let key = std::fs::read(key).with_context(|| format!("cannot read {}", key.display()))?;
+        builder = builder
+            .tls_config(ServerTlsConfig::new().identity(Identity::from_pem(cert, key)))
+            .context("bad TLS certificate or key")?;
+    }
+    let mut stop = shutdown_tx.subscribe();
+    let grpc = builder
+        .add_service(svc)
+        .add_service(reflection_v1)
+        .add_service(reflection_v1alpha)
+        .serve_with_incoming_shutdown(TcpListenerStream::new(grpc_listener), async move {
+            let _ = stop.wait_for(|s| *s).await;
+        });
+    let mut stop = shutdown_tx.subscribe();
+    let http = axum::serve(http_listener, http::router(shared.clone(), req_tx.clone())).with_graceful_shutdown(
+        async move {
+            let _ = stop.wait_for(|s| *s).await;
+        },
+    );
+    let grpc = tokio::spawn(grpc);
+    let http = tokio::spawn(http.into_future());
+    let ticker = {
+        let actor = req_tx.clone();
+        let every = config.checkpoint_interval;
+        tokio::spawn(async move {
+            let mut last = None;
+            loop {
+                tokio::time::sleep(every).await;
+                let Some(s) = crate::status(&actor).await else { return };
+                if last != Some(s.version) {
+                    last = Some(s.version);
+                    let _ = actor.send(Request::Checkpoint { reply: None }).await;
+                }
+            }
+        })
+    };
+    ready(bound);
+
+    shutdown.await;
+    tracing::info!("shutting down");
+    let _ = shutdown_tx.send(true);
+    ticker.abort();
+    let _ = tokio::time::timeout(Duration::from_secs(10), grpc).await;
+    let _ = tokio::time::timeout(Duration::from_secs(5), http).await;
+    let (reply, rx) = oneshot::channel();
+    req_tx.send(Request::Checkpoint { reply: Some(reply) }).await?;
+    match rx.await {
+        Ok(Ok(v)) => tracing::info!(version = v, "final snapshot written"),
+        Ok(Err(e)) => tracing::error!("final snapshot failed: {e}"),
+        Err(_) => tracing::error!("final snapshot was not written"),
+    }
+    drop(req_tx);
+    drop(shared);
+    tokio::task::spawn_blocking(move || {
+        let _ = actor.join();
+        let _ = committer.join();
+    })
+    .await?;
+    Ok(())
+}

@@ -1,0 +1,163 @@
+//! The gRPC service: authentication, roles, request limits, and the hand-off to the actor.
+
+use crate::Shared;
+use crate::actor::{Action, Request};
+use crate::auth::Caller;
+use crate::join;
+use naadf_proto::PROTOCOL_VERSION;
+use naadf_proto::requests::{despawn_batch, move_batch, spawn_batch};
+use naadf_proto::v1::world_service_server::WorldService;
+use naadf_proto::v1::{
+    DespawnEntitiesRequest, EditReply, EditRequest, HistoryRequest, JoinRequest, MoveEntitiesRequest,
+    SpawnEntitiesRequest, StatusReply, StatusRequest, WorldMessage,
+};
+use naadf_world::ops::{Batch, Op};
+use std::pin::Pin;
+use std::sync::Arc;
+use tokio::sync::{mpsc, oneshot};
+use tokio_stream::Stream;
+use tokio_stream::wrappers::ReceiverStream;
+use tonic::{Request as Req, Response, Status};
+
+/// Messages buffered per client stream before the join task waits for the client.
+const STREAM_BUFFER: usize = 64;
+
+/// The `WorldService` implementation.
+#[derive(Clone)]
+pub struct WorldServer {
+    shared: Arc<Shared>,
+    actor: mpsc::Sender<Request>,
+}
+
+impl WorldServer {
+    /// A service handing requests to `actor`.
+    pub fn new(shared: Arc<Shared>, actor: mpsc::Sender<Request>) -> Self {
+        Self { shared, actor }
+    }
+
+    fn caller<T>(&self, r: &Req<T>) -> Result<Caller, Status> {
+        self.shared.auth.caller(r.metadata())
+    }
+
+    /// Checks role and rate, then has the actor apply `action`.
+    async fn submit(&self, caller: Caller, client_seq: u64, action: Action) -> Result<Response<EditReply>, Status> {
+        caller.require_editor()?;
+        if let Action::Batch(b) = &action
+            && let Some(op) = b
+                .ops
+                .iter()
+                .find(|o| matches!(o, Op::DefineMaterial { .. } | Op::DefineModel { .. }))
+        {
+            caller.require_admin(op.name())?;
+        }
+        if self.shared.limiter.check_key(&caller.user).is_err() {
+            self.shared.metrics.refused.inc();
+            return Err(Status::resource_exhausted(format!(
+                "user '{}' is over the request rate limit ({} edits/s); slow down",
+                caller.user, self.shared.rate
+            )));
+        }
+        let (reply, rx) = oneshot::channel();
+        self.actor
+            .send(Request::Edit {
+                user: caller.user,
+                client_seq,
+                action,
+                reply,
+            })
+            .await
+            .map_err(|_| Status::unavailable("the server is shutting down"))?;
+        let r = rx.await.map_err(|_| Status::unavailable("the server is shutting down"))??;
+        Ok(Response::new(r))
+    }
+}
+
+fn bad(e: impl std::fmt::Display) -> Status {
+    Status::invalid_argument(e.to_string())
+}
+
+type WorldStream = Pin<Box<dyn Stream<Item = Result<WorldMessage, Status>> + Send>>;
+
+#[tonic::async_trait]
+impl WorldService for WorldServer {
+    type JoinStream = WorldStream;
+
+    async fn join(&self, r: Req<JoinRequest>) -> Result<Response<WorldStream>, Status> {
+        let caller = self.caller(&r)?;
+        let req = r.into_inner();
+        if req.protocol_version != PROTOCOL_VERSION {
+            return Err(Status::failed_precondition(format!(
+                "client speaks protocol {}, this server speaks {PROTOCOL_VERSION}; upgrade the client",
+                req.protocol_version
+            )));
+        }
+        let held = join::client_pages(&req.cached)?;
+        let (tx, rx) = mpsc::channel(STREAM_BUFFER);
+        let shared = self.shared.clone();
+        let actor = self.actor.clone();
+        tokio::spawn(async move {
+            let id = shared.activity.joined(&caller.user);
+            shared.metrics.clients.inc();
+            join::run(shared.clone(), actor, held, tx).await;
+            shared.metrics.clients.dec();
+            shared.activity.left(id);
+        });
+        Ok(Response::new(Box::pin(ReceiverStream::new(rx))))
+    }
+
+    async fn edit(&self, r: Req<EditRequest>) -> Result<Response<EditReply>, Status> {
+        let caller = self.caller(&r)?;
+        let req = r.into_inner();
+        let batch = Batch::parse_line(&req.ops).map_err(bad)?;
+        self.submit(caller, req.client_seq, Action::Batch(batch)).await
+    }
+
+    async fn spawn_entities(&self, r: Req<SpawnEntitiesRequest>) -> Result<Response<EditReply>, Status> {
+        let caller = self.caller(&r)?;
+        let req = r.into_inner();
+        let batch = spawn_batch(&req).map_err(bad)?;
+        self.submit(caller, req.client_seq, Action::Batch(batch)).await
+    }
+
+    async fn move_entities(&self, r: Req<MoveEntitiesRequest>) -> Result<Response<EditReply>, Status> {
+        let caller = self.caller(&r)?;
+        let req = r.into_inner();
+        let batch = move_batch(&req).map_err(bad)?;
+        self.submit(caller, req.client_seq, Action::Batch(batch)).await
+    }
+
+    async fn despawn_entities(&self, r: Req<DespawnEntitiesRequest>) -> Result<Response<EditReply>, Status> {
+        let caller = self.caller(&r)?;
+        let req = r.into_inner();
+        self.submit(caller, req.client_seq, Action::Batch(despawn_batch(&req)))
+            .await
+    }
+
+    async fn undo(&self, r: Req<HistoryRequest>) -> Result<Response<EditReply>, Status> {
+        let caller = self.caller(&r)?;
+        self.submit(caller, r.into_inner().client_seq, Action::Undo).await
+    }
+
+    async fn redo(&self, r: Req<HistoryRequest>) -> Result<Response<EditReply>, Status> {
+        let caller = self.caller(&r)?;
+        self.submit(caller, r.into_inner().client_seq, Action::Redo).await
+    }
+
+    async fn status(&self, r: Req<StatusRequest>) -> Result<Response<StatusReply>, Status> {
+        let caller = self.caller(&r)?;
+        let s = crate::status(&self.actor)
+            .await
+            .ok_or_else(|| Status::unavailable("the server is shutting down"))?;
+        Ok(Response::new(StatusReply {
+            protocol_version: PROTOCOL_VERSION,
+            size: s.size.to_vec(),
+            version: s.version,
+            growth_seq: s.growth_seq,
+            quiescent: s.quiescent,
+            digest: s.digest.to_string(),
+            clients: self.shared.metrics.clients.get().max(0) as u32,
+            user: caller.user,
+            role: caller.role.name().to_owned(),
+        }))
+    }
+}

@@ -1,0 +1,215 @@
+//! The data directory: snapshots and the write-ahead log.
+//!
+//! ```text
+//! DATA/LOCK                              held (flock) by the one server using DATA
+//! DATA/snapshot-<version>.state          server state at <version>: histories, retries
+//! DATA/snapshot-<version>.naadf          the world at <version> (a world file)
+//! DATA/wal-<base>.log                    batches after <base> (see crate::wal)
+//! ```
+//!
+//! A snapshot is written state first, then world, each atomically (temporary file, fsync,
+//! rename, directory fsync), so a snapshot counts only when both files exist. Older
+//! snapshots and the WAL segments they need are deleted only after a newer one is durable.
+
+use crate::history::Histories;
+use crate::wal::{self, WalError};
+use naadf_world::World;
+use naadf_world::file::{self, WorldParts};
+use serde::{Deserialize, Serialize};
+use std::fs::File;
+use std::path::{Path, PathBuf};
+use xxhash_rust::xxh3::xxh3_64;
+
+/// Magic of a state file.
+const STATE_MAGIC: &[u8; 8] = b"NAADFSTA";
+
+/// Server state persisted beside each world snapshot.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct ServerState {
+    /// The version the state belongs to.
+    pub version: u64,
+    /// Undo/redo histories and answered client sequence numbers.
+    pub histories: Histories,
+}
+
+/// Errors of the data directory.
+#[derive(Debug, thiserror::Error)]
+pub enum StoreError {
+    /// Another process holds the directory.
+    #[error("data directory {0} is in use by another naadf server")]
+    Locked(PathBuf),
+    /// An I/O failure, with what was being done.
+    #[error("{0}: {1}")]
+    Io(String, std::io::Error),
+    /// A damaged state file.
+    #[error("{0}: {1}")]
+    BadState(PathBuf, String),
+    /// A world file failed to load.
+    #[error(transparent)]
+    World(#[from] naadf_world::WorldError),
+    /// The write-ahead log failed.
+    #[error(transparent)]
+    Wal(#[from] WalError),
+}
+
+/// A locked data directory.
+#[derive(Debug)]
+pub struct DataDir {
+    path: PathBuf,
+    _lock: File,
+}
+
+fn snapshot_paths(dir: &Path, version: u64) -> (PathBuf, PathBuf) {
+    (
+        dir.join(format!("snapshot-{version:020}.naadf")),
+        dir.join(format!("snapshot-{version:020}.state")),
+    )
+}
+
+impl DataDir {
+    /// Creates (if needed) and locks the directory.
+    pub fn open(path: &Path) -> Result<Self, StoreError> {
+        std::fs::create_dir_all(path).map_err(|e| StoreError::Io(format!("cannot create {}", path.display()), e))?;
+        let lock_path = path.join("LOCK");
+        let lock = File::options()
+            .create(true)
+            .truncate(false)
+            .write(true)
+            .open(&lock_path)
+            .map_err(|e| StoreError::Io(format!("cannot open {}", lock_path.display()), e))?;
+        lock.try_lock().map_err(|_| StoreError::Locked(path.to_owned()))?;
+        Ok(Self {
+            path: path.to_owned(),
+            _lock: lock,
+        })
+    }
+
+    /// The directory.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// The versions of the complete snapshots, ascending.
+    pub fn snapshots(&self) -> Result<Vec<u64>, StoreError> {
+        snapshots(&self.path)
+    }
+
+    /// Loads the snapshot at `version`.
+    pub fn load(&self, version: u64) -> Result<(World, ServerState), StoreError> {
+        load_snapshot(&self.path, version)
+    }
+
+    /// Writes a snapshot durably (state, then world).
+    pub fn save(&self, parts: &WorldParts, state: &ServerState) -> Result<(), StoreError> {
+        let (world_path, state_path) = snapshot_paths(&self.path, parts.version);
+        let payload = postcard::to_allocvec(state).expect("state serializes");
+        let mut bytes = STATE_MAGIC.to_vec();
+        bytes.extend_from_slice(&xxh3_64(&payload).to_le_bytes());
+        bytes.extend_from_slice(&payload);
+        let tmp = state_path.with_extension("state.tmp");
+        let io = |what: &str, p: &Path| {
+            let what = format!("{what} {}", p.display());
+            move |e| StoreError::Io(what, e)
+        };
+        {
+            use std::io::Write;
+            let mut f = File::create(&tmp).map_err(io("cannot create", &tmp))?;
+            f.write_all(&bytes).map_err(io("cannot write", &tmp))?;
+            f.sync_all().map_err(io("cannot fsync", &tmp))?;
+        }
+        std::fs::rename(&tmp, &state_path).map_err(io("cannot rename", &tmp))?;
+        wal::sync_dir(&self.path)?;
+        file::save_parts(parts, &world_path)?;
+        Ok(())
+    }
+
+    /// Deletes the snapshots older than `version` and the log segments only they needed.
+    pub fn prune(&self, version: u64) -> Result<(), StoreError> {
+        wal::prune(&self.path, version)?;
+        for v in self.snapshots()? {
+            if v < version {
+                let (w, s) = snapshot_paths(&self.path, v);
+                for p in [w, s] {
+                    std::fs::remove_file(&p).map_err(|e| StoreError::Io(format!("cannot remove {}", p.display()), e))?;
+                }
+            }
+        }
+        Ok(wal::sync_dir(&self.path)?)
+    }
+}
+
+/// The complete snapshots in `dir` (both files present), ascending.
+pub fn snapshots(dir: &Path) -> Result<Vec<u64>, StoreError> {
+    let mut out = Vec::new();
+    let list = std::fs::read_dir(dir).map_err(|e| StoreError::Io(format!("cannot list {}", dir.display()), e))?;
+    for e in list {
+        let e = e.map_err(|e| StoreError::Io(format!("cannot list {}", dir.display()), e))?;
+        let name = e.file_name();
+        let Some(v) = name
+            .to_str()
+            .and_then(|n| n.strip_prefix("snapshot-"))
+            .and_then(|r| r.strip_suffix(".naadf"))
+            .and_then(|d| d.parse::<u64>().ok())
+        else {
+            continue;
+        };
+        if snapshot_paths(dir, v).1.exists() {
+            out.push(v);
+        }
+    }
+    out.sort_unstable();
+    Ok(out)
+}
+
+/// Loads the snapshot at `version` from `dir` (no lock needed: read-only tools use it).
+pub fn load_snapshot(dir: &Path, version: u64) -> Result<(World, ServerState), StoreError> {
+    let (world_path, state_path) = snapshot_paths(dir, version);
+    let bytes = std::fs::read(&state_path).map_err(|e| StoreError::Io(format!("cannot read {}", state_path.display()), e))?;
+    let bad = |m: &str| StoreError::BadState(state_path.clone(), m.to_owned());
+    if bytes.len() < 16 || &bytes[..8] != STATE_MAGIC {
+        return Err(bad("not a naadf state file"));
+    }
+    let sum = u64::from_le_bytes(bytes[8..16].try_into().expect("8 bytes"));
+    if xxh3_64(&bytes[16..]) != sum {
+        return Err(bad("checksum mismatch (the file is corrupt)"));
+    }
+    let state: ServerState = postcard::from_bytes(&bytes[16..]).map_err(|e| bad(&e.to_string()))?;
+    let world = file::load(&world_path)?;
+    if world.version() != version || state.version != version {
+        return Err(bad(&format!(
+            "snapshot {version} holds world version {} and state version {}",
+            world.version(),
+            state.version
+        )));
+    }
+    Ok((world, state))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use naadf_world::WorldSize;
+    use naadf_world::preset::Preset;
+
+    #[test]
+    fn snapshots_round_trip_and_prune() {
+        let dir = tempfile::tempdir().unwrap();
+        let d = DataDir::open(dir.path()).unwrap();
+        assert!(matches!(DataDir::open(dir.path()), Err(StoreError::Locked(_))));
+        let source = Preset::Test.source(Some(WorldSize::new(64, 64, 64).unwrap()), 1).unwrap();
+        let world = World::build(&*source, &|_| {}).unwrap();
+        let mut state = ServerState::default();
+        state.histories.answer("u", 3, 0);
+        d.save(&world.to_parts(), &state).unwrap();
+        let (w, s) = d.load(0).unwrap();
+        assert_eq!((w.digest(), s), (world.digest(), state.clone()));
+        // A state file without its world does not count; a damaged one is an error.
+        std::fs::write(dir.path().join("snapshot-00000000000000000009.state"), b"x").unwrap();
+        assert_eq!(d.snapshots().unwrap(), vec![0]);
+        let (_, sp) = snapshot_paths(dir.path(), 0);
+        let mut b = std::fs::read(&sp).unwrap();
+        *b.last_mut().unwrap() ^= 1;
+        std::fs::write(&sp, &b).unwrap();
+        assert!(d.load(0).unwrap_err().to_string().contains("checksum"));
+    }
+}
