@@ -29,14 +29,28 @@ enum Command {
     Apply(commands::apply::Args),
     /// Trace rays read as JSON lines from standard input.
     Raycast(commands::raycast::Args),
+    /// Serve a world: gRPC streaming and edits, durable in a data directory.
+    Serve(commands::serve::Args),
+    /// Join a server and mirror its world, checking every digest.
+    Mirror(commands::mirror::Args),
+    /// Send ops (JSON lines) to a server; prints the acknowledged versions.
+    Edit(commands::edit::Args),
+    /// Print a server's version, digest and clients.
+    Status(commands::status::Args),
+    /// Write the batches a server logged after its newest snapshot as an ops script.
+    ExportLog(commands::export_log::Args),
     /// Benchmarks.
     #[command(subcommand)]
     Bench(commands::bench::Bench),
 }
 
 fn main() -> ExitCode {
-    commands::init_logging();
     let cli = Cli::parse();
+    // Long-running network commands report what they do; one-shot tools stay quiet.
+    commands::init_logging(match cli.command {
+        Command::Serve(_) | Command::Mirror(_) => "info",
+        _ => "warn",
+    });
     let result = match cli.command {
         Command::Import(a) => commands::import::run(a),
         Command::Generate(a) => commands::generate::run(a),
@@ -44,6 +58,11 @@ fn main() -> ExitCode {
         Command::Export(a) => commands::export::run(a),
         Command::Raycast(a) => commands::raycast::run(a),
         Command::Apply(a) => commands::apply::run(a),
+        Command::Serve(a) => commands::serve::run(a),
+        Command::Mirror(a) => commands::mirror::run(a),
+        Command::Edit(a) => commands::edit::run(a),
+        Command::Status(a) => commands::status::run(a),
+        Command::ExportLog(a) => commands::export_log::run(a),
         Command::Bench(b) => commands::bench::run(b),
     };
     commands::finish(result)

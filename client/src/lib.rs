@@ -1,6 +1,14 @@
 //! # naadf-client
 //!
-//! Render clients: the CPU stream mirror, the wgpu GPU mirror, the render pipeline, the
-//! headless render node and the windowed viewer.
+//! Clients of the naadf server:
 //!
-//! This crate is reserved in the workspace layout (BRIEF §2) and exports nothing yet.
+//! - [`connect`]: channels (plain or TLS) and the bearer-token interceptor every call uses;
+//! - [`mirror`]: the CPU mirror, which applies the world stream to local buffers, checks
+//!   every digest, and keeps a page cache on disk so that rejoining is cheap. It is the
+//!   basis of the GPU client and of relays.
+
+pub mod connect;
+pub mod mirror;
+
+pub use connect::{Client, connect};
+pub use mirror::{Mirror, MirrorError, Progress};

@@ -58,6 +58,8 @@ pub async fn run(
         let next = tokio::select! {
             r = rx.recv() => r,
             _ = shutdown.changed() => return,
+            // The client went away while nothing was being sent.
+            _ = tx.closed() => return,
         };
         match next {
             Ok(ev) => {

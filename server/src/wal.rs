@@ -181,6 +181,47 @@ fn read_segment(path: &Path, base: u64, last: bool) -> Result<(Vec<Entry>, Optio
     Ok((out, None))
 }
 
+/// Reads the log in `dir` after version `snapshot` without changing it: the entries in
+/// order, and where a torn final record starts (segment and byte offset), if there is one.
+fn scan(dir: &Path, snapshot: u64) -> Result<(Vec<Entry>, Option<(PathBuf, u64)>), WalError> {
+    let segs = segments(dir)?;
+    if let Some((base, _)) = segs.first()
+        && *base > snapshot
+    {
+        return Err(WalError::Corrupt(
+            dir.to_owned(),
+            format!("the oldest segment starts after version {base}, but the snapshot is at {snapshot}"),
+        ));
+    }
+    let mut entries: Vec<Entry> = Vec::new();
+    let mut next = snapshot + 1;
+    let mut torn_at = None;
+    for (i, (base, path)) in segs.iter().enumerate() {
+        let (es, torn) = read_segment(path, *base, i + 1 == segs.len())?;
+        for e in es {
+            if e.version <= snapshot {
+                continue;
+            }
+            if e.version != next {
+                return Err(WalError::Corrupt(
+                    path.clone(),
+                    format!("version {} follows {} (a gap or a repeat)", e.version, next - 1),
+                ));
+            }
+            next += 1;
+            entries.push(e);
+        }
+        torn_at = torn.map(|at| (path.clone(), at));
+    }
+    Ok((entries, torn_at))
+}
+
+/// The entries after version `snapshot`, read without changing the log (a torn final
+/// record is ignored): what `naadf export-log` reads while a server may be running.
+pub fn read_after(dir: &Path, snapshot: u64) -> Result<Vec<Entry>, WalError> {
+    Ok(scan(dir, snapshot)?.0)
+}
+
 /// An open log, appending to its newest segment.
 #[derive(Debug)]
 pub struct Wal {
@@ -194,47 +235,20 @@ impl Wal {
     /// the entries after the snapshot, in order. A torn final record is dropped and cut off
     /// the file; any other damage, or a gap in the versions, is an error.
     pub fn open(dir: &Path, snapshot: u64) -> Result<(Wal, Vec<Entry>), WalError> {
-        let segs = segments(dir)?;
-        let mut entries: Vec<Entry> = Vec::new();
-        let mut next = snapshot + 1;
-        for (i, (base, path)) in segs.iter().enumerate() {
-            let last = i + 1 == segs.len();
-            let (es, torn) = read_segment(path, *base, last)?;
-            for e in es {
-                if e.version <= snapshot {
-                    continue;
-                }
-                if e.version != next {
-                    return Err(WalError::Corrupt(
-                        path.clone(),
-                        format!("version {} follows {} (a gap or a repeat)", e.version, next - 1),
-                    ));
-                }
-                next += 1;
-                entries.push(e);
-            }
-            if let Some(at) = torn {
-                tracing::warn!(segment = %path.display(), at, "dropping a torn record at the end of the log");
+        let (entries, torn) = scan(dir, snapshot)?;
+        let next = snapshot + 1 + entries.len() as u64;
+        if let Some((path, at)) = torn {
+            tracing::warn!(segment = %path.display(), at, "dropping a torn record at the end of the log");
+            if at < HEADER_LEN {
+                std::fs::remove_file(&path).map_err(io(format!("cannot remove {}", path.display())))?;
+            } else {
                 let f = OpenOptions::new()
                     .write(true)
-                    .open(path)
+                    .open(&path)
                     .map_err(io(format!("cannot open {}", path.display())))?;
-                if at < HEADER_LEN {
-                    drop(f);
-                    std::fs::remove_file(path).map_err(io(format!("cannot remove {}", path.display())))?;
-                } else {
-                    f.set_len(at).map_err(io(format!("cannot truncate {}", path.display())))?;
-                    f.sync_all().map_err(io(format!("cannot fsync {}", path.display())))?;
-                }
+                f.set_len(at).map_err(io(format!("cannot truncate {}", path.display())))?;
+                f.sync_all().map_err(io(format!("cannot fsync {}", path.display())))?;
             }
-        }
-        if let Some((base, _)) = segs.first()
-            && *base > snapshot
-        {
-            return Err(WalError::Corrupt(
-                dir.to_owned(),
-                format!("the oldest segment starts after version {base}, but the snapshot is at {snapshot}"),
-            ));
         }
         // Append to the newest intact segment, or start one after the last version.
         let wal = match segments(dir)?.last() {

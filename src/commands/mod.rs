@@ -4,11 +4,17 @@
 pub mod apply;
 pub mod bench;
 pub mod bench_edit;
+pub mod edit;
 pub mod export;
+pub mod export_log;
 pub mod generate;
 pub mod import;
 pub mod info;
+pub mod mirror;
 pub mod raycast;
+pub mod remote;
+pub mod serve;
+pub mod status;
 
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -16,11 +22,11 @@ use naadf_world::{World, file};
 use std::path::Path;
 use std::process::ExitCode;
 
-/// Logs go to stderr through `tracing`; `RUST_LOG` selects the level (default `warn`).
-pub fn init_logging() {
+/// Logs go to stderr through `tracing`; `RUST_LOG` selects the level (default: `default`).
+pub fn init_logging(default: &str) {
     tracing_subscriber::fmt()
         .with_writer(std::io::stderr)
-        .with_env_filter(tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "warn".into()))
+        .with_env_filter(tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| default.into()))
         .init();
 }
 

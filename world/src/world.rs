@@ -49,6 +49,17 @@ pub struct World {
     pub(crate) growth: Growth,
 }
 
+impl std::fmt::Debug for World {
+    /// A summary (size, version, digest): the buffers are too large to print.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("World")
+            .field("size", &self.size)
+            .field("version", &self.version)
+            .field("digest", &self.digest())
+            .finish_non_exhaustive()
+    }
+}
+
 /// The raw contents of a world, as stored in a world file.
 #[derive(Clone, Debug, PartialEq)]
 pub struct WorldParts {

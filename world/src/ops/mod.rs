@@ -162,11 +162,17 @@ pub struct Batch {
     pub ops: Vec<Op>,
 }
 
-/// The `{"batch":[...]}` line form.
+/// The `{"batch":[...]}` line form. `user` and `version` are informational (`naadf
+/// export-log` writes them: who sent the batch and the version it made); applying ignores
+/// them.
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct BatchLine {
     batch: Vec<Op>,
+    #[serde(default, rename = "user")]
+    _user: Option<String>,
+    #[serde(default, rename = "version")]
+    _version: Option<u64>,
 }
 
 /// The `{"batch":[...]}` line form, for writing.

@@ -1,0 +1,76 @@
+//! Connecting to a server: `http://` or `https://` URLs, an optional CA certificate for
+//! TLS, and the `authorization: Bearer <token>` metadata on every call.
+
+use naadf_proto::v1::world_service_client::WorldServiceClient;
+use std::path::Path;
+use tonic::codec::CompressionEncoding;
+use tonic::metadata::AsciiMetadataValue;
+use tonic::service::Interceptor;
+use tonic::service::interceptor::InterceptedService;
+use tonic::transport::{Certificate, Channel, ClientTlsConfig, Endpoint};
+
+/// Adds the bearer token to every request.
+#[derive(Clone, Debug)]
+pub struct Token(Option<AsciiMetadataValue>);
+
+impl Interceptor for Token {
+    fn call(&mut self, mut r: tonic::Request<()>) -> Result<tonic::Request<()>, tonic::Status> {
+        if let Some(v) = &self.0 {
+            r.metadata_mut().insert("authorization", v.clone());
+        }
+        Ok(r)
+    }
+}
+
+/// A world-service client that sends the token with every call.
+pub type Client = WorldServiceClient<InterceptedService<Channel, Token>>;
+
+/// Errors while connecting.
+#[derive(Debug, thiserror::Error)]
+pub enum ConnectError {
+    /// The URL is not usable.
+    #[error("bad server URL '{0}': {1}")]
+    Url(String, String),
+    /// The token cannot be sent as a header.
+    #[error("the token must be visible ASCII")]
+    Token,
+    /// The CA certificate cannot be read.
+    #[error("cannot read CA certificate {0}: {1}")]
+    Ca(String, std::io::Error),
+    /// The connection failed.
+    #[error("cannot connect to {0}: {1}")]
+    Transport(String, tonic::transport::Error),
+}
+
+/// Connects to `url` (`http://host:port` or `https://host:port`), trusting `ca` (PEM) for
+/// TLS in addition to the system roots, and sending `token` with every call.
+pub async fn connect(url: &str, token: Option<&str>, ca: Option<&Path>) -> Result<Client, ConnectError> {
+    let mut ep = Endpoint::from_shared(url.to_owned()).map_err(|e| ConnectError::Url(url.into(), e.to_string()))?;
+    if url.starts_with("https://") {
+        let mut tls = ClientTlsConfig::new().with_native_roots();
+        if let Some(ca) = ca {
+            let pem = std::fs::read(ca).map_err(|e| ConnectError::Ca(ca.display().to_string(), e))?;
+            tls = tls.ca_certificate(Certificate::from_pem(pem));
+        }
+        ep = ep
+            .tls_config(tls)
+            .map_err(|e| ConnectError::Transport(url.into(), e))?;
+    }
+    let channel = ep
+        .tcp_nodelay(true)
+        .connect()
+        .await
+        .map_err(|e| ConnectError::Transport(url.into(), e))?;
+    let token = match token {
+        Some(t) => Some(
+            format!("Bearer {t}")
+                .parse::<AsciiMetadataValue>()
+                .map_err(|_| ConnectError::Token)?,
+        ),
+        None => None,
+    };
+    Ok(WorldServiceClient::with_interceptor(channel, Token(token))
+        .max_decoding_message_size(usize::MAX)
+        .send_compressed(CompressionEncoding::Zstd)
+        .accept_compressed(CompressionEncoding::Zstd))
+}

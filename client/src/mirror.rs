@@ -1,0 +1,181 @@
+//! The CPU mirror: a world kept byte-identical to the server's by applying its stream.
+//!
+//! A join delivers a header and the snapshot pages the mirror lacks (its cache is its
+//! current world, announced as page hashes); the mirror assembles the world and checks the
+//! header's digest. Each delta is a change record the mirror applies with
+//! [`World::apply_record`], the same code the server ran, and its digest must match. A
+//! mismatch is an error: the mirror never silently diverges.
+
+use naadf_proto::snapshot::{Assembly, buffers_of, cache_of};
+use naadf_proto::v1::{JoinRequest, WorldMessage, world_message};
+use naadf_proto::{PROTOCOL_VERSION, WireError};
+use naadf_world::World;
+use naadf_world::digest::Digest;
+use naadf_world::edit::Record;
+use naadf_world::ops::Limits;
+use prost::Message;
+
+/// What a message did to the mirror.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Progress {
+    /// A snapshot started or continued.
+    Snapshot,
+    /// A snapshot completed: the mirror holds the world.
+    Ready,
+    /// A delta was applied.
+    Delta,
+}
+
+/// Errors of the mirror.
+#[derive(Debug, thiserror::Error)]
+pub enum MirrorError {
+    /// The stream broke the protocol (a malformed or out-of-order message).
+    #[error("protocol error: {0}")]
+    Protocol(String),
+    /// A snapshot did not assemble into a valid world.
+    #[error(transparent)]
+    Snapshot(#[from] WireError),
+    /// After a delta the mirror's digest differs from the server's.
+    #[error("digest mismatch at version {version} step {growth_seq}: mirror {mirror}, server {server}")]
+    Diverged {
+        /// Version.
+        version: u64,
+        /// Growth sub-step.
+        growth_seq: u32,
+        /// The mirror's digest.
+        mirror: Digest,
+        /// The server's.
+        server: Digest,
+    },
+}
+
+/// Counters of what the mirror received.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Stats {
+    /// Encoded bytes of all messages.
+    pub bytes: u64,
+    /// Snapshot pages.
+    pub pages: u64,
+    /// Snapshots (headers), including re-sent ones.
+    pub snapshots: u64,
+    /// Deltas.
+    pub deltas: u64,
+}
+
+/// A mirrored world.
+#[derive(Debug, Default)]
+pub struct Mirror {
+    world: Option<World>,
+    assembly: Option<Assembly>,
+    quiescent: bool,
+    growth_seq: u32,
+    /// What was received so far.
+    pub stats: Stats,
+}
+
+impl Mirror {
+    /// A mirror starting from `cache` (a world from an earlier session, or none).
+    pub fn new(cache: Option<World>) -> Self {
+        Self {
+            world: cache,
+            ..Self::default()
+        }
+    }
+
+    /// The join request announcing the mirror's cache.
+    pub fn join_request(&self) -> JoinRequest {
+        JoinRequest {
+            protocol_version: PROTOCOL_VERSION,
+            cached: self.world.as_ref().map(cache_of).unwrap_or_default(),
+        }
+    }
+
+    /// The mirrored world, once a snapshot has completed (during a re-sent snapshot, the
+    /// previous state).
+    pub fn world(&self) -> Option<&World> {
+        self.world.as_ref()
+    }
+
+    /// Takes the world out of the mirror.
+    pub fn into_world(self) -> Option<World> {
+        self.world
+    }
+
+    /// Whether the mirror is live (a snapshot completed and none is in progress).
+    pub fn is_live(&self) -> bool {
+        self.world.is_some() && self.assembly.is_none()
+    }
+
+    /// Whether the server reported the current state quiescent.
+    pub fn is_quiescent(&self) -> bool {
+        self.is_live() && self.quiescent
+    }
+
+    /// The server's growth sub-step of the current state.
+    pub fn growth_seq(&self) -> u32 {
+        self.growth_seq
+    }
+
+    /// Applies one stream message.
+    pub fn handle(&mut self, m: &WorldMessage) -> Result<Progress, MirrorError> {
+        self.stats.bytes += m.encoded_len() as u64;
+        let proto = |s: &str| MirrorError::Protocol(s.to_owned());
+        match m.kind.as_ref().ok_or_else(|| proto("empty message"))? {
+            world_message::Kind::Header(h) => {
+                if h.protocol_version != PROTOCOL_VERSION {
+                    return Err(MirrorError::Protocol(format!(
+                        "server speaks protocol {}, this client {PROTOCOL_VERSION}",
+                        h.protocol_version
+                    )));
+                }
+                self.stats.snapshots += 1;
+                let cache = self.world.as_ref().map(buffers_of).unwrap_or_default();
+                self.assembly = Some(Assembly::start(h.clone(), cache)?);
+                self.finish_if_complete()
+            }
+            world_message::Kind::Page(p) => {
+                self.stats.pages += 1;
+                self.assembly
+                    .as_mut()
+                    .ok_or_else(|| proto("a page outside a snapshot"))?
+                    .page(p)?;
+                self.finish_if_complete()
+            }
+            world_message::Kind::Delta(d) => {
+                self.stats.deltas += 1;
+                if self.assembly.is_some() {
+                    return Err(proto("a delta inside a snapshot"));
+                }
+                let world = self.world.as_mut().ok_or_else(|| proto("a delta before any snapshot"))?;
+                let decoded = Record::decode(&d.change).map_err(|e| MirrorError::Protocol(e.to_string()))?;
+                let cs = world
+                    .apply_record(decoded.version, &decoded.record, &Limits::unbounded())
+                    .map_err(|e| MirrorError::Protocol(format!("cannot apply delta: {e}")))?;
+                let server = Digest(d.digest);
+                if cs.digest != server {
+                    return Err(MirrorError::Diverged {
+                        version: decoded.version,
+                        growth_seq: decoded.growth_seq,
+                        mirror: cs.digest,
+                        server,
+                    });
+                }
+                self.quiescent = decoded.quiescent;
+                self.growth_seq = decoded.growth_seq;
+                Ok(Progress::Delta)
+            }
+        }
+    }
+
+    fn finish_if_complete(&mut self) -> Result<Progress, MirrorError> {
+        if !self.assembly.as_ref().is_some_and(Assembly::is_complete) {
+            return Ok(Progress::Snapshot);
+        }
+        let a = self.assembly.take().expect("assembly in progress");
+        let (quiescent, growth_seq) = (a.header().quiescent, a.header().growth_seq);
+        self.world = Some(a.finish()?);
+        self.quiescent = quiescent;
+        self.growth_seq = growth_seq;
+        Ok(Progress::Ready)
+    }
+}

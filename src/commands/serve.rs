@@ -1,0 +1,140 @@
+//! `naadf serve [--world FILE | --generate PRESET] [--data DIR] [--grpc ADDR] [--http ADDR]`
+
+use super::generate::{PresetArgs, generate, parse_size};
+use super::remote::block_on;
+use super::{load_world, print_json};
+use anyhow::{Context, Result};
+use naadf_server::auth::Auth;
+use naadf_server::{Bound, ServerConfig};
+use naadf_world::WorldSize;
+use std::net::SocketAddr;
+use std::path::PathBuf;
+use std::time::Duration;
+
+/// Arguments of `serve`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// Start a new data directory from this world file.
+    #[arg(long, conflicts_with = "generate")]
+    world: Option<PathBuf>,
+    /// Start a new data directory from this preset (`terrain`, `test`, `tiled:<file.vox>`).
+    #[arg(long)]
+    generate: Option<String>,
+    /// Size `X,Y,Z` of a generated world (default: the preset's).
+    #[arg(long, value_parser = parse_size, requires = "generate")]
+    size: Option<WorldSize>,
+    /// Seed of a generated world.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Data directory: snapshots and the write-ahead log. An existing one is resumed (and
+    /// --world / --generate are ignored).
+    #[arg(long, default_value = "naadf-data")]
+    data: PathBuf,
+    /// gRPC listen address.
+    #[arg(long, default_value = "127.0.0.1:50051")]
+    grpc: SocketAddr,
+    /// HTTP listen address (/health, /metrics, status page).
+    #[arg(long, default_value = "127.0.0.1:8080")]
+    http: SocketAddr,
+    /// Token file (TOML, `[[token]]` entries with token, user, role); tokens in the
+    /// NAADF_TOKENS environment variable (`TOKEN=user:role,...`) are added.
+    #[arg(long)]
+    auth: Option<PathBuf>,
+    /// TLS certificate chain (PEM); needs --tls-key.
+    #[arg(long, requires = "tls_key")]
+    tls_cert: Option<PathBuf>,
+    /// TLS private key (PEM); needs --tls-cert.
+    #[arg(long, requires = "tls_cert")]
+    tls_key: Option<PathBuf>,
+    /// Edits per second per user.
+    #[arg(long, default_value_t = 1000)]
+    rate: u32,
+    /// Most ops per request.
+    #[arg(long, default_value_t = 4096)]
+    max_ops: usize,
+    /// Most voxels one fill op may cover.
+    #[arg(long, default_value_t = 1 << 27)]
+    max_fill: u64,
+    /// Largest request message, in bytes.
+    #[arg(long, default_value_t = 16 << 20)]
+    max_message_bytes: usize,
+    /// Write a snapshot after this many edits.
+    #[arg(long, default_value_t = 10_000)]
+    checkpoint_every: u64,
+    /// And at least this often (seconds) while edits arrive.
+    #[arg(long, default_value_t = 300)]
+    checkpoint_secs: u64,
+    /// Deltas a client may fall behind before it is re-sent a snapshot.
+    #[arg(long, default_value_t = 4096)]
+    slow_client_events: usize,
+    /// Print the bound addresses as one JSON line on stdout once serving.
+    #[arg(long)]
+    json: bool,
+}
+
+/// Runs the server until Ctrl-C or SIGTERM.
+pub fn run(a: Args) -> Result<()> {
+    let mut auth = match &a.auth {
+        Some(p) => Auth::from_file(p).map_err(anyhow::Error::msg)?,
+        None => Auth::open(),
+    };
+    if let Ok(v) = std::env::var("NAADF_TOKENS") {
+        auth.merge(Auth::from_env_value(&v).map_err(anyhow::Error::msg)?)
+            .map_err(anyhow::Error::msg)?;
+    }
+    let mut config = ServerConfig::new(a.data.clone());
+    config.grpc = a.grpc;
+    config.http = a.http;
+    config.auth = auth;
+    config.rate = a.rate;
+    config.limits.max_ops = a.max_ops;
+    config.limits.max_fill_volume = a.max_fill;
+    config.max_message_bytes = a.max_message_bytes;
+    config.checkpoint_every = a.checkpoint_every.max(1);
+    config.checkpoint_interval = Duration::from_secs(a.checkpoint_secs.max(1));
+    config.slow_client_events = a.slow_client_events;
+    config.tls = a.tls_cert.clone().zip(a.tls_key.clone());
+    let (world, preset) = (a.world.clone(), a.generate.clone());
+    let (size, seed) = (a.size, a.seed);
+    let initial = move || match world {
+        Some(p) => load_world(&p),
+        None => generate(&PresetArgs {
+            preset: preset.unwrap_or_else(|| "terrain".into()),
+            size,
+            seed,
+        }),
+    };
+    let json = a.json;
+    block_on(async move {
+        naadf_server::serve(
+            config,
+            initial,
+            move |b: Bound| {
+                if json {
+                    let _ = print_json(&serde_json::json!({
+                        "grpc": b.grpc.to_string(),
+                        "http": b.http.to_string(),
+                    }));
+                }
+            },
+            shutdown_signal(),
+        )
+        .await
+        .context("server failed")
+    })
+}
+
+/// Resolves on Ctrl-C or SIGTERM.
+async fn shutdown_signal() {
+    let ctrl_c = tokio::signal::ctrl_c();
+    #[cfg(unix)]
+    {
+        let mut term = tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate()).expect("SIGTERM handler");
+        tokio::select! {
+            _ = ctrl_c => {}
+            _ = term.recv() => {}
+        }
+    }
+    #[cfg(not(unix))]
+    let _ = ctrl_c.await;
+}
