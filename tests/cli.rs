@@ -1,47 +1,9 @@
 //! End-to-end tests of the `naadf` CLI: real processes, real files, worlds made in code.
 
-use std::io::Write;
+mod support;
+
 use std::path::Path;
-use std::process::{Command, Output, Stdio};
-
-fn naadf(args: &[&str], stdin: Option<&str>) -> Output {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_naadf"))
-        .args(args)
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("spawn naadf");
-    let mut input = child.stdin.take().unwrap();
-    if let Some(s) = stdin {
-        input.write_all(s.as_bytes()).unwrap();
-    }
-    drop(input);
-    child.wait_with_output().unwrap()
-}
-
-fn ok(args: &[&str], stdin: Option<&str>) -> String {
-    let out = naadf(args, stdin);
-    assert!(
-        out.status.success(),
-        "naadf {args:?} failed: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8(out.stdout).unwrap()
-}
-
-/// Runs a command that must fail cleanly: non-zero exit, a message, no panic.
-fn fails(args: &[&str], stdin: Option<&str>, needle: &str) {
-    let out = naadf(args, stdin);
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(!out.status.success(), "naadf {args:?} should fail");
-    assert!(!err.contains("panicked"), "naadf {args:?} panicked: {err}");
-    assert!(err.contains(needle), "naadf {args:?}: expected '{needle}' in: {err}");
-}
-
-fn p(dir: &Path, name: &str) -> String {
-    dir.join(name).to_str().unwrap().to_string()
-}
+use support::{fails, ok, p};
 
 fn read_raw(path: &str) -> Vec<u16> {
     std::fs::read(path)

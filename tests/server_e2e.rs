@@ -1,0 +1,385 @@
+//! End-to-end tests of the server: the real `naadf serve` binary, real mirror clients over
+//! gRPC, and the offline `naadf apply` as the oracle.
+
+mod support;
+
+use naadf_client::{Client, Mirror, connect};
+use naadf_proto::v1::{EditRequest, HistoryRequest, StatusRequest, world_message};
+use naadf_world::digest::BufferId;
+use naadf_world::{World, file};
+use std::path::Path;
+use std::time::Duration;
+use support::{Server, ok, p};
+use tokio::sync::watch;
+use tokio::task::JoinHandle;
+
+/// A 128×64×128 terrain world file in `dir`.
+fn start_world(dir: &Path) -> String {
+    let w = p(dir, "start.naadf");
+    ok(&["generate", "--preset", "terrain", "--size", "128,64,128", "--seed", "5", "-o", &w], None);
+    w
+}
+
+async fn client(url: &str, token: &str) -> Client {
+    connect(url, Some(token), None).await.expect("connect")
+}
+
+/// (version, digest, quiescent) of a live mirror.
+type Point = (u64, String, bool);
+
+/// A mirror following the server in a task.
+struct Follower {
+    state: watch::Receiver<Option<Point>>,
+    stop: watch::Sender<bool>,
+    task: JoinHandle<Mirror>,
+}
+
+impl Follower {
+    async fn start(url: &str, token: &str, cache: Option<World>) -> Follower {
+        let mut c = client(url, token).await;
+        let mut mirror = Mirror::new(cache);
+        let mut stream = c.join(mirror.join_request()).await.expect("join").into_inner();
+        let (tx, state) = watch::channel(None);
+        let (stop, mut stopped) = watch::channel(false);
+        let task = tokio::spawn(async move {
+            loop {
+                let m = tokio::select! {
+                    m = stream.message() => m.expect("stream error").expect("stream ended"),
+                    _ = stopped.changed() => return mirror,
+                };
+                mirror.handle(&m).expect("mirror follows the stream");
+                if let Some(w) = mirror.world().filter(|_| mirror.is_live()) {
+                    let _ = tx.send(Some((w.version(), w.digest().to_string(), mirror.is_quiescent())));
+                }
+            }
+        });
+        Follower { state, stop, task }
+    }
+
+    async fn finish(self) -> Mirror {
+        let _ = self.stop.send(true);
+        self.task.await.expect("mirror task")
+    }
+}
+
+/// Waits until the server is quiescent and every follower shows its version and digest.
+async fn converge(c: &mut Client, followers: &[&Follower]) -> Point {
+    for _ in 0..1200 {
+        let s = c.status(StatusRequest {}).await.expect("status").into_inner();
+        if s.quiescent {
+            let want = Some((s.version, s.digest.clone(), true));
+            if followers.iter().all(|f| *f.state.borrow() == want) {
+                return (s.version, s.digest, true);
+            }
+        }
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
+    panic!("mirrors did not converge");
+}
+
+/// Asserts two worlds hold identical buffers.
+fn same_buffers(a: &World, b: &World) {
+    assert_eq!(a.digest(), b.digest());
+    for id in BufferId::WORLD {
+        assert!(a.buffer_bytes(id) == b.buffer_bytes(id), "buffer {id:?} differs");
+    }
+}
+
+/// A deterministic random op inside a 128×64×128 world (SplitMix64 stream).
+fn random_op(state: &mut u64) -> String {
+    let mut next = |n: u64| {
+        *state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = *state;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        (z ^ (z >> 31)) % n
+    };
+    let (x, y, z) = (next(128), next(64), next(128));
+    let m = next(6);
+    match next(4) {
+        0 => format!(r#"{{"op":"set","voxels":[[{x},{y},{z},{m}],[{},{y},{z},{}]]}}"#, (x + 1) % 128, next(4) + 1),
+        1 => format!(
+            r#"{{"op":"sphere","center":[{x},{y},{z}],"radius":{},"material":{m}}}"#,
+            1 + next(8)
+        ),
+        2 => format!(
+            r#"{{"op":"box","min":[{x},{y},{z}],"max":[{},{},{}],"material":{m}}}"#,
+            x + next(12),
+            y + next(12),
+            z + next(12)
+        ),
+        _ => format!(
+            r#"{{"op":"paint","center":[{x},{y},{z}],"radius":{},"material":{}}}"#,
+            1 + next(6),
+            m.max(1)
+        ),
+    }
+}
+
+/// Eight mirrors and four concurrent editors: at quiescent checkpoints every mirror equals
+/// the server, and at the end they equal an offline `naadf apply` of `export-log`'s output.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn mirrors_converge_with_the_server_and_the_offline_apply() {
+    let dir = tempfile::tempdir().unwrap();
+    let world = start_world(dir.path());
+    let data = p(dir.path(), "data");
+    let server = Server::start(&["--world", &world, "--data", &data], &dir.path().join("log"), &[]);
+    let mut followers = Vec::new();
+    for i in 0..8 {
+        followers.push(Follower::start(&server.url, &format!("viewer{i}"), None).await);
+    }
+    let mut admin = client(&server.url, "admin").await;
+    for round in 0..3u64 {
+        let mut editors = Vec::new();
+        for e in 0..4u64 {
+            let url = server.url.clone();
+            editors.push(tokio::spawn(async move {
+                let mut c = client(&url, &format!("editor{e}")).await;
+                let mut rng = round * 1000 + e;
+                for k in 0..15 {
+                    let ops = random_op(&mut rng);
+                    let r = c
+                        .edit(EditRequest {
+                            ops: ops.clone(),
+                            client_seq: round * 100 + k + 1,
+                        })
+                        .await;
+                    r.unwrap_or_else(|s| panic!("{ops}: {s}"));
+                }
+            }));
+        }
+        for e in editors {
+            e.await.unwrap();
+        }
+        let (version, digest, _) = converge(&mut admin, &followers.iter().collect::<Vec<_>>()).await;
+        assert_eq!(version, (round + 1) * 60);
+        eprintln!("checkpoint {round}: version {version} digest {digest}");
+    }
+    let mut mirrors = Vec::new();
+    for f in followers {
+        mirrors.push(f.finish().await.into_world().unwrap());
+    }
+    for m in &mirrors[1..] {
+        same_buffers(&mirrors[0], m);
+    }
+    // The log read while the server runs starts from the starting world (no checkpoint
+    // yet): replayed offline it gives the mirrored buffers exactly.
+    let script = p(dir.path(), "log.jsonl");
+    ok(&["export-log", &data, "-o", &script], None);
+    assert_eq!(std::fs::read_to_string(&script).unwrap().lines().count(), 180);
+    let offline = p(dir.path(), "offline.naadf");
+    ok(&["apply", &world, "--ops", &script, "-o", &offline], None);
+    same_buffers(&file::load(Path::new(&offline)).unwrap(), &mirrors[0]);
+    server.stop();
+}
+
+/// Edits acknowledged before a `kill -9` survive the restart; retried requests keep their
+/// versions across restarts; the restarted server equals an offline replay of its log.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn acknowledged_edits_survive_kill_9_and_retries_are_not_reapplied() {
+    let dir = tempfile::tempdir().unwrap();
+    let world = start_world(dir.path());
+    let data = p(dir.path(), "data");
+    let log = dir.path().join("log");
+    let args = ["--world", world.as_str(), "--data", data.as_str()];
+    let server = Server::start(&args, &log, &[]);
+
+    // Four editors write distinct voxels as fast as acknowledgements come; the server is
+    // killed while they are in flight.
+    let (acked_tx, mut acked_rx) = tokio::sync::mpsc::unbounded_channel();
+    let mut editors = Vec::new();
+    for e in 0..4u32 {
+        let url = server.url.clone();
+        let acked = acked_tx.clone();
+        editors.push(tokio::spawn(async move {
+            let mut c = client(&url, &format!("editor{e}")).await;
+            for k in 0..2000u32 {
+                let (x, y, z, m) = (k % 128, 40 + e * 4 + (k / 128) % 4, k / 512, 1 + (k % 5));
+                let ops = format!(r#"{{"op":"set","voxels":[[{x},{y},{z},{m}]]}}"#);
+                match c.edit(EditRequest { ops, client_seq: u64::from(k) + 1 }).await {
+                    Ok(r) => acked.send((e, k, [x, y, z, m], r.into_inner().version)).unwrap(),
+                    Err(_) => return,
+                }
+            }
+        }));
+    }
+    drop(acked_tx);
+    let mut acked = Vec::new();
+    while acked.len() < 150 {
+        acked.push(acked_rx.recv().await.expect("edits are acknowledged"));
+    }
+    server.kill9();
+    for e in editors {
+        e.await.unwrap();
+    }
+    while let Ok(a) = acked_rx.try_recv() {
+        acked.push(a);
+    }
+
+    let server = Server::start(&args, &log, &[]);
+    let mut c = client(&server.url, "editor0").await;
+    let s = c.status(StatusRequest {}).await.unwrap().into_inner();
+    let last_acked = acked.iter().map(|a| a.3).max().unwrap();
+    assert!(s.version >= last_acked, "version {} < acknowledged {last_acked}", s.version);
+    // Every acknowledged voxel is there, unless a later acknowledged edit overwrote it.
+    let out = p(dir.path(), "after.naadf");
+    ok(&["mirror", "--server", &server.url, "--once", "-o", &out, "--no-cache", "--verify"], None);
+    let w = file::load(Path::new(&out)).unwrap();
+    for (_, _, [x, y, z, m], v) in &acked {
+        let later = acked.iter().any(|(_, _, q, v2)| q[..3] == [*x, *y, *z] && v2 > v);
+        if !later {
+            assert_eq!(w.material_at([*x, *y, *z]), *m as u16, "acknowledged voxel at version {v} lost");
+        }
+    }
+    // A retry of an acknowledged request gets its version back and changes nothing.
+    let (e, k, [x, y, z, m], v) = acked[0];
+    let mut c = client(&server.url, &format!("editor{e}")).await;
+    let retry = EditRequest {
+        ops: format!(r#"{{"op":"set","voxels":[[{x},{y},{z},{m}]]}}"#),
+        client_seq: u64::from(k) + 1,
+    };
+    let r = c.edit(retry.clone()).await.unwrap().into_inner();
+    assert_eq!((r.version, r.duplicate), (v, true));
+    let s2 = c.status(StatusRequest {}).await.unwrap().into_inner();
+    assert_eq!((s2.version, &s2.digest), (s.version, &s.digest));
+
+    // A graceful restart keeps the answer too, and so does the snapshot it writes.
+    server.stop();
+    let server = Server::start(&args, &log, &[]);
+    let mut c = client(&server.url, &format!("editor{e}")).await;
+    let r = c.edit(retry).await.unwrap().into_inner();
+    assert_eq!((r.version, r.duplicate), (v, true));
+    server.stop();
+
+    // The restarted server's state is the starting world plus its log, replayed offline.
+    let script = p(dir.path(), "log.jsonl");
+    let base = p(dir.path(), "base.naadf");
+    ok(&["export-log", &data, "-o", &script, "--base", &base], None);
+    let replayed = p(dir.path(), "replayed.naadf");
+    ok(&["apply", &base, "--ops", &script, "-o", &replayed], None);
+    same_buffers(&file::load(Path::new(&replayed)).unwrap(), &w);
+}
+
+/// A mirror that rejoins with its cache after a few edits downloads a small fraction of a
+/// full snapshot.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn rejoining_downloads_only_changed_pages() {
+    let dir = tempfile::tempdir().unwrap();
+    let world = p(dir.path(), "big.naadf");
+    ok(&["generate", "--preset", "terrain", "--size", "512,128,512", "-o", &world], None);
+    let server = Server::start(
+        &["--world", &world, "--data", &p(dir.path(), "data")],
+        &dir.path().join("log"),
+        &[],
+    );
+    let mut c = client(&server.url, "ed").await;
+    let f = Follower::start(&server.url, "viewer", None).await;
+    converge(&mut c, &[&f]).await;
+    let first = f.finish().await;
+    let full = first.stats.bytes;
+    for k in 0..10u64 {
+        let ops = format!(r#"{{"op":"sphere","center":[{},60,200],"radius":3,"material":2}}"#, 200 + 5 * k);
+        c.edit(EditRequest { ops, client_seq: k + 1 }).await.unwrap();
+    }
+    let f = Follower::start(&server.url, "viewer", first.into_world()).await;
+    let point = converge(&mut c, &[&f]).await;
+    let again = f.finish().await;
+    let rejoin = again.stats.bytes;
+    eprintln!("full join {full} bytes, rejoin after 10 edits {rejoin} bytes");
+    assert!(rejoin * 10 < full, "rejoin {rejoin} bytes vs full {full}");
+    assert_eq!(again.world().unwrap().digest().to_string(), point.1);
+    server.stop();
+}
+
+/// A client that stops reading does not hold up the others; when it reads again it
+/// catches up through a re-sent snapshot and ends equal to the server.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_slow_client_is_resnapshotted_and_does_not_stall_others() {
+    let dir = tempfile::tempdir().unwrap();
+    let world = start_world(dir.path());
+    let server = Server::start(
+        &["--world", &world, "--data", &p(dir.path(), "data"), "--slow-client-events", "16"],
+        &dir.path().join("log"),
+        &[],
+    );
+    let mut c = client(&server.url, "ed").await;
+    // The slow client joins, then does not read. Small HTTP/2 windows make its transport
+    // buffers fill after 64 KiB instead of megabytes.
+    let channel = tonic::transport::Endpoint::from_shared(server.url.clone())
+        .unwrap()
+        .initial_stream_window_size(Some(65_535))
+        .initial_connection_window_size(Some(65_535))
+        .connect()
+        .await
+        .unwrap();
+    let mut slow = naadf_proto::v1::world_service_client::WorldServiceClient::new(channel);
+    let mut slow_mirror = Mirror::new(None);
+    let mut slow_stream = slow.join(slow_mirror.join_request()).await.unwrap().into_inner();
+    let fast = Follower::start(&server.url, "fast", None).await;
+    // Enough delta bytes to fill the slow client's transport buffers many times over.
+    for k in 0..300u64 {
+        let voxels: Vec<String> = (0..100).map(|i| format!("[{},{},{},3]", i, 50 + k % 10, k % 128)).collect();
+        let ops = format!(r#"{{"op":"set","voxels":[{}]}}"#, voxels.join(","));
+        c.edit(EditRequest { ops, client_seq: k + 1 }).await.unwrap();
+    }
+    let point = converge(&mut c, &[&fast]).await;
+    assert_eq!(point.0, 300, "the fast mirror kept up while the slow one did not read");
+    // Now the slow client reads: somewhere in its stream comes a re-sent snapshot.
+    let mut resynced = false;
+    loop {
+        let m = tokio::time::timeout(Duration::from_secs(60), slow_stream.message())
+            .await
+            .expect("slow stream moves")
+            .unwrap()
+            .unwrap();
+        if let Some(world_message::Kind::Header(h)) = &m.kind {
+            resynced |= h.resync;
+        }
+        slow_mirror.handle(&m).unwrap();
+        if slow_mirror.is_quiescent() && slow_mirror.world().unwrap().version() == 300 {
+            break;
+        }
+    }
+    assert!(resynced, "the slow client was re-sent a snapshot");
+    assert_eq!(slow_mirror.world().unwrap().digest().to_string(), point.1);
+    fast.finish().await;
+    server.stop();
+}
+
+/// Undo and redo are per user: undoing one user's edit keeps another user's later edit.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn undo_and_redo_are_per_user_and_survive_reconnects() {
+    let dir = tempfile::tempdir().unwrap();
+    let world = start_world(dir.path());
+    let server = Server::start(
+        &["--world", &world, "--data", &p(dir.path(), "data")],
+        &dir.path().join("log"),
+        &[],
+    );
+    let f = Follower::start(&server.url, "viewer", None).await;
+    let mut alice = client(&server.url, "alice").await;
+    let mut bob = client(&server.url, "bob").await;
+    let sphere = r#"{"op":"sphere","center":[64,60,64],"radius":6,"material":4}"#;
+    alice.edit(EditRequest { ops: sphere.into(), client_seq: 1 }).await.unwrap();
+    let bob_set = r#"{"op":"set","voxels":[[64,60,64,5]]}"#;
+    bob.edit(EditRequest { ops: bob_set.into(), client_seq: 1 }).await.unwrap();
+    // Alice reconnects, then undoes: her sphere goes, Bob's voxel stays.
+    drop(alice);
+    let mut alice = client(&server.url, "alice").await;
+    let v = alice.undo(HistoryRequest { client_seq: 2 }).await.unwrap().into_inner().version;
+    assert_eq!(v, 3);
+    let err = bob.redo(HistoryRequest { client_seq: 2 }).await.unwrap_err();
+    assert_eq!(err.code(), tonic::Code::FailedPrecondition);
+    converge(&mut bob, &[&f]).await;
+    let mirror = f.finish().await;
+    let w = mirror.world().unwrap();
+    assert_eq!(w.material_at([64, 60, 64]), 5, "bob's voxel survives alice's undo");
+    let start = file::load(Path::new(&world)).unwrap();
+    assert_eq!(w.material_at([62, 60, 64]), start.material_at([62, 60, 64]), "alice's sphere is undone");
+    let f = Follower::start(&server.url, "viewer", mirror.into_world()).await;
+    alice.redo(HistoryRequest { client_seq: 3 }).await.unwrap();
+    converge(&mut bob, &[&f]).await;
+    let w = f.finish().await.into_world().unwrap();
+    assert_eq!(w.material_at([62, 60, 64]), 4, "redo brings the sphere back");
+    server.stop();
+}

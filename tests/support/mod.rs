@@ -1,0 +1,146 @@
+//! What the end-to-end tests share: running the real `naadf` binary, and a real server
+//! process on ephemeral ports.
+#![allow(dead_code)] // each test binary uses a different part
+
+use std::io::{BufRead, BufReader, Write};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Output, Stdio};
+use std::time::Duration;
+
+/// Runs `naadf` with `args`, feeding `stdin`.
+pub fn naadf(args: &[&str], stdin: Option<&str>) -> Output {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_naadf"))
+        .args(args)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawn naadf");
+    let mut input = child.stdin.take().unwrap();
+    if let Some(s) = stdin {
+        input.write_all(s.as_bytes()).unwrap();
+    }
+    drop(input);
+    child.wait_with_output().unwrap()
+}
+
+/// Runs a command that must succeed; returns its stdout.
+pub fn ok(args: &[&str], stdin: Option<&str>) -> String {
+    let out = naadf(args, stdin);
+    assert!(
+        out.status.success(),
+        "naadf {args:?} failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8(out.stdout).unwrap()
+}
+
+/// Runs a command that must fail cleanly: non-zero exit, a message, no panic.
+pub fn fails(args: &[&str], stdin: Option<&str>, needle: &str) {
+    let out = naadf(args, stdin);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "naadf {args:?} should fail");
+    assert!(!err.contains("panicked"), "naadf {args:?} panicked: {err}");
+    assert!(err.contains(needle), "naadf {args:?}: expected '{needle}' in: {err}");
+}
+
+/// `dir/name` as a string.
+pub fn p(dir: &Path, name: &str) -> String {
+    dir.join(name).to_str().unwrap().to_string()
+}
+
+/// A `naadf serve` process on ephemeral loopback ports.
+pub struct Server {
+    child: Child,
+    /// gRPC URL (`http://127.0.0.1:PORT`).
+    pub url: String,
+    /// HTTP address (`127.0.0.1:PORT`).
+    pub http: String,
+    /// Where its log goes.
+    pub log: PathBuf,
+}
+
+impl Server {
+    /// Starts `naadf serve ARGS` (plus ephemeral ports and `--json`) and waits until it
+    /// serves; `log` receives its stderr (appended, so restarts keep the history).
+    pub fn start(args: &[&str], log: &Path, envs: &[(&str, &str)]) -> Server {
+        let err = std::fs::OpenOptions::new().create(true).append(true).open(log).unwrap();
+        let mut child = Command::new(env!("CARGO_BIN_EXE_naadf"))
+            .arg("serve")
+            .args(["--grpc", "127.0.0.1:0", "--http", "127.0.0.1:0", "--json"])
+            .args(args)
+            .envs(envs.iter().copied())
+            .env("RUST_LOG", "info")
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::from(err))
+            .spawn()
+            .expect("spawn naadf serve");
+        let stdout = child.stdout.take().unwrap();
+        let (tx, rx) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            let mut line = String::new();
+            let _ = BufReader::new(stdout).read_line(&mut line);
+            let _ = tx.send(line);
+        });
+        let line = rx.recv_timeout(Duration::from_secs(300)).unwrap_or_default();
+        let Ok(v) = serde_json::from_str::<serde_json::Value>(&line) else {
+            let _ = child.kill();
+            panic!(
+                "server did not start: {}",
+                std::fs::read_to_string(log).unwrap_or_default()
+            );
+        };
+        Server {
+            child,
+            url: format!("http://{}", v["grpc"].as_str().unwrap()),
+            http: v["http"].as_str().unwrap().to_string(),
+            log: log.to_owned(),
+        }
+    }
+
+    /// The process id.
+    pub fn pid(&self) -> u32 {
+        self.child.id()
+    }
+
+    /// `kill -9`.
+    pub fn kill9(mut self) {
+        self.child.kill().unwrap();
+        self.child.wait().unwrap();
+    }
+
+    /// SIGTERM, then waits for a clean exit.
+    pub fn stop(mut self) {
+        let st = Command::new("kill")
+            .args(["-TERM", &self.child.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(st.success());
+        let status = self.child.wait().unwrap();
+        assert!(
+            status.success(),
+            "server exited with {status}: {}",
+            std::fs::read_to_string(&self.log).unwrap_or_default()
+        );
+    }
+}
+
+impl Drop for Server {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// An HTTP GET on loopback (status line and body), without a client library.
+pub fn http_get(addr: &str, path: &str) -> (u16, String) {
+    use std::io::Read;
+    let mut s = std::net::TcpStream::connect(addr).unwrap();
+    write!(s, "GET {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\r\n").unwrap();
+    let mut buf = String::new();
+    s.read_to_string(&mut buf).unwrap();
+    let code = buf.split_whitespace().nth(1).unwrap().parse().unwrap();
+    let body = buf.split_once("\r\n\r\n").map(|(_, b)| b.to_string()).unwrap_or_default();
+    (code, body)
+}
