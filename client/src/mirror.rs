@@ -7,7 +7,7 @@
 //! mismatch is an error: the mirror never silently diverges.
 
 use naadf_proto::snapshot::{Assembly, buffers_of, cache_of};
-use naadf_proto::v1::{JoinRequest, WorldMessage, world_message};
+use naadf_proto::v1::{JoinRequest, ResumePoint, WorldMessage, world_message};
 use naadf_proto::{PROTOCOL_VERSION, WireError};
 use naadf_world::World;
 use naadf_world::digest::Digest;
@@ -87,6 +87,10 @@ impl Mirror {
         JoinRequest {
             protocol_version: PROTOCOL_VERSION,
             cached: self.world.as_ref().map(cache_of).unwrap_or_default(),
+            resume: self.world.as_ref().map(|w| ResumePoint {
+                version: w.version(),
+                digest: w.digest().0,
+            }),
         }
     }
 
@@ -127,6 +131,22 @@ impl Mirror {
                         "server speaks protocol {}, this client {PROTOCOL_VERSION}",
                         h.protocol_version
                     )));
+                }
+                if h.resume {
+                    // The server resumes from the state this mirror announced.
+                    let w = self.world.as_ref().ok_or_else(|| proto("a resume without a cached world"))?;
+                    if h.pages != 0 || w.version() != h.version || w.digest().0 != h.digest {
+                        return Err(MirrorError::Protocol(format!(
+                            "resume at version {} digest {}, but this mirror holds version {} digest {}",
+                            h.version,
+                            Digest(h.digest),
+                            w.version(),
+                            w.digest()
+                        )));
+                    }
+                    self.assembly = None;
+                    self.quiescent = h.quiescent;
+                    return Ok(Progress::Ready);
                 }
                 self.stats.snapshots += 1;
                 let cache = self.world.as_ref().map(buffers_of).unwrap_or_default();

@@ -13,13 +13,29 @@ use naadf_world::digest::{BufferId, Digest, PAGE_BYTES};
 use naadf_world::file::{TRANSFERRED, parts_from_buffers, section_limits};
 use naadf_world::{World, WorldSize};
 
-/// The zstd level of snapshot pages. Pages are compressed once per content and cached by
-/// the server, so a higher level than the world file's costs little.
+/// The zstd level of snapshot pages. Page groups are compressed once per content and
+/// cached by the server, so a higher level than the world file's costs little.
 pub const PAGE_ZSTD_LEVEL: i32 = 9;
 
-/// Compresses one page for the wire.
-pub fn compress_page(bytes: &[u8]) -> Vec<u8> {
-    zstd::bulk::compress(bytes, PAGE_ZSTD_LEVEL).expect("zstd compresses in memory")
+/// Most pages in one `Page` message: one aligned run of 16 pages (1 MiB).
+pub const GROUP_PAGES: usize = 16;
+
+/// Compresses a group of pages (concatenated in index order) for the wire.
+pub fn compress_pages(pages: &[&[u8]]) -> Vec<u8> {
+    zstd::bulk::compress(&pages.concat(), PAGE_ZSTD_LEVEL).expect("zstd compresses in memory")
+}
+
+/// Splits the wanted page indices of one buffer into wire groups: runs that stay within
+/// one aligned window of [`GROUP_PAGES`] pages.
+pub fn group_pages(indices: &[u32]) -> Vec<Vec<u32>> {
+    let mut out: Vec<Vec<u32>> = Vec::new();
+    for &k in indices {
+        match out.last_mut() {
+            Some(g) if g[0] as usize / GROUP_PAGES == k as usize / GROUP_PAGES => g.push(k),
+            _ => out.push(vec![k]),
+        }
+    }
+    out
 }
 
 /// The position of a transferred buffer in [`TRANSFERRED`], from its wire id.
@@ -117,35 +133,48 @@ impl Assembly {
         })
     }
 
-    /// Writes one received page.
+    /// Writes one received group of pages.
     pub fn page(&mut self, p: &Page) -> Result<(), WireError> {
         if self.received >= self.header.pages {
-            return Err(bad(format!("more pages than the {} announced", self.header.pages)));
+            return Err(bad(format!("more page groups than the {} announced", self.header.pages)));
         }
         let slot = slot_of(p.buffer)?;
         let buf = &mut self.buffers[slot];
-        let start = p.index as usize * PAGE_BYTES;
-        if start >= buf.len() {
+        if p.indices.is_empty() || p.indices.len() > GROUP_PAGES || !p.indices.is_sorted_by(|a, b| a < b) {
             return Err(bad(format!(
-                "page {} of buffer {} lies past its {} bytes",
-                p.index,
-                p.buffer,
-                buf.len()
+                "a page group of buffer {} needs 1..={GROUP_PAGES} ascending indices",
+                p.buffer
             )));
         }
-        let end = (start + PAGE_BYTES).min(buf.len());
-        let bytes = zstd::bulk::decompress(&p.zstd, PAGE_BYTES)
-            .map_err(|e| bad(format!("page {} of buffer {}: {e}", p.index, p.buffer)))?;
-        if bytes.len() != end - start {
+        let mut ranges = Vec::with_capacity(p.indices.len());
+        for &k in &p.indices {
+            let start = k as usize * PAGE_BYTES;
+            if start >= buf.len() {
+                return Err(bad(format!(
+                    "page {k} of buffer {} lies past its {} bytes",
+                    p.buffer,
+                    buf.len()
+                )));
+            }
+            ranges.push(start..(start + PAGE_BYTES).min(buf.len()));
+        }
+        let want: usize = ranges.iter().map(|r| r.len()).sum();
+        let bytes = zstd::bulk::decompress(&p.zstd, want)
+            .map_err(|e| bad(format!("pages {:?} of buffer {}: {e}", p.indices, p.buffer)))?;
+        if bytes.len() != want {
             return Err(bad(format!(
-                "page {} of buffer {} holds {} bytes, expected {}",
-                p.index,
+                "pages {:?} of buffer {} hold {} bytes, expected {want}",
+                p.indices,
                 p.buffer,
-                bytes.len(),
-                end - start
+                bytes.len()
             )));
         }
-        buf[start..end].copy_from_slice(&bytes);
+        let mut at = 0;
+        for r in ranges {
+            let n = r.len();
+            buf[r].copy_from_slice(&bytes[at..at + n]);
+            at += n;
+        }
         self.received += 1;
         Ok(())
     }
@@ -203,7 +232,8 @@ mod tests {
         World::build(&*source, &|_| {}).unwrap()
     }
 
-    /// Every page of `world` that differs from `cache` (hash by hash), as the server sends them.
+    /// Every page of `world` that differs from `cache` (hash by hash), grouped as the
+    /// server sends them.
     fn pages_for(world: &World, cache: &[CachedBuffer]) -> Vec<Page> {
         let mut out = Vec::new();
         for &id in &TRANSFERRED {
@@ -212,15 +242,23 @@ mod tests {
                 .iter()
                 .find(|c| c.buffer == id as u32)
                 .map_or(&[][..], |c| &c.page_hashes[..]);
-            for (k, &h) in world.page_hashes(id).iter().enumerate() {
-                if have.get(k) != Some(&h) {
-                    let page = &bytes[k * PAGE_BYTES..((k + 1) * PAGE_BYTES).min(bytes.len())];
-                    out.push(Page {
-                        buffer: id as u32,
-                        index: k as u32,
-                        zstd: compress_page(page),
-                    });
-                }
+            let wanted: Vec<u32> = (0..world.page_hashes(id).len())
+                .filter(|&k| have.get(k) != Some(&world.page_hashes(id)[k]))
+                .map(|k| k as u32)
+                .collect();
+            for g in group_pages(&wanted) {
+                let pages: Vec<&[u8]> = g
+                    .iter()
+                    .map(|&k| {
+                        let k = k as usize;
+                        &bytes[k * PAGE_BYTES..((k + 1) * PAGE_BYTES).min(bytes.len())]
+                    })
+                    .collect();
+                out.push(Page {
+                    buffer: id as u32,
+                    indices: g,
+                    zstd: compress_pages(&pages),
+                });
             }
         }
         out
@@ -238,6 +276,7 @@ mod tests {
             entity_table: world.entity_table().encode(),
             pages,
             resync: false,
+            resume: false,
         }
     }
 
@@ -269,6 +308,12 @@ mod tests {
     }
 
     #[test]
+    fn groups_stay_in_aligned_windows() {
+        assert_eq!(group_pages(&[0, 1, 15, 16, 40, 47, 48]), vec![vec![0, 1, 15], vec![16], vec![40, 47], vec![48]]);
+        assert!(group_pages(&[]).is_empty());
+    }
+
+    #[test]
     fn bad_snapshots_are_errors() {
         let w = world();
         let pages = pages_for(&w, &[]);
@@ -283,9 +328,9 @@ mod tests {
         for (i, p) in pages.iter().enumerate() {
             let mut p = p.clone();
             if i == 0 {
-                let mut raw = zstd::bulk::decompress(&p.zstd, PAGE_BYTES).unwrap();
+                let mut raw = zstd::bulk::decompress(&p.zstd, 1 << 24).unwrap();
                 raw[5] ^= 1;
-                p.zstd = compress_page(&raw);
+                p.zstd = compress_pages(&[&raw]);
             }
             a.page(&p).unwrap();
         }
@@ -300,15 +345,21 @@ mod tests {
         let mut a = Assembly::start(header_of(&w, 1), Default::default()).unwrap();
         let junk = Page {
             buffer: 2,
-            index: 0,
+            indices: vec![0],
             zstd: vec![1, 2, 3],
         };
         assert!(a.page(&junk).is_err());
         let past = Page {
             buffer: 0,
-            index: 1 << 20,
-            zstd: compress_page(&[0; 4]),
+            indices: vec![1 << 20],
+            zstd: compress_pages(&[&[0; 4]]),
         };
         assert!(a.page(&past).is_err());
+        let unsorted = Page {
+            buffer: 2,
+            indices: vec![1, 0],
+            zstd: compress_pages(&[&[0; 4]]),
+        };
+        assert!(a.page(&unsorted).is_err());
     }
 }

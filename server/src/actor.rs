@@ -53,6 +53,8 @@ pub enum Request {
     },
     /// A snapshot and a subscription to the changes after it.
     Join {
+        /// The state the client holds, if any: `(version, digest)`.
+        resume: Option<(u64, u64)>,
         /// Where the snapshot and subscription go.
         reply: oneshot::Sender<crate::committer::Subscription>,
     },
@@ -90,12 +92,22 @@ pub struct Event {
     pub version: u64,
     /// Growth sub-step.
     pub growth_seq: u32,
+    /// The digest after the change.
+    pub digest: u64,
     /// The `Delta` message.
     pub message: WorldMessage,
     /// The snapshot pages the change altered.
     pub changes: Vec<crate::pages::PageChange>,
     /// The transferred buffers' lengths after it.
     pub lens: [usize; 6],
+}
+
+impl Event {
+    /// Approximate bytes the event holds (for bounding the history of recent deltas).
+    pub fn size(&self) -> usize {
+        use prost::Message;
+        self.message.encoded_len() + 16 * self.changes.len() + 64
+    }
 }
 
 /// The actor.
@@ -163,6 +175,11 @@ impl Actor {
         Ok(())
     }
 
+    /// The world (for wiring and tests; only the actor thread mutates it).
+    pub fn world(&self) -> &World {
+        &self.world
+    }
+
     /// Runs growth until quiescent without publishing (after replay, before serving).
     pub fn settle(&mut self) {
         self.world.grow_until_quiescent();
@@ -221,6 +238,7 @@ impl Actor {
         Arc::new(Event {
             version: cs.version,
             growth_seq: cs.growth_seq,
+            digest: cs.digest.0,
             message: WorldMessage {
                 kind: Some(world_message::Kind::Delta(Delta {
                     change: cs.encode(),
@@ -240,9 +258,9 @@ impl Actor {
                 action,
                 reply,
             } => self.edit(user, client_seq, action, reply),
-            Request::Join { reply } => {
+            Request::Join { resume, reply } => {
                 let view = self.view().clone();
-                self.send(Outgoing::Join { view, reply });
+                self.send(Outgoing::Join { view, resume, reply });
             }
             Request::Status { reply } => {
                 let _ = reply.send(StatusInfo {

@@ -24,8 +24,62 @@ use tokio::sync::{broadcast, mpsc, oneshot};
 /// Most queued items committed as one group.
 const MAX_GROUP: usize = 1024;
 
-/// A snapshot and the subscription to everything published after it.
-pub type Subscription = (Arc<SnapshotView>, broadcast::Receiver<Arc<Event>>);
+/// Most recent deltas kept for resuming clients.
+const HISTORY_EVENTS: usize = 8192;
+/// Most bytes of recent deltas kept for resuming clients.
+const HISTORY_BYTES: usize = 32 << 20;
+
+/// What a join gets: a snapshot, the subscription to everything published after it, and,
+/// when the client's cached state is recent enough, the deltas from that state to the
+/// snapshot (then no pages need to travel).
+#[derive(Debug)]
+pub struct Subscription {
+    /// The state at the join.
+    pub view: Arc<SnapshotView>,
+    /// Everything published after it.
+    pub events: broadcast::Receiver<Arc<Event>>,
+    /// The deltas from the client's state to `view`, if the server still has them all.
+    pub catch_up: Option<Vec<Arc<Event>>>,
+}
+
+/// The recent deltas, for resuming clients.
+#[derive(Debug)]
+struct History {
+    /// The state before the oldest kept delta: `(version, digest)`.
+    base: (u64, u64),
+    events: std::collections::VecDeque<Arc<Event>>,
+    bytes: usize,
+}
+
+impl History {
+    fn push(&mut self, e: &Arc<Event>) {
+        self.bytes += e.size();
+        self.events.push_back(e.clone());
+        while self.events.len() > HISTORY_EVENTS || self.bytes > HISTORY_BYTES {
+            let old = self.events.pop_front().expect("non-empty");
+            self.bytes -= old.size();
+            self.base = (old.version, old.digest);
+        }
+    }
+
+    /// The deltas after the state `(version, digest)`, if that state is `view` itself or
+    /// still in the history.
+    fn after(&self, (version, digest): (u64, u64), view: &SnapshotView) -> Option<Vec<Arc<Event>>> {
+        if view.version == version && view.digest.0 == digest {
+            return Some(Vec::new());
+        }
+        let from = match self
+            .events
+            .iter()
+            .rposition(|e| e.version == version && e.digest == digest)
+        {
+            Some(at) => at + 1,
+            None if self.base == (version, digest) => 0,
+            None => return None,
+        };
+        Some(self.events.range(from..).cloned().collect())
+    }
+}
 
 /// What the actor hands to the committer.
 #[derive(Debug)]
@@ -55,6 +109,8 @@ pub enum Outgoing {
     Join {
         /// The snapshot at this point.
         view: Arc<SnapshotView>,
+        /// The state the client holds, if any: `(version, digest)`.
+        resume: Option<(u64, u64)>,
         /// Where the subscription goes.
         reply: oneshot::Sender<Subscription>,
     },
@@ -79,6 +135,8 @@ pub struct Committer {
     pub events: broadcast::Sender<Arc<Event>>,
     /// Metrics.
     pub metrics: Arc<Metrics>,
+    /// The state the server starts from: `(version, digest)`.
+    pub initial: (u64, u64),
 }
 
 fn fatal(what: &str, e: impl std::fmt::Display) -> ! {
@@ -90,6 +148,11 @@ impl Committer {
     /// Runs until the actor is gone, then waits for a snapshot still being written.
     pub fn run(mut self, mut rx: mpsc::Receiver<Outgoing>) {
         let mut writer: Option<std::thread::JoinHandle<()>> = None;
+        let mut history = History {
+            base: self.initial,
+            events: Default::default(),
+            bytes: 0,
+        };
         while let Some(first) = rx.blocking_recv() {
             let mut group = vec![first];
             while group.len() < MAX_GROUP {
@@ -125,6 +188,7 @@ impl Committer {
                 match o {
                     Outgoing::Batch { event, reply, .. } => {
                         let version = event.version;
+                        history.push(&event);
                         let _ = self.events.send(event);
                         let _ = reply.send(Ok(EditReply {
                             version,
@@ -132,13 +196,19 @@ impl Committer {
                         }));
                     }
                     Outgoing::Growth { event } => {
+                        history.push(&event);
                         let _ = self.events.send(event);
                     }
                     Outgoing::Ack { reply, result } => {
                         let _ = reply.send(result);
                     }
-                    Outgoing::Join { view, reply } => {
-                        let _ = reply.send((view, self.events.subscribe()));
+                    Outgoing::Join { view, resume, reply } => {
+                        let catch_up = resume.and_then(|r| history.after(r, &view));
+                        let _ = reply.send(Subscription {
+                            events: self.events.subscribe(),
+                            catch_up,
+                            view,
+                        });
                     }
                     Outgoing::Checkpoint { parts, state, reply } => {
                         // One snapshot at a time; the log keeps going meanwhile.

@@ -9,9 +9,10 @@
 
 use crate::Shared;
 use crate::actor::{Event, Request};
-use crate::pages::SnapshotView;
+use crate::committer::Subscription;
+use crate::pages::{SnapshotView, StoredPage};
 use naadf_proto::PROTOCOL_VERSION;
-use naadf_proto::snapshot::buffer_lengths;
+use naadf_proto::snapshot::{buffer_lengths, group_pages};
 use naadf_proto::v1::{CachedBuffer, Header, Page, WorldMessage, world_message};
 use naadf_world::digest::PAGE_BYTES;
 use naadf_world::file::TRANSFERRED;
@@ -42,16 +43,23 @@ pub fn client_pages(cached: &[CachedBuffer]) -> Result<ClientPages, Status> {
     Ok(out)
 }
 
-/// Streams the world to one client until it leaves or the server shuts down.
+/// Streams the world to one client until it leaves or the server shuts down. `resume` is
+/// the state the client's cache holds, `(version, digest)`.
 pub async fn run(
     shared: Arc<Shared>,
     actor: mpsc::Sender<Request>,
     mut held: ClientPages,
+    resume: Option<(u64, u64)>,
     tx: mpsc::Sender<Result<WorldMessage, Status>>,
 ) {
     let mut shutdown = shared.shutdown.clone();
-    let Some((view, mut rx)) = subscribe(&actor).await else { return };
-    if send_snapshot(&shared, &view, &mut held, false, &tx).await.is_err() {
+    let Some(sub) = subscribe(&actor, resume).await else { return };
+    let mut rx = sub.events;
+    let started = match (sub.catch_up, resume) {
+        (Some(events), Some((version, digest))) => send_catch_up(&shared, &sub.view, version, digest, &events, &mut held, &tx).await,
+        _ => send_snapshot(&shared, &sub.view, &mut held, false, &tx).await,
+    };
+    if started.is_err() {
         return;
     }
     loop {
@@ -71,9 +79,9 @@ pub async fn run(
             Err(broadcast::error::RecvError::Lagged(missed)) => {
                 tracing::info!(missed, "client fell behind; re-sending a snapshot");
                 shared.metrics.resyncs.inc();
-                let Some((view, fresh)) = subscribe(&actor).await else { return };
-                rx = fresh;
-                if send_snapshot(&shared, &view, &mut held, true, &tx).await.is_err() {
+                let Some(sub) = subscribe(&actor, None).await else { return };
+                rx = sub.events;
+                if send_snapshot(&shared, &sub.view, &mut held, true, &tx).await.is_err() {
                     return;
                 }
             }
@@ -82,10 +90,49 @@ pub async fn run(
     }
 }
 
-async fn subscribe(actor: &mpsc::Sender<Request>) -> Option<crate::committer::Subscription> {
+async fn subscribe(actor: &mpsc::Sender<Request>, resume: Option<(u64, u64)>) -> Option<Subscription> {
     let (reply, rx) = oneshot::channel();
-    actor.send(Request::Join { reply }).await.ok()?;
+    actor.send(Request::Join { resume, reply }).await.ok()?;
     rx.await.ok()
+}
+
+/// Resumes a client from its cached state: a header naming that state, then the deltas
+/// from it to the view.
+async fn send_catch_up(
+    shared: &Arc<Shared>,
+    view: &SnapshotView,
+    version: u64,
+    digest: u64,
+    events: &[Arc<Event>],
+    held: &mut ClientPages,
+    tx: &mpsc::Sender<Result<WorldMessage, Status>>,
+) -> Result<(), ()> {
+    let header = Header {
+        protocol_version: PROTOCOL_VERSION,
+        size: view.size.to_vec(),
+        version,
+        growth_seq: 0,
+        quiescent: events.is_empty() && view.quiescent,
+        digest,
+        buffers: Vec::new(),
+        entity_table: Vec::new(),
+        pages: 0,
+        resync: false,
+        resume: true,
+    };
+    send(
+        shared,
+        tx,
+        WorldMessage {
+            kind: Some(world_message::Kind::Header(header)),
+        },
+    )
+    .await?;
+    for ev in events {
+        track(held, ev);
+        send(shared, tx, ev.message.clone()).await?;
+    }
+    Ok(())
 }
 
 /// Updates the client's page hashes with a delta it is being sent.
@@ -116,13 +163,13 @@ async fn send_snapshot(
     resync: bool,
     tx: &mpsc::Sender<Result<WorldMessage, Status>>,
 ) -> Result<(), ()> {
-    let mut wanted = Vec::new();
+    let mut groups = Vec::new();
     for (slot, pages) in view.pages.iter().enumerate() {
-        for (k, p) in pages.iter().enumerate() {
-            if held[slot].get(k) != Some(&p.hash) {
-                wanted.push((slot, k));
-            }
-        }
+        let wanted: Vec<u32> = (0..pages.len())
+            .filter(|&k| held[slot].get(k) != Some(&pages[k].hash))
+            .map(|k| k as u32)
+            .collect();
+        groups.extend(group_pages(&wanted).into_iter().map(|g| (slot, g)));
     }
     let header = Header {
         protocol_version: PROTOCOL_VERSION,
@@ -133,8 +180,9 @@ async fn send_snapshot(
         digest: view.digest.0,
         buffers: buffer_lengths(view.lens),
         entity_table: view.entity_table.clone(),
-        pages: wanted.len() as u32,
+        pages: groups.len() as u32,
         resync,
+        resume: false,
     };
     send(
         shared,
@@ -144,21 +192,25 @@ async fn send_snapshot(
         },
     )
     .await?;
-    // Compress (or fetch from the shared cache) in batches off the async threads.
-    for part in wanted.chunks(64) {
+    // Compress (or fetch from the shared cache) off the async threads, a few groups at a
+    // time so that sending starts early.
+    for part in groups.chunks(8) {
         let part = part.to_vec();
         let (s, v) = (shared.clone(), view.clone());
         let frames = tokio::task::spawn_blocking(move || {
-            let pages: Vec<_> = part.iter().map(|&(slot, k)| &v.pages[slot][k]).collect();
+            let pages: Vec<Vec<&StoredPage>> = part
+                .iter()
+                .map(|(slot, g)| g.iter().map(|&k| &v.pages[*slot][k as usize]).collect())
+                .collect();
             let frames = s.page_cache.frames(&pages, &v);
             part.into_iter().zip(frames).collect::<Vec<_>>()
         })
         .await
         .map_err(|_| ())?;
-        for ((slot, k), frame) in frames {
+        for ((slot, indices), frame) in frames {
             let page = Page {
                 buffer: TRANSFERRED[slot] as u32,
-                index: k as u32,
+                indices,
                 zstd: frame.as_ref().clone(),
             };
             send(

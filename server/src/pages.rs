@@ -6,7 +6,7 @@
 //! copied. A join takes a [`SnapshotView`]: the pages as `Arc`s, so views are cheap and stay
 //! valid while the world moves on.
 
-use naadf_proto::snapshot::compress_page;
+use naadf_proto::snapshot::{GROUP_PAGES, compress_pages};
 use naadf_world::World;
 use naadf_world::digest::{Digest, PAGE_BYTES};
 use naadf_world::file::TRANSFERRED;
@@ -109,33 +109,50 @@ pub struct SnapshotView {
     pub entity_table: Vec<u8>,
 }
 
-/// zstd frames of pages by hash, compressed once and shared by every join.
+/// zstd frames of page groups, compressed once and shared by every join. A group is keyed
+/// by its pages' hashes, so a frame stays valid exactly as long as its pages do.
 #[derive(Debug, Default)]
 pub struct PageCache {
     frames: Mutex<HashMap<u64, Arc<Vec<u8>>>>,
 }
 
+/// The cache key of a group of pages.
+fn group_key(pages: &[&StoredPage]) -> u64 {
+    let hashes: Vec<u8> = pages.iter().flat_map(|p| p.hash.to_le_bytes()).collect();
+    xxhash_rust::xxh3::xxh3_64(&hashes)
+}
+
 impl PageCache {
-    /// The zstd frames of `pages`, compressing (in parallel) those not cached yet. Entries
-    /// no longer in `view` are dropped when the cache grows past twice the view's pages.
-    pub fn frames(&self, pages: &[&StoredPage], view: &SnapshotView) -> Vec<Arc<Vec<u8>>> {
-        let missing: Vec<&StoredPage> = {
+    /// The zstd frames of `groups` (each compressed as one frame), compressing in parallel
+    /// those not cached yet. When the cache outgrows twice the groups of a full snapshot of
+    /// `view`, it starts over.
+    pub fn frames(&self, groups: &[Vec<&StoredPage>], view: &SnapshotView) -> Vec<Arc<Vec<u8>>> {
+        let keys: Vec<u64> = groups.iter().map(|g| group_key(g)).collect();
+        let missing: Vec<(u64, &Vec<&StoredPage>)> = {
             let map = self.frames.lock().expect("page cache lock");
-            pages.iter().copied().filter(|p| !map.contains_key(&p.hash)).collect()
+            keys.iter()
+                .zip(groups)
+                .filter(|(k, _)| !map.contains_key(k))
+                .map(|(&k, g)| (k, g))
+                .collect()
         };
         let made: Vec<(u64, Arc<Vec<u8>>)> = missing
             .par_iter()
-            .map(|p| (p.hash, Arc::new(compress_page(&p.bytes))))
+            .map(|(k, g)| {
+                let bytes: Vec<&[u8]> = g.iter().map(|p| &p.bytes[..]).collect();
+                (*k, Arc::new(compress_pages(&bytes)))
+            })
             .collect();
         let mut map = self.frames.lock().expect("page cache lock");
-        map.extend(made);
-        let out = pages.iter().map(|p| map[&p.hash].clone()).collect();
-        let live: usize = view.pages.iter().map(Vec::len).sum();
-        if map.len() > 2 * live + 64 {
-            let keep: std::collections::HashSet<u64> = view.pages.iter().flatten().map(|p| p.hash).collect();
-            map.retain(|h, _| keep.contains(h));
+        let full: usize = view.pages.iter().map(|p| p.len().div_ceil(GROUP_PAGES)).sum();
+        if map.len() + made.len() > 2 * full + 64 {
+            map.clear();
         }
-        out
+        map.extend(made.iter().cloned());
+        let made: HashMap<u64, Arc<Vec<u8>>> = made.into_iter().collect();
+        keys.iter()
+            .map(|k| map.get(k).or_else(|| made.get(k)).expect("frame made").clone())
+            .collect()
     }
 }
 

@@ -143,7 +143,9 @@ pub async fn serve(
     .await??;
     tracing::info!(replayed, "write-ahead log replayed");
 
+    let initial = (actor.world().version(), actor.world().digest().0);
     let committer = Committer {
+        initial,
         wal,
         data: data.clone(),
         events,

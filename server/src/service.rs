@@ -92,13 +92,14 @@ impl WorldService for WorldServer {
             )));
         }
         let held = join::client_pages(&req.cached)?;
+        let resume = req.resume.map(|r| (r.version, r.digest));
         let (tx, rx) = mpsc::channel(STREAM_BUFFER);
         let shared = self.shared.clone();
         let actor = self.actor.clone();
         tokio::spawn(async move {
             let id = shared.activity.joined(&caller.user);
             shared.metrics.clients.inc();
-            join::run(shared.clone(), actor, held, tx).await;
+            join::run(shared.clone(), actor, held, resume, tx).await;
             shared.metrics.clients.dec();
             shared.activity.left(id);
         });

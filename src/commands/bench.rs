@@ -26,6 +26,8 @@ pub enum Bench {
     Build(BuildArgs),
     /// Edit latency, change-set sizes, regrowth and replayed edit streams.
     Edit(super::bench_edit::EditArgs),
+    /// The server under load: join, rejoin, edit latency with many mirrors, wire bytes.
+    Stream(super::bench_stream::StreamArgs),
 }
 
 /// Arguments of `bench traverse`.
@@ -74,6 +76,7 @@ pub fn run(b: Bench) -> Result<()> {
         Bench::Traverse(a) => traverse(a),
         Bench::Build(a) => build(a),
         Bench::Edit(a) => super::bench_edit::run(a),
+        Bench::Stream(a) => super::bench_stream::run(a),
     }
 }
 

@@ -68,13 +68,13 @@ struct EditReport {
 }
 
 /// The first solid voxel below the top of the world at column (x, z), if any.
-fn surface(world: &World, x: u32, z: u32) -> Option<[u32; 3]> {
+pub(super) fn surface(world: &World, x: u32, z: u32) -> Option<[u32; 3]> {
     let top = f64::from(world.size().voxels()[1]) - 0.5;
     let ray = Ray::new([f64::from(x) + 0.5, top, f64::from(z) + 0.5], [0.0, -1.0, 0.0]).ok()?;
     trace_naadf(world, &ray).map(|h| h.voxel)
 }
 
-fn percentile(sorted: &[f64], q: f64) -> f64 {
+pub(super) fn percentile(sorted: &[f64], q: f64) -> f64 {
     sorted
         .get(((sorted.len() as f64 - 1.0) * q).round() as usize)
         .copied()

@@ -4,6 +4,7 @@
 pub mod apply;
 pub mod bench;
 pub mod bench_edit;
+pub mod bench_stream;
 pub mod edit;
 pub mod export;
 pub mod export_log;

@@ -1,0 +1,426 @@
+//! `naadf bench stream`: the server under load, in one process on loopback — join time and
+//! bytes, rejoin cost, edit-to-every-client latency with 8/16/64 mirrors, bytes on the wire
+//! per single-voxel edit (counted at the TCP level), and sustained durable edits per second.
+
+use super::bench_edit::{percentile, surface};
+use super::generate::{PresetArgs, generate};
+use super::print_json;
+use super::remote::block_on;
+use anyhow::{Context, Result, bail};
+use naadf_client::{Client, Mirror, connect};
+use naadf_proto::v1::EditRequest;
+use naadf_server::{Bound, ServerConfig};
+use naadf_world::World;
+use naadf_world::raysets::SplitMix64;
+use serde::Serialize;
+use std::collections::HashMap;
+use std::net::SocketAddr;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::{Duration, Instant};
+use tokio::io::AsyncWriteExt;
+use tokio::sync::{oneshot, watch};
+
+/// Arguments of `bench stream`.
+#[derive(clap::Args)]
+pub struct StreamArgs {
+    #[command(flatten)]
+    preset: PresetArgs,
+    /// Mirror-client counts for the latency runs.
+    #[arg(long, value_delimiter = ',', default_value = "8,16,64")]
+    clients: Vec<usize>,
+    /// Edits per second in the latency runs.
+    #[arg(long, default_value_t = 200)]
+    rate: u32,
+    /// Seconds per latency run.
+    #[arg(long, default_value_t = 5.0)]
+    seconds: f64,
+    /// Seconds of the sustained-load run.
+    #[arg(long, default_value_t = 5.0)]
+    sustain_seconds: f64,
+    /// Print one JSON object.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Serialize)]
+struct JoinReport {
+    seconds: f64,
+    bytes: u64,
+    world_file_bytes: u64,
+    ratio_to_file: f64,
+    rejoin_after_100_edits_bytes: u64,
+    rejoin_ratio: f64,
+}
+
+#[derive(Serialize)]
+struct LatencyReport {
+    clients: usize,
+    edits: usize,
+    rate: u32,
+    p50_ms: f64,
+    p99_ms: f64,
+    max_ms: f64,
+    incomplete: usize,
+}
+
+#[derive(Serialize)]
+struct Report {
+    join: JoinReport,
+    latency: Vec<LatencyReport>,
+    wire_bytes_per_voxel_edit: f64,
+    delta_message_bytes_per_voxel_edit: f64,
+    sustained_edits_per_second: f64,
+    threads: usize,
+}
+
+/// A server running in this process on ephemeral ports, with a scratch data directory.
+struct LocalServer {
+    bound: Bound,
+    stop: Option<oneshot::Sender<()>>,
+    task: tokio::task::JoinHandle<Result<()>>,
+    _data: tempfile::TempDir,
+}
+
+impl LocalServer {
+    async fn start(world: World) -> Result<Self> {
+        let data = tempfile::tempdir()?;
+        let mut config = ServerConfig::new(data.path().join("data"));
+        config.grpc = "127.0.0.1:0".parse()?;
+        config.http = "127.0.0.1:0".parse()?;
+        config.rate = 1_000_000;
+        config.checkpoint_every = u64::MAX;
+        config.slow_client_events = 1 << 16;
+        let (stop, stopped) = oneshot::channel::<()>();
+        let (ready_tx, ready_rx) = oneshot::channel();
+        let task = tokio::spawn(naadf_server::serve(
+            config,
+            move || Ok(world),
+            move |b| {
+                let _ = ready_tx.send(b);
+            },
+            async move {
+                let _ = stopped.await;
+            },
+        ));
+        let bound = ready_rx.await.context("server did not start")?;
+        Ok(Self {
+            bound,
+            stop: Some(stop),
+            task,
+            _data: data,
+        })
+    }
+
+    fn url(&self) -> String {
+        format!("http://{}", self.bound.grpc)
+    }
+
+    async fn shutdown(mut self) -> Result<()> {
+        if let Some(s) = self.stop.take() {
+            let _ = s.send(());
+        }
+        self.task.await?
+    }
+}
+
+/// Joins and follows; records when each version was applied. Returns once `stop` is set.
+struct Follower {
+    applied: watch::Receiver<Option<u64>>,
+    /// Message bytes received so far.
+    bytes: Arc<AtomicU64>,
+    stop: watch::Sender<bool>,
+    task: tokio::task::JoinHandle<Result<(Mirror, Vec<(u64, Instant)>)>>,
+}
+
+async fn follow(url: &str, cache: Option<World>) -> Result<Follower> {
+    let mut client = connect(url, None, None).await?;
+    let mut mirror = Mirror::new(cache);
+    let mut stream = client.join(mirror.join_request()).await?.into_inner();
+    let (applied_tx, applied) = watch::channel(None);
+    let (stop, mut stopped) = watch::channel(false);
+    let bytes = Arc::new(AtomicU64::new(0));
+    let received = bytes.clone();
+    let task = tokio::spawn(async move {
+        let mut times = Vec::new();
+        loop {
+            let m = tokio::select! {
+                m = stream.message() => m?,
+                _ = stopped.changed() => break,
+            };
+            let Some(m) = m else { break };
+            mirror.handle(&m)?;
+            received.store(mirror.stats.bytes, Ordering::Relaxed);
+            if let Some(w) = mirror.world().filter(|_| mirror.is_live()) {
+                let v = w.version();
+                if times.last().is_none_or(|&(last, _)| last < v) {
+                    times.push((v, Instant::now()));
+                }
+                let _ = applied_tx.send(Some(v));
+            }
+        }
+        Ok((mirror, times))
+    });
+    Ok(Follower {
+        applied,
+        bytes,
+        stop,
+        task,
+    })
+}
+
+impl Follower {
+    async fn wait_for(&mut self, version: u64) -> Result<()> {
+        tokio::time::timeout(Duration::from_secs(600), self.applied.wait_for(|v| v.is_some_and(|v| v >= version)))
+            .await
+            .context("mirror did not catch up")??;
+        Ok(())
+    }
+
+    async fn finish(self) -> Result<(Mirror, Vec<(u64, Instant)>)> {
+        let _ = self.stop.send(true);
+        self.task.await?
+    }
+}
+
+/// A TCP proxy counting the bytes the server sends to the client.
+async fn counting_proxy(target: SocketAddr, count: Arc<AtomicU64>) -> Result<SocketAddr> {
+    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await?;
+    let addr = listener.local_addr()?;
+    tokio::spawn(async move {
+        while let Ok((inbound, _)) = listener.accept().await {
+            let count = count.clone();
+            tokio::spawn(async move {
+                let Ok(outbound) = tokio::net::TcpStream::connect(target).await else { return };
+                let _ = inbound.set_nodelay(true);
+                let _ = outbound.set_nodelay(true);
+                let (mut ri, mut wi) = inbound.into_split();
+                let (mut ro, mut wo) = outbound.into_split();
+                let up = tokio::spawn(async move { tokio::io::copy(&mut ri, &mut wo).await });
+                let mut buf = vec![0u8; 1 << 16];
+                loop {
+                    use tokio::io::AsyncReadExt;
+                    let n = match ro.read(&mut buf).await {
+                        Ok(0) | Err(_) => break,
+                        Ok(n) => n,
+                    };
+                    count.fetch_add(n as u64, Ordering::Relaxed);
+                    if wi.write_all(&buf[..n]).await.is_err() {
+                        break;
+                    }
+                }
+                up.abort();
+            });
+        }
+    });
+    Ok(addr)
+}
+
+/// Surface points to edit at.
+fn points(world: &World, n: usize, seed: u64) -> Vec<[u32; 3]> {
+    let size = world.size().voxels();
+    let mut rng = SplitMix64(seed);
+    let mut out = Vec::new();
+    while out.len() < n {
+        if let Some(p) = surface(world, rng.below(size[0]), rng.below(size[2])) {
+            out.push(p);
+        }
+    }
+    out
+}
+
+fn voxel_op(p: [u32; 3], k: usize) -> String {
+    format!(r#"{{"op":"set","voxels":[[{},{},{},{}]]}}"#, p[0], p[1] + 1, p[2], 2 * (k % 2))
+}
+
+async fn edit(c: &mut Client, ops: String) -> Result<u64> {
+    Ok(c.edit(EditRequest { ops, client_seq: 0 }).await?.into_inner().version)
+}
+
+/// Runs the benchmark.
+pub fn run(a: StreamArgs) -> Result<()> {
+    let world = generate(&a.preset)?;
+    let file_bytes = {
+        let mut counter = CountingWriter(0);
+        naadf_world::file::write(&world, &mut counter)?;
+        counter.0
+    };
+    let pts = points(&world, 4096, a.preset.seed);
+    block_on(async move {
+        let server = LocalServer::start(world).await?;
+        let url = server.url();
+        let mut editor = connect(&url, None, None).await?;
+
+        // Join: a fresh client, no cache.
+        let t = Instant::now();
+        let mut f = follow(&url, None).await?;
+        f.wait_for(0).await?;
+        let join_seconds = t.elapsed().as_secs_f64();
+        let (mirror, _) = f.finish().await?;
+        let join_bytes = mirror.stats.bytes;
+        // Rejoin after 100 small edits.
+        let mut last = 0;
+        for (k, p) in pts.iter().take(100).enumerate() {
+            last = edit(&mut editor, voxel_op(*p, k)).await?;
+        }
+        let mut f = follow(&url, mirror.into_world()).await?;
+        f.wait_for(last).await?;
+        let (mirror, _) = f.finish().await?;
+        let rejoin_bytes = mirror.stats.bytes;
+        let join = JoinReport {
+            seconds: join_seconds,
+            bytes: join_bytes,
+            world_file_bytes: file_bytes,
+            ratio_to_file: join_bytes as f64 / file_bytes as f64,
+            rejoin_after_100_edits_bytes: rejoin_bytes,
+            rejoin_ratio: rejoin_bytes as f64 / join_bytes as f64,
+        };
+        eprintln!("join: {join_seconds:.2} s, {join_bytes} B ({:.3}× the world file); rejoin {rejoin_bytes} B", join.ratio_to_file);
+
+        // Bytes on the wire per single-voxel edit, through a counting proxy.
+        let count = Arc::new(AtomicU64::new(0));
+        let proxy = counting_proxy(server.bound.grpc, count.clone()).await?;
+        let mut f = follow(&format!("http://{proxy}"), mirror.into_world()).await?;
+        f.wait_for(last).await?;
+        let (before, msg_before) = (count.load(Ordering::Relaxed), f.bytes.load(Ordering::Relaxed));
+        let n = 1000;
+        for k in 0..n {
+            last = edit(&mut editor, voxel_op(pts[(100 + k) % pts.len()], k + 1)).await?;
+        }
+        f.wait_for(last).await?;
+        tokio::time::sleep(Duration::from_millis(200)).await;
+        let wire = (count.load(Ordering::Relaxed) - before) as f64 / n as f64;
+        let delta_msg = (f.bytes.load(Ordering::Relaxed) - msg_before) as f64 / n as f64;
+        let (mirror, _) = f.finish().await?;
+        eprintln!("wire: {wire:.1} B per single-voxel edit on TCP (framing included), {delta_msg:.1} B as messages");
+        let cache = mirror.into_world();
+
+        // Latency with N mirrors at a fixed edit rate (spheres of radius ≤ 8).
+        let mut latency = Vec::new();
+        for &clients in &a.clients {
+            let mut followers = Vec::new();
+            for _ in 0..clients {
+                followers.push(follow(&url, cache.clone()).await?);
+            }
+            for f in &mut followers {
+                f.wait_for(last).await?;
+            }
+            let edits = (f64::from(a.rate) * a.seconds) as usize;
+            let start = tokio::time::Instant::now();
+            let mut sent = Vec::new();
+            for k in 0..edits {
+                tokio::time::sleep_until(start + Duration::from_secs_f64(k as f64 / f64::from(a.rate))).await;
+                let mut c = editor.clone();
+                let p = pts[(k * 7) % pts.len()];
+                let r = 1 + k % 8;
+                let ops = format!(
+                    r#"{{"op":"sphere","center":[{},{},{}],"radius":{r},"material":{}}}"#,
+                    p[0],
+                    p[1],
+                    p[2],
+                    (k % 3) * 2
+                );
+                sent.push(tokio::spawn(async move {
+                    let t0 = Instant::now();
+                    edit(&mut c, ops).await.map(|v| (v, t0))
+                }));
+            }
+            let mut sent_at = HashMap::new();
+            for s in sent {
+                let (v, t0) = s.await??;
+                sent_at.insert(v, t0);
+                last = last.max(v);
+            }
+            let mut done: HashMap<u64, Instant> = HashMap::new();
+            let mut incomplete = 0;
+            for mut f in followers {
+                f.wait_for(last).await?;
+                let (_, times) = f.finish().await?;
+                let seen: HashMap<u64, Instant> = times.into_iter().collect();
+                for &v in sent_at.keys() {
+                    match seen.get(&v) {
+                        Some(&t) => {
+                            let e = done.entry(v).or_insert(t);
+                            *e = (*e).max(t);
+                        }
+                        None => incomplete += 1,
+                    }
+                }
+            }
+            let mut ms: Vec<f64> = sent_at
+                .iter()
+                .filter_map(|(v, t0)| done.get(v).map(|t| t.duration_since(*t0).as_secs_f64() * 1e3))
+                .collect();
+            ms.sort_by(f64::total_cmp);
+            let r = LatencyReport {
+                clients,
+                edits,
+                rate: a.rate,
+                p50_ms: percentile(&ms, 0.5),
+                p99_ms: percentile(&ms, 0.99),
+                max_ms: ms.last().copied().unwrap_or(f64::NAN),
+                incomplete,
+            };
+            eprintln!(
+                "latency, {clients} clients: p50 {:.2} ms, p99 {:.2} ms, max {:.2} ms",
+                r.p50_ms, r.p99_ms, r.max_ms
+            );
+            latency.push(r);
+        }
+
+        // Sustained durable edits per second: 32 requests in flight, single voxels.
+        let stop_at = Instant::now() + Duration::from_secs_f64(a.sustain_seconds);
+        let done = Arc::new(AtomicU64::new(0));
+        let mut workers = Vec::new();
+        for w in 0..32usize {
+            let mut c = editor.clone();
+            let done = done.clone();
+            let pts = pts.clone();
+            workers.push(tokio::spawn(async move {
+                let mut k = w;
+                while Instant::now() < stop_at {
+                    edit(&mut c, voxel_op(pts[k % pts.len()], k)).await?;
+                    done.fetch_add(1, Ordering::Relaxed);
+                    k += 32;
+                }
+                anyhow::Ok(())
+            }));
+        }
+        let t = Instant::now();
+        for w in workers {
+            w.await??;
+        }
+        let sustained = done.load(Ordering::Relaxed) as f64 / t.elapsed().as_secs_f64();
+        eprintln!("sustained: {sustained:.0} durable edits/s");
+        server.shutdown().await?;
+
+        let report = Report {
+            join,
+            latency,
+            wire_bytes_per_voxel_edit: wire,
+            delta_message_bytes_per_voxel_edit: delta_msg,
+            sustained_edits_per_second: sustained,
+            threads: rayon::current_num_threads(),
+        };
+        if a.json {
+            print_json(&report)?;
+        }
+        if report.join.seconds.is_nan() {
+            bail!("no join measured");
+        }
+        Ok(())
+    })
+}
+
+/// Counts bytes written.
+struct CountingWriter(u64);
+
+impl std::io::Write for CountingWriter {
+    fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
+        self.0 += b.len() as u64;
+        Ok(b.len())
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
