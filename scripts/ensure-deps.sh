@@ -4,10 +4,12 @@
 #
 # - Mesa lavapipe (software Vulkan) and EGL: the render client's tests run wgpu on the CPU
 #   when no GPU is present.
+# - python3-venv: the server test that drives stock grpcurl installs it from PyPI into a
+#   virtual environment.
 # - LP_NUM_THREADS=8: llvmpipe balances uneven compute work badly with one thread per core.
 # - XDG_RUNTIME_DIR: silences Vulkan loader warnings on headless machines.
 
-pkgs="mesa-vulkan-drivers libvulkan1 libegl1 libegl-mesa0 libgl1-mesa-dri"
+pkgs="mesa-vulkan-drivers libvulkan1 libegl1 libegl-mesa0 libgl1-mesa-dri python3-venv"
 if command -v dpkg-query >/dev/null 2>&1; then
     missing=""
     for p in $pkgs; do

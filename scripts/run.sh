@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
-# Runs naadf's main job on its built-in world. Until the server lands, that is generating
-# the default `terrain` world (1024 × 512 × 2048) and printing its `info`.
+# Runs the naadf service on its built-in world: `naadf serve` with no arguments generates
+# the default `terrain` world (1024 × 512 × 2048) into ./naadf-data on first start (later
+# starts resume it) and serves gRPC on 127.0.0.1:50051 and HTTP on 127.0.0.1:8080.
+# Extra arguments go to `naadf serve`; stop it with Ctrl-C (a final snapshot is written).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 . scripts/ensure-deps.sh
 cargo build --release --bin naadf
-mkdir -p target/worlds
-./target/release/naadf generate --preset terrain -o target/worlds/terrain.naadf "$@"
-./target/release/naadf info target/worlds/terrain.naadf
+exec ./target/release/naadf serve "$@"

@@ -4,7 +4,11 @@
 mod support;
 
 use naadf_client::{Client, Mirror, connect};
-use naadf_proto::v1::{EditRequest, HistoryRequest, StatusRequest, world_message};
+use naadf_proto::requests::{entity_pose, entity_spawn};
+use naadf_proto::v1::{
+    DespawnEntitiesRequest, EditRequest, HistoryRequest, MoveEntitiesRequest, SpawnEntitiesRequest, StatusRequest,
+    world_message,
+};
 use naadf_world::digest::BufferId;
 use naadf_world::{World, file};
 use std::path::Path;
@@ -399,5 +403,71 @@ async fn undo_and_redo_are_per_user_and_survive_reconnects() {
     converge(&mut bob, &[&f]).await;
     let w = f.finish().await.into_world().unwrap();
     assert_eq!(w.material_at([62, 60, 64]), 4, "redo brings the sphere back");
+    server.stop();
+}
+
+/// Entity RPCs are batches like any other: spawned, moved and despawned entities reach the
+/// mirrors, which stay equal to the server.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn entity_requests_reach_the_mirrors() {
+    let dir = tempfile::tempdir().unwrap();
+    let world = start_world(dir.path());
+    let server = Server::start(
+        &["--world", &world, "--data", &p(dir.path(), "data")],
+        &dir.path().join("log"),
+        &[],
+    );
+    let f = Follower::start(&server.url, "viewer", None).await;
+    let mut c = client(&server.url, "admin").await;
+    let model = r#"{"op":"define_model","name":"crate","size":[3,2,3],"voxels":[[0,0,0,2],[1,1,1,3],[2,0,2,4]]}"#;
+    c.edit(EditRequest { ops: model.into(), client_seq: 1 }).await.unwrap();
+    let rot = [0.0, 0.38268343236508984, 0.0, 0.9238795325112867];
+    let spawn = SpawnEntitiesRequest {
+        entities: (1..=3).map(|i| entity_spawn(i, "crate", [20.0 * f64::from(i), 50.0, 30.0], rot)).collect(),
+        client_seq: 2,
+    };
+    c.spawn_entities(spawn).await.unwrap();
+    let moves = MoveEntitiesRequest {
+        moves: vec![entity_pose(2, [70.5, 55.25, 90.0], [0.0, 0.0, 0.0, 1.0])],
+        client_seq: 3,
+    };
+    c.move_entities(moves).await.unwrap();
+    c.despawn_entities(DespawnEntitiesRequest { ids: vec![3], client_seq: 4 }).await.unwrap();
+    let bad = MoveEntitiesRequest {
+        moves: vec![entity_pose(9, [1.0, 1.0, 1.0], [0.0, 0.0, 0.0, 1.0])],
+        client_seq: 5,
+    };
+    assert_eq!(c.move_entities(bad).await.unwrap_err().code(), tonic::Code::InvalidArgument);
+    let point = converge(&mut c, &[&f]).await;
+    assert_eq!(point.0, 4);
+    let w = f.finish().await.into_world().unwrap();
+    assert!(w.entity(3).is_none());
+    assert_eq!(w.entity(2).unwrap().pos, [70.5, 55.25, 90.0]);
+    assert_eq!(w.entity(1).unwrap().model, "crate");
+    server.stop();
+}
+
+/// With a certificate and key the server speaks TLS, and clients trusting the CA connect.
+#[test]
+fn tls_with_a_certificate() {
+    let dir = tempfile::tempdir().unwrap();
+    let world = start_world(dir.path());
+    let key = rcgen::generate_simple_self_signed(vec!["localhost".to_string()]).unwrap();
+    let (cert, key_file) = (p(dir.path(), "cert.pem"), p(dir.path(), "key.pem"));
+    std::fs::write(&cert, key.cert.pem()).unwrap();
+    std::fs::write(&key_file, key.signing_key.serialize_pem()).unwrap();
+    let server = Server::start(
+        &["--world", &world, "--data", &p(dir.path(), "data"), "--tls-cert", &cert, "--tls-key", &key_file],
+        &dir.path().join("log"),
+        &[],
+    );
+    let port = server.url.rsplit(':').next().unwrap();
+    let url = format!("https://localhost:{port}");
+    let out = ok(&["status", "--server", &url, "--ca", &cert, "--json"], None);
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["version"], 0);
+    // Without trusting the certificate, or without TLS, the call fails cleanly.
+    support::fails(&["status", "--server", &url], None, "error");
+    support::fails(&["status", "--server", &server.url], None, "error");
     server.stop();
 }
