@@ -20,7 +20,20 @@ use tokio::task::JoinHandle;
 /// A 128×64×128 terrain world file in `dir`.
 fn start_world(dir: &Path) -> String {
     let w = p(dir, "start.naadf");
-    ok(&["generate", "--preset", "terrain", "--size", "128,64,128", "--seed", "5", "-o", &w], None);
+    ok(
+        &[
+            "generate",
+            "--preset",
+            "terrain",
+            "--size",
+            "128,64,128",
+            "--seed",
+            "5",
+            "-o",
+            &w,
+        ],
+        None,
+    );
     w
 }
 
@@ -101,7 +114,11 @@ fn random_op(state: &mut u64) -> String {
     let (x, y, z) = (next(128), next(64), next(128));
     let m = next(6);
     match next(4) {
-        0 => format!(r#"{{"op":"set","voxels":[[{x},{y},{z},{m}],[{},{y},{z},{}]]}}"#, (x + 1) % 128, next(4) + 1),
+        0 => format!(
+            r#"{{"op":"set","voxels":[[{x},{y},{z},{m}],[{},{y},{z},{}]]}}"#,
+            (x + 1) % 128,
+            next(4) + 1
+        ),
         1 => format!(
             r#"{{"op":"sphere","center":[{x},{y},{z}],"radius":{},"material":{m}}}"#,
             1 + next(8)
@@ -200,7 +217,13 @@ async fn acknowledged_edits_survive_kill_9_and_retries_are_not_reapplied() {
             for k in 0..2000u32 {
                 let (x, y, z, m) = (k % 128, 40 + e * 4 + (k / 128) % 4, k / 512, 1 + (k % 5));
                 let ops = format!(r#"{{"op":"set","voxels":[[{x},{y},{z},{m}]]}}"#);
-                match c.edit(EditRequest { ops, client_seq: u64::from(k) + 1 }).await {
+                match c
+                    .edit(EditRequest {
+                        ops,
+                        client_seq: u64::from(k) + 1,
+                    })
+                    .await
+                {
                     Ok(r) => acked.send((e, k, [x, y, z, m], r.into_inner().version)).unwrap(),
                     Err(_) => return,
                 }
@@ -224,15 +247,35 @@ async fn acknowledged_edits_survive_kill_9_and_retries_are_not_reapplied() {
     let mut c = client(&server.url, "editor0").await;
     let s = c.status(StatusRequest {}).await.unwrap().into_inner();
     let last_acked = acked.iter().map(|a| a.3).max().unwrap();
-    assert!(s.version >= last_acked, "version {} < acknowledged {last_acked}", s.version);
+    assert!(
+        s.version >= last_acked,
+        "version {} < acknowledged {last_acked}",
+        s.version
+    );
     // Every acknowledged voxel is there, unless a later acknowledged edit overwrote it.
     let out = p(dir.path(), "after.naadf");
-    ok(&["mirror", "--server", &server.url, "--once", "-o", &out, "--no-cache", "--verify"], None);
+    ok(
+        &[
+            "mirror",
+            "--server",
+            &server.url,
+            "--once",
+            "-o",
+            &out,
+            "--no-cache",
+            "--verify",
+        ],
+        None,
+    );
     let w = file::load(Path::new(&out)).unwrap();
     for (_, _, [x, y, z, m], v) in &acked {
         let later = acked.iter().any(|(_, _, q, v2)| q[..3] == [*x, *y, *z] && v2 > v);
         if !later {
-            assert_eq!(w.material_at([*x, *y, *z]), *m as u16, "acknowledged voxel at version {v} lost");
+            assert_eq!(
+                w.material_at([*x, *y, *z]),
+                *m as u16,
+                "acknowledged voxel at version {v} lost"
+            );
         }
     }
     // A retry of an acknowledged request gets its version back and changes nothing.
@@ -271,7 +314,10 @@ async fn acknowledged_edits_survive_kill_9_and_retries_are_not_reapplied() {
 async fn rejoining_costs_a_fraction_of_a_join() {
     let dir = tempfile::tempdir().unwrap();
     let world = p(dir.path(), "big.naadf");
-    ok(&["generate", "--preset", "terrain", "--size", "512,128,512", "-o", &world], None);
+    ok(
+        &["generate", "--preset", "terrain", "--size", "512,128,512", "-o", &world],
+        None,
+    );
     let args = ["--world", world.as_str(), "--data", &p(dir.path(), "data")];
     let log = dir.path().join("log");
     let server = Server::start(&args, &log, &[]);
@@ -284,7 +330,10 @@ async fn rejoining_costs_a_fraction_of_a_join() {
     let mut edits = async |c: &mut Client, n: u64| {
         for _ in 0..n {
             seq += 1;
-            let ops = format!(r#"{{"op":"sphere","center":[{},60,200],"radius":3,"material":2}}"#, 200 + 5 * (seq % 50));
+            let ops = format!(
+                r#"{{"op":"sphere","center":[{},60,200],"radius":3,"material":2}}"#,
+                200 + 5 * (seq % 50)
+            );
             c.edit(EditRequest { ops, client_seq: seq }).await.unwrap();
         }
     };
@@ -309,7 +358,10 @@ async fn rejoining_costs_a_fraction_of_a_join() {
     assert_eq!(paged.world().unwrap().digest().to_string(), point.1);
     eprintln!("full join {full} B; resume after 10 edits {resume_bytes} B; pages after restart {page_bytes} B");
     assert!(resume_bytes * 100 < full, "resume {resume_bytes} B vs full {full} B");
-    assert!(page_bytes * 4 < full, "cache-aware snapshot {page_bytes} B vs full {full} B");
+    assert!(
+        page_bytes * 4 < full,
+        "cache-aware snapshot {page_bytes} B vs full {full} B"
+    );
     server.stop();
 }
 
@@ -320,7 +372,14 @@ async fn a_slow_client_is_resnapshotted_and_does_not_stall_others() {
     let dir = tempfile::tempdir().unwrap();
     let world = start_world(dir.path());
     let server = Server::start(
-        &["--world", &world, "--data", &p(dir.path(), "data"), "--slow-client-events", "16"],
+        &[
+            "--world",
+            &world,
+            "--data",
+            &p(dir.path(), "data"),
+            "--slow-client-events",
+            "16",
+        ],
         &dir.path().join("log"),
         &[],
     );
@@ -340,7 +399,9 @@ async fn a_slow_client_is_resnapshotted_and_does_not_stall_others() {
     let fast = Follower::start(&server.url, "fast", None).await;
     // Enough delta bytes to fill the slow client's transport buffers many times over.
     for k in 0..300u64 {
-        let voxels: Vec<String> = (0..100).map(|i| format!("[{},{},{},3]", i, 50 + k % 10, k % 128)).collect();
+        let voxels: Vec<String> = (0..100)
+            .map(|i| format!("[{},{},{},3]", i, 50 + k % 10, k % 128))
+            .collect();
         let ops = format!(r#"{{"op":"set","voxels":[{}]}}"#, voxels.join(","));
         c.edit(EditRequest { ops, client_seq: k + 1 }).await.unwrap();
     }
@@ -382,13 +443,29 @@ async fn undo_and_redo_are_per_user_and_survive_reconnects() {
     let mut alice = client(&server.url, "alice").await;
     let mut bob = client(&server.url, "bob").await;
     let sphere = r#"{"op":"sphere","center":[64,60,64],"radius":6,"material":4}"#;
-    alice.edit(EditRequest { ops: sphere.into(), client_seq: 1 }).await.unwrap();
+    alice
+        .edit(EditRequest {
+            ops: sphere.into(),
+            client_seq: 1,
+        })
+        .await
+        .unwrap();
     let bob_set = r#"{"op":"set","voxels":[[64,60,64,5]]}"#;
-    bob.edit(EditRequest { ops: bob_set.into(), client_seq: 1 }).await.unwrap();
+    bob.edit(EditRequest {
+        ops: bob_set.into(),
+        client_seq: 1,
+    })
+    .await
+    .unwrap();
     // Alice reconnects, then undoes: her sphere goes, Bob's voxel stays.
     drop(alice);
     let mut alice = client(&server.url, "alice").await;
-    let v = alice.undo(HistoryRequest { client_seq: 2 }).await.unwrap().into_inner().version;
+    let v = alice
+        .undo(HistoryRequest { client_seq: 2 })
+        .await
+        .unwrap()
+        .into_inner()
+        .version;
     assert_eq!(v, 3);
     let err = bob.redo(HistoryRequest { client_seq: 2 }).await.unwrap_err();
     assert_eq!(err.code(), tonic::Code::FailedPrecondition);
@@ -397,7 +474,11 @@ async fn undo_and_redo_are_per_user_and_survive_reconnects() {
     let w = mirror.world().unwrap();
     assert_eq!(w.material_at([64, 60, 64]), 5, "bob's voxel survives alice's undo");
     let start = file::load(Path::new(&world)).unwrap();
-    assert_eq!(w.material_at([62, 60, 64]), start.material_at([62, 60, 64]), "alice's sphere is undone");
+    assert_eq!(
+        w.material_at([62, 60, 64]),
+        start.material_at([62, 60, 64]),
+        "alice's sphere is undone"
+    );
     let f = Follower::start(&server.url, "viewer", mirror.into_world()).await;
     alice.redo(HistoryRequest { client_seq: 3 }).await.unwrap();
     converge(&mut bob, &[&f]).await;
@@ -420,10 +501,17 @@ async fn entity_requests_reach_the_mirrors() {
     let f = Follower::start(&server.url, "viewer", None).await;
     let mut c = client(&server.url, "admin").await;
     let model = r#"{"op":"define_model","name":"crate","size":[3,2,3],"voxels":[[0,0,0,2],[1,1,1,3],[2,0,2,4]]}"#;
-    c.edit(EditRequest { ops: model.into(), client_seq: 1 }).await.unwrap();
+    c.edit(EditRequest {
+        ops: model.into(),
+        client_seq: 1,
+    })
+    .await
+    .unwrap();
     let rot = [0.0, 0.38268343236508984, 0.0, 0.9238795325112867];
     let spawn = SpawnEntitiesRequest {
-        entities: (1..=3).map(|i| entity_spawn(i, "crate", [20.0 * f64::from(i), 50.0, 30.0], rot)).collect(),
+        entities: (1..=3)
+            .map(|i| entity_spawn(i, "crate", [20.0 * f64::from(i), 50.0, 30.0], rot))
+            .collect(),
         client_seq: 2,
     };
     c.spawn_entities(spawn).await.unwrap();
@@ -432,12 +520,20 @@ async fn entity_requests_reach_the_mirrors() {
         client_seq: 3,
     };
     c.move_entities(moves).await.unwrap();
-    c.despawn_entities(DespawnEntitiesRequest { ids: vec![3], client_seq: 4 }).await.unwrap();
+    c.despawn_entities(DespawnEntitiesRequest {
+        ids: vec![3],
+        client_seq: 4,
+    })
+    .await
+    .unwrap();
     let bad = MoveEntitiesRequest {
         moves: vec![entity_pose(9, [1.0, 1.0, 1.0], [0.0, 0.0, 0.0, 1.0])],
         client_seq: 5,
     };
-    assert_eq!(c.move_entities(bad).await.unwrap_err().code(), tonic::Code::InvalidArgument);
+    assert_eq!(
+        c.move_entities(bad).await.unwrap_err().code(),
+        tonic::Code::InvalidArgument
+    );
     let point = converge(&mut c, &[&f]).await;
     assert_eq!(point.0, 4);
     let w = f.finish().await.into_world().unwrap();
@@ -457,7 +553,16 @@ fn tls_with_a_certificate() {
     std::fs::write(&cert, key.cert.pem()).unwrap();
     std::fs::write(&key_file, key.signing_key.serialize_pem()).unwrap();
     let server = Server::start(
-        &["--world", &world, "--data", &p(dir.path(), "data"), "--tls-cert", &cert, "--tls-key", &key_file],
+        &[
+            "--world",
+            &world,
+            "--data",
+            &p(dir.path(), "data"),
+            "--tls-cert",
+            &cert,
+            "--tls-key",
+            &key_file,
+        ],
         &dir.path().join("log"),
         &[],
     );

@@ -52,9 +52,7 @@ pub async fn connect(url: &str, token: Option<&str>, ca: Option<&Path>) -> Resul
             let pem = std::fs::read(ca).map_err(|e| ConnectError::Ca(ca.display().to_string(), e))?;
             tls = tls.ca_certificate(Certificate::from_pem(pem));
         }
-        ep = ep
-            .tls_config(tls)
-            .map_err(|e| ConnectError::Transport(url.into(), e))?;
+        ep = ep.tls_config(tls).map_err(|e| ConnectError::Transport(url.into(), e))?;
     }
     let channel = ep
         .tcp_nodelay(true)

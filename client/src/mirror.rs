@@ -134,7 +134,10 @@ impl Mirror {
                 }
                 if h.resume {
                     // The server resumes from the state this mirror announced.
-                    let w = self.world.as_ref().ok_or_else(|| proto("a resume without a cached world"))?;
+                    let w = self
+                        .world
+                        .as_ref()
+                        .ok_or_else(|| proto("a resume without a cached world"))?;
                     if h.pages != 0 || w.version() != h.version || w.digest().0 != h.digest {
                         return Err(MirrorError::Protocol(format!(
                             "resume at version {} digest {}, but this mirror holds version {} digest {}",
@@ -166,7 +169,10 @@ impl Mirror {
                 if self.assembly.is_some() {
                     return Err(proto("a delta inside a snapshot"));
                 }
-                let world = self.world.as_mut().ok_or_else(|| proto("a delta before any snapshot"))?;
+                let world = self
+                    .world
+                    .as_mut()
+                    .ok_or_else(|| proto("a delta before any snapshot"))?;
                 let decoded = Record::decode(&d.change).map_err(|e| MirrorError::Protocol(e.to_string()))?;
                 let cs = world
                     .apply_record(decoded.version, &decoded.record, &Limits::unbounded())

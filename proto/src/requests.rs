@@ -7,13 +7,11 @@ use naadf_world::ops::{Batch, Op};
 
 /// The position and rotation of a wire pose, checked for length.
 fn pose(p: &EntityPose) -> Result<([f64; 3], [f64; 4]), WireError> {
-    let pos: [f64; 3] = p.pos.as_slice().try_into().map_err(|_| {
-        bad(format!(
-            "entity {}: pos needs 3 numbers, got {}",
-            p.id,
-            p.pos.len()
-        ))
-    })?;
+    let pos: [f64; 3] = p
+        .pos
+        .as_slice()
+        .try_into()
+        .map_err(|_| bad(format!("entity {}: pos needs 3 numbers, got {}", p.id, p.pos.len())))?;
     let rot: [f64; 4] = p.rot.as_slice().try_into().map_err(|_| {
         bad(format!(
             "entity {}: rot needs 4 numbers [x, y, z, w], got {}",

@@ -80,7 +80,12 @@ fn lengths(h: &Header, size: WorldSize) -> Result<[u64; 6], WireError> {
     }
     let mut lens = [0; 6];
     for (slot, l) in out.iter().enumerate() {
-        lens[slot] = l.ok_or_else(|| bad(format!("header lacks the length of buffer {}", TRANSFERRED[slot] as u32)))?;
+        lens[slot] = l.ok_or_else(|| {
+            bad(format!(
+                "header lacks the length of buffer {}",
+                TRANSFERRED[slot] as u32
+            ))
+        })?;
     }
     Ok(lens)
 }
@@ -136,7 +141,10 @@ impl Assembly {
     /// Writes one received group of pages.
     pub fn page(&mut self, p: &Page) -> Result<(), WireError> {
         if self.received >= self.header.pages {
-            return Err(bad(format!("more page groups than the {} announced", self.header.pages)));
+            return Err(bad(format!(
+                "more page groups than the {} announced",
+                self.header.pages
+            )));
         }
         let slot = slot_of(p.buffer)?;
         let buf = &mut self.buffers[slot];
@@ -299,7 +307,12 @@ mod tests {
         w2.apply(&b, &Default::default()).unwrap();
         w2.grow_until_quiescent();
         let delta = pages_for(&w2, &cache_of(&got));
-        assert!(!delta.is_empty() && delta.len() < pages.len(), "{} of {}", delta.len(), pages.len());
+        assert!(
+            !delta.is_empty() && delta.len() < pages.len(),
+            "{} of {}",
+            delta.len(),
+            pages.len()
+        );
         let mut a = Assembly::start(header_of(&w2, delta.len() as u32), buffers_of(&got)).unwrap();
         for p in &delta {
             a.page(p).unwrap();
@@ -309,7 +322,10 @@ mod tests {
 
     #[test]
     fn groups_stay_in_aligned_windows() {
-        assert_eq!(group_pages(&[0, 1, 15, 16, 40, 47, 48]), vec![vec![0, 1, 15], vec![16], vec![40, 47], vec![48]]);
+        assert_eq!(
+            group_pages(&[0, 1, 15, 16, 40, 47, 48]),
+            vec![vec![0, 1, 15], vec![16], vec![40, 47], vec![48]]
+        );
         assert!(group_pages(&[]).is_empty());
     }
 

@@ -313,14 +313,18 @@ impl Actor {
             Action::Undo => match self.histories.next_undo(&user) {
                 Some(r) => (r.undo_batch(&self.world), EntryKind::Undo),
                 None => {
-                    let _ = reply.send(Err(Status::failed_precondition(format!("user '{user}' has nothing to undo"))));
+                    let _ = reply.send(Err(Status::failed_precondition(format!(
+                        "user '{user}' has nothing to undo"
+                    ))));
                     return;
                 }
             },
             Action::Redo => match self.histories.next_redo(&user) {
                 Some(r) => (r.undo_batch(&self.world), EntryKind::Redo),
                 None => {
-                    let _ = reply.send(Err(Status::failed_precondition(format!("user '{user}' has nothing to redo"))));
+                    let _ = reply.send(Err(Status::failed_precondition(format!(
+                        "user '{user}' has nothing to redo"
+                    ))));
                     return;
                 }
             },

@@ -173,9 +173,9 @@ impl Auth {
                 let v = v
                     .to_str()
                     .map_err(|_| Status::unauthenticated("the authorization header is not ASCII"))?;
-                let t = v.strip_prefix("Bearer ").ok_or_else(|| {
-                    Status::unauthenticated("the authorization header must be 'Bearer <token>'")
-                })?;
+                let t = v
+                    .strip_prefix("Bearer ")
+                    .ok_or_else(|| Status::unauthenticated("the authorization header must be 'Bearer <token>'"))?;
                 Some(t.trim())
             }
         };
@@ -215,8 +215,14 @@ mod tests {
         let v = a.caller(&md(Some("Bearer v1"))).unwrap();
         assert_eq!(v.require_editor().unwrap_err().code(), tonic::Code::PermissionDenied);
         assert_eq!(a.caller(&md(None)).unwrap_err().code(), tonic::Code::Unauthenticated);
-        assert_eq!(a.caller(&md(Some("Bearer nope"))).unwrap_err().code(), tonic::Code::Unauthenticated);
-        assert_eq!(a.caller(&md(Some("e1"))).unwrap_err().code(), tonic::Code::Unauthenticated);
+        assert_eq!(
+            a.caller(&md(Some("Bearer nope"))).unwrap_err().code(),
+            tonic::Code::Unauthenticated
+        );
+        assert_eq!(
+            a.caller(&md(Some("e1"))).unwrap_err().code(),
+            tonic::Code::Unauthenticated
+        );
         assert!(Auth::from_env_value("x=y").is_err());
         assert!(Auth::from_env_value("x=y:king").is_err());
         assert!(Auth::from_env_value("x=y:admin,x=z:viewer").is_err());

@@ -53,10 +53,14 @@ pub async fn run(
     tx: mpsc::Sender<Result<WorldMessage, Status>>,
 ) {
     let mut shutdown = shared.shutdown.clone();
-    let Some(sub) = subscribe(&actor, resume).await else { return };
+    let Some(sub) = subscribe(&actor, resume).await else {
+        return;
+    };
     let mut rx = sub.events;
     let started = match (sub.catch_up, resume) {
-        (Some(events), Some((version, digest))) => send_catch_up(&shared, &sub.view, version, digest, &events, &mut held, &tx).await,
+        (Some(events), Some((version, digest))) => {
+            send_catch_up(&shared, &sub.view, version, digest, &events, &mut held, &tx).await
+        }
         _ => send_snapshot(&shared, &sub.view, &mut held, false, &tx).await,
     };
     if started.is_err() {
@@ -79,7 +83,9 @@ pub async fn run(
             Err(broadcast::error::RecvError::Lagged(missed)) => {
                 tracing::info!(missed, "client fell behind; re-sending a snapshot");
                 shared.metrics.resyncs.inc();
-                let Some(sub) = subscribe(&actor, None).await else { return };
+                let Some(sub) = subscribe(&actor, None).await else {
+                    return;
+                };
                 rx = sub.events;
                 if send_snapshot(&shared, &sub.view, &mut held, true, &tx).await.is_err() {
                     return;

@@ -56,9 +56,21 @@ impl Default for Metrics {
         registry.register("version", "Current edit version", m.version.clone());
         registry.register("edits", "Applied edit batches", m.edits.clone());
         registry.register("refused_requests", "Refused edit requests", m.refused.clone());
-        registry.register("bytes_sent", "Bytes of stream messages sent to clients", m.bytes_sent.clone());
-        registry.register("resyncs", "Snapshots re-sent to clients that fell behind", m.resyncs.clone());
-        registry.register("growth_steps", "Background distance-field growth steps published", m.growth_steps.clone());
+        registry.register(
+            "bytes_sent",
+            "Bytes of stream messages sent to clients",
+            m.bytes_sent.clone(),
+        );
+        registry.register(
+            "resyncs",
+            "Snapshots re-sent to clients that fell behind",
+            m.resyncs.clone(),
+        );
+        registry.register(
+            "growth_steps",
+            "Background distance-field growth steps published",
+            m.growth_steps.clone(),
+        );
         registry.register("wal_fsync_seconds", "Write-ahead log fsync latency", m.fsync.clone());
         registry.register("snapshots", "Snapshots written", m.snapshots.clone());
         Metrics { registry, ..m }

@@ -165,7 +165,9 @@ mod tests {
 
     #[test]
     fn the_store_follows_the_world_page_for_page() {
-        let source = Preset::Terrain.source(Some(WorldSize::new(128, 64, 128).unwrap()), 2).unwrap();
+        let source = Preset::Terrain
+            .source(Some(WorldSize::new(128, 64, 128).unwrap()), 2)
+            .unwrap();
         let mut w = World::build(&*source, &|_| {}).unwrap();
         let mut store = PageStore::new(&w);
         let b = Batch::parse_line(r#"{"batch":[{"op":"sphere","center":[30,30,30],"radius":9,"material":3},{"op":"define_material","id":300,"kind":"metal","albedo":[1,0.5,0.25],"roughness":0.2}]}"#).unwrap();

@@ -80,7 +80,10 @@ pub struct Bound {
 
 /// Opens the data directory: the newest snapshot plus the log after it, or a fresh
 /// directory started from `initial()`.
-fn recover(data: &DataDir, initial: impl FnOnce() -> Result<World>) -> Result<(World, ServerState, Wal, Vec<crate::wal::Entry>)> {
+fn recover(
+    data: &DataDir,
+    initial: impl FnOnce() -> Result<World>,
+) -> Result<(World, ServerState, Wal, Vec<crate::wal::Entry>)> {
     let (world, state) = match data.snapshots()?.last() {
         Some(&v) => {
             tracing::info!(version = v, dir = %data.path().display(), "loading snapshot");
@@ -131,7 +134,14 @@ pub async fn serve(
 
     let (out_tx, out_rx) = mpsc::channel(4096);
     let (events, _) = broadcast::channel(config.slow_client_events.max(16));
-    let mut actor = Actor::new(world, state, config.limits.clone(), out_tx, &shared, config.checkpoint_every);
+    let mut actor = Actor::new(
+        world,
+        state,
+        config.limits.clone(),
+        out_tx,
+        &shared,
+        config.checkpoint_every,
+    );
     let replayed = entries.len();
     let actor = tokio::task::spawn_blocking(move || -> Result<Actor> {
         for e in &entries {
@@ -198,11 +208,10 @@ pub async fn serve(
             let _ = stop.wait_for(|s| *s).await;
         });
     let mut stop = shutdown_tx.subscribe();
-    let http = axum::serve(http_listener, http::router(shared.clone(), req_tx.clone())).with_graceful_shutdown(
-        async move {
+    let http =
+        axum::serve(http_listener, http::router(shared.clone(), req_tx.clone())).with_graceful_shutdown(async move {
             let _ = stop.wait_for(|s| *s).await;
-        },
-    );
+        });
     let grpc = tokio::spawn(grpc);
     let http = tokio::spawn(http.into_future());
     let ticker = {

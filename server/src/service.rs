@@ -67,7 +67,9 @@ impl WorldServer {
             })
             .await
             .map_err(|_| Status::unavailable("the server is shutting down"))?;
-        let r = rx.await.map_err(|_| Status::unavailable("the server is shutting down"))??;
+        let r = rx
+            .await
+            .map_err(|_| Status::unavailable("the server is shutting down"))??;
         Ok(Response::new(r))
     }
 }

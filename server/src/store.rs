@@ -130,7 +130,8 @@ impl DataDir {
             if v < version {
                 let (w, s) = snapshot_paths(&self.path, v);
                 for p in [w, s] {
-                    std::fs::remove_file(&p).map_err(|e| StoreError::Io(format!("cannot remove {}", p.display()), e))?;
+                    std::fs::remove_file(&p)
+                        .map_err(|e| StoreError::Io(format!("cannot remove {}", p.display()), e))?;
                 }
             }
         }
@@ -164,7 +165,8 @@ pub fn snapshots(dir: &Path) -> Result<Vec<u64>, StoreError> {
 /// Loads the snapshot at `version` from `dir` (no lock needed: read-only tools use it).
 pub fn load_snapshot(dir: &Path, version: u64) -> Result<(World, ServerState), StoreError> {
     let (world_path, state_path) = snapshot_paths(dir, version);
-    let bytes = std::fs::read(&state_path).map_err(|e| StoreError::Io(format!("cannot read {}", state_path.display()), e))?;
+    let bytes =
+        std::fs::read(&state_path).map_err(|e| StoreError::Io(format!("cannot read {}", state_path.display()), e))?;
     let bad = |m: &str| StoreError::BadState(state_path.clone(), m.to_owned());
     if bytes.len() < 16 || &bytes[..8] != STATE_MAGIC {
         return Err(bad("not a naadf state file"));
@@ -196,7 +198,9 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let d = DataDir::open(dir.path()).unwrap();
         assert!(matches!(DataDir::open(dir.path()), Err(StoreError::Locked(_))));
-        let source = Preset::Test.source(Some(WorldSize::new(64, 64, 64).unwrap()), 1).unwrap();
+        let source = Preset::Test
+            .source(Some(WorldSize::new(64, 64, 64).unwrap()), 1)
+            .unwrap();
         let world = World::build(&*source, &|_| {}).unwrap();
         let mut state = ServerState::default();
         state.histories.answer("u", 3, 0);

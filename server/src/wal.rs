@@ -132,11 +132,15 @@ fn read_segment(path: &Path, base: u64, last: bool) -> Result<(Vec<Entry>, Optio
     }
     let format = u32::from_le_bytes(bytes[8..12].try_into().expect("4 bytes"));
     if format != FORMAT {
-        return Err(corrupt(format!("unsupported format {format} (this build reads {FORMAT})")));
+        return Err(corrupt(format!(
+            "unsupported format {format} (this build reads {FORMAT})"
+        )));
     }
     let stored_base = u64::from_le_bytes(bytes[12..20].try_into().expect("8 bytes"));
     if stored_base != base {
-        return Err(corrupt(format!("header says base {stored_base}, file name says {base}")));
+        return Err(corrupt(format!(
+            "header says base {stored_base}, file name says {base}"
+        )));
     }
     let mut at = HEADER_LEN as usize;
     let mut out = Vec::new();
@@ -181,9 +185,12 @@ fn read_segment(path: &Path, base: u64, last: bool) -> Result<(Vec<Entry>, Optio
     Ok((out, None))
 }
 
+/// Where a torn final record starts: the segment and the byte offset.
+type TornTail = (PathBuf, u64);
+
 /// Reads the log in `dir` after version `snapshot` without changing it: the entries in
 /// order, and where a torn final record starts (segment and byte offset), if there is one.
-fn scan(dir: &Path, snapshot: u64) -> Result<(Vec<Entry>, Option<(PathBuf, u64)>), WalError> {
+fn scan(dir: &Path, snapshot: u64) -> Result<(Vec<Entry>, Option<TornTail>), WalError> {
     let segs = segments(dir)?;
     if let Some((base, _)) = segs.first()
         && *base > snapshot
@@ -246,7 +253,8 @@ impl Wal {
                     .write(true)
                     .open(&path)
                     .map_err(io(format!("cannot open {}", path.display())))?;
-                f.set_len(at).map_err(io(format!("cannot truncate {}", path.display())))?;
+                f.set_len(at)
+                    .map_err(io(format!("cannot truncate {}", path.display())))?;
                 f.sync_all().map_err(io(format!("cannot fsync {}", path.display())))?;
             }
         }
@@ -282,7 +290,8 @@ impl Wal {
         h.extend_from_slice(MAGIC);
         h.extend_from_slice(&FORMAT.to_le_bytes());
         h.extend_from_slice(&base.to_le_bytes());
-        f.write_all(&h).map_err(io(format!("cannot write {}", path.display())))?;
+        f.write_all(&h)
+            .map_err(io(format!("cannot write {}", path.display())))?;
         f.sync_all().map_err(io(format!("cannot fsync {}", path.display())))?;
         sync_dir(dir)?;
         Ok(Wal {

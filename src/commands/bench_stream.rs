@@ -124,13 +124,16 @@ impl LocalServer {
     }
 }
 
+/// When each version was applied at one mirror.
+type Applied = Vec<(u64, Instant)>;
+
 /// Joins and follows; records when each version was applied. Returns once `stop` is set.
 struct Follower {
     applied: watch::Receiver<Option<u64>>,
     /// Message bytes received so far.
     bytes: Arc<AtomicU64>,
     stop: watch::Sender<bool>,
-    task: tokio::task::JoinHandle<Result<(Mirror, Vec<(u64, Instant)>)>>,
+    task: tokio::task::JoinHandle<Result<(Mirror, Applied)>>,
 }
 
 async fn follow(url: &str, cache: Option<World>) -> Result<Follower> {
@@ -171,13 +174,16 @@ async fn follow(url: &str, cache: Option<World>) -> Result<Follower> {
 
 impl Follower {
     async fn wait_for(&mut self, version: u64) -> Result<()> {
-        tokio::time::timeout(Duration::from_secs(600), self.applied.wait_for(|v| v.is_some_and(|v| v >= version)))
-            .await
-            .context("mirror did not catch up")??;
+        tokio::time::timeout(
+            Duration::from_secs(600),
+            self.applied.wait_for(|v| v.is_some_and(|v| v >= version)),
+        )
+        .await
+        .context("mirror did not catch up")??;
         Ok(())
     }
 
-    async fn finish(self) -> Result<(Mirror, Vec<(u64, Instant)>)> {
+    async fn finish(self) -> Result<(Mirror, Applied)> {
         let _ = self.stop.send(true);
         self.task.await?
     }
@@ -191,7 +197,9 @@ async fn counting_proxy(target: SocketAddr, count: Arc<AtomicU64>) -> Result<Soc
         while let Ok((inbound, _)) = listener.accept().await {
             let count = count.clone();
             tokio::spawn(async move {
-                let Ok(outbound) = tokio::net::TcpStream::connect(target).await else { return };
+                let Ok(outbound) = tokio::net::TcpStream::connect(target).await else {
+                    return;
+                };
                 let _ = inbound.set_nodelay(true);
                 let _ = outbound.set_nodelay(true);
                 let (mut ri, mut wi) = inbound.into_split();
@@ -230,7 +238,13 @@ fn points(world: &World, n: usize, seed: u64) -> Vec<[u32; 3]> {
 }
 
 fn voxel_op(p: [u32; 3], k: usize) -> String {
-    format!(r#"{{"op":"set","voxels":[[{},{},{},{}]]}}"#, p[0], p[1] + 1, p[2], 2 * (k % 2))
+    format!(
+        r#"{{"op":"set","voxels":[[{},{},{},{}]]}}"#,
+        p[0],
+        p[1] + 1,
+        p[2],
+        2 * (k % 2)
+    )
 }
 
 async fn edit(c: &mut Client, ops: String) -> Result<u64> {
@@ -275,7 +289,10 @@ pub fn run(a: StreamArgs) -> Result<()> {
             rejoin_after_100_edits_bytes: rejoin_bytes,
             rejoin_ratio: rejoin_bytes as f64 / join_bytes as f64,
         };
-        eprintln!("join: {join_seconds:.2} s, {join_bytes} B ({:.3}× the world file); rejoin {rejoin_bytes} B", join.ratio_to_file);
+        eprintln!(
+            "join: {join_seconds:.2} s, {join_bytes} B ({:.3}× the world file); rejoin {rejoin_bytes} B",
+            join.ratio_to_file
+        );
 
         // Bytes on the wire per single-voxel edit, through a counting proxy.
         let count = Arc::new(AtomicU64::new(0));

@@ -57,7 +57,10 @@ fn cache_file(dir: Option<&PathBuf>, server: &str) -> Option<PathBuf> {
             .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cache")))?
             .join("naadf"),
     };
-    Some(dir.join(format!("mirror-{:016x}.naadf", xxhash_rust::xxh3::xxh3_64(server.as_bytes()))))
+    Some(dir.join(format!(
+        "mirror-{:016x}.naadf",
+        xxhash_rust::xxh3::xxh3_64(server.as_bytes())
+    )))
 }
 
 fn state(m: &Mirror) -> State {
@@ -76,7 +79,10 @@ fn state(m: &Mirror) -> State {
 fn verify(w: &World) -> Result<()> {
     let scratch = w.digest_from_scratch();
     if scratch != w.digest() {
-        bail!("verify: digest from scratch {scratch} differs from the incremental {}", w.digest());
+        bail!(
+            "verify: digest from scratch {scratch} differs from the incremental {}",
+            w.digest()
+        );
     }
     if let Some(c) = w.unsafe_chunk_aadf() {
         bail!("verify: chunk {c}'s distance field reaches a non-empty chunk");
@@ -130,7 +136,9 @@ async fn follow(a: &Args, mirror: &mut Mirror) -> Result<()> {
         .await
         .map_err(status_error)?
         .into_inner();
-    let deadline = a.timeout.map(|s| tokio::time::Instant::now() + Duration::from_secs_f64(s));
+    let deadline = a
+        .timeout
+        .map(|s| tokio::time::Instant::now() + Duration::from_secs_f64(s));
     let mut last_reported = None;
     loop {
         let msg = tokio::select! {

@@ -28,7 +28,10 @@ impl ServerArgs {
 
 /// Runs `f` on a multi-threaded tokio runtime.
 pub fn block_on<T>(f: impl std::future::Future<Output = Result<T>>) -> Result<T> {
-    tokio::runtime::Builder::new_multi_thread().enable_all().build()?.block_on(f)
+    tokio::runtime::Builder::new_multi_thread()
+        .enable_all()
+        .build()?
+        .block_on(f)
 }
 
 /// A gRPC status as an error whose message names the code.
