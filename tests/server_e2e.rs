@@ -576,3 +576,87 @@ fn tls_with_a_certificate() {
     support::fails(&["status", "--server", &server.url], None, "error");
     server.stop();
 }
+
+/// Periodic snapshots truncate the log behind them, and a restart from snapshot plus log
+/// gives the same version and digest as before.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn checkpoints_truncate_the_log_and_restarts_keep_the_digest() {
+    let dir = tempfile::tempdir().unwrap();
+    let world = start_world(dir.path());
+    let data = p(dir.path(), "data");
+    let args = [
+        "--world",
+        world.as_str(),
+        "--data",
+        data.as_str(),
+        "--checkpoint-every",
+        "5",
+    ];
+    let log = dir.path().join("log");
+    let server = Server::start(&args, &log, &[]);
+    let mut c = client(&server.url, "ed").await;
+    let mut rng = 77;
+    for k in 0..12 {
+        c.edit(EditRequest {
+            ops: random_op(&mut rng),
+            client_seq: k + 1,
+        })
+        .await
+        .unwrap();
+    }
+    let f = Follower::start(&server.url, "viewer", None).await;
+    let before = converge(&mut c, &[&f]).await;
+    f.finish().await;
+    assert_eq!(before.0, 12);
+    // Snapshots land on a helper thread; wait for the one at version 10.
+    let names = || -> Vec<String> {
+        let mut v: Vec<String> = std::fs::read_dir(&data)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().into_string().unwrap())
+            .filter(|n| n.starts_with("snapshot-") || n.starts_with("wal-"))
+            .collect();
+        v.sort();
+        v
+    };
+    for _ in 0..200 {
+        if names().iter().any(|n| n == "snapshot-00000000000000000010.naadf") && names().len() == 3 {
+            break;
+        }
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
+    assert_eq!(
+        names(),
+        vec![
+            "snapshot-00000000000000000010.naadf".to_string(),
+            "snapshot-00000000000000000010.state".to_string(),
+            "wal-00000000000000000010.log".to_string(),
+        ]
+    );
+    server.kill9();
+    let server = Server::start(&args, &log, &[]);
+    let mut c = client(&server.url, "ed").await;
+    let s = c.status(StatusRequest {}).await.unwrap().into_inner();
+    assert_eq!((s.version, s.digest, s.quiescent), before);
+    server.stop();
+}
+
+/// A client speaking another protocol version is refused with a clear status.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn an_incompatible_protocol_version_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let world = start_world(dir.path());
+    let server = Server::start(
+        &["--world", &world, "--data", &p(dir.path(), "data")],
+        &dir.path().join("log"),
+        &[],
+    );
+    let mut c = client(&server.url, "viewer").await;
+    let req = naadf_proto::v1::JoinRequest {
+        protocol_version: 99,
+        ..Default::default()
+    };
+    let err = c.join(req).await.unwrap_err();
+    assert_eq!(err.code(), tonic::Code::FailedPrecondition);
+    assert!(err.message().contains("protocol 99"), "{}", err.message());
+    server.stop();
+}
