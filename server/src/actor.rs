@@ -332,7 +332,6 @@ impl Actor {
         let applied = match self.world.apply(&batch, &self.limits) {
             Ok(a) => a,
             Err(e) => {
-                self.metrics.refused.inc();
                 let _ = reply.send(Err(edit_status(&e)));
                 return;
             }

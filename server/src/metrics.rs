@@ -55,7 +55,11 @@ impl Default for Metrics {
         registry.register("clients", "Clients joined now", m.clients.clone());
         registry.register("version", "Current edit version", m.version.clone());
         registry.register("edits", "Applied edit batches", m.edits.clone());
-        registry.register("refused_requests", "Refused edit requests", m.refused.clone());
+        registry.register(
+            "refused_requests",
+            "Refused edit requests (auth, role, parse, limits, invalid ops)",
+            m.refused.clone(),
+        );
         registry.register(
             "bytes_sent",
             "Bytes of stream messages sent to clients",

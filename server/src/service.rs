@@ -39,6 +39,14 @@ impl WorldServer {
         self.shared.auth.caller(r.metadata())
     }
 
+    /// Counts a refused edit request (any error: auth, role, parse, limits, the batch).
+    fn count<T>(&self, r: Result<T, Status>) -> Result<T, Status> {
+        if r.is_err() {
+            self.shared.metrics.refused.inc();
+        }
+        r
+    }
+
     /// Checks role and rate, then has the actor apply `action`.
     async fn submit(&self, caller: Caller, client_seq: u64, action: Action) -> Result<Response<EditReply>, Status> {
         caller.require_editor()?;
@@ -51,7 +59,6 @@ impl WorldServer {
             caller.require_admin(op.name())?;
         }
         if self.shared.limiter.check_key(&caller.user).is_err() {
-            self.shared.metrics.refused.inc();
             return Err(Status::resource_exhausted(format!(
                 "user '{}' is over the request rate limit ({} edits/s); slow down",
                 caller.user, self.shared.rate
@@ -109,41 +116,65 @@ impl WorldService for WorldServer {
     }
 
     async fn edit(&self, r: Req<EditRequest>) -> Result<Response<EditReply>, Status> {
-        let caller = self.caller(&r)?;
-        let req = r.into_inner();
-        let batch = Batch::parse_line(&req.ops).map_err(bad)?;
-        self.submit(caller, req.client_seq, Action::Batch(batch)).await
+        let result = async {
+            let caller = self.caller(&r)?;
+            let req = r.into_inner();
+            let batch = Batch::parse_line(&req.ops).map_err(bad)?;
+            self.submit(caller, req.client_seq, Action::Batch(batch)).await
+        }
+        .await;
+        self.count(result)
     }
 
     async fn spawn_entities(&self, r: Req<SpawnEntitiesRequest>) -> Result<Response<EditReply>, Status> {
-        let caller = self.caller(&r)?;
-        let req = r.into_inner();
-        let batch = spawn_batch(&req).map_err(bad)?;
-        self.submit(caller, req.client_seq, Action::Batch(batch)).await
+        let result = async {
+            let caller = self.caller(&r)?;
+            let req = r.into_inner();
+            let batch = spawn_batch(&req).map_err(bad)?;
+            self.submit(caller, req.client_seq, Action::Batch(batch)).await
+        }
+        .await;
+        self.count(result)
     }
 
     async fn move_entities(&self, r: Req<MoveEntitiesRequest>) -> Result<Response<EditReply>, Status> {
-        let caller = self.caller(&r)?;
-        let req = r.into_inner();
-        let batch = move_batch(&req).map_err(bad)?;
-        self.submit(caller, req.client_seq, Action::Batch(batch)).await
+        let result = async {
+            let caller = self.caller(&r)?;
+            let req = r.into_inner();
+            let batch = move_batch(&req).map_err(bad)?;
+            self.submit(caller, req.client_seq, Action::Batch(batch)).await
+        }
+        .await;
+        self.count(result)
     }
 
     async fn despawn_entities(&self, r: Req<DespawnEntitiesRequest>) -> Result<Response<EditReply>, Status> {
-        let caller = self.caller(&r)?;
-        let req = r.into_inner();
-        self.submit(caller, req.client_seq, Action::Batch(despawn_batch(&req)))
-            .await
+        let result = async {
+            let caller = self.caller(&r)?;
+            let req = r.into_inner();
+            self.submit(caller, req.client_seq, Action::Batch(despawn_batch(&req)))
+                .await
+        }
+        .await;
+        self.count(result)
     }
 
     async fn undo(&self, r: Req<HistoryRequest>) -> Result<Response<EditReply>, Status> {
-        let caller = self.caller(&r)?;
-        self.submit(caller, r.into_inner().client_seq, Action::Undo).await
+        let result = async {
+            let caller = self.caller(&r)?;
+            self.submit(caller, r.into_inner().client_seq, Action::Undo).await
+        }
+        .await;
+        self.count(result)
     }
 
     async fn redo(&self, r: Req<HistoryRequest>) -> Result<Response<EditReply>, Status> {
-        let caller = self.caller(&r)?;
-        self.submit(caller, r.into_inner().client_seq, Action::Redo).await
+        let result = async {
+            let caller = self.caller(&r)?;
+            self.submit(caller, r.into_inner().client_seq, Action::Redo).await
+        }
+        .await;
+        self.count(result)
     }
 
     async fn status(&self, r: Req<StatusRequest>) -> Result<Response<StatusReply>, Status> {
