@@ -14,14 +14,15 @@ use crate::store::ServerState;
 use crate::wal::{Entry, EntryKind};
 use naadf_proto::v1::{Delta, EditReply, WorldMessage, world_message};
 use naadf_world::World;
-use naadf_world::edit::ChangeSet;
+use naadf_world::edit::{ChangeSet, GrowthTask};
 use naadf_world::ops::{Batch, EditError, Limits};
 use std::sync::Arc;
 use tokio::sync::{mpsc, oneshot};
 use tonic::Status;
 
-/// Growth phases run between two looks at the request queue (keeps edit latency low).
-const GROWTH_SLICE: usize = 4;
+/// The pause after a growth job before the next may start: bursts of edits coalesce into
+/// one job, and growth takes at most about half of one core under a steady edit stream.
+const GROWTH_PAUSE: std::time::Duration = std::time::Duration::from_millis(400);
 
 /// What an edit request asks for.
 #[derive(Debug)]
@@ -63,6 +64,8 @@ pub enum Request {
         /// Where it goes.
         reply: oneshot::Sender<StatusInfo>,
     },
+    /// The growth thread finished its task.
+    Grown,
     /// Converge growth, then write a snapshot and truncate the log behind it.
     Checkpoint {
         /// Answered with the snapshot's version once it is durable.
@@ -122,6 +125,8 @@ pub struct Actor {
     view: Option<Arc<SnapshotView>>,
     checkpoint_every: u64,
     since_checkpoint: u64,
+    /// Background growth running on its own thread, if any.
+    growing: Option<std::thread::JoinHandle<GrowthTask>>,
 }
 
 /// The gRPC status for an edit error.
@@ -155,6 +160,7 @@ impl Actor {
             view: None,
             checkpoint_every,
             since_checkpoint: 0,
+            growing: None,
         }
     }
 
@@ -196,39 +202,61 @@ impl Actor {
         self.histories.answer(user, client_seq, self.world.version());
     }
 
-    /// Runs the actor until every request sender is gone.
-    pub fn run(mut self, mut rx: mpsc::Receiver<Request>) {
+    /// Runs the actor until every request sender is gone. Distance-field growth runs on a
+    /// thread of its own (on a copy of what it reads), so edits never wait for it; the
+    /// thread reports back through the request queue.
+    pub fn run(mut self, mut rx: mpsc::Receiver<Request>, notify: mpsc::WeakSender<Request>) {
         loop {
-            let req = if self.world.is_quiescent() {
-                match rx.blocking_recv() {
-                    Some(r) => r,
-                    None => break,
-                }
-            } else {
-                match rx.try_recv() {
-                    Ok(r) => r,
-                    Err(mpsc::error::TryRecvError::Empty) => {
-                        self.grow(GROWTH_SLICE);
-                        continue;
-                    }
-                    Err(mpsc::error::TryRecvError::Disconnected) => break,
-                }
-            };
-            self.handle(req);
+            self.start_growth(&notify);
+            match rx.blocking_recv() {
+                Some(r) => self.handle(r),
+                None => break,
+            }
         }
+        self.collect_growth();
+    }
+
+    fn start_growth(&mut self, notify: &mpsc::WeakSender<Request>) {
+        if self.growing.is_some() {
+            return;
+        }
+        if let Some(mut task) = self.world.start_growth() {
+            let notify = notify.clone();
+            self.growing = Some(std::thread::spawn(move || {
+                // One core at most: the other serves edits and clients meanwhile.
+                let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build();
+                match pool {
+                    Ok(pool) => pool.install(|| task.run()),
+                    Err(_) => task.run(),
+                }
+                // Edits that arrive meanwhile queue seeds for one coalesced next job.
+                std::thread::sleep(GROWTH_PAUSE);
+                if let Some(tx) = notify.upgrade() {
+                    let _ = tx.blocking_send(Request::Grown);
+                }
+                task
+            }));
+        }
+    }
+
+    /// Publishes the growth task's result, waiting for it if it still runs.
+    fn collect_growth(&mut self) {
+        if let Some(handle) = self.growing.take() {
+            let task = handle.join().expect("the growth thread does not panic");
+            let cs = self.world.finish_growth(task);
+            self.publish_growth(&cs);
+        }
+    }
+
+    fn publish_growth(&mut self, cs: &ChangeSet) {
+        self.metrics.growth_steps.inc();
+        let event = self.event(cs);
+        self.send(Outgoing::Growth { event });
     }
 
     fn send(&self, o: Outgoing) {
         // The committer only stops when the process is going down.
         let _ = self.out.blocking_send(o);
-    }
-
-    fn grow(&mut self, budget: usize) {
-        if let Some(cs) = self.world.grow_distance_fields(budget) {
-            self.metrics.growth_steps.inc();
-            let event = self.event(&cs);
-            self.send(Outgoing::Growth { event });
-        }
     }
 
     /// The event publishing change set `cs` (the page store is updated on the way).
@@ -271,6 +299,7 @@ impl Actor {
                     digest: self.world.digest(),
                 });
             }
+            Request::Grown => self.collect_growth(),
             Request::Checkpoint { reply } => self.checkpoint(reply),
         }
     }
@@ -362,8 +391,9 @@ impl Actor {
     }
 
     fn checkpoint(&mut self, reply: Option<oneshot::Sender<Result<u64, String>>>) {
-        while !self.world.is_quiescent() {
-            self.grow(usize::MAX);
+        self.collect_growth();
+        for cs in self.world.grow_until_quiescent() {
+            self.publish_growth(&cs);
         }
         self.since_checkpoint = 0;
         let state = ServerState {

@@ -165,9 +165,10 @@ pub async fn serve(
         .name("naadf-committer".into())
         .spawn(move || committer.run(out_rx))?;
     let (req_tx, req_rx) = mpsc::channel::<Request>(1024);
+    let notify = req_tx.downgrade();
     let actor = std::thread::Builder::new()
         .name("naadf-actor".into())
-        .spawn(move || actor.run(req_rx))?;
+        .spawn(move || actor.run(req_rx, notify))?;
 
     let grpc_listener = tokio::net::TcpListener::bind(config.grpc)
         .await

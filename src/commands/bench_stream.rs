@@ -8,7 +8,7 @@ use super::print_json;
 use super::remote::block_on;
 use anyhow::{Context, Result, bail};
 use naadf_client::{Client, Mirror, connect};
-use naadf_proto::v1::EditRequest;
+use naadf_proto::v1::{EditRequest, StatusRequest};
 use naadf_server::{Bound, ServerConfig};
 use naadf_world::World;
 use naadf_world::raysets::SplitMix64;
@@ -61,6 +61,9 @@ struct LatencyReport {
     p50_ms: f64,
     p99_ms: f64,
     max_ms: f64,
+    /// Edit sent → acknowledged (durable), the server's share of the latency.
+    ack_p50_ms: f64,
+    ack_p99_ms: f64,
     incomplete: usize,
 }
 
@@ -312,8 +315,16 @@ pub fn run(a: StreamArgs) -> Result<()> {
         eprintln!("wire: {wire:.1} B per single-voxel edit on TCP (framing included), {delta_msg:.1} B as messages");
         let cache = mirror.into_world();
 
+        // Let the distance-field growth queued by the edits so far finish first.
+        let t = Instant::now();
+        while !editor.status(StatusRequest {}).await?.into_inner().quiescent {
+            tokio::time::sleep(Duration::from_millis(10)).await;
+        }
+        eprintln!("growth backlog drained in {:.2} s", t.elapsed().as_secs_f64());
+
         // Latency with N mirrors at a fixed edit rate (spheres of radius ≤ 8).
         let mut latency = Vec::new();
+        let mut run = 0;
         for &clients in &a.clients {
             let mut followers = Vec::new();
             for _ in 0..clients {
@@ -325,10 +336,13 @@ pub fn run(a: StreamArgs) -> Result<()> {
             let edits = (f64::from(a.rate) * a.seconds) as usize;
             let start = tokio::time::Instant::now();
             let mut sent = Vec::new();
-            for k in 0..edits {
+            // Each run edits new places: repeating a run's edits would make them no-ops.
+            let first = run * edits;
+            run += 1;
+            for k in first..first + edits {
                 tokio::time::sleep_until(start + Duration::from_secs_f64(k as f64 / f64::from(a.rate))).await;
                 let mut c = editor.clone();
-                let p = pts[(k * 7) % pts.len()];
+                let p = pts[(k * 7 + 3) % pts.len()];
                 let r = 1 + k % 8;
                 let ops = format!(
                     r#"{{"op":"sphere","center":[{},{},{}],"radius":{r},"material":{}}}"#,
@@ -339,15 +353,18 @@ pub fn run(a: StreamArgs) -> Result<()> {
                 );
                 sent.push(tokio::spawn(async move {
                     let t0 = Instant::now();
-                    edit(&mut c, ops).await.map(|v| (v, t0))
+                    edit(&mut c, ops).await.map(|v| (v, t0, t0.elapsed()))
                 }));
             }
             let mut sent_at = HashMap::new();
+            let mut acks = Vec::new();
             for s in sent {
-                let (v, t0) = s.await??;
+                let (v, t0, ack) = s.await??;
                 sent_at.insert(v, t0);
+                acks.push(ack.as_secs_f64() * 1e3);
                 last = last.max(v);
             }
+            acks.sort_by(f64::total_cmp);
             let mut done: HashMap<u64, Instant> = HashMap::new();
             let mut incomplete = 0;
             for mut f in followers {
@@ -376,11 +393,13 @@ pub fn run(a: StreamArgs) -> Result<()> {
                 p50_ms: percentile(&ms, 0.5),
                 p99_ms: percentile(&ms, 0.99),
                 max_ms: ms.last().copied().unwrap_or(f64::NAN),
+                ack_p50_ms: percentile(&acks, 0.5),
+                ack_p99_ms: percentile(&acks, 0.99),
                 incomplete,
             };
             eprintln!(
-                "latency, {clients} clients: p50 {:.2} ms, p99 {:.2} ms, max {:.2} ms",
-                r.p50_ms, r.p99_ms, r.max_ms
+                "latency, {clients} clients: p50 {:.2} ms, p99 {:.2} ms, max {:.2} ms (acknowledged: p50 {:.2} ms, p99 {:.2} ms)",
+                r.p50_ms, r.p99_ms, r.max_ms, r.ack_p50_ms, r.ack_p99_ms
             );
             latency.push(r);
         }

@@ -219,6 +219,13 @@ pub struct GrowthJob {
 }
 
 impl GrowthJob {
+    /// Starts a job recomputing the free chunks within [`crate::edit::REGROW_RADIUS`] of
+    /// `seeds`, on `chunks` (a copy of the cells) with these entity fields.
+    pub fn around(size: WorldSize, seeds: &[u32], chunks: Vec<u32>, entities: &[u32]) -> Self {
+        let region = crate::edit::regrow_region(size, seeds, |i| chunk_is_free(chunks[i], entities[i]));
+        Self::new(chunks, region)
+    }
+
     /// Starts a job on a copy of the chunk cells; `region` lists the chunks to recompute
     /// (free chunks, ascending).
     pub fn new(mut shadow: Vec<u32>, region: Vec<u32>) -> Self {

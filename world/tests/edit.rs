@@ -200,6 +200,47 @@ fn equal_batches_give_equal_digests_whatever_the_growth_timing() {
     );
 }
 
+/// Growth taken out of the world (as a server runs it on another thread) while edits keep
+/// coming: every published state is safe, and the converged world equals the one grown in
+/// place.
+#[test]
+fn detached_growth_with_edits_in_between_converges_to_the_same_world() {
+    let size = WorldSize::new(640, 64, 64).unwrap();
+    let seed = 21;
+    let mut rng = Rng(seed);
+    let mut timing = Rng(seed ^ 0x5EED);
+    let mut raw = random_world(size, seed);
+    let mut w = raw.build();
+    let mut in_place = raw.build();
+    let mut task = None;
+    for v in 0..10 {
+        if task.is_none() {
+            task = w.start_growth();
+        }
+        let batch = random_batch(&mut rng, size.voxels(), raw.materials);
+        w.apply(&batch, &Limits::default()).unwrap();
+        in_place.apply(&batch, &Limits::default()).unwrap();
+        apply_dense(&mut raw, &w, &batch);
+        assert_aadf_valid(&raw, &w, &format!("version {}", v + 1));
+        if timing.below(2) == 0
+            && let Some(mut t) = task.take()
+        {
+            t.run();
+            w.finish_growth(t);
+            assert_aadf_valid(&raw, &w, &format!("version {} after growth", v + 1));
+            assert_eq!(w.digest(), w.digest_from_scratch());
+        }
+    }
+    if let Some(t) = task {
+        w.finish_growth(t);
+    }
+    w.grow_until_quiescent();
+    assert_converged(&w, &raw, "detached");
+    in_place.grow_until_quiescent();
+    assert_eq!(w.digest(), in_place.digest());
+    assert!(w.to_parts() == in_place.to_parts());
+}
+
 #[test]
 fn a_bad_op_rejects_the_whole_batch() {
     let raw = random_world(WorldSize::new(64, 64, 64).unwrap(), 3);

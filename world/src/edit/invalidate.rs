@@ -35,28 +35,48 @@ impl World {
         let hi: [u32; 3] =
             std::array::from_fn(|a| (coords.iter().map(|c| c[a]).max().unwrap_or(0) + reach + 1).min(dims[a]));
         let d: [usize; 3] = std::array::from_fn(|a| (hi[a] - lo[a]) as usize);
-        let marked: std::collections::HashSet<[usize; 3]> = coords
+        // Few origins (the usual edit): test each box against each origin directly. Many:
+        // count origins in each box with a prefix sum over a dense mark grid.
+        let local: Vec<[i64; 3]> = coords
             .iter()
-            .map(|c| std::array::from_fn(|a| (c[a] - lo[a]) as usize))
+            .map(|c| std::array::from_fn(|a| i64::from(c[a] - lo[a])))
             .collect();
-        let origins = PrefixSum3::new(d, |x, y, z| u32::from(marked.contains(&[x, y, z])));
-        let cells: Vec<[u32; 3]> = (lo[2]..hi[2])
-            .flat_map(|z| (lo[1]..hi[1]).flat_map(move |y| (lo[0]..hi[0]).map(move |x| [x, y, z])))
-            .collect();
-        let reset: Vec<usize> = cells
-            .par_iter()
-            .filter_map(|&p| {
-                let i = size.chunk_index(p);
-                let c = self.chunks[i];
-                if !chunk_is_free(c, self.chunk_entities[i]) || c == 0 {
-                    return None;
+        let prefix = (local.len() > 16).then(|| {
+            let mut marks = vec![0u32; d[0] * d[1] * d[2]];
+            for c in &local {
+                marks[c[0] as usize + d[0] * (c[1] as usize + d[1] * c[2] as usize)] = 1;
+            }
+            PrefixSum3::new(d, |x, y, z| marks[x + d[0] * (y + d[1] * z)])
+        });
+        let contains = |a: [i64; 3], b: [i64; 3]| match &prefix {
+            Some(p) => p.count(a, b) > 0,
+            None => local.iter().any(|o| (0..3).all(|k| a[k] <= o[k] && o[k] < b[k])),
+        };
+        let (chunks, entities) = (&self.chunks, &self.chunk_entities);
+        let reset: Vec<usize> = (lo[2]..hi[2])
+            .into_par_iter()
+            .flat_map_iter(|z| {
+                let mut out = Vec::new();
+                for y in lo[1]..hi[1] {
+                    for x in lo[0]..hi[0] {
+                        let p = [x, y, z];
+                        let i = size.chunk_index(p);
+                        let c = chunks[i];
+                        if c == 0 || !chunk_is_free(c, entities[i]) {
+                            continue;
+                        }
+                        let f = Aadf::unpack(c, CHUNK_FIELD_BITS);
+                        // The box in the bounding box's coordinates.
+                        let a: [i64; 3] =
+                            std::array::from_fn(|k| i64::from(p[k]) - i64::from(f.0[2 * k]) - i64::from(lo[k]));
+                        let b: [i64; 3] =
+                            std::array::from_fn(|k| i64::from(p[k]) + i64::from(f.0[2 * k + 1]) + 1 - i64::from(lo[k]));
+                        if contains(a, b) {
+                            out.push(i);
+                        }
+                    }
                 }
-                let f = Aadf::unpack(c, CHUNK_FIELD_BITS);
-                // The box in the bounding box's coordinates.
-                let a: [i64; 3] = std::array::from_fn(|k| i64::from(p[k]) - i64::from(f.0[2 * k]) - i64::from(lo[k]));
-                let b: [i64; 3] =
-                    std::array::from_fn(|k| i64::from(p[k]) + i64::from(f.0[2 * k + 1]) + 1 - i64::from(lo[k]));
-                (origins.count(a, b) > 0).then_some(i)
+                out
             })
             .collect();
         for i in reset {

@@ -20,11 +20,12 @@ mod undo;
 mod writes;
 
 pub use invalidate::REGROW_RADIUS;
+pub(crate) use invalidate::regrow_region;
 pub use record::{Decoded, Record};
 pub use undo::UndoRecord;
 pub use writes::Writes;
 
-use crate::aadf::{GrowthJob, chunk_is_free};
+use crate::aadf::GrowthJob;
 use crate::cell::{self, State};
 use crate::digest::{BufferId, Digest};
 use crate::entity::{self, Entities, EntityTable};
@@ -67,11 +68,46 @@ pub struct Applied {
 
 /// Background chunk-AADF growth: the chunks whose freedom changed since the world last
 /// converged, and the job recomputing the region around them.
+///
+/// Edits never restart a running job (under a steady stream of edits a restarted job would
+/// never finish). A job works on the chunk cells as they were when it started; chunks
+/// whose freedom flips meanwhile become the seeds of the next job, and those that stopped
+/// being free are clamped out of the job's fields when it publishes, so every published
+/// state is safe and the fields still converge to a from-scratch build.
 #[derive(Clone, Debug, Default)]
 pub struct Growth {
+    /// Seeds of the running job (or of the next one, when none runs).
     seeds: Vec<u32>,
     job: Option<GrowthJob>,
     seq: u32,
+    /// Chunks whose freedom flipped while the job ran: the next job's seeds.
+    pending: Vec<u32>,
+    /// Chunks that stopped being free while the job ran.
+    blocked: Vec<usize>,
+    /// Whether the job runs outside the world, as a [`GrowthTask`].
+    detached: bool,
+}
+
+/// Growth work taken out of a world by [`World::start_growth`]: it owns a copy of what it
+/// reads, so it can run on another thread while the world keeps applying edits.
+#[derive(Debug)]
+pub struct GrowthTask {
+    size: crate::WorldSize,
+    seeds: Vec<u32>,
+    chunks: Vec<u32>,
+    entities: Vec<u32>,
+    job: Option<GrowthJob>,
+}
+
+impl GrowthTask {
+    /// Runs the job to convergence (finding its region first: that, too, is work the
+    /// world's owner should not wait for).
+    pub fn run(&mut self) {
+        let job = self.job.get_or_insert_with(|| {
+            GrowthJob::around(self.size, &self.seeds, std::mem::take(&mut self.chunks), &self.entities)
+        });
+        while !job.step(self.size, &self.entities) {}
+    }
 }
 
 impl World {
@@ -166,10 +202,13 @@ impl World {
         self.clamp_around(&blocked, &mut w);
         self.version += 1;
         self.growth.seq = 0;
-        if !changed.is_empty() {
+        if self.growth.job.is_some() || self.growth.detached {
+            // The running job saw the old content: its fields are clamped when it
+            // publishes, and the flipped chunks seed the next job.
+            self.growth.pending.extend(changed);
+            self.growth.blocked.extend(blocked);
+        } else {
             self.growth.seeds.extend(changed);
-            // Any job in progress saw the old content: start over with all seeds.
-            self.growth.job = None;
         }
         let record = Record::of_batch(batch);
         Ok(Applied {
@@ -233,7 +272,7 @@ impl World {
 
     /// Whether no distance-field work is queued.
     pub fn is_quiescent(&self) -> bool {
-        self.growth.seeds.is_empty()
+        self.growth.seeds.is_empty() && self.growth.pending.is_empty()
     }
 
     /// Runs up to `budget` (level, axis) phases of background chunk-AADF growth. Returns a
@@ -241,16 +280,14 @@ impl World {
     /// last one is marked quiescent); `None` while work is still in progress or when there
     /// is none. Deterministic, and the converged fields equal a from-scratch build.
     pub fn grow_distance_fields(&mut self, budget: usize) -> Option<ChangeSet> {
-        if self.growth.seeds.is_empty() {
+        if self.growth.seeds.is_empty() || self.growth.detached {
             return None;
         }
+        if self.growth.job.is_none() {
+            self.growth.job = Some(self.new_growth_job());
+        }
         let size = self.size;
-        let job = self.growth.job.get_or_insert_with(|| {
-            let region = invalidate::regrow_region(size, &self.growth.seeds, |i| {
-                chunk_is_free(self.chunks[i], self.chunk_entities[i])
-            });
-            GrowthJob::new(self.chunks.clone(), region)
-        });
+        let job = self.growth.job.as_mut().expect("job exists");
         let mut done = job.is_done();
         for _ in 0..budget {
             if done {
@@ -262,19 +299,68 @@ impl World {
             return None;
         }
         let job = self.growth.job.take().expect("job exists");
-        self.growth.seeds.clear();
-        let mut writes = Vec::new();
+        Some(self.publish_growth(&job))
+    }
+
+    /// Starts the queued growth work as a task that runs without the world (on another
+    /// thread, say), or `None` when there is none or a job is already running. Until
+    /// [`World::finish_growth`] takes the task back, edits queue their seeds for the next
+    /// job, exactly as while [`World::grow_distance_fields`] works in steps.
+    pub fn start_growth(&mut self) -> Option<GrowthTask> {
+        if self.growth.seeds.is_empty() || self.growth.detached || self.growth.job.is_some() {
+            return None;
+        }
+        self.growth.detached = true;
+        Some(GrowthTask {
+            size: self.size,
+            seeds: self.growth.seeds.clone(),
+            chunks: self.chunks.clone(),
+            entities: self.chunk_entities.clone(),
+            job: None,
+        })
+    }
+
+    /// Publishes a task from [`World::start_growth`] (running it to the end first if
+    /// [`GrowthTask::run`] has not).
+    pub fn finish_growth(&mut self, mut task: GrowthTask) -> ChangeSet {
+        task.run();
+        self.growth.detached = false;
+        self.publish_growth(task.job.as_ref().expect("a run task has a job"))
+    }
+
+    /// A job recomputing the region around the current seeds, on a copy of the chunks.
+    fn new_growth_job(&self) -> GrowthJob {
+        GrowthJob::around(self.size, &self.growth.seeds, self.chunks.clone(), &self.chunk_entities)
+    }
+
+    /// Publishes a converged job: its fields where the chunks are still free, clamped
+    /// around the chunks that stopped being free while it ran. The seeds queued meanwhile
+    /// become the next job's.
+    fn publish_growth(&mut self, job: &GrowthJob) -> ChangeSet {
         let mut w = Writes::default();
+        let mut written = Vec::new();
         for &i in job.region() {
             let v = job.value(i);
-            if self.chunks[i as usize] != v {
+            // A chunk that stopped being free since the job started keeps its cell.
+            if self.chunks[i as usize] != v && self.chunk_is_free(i as usize) {
                 self.chunks[i as usize] = v;
-                writes.push((i, v));
+                written.push(i);
                 w.push(BufferId::Chunks, i as usize, 1);
             }
         }
+        let blocked = std::mem::take(&mut self.growth.blocked);
+        let mut clamped = Writes::default();
+        self.clamp_around(&blocked, &mut clamped);
+        for (_, r) in clamped.ranges() {
+            written.extend(r.clone());
+            w.push(BufferId::Chunks, r.start as usize, (r.end - r.start) as usize);
+        }
+        written.sort_unstable();
+        written.dedup();
+        let writes = written.iter().map(|&i| (i, self.chunks[i as usize])).collect();
+        self.growth.seeds = std::mem::take(&mut self.growth.pending);
         self.growth.seq += 1;
-        Some(self.publish(Record::Chunks(writes), w))
+        self.publish(Record::Chunks(writes), w)
     }
 
     /// Runs background growth until the world is quiescent; returns the change sets.
@@ -324,8 +410,8 @@ impl World {
                     self.chunks[i as usize] = v;
                     w.push(BufferId::Chunks, i as usize, 1);
                 }
-                // A published growth step finishes all the work queued so far (it is always
-                // the quiescent one), so a mirror drops its copy of that queue as well.
+                // A mirror never grows its own fields: it drops its copy of the queue and
+                // follows the quiescent flags of the changes it is sent.
                 self.growth = Growth {
                     seq: self.growth.seq + 1,
                     ..Growth::default()
