@@ -324,8 +324,7 @@ pub fn run(a: StreamArgs) -> Result<()> {
 
         // Latency with N mirrors at a fixed edit rate (spheres of radius ≤ 8).
         let mut latency = Vec::new();
-        let mut run = 0;
-        for &clients in &a.clients {
+        for (run, &clients) in a.clients.iter().enumerate() {
             let mut followers = Vec::new();
             for _ in 0..clients {
                 followers.push(follow(&url, cache.clone()).await?);
@@ -338,7 +337,6 @@ pub fn run(a: StreamArgs) -> Result<()> {
             let mut sent = Vec::new();
             // Each run edits new places: repeating a run's edits would make them no-ops.
             let first = run * edits;
-            run += 1;
             for k in first..first + edits {
                 tokio::time::sleep_until(start + Duration::from_secs_f64(k as f64 / f64::from(a.rate))).await;
                 let mut c = editor.clone();
