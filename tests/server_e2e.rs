@@ -37,6 +37,17 @@ fn start_world(dir: &Path) -> String {
     w
 }
 
+/// A server on a fresh data directory in `dir`, started from a fresh `start_world`, with
+/// `extra` arguments; returns the world file and the server.
+fn serve_fresh(dir: &Path, extra: &[&str]) -> (String, Server) {
+    let world = start_world(dir);
+    let data = p(dir, "data");
+    let mut args = vec!["--world", world.as_str(), "--data", data.as_str()];
+    args.extend_from_slice(extra);
+    let server = Server::start(&args, &dir.join("log"), &[]);
+    (world, server)
+}
+
 async fn client(url: &str, token: &str) -> Client {
     connect(url, Some(token), None).await.expect("connect")
 }
@@ -142,9 +153,8 @@ fn random_op(state: &mut u64) -> String {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn mirrors_converge_with_the_server_and_the_offline_apply() {
     let dir = tempfile::tempdir().unwrap();
-    let world = start_world(dir.path());
+    let (world, server) = serve_fresh(dir.path(), &[]);
     let data = p(dir.path(), "data");
-    let server = Server::start(&["--world", &world, "--data", &data], &dir.path().join("log"), &[]);
     let mut followers = Vec::new();
     for i in 0..8 {
         followers.push(Follower::start(&server.url, &format!("viewer{i}"), None).await);
@@ -370,19 +380,7 @@ async fn rejoining_costs_a_fraction_of_a_join() {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_slow_client_is_resnapshotted_and_does_not_stall_others() {
     let dir = tempfile::tempdir().unwrap();
-    let world = start_world(dir.path());
-    let server = Server::start(
-        &[
-            "--world",
-            &world,
-            "--data",
-            &p(dir.path(), "data"),
-            "--slow-client-events",
-            "16",
-        ],
-        &dir.path().join("log"),
-        &[],
-    );
+    let (_, server) = serve_fresh(dir.path(), &["--slow-client-events", "16"]);
     let mut c = client(&server.url, "ed").await;
     // The slow client joins, then does not read. Small HTTP/2 windows make its transport
     // buffers fill after 64 KiB instead of megabytes.
@@ -433,12 +431,7 @@ async fn a_slow_client_is_resnapshotted_and_does_not_stall_others() {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn undo_and_redo_are_per_user_and_survive_reconnects() {
     let dir = tempfile::tempdir().unwrap();
-    let world = start_world(dir.path());
-    let server = Server::start(
-        &["--world", &world, "--data", &p(dir.path(), "data")],
-        &dir.path().join("log"),
-        &[],
-    );
+    let (world, server) = serve_fresh(dir.path(), &[]);
     let f = Follower::start(&server.url, "viewer", None).await;
     let mut alice = client(&server.url, "alice").await;
     let mut bob = client(&server.url, "bob").await;
@@ -492,12 +485,7 @@ async fn undo_and_redo_are_per_user_and_survive_reconnects() {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn entity_requests_reach_the_mirrors() {
     let dir = tempfile::tempdir().unwrap();
-    let world = start_world(dir.path());
-    let server = Server::start(
-        &["--world", &world, "--data", &p(dir.path(), "data")],
-        &dir.path().join("log"),
-        &[],
-    );
+    let (_, server) = serve_fresh(dir.path(), &[]);
     let f = Follower::start(&server.url, "viewer", None).await;
     let mut c = client(&server.url, "admin").await;
     let model = r#"{"op":"define_model","name":"crate","size":[3,2,3],"voxels":[[0,0,0,2],[1,1,1,3],[2,0,2,4]]}"#;
@@ -547,25 +535,11 @@ async fn entity_requests_reach_the_mirrors() {
 #[test]
 fn tls_with_a_certificate() {
     let dir = tempfile::tempdir().unwrap();
-    let world = start_world(dir.path());
     let key = rcgen::generate_simple_self_signed(vec!["localhost".to_string()]).unwrap();
     let (cert, key_file) = (p(dir.path(), "cert.pem"), p(dir.path(), "key.pem"));
     std::fs::write(&cert, key.cert.pem()).unwrap();
     std::fs::write(&key_file, key.signing_key.serialize_pem()).unwrap();
-    let server = Server::start(
-        &[
-            "--world",
-            &world,
-            "--data",
-            &p(dir.path(), "data"),
-            "--tls-cert",
-            &cert,
-            "--tls-key",
-            &key_file,
-        ],
-        &dir.path().join("log"),
-        &[],
-    );
+    let (_, server) = serve_fresh(dir.path(), &["--tls-cert", &cert, "--tls-key", &key_file]);
     let port = server.url.rsplit(':').next().unwrap();
     let url = format!("https://localhost:{port}");
     let out = ok(&["status", "--server", &url, "--ca", &cert, "--json"], None);
@@ -644,12 +618,7 @@ async fn checkpoints_truncate_the_log_and_restarts_keep_the_digest() {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn an_incompatible_protocol_version_is_refused() {
     let dir = tempfile::tempdir().unwrap();
-    let world = start_world(dir.path());
-    let server = Server::start(
-        &["--world", &world, "--data", &p(dir.path(), "data")],
-        &dir.path().join("log"),
-        &[],
-    );
+    let (_, server) = serve_fresh(dir.path(), &[]);
     let mut c = client(&server.url, "viewer").await;
     let req = naadf_proto::v1::JoinRequest {
         protocol_version: 99,

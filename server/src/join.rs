@@ -126,14 +126,7 @@ async fn send_catch_up(
         resync: false,
         resume: true,
     };
-    send(
-        shared,
-        tx,
-        WorldMessage {
-            kind: Some(world_message::Kind::Header(header)),
-        },
-    )
-    .await?;
+    send(shared, tx, message(world_message::Kind::Header(header))).await?;
     for ev in events {
         track(held, ev);
         send(shared, tx, ev.message.clone()).await?;
@@ -153,6 +146,11 @@ fn track(held: &mut ClientPages, ev: &Event) {
     for (v, len) in held.iter_mut().zip(ev.lens) {
         v.truncate(len.div_ceil(PAGE_BYTES));
     }
+}
+
+/// A stream message.
+fn message(kind: world_message::Kind) -> WorldMessage {
+    WorldMessage { kind: Some(kind) }
 }
 
 async fn send(shared: &Shared, tx: &mpsc::Sender<Result<WorldMessage, Status>>, m: WorldMessage) -> Result<(), ()> {
@@ -190,14 +188,7 @@ async fn send_snapshot(
         resync,
         resume: false,
     };
-    send(
-        shared,
-        tx,
-        WorldMessage {
-            kind: Some(world_message::Kind::Header(header)),
-        },
-    )
-    .await?;
+    send(shared, tx, message(world_message::Kind::Header(header))).await?;
     // Compress (or fetch from the shared cache) off the async threads, a few groups at a
     // time so that sending starts early.
     for part in groups.chunks(8) {
@@ -219,14 +210,7 @@ async fn send_snapshot(
                 indices,
                 zstd: frame.as_ref().clone(),
             };
-            send(
-                shared,
-                tx,
-                WorldMessage {
-                    kind: Some(world_message::Kind::Page(page)),
-                },
-            )
-            .await?;
+            send(shared, tx, message(world_message::Kind::Page(page))).await?;
         }
     }
     for (slot, pages) in view.pages.iter().enumerate() {
