@@ -338,7 +338,7 @@ mod tests {
         for p in &pages[1..] {
             a.page(p).unwrap();
         }
-        assert!(a.finish().err().unwrap().to_string().contains("pages"));
+        assert!(a.finish().unwrap_err().to_string().contains("pages"));
         // A page with the wrong content: the digest check catches it.
         let mut a = Assembly::start(header_of(&w, pages.len() as u32), Default::default()).unwrap();
         for (i, p) in pages.iter().enumerate() {

@@ -78,10 +78,14 @@ struct Report {
 }
 
 /// A server running in this process on ephemeral ports, with a scratch data directory.
+///
+/// It runs on a tokio runtime of its own, on its own threads: the in-process mirrors do
+/// milliseconds of CPU work per delta, and on a shared runtime they would hold up the
+/// server's tasks cooperatively, which remote clients never do.
 struct LocalServer {
     bound: Bound,
     stop: Option<oneshot::Sender<()>>,
-    task: tokio::task::JoinHandle<Result<()>>,
+    thread: std::thread::JoinHandle<Result<()>>,
     _data: tempfile::TempDir,
 }
 
@@ -96,21 +100,28 @@ impl LocalServer {
         config.slow_client_events = 1 << 16;
         let (stop, stopped) = oneshot::channel::<()>();
         let (ready_tx, ready_rx) = oneshot::channel();
-        let task = tokio::spawn(naadf_server::serve(
-            config,
-            move || Ok(world),
-            move |b| {
-                let _ = ready_tx.send(b);
-            },
-            async move {
-                let _ = stopped.await;
-            },
-        ));
+        let thread = std::thread::spawn(move || {
+            tokio::runtime::Builder::new_multi_thread()
+                .worker_threads(2)
+                .thread_name("server")
+                .enable_all()
+                .build()?
+                .block_on(naadf_server::serve(
+                    config,
+                    move || Ok(world),
+                    move |b| {
+                        let _ = ready_tx.send(b);
+                    },
+                    async move {
+                        let _ = stopped.await;
+                    },
+                ))
+        });
         let bound = ready_rx.await.context("server did not start")?;
         Ok(Self {
             bound,
             stop: Some(stop),
-            task,
+            thread,
             _data: data,
         })
     }
@@ -123,7 +134,9 @@ impl LocalServer {
         if let Some(s) = self.stop.take() {
             let _ = s.send(());
         }
-        self.task.await?
+        tokio::task::spawn_blocking(move || self.thread.join())
+            .await?
+            .map_err(|_| anyhow::anyhow!("the server thread panicked"))?
     }
 }
 

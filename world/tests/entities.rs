@@ -771,14 +771,14 @@ fn world_files_keep_entities() {
     let good = w.to_parts();
     let mut p = good.clone();
     p.entities.instances.get_mut(&900).unwrap().pos[0] += 0.001;
-    assert!(World::from_parts(p).err().unwrap().to_string().contains("quantised"));
+    assert!(World::from_parts(p).unwrap_err().to_string().contains("quantised"));
     let mut p = good.clone();
     p.entities.instances.get_mut(&900).unwrap().model = "nope".into();
     assert!(World::from_parts(p).is_err());
     let mut p = good.clone();
     let first = p.chunk_entities.iter().position(|&f| f != 0).unwrap();
     p.chunk_entities[first] = 0;
-    assert!(World::from_parts(p).err().unwrap().to_string().contains("entity field"));
+    assert!(World::from_parts(p).unwrap_err().to_string().contains("entity field"));
     let mut p = good.clone();
     p.entities.instances.remove(&900);
     assert!(World::from_parts(p).is_err(), "chunk fields no longer match");

@@ -71,7 +71,7 @@ fn construction_is_deterministic_across_thread_counts() {
 fn undefined_material_is_rejected() {
     let mut raw = Raw::empty(WorldSize::new(64, 64, 64).unwrap(), 2);
     raw.set([3, 3, 3], 5);
-    let err = World::build(&raw, &|_| {}).err().expect("material 5 is not defined");
+    let err = World::build(&raw, &|_| {}).expect_err("material 5 is not defined");
     assert!(err.to_string().contains("material 5"), "{err}");
 }
 
@@ -87,6 +87,6 @@ fn loading_rejects_a_mixed_chunk_of_empty_blocks() {
         parts.blocks[b] = u32::from(*f);
     }
     parts.voxels.fill(0);
-    let err = World::from_parts(parts).err().expect("non-canonical chunk accepted");
+    let err = World::from_parts(parts).expect_err("non-canonical chunk accepted");
     assert!(err.to_string().contains("collapsed"), "{err}");
 }
