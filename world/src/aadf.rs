@@ -199,6 +199,36 @@ pub fn build_chunk_aadf(size: WorldSize, chunks: &mut Vec<u32>, entities: &[u32]
     *chunks = job.into_shadow();
 }
 
+/// Chebyshev distance (in chunks) from each chunk to the nearest seed, capped at `cap`.
+fn seed_distance(size: WorldSize, seeds: &[u32], cap: u8) -> Vec<u8> {
+    let d = size.chunks().map(|v| v as usize);
+    let stride = [1, d[0], d[0] * d[1]];
+    let mut dist = vec![cap; size.chunk_count()];
+    for &s in seeds {
+        dist[s as usize] = 0;
+    }
+    // The Chebyshev distance transform is separable: a 1-D min-plus pass per axis, where
+    // after the x pass a cell holds its distance along x, then max-combined along y, z:
+    // dist(p) = min over seeds of max(|dx|, |dy|, |dz|) = min over q of max(|dz|, dist_xy(q)).
+    for (axis, &len) in d.iter().enumerate() {
+        let st = stride[axis];
+        for base in (0..size.chunk_count()).filter(|&i| (i / st) % len == 0) {
+            let line: Vec<u8> = (0..len).map(|k| dist[base + k * st]).collect();
+            for k in 0..len {
+                // Nearest q along this axis minimising max(|k − q|, line[q]).
+                let mut best = line[k];
+                let reach = usize::from(best.min(cap));
+                for q in k.saturating_sub(reach)..(k + reach + 1).min(len) {
+                    let v = (k.abs_diff(q) as u8).max(line[q]);
+                    best = best.min(v);
+                }
+                dist[base + k * st] = best;
+            }
+        }
+    }
+    dist
+}
+
 /// A resumable from-scratch recomputation of the chunk AADFs of a region.
 ///
 /// The job works on a shadow copy of the chunk cells: the free chunks of the region start
@@ -216,14 +246,54 @@ pub struct GrowthJob {
     grown: Vec<u32>,
     level: u8,
     axis: usize,
+    /// Chunks that join the lock step only at a later level (a warm start), by level.
+    entering: Vec<Vec<u32>>,
 }
 
 impl GrowthJob {
     /// Starts a job recomputing the free chunks within [`crate::edit::REGROW_RADIUS`] of
     /// `seeds`, on `chunks` (a copy of the cells) with these entity fields.
+    ///
+    /// Warm start: a change influences the lock step one chunk per level, so a chunk at
+    /// Chebyshev distance `d` from every seed has, up to level `d − 2`, the same history as
+    /// before the change. Its field starts at `min(current, d − 2)` per direction and it
+    /// joins the lock step at level `d − 2`; directions below that are already final. Only
+    /// the work near the seeds remains, and the result is still a from-scratch build. A
+    /// chunk whose cell is zero (reset by a clamp, or genuinely boxed in) starts cold.
     pub fn around(size: WorldSize, seeds: &[u32], chunks: Vec<u32>, entities: &[u32]) -> Self {
         let region = crate::edit::regrow_region(size, seeds, |i| chunk_is_free(chunks[i], entities[i]));
-        Self::new(chunks, region)
+        let distance = seed_distance(size, seeds, crate::edit::REGROW_RADIUS as u8);
+        let mut shadow = chunks;
+        let mut entering: Vec<Vec<u32>> = vec![Vec::new(); usize::from(MAX_CHUNK_FIELD) + 1];
+        let mut active = Vec::new();
+        for &i in &region {
+            let c = shadow[i as usize];
+            let start = if c == 0 {
+                0
+            } else {
+                distance[i as usize].saturating_sub(2)
+            };
+            let start = start.min(MAX_CHUNK_FIELD);
+            let mut f = Aadf::unpack(c, CHUNK_FIELD_BITS);
+            for v in &mut f.0 {
+                *v = (*v).min(start);
+            }
+            shadow[i as usize] = f.pack(CHUNK_FIELD_BITS);
+            if start == 0 {
+                active.push(i);
+            } else {
+                entering[usize::from(start)].push(i);
+            }
+        }
+        GrowthJob {
+            shadow,
+            active,
+            region,
+            grown: Vec::new(),
+            level: 0,
+            axis: 0,
+            entering,
+        }
     }
 
     /// Starts a job on a copy of the chunk cells; `region` lists the chunks to recompute
@@ -237,6 +307,7 @@ impl GrowthJob {
             active: region.clone(),
             region,
             grown: Vec::new(),
+            entering: Vec::new(),
             level: 0,
             axis: 0,
         }
@@ -256,8 +327,12 @@ impl GrowthJob {
         if self.axis == 3 {
             self.axis = 0;
             self.level += 1;
-            // Only fields that grew at this level can equal the next one.
+            // Only fields that grew at this level can equal the next one, and the chunks
+            // of a warm start that join at the next level.
             self.active = std::mem::take(&mut self.grown);
+            if let Some(joining) = self.entering.get_mut(usize::from(self.level)) {
+                self.active.append(joining);
+            }
             self.active.sort_unstable();
             self.active.dedup();
         }
@@ -266,7 +341,12 @@ impl GrowthJob {
 
     /// Whether no field can grow any more.
     pub fn is_done(&self) -> bool {
-        self.active.is_empty() || self.level >= MAX_CHUNK_FIELD
+        let waiting = self
+            .entering
+            .iter()
+            .skip(usize::from(self.level) + 1)
+            .any(|e| !e.is_empty());
+        (self.active.is_empty() && !waiting) || self.level >= MAX_CHUNK_FIELD
     }
 
     /// The recomputed chunks, ascending.
