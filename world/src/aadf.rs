@@ -216,12 +216,14 @@ fn seed_distance(size: WorldSize, seeds: &[u32], cap: u8) -> Vec<u8> {
             let line: Vec<u8> = (0..len).map(|k| dist[base + k * st]).collect();
             for k in 0..len {
                 // Nearest q along this axis minimising max(|k − q|, line[q]).
-                let mut best = line[k];
-                let reach = usize::from(best.min(cap));
-                for q in k.saturating_sub(reach)..(k + reach + 1).min(len) {
-                    let v = (k.abs_diff(q) as u8).max(line[q]);
-                    best = best.min(v);
-                }
+                let reach = usize::from(line[k].min(cap));
+                let lo = k.saturating_sub(reach);
+                let best = line[lo..(k + reach + 1).min(len)]
+                    .iter()
+                    .enumerate()
+                    .map(|(j, &v)| (k.abs_diff(lo + j) as u8).max(v))
+                    .min()
+                    .unwrap_or(line[k]);
                 dist[base + k * st] = best;
             }
         }
