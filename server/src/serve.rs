@@ -166,9 +166,14 @@ pub async fn serve(
         .spawn(move || committer.run(out_rx))?;
     let (req_tx, req_rx) = mpsc::channel::<Request>(1024);
     let notify = req_tx.downgrade();
+    // The actor's parallel work (page rehashing, clamps) gets a rayon pool of its own, so
+    // it never queues behind snapshot compression for joining clients on the global pool.
+    let pool = rayon::ThreadPoolBuilder::new()
+        .thread_name(|i| format!("naadf-actor-{i}"))
+        .build()?;
     let actor = std::thread::Builder::new()
         .name("naadf-actor".into())
-        .spawn(move || actor.run(req_rx, notify))?;
+        .spawn(move || pool.install(|| actor.run(req_rx, notify)))?;
 
     let grpc_listener = tokio::net::TcpListener::bind(config.grpc)
         .await
