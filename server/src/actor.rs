@@ -339,24 +339,19 @@ impl Actor {
         }
         let (batch, kind) = match action {
             Action::Batch(b) => (b, EntryKind::Edit),
-            Action::Undo => match self.histories.next_undo(&user) {
-                Some(r) => (r.undo_batch(&self.world), EntryKind::Undo),
-                None => {
+            history => {
+                let (record, kind, what) = match history {
+                    Action::Undo => (self.histories.next_undo(&user), EntryKind::Undo, "undo"),
+                    _ => (self.histories.next_redo(&user), EntryKind::Redo, "redo"),
+                };
+                let Some(record) = record else {
                     let _ = reply.send(Err(Status::failed_precondition(format!(
-                        "user '{user}' has nothing to undo"
+                        "user '{user}' has nothing to {what}"
                     ))));
                     return;
-                }
-            },
-            Action::Redo => match self.histories.next_redo(&user) {
-                Some(r) => (r.undo_batch(&self.world), EntryKind::Redo),
-                None => {
-                    let _ = reply.send(Err(Status::failed_precondition(format!(
-                        "user '{user}' has nothing to redo"
-                    ))));
-                    return;
-                }
-            },
+                };
+                (record.undo_batch(&self.world), kind)
+            }
         };
         let applied = match self.world.apply(&batch, &self.limits) {
             Ok(a) => a,
