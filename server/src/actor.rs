@@ -294,7 +294,7 @@ impl Actor {
                 let _ = reply.send(StatusInfo {
                     size: self.world.size().voxels(),
                     version: self.world.version(),
-                    growth_seq: self.view().growth_seq,
+                    growth_seq: self.world.growth_seq(),
                     quiescent: self.world.is_quiescent(),
                     digest: self.world.digest(),
                 });
@@ -306,12 +306,11 @@ impl Actor {
 
     fn view(&mut self) -> &Arc<SnapshotView> {
         let w = &self.world;
-        let growth_seq = self.last_growth_seq();
         self.view.get_or_insert_with(|| {
             Arc::new(SnapshotView {
                 size: w.size().voxels(),
                 version: w.version(),
-                growth_seq,
+                growth_seq: w.growth_seq(),
                 quiescent: w.is_quiescent(),
                 digest: w.digest(),
                 lens: self.pages.lens(),
@@ -319,10 +318,6 @@ impl Actor {
                 entity_table: w.entity_table().encode(),
             })
         })
-    }
-
-    fn last_growth_seq(&self) -> u32 {
-        self.world.growth_seq()
     }
 
     fn edit(&mut self, user: String, client_seq: u64, action: Action, reply: oneshot::Sender<EditResult>) {
