@@ -3,7 +3,7 @@
 
 mod support;
 
-use naadf_client::{Client, Mirror, connect};
+use naadf_client::{Client, Ended, Mirror, MirrorError, connect};
 use naadf_proto::requests::{entity_pose, entity_spawn};
 use naadf_proto::v1::{
     DespawnEntitiesRequest, EditRequest, HistoryRequest, MoveEntitiesRequest, SpawnEntitiesRequest, StatusRequest,
@@ -11,6 +11,7 @@ use naadf_proto::v1::{
 };
 use naadf_world::digest::BufferId;
 use naadf_world::{World, file};
+use std::ops::ControlFlow;
 use std::path::Path;
 use std::time::Duration;
 use support::{Server, ok, p};
@@ -70,16 +71,20 @@ impl Follower {
         let (tx, state) = watch::channel(None);
         let (stop, mut stopped) = watch::channel(false);
         let task = tokio::spawn(async move {
-            loop {
-                let m = tokio::select! {
-                    m = stream.message() => m.expect("stream error").expect("stream ended"),
-                    _ = stopped.changed() => return mirror,
-                };
-                mirror.handle(&m).expect("mirror follows the stream");
-                if let Some(w) = mirror.world().filter(|_| mirror.is_live()) {
-                    let _ = tx.send(Some((w.version(), w.digest().to_string(), mirror.is_quiescent())));
-                }
-            }
+            let stop = async move {
+                let _ = stopped.changed().await;
+            };
+            let ended = mirror
+                .follow(&mut stream, stop, |mirror| -> Result<ControlFlow<()>, MirrorError> {
+                    if let Some(w) = mirror.world().filter(|_| mirror.is_live()) {
+                        let _ = tx.send(Some((w.version(), w.digest().to_string(), mirror.is_quiescent())));
+                    }
+                    Ok(ControlFlow::Continue(()))
+                })
+                .await
+                .expect("mirror follows the stream");
+            assert_eq!(ended, Ended::Stopped(()), "the stream ended early");
+            mirror
         });
         Follower { state, stop, task }
     }

@@ -11,4 +11,4 @@ pub mod connect;
 pub mod mirror;
 
 pub use connect::{Client, connect};
-pub use mirror::{Mirror, MirrorError, Progress};
+pub use mirror::{Ended, Mirror, MirrorError, Progress};

@@ -35,6 +35,9 @@ pub enum MirrorError {
     /// A snapshot did not assemble into a valid world.
     #[error(transparent)]
     Snapshot(#[from] WireError),
+    /// The stream itself failed (a gRPC status).
+    #[error("stream failed: {0}")]
+    Stream(Box<tonic::Status>),
     /// After a delta the mirror's digest differs from the server's.
     #[error("digest mismatch at version {version} step {growth_seq}: mirror {mirror}, server {server}")]
     Diverged {
@@ -47,6 +50,17 @@ pub enum MirrorError {
         /// The server's.
         server: Digest,
     },
+}
+
+/// How [`Mirror::follow`] ended.
+#[derive(Debug, PartialEq, Eq)]
+pub enum Ended<T> {
+    /// The server ended the stream.
+    Stream,
+    /// The `stop` future resolved, with this value.
+    Stopped(T),
+    /// The `seen` callback asked to stop.
+    Done,
 }
 
 /// Counters of what the mirror received.
@@ -189,6 +203,28 @@ impl Mirror {
                 self.quiescent = decoded.quiescent;
                 self.growth_seq = decoded.growth_seq;
                 Ok(Progress::Delta)
+            }
+        }
+    }
+
+    /// Applies `stream` until the server ends it, `stop` resolves, or `seen` — called after
+    /// every message — breaks. Errors of the stream, the mirror and `seen` end it too.
+    pub async fn follow<T, E: From<MirrorError>>(
+        &mut self,
+        stream: &mut tonic::Streaming<WorldMessage>,
+        stop: impl std::future::Future<Output = T>,
+        mut seen: impl FnMut(&Mirror) -> Result<std::ops::ControlFlow<()>, E>,
+    ) -> Result<Ended<T>, E> {
+        tokio::pin!(stop);
+        loop {
+            let m = tokio::select! {
+                m = stream.message() => m.map_err(|s| MirrorError::Stream(Box::new(s)))?,
+                v = &mut stop => return Ok(Ended::Stopped(v)),
+            };
+            let Some(m) = m else { return Ok(Ended::Stream) };
+            self.handle(&m)?;
+            if seen(self)?.is_break() {
+                return Ok(Ended::Done);
             }
         }
     }

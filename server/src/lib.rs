@@ -27,7 +27,7 @@ pub mod service;
 pub mod store;
 pub mod wal;
 
-pub use serve::{Bound, ServerConfig, serve};
+pub use serve::{Bound, DEFAULT_DATA, DEFAULT_GRPC, DEFAULT_HTTP, ServerConfig, serve};
 
 use actor::{Request, StatusInfo};
 use governor::{DefaultKeyedRateLimiter, Quota};

@@ -49,14 +49,21 @@ pub struct ServerConfig {
     pub tls: Option<(PathBuf, PathBuf)>,
 }
 
-impl ServerConfig {
-    /// The documented defaults: gRPC on 127.0.0.1:50051, HTTP on 127.0.0.1:8080, data in
-    /// `./naadf-data`, open (no tokens).
-    pub fn new(data: PathBuf) -> Self {
+/// The default gRPC listen address.
+pub const DEFAULT_GRPC: &str = "127.0.0.1:50051";
+/// The default HTTP listen address.
+pub const DEFAULT_HTTP: &str = "127.0.0.1:8080";
+/// The default data directory.
+pub const DEFAULT_DATA: &str = "naadf-data";
+
+impl Default for ServerConfig {
+    /// The documented defaults (docs/PROTOCOL.md): gRPC on [`DEFAULT_GRPC`], HTTP on
+    /// [`DEFAULT_HTTP`], data in [`DEFAULT_DATA`], open (no tokens).
+    fn default() -> Self {
         Self {
-            grpc: "127.0.0.1:50051".parse().expect("address"),
-            http: "127.0.0.1:8080".parse().expect("address"),
-            data,
+            grpc: DEFAULT_GRPC.parse().expect("address"),
+            http: DEFAULT_HTTP.parse().expect("address"),
+            data: PathBuf::from(DEFAULT_DATA),
             auth: Auth::open(),
             limits: Limits::default(),
             max_message_bytes: 16 << 20,
@@ -65,6 +72,16 @@ impl ServerConfig {
             checkpoint_interval: Duration::from_secs(300),
             slow_client_events: 4096,
             tls: None,
+        }
+    }
+}
+
+impl ServerConfig {
+    /// The defaults, with the data directory `data`.
+    pub fn new(data: PathBuf) -> Self {
+        Self {
+            data,
+            ..Self::default()
         }
     }
 }

@@ -106,19 +106,10 @@ impl DataDir {
         let mut bytes = STATE_MAGIC.to_vec();
         bytes.extend_from_slice(&xxh3_64(&payload).to_le_bytes());
         bytes.extend_from_slice(&payload);
-        let tmp = state_path.with_extension("state.tmp");
-        let io = |what: &str, p: &Path| {
-            let what = format!("{what} {}", p.display());
-            move |e| StoreError::Io(what, e)
-        };
-        {
-            use std::io::Write;
-            let mut f = File::create(&tmp).map_err(io("cannot create", &tmp))?;
-            f.write_all(&bytes).map_err(io("cannot write", &tmp))?;
-            f.sync_all().map_err(io("cannot fsync", &tmp))?;
-        }
-        std::fs::rename(&tmp, &state_path).map_err(io("cannot rename", &tmp))?;
-        wal::sync_dir(&self.path)?;
+        file::save_atomically(&state_path, &mut |out| {
+            out.write_all(&bytes)
+                .map_err(|e| naadf_world::WorldError::io(format!("cannot write {}", state_path.display()), e))
+        })?;
         file::save_parts(parts, &world_path)?;
         Ok(())
     }

@@ -15,6 +15,7 @@ use naadf_world::raysets::SplitMix64;
 use serde::Serialize;
 use std::collections::HashMap;
 use std::net::SocketAddr;
+use std::ops::ControlFlow;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::{Duration, Instant};
@@ -162,22 +163,22 @@ async fn follow(url: &str, cache: Option<World>) -> Result<Follower> {
     let received = bytes.clone();
     let task = tokio::spawn(async move {
         let mut times = Vec::new();
-        loop {
-            let m = tokio::select! {
-                m = stream.message() => m?,
-                _ = stopped.changed() => break,
-            };
-            let Some(m) = m else { break };
-            mirror.handle(&m)?;
-            received.store(mirror.stats.bytes, Ordering::Relaxed);
-            if let Some(w) = mirror.world().filter(|_| mirror.is_live()) {
-                let v = w.version();
-                if times.last().is_none_or(|&(last, _)| last < v) {
-                    times.push((v, Instant::now()));
+        let stop = async move {
+            let _ = stopped.changed().await;
+        };
+        mirror
+            .follow(&mut stream, stop, |mirror| -> Result<ControlFlow<()>> {
+                received.store(mirror.stats.bytes, Ordering::Relaxed);
+                if let Some(w) = mirror.world().filter(|_| mirror.is_live()) {
+                    let v = w.version();
+                    if times.last().is_none_or(|&(last, _)| last < v) {
+                        times.push((v, Instant::now()));
+                    }
+                    let _ = applied_tx.send(Some(v));
                 }
-                let _ = applied_tx.send(Some(v));
-            }
-        }
+                Ok(ControlFlow::Continue(()))
+            })
+            .await?;
         Ok((mirror, times))
     });
     Ok(Follower {

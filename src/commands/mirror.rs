@@ -3,8 +3,9 @@
 use super::remote::{ServerArgs, block_on, status_error};
 use super::{print_json, save_world};
 use anyhow::{Context, Result, bail};
-use naadf_client::Mirror;
+use naadf_client::{Ended, Mirror};
 use naadf_world::{World, file};
+use std::ops::ControlFlow;
 use std::path::PathBuf;
 use std::time::Duration;
 
@@ -129,6 +130,12 @@ pub fn run(a: Args) -> Result<()> {
     Ok(())
 }
 
+/// Why following stopped early.
+enum Stop {
+    Timeout,
+    Interrupted,
+}
+
 async fn follow(a: &Args, mirror: &mut Mirror) -> Result<()> {
     let mut client = a.server.connect().await?;
     let mut stream = client
@@ -139,44 +146,49 @@ async fn follow(a: &Args, mirror: &mut Mirror) -> Result<()> {
     let deadline = a
         .timeout
         .map(|s| tokio::time::Instant::now() + Duration::from_secs_f64(s));
-    let mut last_reported = None;
-    loop {
-        let msg = tokio::select! {
-            m = stream.message() => m.map_err(status_error)?,
+    let stop = async {
+        tokio::select! {
             _ = async {
                 match deadline {
                     Some(d) => tokio::time::sleep_until(d).await,
                     None => std::future::pending().await,
                 }
-            } => bail!("timed out after {} s before the server was quiescent", a.timeout.unwrap_or_default()),
-            _ = tokio::signal::ctrl_c() => return Ok(()),
-        };
-        let Some(msg) = msg else {
-            if a.once {
-                bail!("the server ended the stream before it was quiescent");
+            } => Stop::Timeout,
+            _ = tokio::signal::ctrl_c() => Stop::Interrupted,
+        }
+    };
+    let mut last_reported = None;
+    let ended = mirror
+        .follow(&mut stream, stop, |mirror| -> Result<ControlFlow<()>> {
+            if !mirror.is_quiescent() {
+                return Ok(ControlFlow::Continue(()));
             }
-            return Ok(());
-        };
-        mirror.handle(&msg)?;
-        if !mirror.is_quiescent() {
-            continue;
-        }
-        let w = mirror.world().expect("live");
-        let point = (w.version(), mirror.growth_seq());
-        if last_reported == Some(point) {
-            continue;
-        }
-        last_reported = Some(point);
-        if a.verify {
-            verify(w)?;
-        }
-        if a.once {
-            return Ok(());
-        }
-        if a.json {
-            print_json(&state(mirror))?;
-        } else {
-            println!("version {} digest {} (quiescent)", w.version(), w.digest());
-        }
+            let w = mirror.world().expect("live");
+            let point = (w.version(), mirror.growth_seq());
+            if last_reported == Some(point) {
+                return Ok(ControlFlow::Continue(()));
+            }
+            last_reported = Some(point);
+            if a.verify {
+                verify(w)?;
+            }
+            if a.once {
+                return Ok(ControlFlow::Break(()));
+            }
+            if a.json {
+                print_json(&state(mirror))?;
+            } else {
+                println!("version {} digest {} (quiescent)", w.version(), w.digest());
+            }
+            Ok(ControlFlow::Continue(()))
+        })
+        .await?;
+    match ended {
+        Ended::Stopped(Stop::Timeout) => bail!(
+            "timed out after {} s before the server was quiescent",
+            a.timeout.unwrap_or_default()
+        ),
+        Ended::Stream if a.once => bail!("the server ended the stream before it was quiescent"),
+        _ => Ok(()),
     }
 }

@@ -9,7 +9,7 @@ use std::path::PathBuf;
 #[derive(clap::Args, Clone, Debug)]
 pub struct ServerArgs {
     /// Server URL (`http://HOST:PORT`, or `https://` with TLS).
-    #[arg(long, env = "NAADF_SERVER", default_value = "http://127.0.0.1:50051")]
+    #[arg(long, env = "NAADF_SERVER", default_value_t = format!("http://{}", naadf_server::DEFAULT_GRPC))]
     pub server: String,
     /// Bearer token sent with every call.
     #[arg(long, env = "NAADF_TOKEN", hide_env_values = true)]

@@ -28,13 +28,13 @@ pub struct Args {
     seed: u64,
     /// Data directory: snapshots and the write-ahead log. An existing one is resumed (and
     /// --world / --generate are ignored).
-    #[arg(long, default_value = "naadf-data")]
+    #[arg(long, default_value = naadf_server::DEFAULT_DATA)]
     data: PathBuf,
     /// gRPC listen address.
-    #[arg(long, default_value = "127.0.0.1:50051")]
+    #[arg(long, default_value = naadf_server::DEFAULT_GRPC)]
     grpc: SocketAddr,
     /// HTTP listen address (/health, /metrics, status page).
-    #[arg(long, default_value = "127.0.0.1:8080")]
+    #[arg(long, default_value = naadf_server::DEFAULT_HTTP)]
     http: SocketAddr,
     /// Token file (TOML, `[[token]]` entries with token, user, role); tokens in the
     /// NAADF_TOKENS environment variable (`TOKEN=user:role,...`) are added.
@@ -47,25 +47,25 @@ pub struct Args {
     #[arg(long, requires = "tls_cert")]
     tls_key: Option<PathBuf>,
     /// Edits per second per user.
-    #[arg(long, default_value_t = 1000)]
+    #[arg(long, default_value_t = ServerConfig::default().rate)]
     rate: u32,
     /// Most ops per request.
-    #[arg(long, default_value_t = 4096)]
+    #[arg(long, default_value_t = ServerConfig::default().limits.max_ops)]
     max_ops: usize,
     /// Most voxels one fill op may cover.
-    #[arg(long, default_value_t = 1 << 27)]
+    #[arg(long, default_value_t = ServerConfig::default().limits.max_fill_volume)]
     max_fill: u64,
     /// Largest request message, in bytes.
-    #[arg(long, default_value_t = 16 << 20)]
+    #[arg(long, default_value_t = ServerConfig::default().max_message_bytes)]
     max_message_bytes: usize,
     /// Write a snapshot after this many edits.
-    #[arg(long, default_value_t = 10_000)]
+    #[arg(long, default_value_t = ServerConfig::default().checkpoint_every)]
     checkpoint_every: u64,
     /// And at least this often (seconds) while edits arrive.
-    #[arg(long, default_value_t = 300)]
+    #[arg(long, default_value_t = ServerConfig::default().checkpoint_interval.as_secs())]
     checkpoint_secs: u64,
     /// Deltas a client may fall behind before it is re-sent a snapshot.
-    #[arg(long, default_value_t = 4096)]
+    #[arg(long, default_value_t = ServerConfig::default().slow_client_events)]
     slow_client_events: usize,
     /// Print the bound addresses as one JSON line on stdout once serving.
     #[arg(long)]

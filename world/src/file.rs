@@ -404,19 +404,25 @@ fn decode_tables(
 /// directory is fsynced). A crash leaves either the old file or the new one, never a mix;
 /// on error the temporary file is removed.
 pub fn save(world: &World, path: &Path) -> Result<(), WorldError> {
-    save_with(path, &mut |out| write(world, out))
+    save_atomically(path, &mut |out| write(world, out))
 }
 
 /// [`save`] for raw parts (what a server snapshots while its world moves on).
 pub fn save_parts(parts: &WorldParts, path: &Path) -> Result<(), WorldError> {
-    save_with(path, &mut |out| write_parts(parts, out))
+    save_atomically(path, &mut |out| write_parts(parts, out))
 }
 
-/// Writes a file atomically with `write` (see [`save`]).
-fn save_with(path: &Path, write: &mut dyn FnMut(&mut dyn Write) -> Result<(), WorldError>) -> Result<(), WorldError> {
+/// Writes the file at `path` atomically with `write`: into a temporary file in the same
+/// directory, flushed and fsynced, then renamed over `path`, then the directory fsynced (see
+/// [`save`]). Other files that must survive a crash whole (a server's state files) use it
+/// too.
+pub fn save_atomically(
+    path: &Path,
+    write: &mut dyn FnMut(&mut dyn Write) -> Result<(), WorldError>,
+) -> Result<(), WorldError> {
     let name = path.file_name().ok_or_else(|| {
         WorldError::io(
-            format!("cannot save world to {}", path.display()),
+            format!("cannot save {}", path.display()),
             std::io::Error::new(std::io::ErrorKind::InvalidInput, "not a file name"),
         )
     })?;
