@@ -11,7 +11,7 @@ use std::io::{BufRead, BufReader};
 use std::path::Path;
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
-use support::{Server, http_get, naadf, ok, p};
+use support::{http_get, naadf, ok, p, serve_world};
 
 /// World edge in voxels; every test world is EDGE³.
 const EDGE: usize = 64;
@@ -143,9 +143,10 @@ fn roles_are_enforced() {
         "[[token]]\ntoken = \"admin-tok\"\nuser = \"root\"\nrole = \"admin\"\n",
     )
     .unwrap();
-    let server = Server::start(
-        &["--world", &world, "--data", &p(dir.path(), "data"), "--auth", &auth],
-        &dir.path().join("server.log"),
+    let server = serve_world(
+        dir.path(),
+        &world,
+        &["--auth", &auth],
         &[("NAADF_TOKENS", "view-tok=val:viewer,edit-tok=ed:editor")],
     );
     let url = server.url.as_str();
@@ -291,20 +292,10 @@ fn roles_are_enforced() {
 fn bad_requests_are_refused_and_the_world_is_unchanged() {
     let dir = tempfile::tempdir().unwrap();
     let world = make_world(dir.path());
-    let server = Server::start(
-        &[
-            "--world",
-            &world,
-            "--data",
-            &p(dir.path(), "data"),
-            "--max-ops",
-            "4",
-            "--max-fill",
-            "1000",
-            "--rate",
-            "1000000",
-        ],
-        &dir.path().join("server.log"),
+    let server = serve_world(
+        dir.path(),
+        &world,
+        &["--max-ops", "4", "--max-fill", "1000", "--rate", "1000000"],
         &[],
     );
     let url = server.url.as_str();
@@ -389,18 +380,7 @@ fn bad_requests_are_refused_and_the_world_is_unchanged() {
 
     // An oversized gRPC message: a set of 500 voxels against a 2000-byte cap.
     let dir2 = tempfile::tempdir().unwrap();
-    let server = Server::start(
-        &[
-            "--world",
-            &world,
-            "--data",
-            &p(dir2.path(), "data"),
-            "--max-message-bytes",
-            "2000",
-        ],
-        &dir2.path().join("server.log"),
-        &[],
-    );
+    let server = serve_world(dir2.path(), &world, &["--max-message-bytes", "2000"], &[]);
     let url = server.url.as_str();
     let start = settled(url, None);
     let voxels: Vec<String> = (0..500).map(|i| format!("[{},{},5,1]", i % 64, i / 64)).collect();
@@ -431,11 +411,7 @@ fn bad_requests_are_refused_and_the_world_is_unchanged() {
 fn rate_limit_refuses_bursts() {
     let dir = tempfile::tempdir().unwrap();
     let world = make_world(dir.path());
-    let server = Server::start(
-        &["--world", &world, "--data", &p(dir.path(), "data"), "--rate", "2"],
-        &dir.path().join("server.log"),
-        &[],
-    );
+    let server = serve_world(dir.path(), &world, &["--rate", "2"], &[]);
     let url = server.url.as_str();
     let ops = p(dir.path(), "ten.jsonl");
     let lines: String = (0..10)
@@ -572,11 +548,7 @@ fn non_loopback_without_tokens_refuses_to_start() {
 fn http_endpoints() {
     let dir = tempfile::tempdir().unwrap();
     let world = make_world(dir.path());
-    let server = Server::start(
-        &["--world", &world, "--data", &p(dir.path(), "data")],
-        &dir.path().join("server.log"),
-        &[],
-    );
+    let server = serve_world(dir.path(), &world, &[], &[]);
     let url = server.url.as_str();
     let http = server.http.as_str();
     let start = settled(url, None);
@@ -710,11 +682,7 @@ fn grpcurl_lists_and_calls() {
     };
     let dir = tempfile::tempdir().unwrap();
     let world = make_world(dir.path());
-    let server = Server::start(
-        &["--world", &world, "--data", &p(dir.path(), "data")],
-        &dir.path().join("server.log"),
-        &[],
-    );
+    let server = serve_world(dir.path(), &world, &[], &[]);
     let addr = server.url.strip_prefix("http://").unwrap().to_owned();
     let call = |args: &[&str]| {
         let mut all = vec!["-plaintext"];

@@ -14,7 +14,7 @@ use naadf_world::{World, file};
 use std::ops::ControlFlow;
 use std::path::Path;
 use std::time::Duration;
-use support::{Server, ok, p};
+use support::{Server, ok, p, serve_world};
 use tokio::sync::watch;
 use tokio::task::JoinHandle;
 
@@ -42,10 +42,7 @@ fn start_world(dir: &Path) -> String {
 /// `extra` arguments; returns the world file and the server.
 fn serve_fresh(dir: &Path, extra: &[&str]) -> (String, Server) {
     let world = start_world(dir);
-    let data = p(dir, "data");
-    let mut args = vec!["--world", world.as_str(), "--data", data.as_str()];
-    args.extend_from_slice(extra);
-    let server = Server::start(&args, &dir.join("log"), &[]);
+    let server = serve_world(dir, &world, extra, &[]);
     (world, server)
 }
 

@@ -133,6 +133,15 @@ impl Drop for Server {
     }
 }
 
+/// `naadf serve --world WORLD --data DIR/data EXTRA` with `envs`, logging to
+/// `DIR/server.log` (so restarts on the same directory resume the same data).
+pub fn serve_world(dir: &Path, world: &str, extra: &[&str], envs: &[(&str, &str)]) -> Server {
+    let data = p(dir, "data");
+    let mut args = vec!["--world", world, "--data", data.as_str()];
+    args.extend_from_slice(extra);
+    Server::start(&args, &dir.join("server.log"), envs)
+}
+
 /// An HTTP GET on loopback (status line and body), without a client library.
 pub fn http_get(addr: &str, path: &str) -> (u16, String) {
     use std::io::Read;
