@@ -12,3 +12,4 @@ pub mod mirror;
 
 pub use connect::{Client, connect};
 pub use mirror::{Ended, Mirror, MirrorError, Progress};
+pub mod gpu;

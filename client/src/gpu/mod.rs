@@ -1,0 +1,27 @@
+//! The GPU side of the client (wgpu): the world buffers on the device, the WGSL traversal
+//! and the renderer.
+//!
+//! - [`Gpu`]: instance, adapter, device and queue, chosen from the environment
+//!   (`WGPU_BACKEND`, `WGPU_ADAPTER_NAME`, `WGPU_POWER_PREF`), so the same code runs on
+//!   Mesa lavapipe and on a real GPU;
+//! - [`GpuWorld`]: the world buffers, byte for byte, kept in step with a [`World`] by
+//!   uploading the 64 KiB pages whose digest hash changed;
+//! - [`shaders`]: the WGSL of `shaders/`, assembled per pass with the bindings the
+//!   world's current buffer split needs;
+//! - [`RayTracer`]: traces lists of rays with any traversal method (tests against the
+//!   CPU, benchmarks);
+//! - [`Renderer`]: renders camera frames in the modes of [`Mode`].
+//!
+//! [`World`]: naadf_world::World
+
+mod context;
+mod pipeline;
+mod rays;
+mod render;
+pub mod shaders;
+mod world;
+
+pub use context::{Gpu, GpuError};
+pub use rays::{GpuHit, GpuRay, RayBatch, RayTracer};
+pub use render::{DEFAULT_SUN, Frame, GBUFFER_MAGIC, Mode, Renderer, STEPS_FULL_SCALE, write_gbuffer};
+pub use world::{DEFAULT_MAX_STEPS, GPU_BUFFERS, GpuWorld, Upload};

@@ -1,0 +1,106 @@
+//! Compute pipelines of one pass, built on demand for each buffer split and variant.
+
+use super::context::{Gpu, GpuError};
+use super::shaders::{self, Loop, Pass, Split};
+use super::world::GpuWorld;
+use std::collections::HashMap;
+
+/// The pipelines of one pass: group 0 is the world ([`GpuWorld::layout`]), group 1 the
+/// pass's own bindings (a uniform, then storage buffers).
+pub(crate) struct PassPipelines {
+    pass: Pass,
+    group1: wgpu::BindGroupLayout,
+    cache: HashMap<(Split, Loop, bool), wgpu::ComputePipeline>,
+}
+
+impl PassPipelines {
+    /// Pipelines for `pass`, whose group 1 is a uniform followed by storage buffers with
+    /// the given read-only flags.
+    pub fn new(gpu: &Gpu, pass: Pass, storage_read_only: &[bool]) -> Self {
+        let mut entries = vec![entry(0, wgpu::BufferBindingType::Uniform)];
+        for (i, &read_only) in storage_read_only.iter().enumerate() {
+            entries.push(entry(i as u32 + 1, wgpu::BufferBindingType::Storage { read_only }));
+        }
+        let group1 = gpu.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some(pass.entry()),
+            entries: &entries,
+        });
+        PassPipelines {
+            pass,
+            group1,
+            cache: HashMap::new(),
+        }
+    }
+
+    /// The group-1 layout.
+    pub fn group1(&self) -> &wgpu::BindGroupLayout {
+        &self.group1
+    }
+
+    /// The pipeline for the world's current split, world loop `lp` and (for the
+    /// hierarchy) whether AADFs are used (a cheap handle to the cached pipeline).
+    pub fn get(
+        &mut self,
+        gpu: &Gpu,
+        world: &GpuWorld,
+        lp: Loop,
+        aadf: bool,
+    ) -> Result<wgpu::ComputePipeline, GpuError> {
+        let key = (world.split(), lp, aadf);
+        if !self.cache.contains_key(&key) {
+            let src = shaders::source(self.pass, lp, &key.0);
+            let pipeline = gpu.checked(|| {
+                let module = gpu.device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                    label: Some(self.pass.entry()),
+                    source: wgpu::ShaderSource::Wgsl(src.into()),
+                });
+                let layout = gpu.device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                    label: Some(self.pass.entry()),
+                    bind_group_layouts: &[Some(world.layout()), Some(&self.group1)],
+                    immediate_size: 0,
+                });
+                let constants: &[(&str, f64)] = match lp {
+                    Loop::Hierarchy => &[("USE_AADF", if aadf { 1.0 } else { 0.0 })],
+                    Loop::Grid => &[],
+                };
+                gpu.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                    label: Some(self.pass.entry()),
+                    layout: Some(&layout),
+                    module: &module,
+                    entry_point: Some(self.pass.entry()),
+                    compilation_options: wgpu::PipelineCompilationOptions {
+                        constants,
+                        ..Default::default()
+                    },
+                    cache: None,
+                })
+            })?;
+            self.cache.insert(key, pipeline);
+        }
+        Ok(self.cache[&key].clone())
+    }
+}
+
+fn entry(binding: u32, ty: wgpu::BufferBindingType) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+/// Splits `groups` workgroups into a 2D dispatch within the per-dimension limit; returns
+/// `(x, y)` with `x · y ≥ groups`.
+pub(crate) fn dispatch_2d(groups: u32) -> (u32, u32) {
+    const MAX: u32 = 65535;
+    if groups <= MAX {
+        (groups.max(1), 1)
+    } else {
+        (MAX, groups.div_ceil(MAX))
+    }
+}

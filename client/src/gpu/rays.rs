@@ -1,0 +1,212 @@
+//! [`RayTracer`]: traces lists of rays on the GPU with any traversal method, for the
+//! GPU-against-CPU tests and the traversal benchmark.
+
+use super::context::{Gpu, GpuError};
+use super::pipeline::{PassPipelines, dispatch_2d};
+use super::shaders::{Loop, Pass};
+use super::world::GpuWorld;
+use naadf_world::traverse::{Hit, Method, Ray};
+use wgpu::util::DeviceExt;
+
+/// Workgroup size of the ray pass (`shaders/rays.wgsl`).
+const WORKGROUP: u32 = 64;
+/// Words per result.
+const RESULT_WORDS: usize = 8;
+/// The largest f32 below 1: an origin's fraction must stay in [0, 1).
+const BELOW_ONE: f32 = 0.999_999_94;
+
+/// A ray as the GPU receives it: the origin is split into its floor (`i32`) and an `f32`
+/// fraction, the direction is rounded to `f32` and **not** renormalised (renormalising in
+/// `f32` would move the line; the GPU measures distances with the direction's length).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GpuRay {
+    /// Origin.
+    pub origin: [f64; 3],
+    /// Direction (any length).
+    pub dir: [f64; 3],
+}
+
+impl From<&Ray> for GpuRay {
+    fn from(r: &Ray) -> Self {
+        GpuRay {
+            origin: r.origin(),
+            dir: r.dir(),
+        }
+    }
+}
+
+/// The origin split as the shaders take it: integer part and `f32` fraction in [0, 1).
+pub(crate) fn split_origin(o: [f64; 3]) -> ([i32; 3], [f32; 3]) {
+    let int = o.map(|v| v.floor());
+    let frac: [f32; 3] = std::array::from_fn(|a| ((o[a] - int[a]) as f32).min(BELOW_ONE));
+    (int.map(|v| v as i32), frac)
+}
+
+/// One GPU result: the hit (as the CPU reports it), and whether the step budget ran out
+/// (which counts as a miss).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GpuHit {
+    /// The first solid voxel, or `None`.
+    pub hit: Option<Hit>,
+    /// The ray ran out of steps.
+    pub exhausted: bool,
+    /// Cells visited (also for misses).
+    pub steps: u32,
+}
+
+/// Rays uploaded once, traced any number of times (benchmarks time [`RayTracer::run`]).
+pub struct RayBatch {
+    count: u32,
+    hits: wgpu::Buffer,
+    bind_group: wgpu::BindGroup,
+}
+
+/// The ray-list pass.
+pub struct RayTracer {
+    pipes: PassPipelines,
+}
+
+impl RayTracer {
+    /// Prepares the pass (pipelines are built on first use).
+    pub fn new(gpu: &Gpu) -> Self {
+        RayTracer {
+            pipes: PassPipelines::new(gpu, Pass::Rays, &[true, false]),
+        }
+    }
+
+    /// Uploads `rays`.
+    pub fn upload(&self, gpu: &Gpu, rays: &[GpuRay]) -> Result<RayBatch, GpuError> {
+        let count = u32::try_from(rays.len())
+            .ok()
+            .filter(|&n| {
+                u64::from(n) * (RESULT_WORDS as u64 * 4) <= u64::from(gpu.limits.max_storage_buffer_binding_size)
+            })
+            .ok_or_else(|| GpuError::Unsupported(format!("{} rays exceed one batch", rays.len())))?;
+        let mut words: Vec<u32> = Vec::with_capacity(rays.len() * 12);
+        for r in rays {
+            let (int, frac) = split_origin(r.origin);
+            let d = r.dir.map(|v| v as f32);
+            words.extend(int.map(|v| v as u32));
+            words.push(0);
+            words.extend(frac.map(f32::to_bits));
+            words.push(0);
+            words.extend(d.map(f32::to_bits));
+            words.push(0);
+        }
+        if words.is_empty() {
+            words.resize(12, 0);
+        }
+        let groups = count.div_ceil(WORKGROUP);
+        let (gx, _) = dispatch_2d(groups);
+        let uniform = gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("ray count"),
+            contents: bytemuck::cast_slice(&[count, gx * WORKGROUP, 0, 0]),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let rays_buf = gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("rays"),
+            contents: bytemuck::cast_slice(&words),
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+        let hits = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("hits"),
+            size: (u64::from(count) * RESULT_WORDS as u64 * 4).max(32),
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let bind_group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("rays"),
+            layout: self.pipes.group1(),
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: uniform.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: rays_buf.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: hits.as_entire_binding(),
+                },
+            ],
+        });
+        Ok(RayBatch {
+            count,
+            hits,
+            bind_group,
+        })
+    }
+
+    /// Traces every ray of `batch` with `method` and waits for the device to finish.
+    /// The grid method needs [`GpuWorld::upload_grid`] first.
+    pub fn run(&mut self, gpu: &Gpu, world: &GpuWorld, batch: &RayBatch, method: Method) -> Result<(), GpuError> {
+        let (lp, aadf) = match method {
+            Method::Naadf => (Loop::Hierarchy, true),
+            Method::Nodf => (Loop::Hierarchy, false),
+            Method::Grid => (Loop::Grid, false),
+        };
+        let pipeline = self.pipes.get(gpu, world, lp, aadf)?;
+        gpu.checked(|| {
+            let mut enc = gpu.device.create_command_encoder(&Default::default());
+            {
+                let mut pass = enc.begin_compute_pass(&Default::default());
+                pass.set_pipeline(&pipeline);
+                pass.set_bind_group(0, world.bind_group(), &[]);
+                pass.set_bind_group(1, &batch.bind_group, &[]);
+                let (gx, gy) = dispatch_2d(batch.count.div_ceil(WORKGROUP));
+                pass.dispatch_workgroups(gx, gy, 1);
+            }
+            gpu.queue.submit([enc.finish()]);
+        })?;
+        gpu.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| GpuError::Readback(e.to_string()))?;
+        Ok(())
+    }
+
+    /// The results of the last [`RayTracer::run`] of `batch`.
+    pub fn results(&self, gpu: &Gpu, batch: &RayBatch) -> Result<Vec<GpuHit>, GpuError> {
+        let bytes = gpu.read_buffer(&batch.hits, u64::from(batch.count) * RESULT_WORDS as u64 * 4)?;
+        let words: &[u32] = bytemuck::cast_slice(&bytes);
+        Ok(words.chunks_exact(RESULT_WORDS).map(decode).collect())
+    }
+
+    /// Uploads, traces and reads back `rays` in one go.
+    pub fn trace(
+        &mut self,
+        gpu: &Gpu,
+        world: &GpuWorld,
+        rays: &[GpuRay],
+        method: Method,
+    ) -> Result<Vec<GpuHit>, GpuError> {
+        let batch = self.upload(gpu, rays)?;
+        self.run(gpu, world, &batch, method)?;
+        self.results(gpu, &batch)
+    }
+}
+
+fn decode(w: &[u32]) -> GpuHit {
+    let flags = w[0];
+    let hit = (flags & 1 != 0).then(|| {
+        let axis = (flags >> 4 & 3) as usize;
+        let mut normal = [0i32; 3];
+        if axis < 3 {
+            normal[axis] = if flags & 64 != 0 { 1 } else { -1 };
+        }
+        Hit {
+            voxel: [w[1], w[2], w[3]],
+            normal,
+            t: f64::from(f32::from_bits(w[5])),
+            material: w[4] as u16,
+            steps: w[6],
+            entity: (w[7] != 0x3FFF).then_some(w[7]),
+        }
+    });
+    GpuHit {
+        hit,
+        exhausted: flags & 2 != 0,
+        steps: w[6],
+    }
+}

@@ -1,0 +1,230 @@
+//! [`Renderer`]: camera frames in the modes of [`Mode`] (docs/RENDERING.md).
+
+use super::context::{Gpu, GpuError};
+use super::pipeline::PassPipelines;
+use super::rays::split_origin;
+use super::shaders::{Loop, Pass};
+use super::world::GpuWorld;
+use naadf_world::camera::Camera;
+use std::io::Write;
+use wgpu::util::DeviceExt;
+
+/// What a frame shows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Mode {
+    /// The first-hit chain (primary hit plus up to 3 mirror bounces) shaded with albedo ×
+    /// (hard sun shadow + ambient) + emission, sky on a miss; deterministic.
+    Albedo,
+    /// Flat material colour of the primary hit (sRGB, no lighting; black on a miss).
+    Material,
+    /// The primary hit's world-space normal as `n · 0.5 + 0.5` (black on a miss).
+    Normal,
+    /// Heat map of the cells the primary ray visited.
+    Steps,
+}
+
+impl Mode {
+    /// Every mode, in CLI order.
+    pub const ALL: [Mode; 4] = [Mode::Albedo, Mode::Material, Mode::Normal, Mode::Steps];
+
+    /// The CLI name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Mode::Albedo => "albedo",
+            Mode::Material => "material",
+            Mode::Normal => "normal",
+            Mode::Steps => "steps",
+        }
+    }
+
+    /// Parses a CLI name.
+    pub fn parse(s: &str) -> Option<Mode> {
+        Mode::ALL.into_iter().find(|m| m.name() == s)
+    }
+
+    fn code(self) -> u32 {
+        match self {
+            Mode::Albedo => 0,
+            Mode::Material => 1,
+            Mode::Normal => 2,
+            Mode::Steps => 3,
+        }
+    }
+}
+
+/// The default sun direction: the reference's RotY(30°)·RotZ(60°)·(0, 1, 0).
+pub const DEFAULT_SUN: [f32; 3] = [-0.75, 0.5, 0.433_012_7];
+/// Step counts map onto the heat map's full range at this many cells.
+pub const STEPS_FULL_SCALE: f32 = 128.0;
+/// Largest frame edge.
+pub const MAX_EDGE: u32 = 16384;
+/// Magic bytes that open a first-hit buffer file ([`write_gbuffer`]).
+pub const GBUFFER_MAGIC: &[u8; 8] = b"NAADFGB1";
+
+/// A rendered frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Frame {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// RGBA8 pixels, rows from the top.
+    pub rgba: Vec<u8>,
+    /// Per pixel, the reference's `firstHitData` words (when asked for).
+    pub gbuffer: Option<Vec<[u32; 4]>>,
+}
+
+impl Frame {
+    /// The frame as PNG bytes.
+    pub fn png(&self) -> Result<Vec<u8>, GpuError> {
+        use image::ImageEncoder;
+        let mut out = Vec::new();
+        image::codecs::png::PngEncoder::new(&mut out)
+            .write_image(&self.rgba, self.width, self.height, image::ExtendedColorType::Rgba8)
+            .map_err(|e| GpuError::Readback(format!("PNG encoding: {e}")))?;
+        Ok(out)
+    }
+}
+
+/// Writes a first-hit buffer: [`GBUFFER_MAGIC`], width and height (u32 LE), then per pixel
+/// (rows from the top) the four u32 LE words of the reference's `firstHitData`.
+pub fn write_gbuffer(out: &mut dyn Write, width: u32, height: u32, words: &[[u32; 4]]) -> std::io::Result<()> {
+    out.write_all(GBUFFER_MAGIC)?;
+    out.write_all(&width.to_le_bytes())?;
+    out.write_all(&height.to_le_bytes())?;
+    out.write_all(bytemuck::cast_slice(words))
+}
+
+/// The frame pass.
+pub struct Renderer {
+    pipes: PassPipelines,
+    /// Unit direction toward the sun.
+    pub sun: [f32; 3],
+}
+
+impl Renderer {
+    /// Prepares the pass (pipelines are built on first use).
+    pub fn new(gpu: &Gpu) -> Self {
+        Renderer {
+            pipes: PassPipelines::new(gpu, Pass::Render, &[false, false]),
+            sun: DEFAULT_SUN,
+        }
+    }
+
+    /// Renders `camera`'s view of `world` at `width × height` in `mode`; with `gbuffer`,
+    /// also returns the first-hit records.
+    pub fn render(
+        &mut self,
+        gpu: &Gpu,
+        world: &GpuWorld,
+        camera: &Camera,
+        (width, height): (u32, u32),
+        mode: Mode,
+        gbuffer: bool,
+    ) -> Result<Frame, GpuError> {
+        let pixels = u64::from(width) * u64::from(height);
+        if width == 0
+            || height == 0
+            || width > MAX_EDGE
+            || height > MAX_EDGE
+            || pixels * 16 > u64::from(gpu.limits.max_storage_buffer_binding_size)
+        {
+            return Err(GpuError::Unsupported(format!(
+                "frame size {width}x{height}: each edge must be 1..={MAX_EDGE} and the frame small enough for one binding"
+            )));
+        }
+        let pipeline = self.pipes.get(gpu, world, Loop::Hierarchy, true)?;
+        let basis = camera.basis();
+        let a = (camera.fov_y.to_radians() / 2.0).tan();
+        let aspect = f64::from(width) / f64::from(height);
+        let (int, frac) = split_origin(camera.pos);
+        let v3 = |v: [f64; 3], s: f64| v.map(|c| ((c * s) as f32).to_bits());
+        let [fx, fy, fz] = v3(basis.forward, 1.0);
+        let [rx, ry, rz] = v3(basis.right, a * aspect);
+        let [ux, uy, uz] = v3(basis.up, a);
+        let sun = self.sun.map(f32::to_bits);
+        let view: [u32; 24] = [
+            int[0] as u32,
+            int[1] as u32,
+            int[2] as u32,
+            mode.code(),
+            frac[0].to_bits(),
+            frac[1].to_bits(),
+            frac[2].to_bits(),
+            width,
+            fx,
+            fy,
+            fz,
+            height,
+            rx,
+            ry,
+            rz,
+            u32::from(gbuffer),
+            ux,
+            uy,
+            uz,
+            (1.0 / STEPS_FULL_SCALE).to_bits(),
+            sun[0],
+            sun[1],
+            sun[2],
+            0,
+        ];
+        let uniform = gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("view"),
+            contents: bytemuck::cast_slice(&view),
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let storage = |label, size: u64| {
+            gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: size.max(16),
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            })
+        };
+        let colour = storage("pixels", pixels * 4);
+        let gbuf = storage("gbuffer", if gbuffer { pixels * 16 } else { 16 });
+        gpu.checked(|| {
+            let bind_group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("render"),
+                layout: self.pipes.group1(),
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: uniform.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: colour.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 2,
+                        resource: gbuf.as_entire_binding(),
+                    },
+                ],
+            });
+            let mut enc = gpu.device.create_command_encoder(&Default::default());
+            {
+                let mut pass = enc.begin_compute_pass(&Default::default());
+                pass.set_pipeline(&pipeline);
+                pass.set_bind_group(0, world.bind_group(), &[]);
+                pass.set_bind_group(1, &bind_group, &[]);
+                pass.dispatch_workgroups(width.div_ceil(8), height.div_ceil(8), 1);
+            }
+            gpu.queue.submit([enc.finish()]);
+        })?;
+        let rgba = gpu.read_buffer(&colour, pixels * 4)?;
+        let gbuffer = if gbuffer {
+            let bytes = gpu.read_buffer(&gbuf, pixels * 16)?;
+            Some(bytemuck::cast_slice::<u8, [u32; 4]>(&bytes).to_vec())
+        } else {
+            None
+        };
+        Ok(Frame {
+            width,
+            height,
+            rgba,
+            gbuffer,
+        })
+    }
+}

@@ -1,0 +1,372 @@
+//! [`GpuWorld`]: the world buffers on the device, kept byte for byte equal to a
+//! [`World`]'s.
+//!
+//! Syncing compares the world's 64 KiB page hashes (the ones its digest is made of, kept
+//! incrementally) with those of the pages last uploaded, and writes only the pages that
+//! differ with `write_buffer`: after a delta that is a handful of pages. Buffers grow by
+//! doubling (old contents are copied on the device). A buffer larger than the adapter's
+//! storage-binding limit is split into parts of `2^k` words, each its own binding; the
+//! shaders read it through a generated accessor ([`super::shaders::prelude`]).
+
+use super::context::{Gpu, GpuError};
+use super::shaders::{BUFFERS, Split};
+use naadf_world::digest::{BufferId, PAGE_BYTES};
+use naadf_world::{World, WorldError};
+
+/// The digested buffers that live on the GPU, in the binding order of [`BUFFERS`] (the
+/// model table is not a GPU buffer; the eighth binding, the dense grid, is not digested).
+pub const GPU_BUFFERS: [BufferId; 7] = [
+    BufferId::Chunks,
+    BufferId::ChunkEntities,
+    BufferId::Blocks,
+    BufferId::Voxels,
+    BufferId::Materials,
+    BufferId::EntityTypes,
+    BufferId::EntityInstances,
+];
+const GRID: usize = 7;
+/// Smallest part (and page) size in words: parts never split a 64 KiB page.
+const MIN_PART_WORDS: u64 = (PAGE_BYTES / 4) as u64;
+/// Smallest buffer allocated (bindings must not be empty).
+const MIN_BYTES: u64 = 16;
+/// Step budget of a ray unless set otherwise: far more cells than any ray crosses in
+/// the largest world with AADFs, a guard against runaway loops only.
+pub const DEFAULT_MAX_STEPS: u32 = 1 << 16;
+
+/// What one sync uploaded.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Upload {
+    /// Bytes written with `write_buffer`.
+    pub bytes: u64,
+    /// Pages written.
+    pub pages: usize,
+    /// Whether a buffer was reallocated (bind groups are rebuilt).
+    pub reallocated: bool,
+}
+
+/// One logical buffer: its parts on the device, logical length, and the page hashes of
+/// what was uploaded.
+struct Logical {
+    parts: Vec<wgpu::Buffer>,
+    len: u64,
+    hashes: Vec<u64>,
+}
+
+/// The world's buffers on a wgpu device.
+pub struct GpuWorld {
+    device: wgpu::Device,
+    queue: wgpu::Queue,
+    part_words: u64,
+    buffers: Vec<Logical>,
+    info: wgpu::Buffer,
+    info_words: [u32; 8],
+    layout: wgpu::BindGroupLayout,
+    bind_group: wgpu::BindGroup,
+    split: Split,
+    generation: u64,
+}
+
+impl std::fmt::Debug for GpuWorld {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "GpuWorld({:?}, generation {})", self.split, self.generation)
+    }
+}
+
+impl GpuWorld {
+    /// Uploads `world` to `gpu`, splitting buffers at the adapter's storage-binding limit.
+    pub fn new(gpu: &Gpu, world: &World) -> Result<Self, GpuError> {
+        let limit = u64::from(gpu.limits.max_storage_buffer_binding_size).min(gpu.limits.max_buffer_size);
+        Self::with_part_words(gpu, world, limit / 4)
+    }
+
+    /// As [`GpuWorld::new`], with parts of at most `max_part_words` words (rounded down to a
+    /// power of two, at least one 64 KiB page): tests use it to exercise splitting.
+    pub fn with_part_words(gpu: &Gpu, world: &World, max_part_words: u64) -> Result<Self, GpuError> {
+        let part_words = if max_part_words < MIN_PART_WORDS {
+            return Err(GpuError::Unsupported(format!(
+                "the adapter's storage-binding limit ({} bytes) is below one 64 KiB page",
+                max_part_words * 4
+            )));
+        } else {
+            1u64 << (63 - max_part_words.leading_zeros())
+        };
+        let device = gpu.device.clone();
+        let buffers: Vec<Logical> = (0..BUFFERS.len())
+            .map(|k| Logical {
+                parts: vec![new_part(&device, BUFFERS[k].0, MIN_BYTES)],
+                len: 0,
+                hashes: Vec::new(),
+            })
+            .collect();
+        let info = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("world info"),
+            size: 32,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let split = Split {
+            part_shift: part_words.trailing_zeros(),
+            parts: [1; 8],
+        };
+        let layout = bind_group_layout(&device, &split);
+        let bind_group = make_bind_group(&device, &layout, &info, &buffers);
+        let mut w = GpuWorld {
+            bind_group,
+            device,
+            queue: gpu.queue.clone(),
+            part_words,
+            buffers,
+            info,
+            info_words: [0; 8],
+            layout,
+            split,
+            generation: 0,
+        };
+        w.info_words[7] = DEFAULT_MAX_STEPS;
+        gpu.checked(|| w.sync(world))??;
+        Ok(w)
+    }
+
+    /// Uploads every page of `world` that differs from what the device holds. After it
+    /// the device buffers equal the world's, byte for byte, at their logical lengths.
+    pub fn sync(&mut self, world: &World) -> Result<Upload, GpuError> {
+        let mut up = Upload::default();
+        for (k, &id) in GPU_BUFFERS.iter().enumerate() {
+            let len = world.buffer_len(id) as u64;
+            up.reallocated |= self.reserve(k, len)?;
+            let hashes = world.page_hashes(id);
+            let stale: Vec<usize> = (0..hashes.len())
+                .filter(|&p| self.buffers[k].hashes.get(p) != Some(&hashes[p]))
+                .collect();
+            if !stale.is_empty() {
+                let bytes = world.buffer_bytes(id);
+                for p in stale {
+                    let lo = p * PAGE_BYTES;
+                    let hi = (lo + PAGE_BYTES).min(bytes.len());
+                    self.write(k, lo as u64, &bytes[lo..hi]);
+                    up.bytes += (hi - lo) as u64;
+                    up.pages += 1;
+                }
+            }
+            let b = &mut self.buffers[k];
+            b.hashes = hashes.to_vec();
+            b.len = len;
+        }
+        let size = world.size();
+        let [vx, vy, vz] = size.voxels();
+        let [cx, cy, cz] = size.chunks();
+        let has_entities = u32::from(!world.entity_instances().is_empty());
+        let words = [vx, vy, vz, has_entities, cx, cy, cz, self.info_words[7]];
+        if words != self.info_words || up.reallocated {
+            self.info_words = words;
+            self.queue.write_buffer(&self.info, 0, bytemuck::cast_slice(&words));
+        }
+        if up.reallocated {
+            self.rebind();
+        }
+        Ok(up)
+    }
+
+    /// Sets how many cells a ray may visit before it counts as a miss.
+    pub fn set_max_steps(&mut self, steps: u32) {
+        self.info_words[7] = steps.max(1);
+        self.queue
+            .write_buffer(&self.info, 0, bytemuck::cast_slice(&self.info_words));
+    }
+
+    /// Uploads a dense decode of `world` (16-bit material ids, x fastest) for the `grid`
+    /// traversal variant. It is a snapshot: later syncs do not update it.
+    pub fn upload_grid(&mut self, world: &World) -> Result<(), GpuError> {
+        let n = world.size().voxel_count();
+        let bytes = n * 2;
+        let max_bytes = self.part_words * 4 * 64;
+        if bytes > max_bytes {
+            return Err(GpuError::Unsupported(format!(
+                "a dense grid of {n} voxels ({} MiB) exceeds what the grid variant binds ({} MiB)",
+                bytes >> 20,
+                max_bytes >> 20
+            )));
+        }
+        let mut raw = Vec::with_capacity(bytes as usize);
+        world
+            .export_raw(&mut raw)
+            .map_err(|e| GpuError::Unsupported(format!("dense decode failed: {e}")))?;
+        if self.reserve(GRID, bytes)? {
+            self.rebind();
+        }
+        for (i, chunk) in raw.chunks(PAGE_BYTES).enumerate() {
+            // The grid is u16 pairs: pad an odd tail to a whole word.
+            let mut page = chunk.to_vec();
+            page.resize(page.len().next_multiple_of(4), 0);
+            self.write(GRID, (i * PAGE_BYTES) as u64, &page);
+        }
+        self.buffers[GRID].len = bytes;
+        Ok(())
+    }
+
+    /// Reads buffer `id` back from the device, at its logical length.
+    pub fn read_back(&self, gpu: &Gpu, id: BufferId) -> Result<Vec<u8>, GpuError> {
+        let k = GPU_BUFFERS
+            .iter()
+            .position(|&b| b == id)
+            .ok_or_else(|| GpuError::Unsupported(format!("{id:?} is not a GPU buffer")))?;
+        let b = &self.buffers[k];
+        let mut out = Vec::with_capacity(b.len as usize);
+        let part_bytes = self.part_words * 4;
+        for (p, buf) in b.parts.iter().enumerate() {
+            let start = p as u64 * part_bytes;
+            if start >= b.len {
+                break;
+            }
+            out.extend(gpu.read_buffer(buf, (b.len - start).min(part_bytes))?);
+        }
+        Ok(out)
+    }
+
+    /// The group-0 layout the passes' pipelines are built against.
+    pub fn layout(&self) -> &wgpu::BindGroupLayout {
+        &self.layout
+    }
+
+    /// The group-0 bind group (world uniform and buffers).
+    pub fn bind_group(&self) -> &wgpu::BindGroup {
+        &self.bind_group
+    }
+
+    /// How the buffers are currently split across bindings.
+    pub fn split(&self) -> Split {
+        self.split
+    }
+
+    /// Bumped whenever a buffer is reallocated (pipelines keyed on [`GpuWorld::split`]
+    /// stay valid; bind groups are already rebuilt).
+    pub fn generation(&self) -> u64 {
+        self.generation
+    }
+
+    /// Writes `bytes` at byte `offset` of logical buffer `k` (within one page).
+    fn write(&self, k: usize, offset: u64, bytes: &[u8]) {
+        let part_bytes = self.part_words * 4;
+        let part = (offset / part_bytes) as usize;
+        self.queue
+            .write_buffer(&self.buffers[k].parts[part], offset % part_bytes, bytes);
+    }
+
+    /// Makes logical buffer `k` hold `len` bytes: grows its last part by doubling (copying
+    /// its contents on the device) and adds parts. Returns whether anything was reallocated.
+    fn reserve(&mut self, k: usize, len: u64) -> Result<bool, GpuError> {
+        let part_bytes = self.part_words * 4;
+        let parts_needed = len.div_ceil(part_bytes).max(1) as usize;
+        let b = &self.buffers[k];
+        let last_cap = b.parts.last().map_or(0, |p| p.size());
+        let covered = (b.parts.len() as u64 - 1) * part_bytes + last_cap;
+        if covered >= len {
+            return Ok(false);
+        }
+        if parts_needed > 64 {
+            return Err(GpuError::Unsupported(format!(
+                "buffer {} needs {parts_needed} bindings of {} MiB; at most 64 are supported",
+                BUFFERS[k].0,
+                part_bytes >> 20
+            )));
+        }
+        let name = BUFFERS[k].0;
+        let mut enc = self.device.create_command_encoder(&Default::default());
+        let b = &mut self.buffers[k];
+        let old_last = b.parts.len() - 1;
+        for p in old_last..parts_needed {
+            let want = if p + 1 < parts_needed {
+                part_bytes
+            } else {
+                (len - p as u64 * part_bytes)
+                    .next_power_of_two()
+                    .clamp(MIN_BYTES, part_bytes)
+            };
+            let fresh = new_part(&self.device, name, want);
+            if p == old_last {
+                let old = &b.parts[p];
+                enc.copy_buffer_to_buffer(old, 0, &fresh, 0, old.size().min(want));
+                b.parts[p] = fresh;
+            } else {
+                b.parts.push(fresh);
+            }
+        }
+        self.queue.submit([enc.finish()]);
+        self.split.parts[k] = parts_needed as u32;
+        Ok(true)
+    }
+
+    /// Rebuilds the layout and bind group after a reallocation.
+    fn rebind(&mut self) {
+        self.layout = bind_group_layout(&self.device, &self.split);
+        self.bind_group = make_bind_group(&self.device, &self.layout, &self.info, &self.buffers);
+        self.generation += 1;
+    }
+}
+
+fn make_bind_group(
+    device: &wgpu::Device,
+    layout: &wgpu::BindGroupLayout,
+    info: &wgpu::Buffer,
+    buffers: &[Logical],
+) -> wgpu::BindGroup {
+    let mut entries = vec![wgpu::BindGroupEntry {
+        binding: 0,
+        resource: info.as_entire_binding(),
+    }];
+    for p in buffers.iter().flat_map(|b| &b.parts) {
+        entries.push(wgpu::BindGroupEntry {
+            binding: entries.len() as u32,
+            resource: p.as_entire_binding(),
+        });
+    }
+    device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("world"),
+        layout,
+        entries: &entries,
+    })
+}
+
+fn new_part(device: &wgpu::Device, name: &str, size: u64) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(name),
+        size,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    })
+}
+
+fn bind_group_layout(device: &wgpu::Device, split: &Split) -> wgpu::BindGroupLayout {
+    let mut entries = vec![wgpu::BindGroupLayoutEntry {
+        binding: 0,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }];
+    for b in 1..=split.bindings() {
+        entries.push(wgpu::BindGroupLayoutEntry {
+            binding: b,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only: true },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        });
+    }
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("world"),
+        entries: &entries,
+    })
+}
+
+impl From<WorldError> for GpuError {
+    fn from(e: WorldError) -> Self {
+        GpuError::Unsupported(e.to_string())
+    }
+}

@@ -1,0 +1,41 @@
+// The world loop over a dense grid (the `grid` method, Amanatides–Woo one voxel at a
+// time): the GPU twin o_frac world/src/traverse/grid.rs. `grid_word(i)` holds voxels 2i and
+// 2i + 1 (x fastest, then y, then z) as 16-bit material ids, low half first.
+
+
+fn grid_material(p: vec3<u32>) -> u32 {
+    let i = p.x + world_info.size.x * (p.y + world_info.size.y * p.z);
+    return (grid_word(i / 2u) >> (16u * (i & 1u))) & 0xFFFFu;
+}
+
+fn world_loop(r: Ray) -> WorldTrace {
+    let dims = vec3<i32>(world_info.size);
+    let entry = ray_entry(r, dims);
+    if !entry.ok {
+        return WorldTrace(no_hit(0u), END_MISSED, 0.0, 0.0);
+    }
+    var s = dda_start(r, entry);
+    let with_entities = world_info.has_entities != 0u;
+    var last_chunk = 0xFFFFFFFFu;
+    for (var steps = 1u; steps <= world_info.max_steps; steps++) {
+        let p = vec3<u32>(s.cell);
+        if with_entities {
+            let ci = chunk_index(p >> vec3<u32>(4u));
+            if ci != last_chunk {
+                last_chunk = ci;
+                record_field(r, chunk_entity_word(ci), entry.t);
+            }
+        }
+        let m = grid_material(p);
+        if m != 0u {
+            return WorldTrace(make_hit(r, s.cell, s.t, s.axis, m, steps), END_HIT, entry.t, s.t);
+        }
+        dda_advance(r, &s);
+        if any(s.cell < vec3<i32>(0)) || any(s.cell >= dims) {
+            return WorldTrace(no_hit(steps), END_LEFT, entry.t, s.t);
+        }
+    }
+    var h = no_hit(world_info.max_steps);
+    h.exhausted = true;
+    return WorldTrace(h, END_EXHAUSTED, entry.t, s.t);
+}

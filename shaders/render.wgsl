@@ -1,0 +1,187 @@
+// Pass: render one frame, one invocation per pixel (docs/RENDERING.md).
+//
+// Camera rays follow the camera contract (BRIEF §8): the host passes the camera position
+// split into integer and fraction, `forward`, and `right`/`up` already scaled by
+// a·W/H and a (a = tan(fov_y/2)), so that dir = forward + sx·right + sy·up with
+// sx = 2(px + 0.5)/W − 1 and sy = 1 − 2(py + 0.5)/H.
+//
+// Modes: 0 albedo, 1 material, 2 normal, 3 steps. Every pixel becomes one RGBA8 word;
+// with bit 0 o_frac `flags`, the pixel's first-hit record (the reference's `firstHitData`)
+// is written to `gbuffer` as well.
+
+struct View {
+    cam_oi: vec3<i32>,
+    mode: u32,
+    cam_of: vec3<f32>,
+    width: u32,
+    forward: vec3<f32>,
+    height: u32,
+    right: vec3<f32>,
+    flags: u32,
+    up: vec3<f32>,
+    steps_scale: f32,
+    sun: vec3<f32>,
+    _pad: u32,
+}
+
+@group(1) @binding(0) var<uniform> view: View;
+@group(1) @binding(1) var<storage, read_write> pixels: array<u32>;
+@group(1) @binding(2) var<storage, read_write> gbuffer: array<vec4<u32>>;
+
+const MODE_ALBEDO: u32 = 0u;
+const MODE_MATERIAL: u32 = 1u;
+const MODE_NORMAL: u32 = 2u;
+const MODE_STEPS: u32 = 3u;
+
+// Hit-plane sentinels o_frac the first-hit record (NAADF-REFERENCE §3.3).
+const HIT_NOTHING: u32 = 0x1FFFFu;
+const HIT_UNDEFINED: u32 = 0u;
+// Mirror segments a path may follow (the primary segment included).
+const MAX_SEGMENTS: u32 = 4u;
+const SUN_COLOR: vec3<f32> = vec3<f32>(1.0, 0.96, 0.88);
+// Cosine o_frac the sun disc's angular radius (about 1.8°).
+const SUN_DISC_COS: f32 = 0.9995;
+// Offset o_frac secondary-ray origins along the surface normal (NAADF-REFERENCE §8).
+const SURFACE_OFFSET: f32 = 0.01;
+
+fn srgb(c: vec3<f32>) -> vec3<f32> {
+    let x = clamp(c, vec3<f32>(0.0), vec3<f32>(1.0));
+    return select(1.055 * pow(x, vec3<f32>(1.0 / 2.4)) - 0.055, 12.92 * x, x <= vec3<f32>(0.0031308));
+}
+
+fn pack_rgb(c: vec3<f32>) -> u32 {
+    let b = vec3<u32>(floor(clamp(c, vec3<f32>(0.0), vec3<f32>(1.0)) * 255.0 + 0.5));
+    return b.x | (b.y << 8u) | (b.z << 16u) | 0xFF000000u;
+}
+
+// The sky: a vertical gradient plus the sun disc.
+fn sky(d: vec3<f32>) -> vec3<f32> {
+    let horizon = vec3<f32>(0.70, 0.80, 0.95);
+    var c: vec3<f32>;
+    if d.y >= 0.0 {
+        c = mix(horizon, vec3<f32>(0.20, 0.40, 0.80), sqrt(d.y));
+    } else {
+        c = mix(horizon, vec3<f32>(0.30, 0.28, 0.25), sqrt(-d.y));
+    }
+    if dot(d, view.sun) > SUN_DISC_COS {
+        c += 8.0 * SUN_COLOR;
+    }
+    return c;
+}
+
+// ACES filmic fit (Narkowicz 2015).
+fn tone_map(c: vec3<f32>) -> vec3<f32> {
+    return clamp((c * (2.51 * c + 0.03)) / (c * (2.43 * c + 0.59) + 0.14), vec3<f32>(0.0), vec3<f32>(1.0));
+}
+
+// Step-count heat map: blue → cyan → green → yellow → red over [0, 1].
+fn heat(v: f32) -> vec3<f32> {
+    let x = clamp(v, 0.0, 1.0) * 4.0;
+    return clamp(vec3<f32>(x - 2.0, select(x, 4.0 - x, x > 3.0), 2.0 - x), vec3<f32>(0.0), vec3<f32>(1.0));
+}
+
+// The 17-bit hit plane: normal id (1 −x, 2 +x, 3 −y, 4 +y, 5 −z, 6 +z; 7 = origin inside
+// the voxel) in bits 0–2, the plane's integer coordinate in bits 3–16.
+fn encode_plane(h: Hit) -> u32 {
+    if h.axis == NO_AXIS {
+        return 7u;
+    }
+    let positive = h.normal[h.axis] > 0;
+    let id = 2u * h.axis + select(1u, 2u, positive);
+    let coord = u32(h.voxel[h.axis] + select(0, 1, positive)) & 0x3FFFu;
+    return id | (coord << 3u);
+}
+
+// Follows the primary hit through up to MAX_SEGMENTS − 1 mirror bounces and shades the
+// first non-mirror surface: albedo × (hard sun shadow + ambient) + emission, Schlick
+// weights on mirrors, the sky on a miss. Returns the colour and writes the first-hit
+// record.
+fn shade_path(primary: Ray, first: Hit, gb: ptr<function, vec4<u32>>) -> vec3<f32> {
+    var r = primary;
+    var h = first;
+    var throughput = vec3<f32>(1.0);
+    var planes = array<u32, 4>(HIT_UNDEFINED, HIT_UNDEFINED, HIT_UNDEFINED, HIT_UNDEFINED);
+    var distance = 0.0;
+    var light = vec3<f32>(0.0);
+    var kind = KIND_DIFFUSE;
+    var mat_id = 0u;
+    var entity = NO_ENTITY;
+    for (var seg = 0u; seg < MAX_SEGMENTS; seg++) {
+        if seg > 0u {
+            h = trace(r);
+        }
+        let dn = r.d / r.len;
+        if !h.hit {
+            planes[seg] = HIT_NOTHING;
+            distance = -1.0;
+            light += throughput * sky(dn);
+            break;
+        }
+        planes[seg] = encode_plane(h);
+        distance += h.t / r.len;
+        let n = world_normal(h);
+        let m = material(h.material);
+        if m.kind == KIND_MIRROR {
+            if seg + 1u == MAX_SEGMENTS {
+                planes[seg] = HIT_NOTHING;
+                distance = -1.0;
+                break;
+            }
+            let cos_i = clamp(-dot(n, dn), 0.0, 1.0);
+            throughput *= m.albedo + (1.0 - m.albedo) * pow(1.0 - cos_i, 5.0);
+            let p = ray_local(r, h.t) + n * SURFACE_OFFSET;
+            r = ray_at(r, p, reflect(dn, n));
+            continue;
+        }
+        kind = m.kind;
+        mat_id = h.material;
+        entity = h.entity;
+        let p = ray_local(r, h.t) + n * SURFACE_OFFSET;
+        let shadow = trace(ray_at(r, p, view.sun));
+        let lit = select(1.0, 0.0, shadow.hit);
+        let direct = 2.0 * max(dot(n, view.sun), 0.0) * lit;
+        let ambient = 0.2 * max(dot(view.sun, normalize(n + 1.01 * view.sun)), 0.0);
+        var c = m.albedo * (direct + ambient) * SUN_COLOR;
+        if m.kind == KIND_EMISSIVE {
+            c += m.albedo * m.emission;
+        }
+        light += throughput * c;
+        break;
+    }
+    let dist_bits = pack2x16float(vec2<f32>(distance, 0.0)) & 0x7FFFu;
+    *gb = vec4<u32>(
+        entity | (planes[0] << 15u),
+        select(0u, 1u, kind != KIND_METAL) | (planes[1] << 15u),
+        mat_id | (planes[2] << 15u),
+        dist_bits | (planes[3] << 15u),
+    );
+    return light;
+}
+
+@compute @workgroup_size(8, 8)
+fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if gid.x >= view.width || gid.y >= view.height {
+        return;
+    }
+    let sx = 2.0 * (f32(gid.x) + 0.5) / f32(view.width) - 1.0;
+    let sy = 1.0 - 2.0 * (f32(gid.y) + 0.5) / f32(view.height);
+    let r = ray_new(view.cam_oi, view.cam_of, view.forward + sx * view.right + sy * view.up);
+    let h = trace(r);
+    var gb = vec4<u32>(0u);
+    var color = vec3<f32>(0.0);
+    if view.mode == MODE_ALBEDO || (view.flags & 1u) != 0u {
+        color = srgb(tone_map(shade_path(r, h, &gb)));
+    }
+    if view.mode == MODE_MATERIAL {
+        color = select(vec3<f32>(0.0), srgb(material(h.material).albedo), h.hit);
+    } else if view.mode == MODE_NORMAL {
+        color = select(vec3<f32>(0.0), world_normal(h) * 0.5 + 0.5, h.hit);
+    } else if view.mode == MODE_STEPS {
+        color = heat(f32(h.steps) * view.steps_scale);
+    }
+    let i = gid.x + gid.y * view.width;
+    pixels[i] = pack_rgb(color);
+    if (view.flags & 1u) != 0u {
+        gbuffer[i] = gb;
+    }
+}

@@ -1,0 +1,170 @@
+// One full trace: the world loop (traverse.wgsl or grid.wgsl), then the entities o_frac the
+// chunks it visited (NAADF-REFERENCE §3.4): the GPU twin o_frac world/src/entity/trace.rs.
+//
+// The world loop hands every chunk entity field it meets to `record_field`. Fields are
+// kept in a small list; when it fills up, its instances are tested at once, which gives
+// the same answer as testing them all at the end: each instance's first solid voxel
+// entered at or after the world entry is found whatever the limit, and only the nearest
+// (lowest id at equal times) survives, and only if it comes strictly before the world's
+// hit or exit.
+
+// How the world loop ended.
+const END_HIT: u32 = 0u;
+const END_LEFT: u32 = 1u;
+const END_MISSED: u32 = 2u;
+const END_EXHAUSTED: u32 = 3u;
+
+struct WorldTrace {
+    hit: Hit,
+    end: u32,
+    // When the ray entered the world, and when it hit or left it.
+    t_entry: f32,
+    t_end: f32,
+}
+
+const MAX_FIELDS: u32 = 16u;
+const RECORD_WORDS: u32 = 5u;
+const ENTITY_SOLID: u32 = 0x80000000u;
+
+var<private> fields: array<u32, MAX_FIELDS>;
+var<private> field_count: u32;
+var<private> best_entity: Hit;
+// The inverse rotation o_frac `best_entity`'s instance.
+var<private> best_rotation: vec4<f32>;
+// Entity-grid cells visited (added to the step count o_frac an entity hit).
+var<private> entity_steps: u32;
+
+fn record_field(r: Ray, field: u32, t_entry: f32) {
+    if field == 0u || (field_count > 0u && fields[field_count - 1u] == field) {
+        return;
+    }
+    if field_count == MAX_FIELDS {
+        flush_fields(r, t_entry);
+    }
+    fields[field_count] = field;
+    field_count += 1u;
+}
+
+fn flush_fields(r: Ray, t_entry: f32) {
+    for (var k = 0u; k < field_count; k++) {
+        let f = fields[k];
+        let first = f >> 8u;
+        for (var j = 0u; j < (f & 0xFFu); j++) {
+            test_instance(r, (first + j) * RECORD_WORDS, t_entry);
+        }
+    }
+    field_count = 0u;
+}
+
+// Decodes a smallest-three quaternion (world/src/entity/pack.rs).
+fn decode_quat(w0: u32, w1: u32) -> vec4<f32> {
+    let s = vec3<f32>(vec3<u32>(w0 & 0x3FFFu, (w0 >> 14u) & 0x3FFFu, (w0 >> 28u) | ((w1 & 0x3FFu) << 4u)));
+    let small = (s - 8192.0) / 8192.0;
+    let rest = sqrt(max(1.0 - dot(small, small), 0.0));
+    let k = (w1 >> 10u) & 3u;
+    if k == 0u {
+        return vec4<f32>(rest, small.x, small.y, small.z);
+    } else if k == 1u {
+        return vec4<f32>(small.x, rest, small.y, small.z);
+    } else if k == 2u {
+        return vec4<f32>(small.x, small.y, rest, small.z);
+    }
+    return vec4<f32>(small, rest);
+}
+
+// Rotates `v` by the unit quaternion `q = (x, y, z, w)`.
+fn rotate(q: vec4<f32>, v: vec3<f32>) -> vec3<f32> {
+    let t = 2.0 * cross(q.xyz, v);
+    return v + q.w * t + cross(q.xyz, t);
+}
+
+fn conjugate(q: vec4<f32>) -> vec4<f32> {
+    return vec4<f32>(-q.xyz, q.w);
+}
+
+// Tests one chunk-instance record against the ray; keeps the nearest entity hit.
+fn test_instance(r: Ray, at: u32, t_lo: f32) {
+    let dx = instance_word(at);
+    let dy = instance_word(at + 1u);
+    let dz = instance_word(at + 2u);
+    let dw = instance_word(at + 3u);
+    let e = instance_word(at + 4u);
+    let id = e & 0x3FFFu;
+    let size = vec3<u32>((e >> 14u) & 0x7Fu, (e >> 21u) & 0x7Fu, ((e >> 28u) & 0xFu) | (((dy >> 29u) & 7u) << 4u));
+    let pos = vec3<u32>(dx & 0x1FFFFFu, (dx >> 21u) | (((dy >> 21u) & 0xFFu) << 11u), dy & 0x1FFFFFu);
+    var limit = T_INF;
+    var equal_ok = false;
+    if best_entity.hit {
+        limit = best_entity.t;
+        equal_ok = id < best_entity.entity;
+    }
+    // The entity lies within |size| o_frac its local-origin corner: reject rays that pass
+    // farther (with slack for f32), before transforming anything.
+    let rel = vec3<f32>(r.o_int - vec3<i32>(pos >> vec3<u32>(7u))) + (r.o_frac - vec3<f32>(pos & vec3<u32>(127u)) / 128.0);
+    let tc = -dot(rel, r.d) / (r.len * r.len);
+    let radius = (length(vec3<f32>(size)) + 0.01) / r.len;
+    let closest = rel + r.d * tc;
+    if dot(closest, closest) > radius * radius * r.len * r.len || tc + radius < t_lo || tc - radius > limit {
+        return;
+    }
+    let q = decode_quat(dz, dw & 0xFFFu);
+    let local = ray_from(rotate(q, rel), rotate(q, r.d));
+    let isize = vec3<i32>(size);
+    let entry = ray_entry(local, isize);
+    if !entry.ok {
+        return;
+    }
+    let base = (dw >> 12u) * 64u;
+    var s = dda_start(local, entry);
+    loop {
+        entity_steps += 1u;
+        if s.t > limit || (s.t == limit && !equal_ok) {
+            return;
+        }
+        if s.t >= t_lo {
+            let c = vec3<u32>(s.cell);
+            let v = entity_type_word(base + c.x + size.x * (c.y + size.y * c.z));
+            if (v & ENTITY_SOLID) != 0u {
+                var h = make_hit(local, s.cell, s.t, s.axis, v & 0x7FFFu, 0u);
+                h.entity = id;
+                best_entity = h;
+                best_rotation = q;
+                return;
+            }
+        }
+        dda_advance(local, &s);
+        if any(s.cell < vec3<i32>(0)) || any(s.cell >= isize) {
+            return;
+        }
+    }
+}
+
+// The world-space normal o_frac the hit the last `trace` returned (entity-local normals are
+// rotated back to the world).
+fn world_normal(h: Hit) -> vec3<f32> {
+    let n = vec3<f32>(h.normal);
+    if h.entity == NO_ENTITY {
+        return n;
+    }
+    return rotate(conjugate(best_rotation), n);
+}
+
+// Traces `r` through the world and its entities.
+fn trace(r: Ray) -> Hit {
+    field_count = 0u;
+    entity_steps = 0u;
+    best_entity = no_hit(0u);
+    let w = world_loop(r);
+    if w.end == END_MISSED || w.end == END_EXHAUSTED {
+        return w.hit;
+    }
+    flush_fields(r, w.t_entry);
+    if best_entity.hit && best_entity.t < w.t_end {
+        var h = best_entity;
+        h.steps = w.hit.steps + entity_steps;
+        return h;
+    }
+    var h = w.hit;
+    h.steps += entity_steps;
+    return h;
+}
