@@ -1,5 +1,5 @@
 // The world loop over a dense grid (the `grid` method, Amanatides–Woo one voxel at a
-// time): the GPU twin o_frac world/src/traverse/grid.rs. `grid_word(i)` holds voxels 2i and
+// time): the GPU twin of world/src/traverse/grid.rs. `grid_word(i)` holds voxels 2i and
 // 2i + 1 (x fastest, then y, then z) as 16-bit material ids, low half first.
 
 

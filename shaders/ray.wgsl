@@ -3,11 +3,11 @@
 // A ray keeps its origin split into an integer part `o_int` and a fraction `o_frac` in [0, 1)
 // (NAADF-REFERENCE §3.1), so precision does not depend on where in the world it starts.
 // The direction `d` is kept exactly as given (not renormalised, which would move the line
-// by an f32 rounding): times are in units o_frac |d| and the ray's `len` converts them to
+// by an f32 rounding): times are in units of |d| and the ray's `len` converts them to
 // distances. Every decision compares plane-crossing times from the one function `t_at`,
-// so the traversal is a consistent walk o_frac the event order "(t, axis), x before y before
+// so the traversal is a consistent walk of the event order "(t, axis), x before y before
 // z at equal t"; it departs from the CPU's f64 order only where two crossings are within
-// f32 rounding o_frac each other.
+// f32 rounding of each other.
 
 const FAR: i32 = 1073741824;
 const T_INF: f32 = 3.0e38;
@@ -22,7 +22,7 @@ struct Ray {
 }
 
 fn ray_new(o_int: vec3<i32>, o_frac: vec3<f32>, d: vec3<f32>) -> Ray {
-    // The inverse o_frac a zero component is never read: such axes never cross a plane.
+    // The inverse of a zero component is never read: such axes never cross a plane.
     let safe = select(vec3<f32>(1.0), d, d != vec3<f32>(0.0));
     return Ray(o_int, o_frac, d, 1.0 / safe, length(d));
 }
@@ -44,18 +44,18 @@ fn ray_at(r: Ray, p: vec3<f32>, d: vec3<f32>) -> Ray {
     return ray_new(r.o_int + vec3<i32>(fl), min(p - fl, vec3<f32>(0.99999994)), d);
 }
 
-// Time at which the ray crosses plane `k` o_frac `axis`.
+// Time at which the ray crosses plane `k` of `axis`.
 fn t_at(r: Ray, a: u32, k: i32) -> f32 {
     return (f32(k - r.o_int[a]) - r.o_frac[a]) * r.inv[a];
 }
 
-// Whether the crossing o_frac plane `k` o_frac axis `b` comes before the event `(t, a)`.
+// Whether the crossing of plane `k` of axis `b` comes before the event `(t, a)`.
 fn crossed(r: Ray, b: u32, k: i32, t: f32, a: u32) -> bool {
     let tb = t_at(r, b, k);
     return tb < t || (tb == t && b < a);
 }
 
-// The cell o_frac axis `b` right after event `(t, a)`, known to lie in `lo..=hi`.
+// The cell of axis `b` right after event `(t, a)`, known to lie in `lo..=hi`.
 fn cell_after(r: Ray, b: u32, t: f32, a: u32, lo: i32, hi: i32) -> i32 {
     let d = r.d[b];
     if lo == hi || d == 0.0 {
@@ -146,7 +146,7 @@ fn ray_entry(r: Ray, size: vec3<i32>) -> Entry {
     return Entry(cell, bt, ba, true);
 }
 
-// Leaving the empty cuboid made o_frac `cell` extended by `skip` cells toward the ray on each
+// Leaving the empty cuboid made of `cell` extended by `skip` cells toward the ray on each
 // axis: the exit event and the cell entered by it.
 struct Exit {
     t: f32,
@@ -215,18 +215,18 @@ fn dda_advance(r: Ray, s: ptr<function, Dda>) {
     (*s).tmax[a] = t_at(r, a, select(c, c + 1, r.d[a] > 0.0));
 }
 
-// The first solid voxel along a ray (o_frac the world, or o_frac an entity: then voxel and normal
+// The first solid voxel along a ray (of the world, or of an entity: then voxel and normal
 // are entity-local).
 struct Hit {
     hit: bool,
     // The step budget ran out (counts as a miss).
     exhausted: bool,
     voxel: vec3<i32>,
-    // Axis o_frac the entry face (NO_AXIS: the origin was inside the voxel).
+    // Axis of the entry face (NO_AXIS: the origin was inside the voxel).
     axis: u32,
     // Entry-face normal (zero when the origin was inside).
     normal: vec3<i32>,
-    // Time o_frac entry, in units o_frac the ray's |d|.
+    // Time of entry, in units of the ray's |d|.
     t: f32,
     material: u32,
     steps: u32,

@@ -1,4 +1,4 @@
-// Pass: trace a list o_frac rays, one invocation each (GPU-against-CPU tests and the
+// Pass: trace a list of rays, one invocation each (GPU-against-CPU tests and the
 // traversal benchmark). Each result is eight words:
 //   0: bit 0 hit, bit 1 step budget exhausted, bits 4–5 entry axis (3 = origin inside),
 //      bit 6 set when the normal points along +axis
@@ -17,7 +17,7 @@ struct RayIn {
 
 struct RayCount {
     count: u32,
-    // Invocations per row o_frac the 2D dispatch.
+    // Invocations per row of the 2D dispatch.
     row: u32,
 }
 
@@ -44,7 +44,7 @@ fn trace_rays(@builtin(global_invocation_id) gid: vec3<u32>) {
     hits_out[o + 2u] = u32(h.voxel.y);
     hits_out[o + 3u] = u32(h.voxel.z);
     hits_out[o + 4u] = h.material;
-    hits_out[o + 5u] = bitcast<u32>(h.t / r.len);
+    hits_out[o + 5u] = bitcast<u32>(h.t * r.len);
     hits_out[o + 6u] = h.steps;
     hits_out[o + 7u] = h.entity;
 }

@@ -6,7 +6,7 @@
 // sx = 2(px + 0.5)/W − 1 and sy = 1 − 2(py + 0.5)/H.
 //
 // Modes: 0 albedo, 1 material, 2 normal, 3 steps. Every pixel becomes one RGBA8 word;
-// with bit 0 o_frac `flags`, the pixel's first-hit record (the reference's `firstHitData`)
+// with bit 0 of `flags`, the pixel's first-hit record (the reference's `firstHitData`)
 // is written to `gbuffer` as well.
 
 struct View {
@@ -33,15 +33,15 @@ const MODE_MATERIAL: u32 = 1u;
 const MODE_NORMAL: u32 = 2u;
 const MODE_STEPS: u32 = 3u;
 
-// Hit-plane sentinels o_frac the first-hit record (NAADF-REFERENCE §3.3).
+// Hit-plane sentinels of the first-hit record (NAADF-REFERENCE §3.3).
 const HIT_NOTHING: u32 = 0x1FFFFu;
 const HIT_UNDEFINED: u32 = 0u;
 // Mirror segments a path may follow (the primary segment included).
 const MAX_SEGMENTS: u32 = 4u;
 const SUN_COLOR: vec3<f32> = vec3<f32>(1.0, 0.96, 0.88);
-// Cosine o_frac the sun disc's angular radius (about 1.8°).
+// Cosine of the sun disc's angular radius (about 1.8°).
 const SUN_DISC_COS: f32 = 0.9995;
-// Offset o_frac secondary-ray origins along the surface normal (NAADF-REFERENCE §8).
+// Offset of secondary-ray origins along the surface normal (NAADF-REFERENCE §8).
 const SURFACE_OFFSET: f32 = 0.01;
 
 fn srgb(c: vec3<f32>) -> vec3<f32> {
@@ -118,7 +118,7 @@ fn shade_path(primary: Ray, first: Hit, gb: ptr<function, vec4<u32>>) -> vec3<f3
             break;
         }
         planes[seg] = encode_plane(h);
-        distance += h.t / r.len;
+        distance += h.t * r.len;
         let n = world_normal(h);
         let m = material(h.material);
         if m.kind == KIND_MIRROR {
@@ -167,17 +167,22 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
     let sy = 1.0 - 2.0 * (f32(gid.y) + 0.5) / f32(view.height);
     let r = ray_new(view.cam_oi, view.cam_of, view.forward + sx * view.right + sy * view.up);
     let h = trace(r);
-    var gb = vec4<u32>(0u);
+    // The diagnostic colour comes first: world_normal reads the entity rotation of the
+    // last trace, which shade_path's shadow and mirror traces overwrite.
     var color = vec3<f32>(0.0);
-    if view.mode == MODE_ALBEDO || (view.flags & 1u) != 0u {
-        color = srgb(tone_map(shade_path(r, h, &gb)));
-    }
     if view.mode == MODE_MATERIAL {
         color = select(vec3<f32>(0.0), srgb(material(h.material).albedo), h.hit);
     } else if view.mode == MODE_NORMAL {
         color = select(vec3<f32>(0.0), world_normal(h) * 0.5 + 0.5, h.hit);
     } else if view.mode == MODE_STEPS {
-        color = heat(f32(h.steps) * view.steps_scale);
+        color = heat(log2(1.0 + f32(h.steps)) * view.steps_scale);
+    }
+    var gb = vec4<u32>(0u);
+    if view.mode == MODE_ALBEDO || (view.flags & 1u) != 0u {
+        let shaded = srgb(tone_map(shade_path(r, h, &gb)));
+        if view.mode == MODE_ALBEDO {
+            color = shaded;
+        }
     }
     let i = gid.x + gid.y * view.width;
     pixels[i] = pack_rgb(color);

@@ -1,5 +1,5 @@
-// One full trace: the world loop (traverse.wgsl or grid.wgsl), then the entities o_frac the
-// chunks it visited (NAADF-REFERENCE §3.4): the GPU twin o_frac world/src/entity/trace.rs.
+// One full trace: the world loop (traverse.wgsl or grid.wgsl), then the entities of the
+// chunks it visited (NAADF-REFERENCE §3.4): the GPU twin of world/src/entity/trace.rs.
 //
 // The world loop hands every chunk entity field it meets to `record_field`. Fields are
 // kept in a small list; when it fills up, its instances are tested at once, which gives
@@ -29,9 +29,9 @@ const ENTITY_SOLID: u32 = 0x80000000u;
 var<private> fields: array<u32, MAX_FIELDS>;
 var<private> field_count: u32;
 var<private> best_entity: Hit;
-// The inverse rotation o_frac `best_entity`'s instance.
+// The inverse rotation of `best_entity`'s instance.
 var<private> best_rotation: vec4<f32>;
-// Entity-grid cells visited (added to the step count o_frac an entity hit).
+// Entity-grid cells visited (added to the step count of an entity hit).
 var<private> entity_steps: u32;
 
 fn record_field(r: Ray, field: u32, t_entry: f32) {
@@ -98,7 +98,7 @@ fn test_instance(r: Ray, at: u32, t_lo: f32) {
         limit = best_entity.t;
         equal_ok = id < best_entity.entity;
     }
-    // The entity lies within |size| o_frac its local-origin corner: reject rays that pass
+    // The entity lies within |size| of its local-origin corner: reject rays that pass
     // farther (with slack for f32), before transforming anything.
     let rel = vec3<f32>(r.o_int - vec3<i32>(pos >> vec3<u32>(7u))) + (r.o_frac - vec3<f32>(pos & vec3<u32>(127u)) / 128.0);
     let tc = -dot(rel, r.d) / (r.len * r.len);
@@ -139,7 +139,7 @@ fn test_instance(r: Ray, at: u32, t_lo: f32) {
     }
 }
 
-// The world-space normal o_frac the hit the last `trace` returned (entity-local normals are
+// The world-space normal of the hit the last `trace` returned (entity-local normals are
 // rotated back to the world).
 fn world_normal(h: Hit) -> vec3<f32> {
     let n = vec3<f32>(h.normal);

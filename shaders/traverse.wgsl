@@ -1,5 +1,5 @@
 // The world loop over the chunk → block → voxel hierarchy (NAADF-REFERENCE §3.2), with
-// AADF jumps (`USE_AADF`, the `naadf` method) or without (`nodf`): the GPU twin o_frac
+// AADF jumps (`USE_AADF`, the `naadf` method) or without (`nodf`): the GPU twin of
 // world/src/traverse/hierarchy.rs. Chunks with entities skip only to their own edge and
 // have their entity fields recorded for the entity pass.
 

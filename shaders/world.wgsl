@@ -26,12 +26,12 @@ const VOXEL_SOLID: u32 = 0x8000u;
 const CHUNK_FIELD_BITS: u32 = 5u;
 const CELL_FIELD_BITS: u32 = 2u;
 
-// State o_frac a chunk or block cell: 0 empty, 1 full, 2 (or 3) mixed.
+// State of a chunk or block cell: 0 empty, 1 full, 2 (or 3) mixed.
 fn cell_state(c: u32) -> u32 {
     return min(c >> 30u, 2u);
 }
 
-// Field `dir` (order −x, +x, −y, +y, −z, +z) o_frac a packed AADF.
+// Field `dir` (order −x, +x, −y, +y, −z, +z) of a packed AADF.
 fn aadf_field(word: u32, dir: u32, bits: u32) -> u32 {
     return (word >> (bits * dir)) & ((1u << bits) - 1u);
 }
@@ -44,7 +44,7 @@ fn index4(p: vec3<u32>) -> u32 {
     return p.x + 4u * p.y + 16u * p.z;
 }
 
-// Voxel `i` (0..64) o_frac the voxel group starting at word `ptr`.
+// Voxel `i` (0..64) of the voxel group starting at word `ptr`.
 fn group_voxel(ptr: u32, i: u32) -> u32 {
     return (voxel_word(ptr + i / 2u) >> (16u * (i & 1u))) & 0xFFFFu;
 }

@@ -39,6 +39,10 @@ enum Command {
     Status(commands::status::Args),
     /// Write the batches a server logged after its newest snapshot as an ops script.
     ExportLog(commands::export_log::Args),
+    /// Render a frame of a world file or a server's world on the GPU (or lavapipe).
+    Render(commands::render::Args),
+    /// Open a window on a server's world: fly through it and edit it live.
+    View(commands::view::Args),
     /// Benchmarks.
     #[command(subcommand)]
     Bench(commands::bench::Bench),
@@ -63,6 +67,8 @@ fn main() -> ExitCode {
         Command::Edit(a) => commands::edit::run(a),
         Command::Status(a) => commands::status::run(a),
         Command::ExportLog(a) => commands::export_log::run(a),
+        Command::Render(a) => commands::render::run(a),
+        Command::View(a) => commands::view::run(a),
         Command::Bench(b) => commands::bench::run(b),
     };
     commands::finish(result)

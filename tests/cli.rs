@@ -343,3 +343,149 @@ fn raycast_reports_entity_hits() {
         assert!((h["t"].as_f64().unwrap() - 1.9).abs() < 1e-9, "{h}");
     }
 }
+
+/// Whether a GPU adapter (Mesa lavapipe in CI) is usable; prints why not.
+fn have_gpu(world: &str, dir: &Path) -> bool {
+    let out = support::naadf(
+        &[
+            "render",
+            "--world",
+            world,
+            "--camera",
+            r#"{"pos":[1,1,1],"yaw":0,"pitch":0}"#,
+            "--size",
+            "8x8",
+            "-o",
+            &p(dir, "probe.png"),
+        ],
+        None,
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    if !out.status.success() && err.contains("no usable GPU adapter") {
+        eprintln!("skipping the GPU commands: {err}");
+        return false;
+    }
+    assert!(out.status.success(), "render failed: {err}");
+    true
+}
+
+#[test]
+fn render_writes_the_image_and_first_hit_buffer() {
+    let dir = tempfile::tempdir().unwrap();
+    let world = p(dir.path(), "t.naadf");
+    ok(&["generate", "--preset", "test", "-o", &world], None);
+    if !have_gpu(&world, dir.path()) {
+        return;
+    }
+    let camera = r#"{"pos":[-10.5,70.25,-12.5],"yaw":45,"pitch":-35,"fov_y":60}"#;
+    let (png, gb) = (p(dir.path(), "m.png"), p(dir.path(), "m.gb"));
+    let out = ok(
+        &[
+            "render",
+            "--world",
+            &world,
+            "--camera",
+            camera,
+            "--size",
+            "64x40",
+            "--mode",
+            "material",
+            "-o",
+            &png,
+            "--gbuffer",
+            &gb,
+            "--frames",
+            "2",
+            "--json",
+        ],
+        None,
+    );
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!((v["width"].as_u64(), v["height"].as_u64()), (Some(64), Some(40)));
+    assert_eq!(v["mode"], "material");
+    let info: serde_json::Value = serde_json::from_str(&ok(&["info", &world, "--json"], None)).unwrap();
+    assert_eq!(v["digest"], info["digest"]);
+
+    let img = image::open(&png).unwrap().to_rgba8();
+    assert_eq!(img.dimensions(), (64, 40));
+    let bytes = std::fs::read(&gb).unwrap();
+    assert_eq!(&bytes[..8], b"NAADFGB1");
+    assert_eq!(bytes.len(), 16 + 16 * 64 * 40);
+    assert_eq!(u32::from_le_bytes(bytes[8..12].try_into().unwrap()), 64);
+    // Every pixel: a sky record (plane 0 = HIT_NOTHING) is black in material mode, a hit
+    // is not (the test preset has no black material).
+    let mut hits = 0;
+    for (i, px) in img.pixels().enumerate() {
+        let w0 = u32::from_le_bytes(bytes[16 + 16 * i..20 + 16 * i].try_into().unwrap());
+        let sky = w0 >> 15 == 0x1FFFF;
+        assert_eq!(sky, px.0[..3] == [0, 0, 0], "pixel {i}");
+        hits += usize::from(!sky);
+    }
+    assert!(hits > 64 * 40 / 4, "the camera looks at the world");
+
+    // The other modes render too, and differ from each other.
+    let mut images = Vec::new();
+    for mode in ["albedo", "normal", "steps"] {
+        let out = p(dir.path(), &format!("{mode}.png"));
+        ok(
+            &[
+                "render", "--world", &world, "--camera", camera, "--size", "64x40", "--mode", mode, "-o", &out,
+            ],
+            None,
+        );
+        images.push(image::open(&out).unwrap().to_rgba8().into_raw());
+    }
+    assert!(images[0] != images[1] && images[1] != images[2]);
+
+    fails(
+        &[
+            "render", "--world", &world, "--camera", camera, "--mode", "gi", "-o", &png,
+        ],
+        None,
+        "unknown mode",
+    );
+    fails(
+        &[
+            "render", "--world", &world, "--camera", camera, "--size", "0x10", "-o", &png,
+        ],
+        None,
+        "frame size",
+    );
+    fails(
+        &["render", "--world", &world, "--camera", r#"{"pos":[1,2]}"#, "-o", &png],
+        None,
+        "error:",
+    );
+    let far = r#"{"pos":[1e12,0,0],"yaw":0,"pitch":0}"#;
+    fails(
+        &["render", "--world", &world, "--camera", far, "-o", &png],
+        None,
+        "out of range",
+    );
+}
+
+#[test]
+fn bench_gpu_measures_every_variant_against_the_cpu() {
+    let dir = tempfile::tempdir().unwrap();
+    let world = p(dir.path(), "t.naadf");
+    ok(&["generate", "--preset", "test", "-o", &world], None);
+    if !have_gpu(&world, dir.path()) {
+        return;
+    }
+    let out = ok(
+        &[
+            "bench", "gpu", &world, "--json", "--width", "32", "--height", "18", "--repeat", "1",
+        ],
+        None,
+    );
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    for set in ["primary", "secondary"] {
+        for m in ["naadf", "nodf", "grid"] {
+            assert!(v[set][m].as_f64().unwrap() > 0.0, "{set}.{m} missing: {v}");
+        }
+    }
+    assert_eq!(v["rays"], 4 * 32 * 18);
+    for m in ["naadf", "nodf", "grid"] {
+        assert!(v["mismatches"][m].as_u64().unwrap() <= 1, "{m}: {v}");
+    }
+}

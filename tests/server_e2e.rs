@@ -14,29 +14,9 @@ use naadf_world::{World, file};
 use std::ops::ControlFlow;
 use std::path::Path;
 use std::time::Duration;
-use support::{Server, ok, p, serve_world};
+use support::{Server, ok, p, random_op, serve_world, start_world};
 use tokio::sync::watch;
 use tokio::task::JoinHandle;
-
-/// A 128×64×128 terrain world file in `dir`.
-fn start_world(dir: &Path) -> String {
-    let w = p(dir, "start.naadf");
-    ok(
-        &[
-            "generate",
-            "--preset",
-            "terrain",
-            "--size",
-            "128,64,128",
-            "--seed",
-            "5",
-            "-o",
-            &w,
-        ],
-        None,
-    );
-    w
-}
 
 /// A server on a fresh data directory in `dir`, started from a fresh `start_world`, with
 /// `extra` arguments; returns the world file and the server.
@@ -112,41 +92,6 @@ fn same_buffers(a: &World, b: &World) {
     assert_eq!(a.digest(), b.digest());
     for id in BufferId::WORLD {
         assert!(a.buffer_bytes(id) == b.buffer_bytes(id), "buffer {id:?} differs");
-    }
-}
-
-/// A deterministic random op inside a 128×64×128 world (SplitMix64 stream).
-fn random_op(state: &mut u64) -> String {
-    let mut next = |n: u64| {
-        *state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = *state;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        (z ^ (z >> 31)) % n
-    };
-    let (x, y, z) = (next(128), next(64), next(128));
-    let m = next(6);
-    match next(4) {
-        0 => format!(
-            r#"{{"op":"set","voxels":[[{x},{y},{z},{m}],[{},{y},{z},{}]]}}"#,
-            (x + 1) % 128,
-            next(4) + 1
-        ),
-        1 => format!(
-            r#"{{"op":"sphere","center":[{x},{y},{z}],"radius":{},"material":{m}}}"#,
-            1 + next(8)
-        ),
-        2 => format!(
-            r#"{{"op":"box","min":[{x},{y},{z}],"max":[{},{},{}],"material":{m}}}"#,
-            x + next(12),
-            y + next(12),
-            z + next(12)
-        ),
-        _ => format!(
-            r#"{{"op":"paint","center":[{x},{y},{z}],"radius":{},"material":{}}}"#,
-            1 + next(6),
-            m.max(1)
-        ),
     }
 }
 

@@ -72,3 +72,12 @@ pub async fn connect(url: &str, token: Option<&str>, ca: Option<&Path>) -> Resul
         .send_compressed(CompressionEncoding::Zstd)
         .accept_compressed(CompressionEncoding::Zstd))
 }
+
+/// A `client_seq` to start a session's edits from: microseconds since the Unix epoch, so
+/// that a new session of the same user never repeats an earlier session's numbers (the
+/// server would answer a repeat as a retry and not apply it).
+pub fn session_client_seq() -> u64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(1, |d| d.as_micros() as u64)
+}

@@ -12,9 +12,9 @@
 mod common;
 
 use common::{Rng, adversarial, random_world, rays};
-use naadf_client::gpu::{GPU_BUFFERS, Gpu, GpuRay, GpuWorld, Mode, RayTracer, Renderer};
+use naadf_client::gpu::{Gpu, GpuRay, GpuWorld, Mode, RayTracer, Renderer};
 use naadf_world::camera::Camera;
-use naadf_world::digest::{BufferId, Digest, digest_of};
+use naadf_world::material::MaterialKind;
 use naadf_world::ops::{Batch, Limits, Op};
 use naadf_world::preset::Preset;
 use naadf_world::traverse::{Hit, Method, Ray, same_result, trace_naadf};
@@ -39,15 +39,24 @@ fn gpu() -> Option<&'static Gpu> {
 }
 
 /// The ray rounded to what the GPU receives (f32 fraction and direction), so that CPU and
-/// GPU trace the very same line.
-fn exact_f32(r: &Ray) -> (Ray, GpuRay) {
+/// GPU trace the very same line. The GPU copy's direction is scaled by a power of two
+/// (exact in f32) that varies with `i`: the GPU must not assume unit directions (camera
+/// rays are not), and hit distances must come out the same.
+fn exact_f32(i: usize, r: &Ray) -> (Ray, GpuRay) {
     let o = r.origin().map(|v| {
         let fl = v.floor();
         fl + f64::from(((v - fl) as f32).min(0.999_999_94))
     });
     let d = r.dir().map(|v| f64::from(v as f32));
     let ray = Ray::new(o, d).expect("valid ray");
-    (ray, GpuRay { origin: o, dir: d })
+    let scale = [1.0, 4.0, 0.125][i % 3];
+    (
+        ray,
+        GpuRay {
+            origin: o,
+            dir: d.map(|v| v * scale),
+        },
+    )
 }
 
 /// Whether moving the origin of `ray` by at most TIE_EPS along some axis makes the CPU
@@ -66,7 +75,7 @@ fn near_tie(world: &World, ray: &Ray, accept: impl Fn(&Option<Hit>) -> bool) -> 
 /// Traces `rays` on the GPU with every method and compares with the CPU; returns
 /// (ray traces compared, traces that differed).
 fn compare(gpu: &Gpu, world: &World, what: &str, rays: &[Ray]) -> (usize, usize) {
-    let (cpu_rays, gpu_rays): (Vec<Ray>, Vec<GpuRay>) = rays.iter().map(exact_f32).unzip();
+    let (cpu_rays, gpu_rays): (Vec<Ray>, Vec<GpuRay>) = rays.iter().enumerate().map(|(i, r)| exact_f32(i, r)).unzip();
     let expected: Vec<Option<Hit>> = cpu_rays.iter().map(|r| trace_naadf(world, r)).collect();
     let mut gw = GpuWorld::new(gpu, world).expect("upload");
     gw.upload_grid(world).expect("grid");
@@ -201,7 +210,7 @@ fn material_frames_match_the_cpu_raycast_of_every_pixel() {
         r#"{"pos":[70.0,10.0,5.0],"yaw":-60,"pitch":5}"#,
     ];
     let (w, h) = (96, 64);
-    let (mut total, mut differed) = (0, 0);
+    let (mut total, mut differed, mut distances) = (0, 0, 0);
     for cam in cams {
         let camera = Camera::from_json(cam).unwrap();
         let basis = camera.basis();
@@ -221,6 +230,19 @@ fn material_frames_match_the_cpu_raycast_of_every_pixel() {
                 let cpu = trace_naadf(&world, &ray);
                 total += 1;
                 if matches(&cpu) {
+                    // The record's distance (f16, along the unit direction; camera
+                    // directions are not unit) is the CPU's, unless a mirror extended it.
+                    if let Some(hit) =
+                        cpu.filter(|h| world.materials().get(h.material).unwrap().kind != MaterialKind::Mirror)
+                    {
+                        let d = f64::from(half::f16::from_bits((gb[i][3] & 0x7FFF) as u16).to_f32());
+                        assert!(
+                            (d - hit.t).abs() <= 2e-3 * hit.t + 1e-3,
+                            "{cam} pixel ({px},{py}): distance {d}, CPU {}",
+                            hit.t
+                        );
+                        distances += 1;
+                    }
                     continue;
                 }
                 // Only a pixel whose ray lies within a hair of a tie may differ.
@@ -234,23 +256,14 @@ fn material_frames_match_the_cpu_raycast_of_every_pixel() {
         }
     }
     eprintln!("material frames: {differed} of {total} pixels differ from the CPU (each within {TIE_EPS} of a tie)");
+    assert!(distances > total / 4, "only {distances} hit distances checked");
     assert!(differed <= 1 + total / 10_000, "{differed} of {total} pixels differ");
 }
 
-/// The digest of the GPU copy: the read-back buffers plus the model table (not a GPU
-/// buffer), combined as the world digest is. Also checks every buffer byte for byte.
-fn gpu_digest(gpu: &Gpu, gw: &GpuWorld, world: &World) -> Digest {
-    let mut d = digest_of(BufferId::Models, &world.buffer_bytes(BufferId::Models));
-    for id in GPU_BUFFERS {
-        let bytes = gw.read_back(gpu, id).unwrap();
-        assert_eq!(
-            bytes,
-            world.buffer_bytes(id).as_ref(),
-            "{id:?} differs from the world's"
-        );
-        d = d ^ digest_of(id, &bytes);
-    }
-    d
+/// Asserts that the device copy holds `world`'s buffers byte for byte and gives its digest.
+fn assert_mirrors(gpu: &Gpu, gw: &GpuWorld, world: &World, what: &str) {
+    assert_eq!(gw.first_difference(gpu, world).unwrap(), None, "{what}");
+    assert_eq!(gw.digest(gpu, world).unwrap(), world.digest(), "{what}");
 }
 
 #[test]
@@ -285,16 +298,8 @@ fn synced_buffers_equal_the_worlds_after_edits_also_when_split() {
         }
         split.sync(&world).unwrap();
         whole.sync(&world).unwrap();
-        assert_eq!(
-            gpu_digest(gpu, &split, &world),
-            world.digest(),
-            "split copy, step {step}"
-        );
-        assert_eq!(
-            gpu_digest(gpu, &whole, &world),
-            world.digest(),
-            "whole copy, step {step}"
-        );
+        assert_mirrors(gpu, &split, &world, &format!("split copy, step {step}"));
+        assert_mirrors(gpu, &whole, &world, &format!("whole copy, step {step}"));
     }
     assert!(
         split.split().parts.iter().any(|&p| p > 1),
@@ -304,7 +309,8 @@ fn synced_buffers_equal_the_worlds_after_edits_also_when_split() {
     let mut tracer = RayTracer::new(gpu);
     let rays: Vec<GpuRay> = rays(world.size().voxels(), &mut rng, 500)
         .iter()
-        .map(|r| exact_f32(r).1)
+        .enumerate()
+        .map(|(i, r)| exact_f32(i, r).1)
         .collect();
     let a = tracer.trace(gpu, &split, &rays, Method::Naadf).unwrap();
     let b = tracer.trace(gpu, &whole, &rays, Method::Naadf).unwrap();

@@ -28,6 +28,8 @@ pub enum Bench {
     Edit(super::bench_edit::EditArgs),
     /// The server under load: join, rejoin, edit latency with many mirrors, wire bytes.
     Stream(super::bench_stream::StreamArgs),
+    /// GPU ray throughput of the traversal variants (naadf, nodf, grid), checked against the CPU.
+    Gpu(super::bench_gpu::GpuArgs),
 }
 
 /// Arguments of `bench traverse`.
@@ -77,6 +79,7 @@ pub fn run(b: Bench) -> Result<()> {
         Bench::Build(a) => build(a),
         Bench::Edit(a) => super::bench_edit::run(a),
         Bench::Stream(a) => super::bench_stream::run(a),
+        Bench::Gpu(a) => super::bench_gpu::run(a),
     }
 }
 
@@ -169,21 +172,23 @@ fn print_report(prefix: &str, r: &TraverseReport) {
             st[0], r.secondary[m], st[1]
         );
     }
-    let ratio = |set: &BTreeMap<&str, f64>, other: &str| set.get(other).map_or(f64::NAN, |o| set["naadf"] / o);
     println!(
         "{prefix}{} primary + {} secondary rays, {} threads",
         r.rays, r.secondary_rays, r.threads
     );
-    println!(
-        "{prefix}naadf/grid: primary {:.1}×, secondary {:.1}×",
-        ratio(&r.primary, "grid"),
-        ratio(&r.secondary, "grid")
-    );
-    println!(
-        "{prefix}naadf/nodf: primary {:.1}×, secondary {:.1}×",
-        ratio(&r.primary, "nodf"),
-        ratio(&r.secondary, "nodf")
-    );
+    print_ratios(prefix, &r.primary, &r.secondary);
+}
+
+/// Prints `naadf`'s speed-up over `grid` and `nodf`, from Mrays/s per method.
+pub fn print_ratios(prefix: &str, primary: &BTreeMap<&str, f64>, secondary: &BTreeMap<&str, f64>) {
+    let ratio = |set: &BTreeMap<&str, f64>, other: &str| set.get(other).map_or(f64::NAN, |o| set["naadf"] / o);
+    for other in ["grid", "nodf"] {
+        println!(
+            "{prefix}naadf/{other}: primary {:.1}×, secondary {:.1}×",
+            ratio(primary, other),
+            ratio(secondary, other)
+        );
+    }
 }
 
 /// Spawns `n` 8³ entities (a hollow box) at random poses, in one batch: on the ground

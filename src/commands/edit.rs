@@ -51,11 +51,7 @@ pub fn run(a: Args) -> Result<()> {
         .map(|(n, l)| l.map(|l| (n + 1, l)))
         .collect::<Result<_, _>>()
         .with_context(|| format!("cannot read {}", a.ops.display()))?;
-    let first = a.client_seq.unwrap_or_else(|| {
-        std::time::SystemTime::now()
-            .duration_since(std::time::UNIX_EPOCH)
-            .map_or(1, |d| d.as_micros() as u64)
-    });
+    let first = a.client_seq.unwrap_or_else(naadf_client::connect::session_client_seq);
     block_on(async move {
         let mut client = a.server.connect().await?;
         for (i, (n, line)) in lines.iter().filter(|(_, l)| !l.trim().is_empty()).enumerate() {

@@ -4,6 +4,7 @@
 pub mod apply;
 pub mod bench;
 pub mod bench_edit;
+pub mod bench_gpu;
 pub mod bench_stream;
 pub mod edit;
 pub mod export;
@@ -14,8 +15,10 @@ pub mod info;
 pub mod mirror;
 pub mod raycast;
 pub mod remote;
+pub mod render;
 pub mod serve;
 pub mod status;
+pub mod view;
 
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};

@@ -38,3 +38,40 @@ pub fn block_on<T>(f: impl std::future::Future<Output = Result<T>>) -> Result<T>
 pub fn status_error(s: tonic::Status) -> anyhow::Error {
     anyhow::anyhow!("server refused: {:?}: {}", s.code(), s.message())
 }
+
+/// Joins `server` and follows its stream until the mirror is live and the world
+/// quiescent, or `timeout` passes; returns that world.
+pub async fn quiescent_world(server: &ServerArgs, timeout: std::time::Duration) -> Result<naadf_world::World> {
+    use naadf_client::{Ended, Mirror};
+    use std::ops::ControlFlow;
+    let mut client = server.connect().await?;
+    let mut mirror = Mirror::new(None);
+    let mut stream = client
+        .join(mirror.join_request())
+        .await
+        .map_err(status_error)?
+        .into_inner();
+    let ended = mirror
+        .follow(
+            &mut stream,
+            tokio::time::sleep(timeout),
+            |m| -> Result<ControlFlow<()>> {
+                Ok(if m.is_live() && m.is_quiescent() {
+                    ControlFlow::Break(())
+                } else {
+                    ControlFlow::Continue(())
+                })
+            },
+        )
+        .await?;
+    match ended {
+        Ended::Stopped(()) => anyhow::bail!(
+            "timed out after {} s before the server was quiescent",
+            timeout.as_secs_f64()
+        ),
+        Ended::Stream => anyhow::bail!("the server ended the stream before it was quiescent"),
+        _ => mirror
+            .into_world()
+            .ok_or_else(|| anyhow::anyhow!("the server sent no world")),
+    }
+}

@@ -1,5 +1,6 @@
 //! Device selection and the errors of the GPU client.
 
+use std::sync::Arc;
 use thiserror::Error;
 
 /// Errors of the GPU client.
@@ -22,6 +23,8 @@ pub enum GpuError {
 
 /// A wgpu device and its queue.
 pub struct Gpu {
+    /// The adapter the device was opened on.
+    pub adapter: wgpu::Adapter,
     /// The device.
     pub device: wgpu::Device,
     /// Its queue.
@@ -40,11 +43,60 @@ impl std::fmt::Debug for Gpu {
 
 impl Gpu {
     /// Opens the default adapter, honouring `WGPU_BACKEND`, `WGPU_ADAPTER_NAME` and
-    /// `WGPU_POWER_PREF`, with the adapter's own limits (large buffers need them).
+    /// `WGPU_POWER_PREF`, with the adapter's own limits (large buffers need them). Without
+    /// `WGPU_BACKEND`, the primary backends (Vulkan, Metal, DX12) are tried before GL, so
+    /// that a working Vulkan never pays for (or logs) a failed EGL probe.
     pub fn new() -> Result<Self, GpuError> {
-        let instance = wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
-        let adapter = pollster::block_on(wgpu::util::initialize_adapter_from_env_or_default(&instance, None))
+        let (gpu, _) = Self::open(wgpu::InstanceDescriptor::new_without_display_handle_from_env, |_| {
+            Ok(None)
+        })?;
+        Ok(gpu)
+    }
+
+    /// Like [`Gpu::new`], but the adapter must be able to present to `window`; returns the
+    /// window's surface too.
+    pub fn for_window<W>(window: Arc<W>) -> Result<(Self, wgpu::Surface<'static>), GpuError>
+    where
+        W: wgpu::WindowHandle + wgpu::rwh::HasDisplayHandle + std::fmt::Debug + 'static,
+    {
+        let (gpu, surface) = Self::open(
+            || wgpu::InstanceDescriptor::new_with_display_handle_from_env(Box::new(window.clone())),
+            |instance| {
+                let surface = instance
+                    .create_surface(window.clone())
+                    .map_err(|e| GpuError::NoAdapter(format!("cannot create a surface for the window: {e}")))?;
+                Ok(Some(surface))
+            },
+        )?;
+        let surface = surface.ok_or_else(|| GpuError::NoAdapter("no surface".into()))?;
+        Ok((gpu, surface))
+    }
+
+    /// Opens an instance from `desc` (per backend set tried), the optional surface
+    /// `surface` makes on it, a compatible adapter, and the device.
+    fn open(
+        desc: impl Fn() -> wgpu::InstanceDescriptor,
+        surface: impl Fn(&wgpu::Instance) -> Result<Option<wgpu::Surface<'static>>, GpuError>,
+    ) -> Result<(Self, Option<wgpu::Surface<'static>>), GpuError> {
+        let try_backends = |backends: Option<wgpu::Backends>| {
+            let mut d = desc();
+            if let Some(b) = backends {
+                d.backends = b;
+            }
+            let instance = wgpu::Instance::new(d);
+            let surface = surface(&instance)?;
+            let adapter = pollster::block_on(wgpu::util::initialize_adapter_from_env_or_default(
+                &instance,
+                surface.as_ref(),
+            ))
             .map_err(|e| GpuError::NoAdapter(e.to_string()))?;
+            Ok::<_, GpuError>((adapter, surface))
+        };
+        let (adapter, surface) = if std::env::var_os("WGPU_BACKEND").is_some() {
+            try_backends(None)
+        } else {
+            try_backends(Some(wgpu::Backends::PRIMARY)).or_else(|_| try_backends(Some(wgpu::Backends::GL)))
+        }?;
         let limits = adapter.limits();
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("naadf"),
@@ -54,12 +106,14 @@ impl Gpu {
         .map_err(|e| GpuError::NoAdapter(e.to_string()))?;
         let info = adapter.get_info();
         tracing::info!(adapter = %info.name, backend = ?info.backend, driver = %info.driver_info, "GPU device ready");
-        Ok(Gpu {
+        let gpu = Gpu {
+            adapter,
             device,
             queue,
             info,
             limits,
-        })
+        };
+        Ok((gpu, surface))
     }
 
     /// The adapter in words, e.g. `llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan)`.

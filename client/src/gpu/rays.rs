@@ -10,6 +10,8 @@ use wgpu::util::DeviceExt;
 
 /// Workgroup size of the ray pass (`shaders/rays.wgsl`).
 const WORKGROUP: u32 = 64;
+/// Words per uploaded ray.
+const RAY_WORDS: usize = 12;
 /// Words per result.
 const RESULT_WORDS: usize = 8;
 /// The largest f32 below 1: an origin's fraction must stay in [0, 1).
@@ -74,15 +76,23 @@ impl RayTracer {
         }
     }
 
-    /// Uploads `rays`.
+    /// The most rays one [`RayBatch`] may hold on `gpu`: the ray list (the larger of the
+    /// batch's two buffers) must fit one storage binding.
+    pub fn max_batch(gpu: &Gpu) -> usize {
+        let bytes = gpu
+            .limits
+            .max_storage_buffer_binding_size
+            .min(gpu.limits.max_buffer_size);
+        (bytes / (RAY_WORDS as u64 * 4)).min(u64::from(u32::MAX)) as usize
+    }
+
+    /// Uploads `rays` (at most [`RayTracer::max_batch`]).
     pub fn upload(&self, gpu: &Gpu, rays: &[GpuRay]) -> Result<RayBatch, GpuError> {
         let count = u32::try_from(rays.len())
             .ok()
-            .filter(|&n| {
-                u64::from(n) * (RESULT_WORDS as u64 * 4) <= u64::from(gpu.limits.max_storage_buffer_binding_size)
-            })
+            .filter(|_| rays.len() <= Self::max_batch(gpu))
             .ok_or_else(|| GpuError::Unsupported(format!("{} rays exceed one batch", rays.len())))?;
-        let mut words: Vec<u32> = Vec::with_capacity(rays.len() * 12);
+        let mut words: Vec<u32> = Vec::with_capacity(rays.len() * RAY_WORDS);
         for r in rays {
             let (int, frac) = split_origin(r.origin);
             let d = r.dir.map(|v| v as f32);
@@ -94,7 +104,7 @@ impl RayTracer {
             words.push(0);
         }
         if words.is_empty() {
-            words.resize(12, 0);
+            words.resize(RAY_WORDS, 0);
         }
         let groups = count.div_ceil(WORKGROUP);
         let (gx, _) = dispatch_2d(groups);

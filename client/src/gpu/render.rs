@@ -6,6 +6,7 @@ use super::rays::split_origin;
 use super::shaders::{Loop, Pass};
 use super::world::GpuWorld;
 use naadf_world::camera::Camera;
+use naadf_world::traverse::MAX_COORD;
 use std::io::Write;
 use wgpu::util::DeviceExt;
 
@@ -54,8 +55,9 @@ impl Mode {
 
 /// The default sun direction: the reference's RotY(30°)·RotZ(60°)·(0, 1, 0).
 pub const DEFAULT_SUN: [f32; 3] = [-0.75, 0.5, 0.433_012_7];
-/// Step counts map onto the heat map's full range at this many cells.
-pub const STEPS_FULL_SCALE: f32 = 128.0;
+/// Step counts map onto the heat map's full range at this many cells (on a log scale:
+/// `log2(1 + steps) / log2(1 + STEPS_FULL_SCALE)`).
+pub const STEPS_FULL_SCALE: f32 = 512.0;
 /// Largest frame edge.
 pub const MAX_EDGE: u32 = 16384;
 /// Magic bytes that open a first-hit buffer file ([`write_gbuffer`]).
@@ -92,7 +94,8 @@ pub fn write_gbuffer(out: &mut dyn Write, width: u32, height: u32, words: &[[u32
     out.write_all(GBUFFER_MAGIC)?;
     out.write_all(&width.to_le_bytes())?;
     out.write_all(&height.to_le_bytes())?;
-    out.write_all(bytemuck::cast_slice(words))
+    let bytes: Vec<u8> = words.iter().flatten().flat_map(|w| w.to_le_bytes()).collect();
+    out.write_all(&bytes)
 }
 
 /// The frame pass.
@@ -127,10 +130,17 @@ impl Renderer {
             || height == 0
             || width > MAX_EDGE
             || height > MAX_EDGE
-            || pixels * 16 > u64::from(gpu.limits.max_storage_buffer_binding_size)
+            || pixels * 16 > gpu.limits.max_storage_buffer_binding_size
         {
             return Err(GpuError::Unsupported(format!(
                 "frame size {width}x{height}: each edge must be 1..={MAX_EDGE} and the frame small enough for one binding"
+            )));
+        }
+        // The shaders take the origin's floor as an i32: the CPU's ray range applies.
+        if camera.pos.iter().any(|c| c.abs() > MAX_COORD) {
+            return Err(GpuError::Unsupported(format!(
+                "camera position {:?} is out of range (within ±2^30)",
+                camera.pos
             )));
         }
         let pipeline = self.pipes.get(gpu, world, Loop::Hierarchy, true)?;
@@ -163,7 +173,7 @@ impl Renderer {
             ux,
             uy,
             uz,
-            (1.0 / STEPS_FULL_SCALE).to_bits(),
+            (1.0 / (1.0 + STEPS_FULL_SCALE).log2()).to_bits(),
             sun[0],
             sun[1],
             sun[2],

@@ -10,7 +10,7 @@
 
 use super::context::{Gpu, GpuError};
 use super::shaders::{BUFFERS, Split};
-use naadf_world::digest::{BufferId, PAGE_BYTES};
+use naadf_world::digest::{BufferId, Digest, PAGE_BYTES, digest_of};
 use naadf_world::{World, WorldError};
 
 /// The digested buffers that live on the GPU, in the binding order of [`BUFFERS`] (the
@@ -75,7 +75,10 @@ impl std::fmt::Debug for GpuWorld {
 impl GpuWorld {
     /// Uploads `world` to `gpu`, splitting buffers at the adapter's storage-binding limit.
     pub fn new(gpu: &Gpu, world: &World) -> Result<Self, GpuError> {
-        let limit = u64::from(gpu.limits.max_storage_buffer_binding_size).min(gpu.limits.max_buffer_size);
+        let limit = gpu
+            .limits
+            .max_storage_buffer_binding_size
+            .min(gpu.limits.max_buffer_size);
         Self::with_part_words(gpu, world, limit / 4)
     }
 
@@ -221,6 +224,28 @@ impl GpuWorld {
             out.extend(gpu.read_buffer(buf, (b.len - start).min(part_bytes))?);
         }
         Ok(out)
+    }
+
+    /// The digest of the device copy: every GPU buffer read back, combined (as
+    /// [`World::digest`] combines them) with `world`'s model table, which is not a GPU
+    /// buffer. Equal to `world.digest()` exactly when the device holds `world`'s buffers.
+    pub fn digest(&self, gpu: &Gpu, world: &World) -> Result<Digest, GpuError> {
+        let mut d = digest_of(BufferId::Models, &world.buffer_bytes(BufferId::Models));
+        for id in GPU_BUFFERS {
+            d = d ^ digest_of(id, &self.read_back(gpu, id)?);
+        }
+        Ok(d)
+    }
+
+    /// The first GPU buffer whose device copy differs from `world`'s, if any: a check
+    /// that syncing kept the mirror byte for byte.
+    pub fn first_difference(&self, gpu: &Gpu, world: &World) -> Result<Option<BufferId>, GpuError> {
+        for id in GPU_BUFFERS {
+            if self.read_back(gpu, id)? != world.buffer_bytes(id).as_ref() {
+                return Ok(Some(id));
+            }
+        }
+        Ok(None)
     }
 
     /// The group-0 layout the passes' pipelines are built against.

@@ -1,0 +1,102 @@
+//! The heads-up display: a few lines of text and a colour swatch drawn into a frame's
+//! RGBA pixels on the CPU, with the public-domain 8×8 glyphs of `font8x8`. The viewer
+//! reads every frame back anyway (for presenting and screenshots), so text costs a few
+//! thousand pixel writes and no extra pipeline.
+
+use font8x8::legacy::BASIC_LEGACY;
+
+/// Glyph pixels are drawn as `SCALE × SCALE` squares.
+const SCALE: u32 = 2;
+/// Glyph cell edge in frame pixels.
+const CELL: u32 = 8 * SCALE;
+/// Space around the text block.
+const MARGIN: u32 = 6;
+
+/// Draws `lines` in the top-left corner of a `width × height` RGBA frame over a darkened
+/// panel, and, when given, a swatch of colour `swatch` after the last line.
+///
+/// ```
+/// let (w, h) = (200, 60);
+/// let mut rgba = vec![0u8; (w * h * 4) as usize];
+/// naadf_client::viewer::draw_hud(&mut rgba, w, h, &["fps 60".to_string()], Some([255, 0, 0]));
+/// assert!(rgba.chunks(4).any(|p| p[..3] == [255, 255, 255])); // text
+/// assert!(rgba.chunks(4).any(|p| p[..3] == [255, 0, 0])); // swatch
+/// ```
+pub fn draw_hud(rgba: &mut [u8], width: u32, height: u32, lines: &[String], swatch: Option<[u8; 3]>) {
+    let cols = lines.iter().map(|l| l.chars().count() as u32).max().unwrap_or(0) + 2 * u32::from(swatch.is_some());
+    let panel_w = (2 * MARGIN + cols * CELL).min(width);
+    let panel_h = (2 * MARGIN + lines.len() as u32 * (CELL + 2)).min(height);
+    let mut put = |x: u32, y: u32, c: [u8; 3], blend: bool| {
+        if x < width && y < height {
+            let i = ((y * width + x) * 4) as usize;
+            if let Some(p) = rgba.get_mut(i..i + 4) {
+                for (dst, src) in p.iter_mut().zip(c) {
+                    *dst = if blend { (*dst / 3).saturating_add(src) } else { src };
+                }
+                p[3] = 255;
+            }
+        }
+    };
+    for y in 0..panel_h {
+        for x in 0..panel_w {
+            put(x, y, [0, 0, 0], true);
+        }
+    }
+    let mut y0 = MARGIN;
+    for line in lines {
+        let mut x0 = MARGIN;
+        for ch in line.chars() {
+            let glyph = BASIC_LEGACY.get(ch as usize).unwrap_or(&BASIC_LEGACY[b'?' as usize]);
+            for (gy, row) in glyph.iter().enumerate() {
+                for gx in 0..8 {
+                    if row >> gx & 1 != 0 {
+                        for s in 0..SCALE * SCALE {
+                            put(
+                                x0 + gx * SCALE + s % SCALE,
+                                y0 + gy as u32 * SCALE + s / SCALE,
+                                [255; 3],
+                                false,
+                            );
+                        }
+                    }
+                }
+            }
+            x0 += CELL;
+        }
+        y0 += CELL + 2;
+    }
+    if let (Some(c), Some(last)) = (swatch, lines.last()) {
+        let x0 = MARGIN + (last.chars().count() as u32 + 1) * CELL;
+        let y0 = MARGIN + (lines.len() as u32 - 1) * (CELL + 2);
+        for y in 0..CELL {
+            for x in 0..CELL {
+                put(x0 + x, y0 + y, c, false);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn text_stays_inside_the_frame_and_the_rest_is_untouched() {
+        let (w, h) = (40, 20);
+        let mut rgba = vec![200u8; (w * h * 4) as usize];
+        // Far more text than fits: must clip, not panic.
+        draw_hud(
+            &mut rgba,
+            w,
+            h,
+            &["a long line of text".into(), "and more".into()],
+            Some([1, 2, 3]),
+        );
+        assert_eq!(rgba.len(), (w * h * 4) as usize);
+        let mut rgba = vec![200u8; 400 * 200 * 4];
+        draw_hud(&mut rgba, 400, 200, &["x".into()], None);
+        let untouched = |x: usize, y: usize| rgba[(y * 400 + x) * 4..][..4] == [200; 4];
+        assert!(untouched(399, 199) && untouched(100, 5), "outside the panel");
+        assert!(!untouched(2, 2), "the panel is darkened");
+    }
+}

@@ -1,0 +1,109 @@
+//! [`Link`]: the viewer's connection to the server. The world stream, status polls and
+//! edit replies run on a small tokio runtime and reach the window's thread as [`Event`]s;
+//! the world itself is only touched on that thread.
+
+use crate::connect::{Client, ConnectError, connect, session_client_seq};
+use naadf_proto::v1::{EditRequest, JoinRequest, StatusRequest, WorldMessage};
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Duration;
+
+/// How often the server's status (client count) is asked for.
+const STATUS_PERIOD: Duration = Duration::from_secs(1);
+
+/// Where the server is and who we are.
+#[derive(Clone, Debug)]
+pub struct ServerAddress {
+    /// Server URL (`http://` or `https://`).
+    pub url: String,
+    /// Bearer token.
+    pub token: Option<String>,
+    /// CA certificate (PEM) for `https://`.
+    pub ca: Option<PathBuf>,
+}
+
+/// What the network side reports to the window.
+#[derive(Debug)]
+pub enum Event {
+    /// A message of the world stream, to apply in order.
+    Message(Box<WorldMessage>),
+    /// The stream ended (the reason); the window may rejoin.
+    StreamEnded(String),
+    /// Clients connected to the server, from the latest status poll.
+    Clients(u32),
+    /// An edit was acknowledged at this version, or refused with this message.
+    Edited(Result<u64, String>),
+}
+
+/// The connection: one client shared by the stream, status and edit tasks.
+pub struct Link {
+    runtime: tokio::runtime::Runtime,
+    client: Client,
+    next_seq: Arc<AtomicU64>,
+    notify: Arc<dyn Fn(Event) + Send + Sync>,
+}
+
+impl Link {
+    /// Connects; every event goes to `notify` (called on the runtime's threads).
+    pub fn connect(
+        server: &ServerAddress,
+        notify: impl Fn(Event) + Send + Sync + 'static,
+    ) -> Result<Self, ConnectError> {
+        let runtime = tokio::runtime::Builder::new_multi_thread()
+            .worker_threads(2)
+            .enable_all()
+            .build()
+            .map_err(|e| ConnectError::Url(server.url.clone(), format!("cannot start the runtime: {e}")))?;
+        let client = runtime.block_on(connect(&server.url, server.token.as_deref(), server.ca.as_deref()))?;
+        let notify: Arc<dyn Fn(Event) + Send + Sync> = Arc::new(notify);
+        let (mut c, n) = (client.clone(), notify.clone());
+        runtime.spawn(async move {
+            let mut tick = tokio::time::interval(STATUS_PERIOD);
+            loop {
+                tick.tick().await;
+                if let Ok(s) = c.status(StatusRequest {}).await {
+                    n(Event::Clients(s.into_inner().clients));
+                }
+            }
+        });
+        Ok(Link {
+            runtime,
+            client,
+            next_seq: Arc::new(AtomicU64::new(session_client_seq())),
+            notify,
+        })
+    }
+
+    /// Joins with `request` (the mirror's cache) and forwards the stream until it ends.
+    pub fn join(&self, request: JoinRequest) {
+        let (mut c, n) = (self.client.clone(), self.notify.clone());
+        self.runtime.spawn(async move {
+            let mut stream = match c.join(request).await {
+                Ok(s) => s.into_inner(),
+                Err(s) => return n(Event::StreamEnded(format!("join refused: {}", s.message()))),
+            };
+            loop {
+                match stream.message().await {
+                    Ok(Some(m)) => n(Event::Message(Box::new(m))),
+                    Ok(None) => return n(Event::StreamEnded("the server ended the stream".into())),
+                    Err(s) => return n(Event::StreamEnded(format!("stream failed: {}", s.message()))),
+                }
+            }
+        });
+    }
+
+    /// Sends `ops` (Ops JSON, one batch) as an edit; the reply arrives as [`Event::Edited`].
+    pub fn edit(&self, ops: String) {
+        let (mut c, n) = (self.client.clone(), self.notify.clone());
+        let client_seq = self.next_seq.fetch_add(1, Ordering::Relaxed);
+        self.runtime.spawn(async move {
+            let reply = c.edit(EditRequest { ops, client_seq }).await;
+            n(Event::Edited(
+                reply
+                    .map(|r| r.into_inner().version)
+                    .map_err(|s| format!("{:?}: {}", s.code(), s.message())),
+            ));
+        });
+    }
+}
