@@ -1,10 +1,11 @@
 //! The windowed viewer in a real window on a virtual X display (Xvfb), following a real
-//! server: it starts, renders the server's world with its HUD, and writes the screenshot.
+//! server: it starts, renders the server's world with its HUD, and writes the screenshot;
+//! mouse clicks (sent with xdotool) become edits the server applies.
 
 mod support;
 
 use std::process::Command;
-use support::{p, serve_world, start_world};
+use support::{ok, p, serve_world, start_world};
 
 #[test]
 fn the_viewer_renders_a_server_world_in_a_window() {
@@ -50,5 +51,63 @@ fn the_viewer_renders_a_server_world_in_a_window() {
         .flat_map(|y| (0..200).map(move |x| (x, y)))
         .filter(|&(x, y)| img.get_pixel(x, y).0[..3] == [255; 3]);
     assert!(white.count() > 30, "no HUD text");
+
+    // Clicks: the first captures the mouse, then erase, place, select material 3, place;
+    // two Escapes release the mouse and close the window.
+    if Command::new("xdotool").arg("version").output().is_err() {
+        eprintln!("skipping the viewer's click test: xdotool is not installed (scripts/ensure-deps.sh installs it)");
+        server.stop();
+        return;
+    }
+    let script = r#"
+        timeout 300 "$@" > "$SUMMARY" &
+        pid=$!
+        # The title shows the version once the world has arrived.
+        for i in $(seq 1200); do
+            win=$(xdotool search --name '^naadf v[0-9]' 2>/dev/null | head -1)
+            [ -n "$win" ] && break
+            sleep 0.1
+        done
+        [ -n "$win" ] || { kill $pid; exit 3; }
+        # No window manager runs on the virtual display: give the window the keyboard.
+        xdotool windowfocus --sync "$win"
+        xdotool mousemove --window "$win" 160 100
+        for k in "click 1" "click 1" "click 3" "key 3" "click 3" "key Escape" "key Escape"; do
+            xdotool $k
+            sleep 0.4
+        done
+        wait $pid
+    "#;
+    let summary_path = p(dir.path(), "clicks.json");
+    let out = Command::new("xvfb-run")
+        .args(["-a", "-s", "-screen 0 800x600x24", "bash", "-c", script, "clicks"])
+        .arg(env!("CARGO_BIN_EXE_naadf"))
+        .args([
+            "view",
+            "--server",
+            &server.url,
+            "--token",
+            "editor",
+            "--size",
+            "320x200",
+            "--json",
+        ])
+        .env("SUMMARY", &summary_path)
+        .output()
+        .expect("run xvfb-run");
+    assert!(
+        out.status.success(),
+        "the clicking session failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&summary_path).unwrap()).unwrap();
+    assert_eq!(summary["edits"], 3, "erase, place, place: {summary}");
+    // Every edit was acknowledged before the window closed: the server is at version 3.
+    let status: serde_json::Value = serde_json::from_str(&ok(
+        &["status", "--server", &server.url, "--token", "admin", "--json"],
+        None,
+    ))
+    .unwrap();
+    assert_eq!(status["version"], 3, "{status}");
     server.stop();
 }

@@ -6,7 +6,7 @@ use crate::connect::{Client, ConnectError, connect, session_client_seq};
 use naadf_proto::v1::{EditRequest, JoinRequest, StatusRequest, WorldMessage};
 use std::path::PathBuf;
 use std::sync::Arc;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 use std::time::Duration;
 
 /// How often the server's status (client count) is asked for.
@@ -41,6 +41,8 @@ pub struct Link {
     runtime: tokio::runtime::Runtime,
     client: Client,
     next_seq: Arc<AtomicU64>,
+    /// Edits sent and not yet answered.
+    pending: Arc<AtomicUsize>,
     notify: Arc<dyn Fn(Event) + Send + Sync>,
 }
 
@@ -71,6 +73,7 @@ impl Link {
             runtime,
             client,
             next_seq: Arc::new(AtomicU64::new(session_client_seq())),
+            pending: Arc::new(AtomicUsize::new(0)),
             notify,
         })
     }
@@ -97,6 +100,8 @@ impl Link {
     pub fn edit(&self, ops: String) {
         let (mut c, n) = (self.client.clone(), self.notify.clone());
         let client_seq = self.next_seq.fetch_add(1, Ordering::Relaxed);
+        let pending = self.pending.clone();
+        pending.fetch_add(1, Ordering::SeqCst);
         self.runtime.spawn(async move {
             let reply = c.edit(EditRequest { ops, client_seq }).await;
             n(Event::Edited(
@@ -104,6 +109,17 @@ impl Link {
                     .map(|r| r.into_inner().version)
                     .map_err(|s| format!("{:?}: {}", s.code(), s.message())),
             ));
+            pending.fetch_sub(1, Ordering::SeqCst);
         });
+    }
+
+    /// Waits up to `limit` for the edits in flight to be answered, so that closing the
+    /// window does not drop a click the user just made; returns how many are still open.
+    pub fn finish_edits(&self, limit: Duration) -> usize {
+        let deadline = std::time::Instant::now() + limit;
+        while self.pending.load(Ordering::SeqCst) > 0 && std::time::Instant::now() < deadline {
+            std::thread::sleep(Duration::from_millis(10));
+        }
+        self.pending.load(Ordering::SeqCst)
     }
 }

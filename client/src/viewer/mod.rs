@@ -41,6 +41,8 @@ use winit::window::{CursorGrabMode, Window, WindowId};
 
 /// How long to wait before rejoining after the stream ended.
 const REJOIN_DELAY: Duration = Duration::from_secs(1);
+/// How long closing waits for edits still in flight.
+const EDIT_DRAIN: Duration = Duration::from_secs(10);
 
 /// What the viewer shows and where it gets it.
 #[derive(Clone, Debug)]
@@ -132,11 +134,16 @@ pub fn run(opts: ViewerOptions) -> Result<ViewerSummary, ViewerError> {
         last_frame: None,
         frames: 0,
         edits: 0,
+        title: String::new(),
         result: Ok(()),
     };
     event_loop
         .run_app(&mut app)
         .map_err(|e| ViewerError::Window(e.to_string()))?;
+    let unanswered = app.link.finish_edits(EDIT_DRAIN);
+    if unanswered > 0 {
+        tracing::warn!("{unanswered} edits were still unanswered when the viewer closed");
+    }
     app.result?;
     let world = app.mirror.world();
     Ok(ViewerSummary {
@@ -174,6 +181,8 @@ struct App {
     last_frame: Option<Instant>,
     frames: u32,
     edits: u32,
+    /// The window title shown now (version and clients; updated when they change).
+    title: String,
     result: Result<(), ViewerError>,
 }
 
@@ -351,18 +360,25 @@ impl App {
             .renderer
             .render(&gfx.gpu, gw, &fly.camera, size, self.opts.mode, false)?;
         let swatch = world.materials().get(self.material).map(|m| m.albedo.map(srgb8));
-        let lines = [
-            format!(
-                "{:.1} fps  v{}  {} clients  {}",
-                self.fps,
-                world.version(),
-                self.clients,
-                self.opts.mode.name()
-            ),
-            self.notice.clone(),
-            format!("material {}", self.material),
-        ];
+        let mut lines = vec![format!(
+            "{:.1} fps  v{}  {} clients  {}",
+            self.fps,
+            world.version(),
+            self.clients,
+            self.opts.mode.name()
+        )];
+        if !self.notice.is_empty() {
+            lines.push(self.notice.clone());
+        }
+        lines.push(format!("material {}", self.material));
         draw_hud(&mut frame.rgba, frame.width, frame.height, &lines, swatch);
+        let title = format!("naadf v{} ({} clients)", world.version(), self.clients);
+        if title != self.title
+            && let Some(w) = &self.window
+        {
+            w.set_title(&title);
+            self.title = title;
+        }
         draw_crosshair(&mut frame);
         gfx.presenter.present(&gfx.gpu, &frame)?;
         self.frames += 1;
