@@ -198,6 +198,19 @@ fn errors_are_clean() {
     fails(&["info", &cut], None, "error:");
 }
 
+/// A `bench traverse` or `bench gpu` JSON report of 32 × 18 rays per camera: every
+/// method measured on both ray sets.
+fn bench_report(out: &str) -> serde_json::Value {
+    let v: serde_json::Value = serde_json::from_str(out).unwrap();
+    for set in ["primary", "secondary"] {
+        for m in ["naadf", "nodf", "grid"] {
+            assert!(v[set][m].as_f64().unwrap() > 0.0, "{set}.{m} missing: {v}");
+        }
+    }
+    assert_eq!(v["rays"], 4 * 32 * 18);
+    v
+}
+
 #[test]
 fn bench_traverse_reports_the_contract() {
     let dir = tempfile::tempdir().unwrap();
@@ -207,13 +220,7 @@ fn bench_traverse_reports_the_contract() {
         &["bench", "traverse", &world, "--json", "--width", "32", "--height", "18"],
         None,
     );
-    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
-    for set in ["primary", "secondary"] {
-        for m in ["naadf", "nodf", "grid"] {
-            assert!(v[set][m].as_f64().unwrap() > 0.0, "{set}.{m} missing: {v}");
-        }
-    }
-    assert_eq!(v["rays"], 4 * 32 * 18);
+    let v = bench_report(&out);
     assert!(v["threads"].as_u64().unwrap() >= 1);
     assert_eq!(v["mismatches"], 0);
 }
@@ -478,13 +485,7 @@ fn bench_gpu_measures_every_variant_against_the_cpu() {
         ],
         None,
     );
-    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
-    for set in ["primary", "secondary"] {
-        for m in ["naadf", "nodf", "grid"] {
-            assert!(v[set][m].as_f64().unwrap() > 0.0, "{set}.{m} missing: {v}");
-        }
-    }
-    assert_eq!(v["rays"], 4 * 32 * 18);
+    let v = bench_report(&out);
     for m in ["naadf", "nodf", "grid"] {
         assert!(v["mismatches"][m].as_u64().unwrap() <= 1, "{m}: {v}");
     }

@@ -7,6 +7,17 @@ mod support;
 use std::process::Command;
 use support::{ok, p, serve_world, start_world};
 
+/// `naadf view` at 320×200 with a JSON summary, on a fresh virtual display, run through
+/// `wrapper` (a script that drives it, or nothing).
+fn viewer(wrapper: &[&str], url: &str, token: &str) -> Command {
+    let mut c = Command::new("xvfb-run");
+    c.args(["-a", "-s", "-screen 0 800x600x24"])
+        .args(wrapper)
+        .arg(env!("CARGO_BIN_EXE_naadf"))
+        .args(["view", "--server", url, "--token", token, "--size", "320x200", "--json"]);
+    c
+}
+
 #[test]
 fn the_viewer_renders_a_server_world_in_a_window() {
     if Command::new("xvfb-run").arg("--help").output().is_err() {
@@ -17,19 +28,8 @@ fn the_viewer_renders_a_server_world_in_a_window() {
     let world = start_world(dir.path());
     let server = serve_world(dir.path(), &world, &[], &[]);
     let shot = p(dir.path(), "shot.png");
-    let out = Command::new("xvfb-run")
-        .args(["-a", "-s", "-screen 0 800x600x24"])
-        .arg(env!("CARGO_BIN_EXE_naadf"))
-        .args([
-            "view",
-            "--server",
-            &server.url,
-            "--token",
-            "viewer",
-            "--size",
-            "320x200",
-        ])
-        .args(["--frames", "4", "--screenshot", &shot, "--timeout", "120", "--json"])
+    let out = viewer(&[], &server.url, "viewer")
+        .args(["--frames", "4", "--screenshot", &shot, "--timeout", "120"])
         .output()
         .expect("run xvfb-run");
     let stderr = String::from_utf8_lossy(&out.stderr);
@@ -79,19 +79,7 @@ fn the_viewer_renders_a_server_world_in_a_window() {
         wait $pid
     "#;
     let summary_path = p(dir.path(), "clicks.json");
-    let out = Command::new("xvfb-run")
-        .args(["-a", "-s", "-screen 0 800x600x24", "bash", "-c", script, "clicks"])
-        .arg(env!("CARGO_BIN_EXE_naadf"))
-        .args([
-            "view",
-            "--server",
-            &server.url,
-            "--token",
-            "editor",
-            "--size",
-            "320x200",
-            "--json",
-        ])
+    let out = viewer(&["bash", "-c", script, "clicks"], &server.url, "editor")
         .env("SUMMARY", &summary_path)
         .output()
         .expect("run xvfb-run");

@@ -32,9 +32,22 @@ impl PassPipelines {
         }
     }
 
-    /// The group-1 layout.
-    pub fn group1(&self) -> &wgpu::BindGroupLayout {
-        &self.group1
+    /// A group-1 bind group of the pass's own buffers: its uniform, then its storage
+    /// buffers, at bindings 0, 1, 2, … in that order.
+    pub fn group1(&self, gpu: &Gpu, buffers: &[&wgpu::Buffer]) -> wgpu::BindGroup {
+        let entries: Vec<wgpu::BindGroupEntry> = buffers
+            .iter()
+            .enumerate()
+            .map(|(i, b)| wgpu::BindGroupEntry {
+                binding: i as u32,
+                resource: b.as_entire_binding(),
+            })
+            .collect();
+        gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(self.pass.entry()),
+            layout: &self.group1,
+            entries: &entries,
+        })
     }
 
     /// The pipeline for the world's current split, world loop `lp` and (for the

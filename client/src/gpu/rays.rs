@@ -124,24 +124,7 @@ impl RayTracer {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
             mapped_at_creation: false,
         });
-        let bind_group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("rays"),
-            layout: self.pipes.group1(),
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: uniform.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: rays_buf.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: hits.as_entire_binding(),
-                },
-            ],
-        });
+        let bind_group = self.pipes.group1(gpu, &[&uniform, &rays_buf, &hits]);
         Ok(RayBatch {
             count,
             hits,

@@ -195,24 +195,7 @@ impl Renderer {
         let colour = storage("pixels", pixels * 4);
         let gbuf = storage("gbuffer", if gbuffer { pixels * 16 } else { 16 });
         gpu.checked(|| {
-            let bind_group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("render"),
-                layout: self.pipes.group1(),
-                entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: uniform.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: colour.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 2,
-                        resource: gbuf.as_entire_binding(),
-                    },
-                ],
-            });
+            let bind_group = self.pipes.group1(gpu, &[&uniform, &colour, &gbuf]);
             let mut enc = gpu.device.create_command_encoder(&Default::default());
             {
                 let mut pass = enc.begin_compute_pass(&Default::default());
