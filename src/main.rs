@@ -43,6 +43,8 @@ enum Command {
     Render(commands::render::Args),
     /// Open a window on a server's world: fly through it and edit it live.
     View(commands::view::Args),
+    /// Run a replay script (or a HashDAG CSV) against a world file or a server.
+    Replay(commands::replay::Args),
     /// Benchmarks.
     #[command(subcommand)]
     Bench(commands::bench::Bench),
@@ -69,6 +71,7 @@ fn main() -> ExitCode {
         Command::ExportLog(a) => commands::export_log::run(a),
         Command::Render(a) => commands::render::run(a),
         Command::View(a) => commands::view::run(a),
+        Command::Replay(a) => commands::replay::run(a),
         Command::Bench(b) => commands::bench::run(b),
     };
     commands::finish(result)

@@ -177,7 +177,8 @@ impl Actor {
                 e.version, applied.change.version
             ));
         }
-        self.record(&e.user, e.client_seq, e.kind, applied.undo);
+        self.histories
+            .record(&e.user, e.client_seq, e.kind, e.version, applied.undo);
         Ok(())
     }
 
@@ -191,15 +192,6 @@ impl Actor {
         self.world.grow_until_quiescent();
         self.pages = PageStore::new(&self.world);
         self.metrics.version.set(self.world.version() as i64);
-    }
-
-    fn record(&mut self, user: &str, client_seq: u64, kind: EntryKind, undo: naadf_world::edit::UndoRecord) {
-        match kind {
-            EntryKind::Edit => self.histories.edited(user, undo),
-            EntryKind::Undo => self.histories.undone(user, undo),
-            EntryKind::Redo => self.histories.redone(user, undo),
-        }
-        self.histories.answer(user, client_seq, self.world.version());
     }
 
     /// Runs the actor until every request sender is gone. Distance-field growth runs on a
@@ -335,17 +327,14 @@ impl Actor {
         let (batch, kind) = match action {
             Action::Batch(b) => (b, EntryKind::Edit),
             history => {
-                let (record, kind, what) = match history {
-                    Action::Undo => (self.histories.next_undo(&user), EntryKind::Undo, "undo"),
-                    _ => (self.histories.next_redo(&user), EntryKind::Redo, "redo"),
-                };
-                let Some(record) = record else {
-                    let _ = reply.send(Err(Status::failed_precondition(format!(
-                        "user '{user}' has nothing to {what}"
-                    ))));
-                    return;
-                };
-                (record.undo_batch(&self.world), kind)
+                let redo = !matches!(history, Action::Undo);
+                match self.histories.history_batch(&user, redo, &self.world) {
+                    Ok(b) => (b, if redo { EntryKind::Redo } else { EntryKind::Undo }),
+                    Err(why) => {
+                        let _ = reply.send(Err(Status::failed_precondition(why)));
+                        return;
+                    }
+                }
             }
         };
         let applied = match self.world.apply(&batch, &self.limits) {
@@ -356,7 +345,7 @@ impl Actor {
             }
         };
         let version = applied.change.version;
-        self.record(&user, client_seq, kind, applied.undo);
+        self.histories.record(&user, client_seq, kind, version, applied.undo);
         let ops = batch.to_json_line();
         self.activity.edit(version, &user, &ops);
         let entry = Entry {

@@ -2,7 +2,10 @@
 //! that makes retried requests idempotent. Both are part of the server state that
 //! snapshots persist and WAL replay rebuilds.
 
+use crate::wal::EntryKind;
+use naadf_world::World;
 use naadf_world::edit::UndoRecord;
+use naadf_world::ops::Batch;
 use serde::{Deserialize, Serialize};
 use std::collections::{BTreeMap, VecDeque};
 
@@ -56,6 +59,30 @@ impl Histories {
         while seqs.len() > MAX_SEQS {
             seqs.pop_first();
         }
+    }
+
+    /// The batch an undo (`redo` false) or redo of `user` applies to `world` now, or why
+    /// there is none.
+    pub fn history_batch(&self, user: &str, redo: bool, world: &World) -> Result<Batch, String> {
+        let (record, what) = if redo {
+            (self.next_redo(user), "redo")
+        } else {
+            (self.next_undo(user), "undo")
+        };
+        record
+            .map(|r| r.undo_batch(world))
+            .ok_or_else(|| format!("user '{user}' has nothing to {what}"))
+    }
+
+    /// Records an applied batch of `kind`: its undo record goes on the right stack, and
+    /// `(user, client_seq)` is answered with `version`.
+    pub fn record(&mut self, user: &str, client_seq: u64, kind: EntryKind, version: u64, undo: UndoRecord) {
+        match kind {
+            EntryKind::Edit => self.edited(user, undo),
+            EntryKind::Undo => self.undone(user, undo),
+            EntryKind::Redo => self.redone(user, undo),
+        }
+        self.answer(user, client_seq, version);
     }
 
     /// Records a new edit's undo record; a new edit clears the user's redo stack.

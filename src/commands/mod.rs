@@ -16,6 +16,7 @@ pub mod mirror;
 pub mod raycast;
 pub mod remote;
 pub mod render;
+pub mod replay;
 pub mod serve;
 pub mod status;
 pub mod view;
@@ -52,15 +53,22 @@ pub fn finish(result: Result<()>) -> ExitCode {
     }
 }
 
-/// A chunk progress bar on stderr (hidden when stderr is not a terminal).
-pub fn chunk_progress(total: u64, what: &str) -> ProgressBar {
+/// A progress bar on stderr counting `unit`s (hidden when stderr is not a terminal).
+pub fn progress(total: u64, what: &str, unit: &str) -> ProgressBar {
     let bar = ProgressBar::new(total);
     bar.set_style(
-        ProgressStyle::with_template("{msg} [{elapsed_precise}] {wide_bar} {pos}/{len} chunks ({eta})")
-            .expect("valid template"),
+        ProgressStyle::with_template(&format!(
+            "{{msg}} [{{elapsed_precise}}] {{wide_bar}} {{pos}}/{{len}} {unit} ({{eta}})"
+        ))
+        .expect("valid template"),
     );
     bar.set_message(what.to_string());
     bar
+}
+
+/// A chunk progress bar on stderr.
+pub fn chunk_progress(total: u64, what: &str) -> ProgressBar {
+    progress(total, what, "chunks")
 }
 
 /// Loads a world file, naming it in any error.

@@ -39,13 +39,19 @@ pub fn status_error(s: tonic::Status) -> anyhow::Error {
     anyhow::anyhow!("server refused: {:?}: {}", s.code(), s.message())
 }
 
-/// Joins `server` and follows its stream until the mirror is live and the world
-/// quiescent, or `timeout` passes; returns that world.
-pub async fn quiescent_world(server: &ServerArgs, timeout: std::time::Duration) -> Result<naadf_world::World> {
+/// Joins `server` (announcing `cache`, so that only changed pages come) and follows its
+/// stream until the mirror is live, at `min_version` or later, and quiescent, or `timeout`
+/// passes; returns that world.
+pub async fn quiescent_world(
+    server: &ServerArgs,
+    cache: Option<naadf_world::World>,
+    min_version: u64,
+    timeout: std::time::Duration,
+) -> Result<naadf_world::World> {
     use naadf_client::{Ended, Mirror};
     use std::ops::ControlFlow;
     let mut client = server.connect().await?;
-    let mut mirror = Mirror::new(None);
+    let mut mirror = Mirror::new(cache);
     let mut stream = client
         .join(mirror.join_request())
         .await
@@ -56,7 +62,8 @@ pub async fn quiescent_world(server: &ServerArgs, timeout: std::time::Duration) 
             &mut stream,
             tokio::time::sleep(timeout),
             |m| -> Result<ControlFlow<()>> {
-                Ok(if m.is_live() && m.is_quiescent() {
+                let at = m.world().is_some_and(|w| w.version() >= min_version);
+                Ok(if m.is_live() && m.is_quiescent() && at {
                     ControlFlow::Break(())
                 } else {
                     ControlFlow::Continue(())

@@ -4,7 +4,7 @@
 use super::remote::{ServerArgs, block_on, quiescent_world};
 use super::{load_world, print_json};
 use anyhow::{Context, Result, bail};
-use naadf_client::gpu::{Gpu, GpuWorld, Mode, Renderer, write_gbuffer};
+use naadf_client::gpu::{Headless, Mode, write_gbuffer};
 use naadf_world::camera::Camera;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
@@ -86,17 +86,20 @@ pub fn run(a: Args) -> Result<()> {
     let camera = read_camera(&a.camera)?;
     let world = match &a.world {
         Some(path) => load_world(path)?,
-        None => block_on(quiescent_world(&a.server, Duration::from_secs_f64(a.timeout.max(0.0))))?,
+        None => block_on(quiescent_world(
+            &a.server,
+            None,
+            0,
+            Duration::from_secs_f64(a.timeout.max(0.0)),
+        ))?,
     };
-    let gpu = Gpu::new()?;
-    let gpu_world = GpuWorld::new(&gpu, &world)?;
-    let mut renderer = Renderer::new(&gpu);
+    let mut headless = Headless::new()?;
     let want_gbuffer = a.gbuffer.is_some();
-    // The first frame builds the pipeline; time the rest when there are several.
-    let mut frame = renderer.render(&gpu, &gpu_world, &camera, a.size, a.mode, want_gbuffer)?;
+    // The first frame uploads the world and builds the pipeline; time the rest.
+    let mut frame = headless.frame(&world, &camera, a.size, a.mode, want_gbuffer)?;
     let t0 = Instant::now();
     for _ in 1..a.frames {
-        frame = renderer.render(&gpu, &gpu_world, &camera, a.size, a.mode, want_gbuffer)?;
+        frame = headless.frame(&world, &camera, a.size, a.mode, want_gbuffer)?;
     }
     let frame_ms = if a.frames > 1 {
         t0.elapsed().as_secs_f64() * 1e3 / f64::from(a.frames - 1)
@@ -123,7 +126,7 @@ pub fn run(a: Args) -> Result<()> {
             mode: a.mode.name(),
             version: world.version(),
             digest: world.digest().to_string(),
-            adapter: gpu.describe(),
+            adapter: headless.gpu.describe(),
             frames: a.frames,
             frame_ms: if frame_ms.is_nan() { 0.0 } else { frame_ms },
         })?;

@@ -47,6 +47,7 @@ pub mod ops;
 mod prefix;
 pub mod preset;
 pub mod raysets;
+pub mod replay;
 pub mod size;
 pub mod stats;
 pub mod traverse;

@@ -10,11 +10,13 @@
 //!   world's current buffer split needs;
 //! - [`RayTracer`]: traces lists of rays with any traversal method (tests against the
 //!   CPU, benchmarks);
-//! - [`Renderer`]: renders camera frames in the modes of [`Mode`].
+//! - [`Renderer`]: renders camera frames in the modes of [`Mode`];
+//! - [`Headless`]: a device, a renderer and a GPU copy that follows a changing world.
 //!
 //! [`World`]: naadf_world::World
 
 mod context;
+mod headless;
 mod pipeline;
 mod rays;
 mod render;
@@ -22,6 +24,7 @@ pub mod shaders;
 mod world;
 
 pub use context::{Gpu, GpuError};
+pub use headless::Headless;
 pub use rays::{GpuHit, GpuRay, RayBatch, RayTracer};
 pub use render::{DEFAULT_SUN, Frame, GBUFFER_MAGIC, Mode, Renderer, STEPS_FULL_SCALE, write_gbuffer};
 pub use world::{DEFAULT_MAX_STEPS, GPU_BUFFERS, GpuWorld, Upload};

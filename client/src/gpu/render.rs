@@ -77,6 +77,40 @@ pub struct Frame {
 }
 
 impl Frame {
+    /// Decodes a PNG (any colour type) into an RGBA8 frame without a first-hit buffer.
+    pub fn from_png(bytes: &[u8]) -> Result<Frame, GpuError> {
+        let img = image::load_from_memory_with_format(bytes, image::ImageFormat::Png)
+            .map_err(|e| GpuError::Unsupported(format!("not a readable PNG: {e}")))?
+            .to_rgba8();
+        Ok(Frame {
+            width: img.width(),
+            height: img.height(),
+            rgba: img.into_raw(),
+            gbuffer: None,
+        })
+    }
+
+    /// Mean absolute difference of the R, G and B bytes (0–255) between two frames of the
+    /// same size; `None` when the sizes differ.
+    ///
+    /// ```
+    /// use naadf_client::gpu::Frame;
+    /// let f = |v: u8| Frame { width: 1, height: 2, rgba: vec![v, v, v, 255, 0, 0, 0, 255], gbuffer: None };
+    /// assert_eq!(f(10).mean_abs_diff(&f(16)), Some(3.0));
+    /// ```
+    pub fn mean_abs_diff(&self, other: &Frame) -> Option<f64> {
+        if (self.width, self.height) != (other.width, other.height) || self.rgba.len() != other.rgba.len() {
+            return None;
+        }
+        let sum: u64 = self
+            .rgba
+            .chunks_exact(4)
+            .zip(other.rgba.chunks_exact(4))
+            .map(|(a, b)| (0..3).map(|c| u64::from(a[c].abs_diff(b[c]))).sum::<u64>())
+            .sum();
+        Some(sum as f64 / (3 * (self.rgba.len() / 4)).max(1) as f64)
+    }
+
     /// The frame as PNG bytes.
     pub fn png(&self) -> Result<Vec<u8>, GpuError> {
         use image::ImageEncoder;

@@ -1,0 +1,487 @@
+//! `naadf replay SCRIPT [--world FILE [-o OUT.naadf] | --server URL] [--json]`: runs a
+//! replay script (docs/REPLAY.md) in-process against a world file, or as one or several
+//! clients of a live server. Both paths check digests at quiescence, so the same script
+//! on the same world gives the same checkpoints either way.
+
+use super::remote::{ServerArgs, quiescent_world, status_error};
+use super::{load_world, print_json, progress, save_world};
+use anyhow::{Context, Result, anyhow, bail};
+use naadf_client::Client;
+use naadf_client::connect::session_client_seq;
+use naadf_client::gpu::{Frame, Headless, Mode};
+use naadf_proto::v1::{EditRequest, HistoryRequest, StatusRequest};
+use naadf_server::history::Histories;
+use naadf_server::wal::EntryKind;
+use naadf_world::World;
+use naadf_world::camera::Camera;
+use naadf_world::ops::{Batch, Limits};
+use naadf_world::replay::hashdag::{HashdagMapping, to_script_lines};
+use naadf_world::replay::script::{Line, ScriptLine, parse_script};
+use serde::Serialize;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+/// Arguments of `replay`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// The script (JSON Lines, or a HashDAG CSV with `--format hashdag`).
+    script: PathBuf,
+    /// Replay in-process against this world file (instead of a server).
+    #[arg(long)]
+    world: Option<PathBuf>,
+    /// With `--world`: write the final world here (after the distance fields converge).
+    #[arg(short, long, requires = "world")]
+    output: Option<PathBuf>,
+    #[command(flatten)]
+    server: ServerArgs,
+    /// What the script file is.
+    #[arg(long, default_value = "script", value_parser = ["script", "hashdag"])]
+    format: String,
+    /// HashDAG coordinates are multiplied by this.
+    #[arg(long, default_value_t = 1.0)]
+    scale: f64,
+    /// Then shifted by this (`X,Y,Z`).
+    #[arg(long, default_value = "0,0,0", value_parser = parse_offset)]
+    offset: [f64; 3],
+    /// Material of HashDAG edits that add voxels.
+    #[arg(long, default_value_t = 1)]
+    material: u16,
+    /// The user until the first `as_user` line (in-process; against a server, `--token`).
+    #[arg(long, default_value = "replay")]
+    user: String,
+    /// Seconds to wait for a server to reach a version or quiescence.
+    #[arg(long, default_value_t = 120.0)]
+    timeout: f64,
+    /// Print the checkpoints and a pass/fail summary as JSON on stdout.
+    #[arg(long)]
+    json: bool,
+}
+
+fn parse_offset(s: &str) -> Result<[f64; 3], String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|p| p.trim().parse::<f64>().map_err(|e| format!("'{p}': {e}")))
+        .collect::<Result<_, _>>()?;
+    match v[..] {
+        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok([x, y, z]),
+        _ => Err("expected three finite numbers X,Y,Z".into()),
+    }
+}
+
+/// One checked point of the run.
+#[derive(Serialize)]
+struct Checkpoint {
+    /// Script line (0 for the end of the script).
+    line: usize,
+    /// `expect_digest`, `expect_image`, `wait_version` or `end`.
+    kind: &'static str,
+    version: u64,
+    digest: String,
+    /// What was expected (a digest, or the largest allowed image difference).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    expected: Option<String>,
+    /// The measured image difference.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    measured: Option<f64>,
+    ok: bool,
+}
+
+#[derive(Serialize)]
+struct Report {
+    target: &'static str,
+    lines: usize,
+    edits: u64,
+    frames: u64,
+    renders: u64,
+    checkpoints: Vec<Checkpoint>,
+    failures: usize,
+    passed: bool,
+    seconds: f64,
+    edits_per_second: f64,
+}
+
+/// Where a script's edits go.
+trait Target {
+    /// Applies `batch` as `user`; returns the version it produced.
+    fn edit(&mut self, user: &str, batch: &Batch) -> Result<u64>;
+    /// Undoes (or redoes) `user`'s latest edit (or undo); returns the version.
+    fn history(&mut self, user: &str, redo: bool) -> Result<u64>;
+    /// Returns once the world is at version `v` or later.
+    fn wait_version(&mut self, v: u64) -> Result<()>;
+    /// The world once quiescent, at the latest version this replay produced or later.
+    fn settled(&mut self) -> Result<&World>;
+}
+
+/// In-process: the world and the per-user histories, as the server's actor keeps them.
+struct Local {
+    world: World,
+    histories: Histories,
+    limits: Limits,
+}
+
+impl Local {
+    fn apply(&mut self, user: &str, batch: &Batch, kind: EntryKind) -> Result<u64> {
+        let applied = self.world.apply(batch, &self.limits)?;
+        let version = applied.change.version;
+        self.histories.record(user, 0, kind, version, applied.undo);
+        Ok(version)
+    }
+}
+
+impl Target for Local {
+    fn edit(&mut self, user: &str, batch: &Batch) -> Result<u64> {
+        self.apply(user, batch, EntryKind::Edit)
+    }
+
+    fn history(&mut self, user: &str, redo: bool) -> Result<u64> {
+        let batch = self
+            .histories
+            .history_batch(user, redo, &self.world)
+            .map_err(|e| anyhow!(e))?;
+        self.apply(user, &batch, if redo { EntryKind::Redo } else { EntryKind::Undo })
+    }
+
+    fn wait_version(&mut self, v: u64) -> Result<()> {
+        if self.world.version() < v {
+            bail!(
+                "version {v} is never reached: in-process only this script edits, and the world is at {}",
+                self.world.version()
+            );
+        }
+        Ok(())
+    }
+
+    fn settled(&mut self) -> Result<&World> {
+        self.world.grow_until_quiescent();
+        Ok(&self.world)
+    }
+}
+
+/// Against a server: one client per user (the user's name is its token), a mirror for
+/// digests and renders.
+struct Remote {
+    server: ServerArgs,
+    default_user: String,
+    runtime: tokio::runtime::Runtime,
+    clients: HashMap<String, Client>,
+    next_seq: u64,
+    /// The newest version this replay produced or waited for.
+    version: u64,
+    mirror: Option<World>,
+    timeout: Duration,
+}
+
+impl Remote {
+    fn client(&mut self, user: &str) -> Result<Client> {
+        if let Some(c) = self.clients.get(user) {
+            return Ok(c.clone());
+        }
+        let mut args = self.server.clone();
+        if user != self.default_user {
+            args.token = Some(user.to_owned());
+        }
+        let c = self.runtime.block_on(args.connect())?;
+        self.clients.insert(user.to_owned(), c.clone());
+        Ok(c)
+    }
+
+    fn seq(&mut self) -> u64 {
+        self.next_seq += 1;
+        self.next_seq
+    }
+
+    fn acked(&mut self, version: u64) -> u64 {
+        self.version = self.version.max(version);
+        version
+    }
+}
+
+impl Target for Remote {
+    fn edit(&mut self, user: &str, batch: &Batch) -> Result<u64> {
+        let mut c = self.client(user)?;
+        let req = EditRequest {
+            ops: batch.to_json_line(),
+            client_seq: self.seq(),
+        };
+        let reply = self.runtime.block_on(c.edit(req)).map_err(status_error)?;
+        Ok(self.acked(reply.into_inner().version))
+    }
+
+    fn history(&mut self, user: &str, redo: bool) -> Result<u64> {
+        let mut c = self.client(user)?;
+        let req = HistoryRequest { client_seq: self.seq() };
+        let reply = if redo {
+            self.runtime.block_on(c.redo(req))
+        } else {
+            self.runtime.block_on(c.undo(req))
+        }
+        .map_err(status_error)?;
+        Ok(self.acked(reply.into_inner().version))
+    }
+
+    fn wait_version(&mut self, v: u64) -> Result<()> {
+        let user = self.default_user.clone();
+        let mut c = self.client(&user)?;
+        let deadline = Instant::now() + self.timeout;
+        loop {
+            let s = self
+                .runtime
+                .block_on(c.status(StatusRequest {}))
+                .map_err(status_error)?;
+            if s.get_ref().version >= v {
+                self.version = self.version.max(v);
+                return Ok(());
+            }
+            if Instant::now() > deadline {
+                bail!(
+                    "the server is at version {} after {:?}, not {v}",
+                    s.get_ref().version,
+                    self.timeout
+                );
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+    }
+
+    fn settled(&mut self) -> Result<&World> {
+        let cache = self.mirror.take();
+        let world = self
+            .runtime
+            .block_on(quiescent_world(&self.server, cache, self.version, self.timeout))?;
+        Ok(self.mirror.insert(world))
+    }
+}
+
+/// The run's state between lines.
+struct Run<'a> {
+    target: &'a mut dyn Target,
+    folder: PathBuf,
+    user: String,
+    camera: Option<Camera>,
+    headless: Option<Headless>,
+    last_frame: Option<Frame>,
+    frame_clock: Option<Instant>,
+    edits: u64,
+    frames: u64,
+    renders: u64,
+    checkpoints: Vec<Checkpoint>,
+}
+
+impl Run<'_> {
+    fn line(&mut self, sl: &ScriptLine) -> Result<()> {
+        match &sl.line {
+            Line::Ops(batch) => {
+                self.target.edit(&self.user, batch)?;
+                self.edits += 1;
+            }
+            Line::RandomEdits(r) => {
+                let w = self.target.settled()?;
+                let batches = r.batches(w.size(), w.materials().len());
+                for b in &batches {
+                    self.target.edit(&self.user, b)?;
+                }
+                self.edits += batches.len() as u64;
+            }
+            Line::Undo | Line::Redo => {
+                self.target.history(&self.user, sl.line == Line::Redo)?;
+                self.edits += 1;
+            }
+            Line::AsUser(u) => self.user = u.clone(),
+            Line::Camera(c) => self.camera = Some(*c),
+            Line::EndFrame { fps } => {
+                self.frames += 1;
+                if let Some(fps) = fps {
+                    // Pace against the first frame's start, so that delays do not add up.
+                    let start = *self.frame_clock.get_or_insert_with(Instant::now);
+                    let due = start + Duration::from_secs_f64(self.frames as f64 / fps);
+                    std::thread::sleep(due.saturating_duration_since(Instant::now()));
+                }
+            }
+            Line::WaitVersion(v) => {
+                self.target.wait_version(*v)?;
+                self.checkpoint(sl.number, "wait_version", None, None, true)?;
+            }
+            Line::ExpectDigest(d) => {
+                let got = self.target.settled()?.digest();
+                self.checkpoint(sl.number, "expect_digest", Some(d.to_string()), None, got == *d)?;
+            }
+            Line::Render(r) => {
+                let mode = Mode::parse(&r.mode).ok_or_else(|| anyhow!("unknown render mode '{}'", r.mode))?;
+                let camera = r
+                    .camera
+                    .or(self.camera)
+                    .ok_or_else(|| anyhow!("render: no camera (give one, or a camera line before)"))?;
+                if self.headless.is_none() {
+                    self.headless = Some(Headless::new().context("render: the GPU client is not available")?);
+                }
+                let world = self.target.settled()?;
+                let headless = self.headless.as_mut().expect("opened above");
+                let frame = headless.frame(world, &camera, (r.size[0], r.size[1]), mode, false)?;
+                let out = self.folder.join(&r.out);
+                std::fs::write(&out, frame.png()?).with_context(|| format!("cannot write {}", out.display()))?;
+                self.last_frame = Some(frame);
+                self.renders += 1;
+            }
+            Line::ExpectImage(e) => {
+                let frame = self
+                    .last_frame
+                    .as_ref()
+                    .ok_or_else(|| anyhow!("expect_image: nothing was rendered before"))?;
+                let path = self.folder.join(&e.file);
+                let bytes = std::fs::read(&path).with_context(|| format!("cannot read {}", path.display()))?;
+                let reference = Frame::from_png(&bytes).with_context(|| path.display().to_string())?;
+                let diff = frame.mean_abs_diff(&reference).ok_or_else(|| {
+                    anyhow!(
+                        "expect_image: {} is {}x{}, the frame {}x{}",
+                        path.display(),
+                        reference.width,
+                        reference.height,
+                        frame.width,
+                        frame.height
+                    )
+                })?;
+                let expected = format!("mean abs diff ≤ {}", e.max_mean_abs_diff);
+                self.checkpoint(
+                    sl.number,
+                    "expect_image",
+                    Some(expected),
+                    Some(diff),
+                    diff <= e.max_mean_abs_diff,
+                )?;
+            }
+        }
+        Ok(())
+    }
+
+    fn checkpoint(
+        &mut self,
+        line: usize,
+        kind: &'static str,
+        expected: Option<String>,
+        measured: Option<f64>,
+        ok: bool,
+    ) -> Result<()> {
+        let w = self.target.settled()?;
+        let c = Checkpoint {
+            line,
+            kind,
+            version: w.version(),
+            digest: w.digest().to_string(),
+            expected,
+            measured,
+            ok,
+        };
+        if !ok {
+            tracing::warn!(line, kind, version = c.version, digest = %c.digest, expected = ?c.expected, "expectation failed");
+        }
+        self.checkpoints.push(c);
+        Ok(())
+    }
+}
+
+/// Reads the script file in the chosen format.
+fn read_script(a: &Args) -> Result<Vec<ScriptLine>> {
+    let text = std::fs::read_to_string(&a.script).with_context(|| format!("cannot read {}", a.script.display()))?;
+    let script = if a.format == "hashdag" {
+        let m = HashdagMapping {
+            scale: a.scale,
+            offset: a.offset,
+            material: a.material,
+        };
+        to_script_lines(&text, &m)?.join("\n")
+    } else {
+        text
+    };
+    Ok(parse_script(&script)?)
+}
+
+/// Runs `replay`.
+pub fn run(a: Args) -> Result<()> {
+    let lines = read_script(&a).with_context(|| a.script.display().to_string())?;
+    let timeout = Duration::from_secs_f64(a.timeout.max(0.0));
+    let mut local;
+    let mut remote;
+    let (target, name): (&mut dyn Target, _) = match &a.world {
+        Some(path) => {
+            local = Local {
+                world: load_world(path)?,
+                histories: Histories::default(),
+                limits: Limits::default(),
+            };
+            (&mut local, "world")
+        }
+        None => {
+            remote = Remote {
+                server: a.server.clone(),
+                default_user: a.user.clone(),
+                runtime: tokio::runtime::Builder::new_multi_thread().enable_all().build()?,
+                clients: HashMap::new(),
+                next_seq: session_client_seq(),
+                version: 0,
+                mirror: None,
+                timeout,
+            };
+            (&mut remote, "server")
+        }
+    };
+    let folder = a.script.parent().map(Path::to_path_buf).unwrap_or_default();
+    let mut run = Run {
+        target,
+        folder,
+        user: a.user.clone(),
+        camera: None,
+        headless: None,
+        last_frame: None,
+        frame_clock: None,
+        edits: 0,
+        frames: 0,
+        renders: 0,
+        checkpoints: Vec::new(),
+    };
+    let t0 = Instant::now();
+    let bar = progress(lines.len() as u64, "replaying", "lines");
+    for sl in &lines {
+        run.line(sl).with_context(|| format!("line {}", sl.number))?;
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    let seconds = t0.elapsed().as_secs_f64();
+    run.checkpoint(0, "end", None, None, true)?;
+    if let Some(out) = &a.output {
+        save_world(run.target.settled()?, out)?;
+    }
+    let failures = run.checkpoints.iter().filter(|c| !c.ok).count();
+    let report = Report {
+        target: name,
+        lines: lines.len(),
+        edits: run.edits,
+        frames: run.frames,
+        renders: run.renders,
+        failures,
+        passed: failures == 0,
+        seconds,
+        edits_per_second: run.edits as f64 / seconds.max(1e-9),
+        checkpoints: run.checkpoints,
+    };
+    if a.json {
+        print_json(&report)?;
+    } else {
+        let last = report.checkpoints.last().expect("the end checkpoint");
+        println!(
+            "{} lines, {} edits in {:.2} s ({:.0} edits/s); final version {} digest {}; {} of {} checkpoints failed",
+            report.lines,
+            report.edits,
+            report.seconds,
+            report.edits_per_second,
+            last.version,
+            last.digest,
+            failures,
+            report.checkpoints.len()
+        );
+    }
+    if failures > 0 {
+        bail!("{failures} expectation(s) failed");
+    }
+    Ok(())
+}
