@@ -45,6 +45,8 @@ enum Command {
     View(commands::view::Args),
     /// Run a replay script (or a HashDAG CSV) against a world file or a server.
     Replay(commands::replay::Args),
+    /// Record a live server's edit batches, with their users, as a replay script.
+    Record(commands::record::Args),
     /// Benchmarks.
     #[command(subcommand)]
     Bench(commands::bench::Bench),
@@ -72,6 +74,7 @@ fn main() -> ExitCode {
         Command::Render(a) => commands::render::run(a),
         Command::View(a) => commands::view::run(a),
         Command::Replay(a) => commands::replay::run(a),
+        Command::Record(a) => commands::record::run(a),
         Command::Bench(b) => commands::bench::run(b),
     };
     commands::finish(result)

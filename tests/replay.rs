@@ -235,3 +235,82 @@ fn renders_agree_in_process_and_against_a_server() {
     let read = |n: &str| std::fs::read(p(dir.path(), n)).unwrap();
     assert!(read("local.png") == read("remote.png"));
 }
+
+/// Three editors at once, recorded live: replaying the recording on the world it started
+/// from reproduces the server's final digest.
+#[test]
+fn a_recorded_multi_user_session_replays_to_the_same_digest() {
+    let dir = tempfile::tempdir().unwrap();
+    let world = start_world(dir.path());
+    let server = serve_world(dir.path(), &world, &[], &[]);
+    let (rec, base) = (p(dir.path(), "rec.jsonl"), p(dir.path(), "base.naadf"));
+    let recorder = std::process::Command::new(env!("CARGO_BIN_EXE_naadf"))
+        .args(["record", "--server", &server.url, "-o", &rec, "--base", &base])
+        .args(["--until-version", "30", "--json"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Wait until the recorder has joined (its script starts), so that it sees every batch.
+    for _ in 0..600 {
+        if std::fs::read_to_string(&rec).is_ok_and(|s| s.contains("wait_version")) {
+            break;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    let editors: Vec<_> = (0..3u64)
+        .map(|e| {
+            let (url, dir) = (server.url.clone(), dir.path().to_owned());
+            std::thread::spawn(move || {
+                let mut rng = 100 + e;
+                let ops: String = (0..10).map(|_| support::random_op(&mut rng) + "\n").collect();
+                let f = p(&dir, &format!("editor{e}.jsonl"));
+                std::fs::write(&f, ops).unwrap();
+                ok(
+                    &["edit", "--server", &url, "--token", &format!("editor{e}"), "--ops", &f],
+                    None,
+                );
+            })
+        })
+        .collect();
+    for e in editors {
+        e.join().unwrap();
+    }
+    let out = recorder.wait_with_output().unwrap();
+    assert!(
+        out.status.success(),
+        "record failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let summary: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(
+        (summary["start_version"].as_u64(), summary["end_version"].as_u64()),
+        (Some(0), Some(30))
+    );
+    let status: Value = serde_json::from_str(&ok(&["status", "--server", &server.url, "--json"], None)).unwrap();
+    // The server's own log, exported, is a replay script too.
+    let (log, log_base) = (p(dir.path(), "log.jsonl"), p(dir.path(), "log-base.naadf"));
+    ok(
+        &["export-log", &p(dir.path(), "data"), "-o", &log, "--base", &log_base],
+        None,
+    );
+    server.stop();
+    let from_log = replay_ok(&["replay", &log, "--world", &log_base, "--json"]);
+    assert_eq!(from_log["edits"], 30);
+    assert_eq!(from_log["checkpoints"][0]["digest"], status["digest"]);
+    assert_eq!(
+        status["digest"], summary["digest"],
+        "the recording's digest is the server's"
+    );
+
+    let script = std::fs::read_to_string(&rec).unwrap();
+    let users: std::collections::BTreeSet<&str> = script.lines().filter(|l| l.contains("as_user")).collect();
+    assert_eq!(users.len(), 3, "three users: {users:?}");
+    let report = replay_ok(&["replay", &rec, "--world", &base, "--json"]);
+    assert_eq!(report["passed"], true, "{report}");
+    assert_eq!(report["edits"], 30);
+    assert_eq!(
+        report["checkpoints"].as_array().unwrap().last().unwrap()["digest"],
+        summary["digest"]
+    );
+}

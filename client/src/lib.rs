@@ -16,4 +16,4 @@ pub mod mirror;
 pub mod viewer;
 
 pub use connect::{Client, connect};
-pub use mirror::{Ended, Mirror, MirrorError, Progress};
+pub use mirror::{Ended, Mirror, MirrorError, Progress, StreamedEdit};

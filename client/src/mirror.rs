@@ -12,7 +12,7 @@ use naadf_proto::{PROTOCOL_VERSION, WireError};
 use naadf_world::World;
 use naadf_world::digest::Digest;
 use naadf_world::edit::Record;
-use naadf_world::ops::Limits;
+use naadf_world::ops::{Batch, Limits};
 use prost::Message;
 
 /// What a message did to the mirror.
@@ -76,6 +76,17 @@ pub struct Stats {
     pub deltas: u64,
 }
 
+/// An edit batch the stream delivered: what a recorder writes down.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StreamedEdit {
+    /// The version it produced.
+    pub version: u64,
+    /// The user whose request it was (empty from a server that does not say).
+    pub user: String,
+    /// The batch as the server applied it (undo and redo as their content batches).
+    pub batch: Batch,
+}
+
 /// A mirrored world.
 #[derive(Debug, Default)]
 pub struct Mirror {
@@ -83,6 +94,7 @@ pub struct Mirror {
     assembly: Option<Assembly>,
     quiescent: bool,
     growth_seq: u32,
+    last_edit: Option<StreamedEdit>,
     /// What was received so far.
     pub stats: Stats,
 }
@@ -127,6 +139,11 @@ impl Mirror {
     /// Whether the server reported the current state quiescent.
     pub fn is_quiescent(&self) -> bool {
         self.is_live() && self.quiescent
+    }
+
+    /// The latest edit batch applied from a delta (growth steps and snapshots leave it).
+    pub fn last_edit(&self) -> Option<&StreamedEdit> {
+        self.last_edit.as_ref()
     }
 
     /// The server's growth sub-step of the current state.
@@ -198,6 +215,13 @@ impl Mirror {
                         growth_seq: decoded.growth_seq,
                         mirror: cs.digest,
                         server,
+                    });
+                }
+                if let (Record::Batch(batch), 0) = (&decoded.record, decoded.growth_seq) {
+                    self.last_edit = Some(StreamedEdit {
+                        version: decoded.version,
+                        user: d.user.clone(),
+                        batch: batch.clone(),
                     });
                 }
                 self.quiescent = decoded.quiescent;

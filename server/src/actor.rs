@@ -242,7 +242,7 @@ impl Actor {
 
     fn publish_growth(&mut self, cs: &ChangeSet) {
         self.metrics.growth_steps.inc();
-        let event = self.event(cs);
+        let event = self.event(cs, "");
         self.send(Outgoing::Growth { event });
     }
 
@@ -252,7 +252,8 @@ impl Actor {
     }
 
     /// The event publishing change set `cs` (the page store is updated on the way).
-    fn event(&mut self, cs: &ChangeSet) -> Arc<Event> {
+    /// The event publishing `cs`, made by `user`'s request (empty for growth steps).
+    fn event(&mut self, cs: &ChangeSet, user: &str) -> Arc<Event> {
         self.view = None;
         let changes = self.pages.update(&self.world);
         Arc::new(Event {
@@ -263,6 +264,7 @@ impl Actor {
                 kind: Some(world_message::Kind::Delta(Delta {
                     change: cs.encode(),
                     digest: cs.digest.0,
+                    user: user.to_owned(),
                 })),
             },
             changes,
@@ -355,7 +357,7 @@ impl Actor {
             kind,
             ops,
         };
-        let event = self.event(&applied.change);
+        let event = self.event(&applied.change, &entry.user);
         self.metrics.edits.inc();
         self.metrics.version.set(version as i64);
         self.send(Outgoing::Batch {

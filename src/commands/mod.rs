@@ -14,6 +14,7 @@ pub mod import;
 pub mod info;
 pub mod mirror;
 pub mod raycast;
+pub mod record;
 pub mod remote;
 pub mod render;
 pub mod replay;
