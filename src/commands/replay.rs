@@ -97,8 +97,21 @@ struct Report {
     checkpoints: Vec<Checkpoint>,
     failures: usize,
     passed: bool,
+    /// Seconds of the run (script lines; not parsing, not the end checkpoint).
     seconds: f64,
     edits_per_second: f64,
+    /// Where the time went: reading and parsing the script, sending or applying edits,
+    /// waiting for quiescence and mirrors at checkpoints (and renders), the rest.
+    profile: Profile,
+}
+
+/// Seconds per phase.
+#[derive(Serialize, Default)]
+struct Profile {
+    parse: f64,
+    edits: f64,
+    checkpoints: f64,
+    other: f64,
 }
 
 /// Where a script's edits go.
@@ -266,25 +279,43 @@ struct Run<'a> {
     frames: u64,
     renders: u64,
     checkpoints: Vec<Checkpoint>,
+    /// Time spent in edits, and in settling for checkpoints and renders.
+    edit_time: Duration,
+    settle_time: Duration,
 }
 
 impl Run<'_> {
+    /// Runs `f` on the target, adding its time to `edit_time`.
+    fn timed_edit<T>(&mut self, f: impl FnOnce(&mut dyn Target, &str) -> Result<T>) -> Result<T> {
+        let t = Instant::now();
+        let r = f(&mut *self.target, &self.user);
+        self.edit_time += t.elapsed();
+        r
+    }
+
+    /// The settled world, with the wait added to `settle_time`.
+    fn settled(&mut self) -> Result<&World> {
+        let t = Instant::now();
+        let w = self.target.settled();
+        self.settle_time += t.elapsed();
+        w
+    }
+
     fn line(&mut self, sl: &ScriptLine) -> Result<()> {
         match &sl.line {
             Line::Ops(batch) => {
-                self.target.edit(&self.user, batch)?;
+                self.timed_edit(|t, user| t.edit(user, batch))?;
                 self.edits += 1;
             }
             Line::RandomEdits(r) => {
-                let w = self.target.settled()?;
+                let w = self.settled()?;
                 let batches = r.batches(w.size(), w.materials().len());
-                for b in &batches {
-                    self.target.edit(&self.user, b)?;
-                }
+                self.timed_edit(|t, user| batches.iter().try_for_each(|b| t.edit(user, b).map(drop)))?;
                 self.edits += batches.len() as u64;
             }
             Line::Undo | Line::Redo => {
-                self.target.history(&self.user, sl.line == Line::Redo)?;
+                let redo = sl.line == Line::Redo;
+                self.timed_edit(|t, user| t.history(user, redo))?;
                 self.edits += 1;
             }
             Line::AsUser(u) => self.user = u.clone(),
@@ -303,7 +334,7 @@ impl Run<'_> {
                 self.checkpoint(sl.number, "wait_version", None, None, true)?;
             }
             Line::ExpectDigest(d) => {
-                let got = self.target.settled()?.digest();
+                let got = self.settled()?.digest();
                 self.checkpoint(sl.number, "expect_digest", Some(d.to_string()), None, got == *d)?;
             }
             Line::Render(r) => {
@@ -315,7 +346,9 @@ impl Run<'_> {
                 if self.headless.is_none() {
                     self.headless = Some(Headless::new().context("render: the GPU client is not available")?);
                 }
+                let t = Instant::now();
                 let world = self.target.settled()?;
+                self.settle_time += t.elapsed();
                 let headless = self.headless.as_mut().expect("opened above");
                 let frame = headless.frame(world, &camera, (r.size[0], r.size[1]), mode, false)?;
                 let out = self.folder.join(&r.out);
@@ -362,7 +395,7 @@ impl Run<'_> {
         measured: Option<f64>,
         ok: bool,
     ) -> Result<()> {
-        let w = self.target.settled()?;
+        let w = self.settled()?;
         let c = Checkpoint {
             line,
             kind,
@@ -398,7 +431,9 @@ fn read_script(a: &Args) -> Result<Vec<ScriptLine>> {
 
 /// Runs `replay`.
 pub fn run(a: Args) -> Result<()> {
+    let t_parse = Instant::now();
     let lines = read_script(&a).with_context(|| a.script.display().to_string())?;
+    let parse = t_parse.elapsed().as_secs_f64();
     let timeout = Duration::from_secs_f64(a.timeout.max(0.0));
     let mut local;
     let mut remote;
@@ -438,6 +473,8 @@ pub fn run(a: Args) -> Result<()> {
         frames: 0,
         renders: 0,
         checkpoints: Vec::new(),
+        edit_time: Duration::ZERO,
+        settle_time: Duration::ZERO,
     };
     let t0 = Instant::now();
     let bar = progress(lines.len() as u64, "replaying", "lines");
@@ -447,6 +484,7 @@ pub fn run(a: Args) -> Result<()> {
     }
     bar.finish_and_clear();
     let seconds = t0.elapsed().as_secs_f64();
+    let (edits, settling) = (run.edit_time.as_secs_f64(), run.settle_time.as_secs_f64());
     run.checkpoint(0, "end", None, None, true)?;
     if let Some(out) = &a.output {
         save_world(run.target.settled()?, out)?;
@@ -462,6 +500,12 @@ pub fn run(a: Args) -> Result<()> {
         passed: failures == 0,
         seconds,
         edits_per_second: run.edits as f64 / seconds.max(1e-9),
+        profile: Profile {
+            parse,
+            edits,
+            checkpoints: settling,
+            other: (seconds - edits - settling).max(0.0),
+        },
         checkpoints: run.checkpoints,
     };
     if a.json {

@@ -2,7 +2,8 @@
 //! edit replies run on a small tokio runtime and reach the window's thread as [`Event`]s;
 //! the world itself is only touched on that thread.
 
-use crate::connect::{Client, ConnectError, connect, session_client_seq};
+use super::ViewerError;
+use crate::connect::{Client, connect, session_client_seq};
 use naadf_proto::v1::{EditRequest, JoinRequest, StatusRequest, WorldMessage};
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -51,12 +52,12 @@ impl Link {
     pub fn connect(
         server: &ServerAddress,
         notify: impl Fn(Event) + Send + Sync + 'static,
-    ) -> Result<Self, ConnectError> {
+    ) -> Result<Self, ViewerError> {
         let runtime = tokio::runtime::Builder::new_multi_thread()
             .worker_threads(2)
             .enable_all()
             .build()
-            .map_err(|e| ConnectError::Url(server.url.clone(), format!("cannot start the runtime: {e}")))?;
+            .map_err(ViewerError::Runtime)?;
         let client = runtime.block_on(connect(&server.url, server.token.as_deref(), server.ca.as_deref()))?;
         let notify: Arc<dyn Fn(Event) + Send + Sync> = Arc::new(notify);
         let (mut c, n) = (client.clone(), notify.clone());

@@ -92,6 +92,9 @@ pub enum ViewerError {
     /// The server could not be reached.
     #[error(transparent)]
     Connect(#[from] ConnectError),
+    /// The async runtime of the connection could not start.
+    #[error("cannot start the network runtime: {0}")]
+    Runtime(std::io::Error),
     /// The stream broke the protocol or the mirror diverged.
     #[error(transparent)]
     Mirror(#[from] MirrorError),
