@@ -12,7 +12,10 @@ use support::{fails, naadf, ok, p, serve_world, start_world};
 fn session(digests: Option<&[String]>) -> String {
     let d = |i: usize| digests.map_or("0000000000000000".to_string(), |d| d[i].clone());
     [
-        r#"{"as_user":"alice"}"#.to_string(),
+        // The first user (`--user`, default "replay") edits and undoes before anyone else.
+        r#"{"op":"box","min":[50,30,50],"max":[60,40,60],"material":1}"#.to_string(),
+        r#"{"undo":true}"#.into(),
+        r#"{"as_user":"alice"}"#.into(),
         r#"{"op":"sphere","center":[64,40,64],"radius":9.5,"material":2}"#.into(),
         r#"{"as_user":"bob"}"#.into(),
         r#"{"op":"box","min":[10,20,10],"max":[30,44,22],"material":3}"#.into(),
@@ -26,6 +29,8 @@ fn session(digests: Option<&[String]>) -> String {
         r#"{"redo":true}"#.into(),
         r#"{"undo":true}"#.into(),
         r#"{"random_edits":{"count":25,"seed":11}}"#.into(),
+        r#"{"as_user":"replay"}"#.into(),
+        r#"{"redo":true}"#.into(),
         r#"{"wait_version":8}"#.into(),
         format!(r#"{{"expect_digest":"{}"}}"#, d(2)),
     ]
@@ -81,14 +86,14 @@ fn a_script_gives_the_same_checkpoints_in_process_and_against_a_server() {
     let local = replay_ok(&["replay", &script, "--world", &world, "-o", &out_world, "--json"]);
     assert_eq!(local["passed"], true, "{local}");
     assert_eq!(checkpoints(&local), seen);
-    assert_eq!(local["edits"], 3 + 3 + 25);
+    assert_eq!(local["edits"], 4 + 5 + 25);
     assert_eq!(local["frames"], 1);
 
     // Twice against a server, each started fresh from the same world.
     for _ in 0..2 {
         let data = tempfile::tempdir().unwrap();
         let server = serve_world(data.path(), &world, &[], &[]);
-        let remote = replay_ok(&["replay", &script, "--server", &server.url, "--token", "carol", "--json"]);
+        let remote = replay_ok(&["replay", &script, "--server", &server.url, "--json"]);
         assert_eq!(remote["passed"], true, "{remote}");
         assert_eq!(
             checkpoints(&remote),
@@ -184,6 +189,12 @@ fn broken_scripts_fail_with_the_line() {
     for (name, text, needle) in cases {
         fails(&["replay", &write(name, text), "--world", &world], None, needle);
     }
+    let empty = write("empty.jsonl", "");
+    fails(
+        &["replay", &empty, "--world", &world, "--timeout", "inf"],
+        None,
+        "--timeout",
+    );
     // A failing expectation: the run completes, reports it, and exits non-zero.
     let f = write(
         "digest.jsonl",
@@ -317,4 +328,11 @@ fn a_recorded_multi_user_session_replays_to_the_same_digest() {
         report["checkpoints"].as_array().unwrap().last().unwrap()["digest"],
         summary["digest"]
     );
+    // And against a fresh server started from the base world.
+    let data = tempfile::tempdir().unwrap();
+    let again = serve_world(data.path(), &base, &[], &[]);
+    let remote = replay_ok(&["replay", &rec, "--server", &again.url, "--json"]);
+    again.stop();
+    assert_eq!(remote["passed"], true, "{remote}");
+    assert_eq!(remote["edits"], 30);
 }

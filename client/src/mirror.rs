@@ -94,6 +94,9 @@ pub struct Mirror {
     assembly: Option<Assembly>,
     quiescent: bool,
     growth_seq: u32,
+    /// Keep the latest edit batch ([`Mirror::keep_edits`]); off by default, since it costs
+    /// a copy of every batch.
+    keep_edits: bool,
     last_edit: Option<StreamedEdit>,
     /// What was received so far.
     pub stats: Stats,
@@ -141,7 +144,13 @@ impl Mirror {
         self.is_live() && self.quiescent
     }
 
-    /// The latest edit batch applied from a delta (growth steps and snapshots leave it).
+    /// Makes the mirror keep the latest edit batch for [`Mirror::last_edit`] (recorders).
+    pub fn keep_edits(&mut self) {
+        self.keep_edits = true;
+    }
+
+    /// The latest edit batch applied from a delta, when [`Mirror::keep_edits`] was asked
+    /// for (growth steps and snapshots leave it).
     pub fn last_edit(&self) -> Option<&StreamedEdit> {
         self.last_edit.as_ref()
     }
@@ -217,7 +226,7 @@ impl Mirror {
                         server,
                     });
                 }
-                if let (Record::Batch(batch), 0) = (&decoded.record, decoded.growth_seq) {
+                if let (true, Record::Batch(batch), 0) = (self.keep_edits, &decoded.record, decoded.growth_seq) {
                     self.last_edit = Some(StreamedEdit {
                         version: decoded.version,
                         user: d.user.clone(),

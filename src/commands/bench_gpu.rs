@@ -52,7 +52,8 @@ struct GpuReport {
     rays: usize,
     /// Secondary rays per run.
     secondary_rays: usize,
-    /// Dispatches per run (ray lists larger than one storage binding are split).
+    /// Dispatches per run of the primary rays (a ray list larger than one storage binding
+    /// is split).
     batches: usize,
     /// Mean cells visited per ray, per variant (primary, secondary).
     steps: BTreeMap<&'static str, [f64; 2]>,
@@ -175,9 +176,9 @@ pub fn run(a: GpuArgs) -> Result<()> {
     } else {
         print_report(&report);
     }
-    let total: usize = report.mismatches.values().sum();
-    if total > (report.rays + report.secondary_rays) / 10_000 + 1 {
-        bail!("{total} GPU results differ from the CPU: more than the 1 in 10,000 tie allowance");
+    let allowance = (report.rays + report.secondary_rays) / 10_000 + 1;
+    if let Some((m, n)) = report.mismatches.iter().find(|(_, n)| **n > allowance) {
+        bail!("{n} {m} results differ from the CPU: more than the 1 in 10,000 tie allowance ({allowance})");
     }
     Ok(())
 }

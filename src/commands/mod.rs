@@ -24,6 +24,7 @@ pub mod view;
 
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
+use naadf_world::ops::Limits;
 use naadf_world::{World, file};
 use std::path::Path;
 use std::process::ExitCode;
@@ -70,6 +71,38 @@ pub fn progress(total: u64, what: &str, unit: &str) -> ProgressBar {
 /// A chunk progress bar on stderr.
 pub fn chunk_progress(total: u64, what: &str) -> ProgressBar {
     progress(total, what, "chunks")
+}
+
+/// The edit limits a server enforces (`naadf serve`) and an in-process replay applies
+/// (`naadf replay --world`), with the same defaults.
+#[derive(clap::Args, Clone, Debug)]
+pub struct EditLimitArgs {
+    /// Most ops per request (batch).
+    #[arg(long, default_value_t = Limits::default().max_ops)]
+    pub max_ops: usize,
+    /// Most voxels one fill op may cover.
+    #[arg(long, default_value_t = Limits::default().max_fill_volume)]
+    pub max_fill: u64,
+}
+
+impl EditLimitArgs {
+    /// The limits: the defaults with these two set.
+    pub fn limits(&self) -> Limits {
+        Limits {
+            max_ops: self.max_ops,
+            max_fill_volume: self.max_fill,
+            ..Limits::default()
+        }
+    }
+}
+
+/// A number of seconds from the command line, checked: finite, not negative, at most
+/// about 30 years (so that adding it to a clock cannot overflow).
+pub fn seconds(v: f64, what: &str) -> Result<std::time::Duration> {
+    if !(0.0..=1e9).contains(&v) {
+        anyhow::bail!("{what}: {v} is not a number of seconds between 0 and 1e9");
+    }
+    Ok(std::time::Duration::from_secs_f64(v))
 }
 
 /// Loads a world file, naming it in any error.

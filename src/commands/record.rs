@@ -5,13 +5,12 @@
 //! that digest exactly.
 
 use super::remote::{ServerArgs, block_on, status_error};
-use super::{print_json, save_world};
+use super::{print_json, save_world, seconds};
 use anyhow::{Context, Result, bail};
 use naadf_client::{Ended, Mirror};
 use std::io::Write;
 use std::ops::ControlFlow;
 use std::path::PathBuf;
-use std::time::Duration;
 
 /// Arguments of `record`.
 #[derive(clap::Args)]
@@ -114,14 +113,16 @@ pub fn run(a: Args) -> Result<()> {
     let world = block_on(async {
         let mut client = a.server.connect().await?;
         let mut mirror = Mirror::new(None);
+        mirror.keep_edits();
         let mut stream = client
             .join(mirror.join_request())
             .await
             .map_err(status_error)?
             .into_inner();
+        let duration = a.duration.map(|s| seconds(s, "--duration")).transpose()?;
         let stop = async {
-            match a.duration {
-                Some(s) => tokio::time::sleep(Duration::from_secs_f64(s.max(0.0))).await,
+            match duration {
+                Some(d) => tokio::time::sleep(d).await,
                 None => {
                     let _ = tokio::signal::ctrl_c().await;
                 }
@@ -169,11 +170,8 @@ pub fn run(a: Args) -> Result<()> {
         print_json(&summary)?;
     } else {
         eprintln!(
-            "recorded {} batches (versions {}..={}), final digest {}",
-            summary.batches,
-            summary.start_version + 1,
-            summary.end_version,
-            summary.digest
+            "recorded {} batches after version {} (to version {}), final digest {}",
+            summary.batches, summary.start_version, summary.end_version, summary.digest
         );
     }
     Ok(())

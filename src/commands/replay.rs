@@ -4,7 +4,7 @@
 //! on the same world gives the same checkpoints either way.
 
 use super::remote::{ServerArgs, quiescent_world, status_error};
-use super::{load_world, print_json, progress, save_world};
+use super::{load_world, print_json, progress, save_world, seconds};
 use anyhow::{Context, Result, anyhow, bail};
 use naadf_client::Client;
 use naadf_client::connect::session_client_seq;
@@ -16,7 +16,7 @@ use naadf_world::World;
 use naadf_world::camera::Camera;
 use naadf_world::ops::{Batch, Limits};
 use naadf_world::replay::hashdag::{HashdagMapping, to_script_lines};
-use naadf_world::replay::script::{Line, ScriptLine, parse_script};
+use naadf_world::replay::script::{Line, ScriptLine, parse_line, parse_script};
 use serde::Serialize;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -47,9 +47,13 @@ pub struct Args {
     /// Material of HashDAG edits that add voxels.
     #[arg(long, default_value_t = 1)]
     material: u16,
-    /// The user until the first `as_user` line (in-process; against a server, `--token`).
+    /// The user until the first `as_user` line. Against a server its client sends
+    /// `--token` if given, otherwise this name as its token (docs/REPLAY.md, users).
     #[arg(long, default_value = "replay")]
     user: String,
+    /// In-process, the limits of the server the script stands for.
+    #[command(flatten)]
+    limits: super::EditLimitArgs,
     /// Seconds to wait for a server to reach a version or quiescence.
     #[arg(long, default_value_t = 120.0)]
     timeout: f64,
@@ -190,8 +194,10 @@ impl Remote {
         if let Some(c) = self.clients.get(user) {
             return Ok(c.clone());
         }
+        // Every user's token is its name, except that the first user sends --token when
+        // one is given (in open mode a token is the user name the server records).
         let mut args = self.server.clone();
-        if user != self.default_user {
+        if user != self.default_user || args.token.is_none() {
             args.token = Some(user.to_owned());
         }
         let c = self.runtime.block_on(args.connect())?;
@@ -236,7 +242,7 @@ impl Target for Remote {
     fn wait_version(&mut self, v: u64) -> Result<()> {
         let user = self.default_user.clone();
         let mut c = self.client(&user)?;
-        let deadline = Instant::now() + self.timeout;
+        let deadline = Instant::now() + self.timeout; // at most 1e9 s: `seconds` checked it
         loop {
             let s = self
                 .runtime
@@ -266,6 +272,13 @@ impl Target for Remote {
     }
 }
 
+/// Frames paced at one rate since `start`.
+struct Pace {
+    fps: f64,
+    start: Instant,
+    frames: u64,
+}
+
 /// The run's state between lines.
 struct Run<'a> {
     target: &'a mut dyn Target,
@@ -274,7 +287,7 @@ struct Run<'a> {
     camera: Option<Camera>,
     headless: Option<Headless>,
     last_frame: Option<Frame>,
-    frame_clock: Option<Instant>,
+    pace: Option<Pace>,
     edits: u64,
     frames: u64,
     renders: u64,
@@ -322,11 +335,23 @@ impl Run<'_> {
             Line::Camera(c) => self.camera = Some(*c),
             Line::EndFrame { fps } => {
                 self.frames += 1;
-                if let Some(fps) = fps {
-                    // Pace against the first frame's start, so that delays do not add up.
-                    let start = *self.frame_clock.get_or_insert_with(Instant::now);
-                    let due = start + Duration::from_secs_f64(self.frames as f64 / fps);
-                    std::thread::sleep(due.saturating_duration_since(Instant::now()));
+                match fps {
+                    Some(fps) => {
+                        // Pace against the start of this run of frames at this rate, so
+                        // that delays do not add up; a new rate starts a new run.
+                        let pace = match &mut self.pace {
+                            Some(p) if p.fps == *fps => p,
+                            slot => slot.insert(Pace {
+                                fps: *fps,
+                                start: Instant::now(),
+                                frames: 0,
+                            }),
+                        };
+                        pace.frames += 1;
+                        let due = pace.start + Duration::from_secs_f64(pace.frames as f64 / pace.fps);
+                        std::thread::sleep(due.saturating_duration_since(Instant::now()));
+                    }
+                    None => self.pace = None,
                 }
             }
             Line::WaitVersion(v) => {
@@ -416,17 +441,23 @@ impl Run<'_> {
 /// Reads the script file in the chosen format.
 fn read_script(a: &Args) -> Result<Vec<ScriptLine>> {
     let text = std::fs::read_to_string(&a.script).with_context(|| format!("cannot read {}", a.script.display()))?;
-    let script = if a.format == "hashdag" {
-        let m = HashdagMapping {
-            scale: a.scale,
-            offset: a.offset,
-            material: a.material,
-        };
-        to_script_lines(&text, &m)?.join("\n")
-    } else {
-        text
+    if a.format != "hashdag" {
+        return Ok(parse_script(&text)?);
+    }
+    let m = HashdagMapping {
+        scale: a.scale,
+        offset: a.offset,
+        material: a.material,
     };
-    Ok(parse_script(&script)?)
+    // Numbered by CSV row, so that run errors and checkpoints name the row.
+    to_script_lines(&text, &m)?
+        .into_iter()
+        .map(|(row, l)| {
+            parse_line(&l)
+                .map(|line| ScriptLine { number: row, line })
+                .map_err(|message| anyhow!("row {row}: {message}"))
+        })
+        .collect()
 }
 
 /// Runs `replay`.
@@ -434,7 +465,7 @@ pub fn run(a: Args) -> Result<()> {
     let t_parse = Instant::now();
     let lines = read_script(&a).with_context(|| a.script.display().to_string())?;
     let parse = t_parse.elapsed().as_secs_f64();
-    let timeout = Duration::from_secs_f64(a.timeout.max(0.0));
+    let timeout = seconds(a.timeout, "--timeout")?;
     let mut local;
     let mut remote;
     let (target, name): (&mut dyn Target, _) = match &a.world {
@@ -442,7 +473,7 @@ pub fn run(a: Args) -> Result<()> {
             local = Local {
                 world: load_world(path)?,
                 histories: Histories::default(),
-                limits: Limits::default(),
+                limits: a.limits.limits(),
             };
             (&mut local, "world")
         }
@@ -468,7 +499,7 @@ pub fn run(a: Args) -> Result<()> {
         camera: None,
         headless: None,
         last_frame: None,
-        frame_clock: None,
+        pace: None,
         edits: 0,
         frames: 0,
         renders: 0,

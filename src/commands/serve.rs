@@ -49,12 +49,8 @@ pub struct Args {
     /// Edits per second per user.
     #[arg(long, default_value_t = ServerConfig::default().rate)]
     rate: u32,
-    /// Most ops per request.
-    #[arg(long, default_value_t = ServerConfig::default().limits.max_ops)]
-    max_ops: usize,
-    /// Most voxels one fill op may cover.
-    #[arg(long, default_value_t = ServerConfig::default().limits.max_fill_volume)]
-    max_fill: u64,
+    #[command(flatten)]
+    limits: super::EditLimitArgs,
     /// Largest request message, in bytes.
     #[arg(long, default_value_t = ServerConfig::default().max_message_bytes)]
     max_message_bytes: usize,
@@ -87,8 +83,7 @@ pub fn run(a: Args) -> Result<()> {
     config.http = a.http;
     config.auth = auth;
     config.rate = a.rate;
-    config.limits.max_ops = a.max_ops;
-    config.limits.max_fill_volume = a.max_fill;
+    config.limits = a.limits.limits();
     config.max_message_bytes = a.max_message_bytes;
     config.checkpoint_every = a.checkpoint_every.max(1);
     config.checkpoint_interval = Duration::from_secs(a.checkpoint_secs.max(1));

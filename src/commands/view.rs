@@ -1,13 +1,12 @@
 //! `naadf view --server URL [--token T]`: the interactive viewer (docs/RENDERING.md).
 
-use super::print_json;
 use super::remote::ServerArgs;
 use super::render::{parse_image_size, parse_mode, read_camera};
+use super::{print_json, seconds};
 use anyhow::Result;
 use naadf_client::gpu::Mode;
 use naadf_client::viewer::{ServerAddress, ViewerOptions};
 use std::path::PathBuf;
-use std::time::Duration;
 
 /// Arguments of `view`.
 #[derive(clap::Args)]
@@ -54,7 +53,7 @@ pub fn run(a: Args) -> Result<()> {
         speed: a.speed,
         frames: a.frames,
         screenshot: a.screenshot,
-        timeout: Duration::from_secs_f64(a.timeout.max(0.0)),
+        timeout: seconds(a.timeout, "--timeout")?,
     })?;
     if a.json {
         print_json(&summary)?;

@@ -95,7 +95,10 @@ impl Gpu {
         let (adapter, surface) = if std::env::var_os("WGPU_BACKEND").is_some() {
             try_backends(None)
         } else {
-            try_backends(Some(wgpu::Backends::PRIMARY)).or_else(|_| try_backends(Some(wgpu::Backends::GL)))
+            try_backends(Some(wgpu::Backends::PRIMARY)).or_else(|primary| {
+                try_backends(Some(wgpu::Backends::GL))
+                    .map_err(|gl| GpuError::NoAdapter(format!("Vulkan/Metal/DX12: {primary}; GL: {gl}")))
+            })
         }?;
         let limits = adapter.limits();
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
@@ -123,12 +126,7 @@ impl Gpu {
 
     /// Runs `f` with validation errors captured, turning them into [`GpuError::Validation`].
     pub(crate) fn checked<T>(&self, f: impl FnOnce() -> T) -> Result<T, GpuError> {
-        let scope = self.device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let out = f();
-        match pollster::block_on(scope.pop()) {
-            Some(e) => Err(GpuError::Validation(e.to_string())),
-            None => Ok(out),
-        }
+        checked_on(&self.device, f)
     }
 
     /// Copies `size` bytes of `src` (a `COPY_SRC` buffer) back to the host.
@@ -161,5 +159,16 @@ impl Gpu {
             .to_vec();
         staging.unmap();
         Ok(bytes)
+    }
+}
+
+/// Runs `f` with `device`'s validation errors captured (wgpu's default handler would panic
+/// on them), turning them into [`GpuError::Validation`].
+pub(crate) fn checked_on<T>(device: &wgpu::Device, f: impl FnOnce() -> T) -> Result<T, GpuError> {
+    let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+    let out = f();
+    match pollster::block_on(scope.pop()) {
+        Some(e) => Err(GpuError::Validation(e.to_string())),
+        None => Ok(out),
     }
 }

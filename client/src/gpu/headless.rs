@@ -36,13 +36,7 @@ impl Headless {
         mode: Mode,
         gbuffer: bool,
     ) -> Result<Frame, GpuError> {
-        let gw = match &mut self.world {
-            Some(g) => {
-                g.sync(world)?;
-                g
-            }
-            None => self.world.insert(GpuWorld::new(&self.gpu, world)?),
-        };
+        let gw = GpuWorld::follow(&mut self.world, &self.gpu, world)?;
         self.renderer.render(&self.gpu, gw, camera, size, mode, gbuffer)
     }
 }

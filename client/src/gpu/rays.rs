@@ -162,7 +162,8 @@ impl RayTracer {
     /// The results of the last [`RayTracer::run`] of `batch`.
     pub fn results(&self, gpu: &Gpu, batch: &RayBatch) -> Result<Vec<GpuHit>, GpuError> {
         let bytes = gpu.read_buffer(&batch.hits, u64::from(batch.count) * RESULT_WORDS as u64 * 4)?;
-        let words: &[u32] = bytemuck::cast_slice(&bytes);
+        // A byte vector need not be 4-aligned: copy, do not cast in place.
+        let words: Vec<u32> = bytemuck::pod_collect_to_vec(&bytes);
         Ok(words.chunks_exact(RESULT_WORDS).map(decode).collect())
     }
 

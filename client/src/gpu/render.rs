@@ -243,7 +243,8 @@ impl Renderer {
         let rgba = gpu.read_buffer(&colour, pixels * 4)?;
         let gbuffer = if gbuffer {
             let bytes = gpu.read_buffer(&gbuf, pixels * 16)?;
-            Some(bytemuck::cast_slice::<u8, [u32; 4]>(&bytes).to_vec())
+            // A byte vector need not be 4-aligned: copy, do not cast in place.
+            Some(bytemuck::pod_collect_to_vec::<u8, [u32; 4]>(&bytes))
         } else {
             None
         };

@@ -8,7 +8,7 @@
 //! storage-binding limit is split into parts of `2^k` words, each its own binding; the
 //! shaders read it through a generated accessor ([`super::shaders::prelude`]).
 
-use super::context::{Gpu, GpuError};
+use super::context::{Gpu, GpuError, checked_on};
 use super::shaders::{BUFFERS, Split};
 use naadf_world::digest::{BufferId, Digest, PAGE_BYTES, digest_of};
 use naadf_world::{World, WorldError};
@@ -27,6 +27,8 @@ pub const GPU_BUFFERS: [BufferId; 7] = [
 const GRID: usize = 7;
 /// Smallest part (and page) size in words: parts never split a 64 KiB page.
 const MIN_PART_WORDS: u64 = (PAGE_BYTES / 4) as u64;
+/// Storage buffers a pass binds besides the world's (rays and hits; pixels and first hits).
+const PASS_STORAGE_BUFFERS: u32 = 2;
 /// Smallest buffer allocated (bindings must not be empty).
 const MIN_BYTES: u64 = 16;
 /// Step budget of a ray unless set otherwise: far more cells than any ray crosses in
@@ -63,12 +65,12 @@ pub struct GpuWorld {
     layout: wgpu::BindGroupLayout,
     bind_group: wgpu::BindGroup,
     split: Split,
-    generation: u64,
+    max_storage_buffers: u32,
 }
 
 impl std::fmt::Debug for GpuWorld {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "GpuWorld({:?}, generation {})", self.split, self.generation)
+        write!(f, "GpuWorld({:?})", self.split)
     }
 }
 
@@ -123,16 +125,34 @@ impl GpuWorld {
             info_words: [0; 8],
             layout,
             split,
-            generation: 0,
+            max_storage_buffers: gpu.limits.max_storage_buffers_per_shader_stage,
         };
         w.info_words[7] = DEFAULT_MAX_STEPS;
-        gpu.checked(|| w.sync(world))??;
+        w.check_bindings(&split)?;
+        w.sync(world)?;
         Ok(w)
     }
 
     /// Uploads every page of `world` that differs from what the device holds. After it
     /// the device buffers equal the world's, byte for byte, at their logical lengths.
     pub fn sync(&mut self, world: &World) -> Result<Upload, GpuError> {
+        let device = self.device.clone();
+        checked_on(&device, || self.sync_pages(world))?
+    }
+
+    /// Keeps `slot` holding `world`: uploads it the first time, syncs it afterwards.
+    pub fn follow<'a>(slot: &'a mut Option<GpuWorld>, gpu: &Gpu, world: &World) -> Result<&'a GpuWorld, GpuError> {
+        match slot {
+            Some(g) => {
+                g.sync(world)?;
+                Ok(g)
+            }
+            None => Ok(slot.insert(GpuWorld::new(gpu, world)?)),
+        }
+    }
+
+    /// [`GpuWorld::sync`] without the error scope.
+    fn sync_pages(&mut self, world: &World) -> Result<Upload, GpuError> {
         let mut up = Upload::default();
         for (k, &id) in GPU_BUFFERS.iter().enumerate() {
             let len = world.buffer_len(id) as u64;
@@ -168,13 +188,6 @@ impl GpuWorld {
             self.rebind();
         }
         Ok(up)
-    }
-
-    /// Sets how many cells a ray may visit before it counts as a miss.
-    pub fn set_max_steps(&mut self, steps: u32) {
-        self.info_words[7] = steps.max(1);
-        self.queue
-            .write_buffer(&self.info, 0, bytemuck::cast_slice(&self.info_words));
     }
 
     /// Uploads a dense decode of `world` (16-bit material ids, x fastest) for the `grid`
@@ -263,12 +276,6 @@ impl GpuWorld {
         self.split
     }
 
-    /// Bumped whenever a buffer is reallocated (pipelines keyed on [`GpuWorld::split`]
-    /// stay valid; bind groups are already rebuilt).
-    pub fn generation(&self) -> u64 {
-        self.generation
-    }
-
     /// Writes `bytes` at byte `offset` of logical buffer `k` (within one page).
     fn write(&self, k: usize, offset: u64, bytes: &[u8]) {
         let part_bytes = self.part_words * 4;
@@ -295,6 +302,9 @@ impl GpuWorld {
                 part_bytes >> 20
             )));
         }
+        let mut split = self.split;
+        split.parts[k] = parts_needed as u32;
+        self.check_bindings(&split)?;
         let name = BUFFERS[k].0;
         let mut enc = self.device.create_command_encoder(&Default::default());
         let b = &mut self.buffers[k];
@@ -307,6 +317,10 @@ impl GpuWorld {
                     .next_power_of_two()
                     .clamp(MIN_BYTES, part_bytes)
             };
+            if p == old_last && b.parts[p].size() >= want {
+                // A full last part stays as it is; only new parts follow it.
+                continue;
+            }
             let fresh = new_part(&self.device, name, want);
             if p == old_last {
                 let old = &b.parts[p];
@@ -321,11 +335,22 @@ impl GpuWorld {
         Ok(true)
     }
 
+    /// Fails when `split` needs more storage bindings than a pass may bind next to its own.
+    fn check_bindings(&self, split: &Split) -> Result<(), GpuError> {
+        if split.bindings() + PASS_STORAGE_BUFFERS > self.max_storage_buffers {
+            return Err(GpuError::Unsupported(format!(
+                "the world needs {} storage bindings plus {PASS_STORAGE_BUFFERS} per pass; the adapter allows {} per shader stage",
+                split.bindings(),
+                self.max_storage_buffers
+            )));
+        }
+        Ok(())
+    }
+
     /// Rebuilds the layout and bind group after a reallocation.
     fn rebind(&mut self) {
         self.layout = bind_group_layout(&self.device, &self.split);
         self.bind_group = make_bind_group(&self.device, &self.layout, &self.info, &self.buffers);
-        self.generation += 1;
     }
 }
 

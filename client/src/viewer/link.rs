@@ -29,8 +29,14 @@ pub struct ServerAddress {
 pub enum Event {
     /// A message of the world stream, to apply in order.
     Message(Box<WorldMessage>),
-    /// The stream ended (the reason); the window may rejoin.
-    StreamEnded(String),
+    /// The stream ended: why, and whether rejoining is pointless (the join itself was
+    /// refused for authentication, permission or protocol reasons).
+    StreamEnded {
+        /// The reason.
+        why: String,
+        /// A refusal that a retry would meet again.
+        fatal: bool,
+    },
     /// Clients connected to the server, from the latest status poll.
     Clients(u32),
     /// An edit was acknowledged at this version, or refused with this message.
@@ -83,15 +89,20 @@ impl Link {
     pub fn join(&self, request: JoinRequest) {
         let (mut c, n) = (self.client.clone(), self.notify.clone());
         self.runtime.spawn(async move {
+            let ended = |why: String, fatal| Event::StreamEnded { why, fatal };
             let mut stream = match c.join(request).await {
                 Ok(s) => s.into_inner(),
-                Err(s) => return n(Event::StreamEnded(format!("join refused: {}", s.message()))),
+                Err(s) => {
+                    use tonic::Code::{FailedPrecondition, PermissionDenied, Unauthenticated};
+                    let fatal = matches!(s.code(), Unauthenticated | PermissionDenied | FailedPrecondition);
+                    return n(ended(format!("join refused: {:?}: {}", s.code(), s.message()), fatal));
+                }
             };
             loop {
                 match stream.message().await {
                     Ok(Some(m)) => n(Event::Message(Box::new(m))),
-                    Ok(None) => return n(Event::StreamEnded("the server ended the stream".into())),
-                    Err(s) => return n(Event::StreamEnded(format!("stream failed: {}", s.message()))),
+                    Ok(None) => return n(ended("the server ended the stream".into(), false)),
+                    Err(s) => return n(ended(format!("stream failed: {}", s.message()), false)),
                 }
             }
         });

@@ -41,6 +41,8 @@ use winit::window::{CursorGrabMode, Window, WindowId};
 
 /// How long to wait before rejoining after the stream ended.
 const REJOIN_DELAY: Duration = Duration::from_secs(1);
+/// Touchpad scroll pixels per material step.
+const SCROLL_STEP: f64 = 40.0;
 /// How long closing waits for edits still in flight.
 const EDIT_DRAIN: Duration = Duration::from_secs(10);
 
@@ -98,9 +100,12 @@ pub enum ViewerError {
     /// The stream broke the protocol or the mirror diverged.
     #[error(transparent)]
     Mirror(#[from] MirrorError),
-    /// No world arrived in time.
-    #[error("no world from the server after {0:?}")]
-    Timeout(Duration),
+    /// No world arrived in time (with the last connection news).
+    #[error("no world from the server after {0:?} ({1})")]
+    Timeout(Duration, String),
+    /// The server refused the join for good (authentication, protocol).
+    #[error("the server refused to stream the world: {0}")]
+    Refused(String),
     /// The screenshot could not be written.
     #[error("cannot write the screenshot {0}: {1}")]
     Screenshot(PathBuf, std::io::Error),
@@ -129,6 +134,7 @@ pub fn run(opts: ViewerOptions) -> Result<ViewerSummary, ViewerError> {
         gfx: None,
         fly: None,
         material: 1,
+        scroll: 0.0,
         grabbed: false,
         clients: 0,
         notice: String::new(),
@@ -175,6 +181,8 @@ struct App {
     gfx: Option<Graphics>,
     fly: Option<Fly>,
     material: u16,
+    /// Scroll not yet turned into material steps.
+    scroll: f64,
     grabbed: bool,
     clients: u32,
     /// The latest edit result or connection news, shown in the HUD.
@@ -316,7 +324,8 @@ impl App {
                     self.fail(el, e.into());
                 }
             }
-            Event::StreamEnded(why) => {
+            Event::StreamEnded { why, fatal: true } => self.fail(el, ViewerError::Refused(why)),
+            Event::StreamEnded { why, fatal: false } => {
                 self.notice = format!("{why}; rejoining");
                 self.rejoin_at = Some(Instant::now() + REJOIN_DELAY);
             }
@@ -331,16 +340,11 @@ impl App {
     fn redraw(&mut self, el: &ActiveEventLoop) -> Result<(), ViewerError> {
         let (Some(world), Some(gfx)) = (self.mirror.world(), &mut self.gfx) else {
             if self.started.elapsed() > self.opts.timeout {
-                return Err(ViewerError::Timeout(self.opts.timeout));
+                return Err(ViewerError::Timeout(self.opts.timeout, self.notice.clone()));
             }
             return Ok(());
         };
-        match &mut gfx.world {
-            Some(g) => {
-                g.sync(world)?;
-            }
-            None => gfx.world = Some(GpuWorld::new(&gfx.gpu, world)?),
-        }
+        GpuWorld::follow(&mut gfx.world, &gfx.gpu, world)?;
         let fly = self.fly.get_or_insert_with(|| {
             let camera = self.opts.camera.unwrap_or_else(|| fixed_cameras(world.size())[0]);
             let width = f64::from(world.size().voxels()[0]);
@@ -348,7 +352,7 @@ impl App {
         });
         let now = Instant::now();
         if let Some(last) = self.last_frame {
-            let dt = (now - last).as_secs_f64();
+            let dt = (now - last).as_secs_f64().max(1e-6);
             fly.advance(dt.min(0.25));
             self.fps = if self.fps == 0.0 {
                 1.0 / dt
@@ -435,8 +439,10 @@ impl ApplicationHandler<Event> for App {
         match event {
             WindowEvent::CloseRequested => el.exit(),
             WindowEvent::Resized(s) => {
-                if let Some(g) = &mut self.gfx {
-                    g.presenter.resize(&g.gpu, (s.width, s.height));
+                if let Some(g) = &mut self.gfx
+                    && let Err(e) = g.presenter.resize(&g.gpu, (s.width, s.height))
+                {
+                    self.fail(el, e.into());
                 }
             }
             WindowEvent::Focused(false) => {
@@ -456,11 +462,16 @@ impl ApplicationHandler<Event> for App {
                 ..
             } => self.click(button),
             WindowEvent::MouseWheel { delta, .. } => {
-                let steps = match delta {
-                    MouseScrollDelta::LineDelta(_, y) => y.signum() as i64,
-                    MouseScrollDelta::PixelDelta(p) => p.y.signum() as i64,
+                // Lines step at once; touchpad pixels add up to a step per SCROLL_STEP.
+                self.scroll += match delta {
+                    MouseScrollDelta::LineDelta(_, y) => f64::from(y) * SCROLL_STEP,
+                    MouseScrollDelta::PixelDelta(p) => p.y,
                 };
-                self.select_material(-steps, true);
+                let steps = (self.scroll / SCROLL_STEP).trunc();
+                if steps != 0.0 {
+                    self.scroll -= steps * SCROLL_STEP;
+                    self.select_material(-(steps as i64), true);
+                }
             }
             WindowEvent::RedrawRequested => {
                 if let Err(e) = self.redraw(el) {

@@ -60,13 +60,14 @@ impl Presenter {
         (self.config.width, self.config.height)
     }
 
-    /// Follows a window resize.
-    pub fn resize(&mut self, gpu: &Gpu, size: (u32, u32)) {
+    /// Follows a window resize (a minimised window keeps its last size).
+    pub fn resize(&mut self, gpu: &Gpu, size: (u32, u32)) -> Result<(), GpuError> {
         if size.0 > 0 && size.1 > 0 && size != self.size() {
             self.config.width = size.0;
             self.config.height = size.1;
-            self.surface.configure(&gpu.device, &self.config);
+            gpu.checked(|| self.surface.configure(&gpu.device, &self.config))?;
         }
+        Ok(())
     }
 
     /// Shows `frame` (of [`Presenter::size`]); a frame the surface cannot take now
@@ -78,8 +79,7 @@ impl Presenter {
         let texture = match self.surface.get_current_texture() {
             wgpu::CurrentSurfaceTexture::Success(t) | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
             wgpu::CurrentSurfaceTexture::Outdated | wgpu::CurrentSurfaceTexture::Lost => {
-                self.surface.configure(&gpu.device, &self.config);
-                return Ok(());
+                return gpu.checked(|| self.surface.configure(&gpu.device, &self.config));
             }
             wgpu::CurrentSurfaceTexture::Validation => {
                 return Err(GpuError::Validation("acquiring the surface texture failed".into()));

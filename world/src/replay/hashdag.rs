@@ -14,8 +14,8 @@
 //! let csv = "EditSphere,10,20,30,4,true\nEndFrame\n";
 //! let m = HashdagMapping { scale: 0.5, offset: [1.0, 0.0, 0.0], material: 3 };
 //! let lines = to_script_lines(csv, &m).unwrap();
-//! assert_eq!(lines[0], r#"{"op":"sphere","center":[6.0,10.0,15.0],"radius":2.0,"material":3}"#);
-//! assert_eq!(lines[1], r#"{"end_frame":true}"#);
+//! assert_eq!(lines[0], (1, r#"{"op":"sphere","center":[6.0,10.0,15.0],"radius":2.0,"material":3}"#.to_string()));
+//! assert_eq!(lines[1], (2, r#"{"end_frame":true}"#.to_string()));
 //! ```
 
 use crate::camera::Camera;
@@ -121,11 +121,11 @@ struct CameraState {
     forward: [f64; 3],
 }
 
-/// Converts a whole CSV file to replay-script lines (JSON text, one per output line, no
-/// trailing newline), in order.
+/// Converts a whole CSV file to replay-script lines (JSON text, no trailing newline), in
+/// order, each with the 1-based CSV row it came from (so that errors can name the row).
 ///
 /// Blank lines are skipped. Every row is checked, so an error means no partial output.
-pub fn to_script_lines(csv: &str, m: &HashdagMapping) -> Result<Vec<String>, HashdagError> {
+pub fn to_script_lines(csv: &str, m: &HashdagMapping) -> Result<Vec<(usize, String)>, HashdagError> {
     m.validate()?;
     let mut out = Vec::new();
     let mut camera = CameraState {
@@ -149,11 +149,14 @@ pub fn to_script_lines(csv: &str, m: &HashdagMapping) -> Result<Vec<String>, Has
                 r.count(&[5])?;
                 let (c, radius) = r.sphere_fields(m)?;
                 let material = if r.flag(4)? { m.material } else { 0 };
-                out.push(op_line(Op::Sphere {
-                    center: c,
-                    radius,
-                    material,
-                }));
+                out.push((
+                    row,
+                    op_line(Op::Sphere {
+                        center: c,
+                        radius,
+                        material,
+                    }),
+                ));
             }
             "EditCube" => {
                 r.count(&[5])?;
@@ -166,37 +169,43 @@ pub fn to_script_lines(csv: &str, m: &HashdagMapping) -> Result<Vec<String>, Has
                 let hi = m.point(c.map(|v| v + half));
                 let min = r.bounds(lo, f64::floor)?;
                 let max = r.bounds(hi, f64::ceil)?;
-                out.push(op_line(Op::Box {
-                    min,
-                    max,
-                    material: if add { m.material } else { 0 },
-                }));
+                out.push((
+                    row,
+                    op_line(Op::Box {
+                        min,
+                        max,
+                        material: if add { m.material } else { 0 },
+                    }),
+                ));
             }
             "EditPaint" => {
                 r.count(&[4])?;
                 let (center, radius) = r.sphere_fields(m)?;
-                out.push(op_line(Op::Paint {
-                    center,
-                    radius,
-                    material: m.material,
-                }));
+                out.push((
+                    row,
+                    op_line(Op::Paint {
+                        center,
+                        radius,
+                        material: m.material,
+                    }),
+                ));
             }
             "Undo" => {
                 r.count(&[0])?;
-                out.push(r#"{"undo":true}"#.to_owned());
+                out.push((row, r#"{"undo":true}"#.to_owned()));
             }
             "Redo" => {
                 r.count(&[0])?;
-                out.push(r#"{"redo":true}"#.to_owned());
+                out.push((row, r#"{"redo":true}"#.to_owned()));
             }
             "EndFrame" => {
                 r.count(&[0])?;
-                out.push(r#"{"end_frame":true}"#.to_owned());
+                out.push((row, r#"{"end_frame":true}"#.to_owned()));
             }
             "SetLocation" => {
                 r.count(&[3])?;
                 camera.pos = r.finite(m.point([r.num(0)?, r.num(1)?, r.num(2)?]), "location")?;
-                out.push(camera_line(&camera));
+                out.push((row, camera_line(&camera)));
             }
             "SetRotation" => {
                 r.count(&[9])?;
@@ -211,7 +220,7 @@ pub fn to_script_lines(csv: &str, m: &HashdagMapping) -> Result<Vec<String>, Has
                     return Err(r.err(format!("forward row {f:?} has no direction")));
                 }
                 camera.forward = f.map(|v| v / len);
-                out.push(camera_line(&camera));
+                out.push((row, camera_line(&camera)));
             }
             "SetToolParameters" => {
                 // The tool cursor and the selected tool: interface state, not edits.
@@ -349,7 +358,12 @@ mod tests {
     use crate::replay::script;
 
     fn conv(csv: &str) -> Vec<String> {
-        to_script_lines(csv, &HashdagMapping::default()).unwrap()
+        text(to_script_lines(csv, &HashdagMapping::default()).unwrap())
+    }
+
+    /// The lines without their row numbers.
+    fn text(lines: Vec<(usize, String)>) -> Vec<String> {
+        lines.into_iter().map(|(_, l)| l).collect()
     }
 
     fn err(csv: &str) -> String {
@@ -430,11 +444,13 @@ mod tests {
             offset: [-3.0, 0.5, 1000.0],
             material: 7,
         };
-        let lines = to_script_lines(
-            "EditSphere,14483,33332,24591,3,true\nEditCube,8,8,8,4,true\nSetLocation,16,0,-8\nEditPaint,1,1,1,1",
-            &m,
-        )
-        .unwrap();
+        let lines = text(
+            to_script_lines(
+                "EditSphere,14483,33332,24591,3,true\nEditCube,8,8,8,4,true\nSetLocation,16,0,-8\nEditPaint,1,1,1,1",
+                &m,
+            )
+            .unwrap(),
+        );
         let b = Batch::parse_line(&lines[0]).unwrap();
         assert_eq!(
             b.ops[0],
@@ -632,7 +648,7 @@ mod tests {
             offset: [0.0; 3],
             material: 2,
         };
-        let lines = to_script_lines(&csv, &m).unwrap();
+        let lines = text(to_script_lines(&csv, &m).unwrap());
         let count = |p: &str| lines.iter().filter(|l| l.starts_with(p)).count();
         assert_eq!(count(r#"{"op":"sphere""#), 451);
         assert_eq!(count(r#"{"end_frame":true}"#), 536);

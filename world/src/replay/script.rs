@@ -106,6 +106,11 @@ pub struct ScriptError {
     pub message: String,
 }
 
+/// The frame rates `end_frame` accepts: one frame in ~17 minutes to 10,000 per second.
+pub const MIN_FPS: f64 = 1e-3;
+/// See [`MIN_FPS`].
+pub const MAX_FPS: f64 = 1e4;
+
 /// The control keys, in the order docs/REPLAY.md lists them.
 const CONTROL_KEYS: [&str; 10] = [
     "camera",
@@ -171,9 +176,11 @@ pub fn parse_line(text: &str) -> Result<Line, String> {
             if v != &Value::Bool(true) {
                 return Err(field("must be true"));
             }
-            let fps = obj.get("fps").map(|f| f.as_f64().filter(|f| f.is_finite() && *f > 0.0));
+            let fps = obj
+                .get("fps")
+                .map(|f| f.as_f64().filter(|f| (MIN_FPS..=MAX_FPS).contains(f)));
             match fps {
-                Some(None) => return Err("fps: must be a positive number".into()),
+                Some(None) => return Err(format!("fps: must be a number from {MIN_FPS} to {MAX_FPS}")),
                 Some(Some(f)) => Line::EndFrame { fps: Some(f) },
                 None => Line::EndFrame { fps: None },
             }
@@ -269,6 +276,7 @@ mod tests {
             ("{\"undo\":false}", "undo: must be true"),
             ("{\"undo\":true,\"redo\":true}", "unexpected field"),
             ("{\"end_frame\":true,\"fps\":-1}", "fps"),
+            ("{\"end_frame\":true,\"fps\":1e-30}", "fps"),
             ("{\"expect_digest\":\"xyz\"}", "expect_digest"),
             ("{\"render\":{\"size\":[1,1]}}", "out"),
             ("{\"random_edits\":{\"count\":1}}", "seed"),
