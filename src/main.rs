@@ -41,6 +41,10 @@ enum Command {
     ExportLog(commands::export_log::Args),
     /// Render a frame of a world file or a server's world on the GPU (or lavapipe).
     Render(commands::render::Args),
+    /// Serve frames for a server as a headless render node.
+    RenderNode(commands::render_node::Args),
+    /// Ask a server for a frame from its render nodes.
+    Frame(commands::frame::Args),
     /// Open a window on a server's world: fly through it and edit it live.
     View(commands::view::Args),
     /// Run a replay script (or a HashDAG CSV) against a world file or a server.
@@ -73,6 +77,8 @@ fn main() -> ExitCode {
         Command::ExportLog(a) => commands::export_log::run(a),
         Command::Render(a) => commands::render::run(a),
         Command::View(a) => commands::view::run(a),
+        Command::RenderNode(a) => commands::render_node::run(a),
+        Command::Frame(a) => commands::frame::run(a),
         Command::Replay(a) => commands::replay::run(a),
         Command::Record(a) => commands::record::run(a),
         Command::Bench(b) => commands::bench::run(b),

@@ -73,6 +73,19 @@ impl Caller {
         }
     }
 
+    /// Fails with PERMISSION_DENIED unless the caller may serve frames (render-node or
+    /// admin).
+    pub fn require_render_node(&self) -> Result<(), Status> {
+        match self.role {
+            Role::RenderNode | Role::Admin => Ok(()),
+            r => Err(Status::permission_denied(format!(
+                "user '{}' has role {}, which cannot register a render node (render-node or admin needed)",
+                self.user,
+                r.name()
+            ))),
+        }
+    }
+
     /// Fails with PERMISSION_DENIED unless the caller is an admin.
     pub fn require_admin(&self, what: &str) -> Result<(), Status> {
         if self.role == Role::Admin {

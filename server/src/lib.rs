@@ -22,6 +22,7 @@ pub mod http;
 pub mod join;
 pub mod metrics;
 pub mod pages;
+pub mod render_router;
 mod serve;
 pub mod service;
 pub mod store;
@@ -51,6 +52,8 @@ pub struct Shared {
     pub rate: u32,
     /// Becomes true when the server shuts down (join streams end).
     pub shutdown: watch::Receiver<bool>,
+    /// Registered render nodes and the frame requests routed to them.
+    pub router: render_router::Router,
 }
 
 impl Shared {
@@ -65,6 +68,7 @@ impl Shared {
             limiter: DefaultKeyedRateLimiter::keyed(Quota::per_second(NonZeroU32::new(rate).expect("rate ≥ 1"))),
             rate,
             shutdown,
+            router: render_router::Router::default(),
         }
     }
 }

@@ -8,8 +8,8 @@ use naadf_proto::PROTOCOL_VERSION;
 use naadf_proto::requests::{despawn_batch, move_batch, spawn_batch};
 use naadf_proto::v1::world_service_server::WorldService;
 use naadf_proto::v1::{
-    DespawnEntitiesRequest, EditReply, EditRequest, HistoryRequest, JoinRequest, MoveEntitiesRequest,
-    SpawnEntitiesRequest, StatusReply, StatusRequest, WorldMessage,
+    DespawnEntitiesRequest, EditReply, EditRequest, FrameJob, FrameReply, FrameRequest, HistoryRequest, JoinRequest,
+    MoveEntitiesRequest, NodeMessage, SpawnEntitiesRequest, StatusReply, StatusRequest, WorldMessage, node_message,
 };
 use naadf_world::ops::{Batch, Op};
 use std::pin::Pin;
@@ -86,10 +86,53 @@ fn bad(e: impl std::fmt::Display) -> Status {
 }
 
 type WorldStream = Pin<Box<dyn Stream<Item = Result<WorldMessage, Status>> + Send>>;
+type JobStream = Pin<Box<dyn Stream<Item = Result<FrameJob, Status>> + Send>>;
+
+/// Largest frame edge a request may ask for.
+const MAX_FRAME_EDGE: u32 = 16384;
 
 #[tonic::async_trait]
 impl WorldService for WorldServer {
     type JoinStream = WorldStream;
+    type RegisterNodeStream = JobStream;
+
+    async fn register_node(&self, r: Req<tonic::Streaming<NodeMessage>>) -> Result<Response<JobStream>, Status> {
+        let caller = self.caller(&r)?;
+        caller.require_render_node()?;
+        let mut inbound = r.into_inner();
+        let hello = match inbound.message().await? {
+            Some(NodeMessage {
+                kind: Some(node_message::Kind::Hello(h)),
+            }) => h,
+            _ => return Err(Status::invalid_argument("a render node must start with a NodeHello")),
+        };
+        let (tx, rx) = mpsc::channel(STREAM_BUFFER);
+        let id = self.shared.router.register(&caller.user, hello, tx);
+        let shared = self.shared.clone();
+        tokio::spawn(async move {
+            // Results until the node leaves; a second hello is ignored.
+            while let Ok(Some(m)) = inbound.message().await {
+                if let Some(node_message::Kind::Result(res)) = m.kind {
+                    shared.router.deliver(id, res);
+                }
+            }
+            shared.router.unregister(id);
+        });
+        Ok(Response::new(Box::pin(ReceiverStream::new(rx))))
+    }
+
+    async fn render_frame(&self, r: Req<FrameRequest>) -> Result<Response<FrameReply>, Status> {
+        self.caller(&r)?;
+        let req = r.into_inner();
+        naadf_world::camera::Camera::from_json(&req.camera).map_err(|e| bad(format!("camera: {e}")))?;
+        if !(1..=MAX_FRAME_EDGE).contains(&req.width) || !(1..=MAX_FRAME_EDGE).contains(&req.height) {
+            return Err(bad(format!(
+                "frame size {}x{}: each edge must be 1..={MAX_FRAME_EDGE}",
+                req.width, req.height
+            )));
+        }
+        self.shared.router.render(req).await.map(Response::new)
+    }
 
     async fn join(&self, r: Req<JoinRequest>) -> Result<Response<WorldStream>, Status> {
         let caller = self.caller(&r)?;

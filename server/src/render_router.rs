@@ -1,0 +1,430 @@
+//! Routing frame requests to render nodes.
+//!
+//! Nodes register over a bidirectional stream (`RegisterNode`): a hello with their
+//! capabilities, then one result per job the router sends them. A `RenderFrame` request
+//! goes to the least loaded node that supports its mode and size. It fails fast with
+//! UNAVAILABLE when no node can take it and with RESOURCE_EXHAUSTED when the jobs in
+//! flight reach the queue bound; a node that answers with an error is believed, but a node
+//! that leaves or misses the deadline has the request retried once on another node.
+
+use naadf_proto::v1::{FrameJob, FrameReply, FrameRequest, FrameResult, NodeHello};
+use std::collections::{BTreeMap, HashMap};
+use std::sync::Mutex;
+use std::time::Duration;
+use tokio::sync::{mpsc, oneshot};
+use tonic::Status;
+
+/// Jobs in flight over all nodes before new requests are refused.
+pub const DEFAULT_QUEUE: usize = 64;
+/// Deadline of a request that names none.
+pub const DEFAULT_DEADLINE: Duration = Duration::from_secs(30);
+
+/// A node's answer, or why there is none.
+type Answer = Result<FrameResult, Gone>;
+
+/// The node left, or its stream broke, before answering.
+#[derive(Debug)]
+struct Gone;
+
+/// A registered node.
+struct Node {
+    hello: NodeHello,
+    user: String,
+    jobs: mpsc::Sender<Result<FrameJob, Status>>,
+    inflight: usize,
+    served: u64,
+    last_error: String,
+}
+
+/// A node as the status page shows it.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct NodeView {
+    /// Registration id.
+    pub id: u64,
+    /// The registering user.
+    pub user: String,
+    /// Adapter name and backend.
+    pub adapter: String,
+    /// Jobs in flight.
+    pub inflight: usize,
+    /// Frames served.
+    pub served: u64,
+    /// The last error it reported.
+    pub last_error: String,
+}
+
+#[derive(Default)]
+struct Inner {
+    nodes: BTreeMap<u64, Node>,
+    /// Job id → (node, where its answer goes).
+    pending: HashMap<u64, (u64, oneshot::Sender<Answer>)>,
+    next_id: u64,
+}
+
+/// The router.
+pub struct Router {
+    inner: Mutex<Inner>,
+    queue: usize,
+}
+
+impl Default for Router {
+    fn default() -> Self {
+        Router::new(DEFAULT_QUEUE)
+    }
+}
+
+impl Router {
+    /// A router refusing requests beyond `queue` jobs in flight.
+    pub fn new(queue: usize) -> Self {
+        Router {
+            inner: Mutex::default(),
+            queue: queue.max(1),
+        }
+    }
+
+    fn lock(&self) -> std::sync::MutexGuard<'_, Inner> {
+        // The state stays consistent under every panic-free path; a poisoned lock only
+        // means another request panicked mid-update, and the maps are still valid.
+        self.inner.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    /// Adds a node; jobs for it go to `jobs`. Returns its id.
+    pub fn register(&self, user: &str, hello: NodeHello, jobs: mpsc::Sender<Result<FrameJob, Status>>) -> u64 {
+        let mut g = self.lock();
+        g.next_id += 1;
+        let id = g.next_id;
+        tracing::info!(node = id, user, adapter = %hello.adapter, "render node registered");
+        g.nodes.insert(
+            id,
+            Node {
+                hello,
+                user: user.to_owned(),
+                jobs,
+                inflight: 0,
+                served: 0,
+                last_error: String::new(),
+            },
+        );
+        id
+    }
+
+    /// Removes node `id`; its jobs in flight are answered as gone (and retried elsewhere).
+    pub fn unregister(&self, id: u64) {
+        let mut g = self.lock();
+        g.nodes.remove(&id);
+        let gone: Vec<u64> = g
+            .pending
+            .iter()
+            .filter(|(_, (n, _))| *n == id)
+            .map(|(j, _)| *j)
+            .collect();
+        for j in gone {
+            if let Some((_, tx)) = g.pending.remove(&j) {
+                let _ = tx.send(Err(Gone));
+            }
+        }
+        tracing::info!(node = id, "render node left");
+    }
+
+    /// Delivers a node's result to the waiting request (unknown ids are late answers to
+    /// requests that gave up, and are dropped).
+    pub fn deliver(&self, node: u64, result: FrameResult) {
+        let mut g = self.lock();
+        if let Some(n) = g.nodes.get_mut(&node) {
+            n.inflight = n.inflight.saturating_sub(1);
+            if result.error.is_empty() {
+                n.served += 1;
+            } else {
+                n.last_error = result.error.clone();
+            }
+        }
+        if let Some((owner, tx)) = g.pending.remove(&result.id)
+            && owner == node
+        {
+            let _ = tx.send(Ok(result));
+        }
+    }
+
+    /// The registered nodes.
+    pub fn nodes(&self) -> Vec<NodeView> {
+        self.lock()
+            .nodes
+            .iter()
+            .map(|(&id, n)| NodeView {
+                id,
+                user: n.user.clone(),
+                adapter: n.hello.adapter.clone(),
+                inflight: n.inflight,
+                served: n.served,
+                last_error: n.last_error.clone(),
+            })
+            .collect()
+    }
+
+    /// Sends `req` to the least loaded node that can take it, other than `avoid`; returns
+    /// the node and where its answer arrives.
+    fn dispatch(
+        &self,
+        req: &FrameRequest,
+        avoid: Option<u64>,
+    ) -> Result<(u64, u64, oneshot::Receiver<Answer>), Status> {
+        let mut g = self.lock();
+        let inflight: usize = g.nodes.values().map(|n| n.inflight).sum();
+        let fits = |n: &Node| {
+            n.hello.modes.contains(&req.mode) && req.width <= n.hello.max_width && req.height <= n.hello.max_height
+        };
+        let Some((&node, _)) = g
+            .nodes
+            .iter()
+            .filter(|(id, n)| Some(**id) != avoid && fits(n))
+            .min_by_key(|(id, n)| (n.inflight, **id))
+        else {
+            return Err(Status::unavailable(format!(
+                "no render node can take a {}x{} {} frame ({} registered)",
+                req.width,
+                req.height,
+                req.mode,
+                g.nodes.len()
+            )));
+        };
+        if inflight >= self.queue {
+            return Err(Status::resource_exhausted(format!(
+                "the render queue is full ({inflight} frames in flight); retry later"
+            )));
+        }
+        g.next_id += 1;
+        let id = g.next_id;
+        let job = FrameJob {
+            id,
+            request: Some(req.clone()),
+        };
+        let n = g.nodes.get_mut(&node).expect("chosen above");
+        if n.jobs.try_send(Ok(job)).is_err() {
+            return Err(Status::unavailable("the chosen render node is not reading its jobs"));
+        }
+        n.inflight += 1;
+        let (tx, rx) = oneshot::channel();
+        g.pending.insert(id, (node, tx));
+        Ok((node, id, rx))
+    }
+
+    /// Forgets job `id` of `node` (its deadline passed).
+    fn abandon(&self, node: u64, id: u64) {
+        let mut g = self.lock();
+        if g.pending.remove(&id).is_some()
+            && let Some(n) = g.nodes.get_mut(&node)
+        {
+            n.inflight = n.inflight.saturating_sub(1);
+            n.last_error = "missed a deadline".into();
+        }
+    }
+
+    /// Renders `req` on a node: one retry on another node if the first leaves or misses
+    /// the deadline (each attempt gets the whole deadline).
+    pub async fn render(&self, req: FrameRequest) -> Result<FrameReply, Status> {
+        let deadline = match req.timeout_ms {
+            0 => DEFAULT_DEADLINE,
+            ms => Duration::from_millis(u64::from(ms)),
+        };
+        let mut avoid = None;
+        let mut failure = None;
+        for _attempt in 0..2 {
+            let (node, id, rx) = match self.dispatch(&req, avoid) {
+                Ok(d) => d,
+                // A retry with no other node reports why the first attempt failed.
+                Err(e) => return Err(failure.unwrap_or(e)),
+            };
+            match tokio::time::timeout(deadline, rx).await {
+                Ok(Ok(Ok(r))) if r.error.is_empty() => {
+                    let adapter = self
+                        .lock()
+                        .nodes
+                        .get(&node)
+                        .map(|n| n.hello.adapter.clone())
+                        .unwrap_or_default();
+                    return Ok(FrameReply {
+                        version: r.version,
+                        width: r.width,
+                        height: r.height,
+                        image: r.image,
+                        node: adapter,
+                    });
+                }
+                Ok(Ok(Ok(r))) => {
+                    return Err(Status::failed_precondition(format!(
+                        "the render node refused: {}",
+                        r.error
+                    )));
+                }
+                Ok(_) => failure = Some(Status::unavailable("the render node left mid-request")),
+                Err(_) => {
+                    self.abandon(node, id);
+                    failure = Some(Status::deadline_exceeded(format!(
+                        "no frame within {} ms",
+                        deadline.as_millis()
+                    )));
+                }
+            }
+            avoid = Some(node);
+        }
+        Err(failure.unwrap_or_else(|| Status::unavailable("no render node answered")))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::sync::Arc;
+    use tonic::Code;
+
+    fn hello(modes: &[&str]) -> NodeHello {
+        NodeHello {
+            adapter: format!("test node ({})", modes.join(",")),
+            modes: modes.iter().map(|m| m.to_string()).collect(),
+            max_width: 64,
+            max_height: 64,
+        }
+    }
+
+    fn req(mode: &str, timeout_ms: u32) -> FrameRequest {
+        FrameRequest {
+            camera: r#"{"pos":[1,2,3],"yaw":0,"pitch":0}"#.into(),
+            width: 8,
+            height: 8,
+            mode: mode.into(),
+            min_version: 0,
+            raw: true,
+            timeout_ms,
+        }
+    }
+
+    /// Registers a node; with `version`, a task answers each of its jobs with a frame of
+    /// that version, otherwise the node never answers.
+    fn node(router: &Arc<Router>, modes: &[&str], version: Option<u64>) -> u64 {
+        let (tx, mut rx) = mpsc::channel(8);
+        let id = router.register("node", hello(modes), tx);
+        let r = router.clone();
+        tokio::spawn(async move {
+            while let Some(Ok(job)) = rx.recv().await {
+                if let Some(version) = version {
+                    r.deliver(
+                        id,
+                        FrameResult {
+                            id: job.id,
+                            version,
+                            width: 8,
+                            height: 8,
+                            image: vec![0; 256],
+                            error: String::new(),
+                        },
+                    );
+                }
+            }
+        });
+        id
+    }
+
+    #[tokio::test]
+    async fn without_a_fitting_node_requests_fail_fast() {
+        let r = Arc::new(Router::default());
+        assert_eq!(r.render(req("albedo", 0)).await.unwrap_err().code(), Code::Unavailable);
+        node(&r, &["material"], Some(1));
+        let e = r.render(req("albedo", 0)).await.unwrap_err();
+        assert_eq!(e.code(), Code::Unavailable, "no node renders albedo: {e:?}");
+        let mut big = req("material", 0);
+        big.width = 65;
+        assert_eq!(r.render(big).await.unwrap_err().code(), Code::Unavailable);
+        assert_eq!(r.render(req("material", 0)).await.unwrap().version, 1);
+    }
+
+    #[tokio::test]
+    async fn the_least_loaded_fitting_node_serves() {
+        let r = Arc::new(Router::default());
+        let silent = node(&r, &["albedo", "steps"], None);
+        node(&r, &["albedo"], Some(7));
+        // The silent node holds a job, so the other one is less loaded for albedo.
+        let held = tokio::spawn({
+            let r = r.clone();
+            async move { r.render(req("steps", 100)).await }
+        });
+        tokio::time::sleep(Duration::from_millis(20)).await;
+        assert_eq!(r.nodes().iter().find(|n| n.id == silent).unwrap().inflight, 1);
+        let ok = r.render(req("albedo", 0)).await.unwrap();
+        assert_eq!(ok.version, 7);
+        assert!(ok.node.contains("albedo"));
+        assert_eq!(held.await.unwrap().unwrap_err().code(), Code::DeadlineExceeded);
+        let views = r.nodes();
+        assert_eq!(views.iter().map(|n| n.served).sum::<u64>(), 1);
+        assert_eq!(
+            views.iter().find(|n| n.id == silent).unwrap().last_error,
+            "missed a deadline"
+        );
+    }
+
+    #[tokio::test]
+    async fn a_node_that_leaves_mid_request_is_retried_once_elsewhere() {
+        let r = Arc::new(Router::default());
+        let first = node(&r, &["albedo"], None);
+        let pending = tokio::spawn({
+            let r = r.clone();
+            async move { r.render(req("albedo", 5000)).await }
+        });
+        tokio::time::sleep(Duration::from_millis(20)).await;
+        node(&r, &["albedo"], Some(3));
+        r.unregister(first);
+        let reply = pending.await.unwrap().unwrap();
+        assert_eq!(reply.version, 3, "served by the second node");
+        // With no other node, the failure itself is reported.
+        let r = Arc::new(Router::default());
+        let only = node(&r, &["albedo"], None);
+        let pending = tokio::spawn({
+            let r = r.clone();
+            async move { r.render(req("albedo", 5000)).await }
+        });
+        tokio::time::sleep(Duration::from_millis(20)).await;
+        r.unregister(only);
+        let e = pending.await.unwrap().unwrap_err();
+        assert_eq!(e.code(), Code::Unavailable);
+        assert!(e.message().contains("left"), "{e:?}");
+    }
+
+    #[tokio::test]
+    async fn a_full_queue_is_resource_exhausted() {
+        let r = Arc::new(Router::new(1));
+        node(&r, &["albedo"], None);
+        let held = tokio::spawn({
+            let r = r.clone();
+            async move { r.render(req("albedo", 200)).await }
+        });
+        tokio::time::sleep(Duration::from_millis(20)).await;
+        assert_eq!(
+            r.render(req("albedo", 0)).await.unwrap_err().code(),
+            Code::ResourceExhausted
+        );
+        assert_eq!(held.await.unwrap().unwrap_err().code(), Code::DeadlineExceeded);
+    }
+
+    #[tokio::test]
+    async fn a_node_error_is_reported_not_retried() {
+        let r = Arc::new(Router::default());
+        let (tx, mut rx) = mpsc::channel(8);
+        let id = r.register("node", hello(&["albedo"]), tx);
+        let answering = r.clone();
+        tokio::spawn(async move {
+            while let Some(Ok(job)) = rx.recv().await {
+                answering.deliver(
+                    id,
+                    FrameResult {
+                        id: job.id,
+                        error: "no GPU memory".into(),
+                        ..FrameResult::default()
+                    },
+                );
+            }
+        });
+        let e = r.render(req("albedo", 0)).await.unwrap_err();
+        assert_eq!(e.code(), Code::FailedPrecondition);
+        assert!(e.message().contains("no GPU memory"));
+        assert_eq!(r.nodes()[0].last_error, "no GPU memory");
+    }
+}

@@ -1,0 +1,76 @@
+//! `naadf frame --server URL --camera JSON [--size WxH] [--mode M] [--min-version N] -o OUT.png`:
+//! asks the server for a frame, which one of its render nodes renders.
+
+use super::print_json;
+use super::remote::{ServerArgs, block_on, status_error};
+use super::render::{parse_image_size, parse_mode, read_camera};
+use anyhow::{Context, Result};
+use naadf_client::gpu::Mode;
+use naadf_proto::v1::FrameRequest;
+use std::path::PathBuf;
+
+/// Arguments of `frame`.
+#[derive(clap::Args)]
+pub struct Args {
+    #[command(flatten)]
+    server: ServerArgs,
+    /// Camera JSON, or a file holding it.
+    #[arg(long)]
+    camera: String,
+    /// Image size `WxH`.
+    #[arg(long, default_value = "1280x720", value_parser = parse_image_size)]
+    size: (u32, u32),
+    /// Render mode.
+    #[arg(long, default_value = "albedo", value_parser = parse_mode)]
+    mode: Mode,
+    /// The oldest world version the frame may show.
+    #[arg(long, default_value_t = 0)]
+    min_version: u64,
+    /// Deadline in milliseconds (0: the server's default).
+    #[arg(long, default_value_t = 0)]
+    timeout_ms: u32,
+    /// PNG file to write.
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Print a JSON summary on stdout.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(serde::Serialize)]
+struct Summary {
+    version: u64,
+    width: u32,
+    height: u32,
+    node: String,
+    bytes: usize,
+}
+
+/// Requests the frame and writes it.
+pub fn run(a: Args) -> Result<()> {
+    let camera = read_camera(&a.camera)?;
+    let req = FrameRequest {
+        camera: serde_json::to_string(&camera)?,
+        width: a.size.0,
+        height: a.size.1,
+        mode: a.mode.name().into(),
+        min_version: a.min_version,
+        raw: false,
+        timeout_ms: a.timeout_ms,
+    };
+    let reply = block_on(async {
+        let mut c = a.server.connect().await?;
+        Ok(c.render_frame(req).await.map_err(status_error)?.into_inner())
+    })?;
+    std::fs::write(&a.output, &reply.image).with_context(|| format!("cannot write {}", a.output.display()))?;
+    if a.json {
+        print_json(&Summary {
+            version: reply.version,
+            width: reply.width,
+            height: reply.height,
+            node: reply.node,
+            bytes: reply.image.len(),
+        })?;
+    }
+    Ok(())
+}

@@ -1,0 +1,194 @@
+//! Render nodes end to end: a real server, real `naadf render-node` processes on lavapipe,
+//! frames requested with `naadf frame` and compared byte for byte with `naadf render
+//! --world` of the same world at the same version.
+
+mod support;
+
+use naadf_client::connect;
+use naadf_proto::v1::{NodeHello, NodeMessage, node_message};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+use support::{naadf, ok, p, serve_world, start_world};
+
+const TOKENS: &str = "adm=admin:admin,vw=viewer:viewer,nd=node:render-node";
+const CAMERA: &str = r#"{"pos":[-10.5,70.25,-12.5],"yaw":45,"pitch":-35,"fov_y":60}"#;
+
+/// A `naadf render-node` process, killed when dropped.
+struct Node(Child);
+
+impl Node {
+    fn start(url: &str, log: &std::path::Path) -> Node {
+        let err = std::fs::File::create(log).unwrap();
+        Node(
+            Command::new(env!("CARGO_BIN_EXE_naadf"))
+                .args(["render-node", "--server", url, "--token", "nd", "--retry", "0.2"])
+                .env("RUST_LOG", "info")
+                .stdout(Stdio::null())
+                .stderr(err)
+                .spawn()
+                .unwrap(),
+        )
+    }
+}
+
+impl Drop for Node {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+/// `naadf frame` as the viewer; returns (success, stdout, stderr).
+fn frame(url: &str, out: &str, mode: &str, min_version: u64) -> (bool, String, String) {
+    let o = naadf(
+        &[
+            "frame",
+            "--server",
+            url,
+            "--token",
+            "vw",
+            "--camera",
+            CAMERA,
+            "--size",
+            "96x64",
+            "--mode",
+            mode,
+            "--min-version",
+            &min_version.to_string(),
+            "-o",
+            out,
+            "--json",
+        ],
+        None,
+    );
+    (
+        o.status.success(),
+        String::from_utf8_lossy(&o.stdout).into_owned(),
+        String::from_utf8_lossy(&o.stderr).into_owned(),
+    )
+}
+
+/// `naadf render --world` of the same view.
+fn local(world: &str, out: &str, mode: &str) -> Vec<u8> {
+    ok(
+        &[
+            "render", "--world", world, "--camera", CAMERA, "--size", "96x64", "--mode", mode, "-o", out,
+        ],
+        None,
+    );
+    std::fs::read(out).unwrap()
+}
+
+#[test]
+fn frames_from_render_nodes_equal_local_renders() {
+    let dir = tempfile::tempdir().unwrap();
+    let world = start_world(dir.path());
+    // Without a GPU adapter there is no node to test.
+    let probe = naadf(
+        &[
+            "render",
+            "--world",
+            &world,
+            "--camera",
+            CAMERA,
+            "--size",
+            "8x8",
+            "-o",
+            &p(dir.path(), "probe.png"),
+        ],
+        None,
+    );
+    if !probe.status.success() {
+        eprintln!("skipping render nodes: {}", String::from_utf8_lossy(&probe.stderr));
+        return;
+    }
+    let server = serve_world(dir.path(), &world, &[], &[("NAADF_TOKENS", TOKENS)]);
+    let out = p(dir.path(), "remote.png");
+
+    // No node yet: the request fails fast with UNAVAILABLE.
+    let t0 = Instant::now();
+    let (done, _, err) = frame(&server.url, &out, "material", 0);
+    assert!(!done && err.contains("Unavailable"), "{err}");
+    assert!(t0.elapsed() < Duration::from_secs(10), "not fast: {:?}", t0.elapsed());
+
+    // A viewer may not register as a node.
+    let rt = tokio::runtime::Runtime::new().unwrap();
+    let refused = rt.block_on(async {
+        let mut c = connect(&server.url, Some("vw"), None).await.unwrap();
+        let hello = NodeMessage {
+            kind: Some(node_message::Kind::Hello(NodeHello {
+                adapter: "fake".into(),
+                modes: vec!["albedo".into()],
+                max_width: 64,
+                max_height: 64,
+            })),
+        };
+        c.register_node(tokio_stream::iter([hello])).await.unwrap_err()
+    });
+    assert_eq!(refused.code(), tonic::Code::PermissionDenied, "{refused:?}");
+
+    let node = Node::start(&server.url, &dir.path().join("node.log"));
+    // Wait until the node has registered (its first frame arrives).
+    let deadline = Instant::now() + Duration::from_secs(120);
+    let summary = loop {
+        let (done, stdout, err) = frame(&server.url, &out, "material", 0);
+        if done {
+            break stdout;
+        }
+        assert!(
+            Instant::now() < deadline,
+            "the node never served: {err}\n{}",
+            std::fs::read_to_string(dir.path().join("node.log")).unwrap_or_default()
+        );
+        std::thread::sleep(Duration::from_millis(200));
+    };
+    let v: serde_json::Value = serde_json::from_str(&summary).unwrap();
+    assert_eq!(v["version"], 0);
+    assert!(v["node"].as_str().unwrap().contains("Vulkan") || !v["node"].as_str().unwrap().is_empty());
+    for mode in ["material", "normal", "albedo"] {
+        let (done, _, err) = frame(&server.url, &out, mode, 0);
+        assert!(done, "{mode}: {err}");
+        let want = local(&world, &p(dir.path(), &format!("local-{mode}.png")), mode);
+        assert!(
+            std::fs::read(&out).unwrap() == want,
+            "{mode}: the node's frame differs from render --world"
+        );
+    }
+
+    // Freshness: a frame asked for at the edit's version shows the edit.
+    let edit = r#"{"op":"sphere","center":[40,40,40],"radius":14,"material":4}"#;
+    let ops = p(dir.path(), "edit.jsonl");
+    std::fs::write(&ops, format!("{edit}\n")).unwrap();
+    ok(
+        &["edit", "--server", &server.url, "--token", "adm", "--ops", &ops],
+        None,
+    );
+    let after = p(dir.path(), "after.naadf");
+    ok(&["apply", &world, "--ops", &ops, "-o", &after], None);
+    let (done, stdout, err) = frame(&server.url, &out, "material", 1);
+    assert!(done, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!(v["version"], 1);
+    let want = local(&after, &p(dir.path(), "local-after.png"), "material");
+    assert!(
+        std::fs::read(&out).unwrap() == want,
+        "the frame at version 1 shows the edit"
+    );
+    assert!(
+        want != local(&world, &p(dir.path(), "local-before.png"), "material"),
+        "the edit is visible"
+    );
+
+    // The node gone, requests fail fast again.
+    drop(node);
+    let deadline = Instant::now() + Duration::from_secs(30);
+    loop {
+        let (done, _, err) = frame(&server.url, &out, "material", 0);
+        if !done && err.contains("Unavailable") {
+            break;
+        }
+        assert!(Instant::now() < deadline, "the dead node is still routed to: {err}");
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    server.stop();
+}
