@@ -8,7 +8,7 @@ use naadf_client::connect;
 use naadf_proto::v1::{NodeHello, NodeMessage, node_message};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
-use support::{naadf, ok, p, serve_world, start_world};
+use support::{http_get, http_get_bytes, naadf, ok, p, serve_world, start_world};
 
 const TOKENS: &str = "adm=admin:admin,vw=viewer:viewer,nd=node:render-node";
 const CAMERA: &str = r#"{"pos":[-10.5,70.25,-12.5],"yaw":45,"pitch":-35,"fov_y":60}"#;
@@ -144,7 +144,10 @@ fn frames_from_render_nodes_equal_local_renders() {
     };
     let v: serde_json::Value = serde_json::from_str(&summary).unwrap();
     assert_eq!(v["version"], 0);
-    assert!(v["node"].as_str().unwrap().contains("Vulkan") || !v["node"].as_str().unwrap().is_empty());
+    assert!(
+        !v["node"].as_str().unwrap().is_empty(),
+        "the reply names the node's adapter"
+    );
     for mode in ["material", "normal", "albedo"] {
         let (done, _, err) = frame(&server.url, &out, mode, 0);
         assert!(done, "{mode}: {err}");
@@ -154,6 +157,37 @@ fn frames_from_render_nodes_equal_local_renders() {
             "{mode}: the node's frame differs from render --world"
         );
     }
+
+    // Over HTTP: the same frame, the same roles (a token is needed here), the node listed.
+    let query = |token: &str| {
+        let camera: String = CAMERA
+            .bytes()
+            .map(|b| {
+                if b.is_ascii_alphanumeric() {
+                    (b as char).to_string()
+                } else {
+                    format!("%{b:02X}")
+                }
+            })
+            .collect();
+        format!("/frame.png?camera={camera}&size=96x64&mode=material{token}")
+    };
+    let (code, _) = http_get_bytes(&server.http, &query(""));
+    assert_eq!(code, 401, "no token");
+    let (code, png) = http_get_bytes(&server.http, &query("&token=vw"));
+    assert_eq!(code, 200);
+    assert!(png == std::fs::read(p(dir.path(), "local-material.png")).unwrap());
+    let (code, _) = http_get_bytes(&server.http, "/frame.png?camera=%7B%7D&token=vw");
+    assert_eq!(code, 400, "a bad camera");
+    let (code, page) = http_get(&server.http, "/");
+    assert_eq!(code, 200);
+    let adapter = v["node"].as_str().unwrap().to_owned();
+    assert!(page.contains("Render nodes") && page.contains(&adapter), "{page}");
+    let (_, metrics) = http_get(&server.http, "/metrics");
+    assert!(metrics.contains("naadf_frames_total{node=\"all\"}"), "{metrics}");
+    assert!(metrics.contains("naadf_frame_seconds_bucket"));
+
+    status_page_in_a_browser(&server.http, &adapter, dir.path());
 
     // Freshness: a frame asked for at the edit's version shows the edit.
     let edit = r#"{"op":"sphere","center":[40,40,40],"radius":14,"material":4}"#;
@@ -191,4 +225,50 @@ fn frames_from_render_nodes_equal_local_renders() {
         std::thread::sleep(Duration::from_millis(100));
     }
     server.stop();
+}
+
+/// Loads the status page in headless Chromium: the node is listed and the live frame
+/// loads (its natural width reaches the DOM); a screenshot goes to the test's output.
+fn status_page_in_a_browser(http: &str, adapter: &str, scratch: &std::path::Path) {
+    if Command::new("chromium").arg("--version").output().is_err() {
+        eprintln!("skipping the browser check: chromium is not installed (scripts/ensure-deps.sh installs it)");
+        return;
+    }
+    // The page passes its token on to the live frame (this server has tokens).
+    let url = format!("http://{http}/?token=vw");
+    let chromium = |extra: &[&str]| {
+        let profile = tempfile::tempdir_in(scratch).unwrap();
+        Command::new("chromium")
+            .args([
+                "--headless",
+                "--no-sandbox",
+                "--disable-gpu",
+                "--disable-quic",
+                "--no-first-run",
+                "--disable-background-networking",
+                "--disable-component-update",
+                "--disable-sync",
+                "--virtual-time-budget=10000",
+                "--window-size=1000,1300",
+            ])
+            .arg(format!("--user-data-dir={}", profile.path().display()))
+            .args(extra)
+            .arg(&url)
+            .output()
+            .expect("run chromium")
+    };
+    let dom = chromium(&["--dump-dom"]);
+    let dom = String::from_utf8_lossy(&dom.stdout);
+    assert!(dom.contains(adapter), "the page lists the node: {dom}");
+    let width = dom
+        .split("data-live-width=\"")
+        .nth(1)
+        .and_then(|r| r.split('"').next())
+        .and_then(|w| w.parse::<u32>().ok());
+    assert_eq!(width, Some(480), "the live frame loaded: {dom}");
+    let shot = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("status-page.png");
+    chromium(&[&format!("--screenshot={}", shot.display())]);
+    let png = std::fs::read(&shot).expect("a screenshot");
+    assert!(png.len() > 1000);
+    eprintln!("status page screenshot: {}", shot.display());
 }

@@ -1,13 +1,16 @@
-//! The HTTP side (axum): `/health`, `/metrics` (Prometheus text format) and a small HTML
-//! status page with the world, the joined clients and the recent edits.
+//! The HTTP side (axum): `/health`, `/metrics` (Prometheus text format), `/frame.png`
+//! (a frame from the render nodes) and a small HTML status page with the world, the joined
+//! clients, the render nodes, a live frame and the recent edits.
 
 use crate::Shared;
 use crate::actor::Request;
 use axum::Router;
-use axum::extract::State;
-use axum::http::{StatusCode, header};
-use axum::response::{Html, IntoResponse, Json};
+use axum::extract::{ConnectInfo, Query, State};
+use axum::http::{HeaderMap, StatusCode, header};
+use axum::response::{Html, IntoResponse, Json, Response};
 use axum::routing::get;
+use naadf_proto::v1::FrameRequest;
+use std::net::SocketAddr;
 use std::sync::Arc;
 use std::time::SystemTime;
 use tokio::sync::mpsc;
@@ -23,6 +26,7 @@ pub fn router(shared: Arc<Shared>, actor: mpsc::Sender<Request>) -> Router {
     Router::new()
         .route("/health", get(health))
         .route("/metrics", get(metrics))
+        .route("/frame.png", get(frame_png))
         .route("/", get(status_page))
         .with_state(App { shared, actor })
 }
@@ -55,6 +59,99 @@ async fn metrics(State(app): State<App>) -> impl IntoResponse {
     )
 }
 
+/// The query of `/frame.png`.
+#[derive(serde::Deserialize)]
+struct FrameQuery {
+    /// Camera JSON.
+    camera: String,
+    /// `WxH` (default 640x360).
+    size: Option<String>,
+    /// Render mode (default albedo).
+    mode: Option<String>,
+    /// Oldest version the frame may show.
+    min_version: Option<u64>,
+    /// A token, for clients that cannot send headers (an `<img>` tag).
+    token: Option<String>,
+}
+
+/// A gRPC status as an HTTP status and message.
+fn http_error(s: &tonic::Status) -> Response {
+    use tonic::Code;
+    let code = match s.code() {
+        Code::InvalidArgument => StatusCode::BAD_REQUEST,
+        Code::Unauthenticated => StatusCode::UNAUTHORIZED,
+        Code::PermissionDenied => StatusCode::FORBIDDEN,
+        Code::ResourceExhausted => StatusCode::TOO_MANY_REQUESTS,
+        Code::DeadlineExceeded => StatusCode::GATEWAY_TIMEOUT,
+        Code::FailedPrecondition => StatusCode::UNPROCESSABLE_ENTITY,
+        Code::Unavailable => StatusCode::SERVICE_UNAVAILABLE,
+        _ => StatusCode::INTERNAL_SERVER_ERROR,
+    };
+    (code, format!("{}\n", s.message())).into_response()
+}
+
+/// `GET /frame.png?camera=<json>&size=WxH&mode=M[&min_version=n][&token=T]`: the same
+/// request, roles and errors as `RenderFrame`. The token comes from `Authorization: Bearer`
+/// or the query; a request without one from another machine is refused even in open mode.
+async fn frame_png(
+    State(app): State<App>,
+    ConnectInfo(peer): ConnectInfo<SocketAddr>,
+    headers: HeaderMap,
+    Query(q): Query<FrameQuery>,
+) -> Response {
+    let mut md = tonic::metadata::MetadataMap::from_headers(headers);
+    if let Some(t) = &q.token {
+        match format!("Bearer {t}").parse() {
+            Ok(v) => {
+                md.insert("authorization", v);
+            }
+            Err(_) => return http_error(&tonic::Status::unauthenticated("the token must be visible ASCII")),
+        }
+    }
+    if !md.contains_key("authorization") && !peer.ip().is_loopback() {
+        return http_error(&tonic::Status::unauthenticated(
+            "a frame request from another machine needs a token",
+        ));
+    }
+    if let Err(s) = app.shared.auth.caller(&md) {
+        return http_error(&s);
+    }
+    let size = q.size.as_deref().unwrap_or("640x360");
+    let Some((w, h)) = size
+        .split_once(['x', 'X'])
+        .and_then(|(w, h)| Some((w.parse().ok()?, h.parse().ok()?)))
+    else {
+        return http_error(&tonic::Status::invalid_argument(format!("size '{size}': expected WxH")));
+    };
+    let req = FrameRequest {
+        camera: q.camera,
+        width: w,
+        height: h,
+        mode: q.mode.unwrap_or_else(|| "albedo".into()),
+        min_version: q.min_version.unwrap_or(0),
+        raw: false,
+        timeout_ms: 0,
+    };
+    if let Err(s) = crate::render_router::check_request(&req) {
+        return http_error(&s);
+    }
+    match app.shared.router.render(req).await {
+        Ok(r) => (
+            [
+                (header::CONTENT_TYPE, "image/png".to_owned()),
+                (header::CACHE_CONTROL, "no-store".to_owned()),
+                (
+                    header::HeaderName::from_static("x-naadf-version"),
+                    r.version.to_string(),
+                ),
+            ],
+            r.image,
+        )
+            .into_response(),
+        Err(s) => http_error(&s),
+    }
+}
+
 fn ago(t: SystemTime) -> String {
     let s = SystemTime::now().duration_since(t).map_or(0, |d| d.as_secs());
     format!("{s} s ago")
@@ -64,7 +161,23 @@ fn escape(s: &str) -> String {
     s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;")
 }
 
-async fn status_page(State(app): State<App>) -> impl IntoResponse {
+/// Percent-encodes `s` for a URL query value.
+fn url_escape(s: &str) -> String {
+    s.bytes()
+        .map(|b| match b {
+            b'A'..=b'Z' | b'a'..=b'z' | b'0'..=b'9' | b'-' | b'_' | b'.' | b'~' => (b as char).to_string(),
+            _ => format!("%{b:02X}"),
+        })
+        .collect()
+}
+
+/// The query of the status page: a token for its live frame, on servers with tokens.
+#[derive(serde::Deserialize)]
+struct PageQuery {
+    token: Option<String>,
+}
+
+async fn status_page(State(app): State<App>, Query(page): Query<PageQuery>) -> impl IntoResponse {
     let Some(s) = crate::status(&app.actor).await else {
         return Html("<p>shutting down</p>".to_owned());
     };
@@ -72,6 +185,31 @@ async fn status_page(State(app): State<App>) -> impl IntoResponse {
     for c in app.shared.activity.clients() {
         clients += &format!("<tr><td>{}</td><td>{}</td></tr>", escape(&c.user), ago(c.since));
     }
+    let mut nodes = String::new();
+    for n in app.shared.router.nodes() {
+        nodes += &format!(
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td></tr>",
+            n.id,
+            escape(&n.user),
+            escape(&n.adapter),
+            n.inflight,
+            n.served,
+            escape(&n.last_error)
+        );
+    }
+    let size = naadf_world::WorldSize::new(s.size[0], s.size[1], s.size[2]).ok();
+    let camera = size
+        .and_then(|sz| naadf_world::raysets::fixed_cameras(sz).first().copied())
+        .and_then(|c| serde_json::to_string(&c).ok())
+        .unwrap_or_default();
+    let token = page
+        .token
+        .map(|t| format!("&token={}", url_escape(&t)))
+        .unwrap_or_default();
+    let live = format!(
+        "/frame.png?size=480x270&mode=albedo&camera={}{token}",
+        url_escape(&camera)
+    );
     let mut edits = String::new();
     for e in app.shared.activity.recent() {
         edits += &format!(
@@ -91,6 +229,13 @@ async fn status_page(State(app): State<App>) -> impl IntoResponse {
          <tr><th>digest</th><td><code>{}</code></td></tr>\
          <tr><th>quiescent</th><td>{}</td></tr></table>\
          <h2>Clients ({})</h2><table><tr><th>user</th><th>joined</th></tr>{clients}</table>\
+         <h2>Render nodes</h2><table id=nodes><tr><th>id</th><th>user</th><th>adapter</th><th>in flight</th>\
+         <th>frames</th><th>last error</th></tr>{nodes}</table>\
+         <h2>Live frame</h2><p><img id=live alt=\"no render node yet\" src=\"{live}\" width=480 height=270></p>\
+         <script>const live=document.getElementById('live');const src=live.src;\
+         live.onload=()=>{{document.body.dataset.liveWidth=live.naturalWidth;}};\
+         if(live.complete&&live.naturalWidth){{document.body.dataset.liveWidth=live.naturalWidth;}}\
+         setInterval(()=>{{live.src=src+'&t='+Date.now();}},2000);</script>\
          <h2>Recent edits</h2><table><tr><th>version</th><th>user</th><th>when</th><th>ops</th></tr>{edits}</table>\
          <p><a href=/metrics>metrics</a> · <a href=/health>health</a></p></body></html>",
         s.size[0],

@@ -60,15 +60,16 @@ impl Shared {
     /// Shared state with a per-user limit of `rate` edits per second (bursts of `rate`).
     pub fn new(auth: auth::Auth, rate: u32, shutdown: watch::Receiver<bool>) -> Self {
         let rate = rate.max(1);
+        let metrics: Arc<metrics::Metrics> = Arc::default();
         Self {
-            metrics: Arc::default(),
+            router: render_router::Router::new(render_router::DEFAULT_QUEUE, metrics.clone()),
+            metrics,
             activity: Arc::default(),
             page_cache: pages::PageCache::default(),
             auth,
             limiter: DefaultKeyedRateLimiter::keyed(Quota::per_second(NonZeroU32::new(rate).expect("rate ≥ 1"))),
             rate,
             shutdown,
-            router: render_router::Router::default(),
         }
     }
 }

@@ -1,7 +1,9 @@
 //! Prometheus metrics (`/metrics`) and the activity the status page shows.
 
+use prometheus_client::encoding::EncodeLabelSet;
 use prometheus_client::encoding::text::encode;
 use prometheus_client::metrics::counter::Counter;
+use prometheus_client::metrics::family::Family;
 use prometheus_client::metrics::gauge::Gauge;
 use prometheus_client::metrics::histogram::{Histogram, exponential_buckets};
 use prometheus_client::registry::Registry;
@@ -12,6 +14,20 @@ use std::time::SystemTime;
 
 /// Recent edits the status page lists.
 const RECENT_EDITS: usize = 32;
+
+/// The label of the frame metrics: a render node's id, or `all` for the totals.
+#[derive(Clone, Debug, Hash, PartialEq, Eq, EncodeLabelSet)]
+pub struct NodeLabel {
+    /// Node id (as registered), or `all`.
+    pub node: String,
+}
+
+/// Histograms of frame latency (1 ms to about 33 s).
+type LatencyFamily = Family<NodeLabel, Histogram, fn() -> Histogram>;
+
+fn latency_histogram() -> Histogram {
+    Histogram::new(exponential_buckets(0.001, 2.0, 16))
+}
 
 /// The server's metrics.
 #[derive(Debug)]
@@ -35,6 +51,34 @@ pub struct Metrics {
     pub fsync: Histogram,
     /// Snapshots written.
     pub snapshots: Counter,
+    /// Frames served, per render node and in total (rate() gives frames per second).
+    pub frames: Family<NodeLabel, Counter>,
+    /// Frame latency as the requester sees it (routing, waiting and rendering), seconds.
+    pub frame_seconds: LatencyFamily,
+    /// Frame jobs in flight (the render queue's depth), per node and in total.
+    pub frames_in_flight: Family<NodeLabel, Gauge>,
+}
+
+impl Metrics {
+    /// Records a frame served by `node` in `seconds`.
+    pub fn frame_served(&self, node: u64, seconds: f64) {
+        for label in [node.to_string(), "all".to_owned()] {
+            let l = NodeLabel { node: label };
+            self.frames.get_or_create(&l).inc();
+            self.frame_seconds.get_or_create(&l).observe(seconds);
+        }
+    }
+
+    /// Sets the jobs in flight of `node` and in total.
+    pub fn in_flight(&self, node: u64, jobs: usize, total: usize) {
+        let set = |label: String, v: usize| {
+            self.frames_in_flight
+                .get_or_create(&NodeLabel { node: label })
+                .set(v as i64);
+        };
+        set(node.to_string(), jobs);
+        set("all".to_owned(), total);
+    }
 }
 
 impl Default for Metrics {
@@ -50,6 +94,9 @@ impl Default for Metrics {
             growth_steps: Counter::default(),
             fsync: Histogram::new(exponential_buckets(0.000_05, 2.0, 16)),
             snapshots: Counter::default(),
+            frames: Family::default(),
+            frame_seconds: LatencyFamily::new_with_constructor(latency_histogram),
+            frames_in_flight: Family::default(),
             registry: Registry::default(),
         };
         registry.register("clients", "Clients joined now", m.clients.clone());
@@ -77,6 +124,17 @@ impl Default for Metrics {
         );
         registry.register("wal_fsync_seconds", "Write-ahead log fsync latency", m.fsync.clone());
         registry.register("snapshots", "Snapshots written", m.snapshots.clone());
+        registry.register("frames", "Frames served by render nodes", m.frames.clone());
+        registry.register(
+            "frame_seconds",
+            "Frame latency seen by requesters (routing, waiting, rendering)",
+            m.frame_seconds.clone(),
+        );
+        registry.register(
+            "frames_in_flight",
+            "Frame jobs sent to render nodes and not answered yet",
+            m.frames_in_flight.clone(),
+        );
         Metrics { registry, ..m }
     }
 }

@@ -7,10 +7,11 @@
 //! flight reach the queue bound; a node that answers with an error is believed, but a node
 //! that leaves or misses the deadline has the request retried once on another node.
 
+use crate::metrics::Metrics;
 use naadf_proto::v1::{FrameJob, FrameReply, FrameRequest, FrameResult, NodeHello};
 use std::collections::{BTreeMap, HashMap};
-use std::sync::Mutex;
-use std::time::Duration;
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
 use tokio::sync::{mpsc, oneshot};
 use tonic::Status;
 
@@ -18,6 +19,22 @@ use tonic::Status;
 pub const DEFAULT_QUEUE: usize = 64;
 /// Deadline of a request that names none.
 pub const DEFAULT_DEADLINE: Duration = Duration::from_secs(30);
+/// Largest frame edge a request may ask for.
+pub const MAX_FRAME_EDGE: u32 = 16384;
+
+/// Checks what the server can check of a request before routing it: the camera and the
+/// size (the mode is whatever some node advertises).
+pub fn check_request(req: &FrameRequest) -> Result<(), Status> {
+    naadf_world::camera::Camera::from_json(&req.camera)
+        .map_err(|e| Status::invalid_argument(format!("camera: {e}")))?;
+    if !(1..=MAX_FRAME_EDGE).contains(&req.width) || !(1..=MAX_FRAME_EDGE).contains(&req.height) {
+        return Err(Status::invalid_argument(format!(
+            "frame size {}x{}: each edge must be 1..={MAX_FRAME_EDGE}",
+            req.width, req.height
+        )));
+    }
+    Ok(())
+}
 
 /// A node's answer, or why there is none.
 type Answer = Result<FrameResult, Gone>;
@@ -65,21 +82,24 @@ struct Inner {
 pub struct Router {
     inner: Mutex<Inner>,
     queue: usize,
-}
-
-impl Default for Router {
-    fn default() -> Self {
-        Router::new(DEFAULT_QUEUE)
-    }
+    metrics: Arc<Metrics>,
 }
 
 impl Router {
-    /// A router refusing requests beyond `queue` jobs in flight.
-    pub fn new(queue: usize) -> Self {
+    /// A router refusing requests beyond `queue` jobs in flight, recording into `metrics`.
+    pub fn new(queue: usize, metrics: Arc<Metrics>) -> Self {
         Router {
             inner: Mutex::default(),
             queue: queue.max(1),
+            metrics,
         }
+    }
+
+    /// Publishes node `node`'s jobs in flight and the total.
+    fn gauge(&self, g: &Inner, node: u64) {
+        let total = g.nodes.values().map(|n| n.inflight).sum();
+        let jobs = g.nodes.get(&node).map_or(0, |n| n.inflight);
+        self.metrics.in_flight(node, jobs, total);
     }
 
     fn lock(&self) -> std::sync::MutexGuard<'_, Inner> {
@@ -123,6 +143,7 @@ impl Router {
                 let _ = tx.send(Err(Gone));
             }
         }
+        self.gauge(&g, id);
         tracing::info!(node = id, "render node left");
     }
 
@@ -138,6 +159,7 @@ impl Router {
                 n.last_error = result.error.clone();
             }
         }
+        self.gauge(&g, node);
         if let Some((owner, tx)) = g.pending.remove(&result.id)
             && owner == node
         {
@@ -205,6 +227,7 @@ impl Router {
         n.inflight += 1;
         let (tx, rx) = oneshot::channel();
         g.pending.insert(id, (node, tx));
+        self.gauge(&g, node);
         Ok((node, id, rx))
     }
 
@@ -217,6 +240,7 @@ impl Router {
             n.inflight = n.inflight.saturating_sub(1);
             n.last_error = "missed a deadline".into();
         }
+        self.gauge(&g, node);
     }
 
     /// Renders `req` on a node: one retry on another node if the first leaves or misses
@@ -228,6 +252,7 @@ impl Router {
         };
         let mut avoid = None;
         let mut failure = None;
+        let start = Instant::now();
         for _attempt in 0..2 {
             let (node, id, rx) = match self.dispatch(&req, avoid) {
                 Ok(d) => d,
@@ -236,6 +261,7 @@ impl Router {
             };
             match tokio::time::timeout(deadline, rx).await {
                 Ok(Ok(Ok(r))) if r.error.is_empty() => {
+                    self.metrics.frame_served(node, start.elapsed().as_secs_f64());
                     let adapter = self
                         .lock()
                         .nodes
@@ -274,7 +300,6 @@ impl Router {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::sync::Arc;
     use tonic::Code;
 
     fn hello(modes: &[&str]) -> NodeHello {
@@ -326,7 +351,7 @@ mod tests {
 
     #[tokio::test]
     async fn without_a_fitting_node_requests_fail_fast() {
-        let r = Arc::new(Router::default());
+        let r = Arc::new(Router::new(DEFAULT_QUEUE, Arc::default()));
         assert_eq!(r.render(req("albedo", 0)).await.unwrap_err().code(), Code::Unavailable);
         node(&r, &["material"], Some(1));
         let e = r.render(req("albedo", 0)).await.unwrap_err();
@@ -339,7 +364,7 @@ mod tests {
 
     #[tokio::test]
     async fn the_least_loaded_fitting_node_serves() {
-        let r = Arc::new(Router::default());
+        let r = Arc::new(Router::new(DEFAULT_QUEUE, Arc::default()));
         let silent = node(&r, &["albedo", "steps"], None);
         node(&r, &["albedo"], Some(7));
         // The silent node holds a job, so the other one is less loaded for albedo.
@@ -363,7 +388,7 @@ mod tests {
 
     #[tokio::test]
     async fn a_node_that_leaves_mid_request_is_retried_once_elsewhere() {
-        let r = Arc::new(Router::default());
+        let r = Arc::new(Router::new(DEFAULT_QUEUE, Arc::default()));
         let first = node(&r, &["albedo"], None);
         let pending = tokio::spawn({
             let r = r.clone();
@@ -375,7 +400,7 @@ mod tests {
         let reply = pending.await.unwrap().unwrap();
         assert_eq!(reply.version, 3, "served by the second node");
         // With no other node, the failure itself is reported.
-        let r = Arc::new(Router::default());
+        let r = Arc::new(Router::new(DEFAULT_QUEUE, Arc::default()));
         let only = node(&r, &["albedo"], None);
         let pending = tokio::spawn({
             let r = r.clone();
@@ -390,7 +415,7 @@ mod tests {
 
     #[tokio::test]
     async fn a_full_queue_is_resource_exhausted() {
-        let r = Arc::new(Router::new(1));
+        let r = Arc::new(Router::new(1, Arc::default()));
         node(&r, &["albedo"], None);
         let held = tokio::spawn({
             let r = r.clone();
@@ -406,7 +431,7 @@ mod tests {
 
     #[tokio::test]
     async fn a_node_error_is_reported_not_retried() {
-        let r = Arc::new(Router::default());
+        let r = Arc::new(Router::new(DEFAULT_QUEUE, Arc::default()));
         let (tx, mut rx) = mpsc::channel(8);
         let id = r.register("node", hello(&["albedo"]), tx);
         let answering = r.clone();

@@ -231,10 +231,13 @@ pub async fn serve(
             let _ = stop.wait_for(|s| *s).await;
         });
     let mut stop = shutdown_tx.subscribe();
-    let http =
-        axum::serve(http_listener, http::router(shared.clone(), req_tx.clone())).with_graceful_shutdown(async move {
-            let _ = stop.wait_for(|s| *s).await;
-        });
+    let http = axum::serve(
+        http_listener,
+        http::router(shared.clone(), req_tx.clone()).into_make_service_with_connect_info::<std::net::SocketAddr>(),
+    )
+    .with_graceful_shutdown(async move {
+        let _ = stop.wait_for(|s| *s).await;
+    });
     let grpc = tokio::spawn(grpc);
     let http = tokio::spawn(http.into_future());
     let ticker = {

@@ -88,9 +88,6 @@ fn bad(e: impl std::fmt::Display) -> Status {
 type WorldStream = Pin<Box<dyn Stream<Item = Result<WorldMessage, Status>> + Send>>;
 type JobStream = Pin<Box<dyn Stream<Item = Result<FrameJob, Status>> + Send>>;
 
-/// Largest frame edge a request may ask for.
-const MAX_FRAME_EDGE: u32 = 16384;
-
 #[tonic::async_trait]
 impl WorldService for WorldServer {
     type JoinStream = WorldStream;
@@ -124,13 +121,7 @@ impl WorldService for WorldServer {
     async fn render_frame(&self, r: Req<FrameRequest>) -> Result<Response<FrameReply>, Status> {
         self.caller(&r)?;
         let req = r.into_inner();
-        naadf_world::camera::Camera::from_json(&req.camera).map_err(|e| bad(format!("camera: {e}")))?;
-        if !(1..=MAX_FRAME_EDGE).contains(&req.width) || !(1..=MAX_FRAME_EDGE).contains(&req.height) {
-            return Err(bad(format!(
-                "frame size {}x{}: each edge must be 1..={MAX_FRAME_EDGE}",
-                req.width, req.height
-            )));
-        }
+        crate::render_router::check_request(&req)?;
         self.shared.router.render(req).await.map(Response::new)
     }
 

@@ -142,19 +142,24 @@ pub fn serve_world(dir: &Path, world: &str, extra: &[&str], envs: &[(&str, &str)
     Server::start(&args, &dir.join("server.log"), envs)
 }
 
-/// An HTTP GET on loopback (status line and body), without a client library.
+/// An HTTP GET on loopback (status line and body as text), without a client library.
 pub fn http_get(addr: &str, path: &str) -> (u16, String) {
+    let (code, body) = http_get_bytes(addr, path);
+    (code, String::from_utf8_lossy(&body).into_owned())
+}
+
+/// An HTTP GET on loopback: the status code and the body bytes (responses with a
+/// content length, as the server's are).
+pub fn http_get_bytes(addr: &str, path: &str) -> (u16, Vec<u8>) {
     use std::io::Read;
     let mut s = std::net::TcpStream::connect(addr).unwrap();
     write!(s, "GET {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\r\n").unwrap();
-    let mut buf = String::new();
-    s.read_to_string(&mut buf).unwrap();
-    let code = buf.split_whitespace().nth(1).unwrap().parse().unwrap();
-    let body = buf
-        .split_once("\r\n\r\n")
-        .map(|(_, b)| b.to_string())
-        .unwrap_or_default();
-    (code, body)
+    let mut buf = Vec::new();
+    s.read_to_end(&mut buf).unwrap();
+    let split = buf.windows(4).position(|w| w == b"\r\n\r\n").unwrap_or(buf.len());
+    let head = String::from_utf8_lossy(&buf[..split]);
+    let code = head.split_whitespace().nth(1).unwrap().parse().unwrap();
+    (code, buf.get(split + 4..).unwrap_or_default().to_vec())
 }
 
 /// A 128×64×128 terrain world file in `dir`.
