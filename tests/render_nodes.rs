@@ -272,3 +272,90 @@ fn status_page_in_a_browser(http: &str, adapter: &str, scratch: &std::path::Path
     assert!(png.len() > 1000);
     eprintln!("status page screenshot: {}", shot.display());
 }
+
+/// Two nodes; the one holding a slow request is killed: the request is served by the other.
+#[test]
+fn a_request_survives_the_death_of_its_node() {
+    let dir = tempfile::tempdir().unwrap();
+    let world = start_world(dir.path());
+    let probe = naadf(
+        &[
+            "render",
+            "--world",
+            &world,
+            "--camera",
+            CAMERA,
+            "--size",
+            "8x8",
+            "-o",
+            &p(dir.path(), "probe.png"),
+        ],
+        None,
+    );
+    if !probe.status.success() {
+        eprintln!("skipping render nodes: {}", String::from_utf8_lossy(&probe.stderr));
+        return;
+    }
+    let server = serve_world(dir.path(), &world, &[], &[("NAADF_TOKENS", TOKENS)]);
+    // Rows of the status page's node table.
+    let count_nodes = || {
+        let page = http_get(&server.http, "/").1;
+        let table = page
+            .split("<table id=nodes>")
+            .nth(1)
+            .and_then(|t| t.split("</table>").next());
+        table.map_or(0, |t| t.matches("<tr><td>").count())
+    };
+    let wait_for = |n: usize| {
+        let deadline = Instant::now() + Duration::from_secs(120);
+        while count_nodes() != n {
+            assert!(Instant::now() < deadline, "{n} nodes never registered");
+            std::thread::sleep(Duration::from_millis(100));
+        }
+    };
+    // The first node registers first and so takes the first request (ties go to the
+    // oldest node).
+    let first = Node::start(&server.url, &dir.path().join("first.log"));
+    wait_for(1);
+    let second = Node::start(&server.url, &dir.path().join("second.log"));
+    wait_for(2);
+    let (url, out) = (server.url.clone(), p(dir.path(), "slow.png"));
+    let request = std::thread::spawn(move || {
+        naadf(
+            &[
+                "frame",
+                "--server",
+                &url,
+                "--token",
+                "vw",
+                "--camera",
+                CAMERA,
+                "--size",
+                "1600x1200",
+                "--mode",
+                "albedo",
+                "-o",
+                &out,
+                "--json",
+            ],
+            None,
+        )
+    });
+    std::thread::sleep(Duration::from_millis(400));
+    drop(first);
+    let o = request.join().unwrap();
+    assert!(
+        o.status.success(),
+        "the request failed: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let img = image::open(p(dir.path(), "slow.png")).unwrap();
+    assert_eq!((img.width(), img.height()), (1600, 1200));
+    wait_for(1);
+    // The frame came from the second node: the one left has served it.
+    let page = http_get(&server.http, "/").1;
+    let row = page.split("<table id=nodes>").nth(1).unwrap().split("</table>").next().unwrap();
+    assert!(row.contains("<td>0</td><td>1</td><td></td></tr>"), "in flight 0, frames 1: {row}");
+    drop(second);
+    server.stop();
+}
