@@ -354,8 +354,17 @@ fn a_request_survives_the_death_of_its_node() {
     wait_for(1);
     // The frame came from the second node: the one left has served it.
     let page = http_get(&server.http, "/").1;
-    let row = page.split("<table id=nodes>").nth(1).unwrap().split("</table>").next().unwrap();
-    assert!(row.contains("<td>0</td><td>1</td><td></td></tr>"), "in flight 0, frames 1: {row}");
+    let row = page
+        .split("<table id=nodes>")
+        .nth(1)
+        .unwrap()
+        .split("</table>")
+        .next()
+        .unwrap();
+    assert!(
+        row.contains("<td>0</td><td>1</td><td></td></tr>"),
+        "in flight 0, frames 1: {row}"
+    );
     drop(second);
     server.stop();
 }

@@ -30,6 +30,8 @@ pub enum Bench {
     Stream(super::bench_stream::StreamArgs),
     /// GPU ray throughput of the traversal variants (naadf, nodf, grid), checked against the CPU.
     Gpu(super::bench_gpu::GpuArgs),
+    /// Frames through a server's render nodes: frames per second, latency, routing overhead.
+    Frames(super::bench_frames::FramesArgs),
 }
 
 /// Arguments of `bench traverse`.
@@ -80,6 +82,7 @@ pub fn run(b: Bench) -> Result<()> {
         Bench::Edit(a) => super::bench_edit::run(a),
         Bench::Stream(a) => super::bench_stream::run(a),
         Bench::Gpu(a) => super::bench_gpu::run(a),
+        Bench::Frames(a) => super::bench_frames::run(a),
     }
 }
 

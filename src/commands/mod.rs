@@ -4,6 +4,7 @@
 pub mod apply;
 pub mod bench;
 pub mod bench_edit;
+pub mod bench_frames;
 pub mod bench_gpu;
 pub mod bench_stream;
 pub mod edit;
