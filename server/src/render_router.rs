@@ -151,6 +151,14 @@ impl Router {
     /// requests that gave up, and are dropped).
     pub fn deliver(&self, node: u64, result: FrameResult) {
         let mut g = self.lock();
+        // Only the node a job went to may answer it, and only once (an abandoned job's
+        // counters were settled when it was abandoned).
+        if g.pending.get(&result.id).is_none_or(|(owner, _)| *owner != node) {
+            return;
+        }
+        let Some((_, tx)) = g.pending.remove(&result.id) else {
+            return;
+        };
         if let Some(n) = g.nodes.get_mut(&node) {
             n.inflight = n.inflight.saturating_sub(1);
             if result.error.is_empty() {
@@ -160,11 +168,7 @@ impl Router {
             }
         }
         self.gauge(&g, node);
-        if let Some((owner, tx)) = g.pending.remove(&result.id)
-            && owner == node
-        {
-            let _ = tx.send(Ok(result));
-        }
+        let _ = tx.send(Ok(result));
     }
 
     /// The registered nodes.
@@ -451,5 +455,34 @@ mod tests {
         assert_eq!(e.code(), Code::FailedPrecondition);
         assert!(e.message().contains("no GPU memory"));
         assert_eq!(r.nodes()[0].last_error, "no GPU memory");
+    }
+
+    #[tokio::test]
+    async fn a_late_answer_to_an_abandoned_job_is_dropped() {
+        let r = Arc::new(Router::new(DEFAULT_QUEUE, Arc::default()));
+        let (tx, mut rx) = mpsc::channel(8);
+        let id = r.register("node", hello(&["albedo"]), tx);
+        let e = r.render(req("albedo", 30)).await.unwrap_err();
+        assert_eq!(e.code(), Code::DeadlineExceeded);
+        let job = rx.recv().await.unwrap().unwrap();
+        r.deliver(
+            id,
+            FrameResult {
+                id: job.id,
+                version: 1,
+                ..FrameResult::default()
+            },
+        );
+        let n = &r.nodes()[0];
+        assert_eq!((n.inflight, n.served), (0, 0), "counted once, when abandoned");
+        // Another node's answer to this node's job is ignored too.
+        r.deliver(
+            id + 1,
+            FrameResult {
+                id: job.id,
+                ..FrameResult::default()
+            },
+        );
+        assert_eq!(r.nodes()[0].inflight, 0);
     }
 }

@@ -11,8 +11,10 @@ use anyhow::{Result, anyhow};
 use naadf_client::Mirror;
 use naadf_client::gpu::{Headless, Mode};
 use naadf_proto::v1::{FrameJob, FrameResult, NodeHello, NodeMessage, node_message};
+use naadf_server::render_router::DEFAULT_DEADLINE;
 use naadf_world::World;
 use naadf_world::camera::Camera;
+use std::time::{Duration, Instant};
 use tokio::sync::mpsc;
 use tokio_stream::wrappers::ReceiverStream;
 
@@ -92,7 +94,8 @@ async fn session(
         }
     };
     tracing::info!(adapter = %hello.adapter, "registered as a render node");
-    let mut waiting: Vec<FrameJob> = Vec::new();
+    // Jobs waiting for the mirror to reach their version, with when they came.
+    let mut waiting: Vec<(Instant, FrameJob)> = Vec::new();
     let result = loop {
         tokio::select! {
             m = world_stream.message() => match m {
@@ -105,7 +108,7 @@ async fn session(
                 Err(s) => break Err(status_error(s)),
             },
             j = jobs.message() => match j {
-                Ok(Some(j)) => waiting.push(j),
+                Ok(Some(j)) => waiting.push((Instant::now(), j)),
                 Ok(None) => break Ok(()),
                 Err(s) => break Err(status_error(s)),
             },
@@ -114,11 +117,13 @@ async fn session(
         let Some(world) = mirror.world().filter(|_| mirror.is_live() && mirror.is_quiescent()) else {
             continue;
         };
-        let (ready, later): (Vec<FrameJob>, Vec<FrameJob>) = waiting
+        // A job past its deadline has been given up by the server: drop it.
+        waiting.retain(|(since, j)| since.elapsed() < deadline_of(j));
+        let (ready, later): (Vec<_>, Vec<_>) = waiting
             .drain(..)
-            .partition(|j| j.request.as_ref().is_none_or(|r| r.min_version <= world.version()));
+            .partition(|(_, j)| j.request.as_ref().is_none_or(|r| r.min_version <= world.version()));
         waiting = later;
-        for job in ready {
+        for (_, job) in ready {
             let result = render_job(headless, world, &job);
             if out
                 .send(NodeMessage {
@@ -133,6 +138,14 @@ async fn session(
     };
     *cache = mirror.into_world();
     result
+}
+
+/// How long the server waits for `job`.
+fn deadline_of(job: &FrameJob) -> Duration {
+    match job.request.as_ref().map_or(0, |r| r.timeout_ms) {
+        0 => DEFAULT_DEADLINE,
+        ms => Duration::from_millis(u64::from(ms)),
+    }
 }
 
 /// Renders one job; a job the node cannot render becomes an error result, not a failure
