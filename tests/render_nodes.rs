@@ -68,6 +68,32 @@ fn frame(url: &str, out: &str, mode: &str, min_version: u64) -> (bool, String, S
     )
 }
 
+/// A world in `dir` and a server with tokens on it, or `None` (with a message) when the
+/// machine has no GPU adapter, so no node could run.
+fn started(dir: &std::path::Path) -> Option<(String, support::Server)> {
+    let world = start_world(dir);
+    let probe = naadf(
+        &[
+            "render",
+            "--world",
+            &world,
+            "--camera",
+            CAMERA,
+            "--size",
+            "8x8",
+            "-o",
+            &p(dir, "probe.png"),
+        ],
+        None,
+    );
+    if !probe.status.success() {
+        eprintln!("skipping render nodes: {}", String::from_utf8_lossy(&probe.stderr));
+        return None;
+    }
+    let server = serve_world(dir, &world, &[], &[("NAADF_TOKENS", TOKENS)]);
+    Some((world, server))
+}
+
 /// `naadf render --world` of the same view.
 fn local(world: &str, out: &str, mode: &str) -> Vec<u8> {
     ok(
@@ -82,27 +108,9 @@ fn local(world: &str, out: &str, mode: &str) -> Vec<u8> {
 #[test]
 fn frames_from_render_nodes_equal_local_renders() {
     let dir = tempfile::tempdir().unwrap();
-    let world = start_world(dir.path());
-    // Without a GPU adapter there is no node to test.
-    let probe = naadf(
-        &[
-            "render",
-            "--world",
-            &world,
-            "--camera",
-            CAMERA,
-            "--size",
-            "8x8",
-            "-o",
-            &p(dir.path(), "probe.png"),
-        ],
-        None,
-    );
-    if !probe.status.success() {
-        eprintln!("skipping render nodes: {}", String::from_utf8_lossy(&probe.stderr));
+    let Some((world, server)) = started(dir.path()) else {
         return;
-    }
-    let server = serve_world(dir.path(), &world, &[], &[("NAADF_TOKENS", TOKENS)]);
+    };
     let out = p(dir.path(), "remote.png");
 
     // No node yet: the request fails fast with UNAVAILABLE.
@@ -277,26 +285,7 @@ fn status_page_in_a_browser(http: &str, adapter: &str, scratch: &std::path::Path
 #[test]
 fn a_request_survives_the_death_of_its_node() {
     let dir = tempfile::tempdir().unwrap();
-    let world = start_world(dir.path());
-    let probe = naadf(
-        &[
-            "render",
-            "--world",
-            &world,
-            "--camera",
-            CAMERA,
-            "--size",
-            "8x8",
-            "-o",
-            &p(dir.path(), "probe.png"),
-        ],
-        None,
-    );
-    if !probe.status.success() {
-        eprintln!("skipping render nodes: {}", String::from_utf8_lossy(&probe.stderr));
-        return;
-    }
-    let server = serve_world(dir.path(), &world, &[], &[("NAADF_TOKENS", TOKENS)]);
+    let Some((_, server)) = started(dir.path()) else { return };
     // Rows of the status page's node table.
     let count_nodes = || {
         let page = http_get(&server.http, "/").1;

@@ -3,10 +3,8 @@
 
 use super::print_json;
 use super::remote::{ServerArgs, block_on, status_error};
-use super::render::{parse_image_size, parse_mode, read_camera};
+use super::render::ViewArgs;
 use anyhow::{Context, Result};
-use naadf_client::gpu::Mode;
-use naadf_proto::v1::FrameRequest;
 use std::path::PathBuf;
 
 /// Arguments of `frame`.
@@ -14,15 +12,8 @@ use std::path::PathBuf;
 pub struct Args {
     #[command(flatten)]
     server: ServerArgs,
-    /// Camera JSON, or a file holding it.
-    #[arg(long)]
-    camera: String,
-    /// Image size `WxH`.
-    #[arg(long, default_value = "1280x720", value_parser = parse_image_size)]
-    size: (u32, u32),
-    /// Render mode.
-    #[arg(long, default_value = "albedo", value_parser = parse_mode)]
-    mode: Mode,
+    #[command(flatten)]
+    view: ViewArgs,
     /// The oldest world version the frame may show.
     #[arg(long, default_value_t = 0)]
     min_version: u64,
@@ -48,16 +39,7 @@ struct Summary {
 
 /// Requests the frame and writes it.
 pub fn run(a: Args) -> Result<()> {
-    let camera = read_camera(&a.camera)?;
-    let req = FrameRequest {
-        camera: serde_json::to_string(&camera)?,
-        width: a.size.0,
-        height: a.size.1,
-        mode: a.mode.name().into(),
-        min_version: a.min_version,
-        raw: false,
-        timeout_ms: a.timeout_ms,
-    };
+    let req = a.view.request(a.min_version, a.timeout_ms)?;
     let reply = block_on(async {
         let mut c = a.server.connect().await?;
         Ok(c.render_frame(req).await.map_err(status_error)?.into_inner())

@@ -5,6 +5,7 @@ use super::remote::{ServerArgs, block_on, quiescent_world};
 use super::{load_world, print_json, seconds};
 use anyhow::{Context, Result};
 use naadf_client::gpu::{Headless, Mode, write_gbuffer};
+use naadf_proto::v1::FrameRequest;
 use naadf_world::camera::Camera;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -18,15 +19,8 @@ pub struct Args {
     world: Option<PathBuf>,
     #[command(flatten)]
     server: ServerArgs,
-    /// Camera JSON `{"pos":[x,y,z],"yaw":deg,"pitch":deg,"fov_y":deg}`, or a file holding it.
-    #[arg(long)]
-    camera: String,
-    /// Image size `WxH`.
-    #[arg(long, default_value = "1280x720", value_parser = parse_image_size)]
-    size: (u32, u32),
-    /// What to show.
-    #[arg(long, default_value = "albedo", value_parser = parse_mode)]
-    mode: Mode,
+    #[command(flatten)]
+    view: ViewArgs,
     /// Frames to render (all identical: the modes are deterministic); the last is written.
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
     frames: u32,
@@ -42,6 +36,35 @@ pub struct Args {
     /// Print a JSON summary on stdout.
     #[arg(long)]
     json: bool,
+}
+
+/// What a frame shows: camera, size and mode (`render`, `frame`).
+#[derive(clap::Args)]
+pub struct ViewArgs {
+    /// Camera JSON `{"pos":[x,y,z],"yaw":deg,"pitch":deg,"fov_y":deg}`, or a file holding it.
+    #[arg(long)]
+    pub camera: String,
+    /// Image size `WxH`.
+    #[arg(long, default_value = "1280x720", value_parser = parse_image_size)]
+    pub size: (u32, u32),
+    /// What to show.
+    #[arg(long, default_value = "albedo", value_parser = parse_mode)]
+    pub mode: Mode,
+}
+
+impl ViewArgs {
+    /// The frame request these arguments make (PNG, server's default deadline).
+    pub fn request(&self, min_version: u64, timeout_ms: u32) -> Result<FrameRequest> {
+        Ok(FrameRequest {
+            camera: serde_json::to_string(&read_camera(&self.camera)?)?,
+            width: self.size.0,
+            height: self.size.1,
+            mode: self.mode.name().into(),
+            min_version,
+            raw: false,
+            timeout_ms,
+        })
+    }
 }
 
 /// Parses `WxH`.
@@ -84,7 +107,7 @@ struct Summary {
 
 /// Renders and writes the image.
 pub fn run(a: Args) -> Result<()> {
-    let camera = read_camera(&a.camera)?;
+    let camera = read_camera(&a.view.camera)?;
     let world = match &a.world {
         Some(path) => load_world(path)?,
         None => block_on(quiescent_world(&a.server, None, 0, seconds(a.timeout, "--timeout")?))?,
@@ -92,10 +115,11 @@ pub fn run(a: Args) -> Result<()> {
     let mut headless = Headless::new()?;
     let want_gbuffer = a.gbuffer.is_some();
     // The first frame uploads the world and builds the pipeline; time the rest.
-    let mut frame = headless.frame(&world, &camera, a.size, a.mode, want_gbuffer)?;
+    let (size, mode) = (a.view.size, a.view.mode);
+    let mut frame = headless.frame(&world, &camera, size, mode, want_gbuffer)?;
     let t0 = Instant::now();
     for _ in 1..a.frames {
-        frame = headless.frame(&world, &camera, a.size, a.mode, want_gbuffer)?;
+        frame = headless.frame(&world, &camera, size, mode, want_gbuffer)?;
     }
     let frame_ms = if a.frames > 1 {
         t0.elapsed().as_secs_f64() * 1e3 / f64::from(a.frames - 1)
@@ -116,7 +140,7 @@ pub fn run(a: Args) -> Result<()> {
         print_json(&Summary {
             width: frame.width,
             height: frame.height,
-            mode: a.mode.name(),
+            mode: mode.name(),
             version: world.version(),
             digest: world.digest().to_string(),
             adapter: headless.gpu.describe(),
