@@ -357,3 +357,67 @@ fn a_request_survives_the_death_of_its_node() {
     drop(second);
     server.stop();
 }
+
+/// Two nodes and a stream of edits: a frame asked for at version v shows the world at the
+/// version it is stamped with (v or later), byte for byte.
+#[test]
+fn frames_at_min_version_show_the_edits_with_two_nodes() {
+    let dir = tempfile::tempdir().unwrap();
+    let Some((world, server)) = started(dir.path()) else {
+        return;
+    };
+    let _nodes = [
+        Node::start(&server.url, &dir.path().join("a.log")),
+        Node::start(&server.url, &dir.path().join("b.log")),
+    ];
+    // Ten spheres in view of the camera, one version each.
+    let edits: Vec<String> = (0..10)
+        .map(|i| {
+            format!(
+                r#"{{"op":"sphere","center":[{},{},{}],"radius":{},"material":{}}}"#,
+                20 + 9 * i,
+                30 + (i % 3) * 5,
+                25 + 7 * i,
+                4 + i % 4,
+                1 + i % 7
+            )
+        })
+        .collect();
+    let (url, dir_path, stream) = (server.url.clone(), dir.path().to_owned(), edits.clone());
+    let editor = std::thread::spawn(move || {
+        for (i, e) in stream.iter().enumerate() {
+            let f = p(&dir_path, &format!("edit{i}.jsonl"));
+            std::fs::write(&f, format!("{e}\n")).unwrap();
+            ok(&["edit", "--server", &url, "--token", "adm", "--ops", &f], None);
+        }
+    });
+    for v in [2u64, 5, 9] {
+        let out = p(dir.path(), &format!("v{v}.png"));
+        let deadline = Instant::now() + Duration::from_secs(120);
+        let stdout = loop {
+            let (done, stdout, err) = frame(&server.url, &out, "material", v);
+            if done {
+                break stdout;
+            }
+            // Until both nodes have registered, a request may find none.
+            assert!(err.contains("Unavailable") && Instant::now() < deadline, "{err}");
+            std::thread::sleep(Duration::from_millis(200));
+        };
+        let shown: u64 = serde_json::from_str::<serde_json::Value>(&stdout).unwrap()["version"]
+            .as_u64()
+            .unwrap();
+        assert!(shown >= v, "asked for {v}, got {shown}");
+        // The world at the version the frame shows, applied offline and rendered locally.
+        let ops = p(dir.path(), &format!("first{shown}.jsonl"));
+        std::fs::write(&ops, edits[..shown as usize].join("\n") + "\n").unwrap();
+        let at = p(dir.path(), &format!("at{shown}.naadf"));
+        ok(&["apply", &world, "--ops", &ops, "-o", &at], None);
+        let want = local(&at, &p(dir.path(), &format!("local{shown}.png")), "material");
+        assert!(
+            std::fs::read(&out).unwrap() == want,
+            "the frame at version {shown} differs"
+        );
+    }
+    editor.join().unwrap();
+    server.stop();
+}
