@@ -421,3 +421,32 @@ fn frames_at_min_version_show_the_edits_with_two_nodes() {
     editor.join().unwrap();
     server.stop();
 }
+
+/// A node re-registers by itself when its server restarts (on the same address).
+#[test]
+fn a_node_reconnects_after_a_server_restart() {
+    let dir = tempfile::tempdir().unwrap();
+    let Some((world, server)) = started(dir.path()) else {
+        return;
+    };
+    let url = server.url.clone();
+    let grpc = url.trim_start_matches("http://").to_owned();
+    let _node = Node::start(&url, &dir.path().join("node.log"));
+    let out = p(dir.path(), "f.png");
+    let served = |what: &str| {
+        let deadline = Instant::now() + Duration::from_secs(120);
+        loop {
+            let (done, _, err) = frame(&url, &out, "material", 0);
+            if done {
+                return;
+            }
+            assert!(Instant::now() < deadline, "{what}: {err}");
+            std::thread::sleep(Duration::from_millis(200));
+        }
+    };
+    served("before the restart");
+    server.stop();
+    let again = serve_world(dir.path(), &world, &["--grpc", &grpc], &[("NAADF_TOKENS", TOKENS)]);
+    served("after the restart");
+    again.stop();
+}

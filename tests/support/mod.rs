@@ -61,13 +61,19 @@ pub struct Server {
 }
 
 impl Server {
-    /// Starts `naadf serve ARGS` (plus ephemeral ports and `--json`) and waits until it
-    /// serves; `log` receives its stderr (appended, so restarts keep the history).
+    /// Starts `naadf serve ARGS` (plus `--json`, and ephemeral loopback ports unless ARGS
+    /// name `--grpc` or `--http`) and waits until it serves; `log` receives its stderr
+    /// (appended, so restarts keep the history).
     pub fn start(args: &[&str], log: &Path, envs: &[(&str, &str)]) -> Server {
         let err = std::fs::OpenOptions::new().create(true).append(true).open(log).unwrap();
-        let mut child = Command::new(env!("CARGO_BIN_EXE_naadf"))
-            .arg("serve")
-            .args(["--grpc", "127.0.0.1:0", "--http", "127.0.0.1:0", "--json"])
+        let mut command = Command::new(env!("CARGO_BIN_EXE_naadf"));
+        command.arg("serve").arg("--json");
+        for flag in ["--grpc", "--http"] {
+            if !args.contains(&flag) {
+                command.args([flag, "127.0.0.1:0"]);
+            }
+        }
+        let mut child = command
             .args(args)
             .envs(envs.iter().copied())
             .env("RUST_LOG", "info")
