@@ -450,3 +450,36 @@ fn a_node_reconnects_after_a_server_restart() {
     served("after the restart");
     again.stop();
 }
+
+/// Frame requests over HTTP from another machine need a token (no node is needed to see
+/// the refusal: authentication comes before routing).
+#[test]
+fn an_unauthenticated_frame_request_off_loopback_is_refused() {
+    // A non-loopback address of this machine, to reach the server as another host would.
+    let Some(ip) = std::net::UdpSocket::bind("0.0.0.0:0")
+        .and_then(|s| s.connect("192.0.2.1:9").map(|()| s))
+        .and_then(|s| s.local_addr())
+        .ok()
+        .map(|a| a.ip())
+        .filter(|ip| !ip.is_loopback() && !ip.is_unspecified())
+    else {
+        eprintln!("skipping: this machine has no non-loopback IPv4 address");
+        return;
+    };
+    let dir = tempfile::tempdir().unwrap();
+    let world = start_world(dir.path());
+    let server = serve_world(
+        dir.path(),
+        &world,
+        &["--http", "0.0.0.0:0"],
+        &[("NAADF_TOKENS", TOKENS)],
+    );
+    let port = server.http.rsplit(':').next().unwrap();
+    let remote = format!("{ip}:{port}");
+    let path = "/frame.png?camera=%7B%22pos%22%3A%5B1%2C2%2C3%5D%2C%22yaw%22%3A0%2C%22pitch%22%3A0%7D&size=8x8";
+    assert_eq!(http_get(&remote, path).0, 401, "no token from {ip}");
+    assert_eq!(http_get(&remote, &format!("{path}&token=wrong")).0, 401);
+    // With a token the request passes authentication and meets the missing node.
+    assert_eq!(http_get(&remote, &format!("{path}&token=vw")).0, 503);
+    server.stop();
+}
