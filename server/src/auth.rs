@@ -61,29 +61,30 @@ pub struct Caller {
 }
 
 impl Caller {
+    /// Fails with PERMISSION_DENIED unless the caller's role is one of `allowed`; the
+    /// message says what the caller tried (`action`) and which roles may.
+    fn require(&self, allowed: &[Role], action: &str) -> Result<(), Status> {
+        if allowed.contains(&self.role) {
+            return Ok(());
+        }
+        let names: Vec<_> = allowed.iter().map(|r| r.name()).collect();
+        Err(Status::permission_denied(format!(
+            "user '{}' has role {}, which cannot {action} ({} needed)",
+            self.user,
+            self.role.name(),
+            names.join(" or ")
+        )))
+    }
+
     /// Fails with PERMISSION_DENIED unless the caller may edit.
     pub fn require_editor(&self) -> Result<(), Status> {
-        match self.role {
-            Role::Editor | Role::Admin => Ok(()),
-            r => Err(Status::permission_denied(format!(
-                "user '{}' has role {}, which cannot edit (editor or admin needed)",
-                self.user,
-                r.name()
-            ))),
-        }
+        self.require(&[Role::Editor, Role::Admin], "edit")
     }
 
     /// Fails with PERMISSION_DENIED unless the caller may serve frames (render-node or
     /// admin).
     pub fn require_render_node(&self) -> Result<(), Status> {
-        match self.role {
-            Role::RenderNode | Role::Admin => Ok(()),
-            r => Err(Status::permission_denied(format!(
-                "user '{}' has role {}, which cannot register a render node (render-node or admin needed)",
-                self.user,
-                r.name()
-            ))),
-        }
+        self.require(&[Role::RenderNode, Role::Admin], "register a render node")
     }
 
     /// Fails with PERMISSION_DENIED unless the caller is an admin.
