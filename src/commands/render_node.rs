@@ -113,12 +113,13 @@ async fn session(
                 Err(s) => break Err(status_error(s)),
             },
         }
+        // A job past its deadline has been given up by the server: drop it (also while
+        // the world is not quiescent, so that waiting jobs cannot pile up).
+        waiting.retain(|(since, j)| since.elapsed() < deadline_of(j));
         // Serve every job whose version the quiescent mirror has reached.
         let Some(world) = mirror.world().filter(|_| mirror.is_live() && mirror.is_quiescent()) else {
             continue;
         };
-        // A job past its deadline has been given up by the server: drop it.
-        waiting.retain(|(since, j)| since.elapsed() < deadline_of(j));
         let (ready, later): (Vec<_>, Vec<_>) = waiting
             .drain(..)
             .partition(|(_, j)| j.request.as_ref().is_none_or(|r| r.min_version <= world.version()));
