@@ -3,6 +3,7 @@
 //! flight; with `--world`, the same frame rendered in-process (GPU, readback, PNG — what a
 //! node does per job) for the server's added latency.
 
+use super::bench_edit::percentile;
 use super::remote::{ServerArgs, block_on, status_error};
 use super::render::{parse_image_size, parse_mode, read_camera};
 use super::{load_world, print_json};
@@ -52,14 +53,9 @@ struct Latency {
 impl Latency {
     fn of(mut ms: Vec<f64>) -> Latency {
         ms.sort_by(f64::total_cmp);
-        let at = |q: f64| {
-            ms.get(((ms.len() as f64 * q) as usize).min(ms.len().saturating_sub(1)))
-                .copied()
-                .unwrap_or(0.0)
-        };
         Latency {
-            p50: at(0.5),
-            p99: at(0.99),
+            p50: percentile(&ms, 0.5),
+            p99: percentile(&ms, 0.99),
         }
     }
 }
