@@ -223,6 +223,34 @@ fn bench_traverse_reports_the_contract() {
     let v = bench_report(&out);
     assert!(v["threads"].as_u64().unwrap() >= 1);
     assert_eq!(v["mismatches"], 0);
+    // With entities: every method agrees on the crowded world too, and the paired rounds
+    // report a cost per method and ray set.
+    let out = ok(
+        &[
+            "bench",
+            "traverse",
+            &world,
+            "--json",
+            "--width",
+            "32",
+            "--height",
+            "18",
+            "--entities",
+            "40",
+            "--rounds",
+            "3",
+        ],
+        None,
+    );
+    let v = bench_report(&out);
+    assert_eq!(v["mismatches"], 0);
+    assert_eq!(v["with_entities"]["mismatches"], 0);
+    assert_eq!(v["entity_cost"]["rounds"], 3);
+    for m in ["naadf", "nodf"] {
+        let median = v["entity_cost"]["median_percent"][m].as_array().unwrap();
+        assert_eq!(median.len(), 3, "{v}");
+        assert!(median.iter().all(|c| c.as_f64().unwrap().is_finite()), "{v}");
+    }
 }
 
 #[test]

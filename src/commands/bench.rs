@@ -51,14 +51,18 @@ pub struct TraverseArgs {
     /// Seed of the secondary-ray directions.
     #[arg(long, default_value_t = 1)]
     seed: u64,
-    /// After the plain run, spawn this many entities (8³ models at random poses) and
-    /// measure again, reporting the ratio.
+    /// After the plain run, spawn this many entities (8³ models at random poses), measure
+    /// again and report the entity cost from paired rounds (see `--rounds`).
     #[arg(long, default_value_t = 0)]
     entities: u32,
     /// Where the entities go: resting on the ground (`surface`, like characters and
     /// vehicles) or anywhere in the air (`air`, the worst case for chunk AADFs).
     #[arg(long, default_value = "surface", value_parser = ["surface", "air"])]
     placement: String,
+    /// Paired rounds (without, then with entities, alternating which goes first) behind
+    /// the entity cost, per traversal method and ray set.
+    #[arg(long, default_value_t = 15)]
+    rounds: u32,
     /// Print one JSON object.
     #[arg(long)]
     json: bool,
@@ -131,16 +135,20 @@ struct Reference {
 }
 
 fn traverse(a: TraverseArgs) -> Result<()> {
-    let mut world = load_world(&a.world)?;
+    let world = load_world(&a.world)?;
     let (plain, secondary) = measure(&world, &a, None)?;
     let with_entities = if a.entities > 0 {
-        spawn_entities(&mut world, a.entities, a.seed, a.placement == "air")?;
+        let mut crowded = world.clone();
+        spawn_entities(&mut crowded, a.entities, a.seed, a.placement == "air")?;
         // The same rays as the plain run, so that the difference is the entities' cost.
-        Some(measure(&world, &a, Some(secondary))?.0)
+        let (report, _) = measure(&crowded, &a, Some(secondary.clone()))?;
+        let primary = primary_rays(&fixed_cameras(world.size()), a.width, a.height);
+        let cost = EntityCost::measure(&world, &crowded, [&primary, &secondary], a.rounds)?;
+        Some((report, cost))
     } else {
         None
     };
-    let mismatches = plain.mismatches + with_entities.as_ref().map_or(0, |r| r.mismatches);
+    let mismatches = plain.mismatches + with_entities.as_ref().map_or(0, |(r, _)| r.mismatches);
     if a.json {
         #[derive(Serialize)]
         struct Out {
@@ -148,23 +156,112 @@ fn traverse(a: TraverseArgs) -> Result<()> {
             plain: TraverseReport,
             #[serde(skip_serializing_if = "Option::is_none")]
             with_entities: Option<TraverseReport>,
+            #[serde(skip_serializing_if = "Option::is_none")]
+            entity_cost: Option<EntityCost>,
         }
-        print_json(&Out { plain, with_entities })?;
+        let (with_entities, entity_cost) = with_entities.unzip();
+        print_json(&Out {
+            plain,
+            with_entities,
+            entity_cost,
+        })?;
     } else {
         print_report("", &plain);
-        if let Some(r) = &with_entities {
+        if let Some((r, cost)) = &with_entities {
             print_report(&format!("with {} entities: ", a.entities), r);
-            println!(
-                "entity cost: primary {:.1}%, secondary {:.1}% (naadf)",
-                100.0 * (1.0 - r.primary["naadf"] / plain.primary["naadf"]),
-                100.0 * (1.0 - r.secondary["naadf"] / plain.secondary["naadf"])
-            );
+            cost.print();
         }
     }
     if mismatches > 0 {
         bail!("{mismatches} rays differ between methods");
     }
     Ok(())
+}
+
+/// The ray-throughput cost of entities: the same rays traced through the world without and
+/// with them, in interleaved rounds so that both sides of each ratio see the same machine.
+#[derive(Serialize)]
+struct EntityCost {
+    /// Paired rounds per method.
+    rounds: u32,
+    /// Per method, `[primary, secondary, all rays]`: the median over rounds of
+    /// `1 − with/without` (rays per second), as a percentage.
+    median_percent: BTreeMap<&'static str, [f64; 3]>,
+    /// Per method, `[primary, secondary, all rays]`: the `[lowest, highest]` round.
+    range_percent: BTreeMap<&'static str, [[f64; 2]; 3]>,
+}
+
+impl EntityCost {
+    /// Times `naadf` and `nodf` (the grid method is too slow for many rounds) on both worlds.
+    /// Each round traces both ray sets once per world, alternating which world goes first.
+    fn measure(plain: &World, crowded: &World, sets: [&[Ray]; 2], rounds: u32) -> Result<Self> {
+        let rounds = rounds.max(1);
+        let mut median_percent = BTreeMap::new();
+        let mut range_percent = BTreeMap::new();
+        for method in [Method::Naadf, Method::Nodf] {
+            let tracers = [Tracer::new(plain, method)?, Tracer::new(crowded, method)?];
+            for (t, rays) in tracers.iter().zip(sets) {
+                trace_all(t, rays);
+            }
+            // Per set (and for both together): the cost of each round.
+            let mut costs: [Vec<f64>; 3] = Default::default();
+            for round in 0..rounds {
+                // secs[world][set]
+                let mut secs = [[0.0; 2]; 2];
+                let order = if round % 2 == 0 { [0, 1] } else { [1, 0] };
+                for w in order {
+                    for (k, rays) in sets.iter().enumerate() {
+                        let t0 = Instant::now();
+                        trace_all(&tracers[w], rays);
+                        secs[w][k] = t0.elapsed().as_secs_f64();
+                    }
+                }
+                let cost = |plain: f64, crowded: f64| 100.0 * (1.0 - plain / crowded);
+                costs[0].push(cost(secs[0][0], secs[1][0]));
+                costs[1].push(cost(secs[0][1], secs[1][1]));
+                costs[2].push(cost(secs[0][0] + secs[0][1], secs[1][0] + secs[1][1]));
+            }
+            let mut median = [0.0; 3];
+            let mut range = [[0.0; 2]; 3];
+            for (k, c) in costs.iter_mut().enumerate() {
+                c.sort_by(f64::total_cmp);
+                median[k] = super::bench_edit::percentile(c, 0.5);
+                range[k] = [c[0], c[c.len() - 1]];
+            }
+            median_percent.insert(method.name(), median);
+            range_percent.insert(method.name(), range);
+        }
+        Ok(EntityCost {
+            rounds,
+            median_percent,
+            range_percent,
+        })
+    }
+
+    fn print(&self) {
+        for (m, median) in &self.median_percent {
+            let range = self.range_percent[m];
+            let parts: Vec<String> = ["primary", "secondary", "all rays"]
+                .iter()
+                .enumerate()
+                .map(|(k, set)| format!("{set} {:.1}% ({:.1}…{:.1})", median[k], range[k][0], range[k][1]))
+                .collect();
+            println!(
+                "entity cost ({m}, median of {} paired rounds): {}",
+                self.rounds,
+                parts.join(", ")
+            );
+        }
+    }
+}
+
+/// Traces every ray once, in parallel, keeping only a checksum so the work is not elided.
+fn trace_all(tracer: &Tracer, rays: &[Ray]) {
+    let steps: u64 = rays
+        .par_iter()
+        .map(|r| tracer.trace(r).map_or(0, |h| u64::from(h.steps)))
+        .sum();
+    std::hint::black_box(steps);
 }
 
 fn print_report(prefix: &str, r: &TraverseReport) {

@@ -597,6 +597,7 @@ impl World {
                 self.size.chunks(),
                 &self.chunk_entities,
                 &self.entities.instances,
+                &self.entities.bounds,
                 &self.entities.type_voxels,
             )
         })

@@ -174,6 +174,10 @@ pub(crate) struct Entities {
     pub type_starts: Vec<u32>,
     /// The instance buffer: 5-word records.
     pub instances: Vec<u32>,
+    /// Per record of `instances`: the padded world box of its entity. Derived on every
+    /// machine from the records (not mirrored, not in the digest), so that a ray rejects
+    /// most instances without transforming into them.
+    pub bounds: Vec<trace::Bounds>,
     /// Chunks with entities and their fields `(pointer << 8) | count`, ascending chunk.
     pub occupied: Vec<(u32, u32)>,
 }
@@ -317,6 +321,7 @@ impl Entities {
         }
         // Per instance: its record and the chunks it overlaps.
         let mut records: Vec<[u32; RECORD_WORDS]> = Vec::with_capacity(table.instances.len());
+        let mut record_bounds = Vec::with_capacity(table.instances.len());
         let mut pairs: Vec<(u32, u32)> = Vec::new();
         for (k, (&id, pose)) in table.instances.iter().enumerate() {
             let &(voxel_start, msize) = type_of
@@ -324,16 +329,15 @@ impl Entities {
                 .ok_or_else(|| LayoutError(format!("entity {id}: model '{}' has no entity type", pose.model)))?;
             let q = quantise_pose(pose.pos, pose.rot)
                 .ok_or_else(|| LayoutError(format!("entity {id}: position {:?} out of range", pose.pos)))?;
-            records.push(
-                InstanceRecord {
-                    id,
-                    size: msize,
-                    voxel_start,
-                    pos: q.fixed,
-                    inv_rot: q.inv_rot,
-                }
-                .pack(),
-            );
+            let record = InstanceRecord {
+                id,
+                size: msize,
+                voxel_start,
+                pos: q.fixed,
+                inv_rot: q.inv_rot,
+            };
+            records.push(record.pack());
+            record_bounds.push(trace::Bounds::of(&record));
             if let Some((lo, hi)) = chunk_range(size, msize, pose.pos, pose.rot) {
                 for z in lo[2]..=hi[2] {
                     for y in lo[1]..=hi[1] {
@@ -347,6 +351,7 @@ impl Entities {
         // Per chunk, ascending; within a chunk, ascending id (= ascending k).
         pairs.sort_unstable();
         let mut instances: Vec<u32> = Vec::new();
+        let mut bounds = Vec::new();
         let mut occupied = Vec::new();
         let mut lists: FxHashMap<Vec<u32>, u32> = FxHashMap::default();
         for run in pairs.chunk_by(|a, b| a.0 == b.0) {
@@ -370,6 +375,7 @@ impl Entities {
                     }
                     for &k in &list {
                         instances.extend_from_slice(&records[k as usize]);
+                        bounds.push(record_bounds[k as usize]);
                     }
                     lists.insert(list, p);
                     p
@@ -382,6 +388,7 @@ impl Entities {
             type_voxels,
             type_starts,
             instances,
+            bounds,
             occupied,
         })
     }

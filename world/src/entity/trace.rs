@@ -3,8 +3,9 @@
 //! The world loop of a method records the entity fields of the chunks it visits, up to
 //! its world hit or to where the ray leaves the world. Every method visits at least one
 //! cell of every non-free chunk the ray passes (chunks with entities are never free, so no
-//! AADF box covers them), so all methods record the same fields. Then each listed instance
-//! is tested in its own frame with the decoded record: `o' = R⁻¹(o − pos)`, `d' = R⁻¹ d`
+//! AADF box covers them), so all methods record every instance that could be hit before
+//! the world hit (the hierarchy skips full chunks, where the world hit comes first). Then
+//! each listed instance is tested in its own frame with the decoded record: `o' = R⁻¹(o − pos)`, `d' = R⁻¹ d`
 //! (a rotation, so `t` is the world distance), by the same event-model DDA as the grid
 //! method ([`crate::traverse::grid`]) over the entity's dense grid.
 //!
@@ -14,24 +15,28 @@
 //! leaves the world. The nearest hit wins; among entity hits at the same `t`, the lowest
 //! id. An entity hit reports entity-local voxel and normal.
 //!
-//! Instances are tested in the order the ray met their chunks, each first against a ball
-//! around its local-origin corner (no transform needed), so that a near hit makes the
-//! remaining tests cheap.
+//! Each listed instance is first tested against its padded world box ([`Bounds`], derived
+//! on every machine from the records), which needs no transform and rejects most. The
+//! rest are tested in the order the ray enters their boxes, so that the first hit usually
+//! ends the search: once a box is entered after the best hit, so is every later one.
+//! Neither the box test nor the order changes the result, only the work.
 
 use super::ENTITY_SOLID;
 use super::pack::{InstanceRecord, RECORD_WORDS, rotate};
 use crate::traverse::grid::{End, Visit, walk};
 use crate::traverse::{Hit, Ray};
 use crate::world::World;
+use smallvec::SmallVec;
 
-/// The entity fields met by a world loop (each run of equal fields once).
+/// The entity fields met by a world loop (each run of equal fields once). Most rays meet
+/// a few at most, so they stay on the stack.
 #[derive(Default)]
 pub(crate) struct Candidates {
-    fields: Vec<u32>,
+    fields: SmallVec<[u32; 8]>,
 }
 
 impl Candidates {
-    /// Records a chunk's entity field (0 = none).
+    /// Records the entity field of a chunk the ray enters (0 = none).
     #[inline]
     pub fn push(&mut self, field: u32) {
         if field != 0 && self.fields.last() != Some(&field) {
@@ -40,12 +45,68 @@ impl Candidates {
     }
 }
 
-/// The entity buffers a ray test reads.
+/// The padded world box of an instance: every point of its grid lies inside.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Bounds {
+    lo: [f64; 3],
+    hi: [f64; 3],
+}
+
+impl Bounds {
+    /// The box of `rec` as [`EntityView::resolve`] places it: the eight corners of its grid
+    /// carried from the entity frame to the world by the inverse of the decoded rotation,
+    /// padded by 1/64 voxel for rounding.
+    pub fn of(rec: &InstanceRecord) -> Self {
+        let (pos, to_world) = (rec.position(), super::pack::conjugate(rec.inv_rotation()));
+        let mut b = Bounds {
+            lo: [f64::INFINITY; 3],
+            hi: [f64::NEG_INFINITY; 3],
+        };
+        for c in 0..8 {
+            let corner = [0, 1, 2].map(|a| if c >> a & 1 == 1 { f64::from(rec.size[a]) } else { 0.0 });
+            let p = rotate(to_world, corner);
+            for a in 0..3 {
+                b.lo[a] = b.lo[a].min(pos[a] + p[a] - PAD);
+                b.hi[a] = b.hi[a].max(pos[a] + p[a] + PAD);
+            }
+        }
+        b
+    }
+
+    /// The first time in `[t_lo, t_hi]` at which `ray` (with `inv_d` = 1/d per axis) is
+    /// inside the box, if any (the slab test).
+    #[inline]
+    fn entry(&self, ray: &Ray, inv_d: [f64; 3], t_lo: f64, t_hi: f64) -> Option<f64> {
+        let o = ray.origin();
+        let (mut lo, mut hi) = (t_lo, t_hi);
+        for a in 0..3 {
+            if inv_d[a].is_infinite() {
+                // The ray does not move along this axis (or by less than 1e-300 voxels,
+                // far inside the padding).
+                if o[a] < self.lo[a] || o[a] > self.hi[a] {
+                    return None;
+                }
+                continue;
+            }
+            let (t0, t1) = ((self.lo[a] - o[a]) * inv_d[a], (self.hi[a] - o[a]) * inv_d[a]);
+            lo = lo.max(t0.min(t1));
+            hi = hi.min(t0.max(t1));
+        }
+        (lo <= hi).then_some(lo)
+    }
+}
+
+/// Padding of [`Bounds`], in voxels: far above the rounding of the rotation, far below a
+/// voxel, so that the box only ever lets more rays through to the exact test.
+const PAD: f64 = 1.0 / 64.0;
+
+/// The entity buffers a ray test reads, and the instance boxes derived from them.
 #[derive(Clone, Copy)]
 pub(crate) struct EntityView<'a> {
     dims: [u32; 3],
     chunk_entities: &'a [u32],
     instances: &'a [u32],
+    bounds: &'a [Bounds],
     voxels: &'a [u32],
 }
 
@@ -54,6 +115,7 @@ pub(crate) struct OwnedEntities {
     dims: [u32; 3],
     chunk_entities: Vec<u32>,
     instances: Vec<u32>,
+    bounds: Vec<Bounds>,
     voxels: Vec<u32>,
 }
 
@@ -65,6 +127,7 @@ impl OwnedEntities {
             dims: v.dims,
             chunk_entities: v.chunk_entities.to_vec(),
             instances: v.instances.to_vec(),
+            bounds: v.bounds.to_vec(),
             voxels: v.voxels.to_vec(),
         })
     }
@@ -74,17 +137,25 @@ impl OwnedEntities {
             dims: self.dims,
             chunk_entities: &self.chunk_entities,
             instances: &self.instances,
+            bounds: &self.bounds,
             voxels: &self.voxels,
         }
     }
 }
 
 impl<'a> EntityView<'a> {
-    pub fn new(dims: [u32; 3], chunk_entities: &'a [u32], instances: &'a [u32], voxels: &'a [u32]) -> Self {
+    pub fn new(
+        dims: [u32; 3],
+        chunk_entities: &'a [u32],
+        instances: &'a [u32],
+        bounds: &'a [Bounds],
+        voxels: &'a [u32],
+    ) -> Self {
         EntityView {
             dims,
             chunk_entities,
             instances,
+            bounds,
             voxels,
         }
     }
@@ -100,7 +171,26 @@ impl<'a> EntityView<'a> {
     /// `t_end`; else `t_end` is where the ray left the world), or a nearer entity hit among
     /// the instances listed in `fields`. `t_entry` is when the ray entered the world and
     /// `steps` the cells the world loop visited; the entity cells visited are added.
+    #[inline(always)]
     pub fn resolve(
+        &self,
+        ray: &Ray,
+        world: Option<Hit>,
+        t_entry: f64,
+        t_end: f64,
+        steps: u32,
+        fields: &Candidates,
+    ) -> Option<Hit> {
+        // Most rays meet no entity field: they pay no call.
+        if fields.fields.is_empty() {
+            return world;
+        }
+        self.resolve_listed(ray, world, t_entry, t_end, steps, fields)
+    }
+
+    /// [`Self::resolve`] for a ray that met at least one entity field.
+    #[inline(never)]
+    fn resolve_listed(
         &self,
         ray: &Ray,
         world: Option<Hit>,
@@ -109,40 +199,38 @@ impl<'a> EntityView<'a> {
         mut steps: u32,
         fields: &Candidates,
     ) -> Option<Hit> {
-        if fields.fields.is_empty() {
-            return world;
-        }
-        // The listed instances, once each, in the order the ray met them: near hits come
-        // first, and lower the limit that rejects the others cheaply.
-        let mut listed: Vec<(u32, usize)> = Vec::new();
+        // The instances whose box the ray crosses before the world's end, as (time it
+        // enters the box, id, record offset), nearest first: a near hit lowers the limit, and
+        // once a box is entered after the limit, so is every later one.
+        let inv_d = ray.dir().map(|d| 1.0 / d);
+        let mut crossed: SmallVec<[(f64, u32, usize); 8]> = SmallVec::new();
         for &f in &fields.fields {
             let (ptr, count) = ((f >> 8) as usize, (f & 0xFF) as usize);
             for r in ptr..ptr + count {
                 let at = r * RECORD_WORDS;
-                if let Some(w) = self.instances.get(at..at + RECORD_WORDS) {
-                    listed.push((w[4] & 0x3FFF, at));
+                let (Some(w), Some(b)) = (self.instances.get(at..at + RECORD_WORDS), self.bounds.get(r)) else {
+                    continue;
+                };
+                if let Some(t) = b.entry(ray, inv_d, t_entry, t_end) {
+                    crossed.push((t, w[4] & 0x3FFF, at));
                 }
             }
         }
-        if listed.len() > 1 {
-            let mut order: Vec<(u32, usize)> = listed.iter().enumerate().map(|(k, e)| (e.0, k)).collect();
-            order.sort_unstable();
-            order.dedup_by_key(|e| e.0);
-            order.sort_unstable_by_key(|e| e.1);
-            listed = order.iter().map(|&(_, k)| listed[k]).collect();
-        }
+        // An instance listed by several chunks has one box: its copies sort together.
+        crossed.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        crossed.dedup_by_key(|c| c.1);
         let mut best: Option<Hit> = None;
-        for &(id, at) in &listed {
+        for &(t_box, id, at) in &crossed {
             // Entity hits must come before the world's end (ties go to the world) and before
             // the best entity hit so far, or at its time with a lower id.
             let (limit, equal_ok) = match &best {
                 Some(b) => (b.t, b.entity.is_some_and(|e| id < e)),
                 None => (t_end, false),
             };
-            let rec = InstanceRecord::unpack(&self.instances[at..at + RECORD_WORDS]);
-            if !near(ray, &rec, t_entry, limit) {
-                continue;
+            if t_box > limit {
+                break;
             }
+            let rec = InstanceRecord::unpack(&self.instances[at..at + RECORD_WORDS]);
             if let Some(h) = self.test(ray, &rec, t_entry, limit, equal_ok, &mut steps) {
                 best = Some(h);
             }
@@ -197,16 +285,76 @@ impl<'a> EntityView<'a> {
     }
 }
 
-/// Whether the ray passes within `|size|` of the instance's local-origin corner while in
-/// `[t_lo, limit]`: every point of the entity does (it is rotated about that corner), so
-/// `false` rejects the instance without transforming the ray. Conservative by 1e-3 voxel.
-#[inline]
-fn near(ray: &Ray, rec: &InstanceRecord, t_lo: f64, limit: f64) -> bool {
-    let pos = rec.position();
-    let (o, d) = (ray.origin(), ray.dir());
-    let v = [0, 1, 2].map(|a| pos[a] - o[a]);
-    let tc = v[0] * d[0] + v[1] * d[1] + v[2] * d[2];
-    let r = rec.size.iter().map(|&s| f64::from(s * s)).sum::<f64>().sqrt() + 1e-3;
-    let dist2 = v.iter().map(|x| x * x).sum::<f64>() - tc * tc;
-    dist2 <= r * r && tc + r >= t_lo && tc - r <= limit
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::entity::pack::quantise_pose;
+    use crate::raysets::SplitMix64;
+
+    /// Every world point that the ray test maps into an instance's grid (`R⁻¹(p − pos)`
+    /// inside `[0, size]`) lies in the instance's box, for random sizes and rotations.
+    #[test]
+    fn boxes_hold_every_point_the_ray_test_maps_into_the_grid() {
+        let mut rng = SplitMix64(7);
+        for _ in 0..200 {
+            let size = [0; 3].map(|_| 1 + (rng.unit() * 126.0) as u32);
+            let rot = [0; 4].map(|_| rng.unit() - 0.5);
+            let q = quantise_pose([500.0 + rng.unit(), 300.0 + rng.unit(), 700.0 + rng.unit()], rot).unwrap();
+            let rec = InstanceRecord {
+                id: 1,
+                size,
+                voxel_start: 0,
+                pos: q.fixed,
+                inv_rot: q.inv_rot,
+            };
+            let b = Bounds::of(&rec);
+            let (pos, inv) = (rec.position(), rec.inv_rotation());
+            let mut inside = 0;
+            for _ in 0..2000 {
+                // Points near the grid, its faces and corners most of all.
+                let near = [0, 1, 2].map(|a| {
+                    let edge = if rng.unit() < 0.5 { 0.0 } else { f64::from(size[a]) };
+                    let at = if rng.unit() < 0.5 {
+                        edge
+                    } else {
+                        rng.unit() * f64::from(size[a])
+                    };
+                    at + (rng.unit() - 0.5) * 0.1
+                });
+                let w = rotate(crate::entity::pack::conjugate(inv), near);
+                let p = [0, 1, 2].map(|a| pos[a] + w[a]);
+                let local = rotate(inv, [0, 1, 2].map(|a| p[a] - pos[a]));
+                if (0..3).all(|a| local[a] >= 0.0 && local[a] <= f64::from(size[a])) {
+                    inside += 1;
+                    assert!(
+                        (0..3).all(|a| p[a] >= b.lo[a] && p[a] <= b.hi[a]),
+                        "{p:?} outside {b:?}"
+                    );
+                }
+            }
+            assert!(inside > 0, "no sample fell in the grid of size {size:?}");
+        }
+    }
+
+    /// A ray's box entry time lies in the window it is asked for, and a ray that starts in
+    /// the box or moves along no axis but one is handled.
+    #[test]
+    fn box_entry_times() {
+        let b = Bounds {
+            lo: [10.0, 10.0, 10.0],
+            hi: [20.0, 20.0, 20.0],
+        };
+        let entry = |o: [f64; 3], d: [f64; 3], lo: f64, hi: f64| {
+            let ray = Ray::new(o, d).unwrap();
+            b.entry(&ray, ray.dir().map(|v| 1.0 / v), lo, hi)
+        };
+        assert_eq!(entry([0.0, 15.0, 15.0], [1.0, 0.0, 0.0], 0.0, 100.0), Some(10.0));
+        assert_eq!(entry([0.0, 15.0, 15.0], [1.0, 0.0, 0.0], 12.0, 100.0), Some(12.0));
+        assert_eq!(entry([0.0, 15.0, 15.0], [1.0, 0.0, 0.0], 0.0, 9.0), None);
+        assert_eq!(entry([0.0, 25.0, 15.0], [1.0, 0.0, 0.0], 0.0, 100.0), None);
+        // On a face, moving along it.
+        assert_eq!(entry([0.0, 10.0, 20.0], [1.0, 0.0, 0.0], 0.0, 100.0), Some(10.0));
+        assert_eq!(entry([15.0, 15.0, 15.0], [0.0, -1.0, 0.0], 0.0, 100.0), Some(0.0));
+        assert_eq!(entry([25.0, 25.0, 25.0], [1.0, 1.0, 1.0], 0.0, 100.0), None);
+    }
 }

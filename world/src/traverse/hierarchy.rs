@@ -81,57 +81,63 @@ fn world_loop<const DF: bool, const ENT: bool>(
             edge - 1 - (c & (edge - 1))
         }
     };
-    // The chunk whose entity field was read last, and that field: most steps stay in the
-    // chunk of the step before, so the field is read once per chunk visited.
-    let mut last_chunk = usize::MAX;
-    let mut last_field = 0u32;
-    for steps in 1..=MAX_STEPS {
-        let p = cell.map(|v| v as u32);
-        let with_entities = ENT && {
-            let ci = size.chunk_index([p[0] >> 4, p[1] >> 4, p[2] >> 4]);
-            if ci != last_chunk {
-                last_chunk = ci;
-                last_field = world.chunk_entities()[ci];
-                fields.push(last_field);
+    let mut steps = 0u32;
+    // One iteration per chunk visited; the inner loop steps through the chunk's blocks and
+    // voxels (an empty chunk is always left in one step), so chunk-level work, the entity
+    // bookkeeping included, happens once per chunk.
+    loop {
+        let chunk_at = cell.map(|v| (v >> 4) as u32);
+        let ci = size.chunk_index(chunk_at);
+        let chunk = world.chunks()[ci];
+        // Entities live only in mixed chunks and in empty chunks whose AADF is zero (the
+        // cell word 0). A full chunk ends the ray where it is entered, before any entity
+        // voxel inside it.
+        if ENT && (chunk == 0 || cell::state(chunk) == State::Mixed) {
+            fields.push(world.chunk_entities()[ci]);
+        }
+        loop {
+            steps += 1;
+            if steps > MAX_STEPS {
+                return None;
             }
-            last_field != 0
-        };
-        match probe::<DF>(world, with_entities, p, &facing, &to_edge) {
-            Probe::Solid(m) => return Some(ray.hit(cell, t, axis, m, steps)),
-            Probe::Empty(skip) => {
-                let (nt, na, next) = ray.exit(cell, skip);
-                if !(0..3).all(|a| next[a] >= 0 && next[a] < i64::from(dims[a])) {
-                    if ENT {
-                        (span.1, span.2) = (nt, steps);
+            match probe::<DF>(world, chunk, cell.map(|v| v as u32), &facing, &to_edge) {
+                Probe::Solid(m) => return Some(ray.hit(cell, t, axis, m, steps)),
+                Probe::Empty(skip) => {
+                    let (nt, na, next) = ray.exit(cell, skip);
+                    if !(0..3).all(|a| next[a] >= 0 && next[a] < i64::from(dims[a])) {
+                        if ENT {
+                            (span.1, span.2) = (nt, steps);
+                        }
+                        return None;
                     }
-                    return None;
+                    (cell, t, axis) = (next, nt, Some(na));
+                    if (0..3).any(|a| (next[a] >> 4) as u32 != chunk_at[a]) {
+                        break;
+                    }
                 }
-                (cell, t, axis) = (next, nt, Some(na));
             }
         }
     }
-    None
 }
 
-/// Looks up voxel `p`. An empty chunk with entities (`with_entities`) skips only to its own
-/// edge, whatever its cell holds (it must hold a zero AADF anyway).
+/// Looks up voxel `p` in its chunk's cell `chunk`. An empty chunk with entities skips only
+/// to its own edge: it holds a zero AADF (the safety invariant, checked when a world is
+/// loaded).
 #[inline(always)]
 fn probe<const DF: bool>(
     world: &World,
-    with_entities: bool,
+    chunk: u32,
     p: [u32; 3],
     facing: &[usize; 3],
     to_edge: &impl Fn(i64, usize, i64) -> i64,
 ) -> Probe {
     let edges = |edge: i64| -> [i64; 3] { std::array::from_fn(|a| to_edge(i64::from(p[a]), a, edge)) };
-    let size = world.size();
-    let chunk = world.chunks()[size.chunk_index([p[0] >> 4, p[1] >> 4, p[2] >> 4])];
     match cell::state(chunk) {
         State::Full => Probe::Solid(cell::material(chunk)),
         State::Empty => {
             let e = edges(16);
             Probe::Empty(std::array::from_fn(|a| {
-                if DF && !with_entities {
+                if DF {
                     e[a] + 16 * i64::from(Aadf::field(chunk, facing[a], CHUNK_FIELD_BITS))
                 } else {
                     e[a]
