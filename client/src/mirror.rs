@@ -104,7 +104,11 @@ pub struct Mirror {
 
 impl Mirror {
     /// A mirror starting from `cache` (a world from an earlier session, or none).
-    pub fn new(cache: Option<World>) -> Self {
+    pub fn new(mut cache: Option<World>) -> Self {
+        // A cache may be a clone, sized to the byte: give it room before deltas arrive.
+        if let Some(w) = &mut cache {
+            w.reserve_headroom();
+        }
         Self {
             world: cache,
             ..Self::default()

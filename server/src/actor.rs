@@ -24,6 +24,15 @@ use tonic::Status;
 /// one job, and growth takes at most about half of one core under a steady edit stream.
 const GROWTH_PAUSE: std::time::Duration = std::time::Duration::from_millis(400);
 
+/// Gives the calling thread the lowest priority of its scheduling class (nice 19 on Linux),
+/// so that it runs on what edits, acknowledgements and streaming leave, yet is never
+/// starved outright (the actor sometimes waits for it).
+fn run_in_background() {
+    if let Err(e) = thread_priority::set_current_thread_priority(thread_priority::ThreadPriority::Min) {
+        tracing::debug!("background growth keeps its priority: {e:?}");
+    }
+}
+
 /// What an edit request asks for.
 #[derive(Debug)]
 pub enum Action {
@@ -215,11 +224,19 @@ impl Actor {
         if let Some(mut task) = self.world.start_growth() {
             let notify = notify.clone();
             self.growing = Some(std::thread::spawn(move || {
-                // One core at most: the other serves edits and clients meanwhile.
-                let pool = rayon::ThreadPoolBuilder::new().num_threads(1).build();
+                // One core at most, and only what edits, acknowledgements and streaming
+                // leave idle: growth is never what a client waits for.
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(1)
+                    .thread_name(|_| "naadf-growth".into())
+                    .start_handler(|_| run_in_background())
+                    .build();
                 match pool {
                     Ok(pool) => pool.install(|| task.run()),
-                    Err(_) => task.run(),
+                    Err(_) => {
+                        run_in_background();
+                        task.run()
+                    }
                 }
                 // Edits that arrive meanwhile queue seeds for one coalesced next job.
                 std::thread::sleep(GROWTH_PAUSE);

@@ -102,13 +102,14 @@ impl GroupMap {
         }
     }
 
-    /// Keeps the map at most half full (tombstones count), rehashing in slot order.
-    fn reserve_one(&mut self) {
-        if (self.used + 1) * 2 <= self.slots.len() {
+    /// Keeps room for `n` more entries with the map at most half full (tombstones count);
+    /// when it must, rehashes in slot order into a map at most a quarter full.
+    fn reserve(&mut self, n: usize) {
+        if (self.used + n) * 2 <= self.slots.len() {
             return;
         }
         let mut bits = self.bits;
-        while (self.live + 1) * 4 > 1 << bits {
+        while (self.live + n) * 4 > 1 << bits {
             bits += 1;
         }
         let old = std::mem::replace(self, Self::with_bits(bits));
@@ -152,7 +153,7 @@ impl GroupStore {
     /// storing it in the lowest free slot (else appending) if it is new. Returns the group's
     /// word pointer.
     pub fn acquire(&mut self, voxels: &mut Vec<u32>, hash: u32, words: &[u32; GROUP_WORDS]) -> Result<u32, WorldError> {
-        self.map.reserve_one();
+        self.map.reserve(1);
         let vacant = match self.map.find(hash, words, voxels) {
             Ok(g) => {
                 self.refs[g as usize] += 1;
@@ -205,6 +206,9 @@ impl GroupStore {
             refs: vec![0; groups],
             ..Self::default()
         };
+        // Sized once, with room for as many new groups again: a rehash right after a load
+        // would stall the first edit (and every mirror of the same world at once).
+        s.map.reserve(groups);
         for p in block_ptrs {
             s.refs[p as usize / GROUP_WORDS] += 1;
         }
@@ -215,13 +219,19 @@ impl GroupStore {
             }
             let hash = stored_group_hash(voxels, g * GROUP_WORDS);
             let words: &[u32; GROUP_WORDS] = voxels[g * GROUP_WORDS..][..GROUP_WORDS].try_into().expect("32 words");
-            s.map.reserve_one();
+            s.map.reserve(1);
             // An identical earlier group keeps the map entry; this one stays unshared.
             if let Err(Some(at)) = s.map.find(hash, words, voxels) {
                 s.map.insert_at(at, hash, g as u32);
             }
         }
         s
+    }
+
+    /// Makes room in the dedup map for as many new groups as there are live ones, so that
+    /// the edits after a build do not pay for a rehash.
+    pub fn reserve_headroom(&mut self) {
+        self.map.reserve(self.map.live);
     }
 
     /// Live references to the group at word pointer `ptr`.
@@ -270,6 +280,43 @@ mod tests {
         assert_eq!(s.acquire(&mut voxels, hb, &b).unwrap(), pb);
         let (c, hc) = group(3);
         assert_eq!(s.acquire(&mut voxels, hc, &c).unwrap(), 0, "lowest free slot first");
+    }
+
+    /// A store rebuilt from a loaded world (or given headroom after a build) takes as many
+    /// new groups again without rehashing: a rehash right after a load would stall the
+    /// first edits of every mirror of that world at once.
+    #[test]
+    fn loaded_and_built_stores_have_room_to_grow() {
+        let mut voxels = Vec::new();
+        let mut ptrs = Vec::new();
+        for k in 0..5000u32 {
+            let (mut w, _) = group(k);
+            w[0] = cell::voxel(1 + (k % 7) as u16).into();
+            w[1] = k | 0x8000;
+            ptrs.push(voxels.len() as u32);
+            voxels.extend_from_slice(&w);
+        }
+        let room = |s: &GroupStore| (s.map.slots.len() / 2).saturating_sub(s.map.used);
+        let loaded = GroupStore::rebuild(&voxels, ptrs.iter().copied());
+        assert!(
+            room(&loaded) >= loaded.live_groups(),
+            "{} free for {}",
+            room(&loaded),
+            loaded.live_groups()
+        );
+        let mut built = GroupStore::default();
+        let mut out = Vec::new();
+        for g in voxels.chunks(GROUP_WORDS) {
+            let w: &[u32; GROUP_WORDS] = g.try_into().unwrap();
+            built.acquire(&mut out, stored_group_hash(g, 0), w).unwrap();
+        }
+        built.reserve_headroom();
+        assert!(
+            room(&built) >= built.live_groups(),
+            "{} free for {}",
+            room(&built),
+            built.live_groups()
+        );
     }
 
     #[test]

@@ -87,6 +87,9 @@ pub fn page_hash(id: BufferId, page: usize, bytes: &[u8]) -> u64 {
     h.digest()
 }
 
+/// Above this many dirty pages, an update rehashes them on the thread pool.
+const PARALLEL_PAGES: usize = 16;
+
 /// The contribution of a whole buffer (all its pages, in parallel).
 ///
 /// ```
@@ -154,10 +157,15 @@ impl PagedDigest {
         }
         todo.sort_unstable();
         todo.dedup();
-        let hashes: Vec<u64> = todo
-            .par_iter()
-            .map(|&k| page_hash(id, k, &bytes[k * PAGE_BYTES..((k + 1) * PAGE_BYTES).min(bytes.len())]))
-            .collect();
+        let hash = |&k: &usize| page_hash(id, k, &bytes[k * PAGE_BYTES..((k + 1) * PAGE_BYTES).min(bytes.len())]);
+        // A typical edit dirties a few pages: hashing them here (tens of microseconds) beats
+        // handing them to the thread pool, which from outside the pool means two thread
+        // wake-ups, and under load a wait behind other work.
+        let hashes: Vec<u64> = if todo.len() > PARALLEL_PAGES {
+            todo.par_iter().map(hash).collect()
+        } else {
+            todo.iter().map(hash).collect()
+        };
         for (&k, h) in todo.iter().zip(hashes) {
             if k < kept {
                 self.total ^= pages[k];

@@ -105,6 +105,7 @@ impl World {
             growth: Growth::default(),
         };
         build::plan_all(source, progress, |i, plan| w.place_chunk(i, plan))?;
+        w.reserve_headroom();
         w.rebuild_chunk_aadf();
         Ok(w)
     }
@@ -315,8 +316,22 @@ impl World {
                 w.size.chunk_coords(i)
             ));
         }
+        w.reserve_headroom();
         w.refresh_digest();
         Ok(w)
+    }
+
+    /// Makes room for the block and voxel buffers to grow by a quarter, and for the dedup
+    /// map to take as many new groups as are live, without reallocating.
+    ///
+    /// A world fresh from a file, a snapshot or a `clone` holds exactly what it needs, so
+    /// its first growing edit would copy whole buffers (and rehash the map); every mirror
+    /// of the same world would pay that at the same version, together. Loading, joining
+    /// and [`World::build`] call this; so should whoever keeps a cloned world to edit.
+    pub fn reserve_headroom(&mut self) {
+        self.blocks.reserve(self.blocks.len() / 4);
+        self.voxels.reserve(self.voxels.len() / 4);
+        self.groups.reserve_headroom();
     }
 
     /// The stored parts (a copy of every buffer and table).
