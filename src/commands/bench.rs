@@ -60,7 +60,7 @@ pub struct TraverseArgs {
     #[arg(long, default_value = "surface", value_parser = ["surface", "air"])]
     placement: String,
     /// Paired rounds (without, then with entities, alternating which goes first) behind
-    /// the entity cost, per traversal method and ray set.
+    /// the entity cost, per traversal method; each round traces both ray sets.
     #[arg(long, default_value_t = 15)]
     rounds: u32,
     /// Print one JSON object.

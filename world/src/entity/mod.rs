@@ -204,16 +204,7 @@ pub fn type_grid(model: &Model) -> Vec<u32> {
 /// The inclusive chunk range an instance of `size` at `pos`/`rot` overlaps, clipped to the
 /// world; `None` if its AABB misses the world.
 pub fn chunk_range(world: WorldSize, size: [u32; 3], pos: [f64; 3], rot: [f64; 4]) -> Option<([u32; 3], [u32; 3])> {
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    for c in 0..8 {
-        let corner = [0, 1, 2].map(|a| if c >> a & 1 == 1 { f64::from(size[a]) } else { 0.0 });
-        let p = rotate(rot, corner);
-        for a in 0..3 {
-            lo[a] = lo[a].min(p[a] + pos[a]);
-            hi[a] = hi[a].max(p[a] + pos[a]);
-        }
-    }
+    let (lo, hi) = world_box(size, pos, rot);
     let dims = world.chunks();
     let mut out = ([0u32; 3], [0u32; 3]);
     for a in 0..3 {
@@ -226,6 +217,22 @@ pub fn chunk_range(world: WorldSize, size: [u32; 3], pos: [f64; 3], rot: [f64; 4
         out.1[a] = a1.min(f64::from(dims[a] - 1)) as u32;
     }
     Some(out)
+}
+
+/// The world box `(lo, hi)` of a grid of `size` whose origin corner is at `pos`, turned by
+/// the rotation `rot` (entity → world): the bounds of its eight corners.
+pub(crate) fn world_box(size: [u32; 3], pos: [f64; 3], rot: [f64; 4]) -> ([f64; 3], [f64; 3]) {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for c in 0..8 {
+        let corner = [0, 1, 2].map(|a| if c >> a & 1 == 1 { f64::from(size[a]) } else { 0.0 });
+        let p = rotate(rot, corner);
+        for a in 0..3 {
+            lo[a] = lo[a].min(p[a] + pos[a]);
+            hi[a] = hi[a].max(p[a] + pos[a]);
+        }
+    }
+    (lo, hi)
 }
 
 /// Why a set of entities cannot be laid out.

@@ -5,9 +5,10 @@
 //! cell of every non-free chunk the ray passes (chunks with entities are never free, so no
 //! AADF box covers them), so all methods record every instance that could be hit before
 //! the world hit (the hierarchy skips full chunks, where the world hit comes first). Then
-//! each listed instance is tested in its own frame with the decoded record: `o' = R⁻¹(o − pos)`, `d' = R⁻¹ d`
-//! (a rotation, so `t` is the world distance), by the same event-model DDA as the grid
-//! method ([`crate::traverse::grid`]) over the entity's dense grid.
+//! each listed instance is tested in its own frame with the decoded record:
+//! `o' = R⁻¹(o − pos)`, `d' = R⁻¹ d` (a rotation, so `t` is the world distance), by the
+//! same event-model DDA as the grid method ([`crate::traverse::grid`]) over the entity's
+//! dense grid.
 //!
 //! An entity hit counts when the entity voxel is entered inside the world: at `t` no
 //! earlier than where the ray enters the world (parts of an entity outside the world are
@@ -15,9 +16,9 @@
 //! leaves the world. The nearest hit wins; among entity hits at the same `t`, the lowest
 //! id. An entity hit reports entity-local voxel and normal.
 //!
-//! Each listed instance is first tested against its padded world box ([`Bounds`], derived
-//! on every machine from the records), which needs no transform and rejects most. The
-//! rest are tested in the order the ray enters their boxes, so that the first hit usually
+//! Each listed instance is first tested against its padded world box and oriented box
+//! ([`Bounds`], derived on every machine from the records), which needs no transform and
+//! rejects most. The rest are tested in the order the ray enters their boxes, so that the first hit usually
 //! ends the search: once a box is entered after the best hit, so is every later one.
 //! Neither the box test nor the order changes the result, only the work.
 
@@ -64,24 +65,15 @@ impl Bounds {
     /// rotation, padded by [`PAD`] for rounding.
     pub fn of(rec: &InstanceRecord) -> Self {
         let (pos, inv) = (rec.position(), rec.inv_rotation());
-        let to_world = super::pack::conjugate(inv);
+        let (lo, hi) = super::world_box(rec.size, pos, super::pack::conjugate(inv));
         let columns = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]].map(|e| rotate(inv, e));
-        let mut b = Bounds {
-            lo: [f64::INFINITY; 3],
-            hi: [f64::NEG_INFINITY; 3],
+        Bounds {
+            lo: lo.map(|v| v - PAD),
+            hi: hi.map(|v| v + PAD),
             pos,
             to_local: [0, 1, 2].map(|r| columns.map(|c| c[r])),
             size: rec.size.map(f64::from),
-        };
-        for c in 0..8 {
-            let corner = [0, 1, 2].map(|a| if c >> a & 1 == 1 { b.size[a] } else { 0.0 });
-            let p = rotate(to_world, corner);
-            for a in 0..3 {
-                b.lo[a] = b.lo[a].min(pos[a] + p[a] - PAD);
-                b.hi[a] = b.hi[a].max(pos[a] + p[a] + PAD);
-            }
         }
-        b
     }
 
     /// The first time in `[t_lo, t_hi]` at which `ray` (with `inv_d` = 1/d per axis) is
