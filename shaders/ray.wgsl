@@ -1,7 +1,7 @@
 // Rays and the event model every traversal shares (world/src/traverse/ray.rs, in f32).
 //
 // A ray keeps its origin split into an integer part `o_int` and a fraction `o_frac` in [0, 1)
-// (NAADF-REFERENCE §3.1), so precision does not depend on where in the world it starts.
+// (docs/NAADF.md §9), so precision does not depend on where in the world it starts.
 // The direction `d` is kept exactly as given (not renormalised, which would move the line
 // by an f32 rounding): times are in units of |d| and the ray's `len` converts them to
 // distances. Every decision compares plane-crossing times from the one function `t_at`,
@@ -230,11 +230,9 @@ struct Hit {
     t: f32,
     material: u32,
     steps: u32,
-    // Entity id, or NO_ENTITY.
+    // Entity id, or NO_ENTITY (generated in the prelude).
     entity: u32,
 }
-
-const NO_ENTITY: u32 = 0x3FFFu;
 
 fn no_hit(steps: u32) -> Hit {
     return Hit(false, false, vec3<i32>(0), NO_AXIS, vec3<i32>(0), T_INF, 0u, steps, NO_ENTITY);

@@ -1,13 +1,13 @@
 // Pass: render one frame, one invocation per pixel (docs/RENDERING.md).
 //
-// Camera rays follow the camera contract (BRIEF §8): the host passes the camera position
+// Camera rays follow the camera contract (docs/CAMERA.md): the host passes the camera position
 // split into integer and fraction, `forward`, and `right`/`up` already scaled by
 // a·W/H and a (a = tan(fov_y/2)), so that dir = forward + sx·right + sy·up with
 // sx = 2(px + 0.5)/W − 1 and sy = 1 − 2(py + 0.5)/H.
 //
-// Modes: 0 albedo, 1 material, 2 normal, 3 steps. Every pixel becomes one RGBA8 word;
-// with bit 0 of `flags`, the pixel's first-hit record (the reference's `firstHitData`)
-// is written to `gbuffer` as well.
+// Modes (MODE_*, generated in the prelude from the client's `Mode`): albedo, material,
+// normal, steps. Every pixel becomes one RGBA8 word; with bit 0 of `flags`, the pixel's
+// first-hit record (the reference's `firstHitData`) is written to `gbuffer` as well.
 
 struct View {
     cam_oi: vec3<i32>,
@@ -28,12 +28,7 @@ struct View {
 @group(1) @binding(1) var<storage, read_write> pixels: array<u32>;
 @group(1) @binding(2) var<storage, read_write> gbuffer: array<vec4<u32>>;
 
-const MODE_ALBEDO: u32 = 0u;
-const MODE_MATERIAL: u32 = 1u;
-const MODE_NORMAL: u32 = 2u;
-const MODE_STEPS: u32 = 3u;
-
-// Hit-plane sentinels of the first-hit record (NAADF-REFERENCE §3.3).
+// Hit-plane sentinels of the first-hit record (docs/NAADF.md §10).
 const HIT_NOTHING: u32 = 0x1FFFFu;
 const HIT_UNDEFINED: u32 = 0u;
 // Mirror segments a path may follow (the primary segment included).
@@ -41,7 +36,7 @@ const MAX_SEGMENTS: u32 = 4u;
 const SUN_COLOR: vec3<f32> = vec3<f32>(1.0, 0.96, 0.88);
 // Cosine of the sun disc's angular radius (about 1.8°).
 const SUN_DISC_COS: f32 = 0.9995;
-// Offset of secondary-ray origins along the surface normal (NAADF-REFERENCE §8).
+// Offset of secondary-ray origins along the surface normal (docs/NAADF.md §12).
 const SURFACE_OFFSET: f32 = 0.01;
 
 fn srgb(c: vec3<f32>) -> vec3<f32> {

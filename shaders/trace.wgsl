@@ -1,5 +1,5 @@
 // One full trace: the world loop (traverse.wgsl or grid.wgsl), then the entities of the
-// chunks it visited (NAADF-REFERENCE §3.4): the GPU twin of world/src/entity/trace.rs.
+// chunks it visited (docs/NAADF.md §11): the GPU twin of world/src/entity/trace.rs.
 //
 // The world loop hands every chunk entity field it meets to `record_field`. Fields are
 // kept in a small list; when it fills up, its instances are tested at once, which gives
@@ -23,8 +23,6 @@ struct WorldTrace {
 }
 
 const MAX_FIELDS: u32 = 16u;
-const RECORD_WORDS: u32 = 5u;
-const ENTITY_SOLID: u32 = 0x80000000u;
 
 var<private> fields: array<u32, MAX_FIELDS>;
 var<private> field_count: u32;
@@ -114,7 +112,7 @@ fn test_instance(r: Ray, at: u32, t_lo: f32) {
     if !entry.ok {
         return;
     }
-    let base = (dw >> 12u) * 64u;
+    let base = (dw >> 12u) * TYPE_ALIGN;
     var s = dda_start(local, entry);
     loop {
         entity_steps += 1u;
@@ -125,7 +123,7 @@ fn test_instance(r: Ray, at: u32, t_lo: f32) {
             let c = vec3<u32>(s.cell);
             let v = entity_type_word(base + c.x + size.x * (c.y + size.y * c.z));
             if (v & ENTITY_SOLID) != 0u {
-                var h = make_hit(local, s.cell, s.t, s.axis, v & 0x7FFFu, 0u);
+                var h = make_hit(local, s.cell, s.t, s.axis, v & MAX_MATERIAL, 0u);
                 h.entity = id;
                 best_entity = h;
                 best_rotation = q;

@@ -1,4 +1,4 @@
-// The world loop over the chunk → block → voxel hierarchy (NAADF-REFERENCE §3.2), with
+// The world loop over the chunk → block → voxel hierarchy (docs/NAADF.md §9), with
 // AADF jumps (`USE_AADF`, the `naadf` method) or without (`nodf`): the GPU twin of
 // world/src/traverse/hierarchy.rs. Chunks with entities skip only to their own edge and
 // have their entity fields recorded for the entity pass.
@@ -42,7 +42,7 @@ fn world_loop(r: Ray) -> WorldTrace {
         var skip = vec3<i32>(0);
         let cs = cell_state(chunk);
         if cs == STATE_FULL {
-            return WorldTrace(make_hit(r, cell, t, axis, chunk & 0x7FFFu, steps), END_HIT, entry.t, t);
+            return WorldTrace(make_hit(r, cell, t, axis, chunk & MAX_MATERIAL, steps), END_HIT, entry.t, t);
         } else if cs == STATE_EMPTY {
             for (var a = 0u; a < 3u; a++) {
                 skip[a] = to_edge(p[a], neg[a], 16u);
@@ -54,7 +54,7 @@ fn world_loop(r: Ray) -> WorldTrace {
             let block = block_word((chunk & PAYLOAD) + index4((p >> vec3<u32>(2u)) & vec3<u32>(3u)));
             let bs = cell_state(block);
             if bs == STATE_FULL {
-                return WorldTrace(make_hit(r, cell, t, axis, block & 0x7FFFu, steps), END_HIT, entry.t, t);
+                return WorldTrace(make_hit(r, cell, t, axis, block & MAX_MATERIAL, steps), END_HIT, entry.t, t);
             } else if bs == STATE_EMPTY {
                 for (var a = 0u; a < 3u; a++) {
                     skip[a] = to_edge(p[a], neg[a], 4u);
@@ -65,7 +65,7 @@ fn world_loop(r: Ray) -> WorldTrace {
             } else {
                 let v = group_voxel(block & PAYLOAD, index4(p & vec3<u32>(3u)));
                 if (v & VOXEL_SOLID) != 0u {
-                    return WorldTrace(make_hit(r, cell, t, axis, v & 0x7FFFu, steps), END_HIT, entry.t, t);
+                    return WorldTrace(make_hit(r, cell, t, axis, v & MAX_MATERIAL, steps), END_HIT, entry.t, t);
                 }
                 if USE_AADF {
                     for (var a = 0u; a < 3u; a++) {

@@ -4,7 +4,7 @@
 
 mod commands;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 use std::process::ExitCode;
 
 /// Streaming voxel worlds built on nested axis-aligned distance fields.
@@ -15,6 +15,7 @@ struct Cli {
     command: Command,
 }
 
+/// The subcommands, in the order `naadf --help` lists them: by use (see [`GROUPS`]).
 #[derive(Subcommand)]
 enum Command {
     /// Build a world file from a MagicaVoxel .vox scene.
@@ -56,8 +57,61 @@ enum Command {
     Bench(commands::bench::Bench),
 }
 
+/// How `naadf --help` groups the subcommands: a heading and the commands under it.
+/// `every_command_is_in_one_group` keeps it complete.
+const GROUPS: &[(&str, &[&str])] = &[
+    ("World files", &["import", "generate", "info", "export", "apply", "raycast"]),
+    ("Service", &["serve", "mirror", "edit", "status", "export-log"]),
+    ("Rendering", &["render", "render-node", "frame", "view"]),
+    ("Replay", &["replay", "record"]),
+    ("Benchmarks", &["bench"]),
+];
+
+impl Command {
+    /// Whether the command may open a GPU device (headless or in a window).
+    fn uses_gpu(&self) -> bool {
+        use commands::bench::Bench;
+        matches!(
+            self,
+            Command::Render(_)
+                | Command::RenderNode(_)
+                | Command::View(_)
+                | Command::Replay(_)
+                | Command::Bench(Bench::Gpu(_) | Bench::Frames(_))
+        )
+    }
+}
+
+/// The command line, with the subcommands listed under the headings of [`GROUPS`] instead of
+/// clap's one flat list; each line's text is the subcommand's own `about`.
+fn command_line() -> clap::Command {
+    let cmd = Cli::command();
+    let width = cmd.get_subcommands().map(|c| c.get_name().len()).max().unwrap_or(0);
+    let mut listing = String::new();
+    for (heading, names) in GROUPS {
+        listing.push_str(&format!("{heading}:\n"));
+        for name in *names {
+            let about = cmd
+                .find_subcommand(name)
+                .and_then(|c| c.get_about())
+                .map(ToString::to_string)
+                .unwrap_or_default();
+            listing.push_str(&format!("  {name:width$}  {about}\n"));
+        }
+        listing.push('\n');
+    }
+    cmd.help_template(format!(
+        "{{about-with-newline}}\n{{usage-heading}} {{usage}}\n\n{listing}Options:\n{{options}}{{after-help}}"
+    ))
+    .after_help("`naadf help COMMAND` or `naadf COMMAND --help` shows a command's options.")
+}
+
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match Cli::from_arg_matches(&command_line().get_matches()) {
+        Ok(cli) => cli,
+        Err(e) => e.exit(),
+    };
+    let _runtime_dir = cli.command.uses_gpu().then(commands::quiet_headless_gpu).flatten();
     // Long-running network commands report what they do; one-shot tools stay quiet.
     commands::init_logging(match cli.command {
         Command::Serve(_) | Command::Mirror(_) => "info",
@@ -84,4 +138,26 @@ fn main() -> ExitCode {
         Command::Bench(b) => commands::bench::run(b),
     };
     commands::finish(result)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every subcommand appears under exactly one heading of `naadf --help`, and every name
+    /// there is a subcommand.
+    #[test]
+    fn every_command_is_in_one_group() {
+        let cmd = Cli::command();
+        let mut listed: Vec<&str> = GROUPS.iter().flat_map(|(_, names)| names.iter().copied()).collect();
+        listed.sort_unstable();
+        let mut real: Vec<&str> = cmd.get_subcommands().map(|c| c.get_name()).collect();
+        real.sort_unstable();
+        assert_eq!(listed, real);
+    }
+
+    #[test]
+    fn command_line_is_valid() {
+        command_line().debug_assert();
+    }
 }

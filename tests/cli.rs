@@ -380,9 +380,13 @@ fn raycast_reports_entity_hits() {
 }
 
 /// Whether a GPU adapter (Mesa lavapipe in CI) is usable; prints why not.
+///
+/// The probe runs without `XDG_RUNTIME_DIR`, as on a fresh headless machine, and a render
+/// that succeeds must print nothing that looks like an error (the graphics stack complains
+/// about that variable unless `naadf` gives it a directory).
 fn have_gpu(world: &str, dir: &Path) -> bool {
-    let out = support::naadf(
-        &[
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_naadf"))
+        .args([
             "render",
             "--world",
             world,
@@ -392,15 +396,17 @@ fn have_gpu(world: &str, dir: &Path) -> bool {
             "8x8",
             "-o",
             &p(dir, "probe.png"),
-        ],
-        None,
-    );
+        ])
+        .env_remove("XDG_RUNTIME_DIR")
+        .output()
+        .unwrap();
     let err = String::from_utf8_lossy(&out.stderr);
     if !out.status.success() && err.contains("no usable GPU adapter") {
         eprintln!("skipping the GPU commands: {err}");
         return false;
     }
     assert!(out.status.success(), "render failed: {err}");
+    assert!(!err.contains("error"), "a successful render printed an error: {err}");
     true
 }
 
@@ -517,4 +523,144 @@ fn bench_gpu_measures_every_variant_against_the_cpu() {
     for m in ["naadf", "nodf", "grid"] {
         assert!(v["mismatches"][m].as_u64().unwrap() <= 1, "{m}: {v}");
     }
+}
+
+/// Keeps `docs/CLI.md` equal to the real `--help` output of `naadf` and of every command and
+/// subcommand (`bench` subcommands included), found by walking the help output itself.
+///
+/// Everything after the `BEGIN GENERATED` marker of `docs/CLI.md` is generated here; the
+/// hand-written part above it is kept as it is. The test fails when the file is stale. Run
+/// it with `NAADF_BLESS=1` to rewrite the file instead:
+/// `NAADF_BLESS=1 cargo test --test cli cli_reference_is_up_to_date`.
+///
+/// The binary runs with an empty environment, so that variables such as `NAADF_SERVER`
+/// (whose value clap would print) or `COLUMNS` cannot change the text.
+#[test]
+fn cli_reference_is_up_to_date() {
+    const BEGIN: &str = "<!-- BEGIN GENERATED";
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/CLI.md");
+    let generated = cli_reference();
+    let bless = std::env::var_os("NAADF_BLESS").is_some_and(|v| !v.is_empty() && v != "0");
+    let current = std::fs::read_to_string(&path).unwrap_or_default();
+    let head = match current.find(BEGIN) {
+        Some(at) => current[..at].to_string(),
+        None => "# naadf command-line reference\n\n".to_string(),
+    };
+    let want = format!("{head}{generated}");
+    if bless {
+        if current != want {
+            std::fs::write(&path, &want).unwrap();
+            eprintln!("rewrote {}", path.display());
+        }
+        return;
+    }
+    assert!(
+        current.contains(BEGIN),
+        "{} lacks its generated part; run NAADF_BLESS=1 cargo test --test cli cli_reference_is_up_to_date",
+        path.display()
+    );
+    if current != want {
+        let diff = current
+            .lines()
+            .zip(want.lines())
+            .position(|(a, b)| a != b)
+            .unwrap_or_else(|| current.lines().count().min(want.lines().count()));
+        panic!(
+            "{} is stale (first difference at line {}: {:?} should be {:?}); \
+             run NAADF_BLESS=1 cargo test --test cli cli_reference_is_up_to_date",
+            path.display(),
+            diff + 1,
+            current.lines().nth(diff).unwrap_or("<end of file>"),
+            want.lines().nth(diff).unwrap_or("<end of file>"),
+        );
+    }
+}
+
+/// `naadf <path> --help`, run with an empty environment; `None` if it fails.
+fn help_text(path: &[String]) -> Option<String> {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_naadf"))
+        .args(path)
+        .arg("--help")
+        .env_clear()
+        .stdin(std::process::Stdio::null())
+        .output()
+        .expect("spawn naadf");
+    if !out.status.success() {
+        return None;
+    }
+    let text = String::from_utf8(out.stdout).expect("help is UTF-8");
+    let lines: Vec<&str> = text.lines().map(str::trim_end).collect();
+    Some(lines.join("\n").trim_end().to_string())
+}
+
+/// The subcommands a help text lists, with their one-line descriptions, in order: every
+/// `  name  description` line under any heading (so grouped command lists work too), kept
+/// only if `naadf <path> name --help` succeeds. `help` itself is left out.
+fn listed_subcommands(path: &[String], help: &str) -> Vec<(String, String)> {
+    let mut found: Vec<(String, String)> = Vec::new();
+    for line in help.lines() {
+        let Some(rest) = line.strip_prefix("  ") else { continue };
+        let name: String = rest
+            .chars()
+            .take_while(|c| c.is_ascii_alphanumeric() || *c == '-' || *c == '_')
+            .collect();
+        let after = &rest[name.len()..];
+        if name.is_empty()
+            || !name.starts_with(|c: char| c.is_ascii_lowercase())
+            || name == "help"
+            || !(after.is_empty() || after.starts_with("  "))
+            || found.iter().any(|(n, _)| *n == name)
+        {
+            continue;
+        }
+        let mut sub = path.to_vec();
+        sub.push(name.clone());
+        if help_text(&sub).is_some() {
+            found.push((name, after.trim().to_string()));
+        }
+    }
+    found
+}
+
+/// The generated part of `docs/CLI.md`: an index, then each command's `--help`, depth first.
+fn cli_reference() -> String {
+    fn walk(path: Vec<String>, about: String, out: &mut Vec<(Vec<String>, String, String)>) {
+        let help = help_text(&path).unwrap_or_else(|| panic!("naadf {} --help failed", path.join(" ")));
+        let subs = listed_subcommands(&path, &help);
+        out.push((path.clone(), about, help));
+        for (name, about) in subs {
+            let mut sub = path.clone();
+            sub.push(name);
+            walk(sub, about, out);
+        }
+    }
+    let mut commands = Vec::new();
+    walk(Vec::new(), String::new(), &mut commands);
+    let title = |p: &[String]| {
+        if p.is_empty() {
+            "naadf".to_string()
+        } else {
+            format!("naadf {}", p.join(" "))
+        }
+    };
+    let mut s = String::from(
+        "<!-- BEGIN GENERATED by `cargo test --test cli cli_reference_is_up_to_date` from `naadf … --help`; \
+         do not edit below this line, rewrite with NAADF_BLESS=1 -->\n\n## Commands\n\n",
+    );
+    for (path, about, _) in &commands {
+        let t = title(path);
+        let anchor = t.replace(' ', "-");
+        let indent = "  ".repeat(path.len().saturating_sub(1));
+        if path.is_empty() {
+            s += &format!("- [`{t}`](#{anchor})\n");
+        } else if about.is_empty() {
+            s += &format!("{indent}- [`{t}`](#{anchor})\n");
+        } else {
+            s += &format!("{indent}- [`{t}`](#{anchor}): {about}\n");
+        }
+    }
+    for (path, _, help) in &commands {
+        s += &format!("\n## {}\n\n```text\n{help}\n```\n", title(path));
+    }
+    s
 }

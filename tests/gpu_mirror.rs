@@ -6,9 +6,7 @@
 mod support;
 
 use naadf_client::gpu::{Gpu, GpuWorld};
-use naadf_client::{Ended, Mirror, MirrorError, connect};
-use naadf_proto::requests::{entity_pose, entity_spawn};
-use naadf_proto::v1::{EditRequest, MoveEntitiesRequest, SpawnEntitiesRequest};
+use naadf_client::{Client, Ended, Error, Pose, Spawn};
 use std::ops::ControlFlow;
 use std::time::Duration;
 use support::{random_op, serve_world, start_world};
@@ -30,59 +28,52 @@ async fn gpu_world_synced_from_a_server_stream_equals_the_mirror() {
     let world = start_world(dir.path());
     let server = serve_world(dir.path(), &world, &[], &[]);
 
-    let mut viewer = connect(&server.url, Some("viewer"), None).await.unwrap();
-    let mut mirror = Mirror::new(None);
-    let mut stream = viewer.join(mirror.join_request()).await.unwrap().into_inner();
+    let viewer = Client::connect(&server.url, Some("viewer"), None).await.unwrap();
+    let mut session = viewer.join(None).await.unwrap();
 
     // Voxel edits of every kind, then entities: a model, a spawn at odd rotations and
     // moves, so that every GPU buffer changes and grows while the viewer follows.
     let url = server.url.clone();
     let editor = tokio::spawn(async move {
-        let mut c = connect(&url, Some("editor"), None).await.unwrap();
+        let c = Client::connect(&url, Some("editor"), None).await.unwrap();
         let mut rng = 17;
         for seq in 1..=EDITS {
-            let ops = random_op(&mut rng);
-            c.edit(EditRequest { ops, client_seq: seq }).await.unwrap();
+            c.edit(random_op(&mut rng), seq).await.unwrap();
         }
         let model = r#"{"op":"define_model","name":"crate","size":[5,3,4],"voxels":[[0,0,0,2],[4,2,3,3],[2,1,1,4]]}"#;
-        c.edit(EditRequest {
-            ops: model.into(),
-            client_seq: EDITS + 1,
-        })
-        .await
-        .unwrap();
+        c.edit(model, EDITS + 1).await.unwrap();
         let rot = [0.1, 0.38268343236508984, -0.2, 0.8958];
-        let entities = (1..=24)
-            .map(|i| entity_spawn(i, "crate", [5.0 * f64::from(i), 40.0, 3.5 * f64::from(i)], rot))
-            .collect();
-        c.spawn_entities(SpawnEntitiesRequest {
-            entities,
-            client_seq: EDITS + 2,
-        })
-        .await
-        .unwrap();
-        for k in 0..2u32 {
-            let moves = (1..=24)
-                .step_by(2 + k as usize)
-                .map(|i| entity_pose(i, [100.25 - 3.0 * f64::from(i), 45.5, 7.0 + f64::from(k * i)], rot))
-                .collect();
-            c.move_entities(MoveEntitiesRequest {
-                moves,
-                client_seq: EDITS + 3 + u64::from(k),
+        let entities: Vec<Spawn> = (1..=24)
+            .map(|id| Spawn {
+                model: "crate".into(),
+                pose: Pose {
+                    id,
+                    pos: [5.0 * f64::from(id), 40.0, 3.5 * f64::from(id)],
+                    rot,
+                },
             })
-            .await
-            .unwrap();
+            .collect();
+        c.spawn_entities(&entities, EDITS + 2).await.unwrap();
+        for k in 0..2u32 {
+            let moves: Vec<Pose> = (1..=24)
+                .step_by(2 + k as usize)
+                .map(|id| Pose {
+                    id,
+                    pos: [100.25 - 3.0 * f64::from(id), 45.5, 7.0 + f64::from(k * id)],
+                    rot,
+                })
+                .collect();
+            c.move_entities(&moves, EDITS + 3 + u64::from(k)).await.unwrap();
         }
     });
 
     let last = EDITS + 4;
     let mut gpu_world: Option<GpuWorld> = None;
     let (mut syncs, mut checks, mut reallocations) = (0u32, 0u32, 0u32);
-    let ended = mirror
+    let ended = session
         .follow(
-            &mut stream,
             tokio::time::sleep(Duration::from_secs(300)),
-            |m| -> Result<ControlFlow<()>, MirrorError> {
+            |m| -> Result<ControlFlow<()>, Error> {
                 let Some(w) = m.world().filter(|_| m.is_live()) else {
                     return Ok(ControlFlow::Continue(()));
                 };
@@ -114,7 +105,7 @@ async fn gpu_world_synced_from_a_server_stream_equals_the_mirror() {
     assert_eq!(ended, Ended::Done, "the stream ended before version {last}");
     editor.await.unwrap();
 
-    let w = mirror.world().unwrap();
+    let w = session.mirror().world().unwrap();
     let g = gpu_world.unwrap();
     assert_eq!(g.first_difference(&gpu, w).unwrap(), None);
     assert_eq!(g.digest(&gpu, w).unwrap(), w.digest(), "the device copy's digest");

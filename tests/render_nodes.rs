@@ -4,8 +4,10 @@
 
 mod support;
 
-use naadf_client::connect;
-use naadf_proto::v1::{NodeHello, NodeMessage, node_message};
+use naadf_client::error::Code;
+use naadf_client::gpu::Mode;
+use naadf_client::node::NodeInfo;
+use naadf_client::{Client, Error};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 use support::{http_get, http_get_bytes, naadf, ok, p, serve_world, start_world};
@@ -122,18 +124,24 @@ fn frames_from_render_nodes_equal_local_renders() {
     // A viewer may not register as a node.
     let rt = tokio::runtime::Runtime::new().unwrap();
     let refused = rt.block_on(async {
-        let mut c = connect(&server.url, Some("vw"), None).await.unwrap();
-        let hello = NodeMessage {
-            kind: Some(node_message::Kind::Hello(NodeHello {
-                adapter: "fake".into(),
-                modes: vec!["albedo".into()],
-                max_width: 64,
-                max_height: 64,
-            })),
+        let c = Client::connect(&server.url, Some("vw"), None).await.unwrap();
+        let info = NodeInfo {
+            adapter: "fake".into(),
+            modes: vec![Mode::Albedo],
+            max_size: (64, 64),
         };
-        c.register_node(tokio_stream::iter([hello])).await.unwrap_err()
+        c.register_node(&info).await.unwrap_err()
     });
-    assert_eq!(refused.code(), tonic::Code::PermissionDenied, "{refused:?}");
+    assert!(
+        matches!(
+            refused,
+            Error::Refused {
+                code: Code::PermissionDenied,
+                ..
+            }
+        ),
+        "{refused:?}"
+    );
 
     let node = Node::start(&server.url, &dir.path().join("node.log"));
     // Wait until the node has registered (its first frame arrives).

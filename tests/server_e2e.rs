@@ -3,12 +3,9 @@
 
 mod support;
 
-use naadf_client::{Client, Ended, Mirror, MirrorError, connect};
-use naadf_proto::requests::{entity_pose, entity_spawn};
-use naadf_proto::v1::{
-    DespawnEntitiesRequest, EditRequest, HistoryRequest, MoveEntitiesRequest, SpawnEntitiesRequest, StatusRequest,
-    world_message,
-};
+use naadf_client::error::Code;
+use naadf_client::{Client, Ended, Error, Mirror, Pose, Spawn};
+use naadf_proto::v1::world_message;
 use naadf_world::digest::BufferId;
 use naadf_world::{World, file};
 use std::ops::ControlFlow;
@@ -27,7 +24,7 @@ fn serve_fresh(dir: &Path, extra: &[&str]) -> (String, Server) {
 }
 
 async fn client(url: &str, token: &str) -> Client {
-    connect(url, Some(token), None).await.expect("connect")
+    Client::connect(url, Some(token), None).await.expect("connect")
 }
 
 /// (version, digest, quiescent) of a live mirror.
@@ -42,17 +39,15 @@ struct Follower {
 
 impl Follower {
     async fn start(url: &str, token: &str, cache: Option<World>) -> Follower {
-        let mut c = client(url, token).await;
-        let mut mirror = Mirror::new(cache);
-        let mut stream = c.join(mirror.join_request()).await.expect("join").into_inner();
+        let mut session = client(url, token).await.join(cache).await.expect("join");
         let (tx, state) = watch::channel(None);
         let (stop, mut stopped) = watch::channel(false);
         let task = tokio::spawn(async move {
             let stop = async move {
                 let _ = stopped.changed().await;
             };
-            let ended = mirror
-                .follow(&mut stream, stop, |mirror| -> Result<ControlFlow<()>, MirrorError> {
+            let ended = session
+                .follow(stop, |mirror| -> Result<ControlFlow<()>, Error> {
                     if let Some(w) = mirror.world().filter(|_| mirror.is_live()) {
                         let _ = tx.send(Some((w.version(), w.digest().to_string(), mirror.is_quiescent())));
                     }
@@ -61,7 +56,7 @@ impl Follower {
                 .await
                 .expect("mirror follows the stream");
             assert_eq!(ended, Ended::Stopped(()), "the stream ended early");
-            mirror
+            session.into_mirror()
         });
         Follower { state, stop, task }
     }
@@ -73,13 +68,13 @@ impl Follower {
 }
 
 /// Waits until the server is quiescent and every follower shows its version and digest.
-async fn converge(c: &mut Client, followers: &[&Follower]) -> Point {
+async fn converge(c: &Client, followers: &[&Follower]) -> Point {
     for _ in 0..1200 {
-        let s = c.status(StatusRequest {}).await.expect("status").into_inner();
+        let s = c.status().await.expect("status");
         if s.quiescent {
-            let want = Some((s.version, s.digest.clone(), true));
+            let want = Some((s.version, s.digest.to_string(), true));
             if followers.iter().all(|f| *f.state.borrow() == want) {
-                return (s.version, s.digest, true);
+                return (s.version, s.digest.to_string(), true);
             }
         }
         tokio::time::sleep(Duration::from_millis(50)).await;
@@ -106,30 +101,25 @@ async fn mirrors_converge_with_the_server_and_the_offline_apply() {
     for i in 0..8 {
         followers.push(Follower::start(&server.url, &format!("viewer{i}"), None).await);
     }
-    let mut admin = client(&server.url, "admin").await;
+    let admin = client(&server.url, "admin").await;
     for round in 0..3u64 {
         let mut editors = Vec::new();
         for e in 0..4u64 {
             let url = server.url.clone();
             editors.push(tokio::spawn(async move {
-                let mut c = client(&url, &format!("editor{e}")).await;
+                let c = client(&url, &format!("editor{e}")).await;
                 let mut rng = round * 1000 + e;
                 for k in 0..15 {
                     let ops = random_op(&mut rng);
-                    let r = c
-                        .edit(EditRequest {
-                            ops: ops.clone(),
-                            client_seq: round * 100 + k + 1,
-                        })
-                        .await;
-                    r.unwrap_or_else(|s| panic!("{ops}: {s}"));
+                    let r = c.edit(ops.as_str(), round * 100 + k + 1).await;
+                    r.unwrap_or_else(|e| panic!("{ops}: {e}"));
                 }
             }));
         }
         for e in editors {
             e.await.unwrap();
         }
-        let (version, digest, _) = converge(&mut admin, &followers.iter().collect::<Vec<_>>()).await;
+        let (version, digest, _) = converge(&admin, &followers.iter().collect::<Vec<_>>()).await;
         assert_eq!(version, (round + 1) * 60);
         eprintln!("checkpoint {round}: version {version} digest {digest}");
     }
@@ -170,19 +160,15 @@ async fn acknowledged_edits_survive_kill_9_and_retries_are_not_reapplied() {
         let url = server.url.clone();
         let acked = acked_tx.clone();
         editors.push(tokio::spawn(async move {
-            let mut c = client(&url, &format!("editor{e}")).await;
+            let c = client(&url, &format!("editor{e}")).await;
             for k in 0..2000u32 {
                 let (x, y, z, m) = (k % 128, 40 + e * 4 + (k / 128) % 4, k / 512, 1 + (k % 5));
                 let ops = format!(r#"{{"op":"set","voxels":[[{x},{y},{z},{m}]]}}"#);
-                match c
-                    .edit(EditRequest {
-                        ops,
-                        client_seq: u64::from(k) + 1,
-                    })
-                    .await
-                {
-                    Ok(r) => acked.send((e, k, [x, y, z, m], r.into_inner().version)).unwrap(),
-                    Err(_) => return,
+                match c.edit(ops, u64::from(k) + 1).await {
+                    Ok(r) => acked.send((e, k, [x, y, z, m], r.version)).unwrap(),
+                    // The server was killed under the call: the typed error says so.
+                    Err(Error::ConnectionLost(_)) => return,
+                    Err(e) => panic!("an edit failed otherwise than by the kill: {e}"),
                 }
             }
         }));
@@ -201,8 +187,8 @@ async fn acknowledged_edits_survive_kill_9_and_retries_are_not_reapplied() {
     }
 
     let server = Server::start(&args, &log, &[]);
-    let mut c = client(&server.url, "editor0").await;
-    let s = c.status(StatusRequest {}).await.unwrap().into_inner();
+    let c = client(&server.url, "editor0").await;
+    let s = c.status().await.unwrap();
     let last_acked = acked.iter().map(|a| a.3).max().unwrap();
     assert!(
         s.version >= last_acked,
@@ -237,21 +223,18 @@ async fn acknowledged_edits_survive_kill_9_and_retries_are_not_reapplied() {
     }
     // A retry of an acknowledged request gets its version back and changes nothing.
     let (e, k, [x, y, z, m], v) = acked[0];
-    let mut c = client(&server.url, &format!("editor{e}")).await;
-    let retry = EditRequest {
-        ops: format!(r#"{{"op":"set","voxels":[[{x},{y},{z},{m}]]}}"#),
-        client_seq: u64::from(k) + 1,
-    };
-    let r = c.edit(retry.clone()).await.unwrap().into_inner();
+    let c = client(&server.url, &format!("editor{e}")).await;
+    let retry = format!(r#"{{"op":"set","voxels":[[{x},{y},{z},{m}]]}}"#);
+    let r = c.edit(retry.as_str(), u64::from(k) + 1).await.unwrap();
     assert_eq!((r.version, r.duplicate), (v, true));
-    let s2 = c.status(StatusRequest {}).await.unwrap().into_inner();
-    assert_eq!((s2.version, &s2.digest), (s.version, &s.digest));
+    let s2 = c.status().await.unwrap();
+    assert_eq!((s2.version, s2.digest), (s.version, s.digest));
 
     // A graceful restart keeps the answer too, and so does the snapshot it writes.
     server.stop();
     let server = Server::start(&args, &log, &[]);
-    let mut c = client(&server.url, &format!("editor{e}")).await;
-    let r = c.edit(retry).await.unwrap().into_inner();
+    let c = client(&server.url, &format!("editor{e}")).await;
+    let r = c.edit(retry, u64::from(k) + 1).await.unwrap();
     assert_eq!((r.version, r.duplicate), (v, true));
     server.stop();
 
@@ -278,37 +261,37 @@ async fn rejoining_costs_a_fraction_of_a_join() {
     let args = ["--world", world.as_str(), "--data", &p(dir.path(), "data")];
     let log = dir.path().join("log");
     let server = Server::start(&args, &log, &[]);
-    let mut c = client(&server.url, "ed").await;
+    let c = client(&server.url, "ed").await;
     let f = Follower::start(&server.url, "viewer", None).await;
-    converge(&mut c, &[&f]).await;
+    converge(&c, &[&f]).await;
     let first = f.finish().await;
     let full = first.stats.bytes;
     let mut seq = 0;
-    let mut edits = async |c: &mut Client, n: u64| {
+    let mut edits = async |c: &Client, n: u64| {
         for _ in 0..n {
             seq += 1;
             let ops = format!(
                 r#"{{"op":"sphere","center":[{},60,200],"radius":3,"material":2}}"#,
                 200 + 5 * (seq % 50)
             );
-            c.edit(EditRequest { ops, client_seq: seq }).await.unwrap();
+            c.edit(ops, seq).await.unwrap();
         }
     };
-    edits(&mut c, 10).await;
+    edits(&c, 10).await;
     let f = Follower::start(&server.url, "viewer", first.into_world()).await;
-    let point = converge(&mut c, &[&f]).await;
+    let point = converge(&c, &[&f]).await;
     let resumed = f.finish().await;
     let resume_bytes = resumed.stats.bytes;
     assert_eq!(resumed.stats.pages, 0, "resumed from deltas");
     assert_eq!(resumed.world().unwrap().digest().to_string(), point.1);
 
     // After a restart the server has no deltas from before it: the cache's pages are used.
-    edits(&mut c, 10).await;
+    edits(&c, 10).await;
     server.stop();
     let server = Server::start(&args, &log, &[]);
-    let mut c = client(&server.url, "ed").await;
+    let c = client(&server.url, "ed").await;
     let f = Follower::start(&server.url, "viewer", resumed.into_world()).await;
-    let point = converge(&mut c, &[&f]).await;
+    let point = converge(&c, &[&f]).await;
     let paged = f.finish().await;
     let page_bytes = paged.stats.bytes;
     assert!(paged.stats.pages > 0);
@@ -328,7 +311,7 @@ async fn rejoining_costs_a_fraction_of_a_join() {
 async fn a_slow_client_is_resnapshotted_and_does_not_stall_others() {
     let dir = tempfile::tempdir().unwrap();
     let (_, server) = serve_fresh(dir.path(), &["--slow-client-events", "16"]);
-    let mut c = client(&server.url, "ed").await;
+    let c = client(&server.url, "ed").await;
     // The slow client joins, then does not read. Small HTTP/2 windows make its transport
     // buffers fill after 64 KiB instead of megabytes.
     let channel = tonic::transport::Endpoint::from_shared(server.url.clone())
@@ -348,9 +331,9 @@ async fn a_slow_client_is_resnapshotted_and_does_not_stall_others() {
             .map(|i| format!("[{},{},{},3]", i, 50 + k % 10, k % 128))
             .collect();
         let ops = format!(r#"{{"op":"set","voxels":[{}]}}"#, voxels.join(","));
-        c.edit(EditRequest { ops, client_seq: k + 1 }).await.unwrap();
+        c.edit(ops, k + 1).await.unwrap();
     }
-    let point = converge(&mut c, &[&fast]).await;
+    let point = converge(&c, &[&fast]).await;
     assert_eq!(point.0, 300, "the fast mirror kept up while the slow one did not read");
     // Now the slow client reads: somewhere in its stream comes a re-sent snapshot.
     let mut resynced = false;
@@ -380,36 +363,29 @@ async fn undo_and_redo_are_per_user_and_survive_reconnects() {
     let dir = tempfile::tempdir().unwrap();
     let (world, server) = serve_fresh(dir.path(), &[]);
     let f = Follower::start(&server.url, "viewer", None).await;
-    let mut alice = client(&server.url, "alice").await;
-    let mut bob = client(&server.url, "bob").await;
+    let alice = client(&server.url, "alice").await;
+    let bob = client(&server.url, "bob").await;
     let sphere = r#"{"op":"sphere","center":[64,60,64],"radius":6,"material":4}"#;
-    alice
-        .edit(EditRequest {
-            ops: sphere.into(),
-            client_seq: 1,
-        })
-        .await
-        .unwrap();
+    alice.edit(sphere, 1).await.unwrap();
     let bob_set = r#"{"op":"set","voxels":[[64,60,64,5]]}"#;
-    bob.edit(EditRequest {
-        ops: bob_set.into(),
-        client_seq: 1,
-    })
-    .await
-    .unwrap();
+    bob.edit(bob_set, 1).await.unwrap();
     // Alice reconnects, then undoes: her sphere goes, Bob's voxel stays.
     drop(alice);
-    let mut alice = client(&server.url, "alice").await;
-    let v = alice
-        .undo(HistoryRequest { client_seq: 2 })
-        .await
-        .unwrap()
-        .into_inner()
-        .version;
+    let alice = client(&server.url, "alice").await;
+    let v = alice.undo(2).await.unwrap().version;
     assert_eq!(v, 3);
-    let err = bob.redo(HistoryRequest { client_seq: 2 }).await.unwrap_err();
-    assert_eq!(err.code(), tonic::Code::FailedPrecondition);
-    converge(&mut bob, &[&f]).await;
+    let err = bob.redo(2).await.unwrap_err();
+    assert!(
+        matches!(
+            err,
+            Error::Refused {
+                code: Code::FailedPrecondition,
+                ..
+            }
+        ),
+        "{err}"
+    );
+    converge(&bob, &[&f]).await;
     let mirror = f.finish().await;
     let w = mirror.world().unwrap();
     assert_eq!(w.material_at([64, 60, 64]), 5, "bob's voxel survives alice's undo");
@@ -420,8 +396,8 @@ async fn undo_and_redo_are_per_user_and_survive_reconnects() {
         "alice's sphere is undone"
     );
     let f = Follower::start(&server.url, "viewer", mirror.into_world()).await;
-    alice.redo(HistoryRequest { client_seq: 3 }).await.unwrap();
-    converge(&mut bob, &[&f]).await;
+    alice.redo(3).await.unwrap();
+    converge(&bob, &[&f]).await;
     let w = f.finish().await.into_world().unwrap();
     assert_eq!(w.material_at([62, 60, 64]), 4, "redo brings the sphere back");
     server.stop();
@@ -434,42 +410,39 @@ async fn entity_requests_reach_the_mirrors() {
     let dir = tempfile::tempdir().unwrap();
     let (_, server) = serve_fresh(dir.path(), &[]);
     let f = Follower::start(&server.url, "viewer", None).await;
-    let mut c = client(&server.url, "admin").await;
+    let c = client(&server.url, "admin").await;
     let model = r#"{"op":"define_model","name":"crate","size":[3,2,3],"voxels":[[0,0,0,2],[1,1,1,3],[2,0,2,4]]}"#;
-    c.edit(EditRequest {
-        ops: model.into(),
-        client_seq: 1,
-    })
-    .await
-    .unwrap();
+    c.edit(model, 1).await.unwrap();
     let rot = [0.0, 0.38268343236508984, 0.0, 0.9238795325112867];
-    let spawn = SpawnEntitiesRequest {
-        entities: (1..=3)
-            .map(|i| entity_spawn(i, "crate", [20.0 * f64::from(i), 50.0, 30.0], rot))
-            .collect(),
-        client_seq: 2,
+    let spawns: Vec<Spawn> = (1..=3)
+        .map(|id| Spawn {
+            model: "crate".into(),
+            pose: Pose {
+                id,
+                pos: [20.0 * f64::from(id), 50.0, 30.0],
+                rot,
+            },
+        })
+        .collect();
+    c.spawn_entities(&spawns, 2).await.unwrap();
+    let unrotated = [0.0, 0.0, 0.0, 1.0];
+    let moved = Pose {
+        id: 2,
+        pos: [70.5, 55.25, 90.0],
+        rot: unrotated,
     };
-    c.spawn_entities(spawn).await.unwrap();
-    let moves = MoveEntitiesRequest {
-        moves: vec![entity_pose(2, [70.5, 55.25, 90.0], [0.0, 0.0, 0.0, 1.0])],
-        client_seq: 3,
-    };
-    c.move_entities(moves).await.unwrap();
-    c.despawn_entities(DespawnEntitiesRequest {
-        ids: vec![3],
-        client_seq: 4,
-    })
-    .await
-    .unwrap();
-    let bad = MoveEntitiesRequest {
-        moves: vec![entity_pose(9, [1.0, 1.0, 1.0], [0.0, 0.0, 0.0, 1.0])],
-        client_seq: 5,
+    c.move_entities(&[moved], 3).await.unwrap();
+    c.despawn_entities(&[3], 4).await.unwrap();
+    let bad = Pose {
+        id: 9,
+        pos: [1.0, 1.0, 1.0],
+        rot: unrotated,
     };
     assert_eq!(
-        c.move_entities(bad).await.unwrap_err().code(),
-        tonic::Code::InvalidArgument
+        c.move_entities(&[bad], 5).await.unwrap_err().code(),
+        Some(Code::InvalidArgument)
     );
-    let point = converge(&mut c, &[&f]).await;
+    let point = converge(&c, &[&f]).await;
     assert_eq!(point.0, 4);
     let w = f.finish().await.into_world().unwrap();
     assert!(w.entity(3).is_none());
@@ -515,18 +488,13 @@ async fn checkpoints_truncate_the_log_and_restarts_keep_the_digest() {
     ];
     let log = dir.path().join("log");
     let server = Server::start(&args, &log, &[]);
-    let mut c = client(&server.url, "ed").await;
+    let c = client(&server.url, "ed").await;
     let mut rng = 77;
     for k in 0..12 {
-        c.edit(EditRequest {
-            ops: random_op(&mut rng),
-            client_seq: k + 1,
-        })
-        .await
-        .unwrap();
+        c.edit(random_op(&mut rng), k + 1).await.unwrap();
     }
     let f = Follower::start(&server.url, "viewer", None).await;
-    let before = converge(&mut c, &[&f]).await;
+    let before = converge(&c, &[&f]).await;
     f.finish().await;
     assert_eq!(before.0, 12);
     // Snapshots land on a helper thread; wait for the one at version 10.
@@ -555,9 +523,9 @@ async fn checkpoints_truncate_the_log_and_restarts_keep_the_digest() {
     );
     server.kill9();
     let server = Server::start(&args, &log, &[]);
-    let mut c = client(&server.url, "ed").await;
-    let s = c.status(StatusRequest {}).await.unwrap().into_inner();
-    assert_eq!((s.version, s.digest, s.quiescent), before);
+    let c = client(&server.url, "ed").await;
+    let s = c.status().await.unwrap();
+    assert_eq!((s.version, s.digest.to_string(), s.quiescent), before);
     server.stop();
 }
 
@@ -566,13 +534,19 @@ async fn checkpoints_truncate_the_log_and_restarts_keep_the_digest() {
 async fn an_incompatible_protocol_version_is_refused() {
     let dir = tempfile::tempdir().unwrap();
     let (_, server) = serve_fresh(dir.path(), &[]);
-    let mut c = client(&server.url, "viewer").await;
+    let c = client(&server.url, "viewer").await;
     let req = naadf_proto::v1::JoinRequest {
         protocol_version: 99,
         ..Default::default()
     };
-    let err = c.join(req).await.unwrap_err();
-    assert_eq!(err.code(), tonic::Code::FailedPrecondition);
-    assert!(err.message().contains("protocol 99"), "{}", err.message());
+    let err = c.stream(req).await.unwrap_err();
+    let Error::Refused {
+        code: Code::FailedPrecondition,
+        message,
+    } = &err
+    else {
+        panic!("expected a refusal: {err}");
+    };
+    assert!(message.contains("protocol 99"), "{message}");
     server.stop();
 }

@@ -1,17 +1,38 @@
-//! Connecting to a server: `http://` or `https://` URLs, an optional CA certificate for
-//! TLS, and the `authorization: Bearer <token>` metadata on every call.
+//! Reaching a server: `http://` or `https://` URLs, an optional CA certificate for TLS, and
+//! the `authorization: Bearer <token>` metadata on every call. [`Client`] builds on this;
+//! nothing here knows the service's calls.
 
+use crate::Client;
+use crate::error::Error;
 use naadf_proto::v1::world_service_client::WorldServiceClient;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use tonic::codec::CompressionEncoding;
 use tonic::metadata::AsciiMetadataValue;
 use tonic::service::Interceptor;
 use tonic::service::interceptor::InterceptedService;
 use tonic::transport::{Certificate, Channel, ClientTlsConfig, Endpoint};
 
+/// Where a server is and who we are to it.
+#[derive(Clone, Debug)]
+pub struct ServerAddress {
+    /// Server URL (`http://` or `https://`).
+    pub url: String,
+    /// Bearer token.
+    pub token: Option<String>,
+    /// CA certificate (PEM) for `https://`.
+    pub ca: Option<PathBuf>,
+}
+
+impl ServerAddress {
+    /// Connects ([`Client::connect`]).
+    pub async fn connect(&self) -> Result<Client, Error> {
+        Client::connect(&self.url, self.token.as_deref(), self.ca.as_deref()).await
+    }
+}
+
 /// Adds the bearer token to every request.
 #[derive(Clone, Debug)]
-pub struct Token(Option<AsciiMetadataValue>);
+pub(crate) struct Token(Option<AsciiMetadataValue>);
 
 impl Interceptor for Token {
     fn call(&mut self, mut r: tonic::Request<()>) -> Result<tonic::Request<()>, tonic::Status> {
@@ -22,8 +43,9 @@ impl Interceptor for Token {
     }
 }
 
-/// A world-service client that sends the token with every call.
-pub type Client = WorldServiceClient<InterceptedService<Channel, Token>>;
+/// The generated world-service client, sending the token with every call: what a
+/// [`Client`] wraps.
+pub(crate) type RawClient = WorldServiceClient<InterceptedService<Channel, Token>>;
 
 /// Errors while connecting.
 #[derive(Debug, thiserror::Error)]
@@ -42,9 +64,10 @@ pub enum ConnectError {
     Transport(String, tonic::transport::Error),
 }
 
-/// Connects to `url` (`http://host:port` or `https://host:port`), trusting `ca` (PEM) for
-/// TLS in addition to the system roots, and sending `token` with every call.
-pub async fn connect(url: &str, token: Option<&str>, ca: Option<&Path>) -> Result<Client, ConnectError> {
+/// Connects to `url`, trusting `ca` (PEM) for TLS in addition to the system roots, and
+/// sending `token` with every call. The channel reconnects by itself after the connection
+/// breaks, so one stays usable across server restarts.
+pub(crate) async fn connect(url: &str, token: Option<&str>, ca: Option<&Path>) -> Result<RawClient, ConnectError> {
     let mut ep = Endpoint::from_shared(url.to_owned()).map_err(|e| ConnectError::Url(url.into(), e.to_string()))?;
     if url.starts_with("https://") {
         let mut tls = ClientTlsConfig::new().with_native_roots();

@@ -1,19 +1,54 @@
 //! # naadf-client
 //!
-//! Clients of the naadf server:
+//! Clients of the naadf server. [`Client`] is the one way to talk to a server: every call
+//! of the world service as a typed method, failing with a typed [`Error`].
 //!
-//! - [`connect`]: channels (plain or TLS) and the bearer-token interceptor every call uses;
-//! - [`mirror`]: the CPU mirror, which applies the world stream to local buffers, checks
-//!   every digest, and keeps a page cache on disk so that rejoining is cheap. It is the
-//!   basis of the GPU client and of relays;
+//! ```no_run
+//! # async fn demo() -> Result<(), naadf_client::Error> {
+//! use naadf_client::Client;
+//! use std::time::Duration;
+//! let client = Client::connect("http://127.0.0.1:50051", Some("token"), None).await?;
+//! let ack = client.edit(r#"{"op":"sphere","center":[40,40,40],"radius":6,"material":2}"#, 0).await?;
+//! let mut session = client.join(None).await?;
+//! let world = session.until_quiescent(ack.version, Duration::from_secs(60)).await?;
+//! println!("version {} digest {}", world.version(), world.digest());
+//! # Ok(()) }
+//! ```
+//!
+//! The modules:
+//!
+//! - [`client`]: [`Client`] and the typed requests and replies (edits, status, frames);
+//! - [`connect`]: channels (plain or TLS), the bearer token every call carries, and
+//!   [`ServerAddress`];
+//! - [`error`]: [`Error`], which tells a lost connection from a refusal, a rate limit and a
+//!   mirror that broke;
+//! - [`session`]: [`Session`], a joined world stream applied to a mirror that it keeps
+//!   current, and [`WorldStream`], the stream alone;
+//! - [`mirror`]: the CPU mirror, which applies the stream's messages to local buffers and
+//!   checks every digest (no I/O of its own); the basis of the GPU client and of relays;
+//! - [`cache`]: [`PageCache`], the mirrored world on disk, so that rejoining after a restart
+//!   costs only what changed;
+//! - [`node`]: render nodes — the server's frame jobs, and [`node::RenderNode`], which keeps a
+//!   node registered and serving with any renderer;
 //! - [`gpu`]: the GPU mirror ([`gpu::GpuWorld`]), the WGSL traversal and the renderer;
 //! - [`viewer`]: the interactive window (winit) that flies through a server's world and
 //!   edits it.
 
+#![warn(missing_docs)]
+
+pub mod cache;
+pub mod client;
 pub mod connect;
+pub mod error;
 pub mod gpu;
 pub mod mirror;
+pub mod node;
+pub mod session;
 pub mod viewer;
 
-pub use connect::{Client, connect};
-pub use mirror::{Ended, Mirror, MirrorError, Progress, StreamedEdit};
+pub use cache::PageCache;
+pub use client::{Ack, Client, FrameImage, FrameSpec, Pose, RenderedFrame, ServerStatus, Spawn};
+pub use connect::ServerAddress;
+pub use error::Error;
+pub use mirror::{Mirror, MirrorError, Progress, StreamedEdit};
+pub use session::{Ended, Session, WorldStream};

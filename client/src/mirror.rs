@@ -5,6 +5,10 @@
 //! header's digest. Each delta is a change record the mirror applies with
 //! [`World::apply_record`], the same code the server ran, and its digest must match. A
 //! mismatch is an error: the mirror never silently diverges.
+//!
+//! The mirror does no I/O: a [`Session`](crate::Session) reads the stream and feeds it, or
+//! a program that reads the stream itself ([`Client::stream`](crate::Client::stream))
+//! calls [`Mirror::handle`].
 
 use naadf_proto::snapshot::{Assembly, buffers_of, cache_of};
 use naadf_proto::v1::{JoinRequest, ResumePoint, WorldMessage, world_message};
@@ -35,9 +39,6 @@ pub enum MirrorError {
     /// A snapshot did not assemble into a valid world.
     #[error(transparent)]
     Snapshot(#[from] WireError),
-    /// The stream itself failed (a gRPC status).
-    #[error("stream failed: {0}")]
-    Stream(Box<tonic::Status>),
     /// After a delta the mirror's digest differs from the server's.
     #[error("digest mismatch at version {version} step {growth_seq}: mirror {mirror}, server {server}")]
     Diverged {
@@ -50,17 +51,6 @@ pub enum MirrorError {
         /// The server's.
         server: Digest,
     },
-}
-
-/// How [`Mirror::follow`] ended.
-#[derive(Debug, PartialEq, Eq)]
-pub enum Ended<T> {
-    /// The server ended the stream.
-    Stream,
-    /// The `stop` future resolved, with this value.
-    Stopped(T),
-    /// The `seen` callback asked to stop.
-    Done,
 }
 
 /// Counters of what the mirror received.
@@ -115,8 +105,12 @@ impl Mirror {
         }
     }
 
-    /// The join request announcing the mirror's cache.
-    pub fn join_request(&self) -> JoinRequest {
+    /// Starts a new stream: forgets the one in progress (a partial snapshot, and the
+    /// quiescent flag, which the new stream's header sets again) and returns the join
+    /// request announcing the mirror's world as its cache.
+    pub fn join_request(&mut self) -> JoinRequest {
+        self.assembly = None;
+        self.quiescent = false;
         JoinRequest {
             protocol_version: PROTOCOL_VERSION,
             cached: self.world.as_ref().map(cache_of).unwrap_or_default(),
@@ -240,28 +234,6 @@ impl Mirror {
                 self.quiescent = decoded.quiescent;
                 self.growth_seq = decoded.growth_seq;
                 Ok(Progress::Delta)
-            }
-        }
-    }
-
-    /// Applies `stream` until the server ends it, `stop` resolves, or `seen` — called after
-    /// every message — breaks. Errors of the stream, the mirror and `seen` end it too.
-    pub async fn follow<T, E: From<MirrorError>>(
-        &mut self,
-        stream: &mut tonic::Streaming<WorldMessage>,
-        stop: impl std::future::Future<Output = T>,
-        mut seen: impl FnMut(&Mirror) -> Result<std::ops::ControlFlow<()>, E>,
-    ) -> Result<Ended<T>, E> {
-        tokio::pin!(stop);
-        loop {
-            let m = tokio::select! {
-                m = stream.message() => m.map_err(|s| MirrorError::Stream(Box::new(s)))?,
-                v = &mut stop => return Ok(Ended::Stopped(v)),
-            };
-            let Some(m) = m else { return Ok(Ended::Stream) };
-            self.handle(&m)?;
-            if seen(self)?.is_break() {
-                return Ok(Ended::Done);
             }
         }
     }

@@ -180,7 +180,7 @@ fn srgb8(c: f32) -> u8 {
 }
 
 /// What a `material` pixel and its first-hit record should hold for a CPU result: the
-/// colour, the primary hit plane (NAADF-REFERENCE §3.3) and the entity id.
+/// colour, the primary hit plane (docs/NAADF.md §10) and the entity id.
 fn expected_pixel(world: &World, cpu: &Option<Hit>) -> ([u8; 4], u32, u32) {
     let Some(hit) = cpu else {
         return ([0, 0, 0, 255], 0x1FFFF, 0x3FFF);

@@ -12,6 +12,8 @@
 //! The stream itself is specified in the `.proto` file: a `Header`, the pages the client
 //! lacks, then one `Delta` per change, each carrying the digest after it.
 
+#![warn(missing_docs)]
+
 pub mod requests;
 pub mod snapshot;
 
@@ -26,6 +28,10 @@ pub const FILE_DESCRIPTOR_SET: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "
 
 /// The protocol version this build speaks; `Join` refuses other versions.
 pub const PROTOCOL_VERSION: u32 = 1;
+
+/// How long the server waits for a frame whose request names no deadline (`timeout_ms`
+/// 0); a render node drops a job it has not rendered by then.
+pub const DEFAULT_FRAME_DEADLINE: std::time::Duration = std::time::Duration::from_secs(30);
 
 /// Errors in wire data: a message that does not describe a valid world or request.
 #[derive(Debug, thiserror::Error)]

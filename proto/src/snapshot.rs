@@ -1,5 +1,5 @@
 //! Snapshots on the wire: the [`TRANSFERRED`] buffers cut into 64 KiB pages (the digest's
-//! pages, BRIEF §3), each sent as one zstd frame, and the assembly of a world from a
+//! pages, docs/FORMAT.md §8), each sent as one zstd frame, and the assembly of a world from a
 //! [`Header`], the buffers a client already holds, and the pages it receives.
 //!
 //! A client announces its cache as the page hashes of its buffers ([`cache_of`]); the

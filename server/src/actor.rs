@@ -6,15 +6,14 @@
 //! in order to the [committer](crate::committer), which makes batches durable before it
 //! publishes them or answers their senders.
 
-use crate::committer::Outgoing;
-use crate::history::Histories;
+use crate::messages::{EditResult, Event, Outgoing, Subscription};
 use crate::metrics::Metrics;
 use crate::pages::{PageStore, SnapshotView};
 use crate::store::ServerState;
-use crate::wal::{Entry, EntryKind};
+use crate::wal::Entry;
 use naadf_proto::v1::{Delta, EditReply, WorldMessage, world_message};
 use naadf_world::World;
-use naadf_world::edit::{ChangeSet, GrowthTask};
+use naadf_world::edit::{BatchKind, ChangeSet, GrowthTask, Histories};
 use naadf_world::ops::{Batch, EditError, Limits};
 use std::sync::Arc;
 use tokio::sync::{mpsc, oneshot};
@@ -44,9 +43,6 @@ pub enum Action {
     Redo,
 }
 
-/// The answer to an edit request.
-pub type EditResult = Result<EditReply, Status>;
-
 /// A request to the actor.
 #[derive(Debug)]
 pub enum Request {
@@ -66,11 +62,12 @@ pub enum Request {
         /// The state the client holds, if any: `(version, digest)`.
         resume: Option<(u64, u64)>,
         /// Where the snapshot and subscription go.
-        reply: oneshot::Sender<crate::committer::Subscription>,
+        reply: oneshot::Sender<Subscription>,
     },
-    /// The current state.
+    /// The world's current version, growth sub-step and digest (answered at once, without
+    /// waiting for durability).
     Status {
-        /// Where it goes.
+        /// Where the answer goes.
         reply: oneshot::Sender<StatusInfo>,
     },
     /// The growth thread finished its task.
@@ -85,44 +82,21 @@ pub enum Request {
 /// The actor's state as `Status` reports it.
 #[derive(Clone, Debug)]
 pub struct StatusInfo {
-    /// World size.
+    /// World size in voxels.
     pub size: [u32; 3],
-    /// Edit version.
+    /// Edit version: the number of batches applied so far.
     pub version: u64,
-    /// Growth sub-step.
+    /// Growth sub-step: background distance-field steps published since that batch.
     pub growth_seq: u32,
-    /// No distance-field work queued.
+    /// No distance-field work queued: the world stays as it is until the next edit.
     pub quiescent: bool,
-    /// Digest.
+    /// The world digest at `(version, growth_seq)`.
     pub digest: naadf_world::digest::Digest,
 }
 
-/// One published change, as every join task forwards it.
-#[derive(Debug)]
-pub struct Event {
-    /// Edit version after the change.
-    pub version: u64,
-    /// Growth sub-step.
-    pub growth_seq: u32,
-    /// The digest after the change.
-    pub digest: u64,
-    /// The `Delta` message.
-    pub message: WorldMessage,
-    /// The snapshot pages the change altered.
-    pub changes: Vec<crate::pages::PageChange>,
-    /// The transferred buffers' lengths after it.
-    pub lens: [usize; 6],
-}
-
-impl Event {
-    /// Approximate bytes the event holds (for bounding the history of recent deltas).
-    pub fn size(&self) -> usize {
-        use prost::Message;
-        self.message.encoded_len() + 16 * self.changes.len() + 64
-    }
-}
-
-/// The actor.
+/// The owner of the world: applies edits, undo and redo in one total order, keeps the
+/// snapshot pages and per-user histories current, and runs distance-field growth on a
+/// thread of its own between requests.
 pub struct Actor {
     world: World,
     histories: Histories,
@@ -344,11 +318,11 @@ impl Actor {
             return;
         }
         let (batch, kind) = match action {
-            Action::Batch(b) => (b, EntryKind::Edit),
+            Action::Batch(b) => (b, BatchKind::Edit),
             history => {
                 let redo = !matches!(history, Action::Undo);
                 match self.histories.history_batch(&user, redo, &self.world) {
-                    Ok(b) => (b, if redo { EntryKind::Redo } else { EntryKind::Undo }),
+                    Ok(b) => (b, if redo { BatchKind::Redo } else { BatchKind::Undo }),
                     Err(why) => {
                         let _ = reply.send(Err(Status::failed_precondition(why)));
                         return;

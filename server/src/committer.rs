@@ -10,16 +10,15 @@
 //! A log that cannot be written stops the process: the actor has already applied the
 //! batches in memory, and continuing would publish versions that a restart would lose.
 
-use crate::actor::{EditResult, Event};
+use crate::messages::{Event, Outgoing, Subscription};
 use crate::metrics::Metrics;
 use crate::pages::SnapshotView;
-use crate::store::{DataDir, ServerState};
+use crate::store::DataDir;
 use crate::wal::Wal;
 use naadf_proto::v1::EditReply;
-use naadf_world::file::WorldParts;
 use std::sync::Arc;
 use std::time::Instant;
-use tokio::sync::{broadcast, mpsc, oneshot};
+use tokio::sync::{broadcast, mpsc};
 
 /// Most queued items committed as one group.
 const MAX_GROUP: usize = 1024;
@@ -28,19 +27,6 @@ const MAX_GROUP: usize = 1024;
 const HISTORY_EVENTS: usize = 8192;
 /// Most bytes of recent deltas kept for resuming clients.
 const HISTORY_BYTES: usize = 32 << 20;
-
-/// What a join gets: a snapshot, the subscription to everything published after it, and,
-/// when the client's cached state is recent enough, the deltas from that state to the
-/// snapshot (then no pages need to travel).
-#[derive(Debug)]
-pub struct Subscription {
-    /// The state at the join.
-    pub view: Arc<SnapshotView>,
-    /// Everything published after it.
-    pub events: broadcast::Receiver<Arc<Event>>,
-    /// The deltas from the client's state to `view`, if the server still has them all.
-    pub catch_up: Option<Vec<Arc<Event>>>,
-}
 
 /// The recent deltas, for resuming clients.
 #[derive(Debug)]
@@ -81,59 +67,17 @@ impl History {
     }
 }
 
-/// What the actor hands to the committer.
-#[derive(Debug)]
-pub enum Outgoing {
-    /// An applied batch: log it, then publish and acknowledge it.
-    Batch {
-        /// The framed log record.
-        frame: Vec<u8>,
-        /// The delta to publish.
-        event: Arc<Event>,
-        /// The sender's answer.
-        reply: oneshot::Sender<EditResult>,
-    },
-    /// A growth step: publish it.
-    Growth {
-        /// The delta to publish.
-        event: Arc<Event>,
-    },
-    /// An answer that needs no log record (a retried request), given in order.
-    Ack {
-        /// Where it goes.
-        reply: oneshot::Sender<EditResult>,
-        /// The answer.
-        result: EditResult,
-    },
-    /// A join: subscribe after everything before it is published.
-    Join {
-        /// The snapshot at this point.
-        view: Arc<SnapshotView>,
-        /// The state the client holds, if any: `(version, digest)`.
-        resume: Option<(u64, u64)>,
-        /// Where the subscription goes.
-        reply: oneshot::Sender<Subscription>,
-    },
-    /// A checkpoint: start a new log segment and write the snapshot.
-    Checkpoint {
-        /// The world at the checkpoint.
-        parts: Box<WorldParts>,
-        /// The server state at the checkpoint.
-        state: Box<ServerState>,
-        /// Answered once the snapshot is durable.
-        reply: Option<oneshot::Sender<Result<u64, String>>>,
-    },
-}
-
-/// The committer.
+/// The durability point between the actor and everyone else: the only writer of the log and
+/// of snapshots, and the only publisher of deltas and edit answers (see the module docs).
 pub struct Committer {
-    /// The log.
+    /// The write-ahead log every applied batch is appended to (and synced) before it is
+    /// published.
     pub wal: Wal,
     /// The data directory (snapshots).
     pub data: Arc<DataDir>,
     /// Where deltas are published.
     pub events: broadcast::Sender<Arc<Event>>,
-    /// Metrics.
+    /// Where fsync latencies and written snapshots are counted.
     pub metrics: Arc<Metrics>,
     /// The state the server starts from: `(version, digest)`.
     pub initial: (u64, u64),

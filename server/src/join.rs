@@ -8,8 +8,8 @@
 //! clients never wait for a slow one.
 
 use crate::Shared;
-use crate::actor::{Event, Request};
-use crate::committer::Subscription;
+use crate::actor::Request;
+use crate::messages::{Event, Subscription};
 use crate::pages::{SnapshotView, StoredPage};
 use naadf_proto::PROTOCOL_VERSION;
 use naadf_proto::snapshot::{buffer_lengths, group_pages};

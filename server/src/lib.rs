@@ -6,7 +6,8 @@
 //! snapshot and then every delta over gRPC. axum serves health, metrics and a status page.
 //!
 //! Where to start reading: [`serve`] wires everything; [`actor`] is the world's owner;
-//! [`committer`] the durability point; [`join`] one client's stream.
+//! [`committer`] the durability point; [`join`] one client's stream; [`messages`] what these
+//! three hand each other.
 //!
 //! ```text
 //! gRPC Edit ──▶ service (auth, roles, rate) ──▶ actor (apply, undo, growth) ──▶ committer
@@ -14,12 +15,14 @@
 //!                                       join tasks ◀── broadcast deltas ◀┘ then ack the sender
 //! ```
 
+#![warn(missing_docs)]
+
 pub mod actor;
 pub mod auth;
 pub mod committer;
-pub mod history;
 pub mod http;
 pub mod join;
+pub mod messages;
 pub mod metrics;
 pub mod pages;
 pub mod render_router;
@@ -38,7 +41,7 @@ use tokio::sync::{mpsc, oneshot, watch};
 
 /// What the service, the join tasks and the HTTP side share.
 pub struct Shared {
-    /// Metrics.
+    /// The Prometheus metrics the HTTP side exports.
     pub metrics: Arc<metrics::Metrics>,
     /// Clients and recent edits for the status page.
     pub activity: Arc<metrics::Activity>,

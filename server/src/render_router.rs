@@ -17,8 +17,8 @@ use tonic::Status;
 
 /// Jobs in flight over all nodes before new requests are refused.
 pub const DEFAULT_QUEUE: usize = 64;
-/// Deadline of a request that names none.
-pub const DEFAULT_DEADLINE: Duration = Duration::from_secs(30);
+/// Deadline of a request that names none (the protocol's, which render nodes keep too).
+pub const DEFAULT_DEADLINE: Duration = naadf_proto::DEFAULT_FRAME_DEADLINE;
 /// Largest frame edge a request may ask for.
 pub const MAX_FRAME_EDGE: u32 = 16384;
 

@@ -11,9 +11,9 @@
 //! rename, directory fsync), so a snapshot counts only when both files exist. Older
 //! snapshots and the WAL segments they need are deleted only after a newer one is durable.
 
-use crate::history::Histories;
 use crate::wal::{self, WalError};
 use naadf_world::World;
+use naadf_world::edit::Histories;
 use naadf_world::file::{self, WorldParts};
 use serde::{Deserialize, Serialize};
 use std::fs::File;

@@ -16,6 +16,7 @@
 //! dropped (and truncated away). Damage anywhere else is corruption, reported as an error
 //! rather than silently losing acknowledged edits.
 
+use naadf_world::edit::BatchKind;
 use serde::{Deserialize, Serialize};
 use std::fs::{File, OpenOptions};
 use std::io::{BufWriter, Read, Seek, SeekFrom, Write};
@@ -33,17 +34,6 @@ const FRAME_LEN: usize = 4 + 8;
 /// The largest payload a record may hold (a request is bounded far below this).
 const MAX_PAYLOAD: usize = 1 << 30;
 
-/// What kind of request a batch came from (undo and redo rebuild the history on replay).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub enum EntryKind {
-    /// An edit or entity request.
-    Edit,
-    /// An undo of the user's latest edit.
-    Undo,
-    /// A redo of the user's latest undo.
-    Redo,
-}
-
 /// One logged batch.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Entry {
@@ -53,8 +43,8 @@ pub struct Entry {
     pub user: String,
     /// The request's client sequence number (0: none).
     pub client_seq: u64,
-    /// What kind of request it was.
-    pub kind: EntryKind,
+    /// What kind of request it was (undo and redo rebuild the history on replay).
+    pub kind: BatchKind,
     /// The batch as one canonical ops-JSON line.
     pub ops: String,
 }
@@ -353,7 +343,7 @@ mod tests {
             version: v,
             user: "alice".into(),
             client_seq: v * 10,
-            kind: EntryKind::Edit,
+            kind: BatchKind::Edit,
             ops: format!(r#"{{"op":"set","voxels":[[{v},0,0,1]]}}"#),
         }
     }

@@ -2,9 +2,10 @@
 //! and prints the acknowledged versions.
 
 use super::print_json;
-use super::remote::{ServerArgs, block_on, status_error};
+use super::remote::{ServerArgs, block_on};
 use anyhow::{Context, Result};
-use naadf_proto::v1::EditRequest;
+use naadf_client::Error;
+use naadf_client::error::Code;
 use std::io::BufRead;
 use std::path::PathBuf;
 use std::time::Duration;
@@ -27,7 +28,8 @@ pub struct Args {
     json: bool,
 }
 
-/// Attempts per request when the server is unreachable or restarting.
+/// Attempts per request when the server is unreachable or restarting (retries are safe:
+/// the server answers a repeated `client_seq` with the original version).
 const ATTEMPTS: u32 = 5;
 
 #[derive(serde::Serialize)]
@@ -53,25 +55,26 @@ pub fn run(a: Args) -> Result<()> {
         .with_context(|| format!("cannot read {}", a.ops.display()))?;
     let first = a.client_seq.unwrap_or_else(naadf_client::connect::session_client_seq);
     block_on(async move {
-        let mut client = a.server.connect().await?;
+        // The client reconnects by itself on the call after a lost connection.
+        let client = a.server.connect().await?;
         for (i, (n, line)) in lines.iter().filter(|(_, l)| !l.trim().is_empty()).enumerate() {
-            let req = EditRequest {
-                ops: line.clone(),
-                client_seq: first + i as u64,
-            };
+            let client_seq = first + i as u64;
             let mut attempt = 0;
             let reply = loop {
                 attempt += 1;
-                match client.edit(req.clone()).await {
-                    Ok(r) => break r.into_inner(),
-                    Err(s) if s.code() == tonic::Code::Unavailable && attempt < ATTEMPTS => {
-                        tracing::warn!("server unavailable ({}); retrying line {n}", s.message());
+                match client.edit(line.as_str(), client_seq).await {
+                    Ok(r) => break r,
+                    Err(
+                        e @ (Error::ConnectionLost(_)
+                        | Error::Refused {
+                            code: Code::Unavailable,
+                            ..
+                        }),
+                    ) if attempt < ATTEMPTS => {
+                        tracing::warn!("{e}; retrying line {n}");
                         tokio::time::sleep(Duration::from_millis(200 << attempt)).await;
-                        if let Ok(c) = a.server.connect().await {
-                            client = c;
-                        }
                     }
-                    Err(s) => return Err(status_error(s).context(format!("line {n}"))),
+                    Err(e) => return Err(anyhow::Error::from(e).context(format!("line {n}"))),
                 }
             };
             if a.json {

@@ -2,10 +2,12 @@
 //! asks the server for a frame, which one of its render nodes renders.
 
 use super::print_json;
-use super::remote::{ServerArgs, block_on, status_error};
+use super::remote::{ServerArgs, block_on};
 use super::render::ViewArgs;
 use anyhow::{Context, Result};
+use naadf_client::FrameSpec;
 use std::path::PathBuf;
+use std::time::Duration;
 
 /// Arguments of `frame`.
 #[derive(clap::Args)]
@@ -39,19 +41,21 @@ struct Summary {
 
 /// Requests the frame and writes it.
 pub fn run(a: Args) -> Result<()> {
-    let req = a.view.request(a.min_version, a.timeout_ms)?;
-    let reply = block_on(async {
-        let mut c = a.server.connect().await?;
-        Ok(c.render_frame(req).await.map_err(status_error)?.into_inner())
-    })?;
-    std::fs::write(&a.output, &reply.image).with_context(|| format!("cannot write {}", a.output.display()))?;
+    let spec = FrameSpec {
+        min_version: a.min_version,
+        timeout: (a.timeout_ms != 0).then(|| Duration::from_millis(u64::from(a.timeout_ms))),
+        ..a.view.spec()?
+    };
+    let reply = block_on(async { Ok(a.server.connect().await?.frame(&spec).await?) })?;
+    let image = &reply.image;
+    std::fs::write(&a.output, &image.data).with_context(|| format!("cannot write {}", a.output.display()))?;
     if a.json {
         print_json(&Summary {
             version: reply.version,
-            width: reply.width,
-            height: reply.height,
+            width: image.width,
+            height: image.height,
             node: reply.node,
-            bytes: reply.image.len(),
+            bytes: image.data.len(),
         })?;
     }
     Ok(())

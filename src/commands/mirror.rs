@@ -1,10 +1,10 @@
 //! `naadf mirror --server URL [--verify] [--json] [--once -o OUT.naadf [--timeout S]]`
 
-use super::remote::{ServerArgs, block_on, status_error};
+use super::remote::{ServerArgs, block_on};
 use super::{print_json, save_world};
-use anyhow::{Context, Result, bail};
-use naadf_client::{Ended, Mirror};
-use naadf_world::{World, file};
+use anyhow::{Result, bail};
+use naadf_client::{Ended, Mirror, PageCache, Session};
+use naadf_world::World;
 use std::ops::ControlFlow;
 use std::path::PathBuf;
 use std::time::Duration;
@@ -49,21 +49,6 @@ struct State {
     deltas: u64,
 }
 
-/// The cache file for `server` in `dir`.
-fn cache_file(dir: Option<&PathBuf>, server: &str) -> Option<PathBuf> {
-    let dir = match dir {
-        Some(d) => d.clone(),
-        None => std::env::var_os("XDG_CACHE_HOME")
-            .map(PathBuf::from)
-            .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cache")))?
-            .join("naadf"),
-    };
-    Some(dir.join(format!(
-        "mirror-{:016x}.naadf",
-        xxhash_rust::xxh3::xxh3_64(server.as_bytes())
-    )))
-}
-
 fn state(m: &Mirror) -> State {
     let w = m.world().expect("live mirror");
     State {
@@ -96,28 +81,21 @@ pub fn run(a: Args) -> Result<()> {
     let cache = if a.no_cache {
         None
     } else {
-        cache_file(a.cache.as_ref(), &a.server.server)
+        PageCache::for_server(a.cache.as_deref(), &a.server.server)
     };
-    let cached = cache.as_ref().filter(|p| p.exists()).and_then(|p| match file::load(p) {
-        Ok(w) => Some(w),
-        Err(e) => {
-            tracing::warn!("ignoring the page cache: {e}");
-            None
-        }
-    });
-    let mut mirror = Mirror::new(cached);
-    let result = block_on(follow(&a, &mut mirror));
-    if let (Some(path), Some(w)) = (&cache, mirror.world())
-        && mirror.is_live()
-    {
-        if let Some(dir) = path.parent() {
-            std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-        }
-        if let Err(e) = file::save(w, path) {
+    let mirror = block_on(async {
+        let cached = cache.as_ref().and_then(PageCache::load);
+        let mut session = a.server.connect().await?.join(cached).await?;
+        let followed = follow(&a, &mut session).await;
+        // What was mirrored is worth caching even when following failed later on.
+        let mirror = session.into_mirror();
+        if let (Some(cache), Some(w)) = (&cache, mirror.world().filter(|_| mirror.is_live()))
+            && let Err(e) = cache.save(w)
+        {
             tracing::warn!("cannot write the page cache: {e}");
         }
-    }
-    result?;
+        followed.map(|()| mirror)
+    })?;
     if a.once {
         let w = mirror.world().expect("--once ends live");
         save_world(w, a.output.as_ref().expect("clap requires -o"))?;
@@ -136,13 +114,9 @@ enum Stop {
     Interrupted,
 }
 
-async fn follow(a: &Args, mirror: &mut Mirror) -> Result<()> {
-    let mut client = a.server.connect().await?;
-    let mut stream = client
-        .join(mirror.join_request())
-        .await
-        .map_err(status_error)?
-        .into_inner();
+/// Follows the session until the stream ends, a stop, or with --once the first quiescent
+/// point.
+async fn follow(a: &Args, session: &mut Session) -> Result<()> {
     let deadline = a
         .timeout
         .map(|s| tokio::time::Instant::now() + Duration::from_secs_f64(s));
@@ -158,8 +132,8 @@ async fn follow(a: &Args, mirror: &mut Mirror) -> Result<()> {
         }
     };
     let mut last_reported = None;
-    let ended = mirror
-        .follow(&mut stream, stop, |mirror| -> Result<ControlFlow<()>> {
+    let ended = session
+        .follow(stop, |mirror| -> Result<ControlFlow<()>> {
             if !mirror.is_quiescent() {
                 return Ok(ControlFlow::Continue(()));
             }

@@ -3,10 +3,6 @@
 
 pub mod apply;
 pub mod bench;
-pub mod bench_edit;
-pub mod bench_frames;
-pub mod bench_gpu;
-pub mod bench_stream;
 pub mod edit;
 pub mod export;
 pub mod export_log;
@@ -125,4 +121,25 @@ pub fn print_json(v: &impl serde::Serialize) -> Result<()> {
     serde_json::to_writer(&mut out, v)?;
     writeln!(out)?;
     Ok(())
+}
+
+/// Gives the GPU stack a private, empty runtime directory when the environment has no usable
+/// `XDG_RUNTIME_DIR`, and returns it (it is removed when the guard drops).
+///
+/// Mesa's software Vulkan driver (lavapipe) looks for a Wayland display while it starts, and
+/// libwayland prints `error: XDG_RUNTIME_DIR is invalid or not set in the environment` when
+/// that variable is missing, which is the normal case on a headless machine. Nothing failed,
+/// but a user reads "error". With the variable pointing at an empty directory the probe finds
+/// no display and says nothing, as on a desktop without Wayland.
+///
+/// Call it before any thread starts: it sets an environment variable.
+pub fn quiet_headless_gpu() -> Option<tempfile::TempDir> {
+    if std::env::var_os("XDG_RUNTIME_DIR").is_some_and(|d| Path::new(&d).is_dir()) {
+        return None;
+    }
+    let dir = tempfile::Builder::new().prefix("naadf-runtime-").tempdir().ok()?;
+    // SAFETY: called from `main` before any other thread exists, so nothing reads the
+    // environment concurrently.
+    unsafe { std::env::set_var("XDG_RUNTIME_DIR", dir.path()) };
+    Some(dir)
 }

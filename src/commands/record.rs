@@ -4,7 +4,7 @@
 //! quiescent world, so replaying it on the world it started from (`--base`) must reproduce
 //! that digest exactly.
 
-use super::remote::{ServerArgs, block_on, status_error};
+use super::remote::{ServerArgs, block_on};
 use super::{print_json, save_world, seconds};
 use anyhow::{Context, Result, bail};
 use naadf_client::{Ended, Mirror};
@@ -111,14 +111,8 @@ pub fn run(a: Args) -> Result<()> {
         batches: 0,
     };
     let world = block_on(async {
-        let mut client = a.server.connect().await?;
-        let mut mirror = Mirror::new(None);
-        mirror.keep_edits();
-        let mut stream = client
-            .join(mirror.join_request())
-            .await
-            .map_err(status_error)?
-            .into_inner();
+        let mut session = a.server.connect().await?.join(None).await?;
+        session.keep_edits();
         let duration = a.duration.map(|s| seconds(s, "--duration")).transpose()?;
         let stop = async {
             match duration {
@@ -129,8 +123,8 @@ pub fn run(a: Args) -> Result<()> {
             }
         };
         let url = a.server.server.clone();
-        let ended = mirror
-            .follow(&mut stream, stop, |m| -> Result<ControlFlow<()>> {
+        let ended = session
+            .follow(stop, |m| -> Result<ControlFlow<()>> {
                 rec.seen(m, a.base.as_ref(), &url)?;
                 let done = a.until_version.is_some_and(|v| rec.last >= v) && m.is_quiescent();
                 Ok(if done {
@@ -143,7 +137,7 @@ pub fn run(a: Args) -> Result<()> {
         if ended == Ended::Stream {
             tracing::warn!("the server ended the stream");
         }
-        mirror
+        session
             .into_world()
             .ok_or_else(|| anyhow::anyhow!("the server sent no world"))
     })?;

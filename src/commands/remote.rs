@@ -2,7 +2,7 @@
 //! certificate, and the async runtime.
 
 use anyhow::Result;
-use naadf_client::Client;
+use naadf_client::{Client, ServerAddress};
 use std::path::PathBuf;
 
 /// How to reach a server.
@@ -20,9 +20,18 @@ pub struct ServerArgs {
 }
 
 impl ServerArgs {
+    /// Where these arguments point.
+    pub fn address(&self) -> ServerAddress {
+        ServerAddress {
+            url: self.server.clone(),
+            token: self.token.clone(),
+            ca: self.ca.clone(),
+        }
+    }
+
     /// Connects.
     pub async fn connect(&self) -> Result<Client> {
-        Ok(naadf_client::connect(&self.server, self.token.as_deref(), self.ca.as_deref()).await?)
+        Ok(Client::connect(&self.server, self.token.as_deref(), self.ca.as_deref()).await?)
     }
 }
 
@@ -34,51 +43,16 @@ pub fn block_on<T>(f: impl std::future::Future<Output = Result<T>>) -> Result<T>
         .block_on(f)
 }
 
-/// A gRPC status as an error whose message names the code.
-pub fn status_error(s: tonic::Status) -> anyhow::Error {
-    anyhow::anyhow!("server refused: {:?}: {}", s.code(), s.message())
-}
-
-/// Joins `server` (announcing `cache`, so that only changed pages come) and follows its
-/// stream until the mirror is live, at `min_version` or later, and quiescent, or `timeout`
-/// passes; returns that world.
+/// Joins `server` (announcing `cache`, so that only changed pages come) and returns its
+/// world once the mirror is at `min_version` or later and quiescent, failing after
+/// `timeout`.
 pub async fn quiescent_world(
     server: &ServerArgs,
     cache: Option<naadf_world::World>,
     min_version: u64,
     timeout: std::time::Duration,
 ) -> Result<naadf_world::World> {
-    use naadf_client::{Ended, Mirror};
-    use std::ops::ControlFlow;
-    let mut client = server.connect().await?;
-    let mut mirror = Mirror::new(cache);
-    let mut stream = client
-        .join(mirror.join_request())
-        .await
-        .map_err(status_error)?
-        .into_inner();
-    let ended = mirror
-        .follow(
-            &mut stream,
-            tokio::time::sleep(timeout),
-            |m| -> Result<ControlFlow<()>> {
-                let at = m.world().is_some_and(|w| w.version() >= min_version);
-                Ok(if m.is_live() && m.is_quiescent() && at {
-                    ControlFlow::Break(())
-                } else {
-                    ControlFlow::Continue(())
-                })
-            },
-        )
-        .await?;
-    match ended {
-        Ended::Stopped(()) => anyhow::bail!(
-            "timed out after {} s before the server was quiescent",
-            timeout.as_secs_f64()
-        ),
-        Ended::Stream => anyhow::bail!("the server ended the stream before it was quiescent"),
-        _ => mirror
-            .into_world()
-            .ok_or_else(|| anyhow::anyhow!("the server sent no world")),
-    }
+    let mut session = server.connect().await?.join(cache).await?;
+    session.until_quiescent(min_version, timeout).await?;
+    Ok(session.into_world().expect("a quiescent mirror holds a world"))
 }

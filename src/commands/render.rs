@@ -4,8 +4,8 @@
 use super::remote::{ServerArgs, block_on, quiescent_world};
 use super::{load_world, print_json, seconds};
 use anyhow::{Context, Result};
+use naadf_client::FrameSpec;
 use naadf_client::gpu::{Headless, Mode, write_gbuffer};
-use naadf_proto::v1::FrameRequest;
 use naadf_world::camera::Camera;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -53,17 +53,10 @@ pub struct ViewArgs {
 }
 
 impl ViewArgs {
-    /// The frame request these arguments make (PNG, server's default deadline).
-    pub fn request(&self, min_version: u64, timeout_ms: u32) -> Result<FrameRequest> {
-        Ok(FrameRequest {
-            camera: serde_json::to_string(&read_camera(&self.camera)?)?,
-            width: self.size.0,
-            height: self.size.1,
-            mode: self.mode.name().into(),
-            min_version,
-            raw: false,
-            timeout_ms,
-        })
+    /// The frame these arguments ask for (PNG, of any version, the server's default
+    /// deadline).
+    pub fn spec(&self) -> Result<FrameSpec> {
+        Ok(FrameSpec::new(read_camera(&self.camera)?, self.size, self.mode))
     }
 }
 

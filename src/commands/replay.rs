@@ -3,17 +3,15 @@
 //! clients of a live server. Both paths check digests at quiescence, so the same script
 //! on the same world gives the same checkpoints either way.
 
-use super::remote::{ServerArgs, quiescent_world, status_error};
+use super::remote::{ServerArgs, quiescent_world};
 use super::{load_world, print_json, progress, save_world, seconds};
 use anyhow::{Context, Result, anyhow, bail};
 use naadf_client::Client;
 use naadf_client::connect::session_client_seq;
 use naadf_client::gpu::{Frame, Headless, Mode};
-use naadf_proto::v1::{EditRequest, HistoryRequest, StatusRequest};
-use naadf_server::history::Histories;
-use naadf_server::wal::EntryKind;
 use naadf_world::World;
 use naadf_world::camera::Camera;
+use naadf_world::edit::{BatchKind, Histories};
 use naadf_world::ops::{Batch, Limits};
 use naadf_world::replay::hashdag::{HashdagMapping, to_script_lines};
 use naadf_world::replay::script::{Line, ScriptLine, parse_line, parse_script};
@@ -138,7 +136,7 @@ struct Local {
 }
 
 impl Local {
-    fn apply(&mut self, user: &str, batch: &Batch, kind: EntryKind) -> Result<u64> {
+    fn apply(&mut self, user: &str, batch: &Batch, kind: BatchKind) -> Result<u64> {
         let applied = self.world.apply(batch, &self.limits)?;
         let version = applied.change.version;
         self.histories.record(user, 0, kind, version, applied.undo);
@@ -148,7 +146,7 @@ impl Local {
 
 impl Target for Local {
     fn edit(&mut self, user: &str, batch: &Batch) -> Result<u64> {
-        self.apply(user, batch, EntryKind::Edit)
+        self.apply(user, batch, BatchKind::Edit)
     }
 
     fn history(&mut self, user: &str, redo: bool) -> Result<u64> {
@@ -156,7 +154,7 @@ impl Target for Local {
             .histories
             .history_batch(user, redo, &self.world)
             .map_err(|e| anyhow!(e))?;
-        self.apply(user, &batch, if redo { EntryKind::Redo } else { EntryKind::Undo })
+        self.apply(user, &batch, if redo { BatchKind::Redo } else { BatchKind::Undo })
     }
 
     fn wait_version(&mut self, v: u64) -> Result<()> {
@@ -218,44 +216,37 @@ impl Remote {
 
 impl Target for Remote {
     fn edit(&mut self, user: &str, batch: &Batch) -> Result<u64> {
-        let mut c = self.client(user)?;
-        let req = EditRequest {
-            ops: batch.to_json_line(),
-            client_seq: self.seq(),
-        };
-        let reply = self.runtime.block_on(c.edit(req)).map_err(status_error)?;
-        Ok(self.acked(reply.into_inner().version))
+        let c = self.client(user)?;
+        let seq = self.seq();
+        let ack = self.runtime.block_on(c.edit(batch.to_json_line(), seq))?;
+        Ok(self.acked(ack.version))
     }
 
     fn history(&mut self, user: &str, redo: bool) -> Result<u64> {
-        let mut c = self.client(user)?;
-        let req = HistoryRequest { client_seq: self.seq() };
-        let reply = if redo {
-            self.runtime.block_on(c.redo(req))
+        let c = self.client(user)?;
+        let seq = self.seq();
+        let ack = if redo {
+            self.runtime.block_on(c.redo(seq))
         } else {
-            self.runtime.block_on(c.undo(req))
-        }
-        .map_err(status_error)?;
-        Ok(self.acked(reply.into_inner().version))
+            self.runtime.block_on(c.undo(seq))
+        }?;
+        Ok(self.acked(ack.version))
     }
 
     fn wait_version(&mut self, v: u64) -> Result<()> {
         let user = self.default_user.clone();
-        let mut c = self.client(&user)?;
+        let c = self.client(&user)?;
         let deadline = Instant::now() + self.timeout; // at most 1e9 s: `seconds` checked it
         loop {
-            let s = self
-                .runtime
-                .block_on(c.status(StatusRequest {}))
-                .map_err(status_error)?;
-            if s.get_ref().version >= v {
+            let s = self.runtime.block_on(c.status())?;
+            if s.version >= v {
                 self.version = self.version.max(v);
                 return Ok(());
             }
             if Instant::now() > deadline {
                 bail!(
                     "the server is at version {} after {:?}, not {v}",
-                    s.get_ref().version,
+                    s.version,
                     self.timeout
                 );
             }

@@ -1,9 +1,8 @@
 //! `naadf status --server URL [--json]`: the server's version, digest and clients.
 
 use super::print_json;
-use super::remote::{ServerArgs, block_on, status_error};
+use super::remote::{ServerArgs, block_on};
 use anyhow::Result;
-use naadf_proto::v1::StatusRequest;
 
 /// Arguments of `status`.
 #[derive(clap::Args)]
@@ -18,7 +17,7 @@ pub struct Args {
 #[derive(serde::Serialize)]
 struct Status {
     protocol_version: u32,
-    size: Vec<u32>,
+    size: [u32; 3],
     version: u64,
     growth_seq: u32,
     quiescent: bool,
@@ -30,17 +29,14 @@ struct Status {
 
 /// Prints the server's state.
 pub fn run(a: Args) -> Result<()> {
-    let s = block_on(async {
-        let mut c = a.server.connect().await?;
-        Ok(c.status(StatusRequest {}).await.map_err(status_error)?.into_inner())
-    })?;
+    let s = block_on(async { Ok(a.server.connect().await?.status().await?) })?;
     let out = Status {
         protocol_version: s.protocol_version,
         size: s.size,
         version: s.version,
         growth_seq: s.growth_seq,
         quiescent: s.quiescent,
-        digest: s.digest,
+        digest: s.digest.to_string(),
         clients: s.clients,
         user: s.user,
         role: s.role,

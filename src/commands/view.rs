@@ -5,7 +5,7 @@ use super::render::{parse_image_size, parse_mode, read_camera};
 use super::{print_json, seconds};
 use anyhow::Result;
 use naadf_client::gpu::Mode;
-use naadf_client::viewer::{ServerAddress, ViewerOptions};
+use naadf_client::viewer::ViewerOptions;
 use std::path::PathBuf;
 
 /// Arguments of `view`.
@@ -42,11 +42,7 @@ pub struct Args {
 /// Runs the viewer.
 pub fn run(a: Args) -> Result<()> {
     let summary = naadf_client::viewer::run(ViewerOptions {
-        server: ServerAddress {
-            url: a.server.server,
-            token: a.server.token,
-            ca: a.server.ca,
-        },
+        server: a.server.address(),
         size: a.size,
         camera: a.camera.as_deref().map(read_camera).transpose()?,
         mode: a.mode,

@@ -1,4 +1,4 @@
-//! Axis-aligned distance fields (NAADF-REFERENCE §2.4–§2.5).
+//! Axis-aligned distance fields (docs/NAADF.md §6–§7, docs/FORMAT.md §5.6).
 //!
 //! Every empty cell stores, per direction (−x, +x, −y, +y, −z, +z), how many further cells
 //! of its level are empty in a box around it. All levels grow their fields in **lock
@@ -199,6 +199,37 @@ pub fn build_chunk_aadf(size: WorldSize, chunks: &mut Vec<u32>, entities: &[u32]
     *chunks = job.into_shadow();
 }
 
+/// Chunks around a change whose converged AADF may differ: a lock-step field depends on
+/// chunks at most 31 levels plus one neighbour away; two more for margin.
+pub const REGROW_RADIUS: u32 = MAX_CHUNK_FIELD as u32 + 3;
+
+/// The free chunks within [`REGROW_RADIUS`] (Chebyshev) of any seed chunk, ascending:
+/// a separable dilation of the seed mask, O(chunks) whatever the number of seeds.
+fn regrow_region(size: WorldSize, seeds: &[u32], free: impl Fn(usize) -> bool) -> Vec<u32> {
+    let d = size.chunks().map(|v| v as usize);
+    let n = size.chunk_count();
+    let mut mask = vec![false; n];
+    for &s in seeds {
+        mask[s as usize] = true;
+    }
+    let r = REGROW_RADIUS as usize;
+    let stride = [1, d[0], d[0] * d[1]];
+    for axis in 0..3 {
+        let mut out = vec![false; n];
+        for (i, _) in mask.iter().enumerate().filter(|(_, m)| **m) {
+            let p = (i / stride[axis]) % d[axis];
+            let base = i - p * stride[axis];
+            for q in p.saturating_sub(r)..(p + r + 1).min(d[axis]) {
+                out[base + q * stride[axis]] = true;
+            }
+        }
+        mask = out;
+    }
+    (0..n as u32)
+        .filter(|&i| mask[i as usize] && free(i as usize))
+        .collect()
+}
+
 /// Chebyshev distance (in chunks) from each chunk to the nearest seed, capped at `cap`.
 fn seed_distance(size: WorldSize, seeds: &[u32], cap: u8) -> Vec<u8> {
     let d = size.chunks().map(|v| v as usize);
@@ -253,7 +284,7 @@ pub struct GrowthJob {
 }
 
 impl GrowthJob {
-    /// Starts a job recomputing the free chunks within [`crate::edit::REGROW_RADIUS`] of
+    /// Starts a job recomputing the free chunks within [`REGROW_RADIUS`] of
     /// `seeds`, on `chunks` (a copy of the cells) with these entity fields.
     ///
     /// Warm start: a change influences the lock step one chunk per level, so a chunk at
@@ -263,8 +294,8 @@ impl GrowthJob {
     /// the work near the seeds remains, and the result is still a from-scratch build. A
     /// chunk whose cell is zero (reset by a clamp, or genuinely boxed in) starts cold.
     pub fn around(size: WorldSize, seeds: &[u32], chunks: Vec<u32>, entities: &[u32]) -> Self {
-        let region = crate::edit::regrow_region(size, seeds, |i| chunk_is_free(chunks[i], entities[i]));
-        let distance = seed_distance(size, seeds, crate::edit::REGROW_RADIUS as u8);
+        let region = regrow_region(size, seeds, |i| chunk_is_free(chunks[i], entities[i]));
+        let distance = seed_distance(size, seeds, REGROW_RADIUS as u8);
         let mut shadow = chunks;
         let mut entering: Vec<Vec<u32>> = vec![Vec::new(); usize::from(MAX_CHUNK_FIELD) + 1];
         let mut active = Vec::new();

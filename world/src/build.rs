@@ -1,4 +1,4 @@
-//! Construction of a world from raw voxels, chunk by chunk (NAADF-REFERENCE §2.3).
+//! Construction of a world from raw voxels, chunk by chunk (docs/FORMAT.md §7, docs/NAADF.md §5).
 //!
 //! A [`ChunkSource`] yields one 16³ chunk of material ids at a time, so no dense copy of
 //! the world ever exists. Chunks are processed in batches, in linear chunk order:

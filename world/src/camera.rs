@@ -1,4 +1,4 @@
-//! The camera contract (BRIEF §8): JSON `{"pos":[x,y,z],"yaw":deg,"pitch":deg,"fov_y":deg}`.
+//! The camera contract (docs/CAMERA.md): JSON `{"pos":[x,y,z],"yaw":deg,"pitch":deg,"fov_y":deg}`.
 //!
 //! forward = (sin yaw·cos pitch, sin pitch, cos yaw·cos pitch); right = normalize(cross(+Y,
 //! forward)); up = cross(forward, right). At yaw 0 the camera looks along +Z with +X to the

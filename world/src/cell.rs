@@ -1,4 +1,4 @@
-//! Bit layouts of the three cell levels (BRIEF §3, NAADF-REFERENCE §1.1).
+//! Bit layouts of the three cell levels (docs/FORMAT.md §5, docs/NAADF.md §2).
 //!
 //! Chunk and block cells are `u32` with a 2-bit state in bits 30–31:
 //! - `0` empty: bits 0–29 hold an AADF (six 5-bit fields for chunks, six 2-bit fields in
@@ -34,7 +34,14 @@ pub enum State {
     Mixed,
 }
 
-const STATE_SHIFT: u32 = 30;
+/// Bit position of the 2-bit state of a chunk or block cell.
+pub const STATE_SHIFT: u32 = 30;
+/// State bits of an empty cell ([`State::Empty`]).
+pub const STATE_EMPTY: u32 = 0;
+/// State bits of a uniformly full cell ([`State::Full`]).
+pub const STATE_FULL: u32 = 1;
+/// State bits of a mixed cell ([`State::Mixed`]; 3 decodes as mixed too).
+pub const STATE_MIXED: u32 = 2;
 /// Mask of the 30-bit payload.
 pub const PAYLOAD: u32 = (1 << STATE_SHIFT) - 1;
 
@@ -43,8 +50,8 @@ pub const PAYLOAD: u32 = (1 << STATE_SHIFT) - 1;
 #[inline]
 pub fn state(cell: u32) -> State {
     match cell >> STATE_SHIFT {
-        0 => State::Empty,
-        1 => State::Full,
+        STATE_EMPTY => State::Empty,
+        STATE_FULL => State::Full,
         _ => State::Mixed,
     }
 }
@@ -58,14 +65,14 @@ pub fn uniform(material: u16) -> u32 {
 /// A full cell of `material` (1..=32767).
 #[inline]
 pub fn full(material: u16) -> u32 {
-    (1 << STATE_SHIFT) | u32::from(material & MAX_MATERIAL)
+    (STATE_FULL << STATE_SHIFT) | u32::from(material & MAX_MATERIAL)
 }
 
 /// A mixed cell pointing at `ptr`.
 #[inline]
 pub fn mixed(ptr: u32) -> u32 {
     debug_assert!(ptr <= PAYLOAD);
-    (2 << STATE_SHIFT) | ptr
+    (STATE_MIXED << STATE_SHIFT) | ptr
 }
 
 /// Material of a full cell.

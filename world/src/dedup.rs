@@ -1,7 +1,7 @@
 //! Deduplication of voxel groups: one authoritative open-addressing map from group content
 //! to group slot, reference counts, and deterministic slot allocation.
 //!
-//! Unlike the reference engine (NAADF-REFERENCE §9.7–§9.8):
+//! Unlike the reference engine (docs/NAADF.md §5 and §14, R1–R3):
 //! - deleted entries become tombstones, so probe chains never break;
 //! - a probe that fails after [`PROBE_LIMIT`] slots appends a new group instead of
 //!   returning a bogus pointer;

@@ -1,4 +1,4 @@
-//! The world digest (BRIEF §3): 64 bits, kept incrementally in O(changed pages).
+//! The world digest (docs/FORMAT.md §8): 64 bits, kept incrementally in O(changed pages).
 //!
 //! Every mirrored buffer and table, taken at its logical length, is cut into 64 KiB pages
 //! (the last one may be short). Page `k` of buffer `id` contributes

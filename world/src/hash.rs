@@ -1,4 +1,4 @@
-//! The reference engine's block hash (NAADF-REFERENCE §2.3).
+//! The reference engine's block hash (docs/NAADF.md §4).
 //!
 //! `H = C[0] + Σ_{i=0..63} C[i+1]·(v_i & 0x7FFF)` in wrapping `u32` arithmetic, with
 //! `C[k] = 31^(64−k)`. Only the material bits enter the hash; equality is always checked

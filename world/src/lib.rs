@@ -13,7 +13,7 @@
 //! - [`traverse`]: CPU ray traversal (three methods that must agree exactly);
 //! - [`edit`] and [`entity`]: edit batches, dynamic entities;
 //! - [`digest`]: the paged 64-bit digest clients use to verify their mirror;
-//! - [`file`]: the `.naadf` world file.
+//! - [`file`](mod@file): the `.naadf` world file.
 //!
 //! ```
 //! use naadf_world::preset::Preset;
@@ -28,6 +28,8 @@
 //! assert!(hit.is_some_and(|h| h.material != 0));
 //! println!("digest {}", world.digest());
 //! ```
+
+#![warn(missing_docs)]
 
 pub mod aadf;
 pub mod build;

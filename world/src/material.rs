@@ -1,4 +1,4 @@
-//! Materials: 15-bit ids mapped to 16-byte GPU entries (BRIEF §3, NAADF-REFERENCE §1.2).
+//! Materials: 15-bit ids mapped to 16-byte GPU entries (docs/FORMAT.md §5.4, docs/NAADF.md §3).
 //!
 //! Entry layout (four little-endian `u32` words of half floats):
 //! - w0 = kind (bits 0–1) | layer 0 (bits 2–3) | half(roughness) << 16

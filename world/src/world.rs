@@ -6,7 +6,6 @@ use crate::cell::{self, Aadf, CHUNK_FIELD_BITS, CHUNK_VOXELS, GROUP_WORDS, State
 use crate::dedup::GroupStore;
 use crate::digest::{BufferId, Digest, PagedDigest};
 use crate::edit::Growth;
-use crate::entity::trace::EntityView;
 use crate::entity::{Entities, EntityTable, Pose};
 use crate::error::WorldError;
 use crate::material::MaterialTable;
@@ -20,7 +19,7 @@ use std::io::Write;
 /// Block cells per chunk (one block array).
 const BLOCK_ARRAY: usize = 64;
 
-/// A NAADF world: the GPU-mirrored buffers (BRIEF §3) and the tables that travel with them.
+/// A NAADF world: the GPU-mirrored buffers (docs/FORMAT.md §5) and the tables that travel with them.
 ///
 /// Invariants, checked on load and kept by every mutation:
 /// - canonical form: no mixed cell whose children are all one uniform value, no full cell
@@ -562,7 +561,7 @@ impl World {
         }
     }
 
-    /// The world digest (BRIEF §3) over every mirrored buffer and table, kept
+    /// The world digest (docs/FORMAT.md §8) over every mirrored buffer and table, kept
     /// incrementally: O(1) to read, O(changed pages) to maintain.
     pub fn digest(&self) -> Digest {
         self.digest.digest()
@@ -602,20 +601,6 @@ impl World {
     /// The entity instance buffer: the chunk instance lists, 5-word records.
     pub fn entity_instances(&self) -> &[u32] {
         &self.entities.instances
-    }
-
-    /// The entity buffers a ray test reads, or `None` when no chunk lists an entity.
-    #[inline]
-    pub(crate) fn entity_view(&self) -> Option<EntityView<'_>> {
-        self.entities.present().then(|| {
-            EntityView::new(
-                self.size.chunks(),
-                &self.chunk_entities,
-                &self.entities.instances,
-                &self.entities.bounds,
-                &self.entities.type_voxels,
-            )
-        })
     }
 
     /// Whether a chunk is empty and free of entities (it may carry a chunk AADF).

@@ -90,3 +90,27 @@ fn loading_rejects_a_mixed_chunk_of_empty_blocks() {
     let err = World::from_parts(parts).expect_err("non-canonical chunk accepted");
     assert!(err.to_string().contains("collapsed"), "{err}");
 }
+
+/// The digests of preset worlds, as built when the layout was last changed on purpose.
+///
+/// The digest covers every mirrored buffer byte, and clients and tools on other machines
+/// compare against it, so a refactor must leave it alone: a change here means the world
+/// buffers changed. Update the values only with a deliberate format change, and say so in
+/// the commit.
+#[test]
+fn preset_digests_are_stable() {
+    use naadf_world::preset::Preset;
+    let cases = [
+        ("test", None, 1, "cc9aa95f3691a194"),
+        ("test", None, 7, "4d09a32d11d1593c"),
+        ("terrain", Some((256, 128, 256)), 1, "4552ddd814903dc2"),
+        ("terrain", Some((256, 128, 256)), 7, "083022fd151bb379"),
+    ];
+    for (name, size, seed, expected) in cases {
+        let size = size.map(|(x, y, z)| WorldSize::new(x, y, z).unwrap());
+        let source = Preset::parse(name).unwrap().source(size, seed).unwrap();
+        let world = World::build(&*source, &|_| {}).unwrap();
+        assert_eq!(world.digest().to_string(), expected, "{name} seed {seed}");
+        assert_eq!(world.digest_from_scratch(), world.digest(), "{name} seed {seed}");
+    }
+}

@@ -6,8 +6,11 @@
 //!   Mesa lavapipe and on a real GPU;
 //! - [`GpuWorld`]: the world buffers, byte for byte, kept in step with a [`World`] by
 //!   uploading the 64 KiB pages whose digest hash changed;
-//! - [`shaders`]: the WGSL of `shaders/`, assembled per pass with the bindings the
-//!   world's current buffer split needs;
+//! - [`shaders`]: the WGSL of `shaders/`, assembled per pass after a generated prelude:
+//!   the bindings the world's current buffer split needs, the [`WorldInfo`] uniform and
+//!   the constants the shaders share with the Rust code;
+//! - [`WorldInfo`]: the world uniform, one definition for Rust and WGSL
+//!   ([`WgslStruct`]);
 //! - [`RayTracer`]: traces lists of rays with any traversal method (tests against the
 //!   CPU, benchmarks);
 //! - [`Renderer`]: renders camera frames in the modes of [`Mode`];
@@ -21,10 +24,12 @@ mod pipeline;
 mod rays;
 mod render;
 pub mod shaders;
+mod uniform;
 mod world;
 
 pub use context::{Gpu, GpuError};
 pub use headless::Headless;
 pub use rays::{GpuHit, GpuRay, RayBatch, RayTracer};
 pub use render::{DEFAULT_SUN, Frame, GBUFFER_MAGIC, Mode, Renderer, STEPS_FULL_SCALE, write_gbuffer};
+pub use uniform::{Member, WgslStruct, WgslType, WorldInfo};
 pub use world::{DEFAULT_MAX_STEPS, GPU_BUFFERS, GpuWorld, Upload};

@@ -3,7 +3,7 @@
 
 use super::context::{Gpu, GpuError};
 use super::pipeline::{PassPipelines, dispatch_2d};
-use super::shaders::{Loop, Pass};
+use super::shaders::{Loop, NO_ENTITY, Pass};
 use super::world::GpuWorld;
 use naadf_world::traverse::{Hit, Method, Ray};
 use wgpu::util::DeviceExt;
@@ -195,7 +195,7 @@ fn decode(w: &[u32]) -> GpuHit {
             t: f64::from(f32::from_bits(w[5])),
             material: w[4] as u16,
             steps: w[6],
-            entity: (w[7] != 0x3FFF).then_some(w[7]),
+            entity: (w[7] != NO_ENTITY).then_some(w[7]),
         }
     });
     GpuHit {

@@ -43,7 +43,8 @@ impl Mode {
         Mode::ALL.into_iter().find(|m| m.name() == s)
     }
 
-    fn code(self) -> u32 {
+    /// The mode's code in the shaders (their `MODE_*` constants).
+    pub(super) const fn code(self) -> u32 {
         match self {
             Mode::Albedo => 0,
             Mode::Material => 1,

@@ -10,6 +10,7 @@
 
 use super::context::{Gpu, GpuError, checked_on};
 use super::shaders::{BUFFERS, Split};
+use super::uniform::WorldInfo;
 use naadf_world::digest::{BufferId, Digest, PAGE_BYTES, digest_of};
 use naadf_world::{World, WorldError};
 
@@ -61,7 +62,8 @@ pub struct GpuWorld {
     part_words: u64,
     buffers: Vec<Logical>,
     info: wgpu::Buffer,
-    info_words: [u32; 8],
+    /// What `info` holds.
+    world_info: WorldInfo,
     layout: wgpu::BindGroupLayout,
     bind_group: wgpu::BindGroup,
     split: Split,
@@ -105,7 +107,7 @@ impl GpuWorld {
             .collect();
         let info = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("world info"),
-            size: 32,
+            size: size_of::<WorldInfo>() as u64,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
@@ -122,12 +124,14 @@ impl GpuWorld {
             part_words,
             buffers,
             info,
-            info_words: [0; 8],
+            world_info: WorldInfo {
+                max_steps: DEFAULT_MAX_STEPS,
+                ..bytemuck::Zeroable::zeroed()
+            },
             layout,
             split,
             max_storage_buffers: gpu.limits.max_storage_buffers_per_shader_stage,
         };
-        w.info_words[7] = DEFAULT_MAX_STEPS;
         w.check_bindings(&split)?;
         w.sync(world)?;
         Ok(w)
@@ -176,13 +180,15 @@ impl GpuWorld {
             b.len = len;
         }
         let size = world.size();
-        let [vx, vy, vz] = size.voxels();
-        let [cx, cy, cz] = size.chunks();
-        let has_entities = u32::from(!world.entity_instances().is_empty());
-        let words = [vx, vy, vz, has_entities, cx, cy, cz, self.info_words[7]];
-        if words != self.info_words || up.reallocated {
-            self.info_words = words;
-            self.queue.write_buffer(&self.info, 0, bytemuck::cast_slice(&words));
+        let info = WorldInfo {
+            size: size.voxels(),
+            has_entities: u32::from(!world.entity_instances().is_empty()),
+            chunks: size.chunks(),
+            max_steps: self.world_info.max_steps,
+        };
+        if info != self.world_info || up.reallocated {
+            self.world_info = info;
+            self.queue.write_buffer(&self.info, 0, bytemuck::bytes_of(&info));
         }
         if up.reallocated {
             self.rebind();

@@ -3,26 +3,15 @@
 //! the world itself is only touched on that thread.
 
 use super::ViewerError;
-use crate::connect::{Client, connect, session_client_seq};
-use naadf_proto::v1::{EditRequest, JoinRequest, StatusRequest, WorldMessage};
-use std::path::PathBuf;
+use crate::Client;
+use crate::connect::{ServerAddress, session_client_seq};
+use naadf_proto::v1::{JoinRequest, WorldMessage};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
 use std::time::Duration;
 
 /// How often the server's status (client count) is asked for.
 const STATUS_PERIOD: Duration = Duration::from_secs(1);
-
-/// Where the server is and who we are.
-#[derive(Clone, Debug)]
-pub struct ServerAddress {
-    /// Server URL (`http://` or `https://`).
-    pub url: String,
-    /// Bearer token.
-    pub token: Option<String>,
-    /// CA certificate (PEM) for `https://`.
-    pub ca: Option<PathBuf>,
-}
 
 /// What the network side reports to the window.
 #[derive(Debug)]
@@ -39,7 +28,7 @@ pub enum Event {
     },
     /// Clients connected to the server, from the latest status poll.
     Clients(u32),
-    /// An edit was acknowledged at this version, or refused with this message.
+    /// An edit was acknowledged at this version, or failed with this message.
     Edited(Result<u64, String>),
 }
 
@@ -64,15 +53,15 @@ impl Link {
             .enable_all()
             .build()
             .map_err(ViewerError::Runtime)?;
-        let client = runtime.block_on(connect(&server.url, server.token.as_deref(), server.ca.as_deref()))?;
+        let client = runtime.block_on(server.connect())?;
         let notify: Arc<dyn Fn(Event) + Send + Sync> = Arc::new(notify);
-        let (mut c, n) = (client.clone(), notify.clone());
+        let (c, n) = (client.clone(), notify.clone());
         runtime.spawn(async move {
             let mut tick = tokio::time::interval(STATUS_PERIOD);
             loop {
                 tick.tick().await;
-                if let Ok(s) = c.status(StatusRequest {}).await {
-                    n(Event::Clients(s.into_inner().clients));
+                if let Ok(s) = c.status().await {
+                    n(Event::Clients(s.clients));
                 }
             }
         });
@@ -87,22 +76,22 @@ impl Link {
 
     /// Joins with `request` (the mirror's cache) and forwards the stream until it ends.
     pub fn join(&self, request: JoinRequest) {
-        let (mut c, n) = (self.client.clone(), self.notify.clone());
+        let (c, n) = (self.client.clone(), self.notify.clone());
         self.runtime.spawn(async move {
             let ended = |why: String, fatal| Event::StreamEnded { why, fatal };
-            let mut stream = match c.join(request).await {
-                Ok(s) => s.into_inner(),
-                Err(s) => {
+            let mut stream = match c.stream(request).await {
+                Ok(s) => s,
+                Err(e) => {
                     use tonic::Code::{FailedPrecondition, PermissionDenied, Unauthenticated};
-                    let fatal = matches!(s.code(), Unauthenticated | PermissionDenied | FailedPrecondition);
-                    return n(ended(format!("join refused: {:?}: {}", s.code(), s.message()), fatal));
+                    let fatal = matches!(e.code(), Some(Unauthenticated | PermissionDenied | FailedPrecondition));
+                    return n(ended(e.to_string(), fatal));
                 }
             };
             loop {
                 match stream.message().await {
                     Ok(Some(m)) => n(Event::Message(Box::new(m))),
                     Ok(None) => return n(ended("the server ended the stream".into(), false)),
-                    Err(s) => return n(ended(format!("stream failed: {}", s.message()), false)),
+                    Err(e) => return n(ended(e.to_string(), false)),
                 }
             }
         });
@@ -110,17 +99,13 @@ impl Link {
 
     /// Sends `ops` (Ops JSON, one batch) as an edit; the reply arrives as [`Event::Edited`].
     pub fn edit(&self, ops: String) {
-        let (mut c, n) = (self.client.clone(), self.notify.clone());
+        let (c, n) = (self.client.clone(), self.notify.clone());
         let client_seq = self.next_seq.fetch_add(1, Ordering::Relaxed);
         let pending = self.pending.clone();
         pending.fetch_add(1, Ordering::SeqCst);
         self.runtime.spawn(async move {
-            let reply = c.edit(EditRequest { ops, client_seq }).await;
-            n(Event::Edited(
-                reply
-                    .map(|r| r.into_inner().version)
-                    .map_err(|s| format!("{:?}: {}", s.code(), s.message())),
-            ));
+            let reply = c.edit(ops, client_seq).await;
+            n(Event::Edited(reply.map(|a| a.version).map_err(|e| e.to_string())));
             pending.fetch_sub(1, Ordering::SeqCst);
         });
     }

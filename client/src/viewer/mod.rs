@@ -21,11 +21,11 @@ mod present;
 
 pub use fly::{Fly, Move};
 pub use hud::draw_hud;
-pub use link::{Event, Link, ServerAddress};
+pub use link::{Event, Link};
 pub use pick::{Click, edit_for_click};
 pub use present::Presenter;
 
-use crate::connect::ConnectError;
+use crate::connect::ServerAddress;
 use crate::gpu::{Frame, Gpu, GpuError, GpuWorld, Mode, Renderer};
 use crate::mirror::{Mirror, MirrorError};
 use naadf_world::camera::Camera;
@@ -93,7 +93,7 @@ pub enum ViewerError {
     Gpu(#[from] GpuError),
     /// The server could not be reached.
     #[error(transparent)]
-    Connect(#[from] ConnectError),
+    Connect(#[from] crate::Error),
     /// The async runtime of the connection could not start.
     #[error("cannot start the network runtime: {0}")]
     Runtime(std::io::Error),
@@ -104,7 +104,7 @@ pub enum ViewerError {
     #[error("no world from the server after {0:?} ({1})")]
     Timeout(Duration, String),
     /// The server refused the join for good (authentication, protocol).
-    #[error("the server refused to stream the world: {0}")]
+    #[error("cannot stream the world: {0}")]
     Refused(String),
     /// The screenshot could not be written.
     #[error("cannot write the screenshot {0}: {1}")]
@@ -123,7 +123,7 @@ pub fn run(opts: ViewerOptions) -> Result<ViewerSummary, ViewerError> {
             let _ = p.send_event(e);
         }
     })?;
-    let mirror = Mirror::new(None);
+    let mut mirror = Mirror::new(None);
     link.join(mirror.join_request());
     let mut app = App {
         opts,
@@ -331,7 +331,7 @@ impl App {
             }
             Event::Clients(n) => self.clients = n,
             Event::Edited(Ok(v)) => self.notice = format!("edit applied at v{v}"),
-            Event::Edited(Err(e)) => self.notice = format!("edit refused: {e}"),
+            Event::Edited(Err(e)) => self.notice = format!("edit not applied: {e}"),
         }
     }
 

@@ -1,4 +1,4 @@
-//! Keeping chunk AADFs safe across edits, and queueing their regrowth.
+//! Keeping chunk AADFs safe across edits.
 //!
 //! When chunks stop being free (they gain solid voxels, or entities), every free chunk
 //! whose AADF box contains one of them is reset to a zero AADF in the same version; that
@@ -10,13 +10,8 @@ use crate::aadf::chunk_is_free;
 use crate::cell::{Aadf, CHUNK_FIELD_BITS, MAX_CHUNK_FIELD};
 use crate::digest::BufferId;
 use crate::prefix::PrefixSum3;
-use crate::size::WorldSize;
 use crate::world::World;
 use rayon::prelude::*;
-
-/// Chunks around a change whose converged AADF may differ: a lock-step field depends on
-/// chunks at most 31 levels plus one neighbour away; two more for margin.
-pub const REGROW_RADIUS: u32 = MAX_CHUNK_FIELD as u32 + 3;
 
 impl World {
     /// Resets every free chunk whose AADF box contains one of `origins` (chunks that just
@@ -84,31 +79,4 @@ impl World {
             w.push(BufferId::Chunks, i, 1);
         }
     }
-}
-
-/// The free chunks within [`REGROW_RADIUS`] (Chebyshev) of any seed chunk, ascending:
-/// a separable dilation of the seed mask, O(chunks) whatever the number of seeds.
-pub(crate) fn regrow_region(size: WorldSize, seeds: &[u32], free: impl Fn(usize) -> bool) -> Vec<u32> {
-    let d = size.chunks().map(|v| v as usize);
-    let n = size.chunk_count();
-    let mut mask = vec![false; n];
-    for &s in seeds {
-        mask[s as usize] = true;
-    }
-    let r = REGROW_RADIUS as usize;
-    let stride = [1, d[0], d[0] * d[1]];
-    for axis in 0..3 {
-        let mut out = vec![false; n];
-        for (i, _) in mask.iter().enumerate().filter(|(_, m)| **m) {
-            let p = (i / stride[axis]) % d[axis];
-            let base = i - p * stride[axis];
-            for q in p.saturating_sub(r)..(p + r + 1).min(d[axis]) {
-                out[base + q * stride[axis]] = true;
-            }
-        }
-        mask = out;
-    }
-    (0..n as u32)
-        .filter(|&i| mask[i as usize] && free(i as usize))
-        .collect()
 }

@@ -1,5 +1,6 @@
 //! Edits: applying batches of ops atomically, keeping the structure canonical and the
-//! distance fields safe, background chunk-AADF growth, change sets and undo records.
+//! distance fields safe, background chunk-AADF growth, change sets, undo records and the
+//! per-user undo histories built from them.
 //!
 //! One batch → one new version → one [`ChangeSet`]. The change set's [`Record`] is compact
 //! (a single-voxel edit is a dozen bytes): a mirror expands it into the exact buffer writes
@@ -13,14 +14,14 @@
 //! chunks whose emptiness flips (they stop or start being free).
 
 mod commit;
+mod history;
 mod invalidate;
 mod overlay;
 mod record;
 mod undo;
 mod writes;
 
-pub use invalidate::REGROW_RADIUS;
-pub(crate) use invalidate::regrow_region;
+pub use history::{BatchKind, Histories, MAX_SEQS, MAX_UNDO, MAX_UNDO_VOXELS};
 pub use record::{Decoded, Record};
 pub use undo::UndoRecord;
 pub use writes::Writes;

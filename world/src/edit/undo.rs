@@ -1,4 +1,4 @@
-//! Content-level undo records (BRIEF §4): what a batch overwrote, and the batch that puts
+//! Content-level undo records (docs/OPS.md, "Undo and redo"): what a batch overwrote, and the batch that puts
 //! it back where nobody has changed it since.
 
 use super::overlay::Touched;

@@ -1,4 +1,4 @@
-//! Dynamic entities (BRIEF §4, NAADF-REFERENCE §3.4 and §5): rigid voxel models placed at
+//! Dynamic entities (docs/OPS.md "Entities", docs/NAADF.md §11): rigid voxel models placed at
 //! arbitrary positions and rotations on top of the voxel world.
 //!
 //! - An **entity type** is made from a model of the world's [`ModelTable`] the first time an
@@ -24,8 +24,8 @@
 //!   entities or models, so they are a pure function of the entity table, the type order
 //!   and the models.
 
+pub(crate) mod bounds;
 pub mod pack;
-pub(crate) mod trace;
 
 use crate::aadf::grid_aadf;
 use crate::cell::CHUNK_FIELD_BITS;
@@ -177,7 +177,7 @@ pub(crate) struct Entities {
     /// Per record of `instances`: the padded world box of its entity. Derived on every
     /// machine from the records (not mirrored, not in the digest), so that a ray rejects
     /// most instances without transforming into them.
-    pub bounds: Vec<trace::Bounds>,
+    pub bounds: Vec<bounds::Bounds>,
     /// Chunks with entities and their fields `(pointer << 8) | count`, ascending chunk.
     pub occupied: Vec<(u32, u32)>,
 }
@@ -344,7 +344,7 @@ impl Entities {
                 inv_rot: q.inv_rot,
             };
             records.push(record.pack());
-            record_bounds.push(trace::Bounds::of(&record));
+            record_bounds.push(bounds::Bounds::of(&record));
             if let Some((lo, hi)) = chunk_range(size, msize, pose.pos, pose.rot) {
                 for z in lo[2]..=hi[2] {
                     for y in lo[1]..=hi[1] {

@@ -1,4 +1,4 @@
-//! The packed chunk-instance record (NAADF-REFERENCE §5), exactly as the GPU reads it.
+//! The packed chunk-instance record (docs/FORMAT.md §5.8), exactly as the GPU reads it.
 //!
 //! A record is five `u32` words (`uint4` + `uint`, 20 bytes):
 //!

@@ -1,4 +1,4 @@
-//! MagicaVoxel `.vox` import (BRIEF §8, NAADF-REFERENCE §7).
+//! MagicaVoxel `.vox` import (docs/CLI.md, "Formats"; docs/NAADF.md §13).
 //!
 //! Mapping:
 //! - the scene graph (`nTRN`/`nGRP`/`nSHP`) is flattened at frame 0 (module `vox_graph`

@@ -1,4 +1,4 @@
-//! Edit operations (BRIEF §4): the ops JSON, its validation, and its resolution into voxel
+//! Edit operations (docs/OPS.md): the ops JSON, its validation, and its resolution into voxel
 //! writes on a [`Canvas`].
 //!
 //! One ops-JSON line is one [`Batch`]: a single op object, or `{"batch":[op,...]}`. The world
@@ -34,7 +34,7 @@ use crate::size::WorldSize;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-/// One edit operation, exactly as in BRIEF §4. Material 0 erases.
+/// One edit operation, exactly as in docs/OPS.md. Material 0 erases.
 ///
 /// Serde form: an object internally tagged by `"op"` with the snake_case variant name;
 /// unknown ops and unknown fields are rejected.
@@ -388,7 +388,7 @@ mod tests {
     }
 
     #[test]
-    fn parses_every_op_of_the_brief() {
+    fn parses_every_op() {
         let lines = [
             r#"{"op":"set","voxels":[[1,2,3,4],[0,0,0,0]]}"#,
             r#"{"op":"box","min":[0,0,0],"max":[4,5,6],"material":2}"#,

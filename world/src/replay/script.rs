@@ -1,5 +1,5 @@
-//! The replay script format (docs/REPLAY.md): JSON Lines, each line either an ops line of
-//! BRIEF §4 (`{"op":…}` or `{"batch":[…]}`: one batch, one version) or one control line.
+//! The replay script format (docs/REPLAY.md): JSON Lines, each line either an ops line
+//! (docs/OPS.md: `{"op":…}` or `{"batch":[…]}`: one batch, one version) or one control line.
 //!
 //! Parsing checks the whole script before anything runs, so a broken script changes
 //! nothing; every error names its 1-based line.

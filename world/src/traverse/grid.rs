@@ -1,7 +1,7 @@
 //! The dense-grid oracle: Amanatides–Woo over a full decode of the world.
 
+use super::entities::{Candidates, OwnedEntities};
 use super::ray::{Hit, Ray};
-use crate::entity::trace::{Candidates, OwnedEntities};
 use crate::error::WorldError;
 use crate::world::World;
 use rayon::prelude::*;

@@ -1,15 +1,15 @@
 //! Traversal of the chunk → block → voxel hierarchy, with or without AADF jumps.
 
+use super::entities::Candidates;
 use super::ray::{Hit, Ray};
 use crate::cell::{self, Aadf, CELL_FIELD_BITS, CHUNK_FIELD_BITS, State};
-use crate::entity::trace::Candidates;
 use crate::world::World;
 
 /// Upper bound on visited cells; unreachable while the AADF safety invariant holds (every
 /// step enters a new cell of the finite Amanatides–Woo sequence), kept as a guard.
 const MAX_STEPS: u32 = 1 << 24;
 
-/// Traces `ray` with AADF jumps (NAADF-REFERENCE §3.2).
+/// Traces `ray` with AADF jumps (docs/NAADF.md §9).
 ///
 /// ```
 /// use naadf_world::{World, preset::Preset, traverse::{trace_naadf, Ray}};

@@ -1,6 +1,6 @@
 //! CPU ray traversal: three methods on the same world that must agree exactly.
 //!
-//! - [`Method::Naadf`]: the multi-axis DDA of NAADF-REFERENCE §3.2 that jumps over the
+//! - [`Method::Naadf`]: the reference's multi-axis DDA (docs/NAADF.md §9) that jumps over the
 //!   empty cuboid given by the chunk, block and voxel AADFs;
 //! - [`Method::Nodf`]: the same hierarchy with the AADFs ignored (empty chunks and blocks
 //!   are skipped only to their own edge);
@@ -12,6 +12,7 @@
 //! every cell in between is known to be empty, so all three visit the same first solid
 //! cell and report the same voxel, normal, material and `t`.
 
+mod entities;
 pub mod grid;
 mod hierarchy;
 pub mod ray;

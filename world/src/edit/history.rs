@@ -1,11 +1,11 @@
 //! Per-user undo and redo histories, and the table of answered client sequence numbers
-//! that makes retried requests idempotent. Both are part of the server state that
-//! snapshots persist and WAL replay rebuilds.
+//! that makes retried requests idempotent. The server keeps them in the state its
+//! snapshots persist and rebuilds them when it replays its log; an in-process replay
+//! keeps them the same way, so both undo exactly alike.
 
-use crate::wal::EntryKind;
-use naadf_world::World;
-use naadf_world::edit::UndoRecord;
-use naadf_world::ops::Batch;
+use super::UndoRecord;
+use crate::ops::Batch;
+use crate::world::World;
 use serde::{Deserialize, Serialize};
 use std::collections::{BTreeMap, VecDeque};
 
@@ -15,6 +15,20 @@ pub const MAX_UNDO: usize = 64;
 pub const MAX_UNDO_VOXELS: usize = 1 << 22;
 /// Most answered client sequence numbers remembered per user.
 pub const MAX_SEQS: usize = 4096;
+
+/// What kind of request an applied batch came from, which decides where its undo record
+/// goes: a new edit pushes it on the undo stack (and clears redo), an undo moves one step
+/// from undo to redo, a redo moves one back. Logs record it with each batch so that a
+/// replay rebuilds the same histories.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum BatchKind {
+    /// An edit or entity request.
+    Edit,
+    /// An undo of the user's latest edit.
+    Undo,
+    /// A redo of the user's latest undo.
+    Redo,
+}
 
 /// One user's history.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -76,11 +90,11 @@ impl Histories {
 
     /// Records an applied batch of `kind`: its undo record goes on the right stack, and
     /// `(user, client_seq)` is answered with `version`.
-    pub fn record(&mut self, user: &str, client_seq: u64, kind: EntryKind, version: u64, undo: UndoRecord) {
+    pub fn record(&mut self, user: &str, client_seq: u64, kind: BatchKind, version: u64, undo: UndoRecord) {
         match kind {
-            EntryKind::Edit => self.edited(user, undo),
-            EntryKind::Undo => self.undone(user, undo),
-            EntryKind::Redo => self.redone(user, undo),
+            BatchKind::Edit => self.edited(user, undo),
+            BatchKind::Undo => self.undone(user, undo),
+            BatchKind::Redo => self.redone(user, undo),
         }
         self.answer(user, client_seq, version);
     }

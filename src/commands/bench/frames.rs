@@ -3,13 +3,13 @@
 //! flight; with `--world`, the same frame rendered in-process (GPU, readback, PNG — what a
 //! node does per job) for the server's added latency.
 
-use super::bench_edit::percentile;
-use super::remote::{ServerArgs, block_on, status_error};
-use super::render::{parse_image_size, parse_mode, read_camera};
-use super::{load_world, print_json};
+use super::percentile;
+use crate::commands::remote::{ServerArgs, block_on};
+use crate::commands::render::{parse_image_size, parse_mode, read_camera};
+use crate::commands::{load_world, print_json};
 use anyhow::Result;
+use naadf_client::FrameSpec;
 use naadf_client::gpu::{Headless, Mode};
-use naadf_proto::v1::FrameRequest;
 use naadf_world::raysets::fixed_cameras;
 use serde::Serialize;
 use std::path::PathBuf;
@@ -84,30 +84,22 @@ pub fn run(a: FramesArgs) -> Result<()> {
         (None, Some(w)) => fixed_cameras(w.size())[0],
         (None, None) => read_camera(r#"{"pos":[64,80,-40],"yaw":0,"pitch":-30}"#)?,
     };
-    let req = FrameRequest {
-        camera: serde_json::to_string(&camera)?,
-        width: a.size.0,
-        height: a.size.1,
-        mode: a.mode.name().into(),
-        min_version: 0,
-        raw: false,
-        timeout_ms: 0,
-    };
+    let spec = FrameSpec::new(camera, a.size, a.mode);
     let (fps, ms, nodes) = block_on(async {
         let client = a.server.connect().await?;
         // One untimed frame: pipelines are built on every node's first frame.
-        client.clone().render_frame(req.clone()).await.map_err(status_error)?;
+        client.frame(&spec).await?;
         let t0 = Instant::now();
         let per_task = a.frames.div_ceil(a.concurrency.max(1));
         let mut tasks = Vec::new();
         for _ in 0..a.concurrency.max(1) {
-            let (mut c, req) = (client.clone(), req.clone());
+            let (c, spec) = (client.clone(), spec.clone());
             tasks.push(tokio::spawn(async move {
                 let mut out = Vec::new();
                 for _ in 0..per_task {
                     let t = Instant::now();
-                    let r = c.render_frame(req.clone()).await.map_err(status_error)?;
-                    out.push((t.elapsed().as_secs_f64() * 1e3, r.into_inner().node));
+                    let r = c.frame(&spec).await?;
+                    out.push((t.elapsed().as_secs_f64() * 1e3, r.node));
                 }
                 anyhow::Ok(out)
             }));

@@ -3,7 +3,7 @@
 //! measured in one run so that their ratios mean something on a shared machine. Every
 //! GPU result is also checked against the CPU `naadf` traversal.
 
-use super::{load_world, print_json};
+use crate::commands::{load_world, print_json};
 use anyhow::{Result, bail};
 use naadf_client::gpu::{Gpu, GpuHit, GpuRay, GpuWorld, RayBatch, RayTracer};
 use naadf_world::raysets::{fixed_cameras, primary_rays, secondary_rays};
@@ -199,5 +199,5 @@ fn print_report(r: &GpuReport) {
         "{} primary + {} secondary rays, {} batch(es)",
         r.rays, r.secondary_rays, r.batches
     );
-    super::bench::print_ratios("", &r.primary, &r.secondary);
+    super::print_ratios("", &r.primary, &r.secondary);
 }

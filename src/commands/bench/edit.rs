@@ -1,13 +1,13 @@
 //! `naadf bench edit`: edit latency, change-set sizes, background regrowth and a real
 //! edit stream (HashDAG `EditSphere` replays), on a generated world.
 
-use super::generate::{PresetArgs, generate};
-use super::print_json;
+use crate::commands::generate::{PresetArgs, generate};
+use super::{percentile, surface};
+use crate::commands::print_json;
 use anyhow::{Context, Result, bail};
 use naadf_world::World;
 use naadf_world::ops::{Batch, Limits, Op};
 use naadf_world::raysets::SplitMix64;
-use naadf_world::traverse::{Ray, trace_naadf};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -65,20 +65,6 @@ struct EditReport {
     /// Encoded record of that batch, bytes.
     entity_move_1000_record_bytes: usize,
     replay: Option<ReplayReport>,
-}
-
-/// The first solid voxel below the top of the world at column (x, z), if any.
-pub(super) fn surface(world: &World, x: u32, z: u32) -> Option<[u32; 3]> {
-    let top = f64::from(world.size().voxels()[1]) - 0.5;
-    let ray = Ray::new([f64::from(x) + 0.5, top, f64::from(z) + 0.5], [0.0, -1.0, 0.0]).ok()?;
-    trace_naadf(world, &ray).map(|h| h.voxel)
-}
-
-pub(super) fn percentile(sorted: &[f64], q: f64) -> f64 {
-    sorted
-        .get(((sorted.len() as f64 - 1.0) * q).round() as usize)
-        .copied()
-        .unwrap_or(f64::NAN)
 }
 
 fn median<T: Copy + Ord + Default>(mut v: Vec<T>) -> T {
@@ -231,7 +217,7 @@ fn time_entity_moves(world: &mut World, points: &[[u32; 3]]) -> Result<(f64, usi
             z as f64 + 0.5 * (step % 2) as f64,
         ]
     };
-    let mut ops = vec![super::bench::entity_model_op()];
+    let mut ops = vec![super::entity_model_op()];
     ops.extend((0..1000).map(|k| Op::SpawnEntity {
         id: k as u32,
         model: "bench_box".into(),

@@ -1,38 +1,18 @@
-//! `naadf bench traverse WORLD` and `naadf bench build`: throughput measured in one run, so
-//! that ratios between methods are meaningful on a shared, noisy machine.
+//! `naadf bench traverse WORLD`: ray throughput of the three traversal methods on fixed
+//! cameras, and the cost of entities from paired rounds.
 
-use super::generate::PresetArgs;
-use super::{chunk_progress, load_world, print_json};
+use super::{entity_model_op, print_ratios};
+use crate::commands::{load_world, print_json};
 use anyhow::{Result, bail};
-use naadf_world::cell::CHUNK_VOXELS;
-use naadf_world::model::ModelTable;
 use naadf_world::ops::{Batch, Limits, Op};
 use naadf_world::raysets::{SplitMix64, fixed_cameras, primary_rays, secondary_rays};
-use naadf_world::stats::WorldStats;
 use naadf_world::traverse::{Hit, Method, Ray, Tracer, same_result};
-use naadf_world::{ChunkSource, MaterialTable, World, WorldSize};
+use naadf_world::World;
 use rayon::prelude::*;
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::time::Instant;
-
-/// Benchmarks.
-#[derive(clap::Subcommand)]
-pub enum Bench {
-    /// Ray throughput of the three traversal methods on fixed cameras.
-    Traverse(TraverseArgs),
-    /// Generation, construction and chunk-AADF build times of a preset.
-    Build(BuildArgs),
-    /// Edit latency, change-set sizes, regrowth and replayed edit streams.
-    Edit(super::bench_edit::EditArgs),
-    /// The server under load: join, rejoin, edit latency with many mirrors, wire bytes.
-    Stream(super::bench_stream::StreamArgs),
-    /// GPU ray throughput of the traversal variants (naadf, nodf, grid), checked against the CPU.
-    Gpu(super::bench_gpu::GpuArgs),
-    /// Frames through a server's render nodes: frames per second, latency, routing overhead.
-    Frames(super::bench_frames::FramesArgs),
-}
 
 /// Arguments of `bench traverse`.
 #[derive(clap::Args)]
@@ -66,28 +46,6 @@ pub struct TraverseArgs {
     /// Print one JSON object.
     #[arg(long)]
     json: bool,
-}
-
-/// Arguments of `bench build`.
-#[derive(clap::Args)]
-pub struct BuildArgs {
-    #[command(flatten)]
-    preset: PresetArgs,
-    /// Print one JSON object.
-    #[arg(long)]
-    json: bool,
-}
-
-/// Runs a benchmark.
-pub fn run(b: Bench) -> Result<()> {
-    match b {
-        Bench::Traverse(a) => traverse(a),
-        Bench::Build(a) => build(a),
-        Bench::Edit(a) => super::bench_edit::run(a),
-        Bench::Stream(a) => super::bench_stream::run(a),
-        Bench::Gpu(a) => super::bench_gpu::run(a),
-        Bench::Frames(a) => super::bench_frames::run(a),
-    }
 }
 
 #[derive(Serialize)]
@@ -134,7 +92,8 @@ struct Reference {
     secondary_hits: Vec<Option<Hit>>,
 }
 
-fn traverse(a: TraverseArgs) -> Result<()> {
+/// Runs `bench traverse`.
+pub fn run(a: TraverseArgs) -> Result<()> {
     let world = load_world(&a.world)?;
     let (plain, secondary) = measure(&world, &a, None)?;
     let with_entities = if a.entities > 0 {
@@ -225,7 +184,7 @@ impl EntityCost {
             let mut range = [[0.0; 2]; 3];
             for (k, c) in costs.iter_mut().enumerate() {
                 c.sort_by(f64::total_cmp);
-                median[k] = super::bench_edit::percentile(c, 0.5);
+                median[k] = super::percentile(c, 0.5);
                 range[k] = [c[0], c[c.len() - 1]];
             }
             median_percent.insert(method.name(), median);
@@ -279,17 +238,6 @@ fn print_report(prefix: &str, r: &TraverseReport) {
     print_ratios(prefix, &r.primary, &r.secondary);
 }
 
-/// Prints `naadf`'s speed-up over `grid` and `nodf`, from Mrays/s per method.
-pub fn print_ratios(prefix: &str, primary: &BTreeMap<&str, f64>, secondary: &BTreeMap<&str, f64>) {
-    let ratio = |set: &BTreeMap<&str, f64>, other: &str| set.get(other).map_or(f64::NAN, |o| set["naadf"] / o);
-    for other in ["grid", "nodf"] {
-        println!(
-            "{prefix}naadf/{other}: primary {:.1}×, secondary {:.1}×",
-            ratio(primary, other),
-            ratio(secondary, other)
-        );
-    }
-}
 
 /// Spawns `n` 8³ entities (a hollow box) at random poses, in one batch: on the ground
 /// (found with a downward ray per column) or, with `air`, at random heights.
@@ -326,24 +274,6 @@ fn spawn_entities(world: &mut World, n: u32, seed: u64, air: bool) -> Result<()>
     Ok(())
 }
 
-/// Defines the 8³ hollow-box model used by entity benchmarks.
-pub fn entity_model_op() -> Op {
-    let mut voxels = Vec::new();
-    for z in 0..8i64 {
-        for y in 0..8i64 {
-            for x in 0..8i64 {
-                if [x, y, z].iter().any(|&c| c == 0 || c == 7) {
-                    voxels.push([x, y, z, 1]);
-                }
-            }
-        }
-    }
-    Op::DefineModel {
-        name: "bench_box".into(),
-        size: [8, 8, 8],
-        voxels,
-    }
-}
 
 /// Measures every method on the fixed primary rays of `world` and on `secondary` (by
 /// default, cosine rays from the first method's primary hits). Returns the report and the
@@ -408,136 +338,3 @@ fn measure(world: &World, a: &TraverseArgs, secondary: Option<Vec<Ray>>) -> Resu
     Ok((report, secondary))
 }
 
-/// Raw chunks held in memory, so that construction is timed without generation.
-struct MemorySource {
-    size: WorldSize,
-    materials: MaterialTable,
-    models: ModelTable,
-    chunks: Vec<Box<[u16; CHUNK_VOXELS]>>,
-}
-
-impl ChunkSource for MemorySource {
-    fn size(&self) -> WorldSize {
-        self.size
-    }
-    fn materials(&self) -> MaterialTable {
-        self.materials.clone()
-    }
-    fn models(&self) -> ModelTable {
-        self.models.clone()
-    }
-    fn fill_chunk(&self, c: [u32; 3], out: &mut [u16; CHUNK_VOXELS]) {
-        out.copy_from_slice(&self.chunks[self.size.chunk_index(c)][..]);
-    }
-}
-
-#[derive(Serialize)]
-struct BuildReport {
-    preset: String,
-    size: [u32; 3],
-    voxels: u64,
-    threads: usize,
-    /// Generating every raw chunk into memory (the generator's own cost).
-    generation_s: f64,
-    /// Construction from raw chunks in memory (hashing, dedup, voxel/block AADFs), all threads.
-    construction_s: f64,
-    /// The same on one thread.
-    construction_1_thread_s: f64,
-    /// Raw voxels per second per core (from the one-thread run).
-    construction_mvoxels_per_s_per_core: f64,
-    /// Raw voxels per second, all threads.
-    construction_mvoxels_per_s: f64,
-    /// Full chunk-AADF build (31 levels × 3 axes), all threads.
-    chunk_aadf_s: f64,
-    /// Bytes per layer and the dense u16 grid for comparison.
-    bytes: naadf_world::stats::Bytes,
-    dense_u16_bytes: u64,
-    dense_over_structure: f64,
-    stats: WorldStats,
-}
-
-fn build(a: BuildArgs) -> Result<()> {
-    let source = a.preset.source()?;
-    let size = source.size();
-    let n = size.chunk_count();
-    let bar = chunk_progress(n as u64, "generating");
-    let t0 = Instant::now();
-    let chunks: Vec<Box<[u16; CHUNK_VOXELS]>> = (0..n)
-        .into_par_iter()
-        .map(|i| {
-            let c = size.chunk_coords(i);
-            let mut raw = Box::new([0u16; CHUNK_VOXELS]);
-            match source.uniform_hint(c) {
-                Some(m) => raw.fill(m),
-                None => source.fill_chunk(c, &mut raw),
-            }
-            if i % 4096 == 0 {
-                bar.set_position(i as u64);
-            }
-            raw
-        })
-        .collect();
-    let generation_s = t0.elapsed().as_secs_f64();
-    bar.finish_and_clear();
-    let mem = MemorySource {
-        size,
-        materials: source.materials(),
-        models: source.models(),
-        chunks,
-    };
-    let timed_build = |threads: Option<usize>| -> Result<(World, f64, f64)> {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads.unwrap_or(0))
-            .build()?;
-        pool.install(|| {
-            let t0 = Instant::now();
-            let mut w = World::build(&mem, &|_| {})?;
-            let total = t0.elapsed().as_secs_f64();
-            let t1 = Instant::now();
-            w.rebuild_chunk_aadf();
-            let aadf = t1.elapsed().as_secs_f64();
-            Ok((w, total - aadf, aadf))
-        })
-    };
-    let (_, construction_1_thread_s, _) = timed_build(Some(1))?;
-    let (world, construction_s, chunk_aadf_s) = timed_build(None)?;
-    let stats = WorldStats::of(&world);
-    let voxels = size.voxel_count();
-    let dense = voxels * 2;
-    let r = BuildReport {
-        preset: a.preset.preset,
-        size: size.voxels(),
-        voxels,
-        threads: rayon::current_num_threads(),
-        generation_s,
-        construction_s,
-        construction_1_thread_s,
-        construction_mvoxels_per_s_per_core: voxels as f64 / construction_1_thread_s / 1e6,
-        construction_mvoxels_per_s: voxels as f64 / construction_s / 1e6,
-        chunk_aadf_s,
-        bytes: stats.bytes,
-        dense_u16_bytes: dense,
-        dense_over_structure: dense as f64 / stats.bytes.total as f64,
-        stats,
-    };
-    if a.json {
-        return print_json(&r);
-    }
-    println!("{} {:?}: {} voxels, {} threads", r.preset, r.size, r.voxels, r.threads);
-    println!("generation          {:.2} s", r.generation_s);
-    println!(
-        "construction        {:.2} s ({:.0} Mvoxels/s); one thread {:.2} s ({:.0} Mvoxels/s per core)",
-        r.construction_s,
-        r.construction_mvoxels_per_s,
-        r.construction_1_thread_s,
-        r.construction_mvoxels_per_s_per_core
-    );
-    println!("chunk AADF build    {:.3} s", r.chunk_aadf_s);
-    println!(
-        "structure           {:.1} MiB vs dense u16 {:.1} MiB ({:.1}×)",
-        r.bytes.total as f64 / 1048576.0,
-        dense as f64 / 1048576.0,
-        r.dense_over_structure
-    );
-    Ok(())
-}

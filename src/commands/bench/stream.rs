@@ -2,13 +2,12 @@
 //! bytes, rejoin cost, edit-to-every-client latency with 8/16/64 mirrors, bytes on the wire
 //! per single-voxel edit (counted at the TCP level), and sustained durable edits per second.
 
-use super::bench_edit::{percentile, surface};
-use super::generate::{PresetArgs, generate};
-use super::print_json;
-use super::remote::block_on;
+use super::{percentile, surface};
+use crate::commands::generate::{PresetArgs, generate};
+use crate::commands::print_json;
+use crate::commands::remote::block_on;
 use anyhow::{Context, Result, bail};
-use naadf_client::{Client, Mirror, connect};
-use naadf_proto::v1::{EditRequest, StatusRequest};
+use naadf_client::{Client, Mirror};
 use naadf_server::{Bound, ServerConfig};
 use naadf_world::World;
 use naadf_world::raysets::SplitMix64;
@@ -154,9 +153,7 @@ struct Follower {
 }
 
 async fn follow(url: &str, cache: Option<World>) -> Result<Follower> {
-    let mut client = connect(url, None, None).await?;
-    let mut mirror = Mirror::new(cache);
-    let mut stream = client.join(mirror.join_request()).await?.into_inner();
+    let mut session = Client::connect(url, None, None).await?.join(cache).await?;
     let (applied_tx, applied) = watch::channel(None);
     let (stop, mut stopped) = watch::channel(false);
     let bytes = Arc::new(AtomicU64::new(0));
@@ -166,8 +163,8 @@ async fn follow(url: &str, cache: Option<World>) -> Result<Follower> {
         let stop = async move {
             let _ = stopped.changed().await;
         };
-        mirror
-            .follow(&mut stream, stop, |mirror| -> Result<ControlFlow<()>> {
+        session
+            .follow(stop, |mirror| -> Result<ControlFlow<()>> {
                 received.store(mirror.stats.bytes, Ordering::Relaxed);
                 if let Some(w) = mirror.world().filter(|_| mirror.is_live()) {
                     let v = w.version();
@@ -179,7 +176,7 @@ async fn follow(url: &str, cache: Option<World>) -> Result<Follower> {
                 Ok(ControlFlow::Continue(()))
             })
             .await?;
-        Ok((mirror, times))
+        Ok((session.into_mirror(), times))
     });
     Ok(Follower {
         applied,
@@ -264,8 +261,8 @@ fn voxel_op(p: [u32; 3], k: usize) -> String {
     )
 }
 
-async fn edit(c: &mut Client, ops: String) -> Result<u64> {
-    Ok(c.edit(EditRequest { ops, client_seq: 0 }).await?.into_inner().version)
+async fn edit(c: &Client, ops: String) -> Result<u64> {
+    Ok(c.edit(ops, 0).await?.version)
 }
 
 /// Runs the benchmark.
@@ -280,7 +277,7 @@ pub fn run(a: StreamArgs) -> Result<()> {
     block_on(async move {
         let server = LocalServer::start(world).await?;
         let url = server.url();
-        let mut editor = connect(&url, None, None).await?;
+        let editor = Client::connect(&url, None, None).await?;
 
         // Join: a fresh client, no cache.
         let t = Instant::now();
@@ -292,7 +289,7 @@ pub fn run(a: StreamArgs) -> Result<()> {
         // Rejoin after 100 small edits.
         let mut last = 0;
         for (k, p) in pts.iter().take(100).enumerate() {
-            last = edit(&mut editor, voxel_op(*p, k)).await?;
+            last = edit(&editor, voxel_op(*p, k)).await?;
         }
         let mut f = follow(&url, mirror.into_world()).await?;
         f.wait_for(last).await?;
@@ -319,7 +316,7 @@ pub fn run(a: StreamArgs) -> Result<()> {
         let (before, msg_before) = (count.load(Ordering::Relaxed), f.bytes.load(Ordering::Relaxed));
         let n = 1000;
         for k in 0..n {
-            last = edit(&mut editor, voxel_op(pts[(100 + k) % pts.len()], k + 1)).await?;
+            last = edit(&editor, voxel_op(pts[(100 + k) % pts.len()], k + 1)).await?;
         }
         f.wait_for(last).await?;
         tokio::time::sleep(Duration::from_millis(200)).await;
@@ -331,7 +328,7 @@ pub fn run(a: StreamArgs) -> Result<()> {
 
         // Let the distance-field growth queued by the edits so far finish first.
         let t = Instant::now();
-        while !editor.status(StatusRequest {}).await?.into_inner().quiescent {
+        while !editor.status().await?.quiescent {
             tokio::time::sleep(Duration::from_millis(10)).await;
         }
         eprintln!("growth backlog drained in {:.2} s", t.elapsed().as_secs_f64());
@@ -353,7 +350,7 @@ pub fn run(a: StreamArgs) -> Result<()> {
             let first = run * edits;
             for k in first..first + edits {
                 tokio::time::sleep_until(start + Duration::from_secs_f64(k as f64 / f64::from(a.rate))).await;
-                let mut c = editor.clone();
+                let c = editor.clone();
                 let p = pts[(k * 7 + 3) % pts.len()];
                 let r = 1 + k % 8;
                 let ops = format!(
@@ -365,7 +362,7 @@ pub fn run(a: StreamArgs) -> Result<()> {
                 );
                 sent.push(tokio::spawn(async move {
                     let t0 = Instant::now();
-                    edit(&mut c, ops).await.map(|v| (v, t0, t0.elapsed()))
+                    edit(&c, ops).await.map(|v| (v, t0, t0.elapsed()))
                 }));
             }
             let mut sent_at = HashMap::new();
@@ -421,13 +418,13 @@ pub fn run(a: StreamArgs) -> Result<()> {
         let done = Arc::new(AtomicU64::new(0));
         let mut workers = Vec::new();
         for w in 0..32usize {
-            let mut c = editor.clone();
+            let c = editor.clone();
             let done = done.clone();
             let pts = pts.clone();
             workers.push(tokio::spawn(async move {
                 let mut k = w;
                 while Instant::now() < stop_at {
-                    edit(&mut c, voxel_op(pts[k % pts.len()], k)).await?;
+                    edit(&c, voxel_op(pts[k % pts.len()], k)).await?;
                     done.fetch_add(1, Ordering::Relaxed);
                     k += 32;
                 }

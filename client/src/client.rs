@@ -1,0 +1,378 @@
+//! [`Client`]: the world service's calls as typed methods. Every method takes `&self` (the
+//! client is a cheap handle to one connection; clone it for concurrent calls) and fails
+//! with a typed [`Error`].
+//!
+//! ```no_run
+//! # async fn demo() -> Result<(), naadf_client::Error> {
+//! use naadf_client::{Client, connect::session_client_seq};
+//! let client = Client::connect("http://127.0.0.1:50051", Some("token"), None).await?;
+//! let ack = client.edit(r#"{"op":"set","voxels":[[1,2,3,4]]}"#, session_client_seq()).await?;
+//! let status = client.status().await?;
+//! assert!(status.version >= ack.version);
+//! # Ok(()) }
+//! ```
+
+use crate::connect::{self, RawClient};
+use crate::error::Error;
+use crate::gpu::Mode;
+use crate::node::{NodeInfo, Registration};
+use crate::session::{Session, WorldStream};
+use naadf_proto::requests::{entity_pose, entity_spawn};
+use naadf_proto::v1::{
+    DespawnEntitiesRequest, EditReply, EditRequest, FrameReply, FrameRequest, HistoryRequest, JoinRequest,
+    MoveEntitiesRequest, NodeHello, NodeMessage, SpawnEntitiesRequest, StatusRequest, node_message,
+};
+use naadf_world::World;
+use naadf_world::camera::Camera;
+use naadf_world::digest::Digest;
+use std::path::Path;
+use std::time::Duration;
+use tokio::sync::mpsc;
+use tokio_stream::wrappers::ReceiverStream;
+
+/// A connection to a server.
+#[derive(Clone, Debug)]
+pub struct Client {
+    raw: RawClient,
+}
+
+/// The acknowledgement of a durable edit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Ack {
+    /// The version the edit produced.
+    pub version: u64,
+    /// The request repeated an earlier `client_seq`: it was not applied again, and
+    /// `version` is the one it produced the first time.
+    pub duplicate: bool,
+}
+
+/// The server's state ([`Client::status`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ServerStatus {
+    /// The protocol version the server speaks.
+    pub protocol_version: u32,
+    /// World size in voxels.
+    pub size: [u32; 3],
+    /// The current edit version.
+    pub version: u64,
+    /// The current growth sub-step.
+    pub growth_seq: u32,
+    /// Whether no distance-field work is queued.
+    pub quiescent: bool,
+    /// The current digest.
+    pub digest: Digest,
+    /// Clients joined now.
+    pub clients: u32,
+    /// The caller's user name.
+    pub user: String,
+    /// The caller's role.
+    pub role: String,
+}
+
+/// An entity's id and pose.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pose {
+    /// The entity id.
+    pub id: u32,
+    /// World position of the model's local-origin corner.
+    pub pos: [f64; 3],
+    /// Rotation quaternion `[x, y, z, w]` (any non-zero length).
+    pub rot: [f64; 4],
+}
+
+/// An entity to spawn.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Spawn {
+    /// The model it shows.
+    pub model: String,
+    /// Its id and pose.
+    pub pose: Pose,
+}
+
+/// A frame to render: what [`Client::frame`] asks for and what a render node's job says.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FrameSpec {
+    /// The camera.
+    pub camera: Camera,
+    /// Image size in pixels (width, height).
+    pub size: (u32, u32),
+    /// Render mode.
+    pub mode: Mode,
+    /// The oldest world version the frame may show.
+    pub min_version: u64,
+    /// Raw RGBA8 (rows from the top) instead of PNG.
+    pub raw: bool,
+    /// The deadline, or the server's default ([`naadf_proto::DEFAULT_FRAME_DEADLINE`]).
+    /// Sent in whole milliseconds; one under a millisecond means the default.
+    pub timeout: Option<Duration>,
+}
+
+impl FrameSpec {
+    /// A PNG frame of any version, with the server's default deadline.
+    pub fn new(camera: Camera, size: (u32, u32), mode: Mode) -> Self {
+        Self {
+            camera,
+            size,
+            mode,
+            min_version: 0,
+            raw: false,
+            timeout: None,
+        }
+    }
+
+    /// The request on the wire.
+    pub(crate) fn to_wire(&self) -> FrameRequest {
+        FrameRequest {
+            // A camera is numbers only: it always serializes.
+            camera: serde_json::to_string(&self.camera).expect("camera JSON"),
+            width: self.size.0,
+            height: self.size.1,
+            mode: self.mode.name().into(),
+            min_version: self.min_version,
+            raw: self.raw,
+            timeout_ms: self
+                .timeout
+                .map_or(0, |t| t.as_millis().min(u128::from(u32::MAX)) as u32),
+        }
+    }
+
+    /// A request from the wire; an error names what this client cannot render.
+    pub(crate) fn from_wire(r: &FrameRequest) -> Result<Self, String> {
+        Ok(Self {
+            camera: Camera::from_json(&r.camera).map_err(|e| e.to_string())?,
+            size: (r.width, r.height),
+            mode: Mode::parse(&r.mode).ok_or_else(|| format!("unknown mode '{}'", r.mode))?,
+            min_version: r.min_version,
+            raw: r.raw,
+            timeout: (r.timeout_ms != 0).then(|| Duration::from_millis(u64::from(r.timeout_ms))),
+        })
+    }
+}
+
+/// An encoded frame.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct FrameImage {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// PNG bytes, or raw RGBA8 rows from the top when [`FrameSpec::raw`] asked for them.
+    pub data: Vec<u8>,
+}
+
+/// A frame the server had rendered ([`Client::frame`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct RenderedFrame {
+    /// The world version it shows (the quiescent state of that version).
+    pub version: u64,
+    /// The render node that made it (its adapter).
+    pub node: String,
+    /// The image.
+    pub image: FrameImage,
+}
+
+impl From<EditReply> for Ack {
+    fn from(r: EditReply) -> Self {
+        Ack {
+            version: r.version,
+            duplicate: r.duplicate,
+        }
+    }
+}
+
+impl Client {
+    /// Connects to `url` (`http://host:port`, or `https://host:port` trusting `ca` (PEM) in
+    /// addition to the system roots), sending `token` with every call.
+    ///
+    /// ```no_run
+    /// # async fn demo() -> Result<(), naadf_client::Error> {
+    /// let client = naadf_client::Client::connect("https://example.org:50051", Some("t"), None).await?;
+    /// println!("at version {}", client.status().await?.version);
+    /// # Ok(()) }
+    /// ```
+    pub async fn connect(url: &str, token: Option<&str>, ca: Option<&Path>) -> Result<Client, Error> {
+        Ok(Client {
+            raw: connect::connect(url, token, ca).await?,
+        })
+    }
+
+    /// Joins the world stream, announcing `cache` (a world from an earlier session) so
+    /// that only what changed is sent, and returns the [`Session`] that applies it.
+    ///
+    /// ```no_run
+    /// # async fn demo(client: naadf_client::Client) -> Result<(), naadf_client::Error> {
+    /// let mut session = client.join(None).await?;
+    /// let world = session.until_quiescent(0, std::time::Duration::from_secs(60)).await?;
+    /// println!("version {} digest {}", world.version(), world.digest());
+    /// # Ok(()) }
+    /// ```
+    pub async fn join(&self, cache: Option<World>) -> Result<Session, Error> {
+        Session::start(self.clone(), cache).await
+    }
+
+    /// Opens the world stream with `request` ([`crate::Mirror::join_request`]) and returns
+    /// it unapplied: for a mirror that lives elsewhere (the viewer applies it on its window
+    /// thread) or a relay that passes the messages on.
+    pub async fn stream(&self, request: JoinRequest) -> Result<WorldStream, Error> {
+        Ok(WorldStream::new(self.raw.clone().join(request).await?.into_inner()))
+    }
+
+    /// Applies `ops` (one ops-JSON line: an op or `{"batch":[...]}`) as one version, and
+    /// returns once it is durable. A repeat of `client_seq` by the same user is answered
+    /// with the original version and not applied again; 0 opts out.
+    pub async fn edit(&self, ops: impl Into<String>, client_seq: u64) -> Result<Ack, Error> {
+        let req = EditRequest {
+            ops: ops.into(),
+            client_seq,
+        };
+        Ok(self.raw.clone().edit(req).await?.into_inner().into())
+    }
+
+    /// Undoes the caller's latest edit that is not undone yet (a new version).
+    pub async fn undo(&self, client_seq: u64) -> Result<Ack, Error> {
+        Ok(self
+            .raw
+            .clone()
+            .undo(HistoryRequest { client_seq })
+            .await?
+            .into_inner()
+            .into())
+    }
+
+    /// Redoes the caller's latest undone edit (a new version).
+    pub async fn redo(&self, client_seq: u64) -> Result<Ack, Error> {
+        Ok(self
+            .raw
+            .clone()
+            .redo(HistoryRequest { client_seq })
+            .await?
+            .into_inner()
+            .into())
+    }
+
+    /// Spawns entities (one version).
+    pub async fn spawn_entities(&self, entities: &[Spawn], client_seq: u64) -> Result<Ack, Error> {
+        let req = SpawnEntitiesRequest {
+            entities: entities
+                .iter()
+                .map(|s| entity_spawn(s.pose.id, &s.model, s.pose.pos, s.pose.rot))
+                .collect(),
+            client_seq,
+        };
+        Ok(self.raw.clone().spawn_entities(req).await?.into_inner().into())
+    }
+
+    /// Moves entities (one version).
+    pub async fn move_entities(&self, moves: &[Pose], client_seq: u64) -> Result<Ack, Error> {
+        let req = MoveEntitiesRequest {
+            moves: moves.iter().map(|p| entity_pose(p.id, p.pos, p.rot)).collect(),
+            client_seq,
+        };
+        Ok(self.raw.clone().move_entities(req).await?.into_inner().into())
+    }
+
+    /// Despawns entities (one version).
+    pub async fn despawn_entities(&self, ids: &[u32], client_seq: u64) -> Result<Ack, Error> {
+        let req = DespawnEntitiesRequest {
+            ids: ids.to_vec(),
+            client_seq,
+        };
+        Ok(self.raw.clone().despawn_entities(req).await?.into_inner().into())
+    }
+
+    /// The server's state.
+    pub async fn status(&self) -> Result<ServerStatus, Error> {
+        let s = self.raw.clone().status(StatusRequest {}).await?.into_inner();
+        Ok(ServerStatus {
+            protocol_version: s.protocol_version,
+            size: s
+                .size
+                .as_slice()
+                .try_into()
+                .map_err(|_| Error::Malformed(format!("a world size of {} numbers", s.size.len())))?,
+            version: s.version,
+            growth_seq: s.growth_seq,
+            quiescent: s.quiescent,
+            digest: s.digest.parse().map_err(Error::Malformed)?,
+            clients: s.clients,
+            user: s.user,
+            role: s.role,
+        })
+    }
+
+    /// Has one of the server's render nodes render a frame. The server refuses with
+    /// UNAVAILABLE when no node can take it, RESOURCE_EXHAUSTED ([`Error::RateLimited`])
+    /// when its render queue is full, DEADLINE_EXCEEDED past the deadline.
+    ///
+    /// ```no_run
+    /// # async fn demo(client: naadf_client::Client) -> Result<(), naadf_client::Error> {
+    /// use naadf_client::{FrameSpec, gpu::Mode};
+    /// let camera = naadf_world::camera::Camera::from_json(r#"{"pos":[0,80,0],"yaw":45,"pitch":-30}"#).unwrap();
+    /// let frame = client.frame(&FrameSpec::new(camera, (640, 480), Mode::Albedo)).await?;
+    /// std::fs::write("frame.png", &frame.image.data).unwrap();
+    /// # Ok(()) }
+    /// ```
+    pub async fn frame(&self, spec: &FrameSpec) -> Result<RenderedFrame, Error> {
+        let FrameReply {
+            version,
+            width,
+            height,
+            image,
+            node,
+        } = self.raw.clone().render_frame(spec.to_wire()).await?.into_inner();
+        Ok(RenderedFrame {
+            version,
+            node,
+            image: FrameImage {
+                width,
+                height,
+                data: image,
+            },
+        })
+    }
+
+    /// Registers as a render node that can do what `info` says; the server then sends it
+    /// jobs ([`Registration`]). Needs the render-node or admin role. A program that renders
+    /// frames runs a [`crate::node::RenderNode`], which keeps a node registered.
+    pub async fn register_node(&self, info: &NodeInfo) -> Result<Registration, Error> {
+        let (results, rx) = mpsc::channel(16);
+        let hello = NodeHello {
+            adapter: info.adapter.clone(),
+            modes: info.modes.iter().map(|m| m.name().to_owned()).collect(),
+            max_width: info.max_size.0,
+            max_height: info.max_size.1,
+        };
+        results
+            .try_send(NodeMessage {
+                kind: Some(node_message::Kind::Hello(hello)),
+            })
+            .expect("a new channel has room");
+        let jobs = self
+            .raw
+            .clone()
+            .register_node(ReceiverStream::new(rx))
+            .await?
+            .into_inner();
+        Ok(Registration::new(jobs, results))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frame_specs_cross_the_wire_unchanged() {
+        let camera = Camera::from_json(r#"{"pos":[1.5,2,-3],"yaw":45,"pitch":-30,"fov_y":70}"#).unwrap();
+        let mut spec = FrameSpec::new(camera, (96, 64), Mode::Material);
+        assert_eq!(FrameSpec::from_wire(&spec.to_wire()), Ok(spec.clone()));
+        assert_eq!(spec.to_wire().timeout_ms, 0, "the server's default deadline");
+        spec.min_version = 7;
+        spec.raw = true;
+        spec.timeout = Some(Duration::from_millis(1500));
+        assert_eq!(FrameSpec::from_wire(&spec.to_wire()), Ok(spec.clone()));
+        let mut wire = spec.to_wire();
+        wire.mode = "x-ray".into();
+        assert_eq!(FrameSpec::from_wire(&wire), Err("unknown mode 'x-ray'".into()));
+    }
+}

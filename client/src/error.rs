@@ -1,0 +1,120 @@
+//! [`Error`]: why a call to the server failed, sorted by what a caller does about it —
+//! reconnect and retry (a lost connection), back off (a rate limit), give up or fix the
+//! request (a refusal), or distrust the stream (a mirror error).
+
+use crate::connect::ConnectError;
+use crate::mirror::MirrorError;
+use std::time::Duration;
+
+/// The gRPC status codes [`Error::Refused`] carries.
+pub use tonic::Code;
+
+/// Errors of the client.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// No connection could be made: a bad URL, token or CA certificate, or no server
+    /// listening.
+    #[error(transparent)]
+    Connect(#[from] ConnectError),
+    /// The connection broke during a call, or could not be made again: whether the server
+    /// acted on the call is unknown. Retrying an edit with the same `client_seq` is safe
+    /// (the server answers a repeat with the original version); the client reconnects by
+    /// itself on the next call.
+    #[error("connection lost: {0}")]
+    ConnectionLost(String),
+    /// The server turned the request away with RESOURCE_EXHAUSTED: the caller is over its
+    /// rate limit, or the render queue is full. Back off and retry. (The server also uses
+    /// this code for a batch over its edit limits, which no retry fixes; the message says
+    /// which.)
+    #[error("server refused: ResourceExhausted: {0}")]
+    RateLimited(String),
+    /// The server refused the request: its gRPC code and message.
+    #[error("server refused: {code:?}: {message}")]
+    Refused {
+        /// The gRPC status code.
+        code: Code,
+        /// The server's explanation.
+        message: String,
+    },
+    /// The world stream broke the protocol, or the mirror diverged from the server.
+    #[error(transparent)]
+    Mirror(#[from] MirrorError),
+    /// The server ended the world stream before the mirror was quiescent at the version
+    /// waited for.
+    #[error("the server ended the stream before it was quiescent")]
+    StreamEnded,
+    /// The mirror was not quiescent at the version waited for within this time.
+    #[error("timed out after {} s before the server was quiescent", .0.as_secs_f64())]
+    Timeout(Duration),
+    /// A reply that does not hold what the protocol promises.
+    #[error("malformed reply from the server: {0}")]
+    Malformed(String),
+}
+
+impl Error {
+    /// The gRPC code of a refusal by the server (none for the other errors).
+    pub fn code(&self) -> Option<Code> {
+        match self {
+            Error::Refused { code, .. } => Some(*code),
+            Error::RateLimited(_) => Some(Code::ResourceExhausted),
+            _ => None,
+        }
+    }
+}
+
+impl From<tonic::Status> for Error {
+    /// Sorts a failed call: a status that tonic made itself from a transport failure
+    /// carries that failure as its source; a status the server sent has none.
+    fn from(s: tonic::Status) -> Self {
+        if let Some(mut cause) = std::error::Error::source(&s) {
+            let mut why = s.message().to_owned();
+            loop {
+                let text = cause.to_string();
+                if !why.contains(&text) {
+                    why = format!("{why}: {text}");
+                }
+                match cause.source() {
+                    Some(c) => cause = c,
+                    None => return Error::ConnectionLost(why),
+                }
+            }
+        }
+        match s.code() {
+            Code::ResourceExhausted => Error::RateLimited(s.message().to_owned()),
+            code => Error::Refused {
+                code,
+                message: s.message().to_owned(),
+            },
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn statuses_from_the_server_are_refusals() {
+        let e = Error::from(tonic::Status::invalid_argument("voxel outside the world"));
+        assert_eq!(e.code(), Some(Code::InvalidArgument));
+        assert_eq!(
+            e.to_string(),
+            "server refused: InvalidArgument: voxel outside the world"
+        );
+        let e = Error::from(tonic::Status::resource_exhausted("over the rate limit"));
+        assert!(matches!(e, Error::RateLimited(_)), "{e:?}");
+        assert_eq!(e.to_string(), "server refused: ResourceExhausted: over the rate limit");
+        // The server's own UNAVAILABLE (no render node) is a refusal, not a lost connection.
+        let e = Error::from(tonic::Status::unavailable("no render node"));
+        assert_eq!(e.code(), Some(Code::Unavailable));
+    }
+
+    #[test]
+    fn statuses_with_a_transport_cause_are_lost_connections() {
+        let io = std::io::Error::new(std::io::ErrorKind::ConnectionReset, "connection reset by peer");
+        let e = Error::from(tonic::Status::from_error(Box::new(io)));
+        assert!(matches!(e, Error::ConnectionLost(_)), "{e:?}");
+        assert_eq!(e.code(), None);
+        assert_eq!(e.to_string(), "connection lost: connection reset by peer");
+    }
+}

@@ -1,0 +1,106 @@
+//! Uniform structs declared once for Rust and WGSL.
+//!
+//! `wgsl_struct!` declares a `#[repr(C)]` [`bytemuck::Pod`] struct and implements
+//! [`WgslStruct`] for it from the same field list: the WGSL declaration the shaders'
+//! prelude gets ([`WgslStruct::wgsl`]) has the same fields, in the same order, with types
+//! derived from the Rust ones ([`WgslType`]). A unit test in `shaders.rs` checks with naga
+//! that WGSL lays the struct out at the Rust offsets.
+
+use std::fmt::Write;
+
+/// A Rust field type with a WGSL counterpart of the same size.
+pub trait WgslType: bytemuck::Pod {
+    /// The WGSL type.
+    const WGSL: &'static str;
+}
+
+impl WgslType for u32 {
+    const WGSL: &'static str = "u32";
+}
+
+impl WgslType for [u32; 3] {
+    const WGSL: &'static str = "vec3<u32>";
+}
+
+/// One field of a [`WgslStruct`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Member {
+    /// The field's name, the same in Rust and WGSL.
+    pub name: &'static str,
+    /// Its WGSL type.
+    pub wgsl: &'static str,
+    /// Its byte offset in the Rust struct (`offset_of!`).
+    pub offset: usize,
+    /// Its doc comment, one entry per line.
+    pub doc: &'static [&'static str],
+}
+
+/// A struct with one definition for Rust and WGSL (declared with `wgsl_struct!`).
+pub trait WgslStruct: bytemuck::Pod {
+    /// The struct's name in both languages.
+    const NAME: &'static str;
+    /// Its fields, in declaration order.
+    const MEMBERS: &'static [Member];
+
+    /// The WGSL declaration, doc comments included.
+    fn wgsl() -> String {
+        let mut s = format!("struct {} {{\n", Self::NAME);
+        for m in Self::MEMBERS {
+            for line in m.doc {
+                let _ = writeln!(s, "    //{line}");
+            }
+            let _ = writeln!(s, "    {}: {},", m.name, m.wgsl);
+        }
+        s.push_str("}\n");
+        s
+    }
+}
+
+/// Declares a `#[repr(C)]` Pod struct of documented `pub` fields whose types implement
+/// [`WgslType`], and implements [`WgslStruct`] for it from the same field list. Its size
+/// must be a multiple of 16 bytes, as WGSL's uniform layout rounds structs up to that.
+macro_rules! wgsl_struct {
+    (
+        $(#[doc = $doc:literal])*
+        pub struct $name:ident {
+            $($(#[doc = $field_doc:literal])+ pub $field:ident: $ty:ty,)+
+        }
+    ) => {
+        $(#[doc = $doc])*
+        #[repr(C)]
+        #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+        pub struct $name {
+            $($(#[doc = $field_doc])+ pub $field: $ty,)+
+        }
+
+        const _: () = assert!(size_of::<$name>() % 16 == 0, "uniform structs are multiples of 16 bytes");
+
+        impl WgslStruct for $name {
+            const NAME: &'static str = stringify!($name);
+            const MEMBERS: &'static [Member] = &[$(Member {
+                name: stringify!($field),
+                wgsl: <$ty as WgslType>::WGSL,
+                offset: std::mem::offset_of!($name, $field),
+                doc: &[$($field_doc),+],
+            }),+];
+        }
+    };
+}
+
+wgsl_struct! {
+    /// The world uniform, `world_info` (group 0, binding 0 of every pass): what the shaders
+    /// know about the world besides its buffers.
+    pub struct WorldInfo {
+        /// World size in voxels.
+        pub size: [u32; 3],
+        /// 1 when some chunk lists entities.
+        pub has_entities: u32,
+        /// World size in chunks.
+        pub chunks: [u32; 3],
+        /// Cells a ray may visit before it counts as a miss.
+        pub max_steps: u32,
+    }
+}
+
+// Two 16-byte rows: a vec3 and a scalar each.
+const _: () = assert!(size_of::<WorldInfo>() == 32);

@@ -1,0 +1,98 @@
+//! What the actor, the committer and the join tasks hand each other. The actor sends
+//! [`Outgoing`] items to the committer in the world's total order; the committer publishes
+//! each change as an [`Event`] to every join task's [`Subscription`], and answers edit
+//! requests with an [`EditResult`] once their batch is durable.
+
+use crate::pages::{PageChange, SnapshotView};
+use crate::store::ServerState;
+use naadf_proto::v1::{EditReply, WorldMessage};
+use naadf_world::file::WorldParts;
+use std::sync::Arc;
+use tokio::sync::{broadcast, oneshot};
+use tonic::Status;
+
+/// The answer to an edit request: the version its batch produced (or the earlier answer,
+/// for a retried request), or the gRPC status it was refused with.
+pub type EditResult = Result<EditReply, Status>;
+
+/// One published change, as every join task forwards it.
+#[derive(Debug)]
+pub struct Event {
+    /// Edit version after the change.
+    pub version: u64,
+    /// Growth sub-step.
+    pub growth_seq: u32,
+    /// The digest after the change.
+    pub digest: u64,
+    /// The `Delta` message.
+    pub message: WorldMessage,
+    /// The snapshot pages the change altered.
+    pub changes: Vec<PageChange>,
+    /// The transferred buffers' lengths after it.
+    pub lens: [usize; 6],
+}
+
+impl Event {
+    /// Approximate bytes the event holds (for bounding the history of recent deltas).
+    pub fn size(&self) -> usize {
+        use prost::Message;
+        self.message.encoded_len() + 16 * self.changes.len() + 64
+    }
+}
+
+/// What a join gets: a snapshot, the subscription to everything published after it, and,
+/// when the client's cached state is recent enough, the deltas from that state to the
+/// snapshot (then no pages need to travel).
+#[derive(Debug)]
+pub struct Subscription {
+    /// The state at the join.
+    pub view: Arc<SnapshotView>,
+    /// Everything published after it.
+    pub events: broadcast::Receiver<Arc<Event>>,
+    /// The deltas from the client's state to `view`, if the server still has them all.
+    pub catch_up: Option<Vec<Arc<Event>>>,
+}
+
+/// What the actor hands to the committer.
+#[derive(Debug)]
+pub enum Outgoing {
+    /// An applied batch: log it, then publish and acknowledge it.
+    Batch {
+        /// The framed log record.
+        frame: Vec<u8>,
+        /// The delta to publish.
+        event: Arc<Event>,
+        /// The sender's answer.
+        reply: oneshot::Sender<EditResult>,
+    },
+    /// A growth step: publish it.
+    Growth {
+        /// The delta to publish.
+        event: Arc<Event>,
+    },
+    /// An answer that needs no log record (a retried request), given in order.
+    Ack {
+        /// Where the answer goes.
+        reply: oneshot::Sender<EditResult>,
+        /// The answer: for a retry, the version the original request produced.
+        result: EditResult,
+    },
+    /// A join: subscribe after everything before it is published.
+    Join {
+        /// The snapshot at this point.
+        view: Arc<SnapshotView>,
+        /// The state the client holds, if any: `(version, digest)`.
+        resume: Option<(u64, u64)>,
+        /// Where the subscription goes.
+        reply: oneshot::Sender<Subscription>,
+    },
+    /// A checkpoint: start a new log segment and write the snapshot.
+    Checkpoint {
+        /// The world at the checkpoint.
+        parts: Box<WorldParts>,
+        /// The server state at the checkpoint.
+        state: Box<ServerState>,
+        /// Answered once the snapshot is durable.
+        reply: Option<oneshot::Sender<Result<u64, String>>>,
+    },
+}

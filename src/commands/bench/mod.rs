@@ -1,0 +1,91 @@
+//! `naadf bench ...`: the benchmarks, one module each, and the helpers they share.
+//! Every benchmark measures the compared variants in one run, so that ratios are meaningful
+//! on a shared, noisy machine.
+
+mod build;
+mod edit;
+mod frames;
+mod gpu;
+mod stream;
+mod traverse;
+
+use anyhow::Result;
+use naadf_world::World;
+use naadf_world::ops::Op;
+use naadf_world::traverse::{Ray, trace_naadf};
+use std::collections::BTreeMap;
+
+/// Benchmarks.
+#[derive(clap::Subcommand)]
+pub enum Bench {
+    /// Ray throughput of the three traversal methods on fixed cameras.
+    Traverse(traverse::TraverseArgs),
+    /// Generation, construction and chunk-AADF build times of a preset.
+    Build(build::BuildArgs),
+    /// Edit latency, change-set sizes, regrowth and replayed edit streams.
+    Edit(edit::EditArgs),
+    /// The server under load: join, rejoin, edit latency with many mirrors, wire bytes.
+    Stream(stream::StreamArgs),
+    /// GPU ray throughput of the traversal variants (naadf, nodf, grid), checked against the CPU.
+    Gpu(gpu::GpuArgs),
+    /// Frames through a server's render nodes: frames per second, latency, routing overhead.
+    Frames(frames::FramesArgs),
+}
+
+/// Runs a benchmark.
+pub fn run(b: Bench) -> Result<()> {
+    match b {
+        Bench::Traverse(a) => traverse::run(a),
+        Bench::Build(a) => build::run(a),
+        Bench::Edit(a) => edit::run(a),
+        Bench::Stream(a) => stream::run(a),
+        Bench::Gpu(a) => gpu::run(a),
+        Bench::Frames(a) => frames::run(a),
+    }
+}
+
+/// The first solid voxel below the top of the world at column (x, z), if any.
+pub fn surface(world: &World, x: u32, z: u32) -> Option<[u32; 3]> {
+    let top = f64::from(world.size().voxels()[1]) - 0.5;
+    let ray = Ray::new([f64::from(x) + 0.5, top, f64::from(z) + 0.5], [0.0, -1.0, 0.0]).ok()?;
+    trace_naadf(world, &ray).map(|h| h.voxel)
+}
+
+/// The `q` quantile (0–1) of `sorted`, by nearest rank; NaN when empty.
+pub fn percentile(sorted: &[f64], q: f64) -> f64 {
+    sorted
+        .get(((sorted.len() as f64 - 1.0) * q).round() as usize)
+        .copied()
+        .unwrap_or(f64::NAN)
+}
+
+/// Prints `naadf`'s speed-up over `grid` and `nodf`, from Mrays/s per method.
+pub fn print_ratios(prefix: &str, primary: &BTreeMap<&str, f64>, secondary: &BTreeMap<&str, f64>) {
+    let ratio = |set: &BTreeMap<&str, f64>, other: &str| set.get(other).map_or(f64::NAN, |o| set["naadf"] / o);
+    for other in ["grid", "nodf"] {
+        println!(
+            "{prefix}naadf/{other}: primary {:.1}×, secondary {:.1}×",
+            ratio(primary, other),
+            ratio(secondary, other)
+        );
+    }
+}
+
+/// Defines the 8³ hollow-box model used by entity benchmarks.
+pub fn entity_model_op() -> Op {
+    let mut voxels = Vec::new();
+    for z in 0..8i64 {
+        for y in 0..8i64 {
+            for x in 0..8i64 {
+                if [x, y, z].iter().any(|&c| c == 0 || c == 7) {
+                    voxels.push([x, y, z, 1]);
+                }
+            }
+        }
+    }
+    Op::DefineModel {
+        name: "bench_box".into(),
+        size: [8, 8, 8],
+        voxels,
+    }
+}
