@@ -95,10 +95,10 @@ async fn errors_tell_refusals_rate_limits_timeouts_and_lost_connections_apart() 
     let grpc = server.url.trim_start_matches("http://").to_owned();
     server.kill9();
     let e = session.until_quiescent(at + 1, SETTLE).await.unwrap_err();
-    assert!(matches!(e, Error::ConnectionLost(_)), "the stream: {e:?}");eprintln!("STREAM {e}");
+    assert!(matches!(e, Error::ConnectionLost(_)), "the stream: {e:?}");
     let e = c.status().await.unwrap_err();
     assert!(matches!(e, Error::ConnectionLost(_)), "a call: {e:?}");
-    assert!(e.to_string().starts_with("connection lost: "), "{e}");eprintln!("CALL {e}");
+    assert!(e.to_string().starts_with("connection lost: "), "{e}");
 
     // Back on the same address: the client reconnects by itself, the session rejoins
     // with the world it holds.

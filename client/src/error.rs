@@ -52,6 +52,20 @@ pub enum Error {
 }
 
 impl Error {
+    /// Whether the server was out of reach: the connection was lost, or the server said it
+    /// is unavailable (shutting down). A retry after a pause may succeed; a rate limit is
+    /// [`Error::RateLimited`] instead.
+    pub fn is_unavailable(&self) -> bool {
+        matches!(
+            self,
+            Error::ConnectionLost(_)
+                | Error::Refused {
+                    code: Code::Unavailable,
+                    ..
+                }
+        )
+    }
+
     /// The gRPC code of a refusal by the server (none for the other errors).
     pub fn code(&self) -> Option<Code> {
         match self {
@@ -107,6 +121,7 @@ mod tests {
         // The server's own UNAVAILABLE (no render node) is a refusal, not a lost connection.
         let e = Error::from(tonic::Status::unavailable("no render node"));
         assert_eq!(e.code(), Some(Code::Unavailable));
+        assert!(e.is_unavailable());
     }
 
     #[test]
@@ -115,6 +130,7 @@ mod tests {
         let e = Error::from(tonic::Status::from_error(Box::new(io)));
         assert!(matches!(e, Error::ConnectionLost(_)), "{e:?}");
         assert_eq!(e.code(), None);
+        assert!(e.is_unavailable());
         assert_eq!(e.to_string(), "connection lost: connection reset by peer");
     }
 }

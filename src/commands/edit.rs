@@ -4,8 +4,6 @@
 use super::print_json;
 use super::remote::{ServerArgs, block_on};
 use anyhow::{Context, Result};
-use naadf_client::Error;
-use naadf_client::error::Code;
 use std::io::BufRead;
 use std::path::PathBuf;
 use std::time::Duration;
@@ -64,13 +62,7 @@ pub fn run(a: Args) -> Result<()> {
                 attempt += 1;
                 match client.edit(line.as_str(), client_seq).await {
                     Ok(r) => break r,
-                    Err(
-                        e @ (Error::ConnectionLost(_)
-                        | Error::Refused {
-                            code: Code::Unavailable,
-                            ..
-                        }),
-                    ) if attempt < ATTEMPTS => {
+                    Err(e) if e.is_unavailable() && attempt < ATTEMPTS => {
                         tracing::warn!("{e}; retrying line {n}");
                         tokio::time::sleep(Duration::from_millis(200 << attempt)).await;
                     }

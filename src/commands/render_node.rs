@@ -44,7 +44,7 @@ pub fn run(a: Args) -> Result<()> {
         modes,
         max_size: a.max_size,
     };
-    let render = move |world: &World, spec: &FrameSpec| render(&mut headless, world, spec);
+    let render = move |world: &World, spec: &FrameSpec| render_frame(&mut headless, world, spec);
     let mut node = RenderNode::new(a.server.address(), info, retry, render);
     block_on(async {
         node.run(async {
@@ -56,7 +56,7 @@ pub fn run(a: Args) -> Result<()> {
 }
 
 /// Renders one job's frame, PNG unless raw RGBA was asked for.
-fn render(headless: &mut Headless, world: &World, spec: &FrameSpec) -> Result<FrameImage> {
+fn render_frame(headless: &mut Headless, world: &World, spec: &FrameSpec) -> Result<FrameImage> {
     let frame = headless.frame(world, &spec.camera, spec.size, spec.mode, false)?;
     let (width, height) = (frame.width, frame.height);
     let data = if spec.raw { frame.rgba } else { frame.png()? };

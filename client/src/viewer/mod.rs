@@ -1,11 +1,11 @@
 //! The windowed viewer: a winit window that mirrors a server's world on the GPU, flies
 //! through it, and edits it.
 //!
-//! - [`link`]: the connection (world stream, status polls, edits) on a tokio runtime;
-//! - [`fly`]: WASD + mouse-look camera control;
-//! - [`pick`]: which voxel a click edits;
-//! - [`hud`]: the text overlay;
-//! - [`present`]: showing frames in the window;
+//! - `link` ([`Link`]): the connection (world stream, status polls, edits) on a tokio runtime;
+//! - `fly` ([`Fly`]): WASD + mouse-look camera control;
+//! - `pick` ([`edit_for_click`]): which voxel a click edits;
+//! - `hud` ([`draw_hud`]): the text overlay;
+//! - `present` ([`Presenter`]): showing frames in the window;
 //! - this module: the window's event loop, which owns the [`Mirror`] and the [`GpuWorld`]
 //!   and applies stream messages in order on its own thread.
 //!
