@@ -40,6 +40,9 @@ enum Command {
     Status(commands::status::Args),
     /// Write the batches a server logged after its newest snapshot as an ops script.
     ExportLog(commands::export_log::Args),
+    /// Check or repair a server's data directory (snapshots and write-ahead log).
+    #[command(subcommand)]
+    Data(commands::data::Data),
     /// Render a frame of a world file or a server's world on the GPU (or lavapipe).
     Render(commands::render::Args),
     /// Serve frames for a server as a headless render node.
@@ -60,8 +63,11 @@ enum Command {
 /// How `naadf --help` groups the subcommands: a heading and the commands under it.
 /// `every_command_is_in_one_group` keeps it complete.
 const GROUPS: &[(&str, &[&str])] = &[
-    ("World files", &["import", "generate", "info", "export", "apply", "raycast"]),
-    ("Service", &["serve", "mirror", "edit", "status", "export-log"]),
+    (
+        "World files",
+        &["import", "generate", "info", "export", "apply", "raycast"],
+    ),
+    ("Service", &["serve", "mirror", "edit", "status", "export-log", "data"]),
     ("Rendering", &["render", "render-node", "frame", "view"]),
     ("Replay", &["replay", "record"]),
     ("Benchmarks", &["bench"]),
@@ -129,6 +135,7 @@ fn main() -> ExitCode {
         Command::Edit(a) => commands::edit::run(a),
         Command::Status(a) => commands::status::run(a),
         Command::ExportLog(a) => commands::export_log::run(a),
+        Command::Data(d) => commands::data::run(d),
         Command::Render(a) => commands::render::run(a),
         Command::View(a) => commands::view::run(a),
         Command::RenderNode(a) => commands::render_node::run(a),

@@ -162,6 +162,9 @@ impl Actor {
         }
         self.histories
             .record(&e.user, e.client_seq, e.kind, e.version, applied.undo);
+        // Checkpoints count from the snapshot, not from this process's start: otherwise a
+        // server that crashes often would never write one.
+        self.since_checkpoint += 1;
         Ok(())
     }
 

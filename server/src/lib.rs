@@ -20,6 +20,7 @@
 pub mod actor;
 pub mod auth;
 pub mod committer;
+pub mod fsck;
 pub mod http;
 pub mod join;
 pub mod messages;

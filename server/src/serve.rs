@@ -4,9 +4,10 @@
 use crate::actor::{Actor, Request};
 use crate::auth::Auth;
 use crate::committer::Committer;
+use crate::fsck::Verdict;
 use crate::service::WorldServer;
-use crate::store::{DataDir, ServerState};
-use crate::wal::Wal;
+use crate::store::{DataDir, ServerState, StoreError};
+use crate::wal::{Entry, Wal};
 use crate::{Shared, http};
 use anyhow::{Context, Result, bail};
 use naadf_proto::FILE_DESCRIPTOR_SET;
@@ -14,7 +15,7 @@ use naadf_proto::v1::world_service_server::WorldServiceServer;
 use naadf_world::World;
 use naadf_world::ops::Limits;
 use std::net::SocketAddr;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Duration;
 use tokio::sync::{broadcast, mpsc, oneshot, watch};
@@ -95,30 +96,66 @@ pub struct Bound {
     pub http: SocketAddr,
 }
 
-/// Opens the data directory: the newest snapshot plus the log after it, or a fresh
-/// directory started from `initial()`.
-fn recover(
-    data: &DataDir,
-    initial: impl FnOnce() -> Result<World>,
-) -> Result<(World, ServerState, Wal, Vec<crate::wal::Entry>)> {
-    let (world, state) = match data.snapshots()?.last() {
-        Some(&v) => {
-            tracing::info!(version = v, dir = %data.path().display(), "loading snapshot");
-            data.load(v)?
+/// What recovery hands the server.
+struct Recovered {
+    /// The locked data directory.
+    data: DataDir,
+    /// The world at the snapshot (or the initial world).
+    world: World,
+    /// The server state at the snapshot.
+    state: ServerState,
+    /// The log, open for appending.
+    wal: Wal,
+    /// The logged batches after the snapshot, to replay.
+    entries: Vec<Entry>,
+}
+
+/// Opens the data directory `dir` as [`fsck`](crate::fsck) judges it: the newest complete
+/// snapshot and the log after it (orphans removed, a torn tail cut off), or a new directory
+/// started from `initial()`. A directory it refuses is left untouched.
+fn recover(dir: &Path, initial: impl FnOnce() -> Result<World>) -> Result<Recovered> {
+    let (data, inspection) = DataDir::open(dir)?;
+    match inspection.verdict() {
+        Verdict::Resume { snapshot, records } => {
+            tracing::info!(version = snapshot, records, dir = %dir.display(), "loading snapshot");
+            let (world, state) = data.load(snapshot).with_context(|| {
+                format!(
+                    "cannot load snapshot {snapshot} (`naadf data check {}` reports the directory)",
+                    dir.display()
+                )
+            })?;
+            for orphan in inspection.orphans() {
+                tracing::warn!(file = %orphan.path.display(), "removing {}", orphan.why);
+                orphan.remove()?;
+            }
+            let (wal, entries) = Wal::resume(dir, inspection.into_log(snapshot)?, snapshot)?;
+            Ok(Recovered {
+                data,
+                world,
+                state,
+                wal,
+                entries,
+            })
         }
-        None => {
+        Verdict::New => {
             let world = initial()?;
             let state = ServerState {
                 version: world.version(),
                 ..ServerState::default()
             };
             data.save(&world.to_parts(), &state)?;
-            tracing::info!(version = world.version(), dir = %data.path().display(), "started a new data directory");
-            (world, state)
+            let (wal, _) = Wal::resume(dir, Vec::new(), world.version())?;
+            tracing::info!(version = world.version(), dir = %dir.display(), "started a new data directory");
+            Ok(Recovered {
+                data,
+                world,
+                state,
+                wal,
+                entries: Vec::new(),
+            })
         }
-    };
-    let (wal, entries) = Wal::open(data.path(), world.version())?;
-    Ok((world, state, wal, entries))
+        Verdict::Refuse(r) => Err(StoreError::Refused(Box::new(r)).into()),
+    }
 }
 
 /// Runs the server until `shutdown` resolves, then stops accepting, ends the streams and
@@ -141,11 +178,17 @@ pub async fn serve(
         }
         tracing::warn!("no tokens configured: serving open (every caller is an admin) on loopback only");
     }
-    let data = Arc::new(DataDir::open(&config.data)?);
-    let (world, state, wal, entries) = {
-        let data = data.clone();
-        tokio::task::spawn_blocking(move || recover(&data, initial)).await??
+    let Recovered {
+        data,
+        world,
+        state,
+        wal,
+        entries,
+    } = {
+        let dir = config.data.clone();
+        tokio::task::spawn_blocking(move || recover(&dir, initial)).await??
     };
+    let data = Arc::new(data);
     let (shutdown_tx, shutdown_rx) = watch::channel(false);
     let shared = Arc::new(Shared::new(config.auth.clone(), config.rate, shutdown_rx));
 
@@ -191,6 +234,12 @@ pub async fn serve(
     let actor = std::thread::Builder::new()
         .name("naadf-actor".into())
         .spawn(move || pool.install(|| actor.run(req_rx, notify)))?;
+    // The actor counts replayed records towards its next checkpoint; a replay as long as a
+    // whole interval gets one at once, so that crash after crash cannot grow the log that
+    // every start replays.
+    if replayed as u64 >= config.checkpoint_every {
+        req_tx.send(Request::Checkpoint { reply: None }).await?;
+    }
 
     let grpc_listener = tokio::net::TcpListener::bind(config.grpc)
         .await

@@ -5,12 +5,16 @@
 //! DATA/snapshot-<version>.state          server state at <version>: histories, retries
 //! DATA/snapshot-<version>.naadf          the world at <version> (a world file)
 //! DATA/wal-<base>.log                    batches after <base> (see crate::wal)
+//! DATA/.snapshot-<version>.<ext>.tmp-…   a snapshot file being written
 //! ```
 //!
 //! A snapshot is written state first, then world, each atomically (temporary file, fsync,
 //! rename, directory fsync), so a snapshot counts only when both files exist. Older
 //! snapshots and the WAL segments they need are deleted only after a newer one is durable.
+//! What a directory holds, and whether a server may start on it, is judged by
+//! [`crate::fsck`].
 
+use crate::fsck::{self, Inspection, Refusal, Verdict};
 use crate::wal::{self, WalError};
 use naadf_world::World;
 use naadf_world::edit::Histories;
@@ -50,16 +54,100 @@ pub enum StoreError {
     /// The write-ahead log failed.
     #[error(transparent)]
     Wal(#[from] WalError),
+    /// The directory is no valid start: it holds history but nothing to resume from.
+    #[error("refusing to start: {0}")]
+    Refused(Box<Refusal>),
+}
+
+/// The name of the lock file in a data directory.
+pub const LOCK: &str = "LOCK";
+
+/// The lock of a data directory, held until dropped.
+#[derive(Debug)]
+pub struct Lock {
+    _file: File,
+}
+
+impl Lock {
+    /// Takes the lock of `dir` if its lock file exists (opening it writes nothing), else
+    /// `None`.
+    pub fn existing(dir: &Path) -> Result<Option<Lock>, StoreError> {
+        let path = dir.join(LOCK);
+        match File::open(&path) {
+            Ok(file) => Self::hold(file, dir).map(Some),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
+            Err(e) => Err(StoreError::Io(format!("cannot open {}", path.display()), e)),
+        }
+    }
+
+    /// Takes the lock of `dir`, creating the directory and its lock file if needed.
+    pub fn create(dir: &Path) -> Result<Lock, StoreError> {
+        std::fs::create_dir_all(dir).map_err(|e| StoreError::Io(format!("cannot create {}", dir.display()), e))?;
+        let path = dir.join(LOCK);
+        let file = File::options()
+            .create(true)
+            .truncate(false)
+            .write(true)
+            .open(&path)
+            .map_err(|e| StoreError::Io(format!("cannot open {}", path.display()), e))?;
+        Self::hold(file, dir)
+    }
+
+    fn hold(file: File, dir: &Path) -> Result<Lock, StoreError> {
+        file.try_lock().map_err(|_| StoreError::Locked(dir.to_owned()))?;
+        Ok(Lock { _file: file })
+    }
+}
+
+/// Which file of a snapshot a name is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Part {
+    /// `snapshot-<version>.naadf`, the world.
+    World,
+    /// `snapshot-<version>.state`, the server state.
+    State,
+}
+
+/// A file name of a snapshot, parsed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SnapshotName {
+    /// The snapshot's version.
+    pub version: u64,
+    /// Which of its files.
+    pub part: Part,
+    /// Whether it is the temporary file of an atomic write of that file
+    /// (`.snapshot-<version>.<ext>.tmp-…`), which only the finished rename makes count.
+    pub temporary: bool,
+}
+
+/// Parses a file name of a snapshot, or of the temporary file of one being written.
+pub fn snapshot_name(name: &str) -> Option<SnapshotName> {
+    let (name, temporary) = match name.strip_prefix('.') {
+        Some(rest) => (rest.split_once(".tmp-")?.0, true),
+        None => (name, false),
+    };
+    let (version, ext) = name.strip_prefix("snapshot-")?.split_once('.')?;
+    let part = match ext {
+        "naadf" => Part::World,
+        "state" => Part::State,
+        _ => return None,
+    };
+    Some(SnapshotName {
+        version: version.parse().ok()?,
+        part,
+        temporary,
+    })
 }
 
 /// A locked data directory.
 #[derive(Debug)]
 pub struct DataDir {
     path: PathBuf,
-    _lock: File,
+    _lock: Lock,
 }
 
-fn snapshot_paths(dir: &Path, version: u64) -> (PathBuf, PathBuf) {
+/// The world and state files of the snapshot at `version` in `dir`.
+pub fn snapshot_paths(dir: &Path, version: u64) -> (PathBuf, PathBuf) {
     (
         dir.join(format!("snapshot-{version:020}.naadf")),
         dir.join(format!("snapshot-{version:020}.state")),
@@ -67,21 +155,22 @@ fn snapshot_paths(dir: &Path, version: u64) -> (PathBuf, PathBuf) {
 }
 
 impl DataDir {
-    /// Creates (if needed) and locks the directory.
-    pub fn open(path: &Path) -> Result<Self, StoreError> {
-        std::fs::create_dir_all(path).map_err(|e| StoreError::Io(format!("cannot create {}", path.display()), e))?;
-        let lock_path = path.join("LOCK");
-        let lock = File::options()
-            .create(true)
-            .truncate(false)
-            .write(true)
-            .open(&lock_path)
-            .map_err(|e| StoreError::Io(format!("cannot open {}", lock_path.display()), e))?;
-        lock.try_lock().map_err(|_| StoreError::Locked(path.to_owned()))?;
-        Ok(Self {
-            path: path.to_owned(),
-            _lock: lock,
-        })
+    /// Locks the directory and judges what it holds ([`crate::fsck`]): returns the locked
+    /// directory and what was found, to resume or start anew. A directory the judgement
+    /// refuses is left exactly as it was: not even its lock file is created.
+    pub fn open(path: &Path) -> Result<(Self, Inspection), StoreError> {
+        let (lock, inspection) = fsck::inspect_locked(path, |i| !matches!(i.verdict(), Verdict::Refuse(_)))?;
+        if let Verdict::Refuse(r) = inspection.verdict() {
+            return Err(StoreError::Refused(Box::new(r)));
+        }
+        let lock = lock.expect("inspect_locked locks a directory that will be written");
+        Ok((
+            Self {
+                path: path.to_owned(),
+                _lock: lock,
+            },
+            inspection,
+        ))
     }
 
     /// The directory.
@@ -137,16 +226,16 @@ pub fn snapshots(dir: &Path) -> Result<Vec<u64>, StoreError> {
     for e in list {
         let e = e.map_err(|e| StoreError::Io(format!("cannot list {}", dir.display()), e))?;
         let name = e.file_name();
-        let Some(v) = name
-            .to_str()
-            .and_then(|n| n.strip_prefix("snapshot-"))
-            .and_then(|r| r.strip_suffix(".naadf"))
-            .and_then(|d| d.parse::<u64>().ok())
+        let Some(SnapshotName {
+            version,
+            part: Part::World,
+            temporary: false,
+        }) = name.to_str().and_then(snapshot_name)
         else {
             continue;
         };
-        if snapshot_paths(dir, v).1.exists() {
-            out.push(v);
+        if snapshot_paths(dir, version).1.exists() {
+            out.push(version);
         }
     }
     out.sort_unstable();
@@ -187,7 +276,7 @@ mod tests {
     #[test]
     fn snapshots_round_trip_and_prune() {
         let dir = tempfile::tempdir().unwrap();
-        let d = DataDir::open(dir.path()).unwrap();
+        let (d, _) = DataDir::open(dir.path()).unwrap();
         assert!(matches!(DataDir::open(dir.path()), Err(StoreError::Locked(_))));
         let source = Preset::Test
             .source(Some(WorldSize::new(64, 64, 64).unwrap()), 1)

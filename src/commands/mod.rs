@@ -3,6 +3,7 @@
 
 pub mod apply;
 pub mod bench;
+pub mod data;
 pub mod edit;
 pub mod export;
 pub mod export_log;

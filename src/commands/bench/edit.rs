@@ -1,8 +1,8 @@
 //! `naadf bench edit`: edit latency, change-set sizes, background regrowth and a real
 //! edit stream (HashDAG `EditSphere` replays), on a generated world.
 
-use crate::commands::generate::{PresetArgs, generate};
 use super::{percentile, surface};
+use crate::commands::generate::{PresetArgs, generate};
 use crate::commands::print_json;
 use anyhow::{Context, Result, bail};
 use naadf_world::World;

@@ -4,10 +4,10 @@
 use super::{entity_model_op, print_ratios};
 use crate::commands::{load_world, print_json};
 use anyhow::{Result, bail};
+use naadf_world::World;
 use naadf_world::ops::{Batch, Limits, Op};
 use naadf_world::raysets::{SplitMix64, fixed_cameras, primary_rays, secondary_rays};
 use naadf_world::traverse::{Hit, Method, Ray, Tracer, same_result};
-use naadf_world::World;
 use rayon::prelude::*;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -238,7 +238,6 @@ fn print_report(prefix: &str, r: &TraverseReport) {
     print_ratios(prefix, &r.primary, &r.secondary);
 }
 
-
 /// Spawns `n` 8³ entities (a hollow box) at random poses, in one batch: on the ground
 /// (found with a downward ray per column) or, with `air`, at random heights.
 fn spawn_entities(world: &mut World, n: u32, seed: u64, air: bool) -> Result<()> {
@@ -273,7 +272,6 @@ fn spawn_entities(world: &mut World, n: u32, seed: u64, air: bool) -> Result<()>
     world.grow_until_quiescent();
     Ok(())
 }
-
 
 /// Measures every method on the fixed primary rays of `world` and on `secondary` (by
 /// default, cosine rays from the first method's primary hits). Returns the report and the
@@ -337,4 +335,3 @@ fn measure(world: &World, a: &TraverseArgs, secondary: Option<Vec<Ray>>) -> Resu
     report.secondary_rays = secondary.len();
     Ok((report, secondary))
 }
-

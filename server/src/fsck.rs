@@ -1,0 +1,644 @@
+//! Judging a data directory: what it holds, whether a server may start on it, and what
+//! `naadf data repair` may change. The server's startup ([`DataDir::open`]) and
+//! `naadf data check` share this one judgement.
+//!
+//! A directory is new only when it holds no log segment and no file of a snapshot, not
+//! even a temporary one: anything else is history, and starting a new world over it would
+//! serve a state that no history produced. A directory with history resumes from its newest
+//! complete snapshot (both files) and the log after it, or is refused, untouched, with what
+//! was found and what the operator can do.
+//!
+//! Orphans are files no recovery reads: temporary files of snapshot writes that never
+//! finished, and the single file of an incomplete snapshot. Startup removes them, as does
+//! `naadf data repair --apply`, but never a file of a complete snapshot. In a refused
+//! directory they stay as evidence, unless they are all it holds: then they are what a
+//! first start left when it was killed before any edit was logged.
+//!
+//! [`DataDir::open`]: crate::store::DataDir::open
+
+use crate::store::{self, Lock, Part, StoreError};
+use crate::wal::{self, Segment, WalError};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// The files of one snapshot version found in a directory.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SnapshotFiles {
+    /// The version.
+    pub version: u64,
+    /// Whether `snapshot-<version>.naadf` (the world) is there.
+    pub world: bool,
+    /// Whether `snapshot-<version>.state` (the server state) is there.
+    pub state: bool,
+}
+
+impl SnapshotFiles {
+    /// Whether both files are there: only a complete snapshot counts.
+    pub fn complete(&self) -> bool {
+        self.world && self.state
+    }
+}
+
+/// One log segment found in a directory.
+#[derive(Debug)]
+pub struct SegmentFile {
+    /// The version it follows (from its name).
+    pub base: u64,
+    /// The file.
+    pub path: PathBuf,
+    /// Its records and torn tail, or why it cannot be read.
+    pub read: Result<Segment, WalError>,
+}
+
+/// What a data directory holds.
+#[derive(Debug)]
+pub struct Inspection {
+    /// The directory.
+    pub dir: PathBuf,
+    /// The snapshot files, by version, ascending.
+    pub snapshots: Vec<SnapshotFiles>,
+    /// Temporary files of snapshot writes that never finished.
+    pub temporary: Vec<PathBuf>,
+    /// The log segments, by base, ascending.
+    pub segments: Vec<SegmentFile>,
+    /// Files that are none of these (left alone).
+    pub other: Vec<PathBuf>,
+}
+
+/// What a server does with a directory.
+#[derive(Debug)]
+pub enum Verdict {
+    /// Starts a new world: the directory is missing or holds no history.
+    New,
+    /// Resumes from a snapshot and the log after it.
+    Resume {
+        /// The version of the newest complete snapshot.
+        snapshot: u64,
+        /// How many logged records follow it.
+        records: u64,
+    },
+    /// Refuses to start.
+    Refuse(Refusal),
+}
+
+/// Why a server will not start on a directory, and what the operator can do.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error(
+    "data directory {} {problem}. {remedy} `naadf data check {}` reports what it holds.",
+    .dir.display(),
+    .dir.display()
+)]
+pub struct Refusal {
+    /// The directory.
+    pub dir: PathBuf,
+    /// What is missing or damaged, and what was found.
+    pub problem: String,
+    /// What the operator can do.
+    pub remedy: String,
+    /// Whether `naadf data repair --apply` makes the directory servable.
+    pub repairable: bool,
+}
+
+/// A file no recovery reads.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Orphan {
+    /// The file.
+    pub path: PathBuf,
+    /// What it is.
+    pub why: String,
+}
+
+impl Orphan {
+    /// Removes the file, durably.
+    pub fn remove(&self) -> Result<(), StoreError> {
+        std::fs::remove_file(&self.path)
+            .map_err(|e| StoreError::Io(format!("cannot remove {}", self.path.display()), e))?;
+        match self.path.parent() {
+            Some(dir) if !dir.as_os_str().is_empty() => Ok(wal::sync_dir(dir)?),
+            _ => Ok(wal::sync_dir(Path::new("."))?),
+        }
+    }
+}
+
+/// One change of `naadf data repair`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Action {
+    /// Cuts a torn write off the end of the log.
+    Cut {
+        /// The segment.
+        path: PathBuf,
+        /// Where the torn write starts (0: the whole file goes).
+        at: u64,
+        /// The segment's size.
+        len: u64,
+    },
+    /// Removes an orphan.
+    Remove(Orphan),
+}
+
+impl Action {
+    /// Makes the change.
+    pub fn apply(&self) -> Result<(), StoreError> {
+        match self {
+            Action::Cut { path, at, .. } => Ok(wal::cut_tail(path, *at)?),
+            Action::Remove(orphan) => orphan.remove(),
+        }
+    }
+}
+
+impl std::fmt::Display for Action {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Action::Cut { path, at: 0, .. } => {
+                write!(f, "remove {}: a log segment whose header was never written", name(path))
+            }
+            Action::Cut { path, at, len } => write!(
+                f,
+                "cut the torn write off the end of {}: {} bytes from byte {at}",
+                name(path),
+                len - at
+            ),
+            Action::Remove(o) => write!(f, "remove {}: {}", name(&o.path), o.why),
+        }
+    }
+}
+
+/// The file name of `path`, for messages.
+fn name(path: &Path) -> String {
+    path.file_name()
+        .map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned())
+}
+
+/// Looks at the directory `dir` without changing anything; a missing directory is new.
+pub fn inspect(dir: &Path) -> Result<Inspection, StoreError> {
+    let mut found = Inspection {
+        dir: dir.to_owned(),
+        snapshots: Vec::new(),
+        temporary: Vec::new(),
+        segments: Vec::new(),
+        other: Vec::new(),
+    };
+    let listing = |e| StoreError::Io(format!("cannot list {}", dir.display()), e);
+    let list = match std::fs::read_dir(dir) {
+        Ok(list) => list,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(found),
+        Err(e) => return Err(listing(e)),
+    };
+    let mut snapshots = BTreeMap::new();
+    let mut segments = Vec::new();
+    for e in list {
+        let e = e.map_err(listing)?;
+        let path = e.path();
+        let file_name = e.file_name();
+        let Some(file_name) = file_name.to_str() else {
+            found.other.push(path);
+            continue;
+        };
+        if file_name == store::LOCK {
+            continue;
+        }
+        if let Some(s) = store::snapshot_name(file_name) {
+            if s.temporary {
+                found.temporary.push(path);
+                continue;
+            }
+            let files = snapshots.entry(s.version).or_insert(SnapshotFiles {
+                version: s.version,
+                world: false,
+                state: false,
+            });
+            match s.part {
+                Part::World => files.world = true,
+                Part::State => files.state = true,
+            }
+        } else if let Some(base) = wal::segment_base(file_name) {
+            segments.push((base, path));
+        } else {
+            found.other.push(path);
+        }
+    }
+    segments.sort();
+    let last = segments.len();
+    found.segments = segments
+        .into_iter()
+        .enumerate()
+        .map(|(i, (base, path))| SegmentFile {
+            read: wal::read_segment(&path, base, i + 1 == last),
+            base,
+            path,
+        })
+        .collect();
+    found.snapshots = snapshots.into_values().collect();
+    found.temporary.sort();
+    found.other.sort();
+    Ok(found)
+}
+
+/// Locks `dir` and inspects it. An existing lock file is taken before looking, so that a
+/// running server is reported as such and no change of one is judged half-done. A missing
+/// one is created only when `writes` says the directory will be written after the first
+/// look, which is then repeated under the new lock (another process may have started on
+/// the directory in between). Returns the lock, if taken, and the inspection.
+pub fn inspect_locked(
+    dir: &Path,
+    writes: impl Fn(&Inspection) -> bool,
+) -> Result<(Option<Lock>, Inspection), StoreError> {
+    if let Some(lock) = Lock::existing(dir)? {
+        return Ok((Some(lock), inspect(dir)?));
+    }
+    let first = inspect(dir)?;
+    if !writes(&first) {
+        return Ok((None, first));
+    }
+    let lock = Lock::create(dir)?;
+    Ok((Some(lock), inspect(dir)?))
+}
+
+impl Inspection {
+    /// The newest complete snapshot, if any.
+    pub fn newest_complete(&self) -> Option<u64> {
+        self.snapshots.iter().rev().find(|s| s.complete()).map(|s| s.version)
+    }
+
+    /// The index of the first segment that recovery from the snapshot at `snapshot` reads
+    /// (see [`wal::first_needed`]).
+    pub fn first_needed(&self, snapshot: u64) -> usize {
+        wal::first_needed(self.segments.iter().map(|s| s.base), snapshot)
+    }
+
+    /// What a server does with the directory.
+    pub fn verdict(&self) -> Verdict {
+        match self.newest_complete() {
+            None if self.snapshots.is_empty() && self.temporary.is_empty() && self.segments.is_empty() => Verdict::New,
+            None => Verdict::Refuse(self.nothing_to_resume()),
+            Some(snapshot) => match self.replay(snapshot) {
+                Ok(records) => Verdict::Resume { snapshot, records },
+                Err(e) => Verdict::Refuse(self.refusal(
+                    format!(
+                        "cannot be resumed: the write-ahead log after its newest complete snapshot \
+                         (version {snapshot}) is damaged: {e}"
+                    ),
+                    // Its world file is there, so a newest one is always found.
+                    self.seed_remedy(self.newest_world().unwrap_or(snapshot)),
+                    false,
+                )),
+            },
+        }
+    }
+
+    /// Checks the log recovery from the snapshot at `snapshot` replays: how many records
+    /// follow it.
+    fn replay(&self, snapshot: u64) -> Result<u64, String> {
+        let needed = self.segments[self.first_needed(snapshot)..]
+            .iter()
+            .map(|s| s.read.as_ref().map_err(ToString::to_string))
+            .collect::<Result<Vec<_>, _>>()?;
+        wal::check_sequence(needed, snapshot).map_err(|e| e.to_string())
+    }
+
+    /// The refusal of a directory with history but no complete snapshot.
+    fn nothing_to_resume(&self) -> Refusal {
+        let mut found: Vec<String> = self
+            .segments
+            .iter()
+            .map(|s| {
+                let what = match &s.read {
+                    Ok(seg) => match seg.versions() {
+                        Some((a, b)) => format!("versions {a}–{b}"),
+                        None => "no records".into(),
+                    },
+                    Err(_) => "damaged".into(),
+                };
+                format!("{} ({what})", name(&s.path))
+            })
+            .collect();
+        for s in &self.snapshots {
+            let (world, state) = store::snapshot_paths(&self.dir, s.version);
+            found.push(if s.world {
+                format!("{} without its .state", name(&world))
+            } else {
+                format!("{} without its .naadf", name(&state))
+            });
+        }
+        if !self.temporary.is_empty() {
+            found.push(format!(
+                "{} temporary file(s) of unfinished snapshot writes",
+                self.temporary.len()
+            ));
+        }
+        let problem = format!(
+            "holds no complete snapshot (snapshot-<V>.naadf with its snapshot-<V>.state) to resume \
+             from, yet it is not new: found {}. Starting a new world here would serve a state that \
+             no history produced",
+            found.join(", ")
+        );
+        let dir = self.dir.display();
+        if let Some(world) = self.newest_world() {
+            return self.refusal(problem, self.seed_remedy(world), false);
+        }
+        if self.segments.is_empty() {
+            let remedy = format!(
+                "No edit was ever logged here: these are what a first start left when it was \
+                 stopped while writing its first snapshot. `naadf data repair {dir} --apply` \
+                 removes them, and the next start begins a new world."
+            );
+            return self.refusal(problem, remedy, true);
+        }
+        let remedy = format!(
+            "The world itself is gone from it: restore the directory from a backup, or move it \
+             aside and start anew from a world file with `naadf serve --world FILE --data {dir}`."
+        );
+        self.refusal(problem, remedy, false)
+    }
+
+    /// The version of the newest snapshot world file, complete or not.
+    fn newest_world(&self) -> Option<u64> {
+        self.snapshots.iter().rev().find(|s| s.world).map(|s| s.version)
+    }
+
+    /// The way out of a directory that cannot be resumed: a backup, or a new directory
+    /// seeded with the world file at `version`, giving up what only the server state and
+    /// the log after it hold.
+    fn seed_remedy(&self, version: u64) -> String {
+        let lost = self
+            .segments
+            .iter()
+            .filter_map(|s| s.read.as_ref().ok())
+            .flat_map(|s| &s.entries)
+            .filter(|e| e.version > version)
+            .count();
+        format!(
+            "Restore the directory from a backup, or seed a new one with its newest world file: \
+             move this one aside (to MOVED) and run `naadf serve --world MOVED/{} --data {}`, \
+             giving up the undo histories, the retry answers and the edits logged after version \
+             {version} ({lost} readable in the log).",
+            name(&store::snapshot_paths(&self.dir, version).0),
+            self.dir.display()
+        )
+    }
+
+    fn refusal(&self, problem: String, remedy: String, repairable: bool) -> Refusal {
+        Refusal {
+            dir: self.dir.clone(),
+            problem,
+            remedy,
+            repairable,
+        }
+    }
+
+    /// The orphans that startup and `naadf data repair --apply` remove: in a directory that
+    /// resumes, every temporary file and every file of an incomplete snapshot; in one refused
+    /// for holding nothing but what an interrupted first start left, those. None in any
+    /// other refused directory, where they are evidence.
+    pub fn orphans(&self) -> Vec<Orphan> {
+        let removable = match self.verdict() {
+            Verdict::Resume { .. } => true,
+            Verdict::Refuse(r) => r.repairable,
+            Verdict::New => false,
+        };
+        if !removable {
+            return Vec::new();
+        }
+        let temporary = self.temporary.iter().map(|path| Orphan {
+            path: path.clone(),
+            why: "the temporary file of a snapshot write that never finished".into(),
+        });
+        let incomplete = self.snapshots.iter().filter(|s| !s.complete()).map(|s| {
+            let (world, state) = store::snapshot_paths(&self.dir, s.version);
+            let (path, missing) = if s.world { (world, state) } else { (state, world) };
+            Orphan {
+                path,
+                why: format!("snapshot {} is incomplete ({} is missing)", s.version, name(&missing)),
+            }
+        });
+        temporary.chain(incomplete).collect()
+    }
+
+    /// What `naadf data repair` changes: cut a torn write off the log and remove the
+    /// orphans. Or, when the directory cannot be made servable, why (and then nothing may
+    /// change).
+    pub fn repair(&self) -> Result<Vec<Action>, Refusal> {
+        let mut actions = Vec::new();
+        match self.verdict() {
+            Verdict::Refuse(r) if !r.repairable => return Err(r),
+            Verdict::Resume { .. } => {
+                // Only the last segment may end torn; it is always one recovery reads.
+                if let Some(Ok(s)) = self.segments.last().map(|s| &s.read)
+                    && let Some(at) = s.torn
+                {
+                    actions.push(Action::Cut {
+                        path: s.path.clone(),
+                        at,
+                        len: s.len,
+                    });
+                }
+            }
+            _ => {}
+        }
+        actions.extend(self.orphans().into_iter().map(Action::Remove));
+        Ok(actions)
+    }
+
+    /// Takes out the segments that recovery from the snapshot at `snapshot` reads (for
+    /// [`wal::Wal::resume`]).
+    pub fn into_log(self, snapshot: u64) -> Result<Vec<Segment>, WalError> {
+        let first = self.first_needed(snapshot);
+        self.segments.into_iter().skip(first).map(|s| s.read).collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::store::{DataDir, ServerState};
+    use crate::wal::{Entry, Wal};
+    use naadf_world::edit::BatchKind;
+    use naadf_world::preset::Preset;
+    use naadf_world::{World, WorldSize};
+
+    fn entry(version: u64) -> Entry {
+        Entry {
+            version,
+            user: "alice".into(),
+            client_seq: version,
+            kind: BatchKind::Edit,
+            ops: r#"{"op":"set","voxels":[[1,2,3,4]]}"#.into(),
+        }
+    }
+
+    /// A directory as a server leaves it: snapshot 0 and three logged edits after it.
+    fn served(dir: &Path) {
+        let (data, _) = DataDir::open(dir).unwrap();
+        let source = Preset::Test
+            .source(Some(WorldSize::new(64, 64, 64).unwrap()), 1)
+            .unwrap();
+        let world = World::build(&*source, &|_| {}).unwrap();
+        data.save(&world.to_parts(), &ServerState::default()).unwrap();
+        let (mut wal, _) = Wal::resume(dir, Vec::new(), 0).unwrap();
+        for version in 1..4 {
+            wal.append(&entry(version).frame()).unwrap();
+        }
+        wal.sync().unwrap();
+    }
+
+    /// Every file in `dir` with its contents.
+    fn contents(dir: &Path) -> BTreeMap<String, Vec<u8>> {
+        std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| {
+                let e = e.unwrap();
+                (e.file_name().into_string().unwrap(), std::fs::read(e.path()).unwrap())
+            })
+            .collect()
+    }
+
+    fn refusal(dir: &Path) -> Refusal {
+        match inspect(dir).unwrap().verdict() {
+            Verdict::Refuse(r) => r,
+            v => panic!("{v:?}"),
+        }
+    }
+
+    #[test]
+    fn only_a_directory_without_history_is_new() {
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path().join("data");
+        assert!(matches!(inspect(&dir).unwrap().verdict(), Verdict::New));
+        std::fs::create_dir(&dir).unwrap();
+        std::fs::write(dir.join("notes.txt"), "mine").unwrap();
+        let found = inspect(&dir).unwrap();
+        assert!(matches!(found.verdict(), Verdict::New));
+        assert_eq!(found.other, vec![dir.join("notes.txt")]);
+        // A first start killed while writing its first snapshot: refused, but repairable.
+        let tmp_state = dir.join(".snapshot-00000000000000000000.state.tmp-7-0-1");
+        std::fs::write(&tmp_state, "half").unwrap();
+        let state = dir.join("snapshot-00000000000000000000.state");
+        std::fs::write(&state, "whole").unwrap();
+        let r = refusal(&dir);
+        assert!(r.repairable, "{r}");
+        assert!(r.to_string().contains("naadf data repair"), "{r}");
+        assert!(matches!(DataDir::open(&dir), Err(StoreError::Refused(_))));
+        assert!(!dir.join(store::LOCK).exists(), "a refused directory gets no lock file");
+        for a in inspect(&dir).unwrap().repair().unwrap() {
+            a.apply().unwrap();
+        }
+        assert!(!tmp_state.exists() && !state.exists());
+        assert!(dir.join("notes.txt").exists());
+        assert!(matches!(inspect(&dir).unwrap().verdict(), Verdict::New));
+    }
+
+    #[test]
+    fn history_without_a_complete_snapshot_is_refused_untouched() {
+        for (missing, found, remedy) in [
+            (
+                &["state"][..],
+                "snapshot-00000000000000000000.naadf without its .state",
+                "(3 readable in the log)",
+            ),
+            (
+                &["naadf"][..],
+                "snapshot-00000000000000000000.state without its .naadf",
+                "gone",
+            ),
+            (
+                &["naadf", "state"][..],
+                "wal-00000000000000000000.log (versions 1–3)",
+                "gone",
+            ),
+        ] {
+            let tmp = tempfile::tempdir().unwrap();
+            let dir = tmp.path();
+            served(dir);
+            for ext in missing {
+                std::fs::remove_file(dir.join(format!("snapshot-00000000000000000000.{ext}"))).unwrap();
+            }
+            std::fs::remove_file(dir.join(store::LOCK)).unwrap();
+            let before = contents(dir);
+            let r = refusal(dir);
+            let text = r.to_string();
+            assert!(!r.repairable && text.contains(found) && text.contains(remedy), "{text}");
+            assert!(text.contains("naadf data check"), "{text}");
+            let err = DataDir::open(dir).unwrap_err().to_string();
+            assert!(err.starts_with("refusing to start: data directory"), "{err}");
+            assert_eq!(inspect(dir).unwrap().repair(), Err(r));
+            assert!(inspect(dir).unwrap().orphans().is_empty());
+            assert_eq!(contents(dir), before, "missing {missing:?}: the directory changed");
+        }
+    }
+
+    #[test]
+    fn a_resumable_directory_loses_its_orphans_and_torn_tail_only() {
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path();
+        served(dir);
+        let segment = dir.join(wal::segment_name(0));
+        let intact = std::fs::metadata(&segment).unwrap().len();
+        std::fs::OpenOptions::new()
+            .append(true)
+            .open(&segment)
+            .and_then(|mut f| std::io::Write::write_all(&mut f, &[0; 100]))
+            .unwrap();
+        let lone = dir.join("snapshot-00000000000000000002.state");
+        std::fs::copy(dir.join("snapshot-00000000000000000000.state"), &lone).unwrap();
+        let temps = [
+            dir.join(".snapshot-00000000000000000002.naadf.tmp-9-0-5"),
+            dir.join(".snapshot-00000000000000000000.state.tmp-9-1-5"),
+        ];
+        for t in &temps {
+            std::fs::write(t, "partial").unwrap();
+        }
+        let found = inspect(dir).unwrap();
+        assert!(matches!(
+            found.verdict(),
+            Verdict::Resume {
+                snapshot: 0,
+                records: 3
+            }
+        ));
+        let actions = found.repair().unwrap();
+        assert_eq!(actions.len(), 4, "{actions:?}");
+        assert_eq!(
+            actions[0],
+            Action::Cut {
+                path: segment.clone(),
+                at: intact,
+                len: intact + 100
+            }
+        );
+        for a in &actions {
+            a.apply().unwrap();
+        }
+        let after = inspect(dir).unwrap();
+        assert!(matches!(
+            after.verdict(),
+            Verdict::Resume {
+                snapshot: 0,
+                records: 3
+            }
+        ));
+        assert_eq!(after.repair().unwrap(), vec![]);
+        assert!(!lone.exists() && temps.iter().all(|t| !t.exists()));
+        assert_eq!(std::fs::metadata(&segment).unwrap().len(), intact);
+        assert_eq!(store::snapshots(dir).unwrap(), vec![0]);
+    }
+
+    #[test]
+    fn a_broken_log_after_a_complete_snapshot_is_refused() {
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path();
+        served(dir);
+        // Zeros over the second record, the third intact behind them.
+        let segment = dir.join(wal::segment_name(0));
+        let mut bytes = std::fs::read(&segment).unwrap();
+        let second = bytes.len() - entry(3).frame().len() - entry(2).frame().len();
+        bytes[second..second + entry(2).frame().len()].fill(0);
+        std::fs::write(&segment, &bytes).unwrap();
+        let r = refusal(dir);
+        assert!(!r.repairable);
+        assert!(r.problem.contains("followed by an intact record (version 3)"), "{r}");
+        assert!(
+            r.remedy.contains("--world MOVED/snapshot-00000000000000000000.naadf"),
+            "{r}"
+        );
+    }
+}
