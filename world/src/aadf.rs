@@ -12,6 +12,10 @@
 //!   ([`cell_aadf4`], a bit-sliced implementation of [`grid_aadf`]);
 //! - chunk AADFs: the whole chunk grid, fields 0..=31, outside the world counts as empty,
 //!   chunks with entities block growth ([`build_chunk_aadf`]).
+//! - regrowth after edits: the region a change may affect ([`REGROW_RADIUS`]), the resumable
+//!   job that recomputes it ([`GrowthJob`]), and the world's background-growth bookkeeping
+//!   and detached task ([`GrowthTask`]), which `World::start_growth` and
+//!   `World::finish_growth` (in `edit/`) drive.
 
 use crate::cell::{self, Aadf, CHUNK_FIELD_BITS, MAX_CHUNK_FIELD, State};
 use crate::size::WorldSize;
@@ -446,6 +450,57 @@ fn grow_chunks(
             (next != cur).then(|| (i, next.pack(CHUNK_FIELD_BITS)))
         })
         .collect()
+}
+
+/// Background chunk-AADF growth: the chunks whose freedom changed since the world last
+/// converged, and the job recomputing the region around them.
+///
+/// Edits never restart a running job (under a steady stream of edits a restarted job would
+/// never finish). A job works on the chunk cells as they were when it started; chunks
+/// whose freedom flips meanwhile become the seeds of the next job, and those that stopped
+/// being free are clamped out of the job's fields when it publishes, so every published
+/// state is safe and the fields still converge to a from-scratch build.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Growth {
+    /// Seeds of the running job (or of the next one, when none runs).
+    pub(crate) seeds: Vec<u32>,
+    /// The running (or attached, paused) job.
+    pub(crate) job: Option<GrowthJob>,
+    /// The growth sub-step of the world's version: how many growth results were published.
+    pub(crate) seq: u32,
+    /// Chunks whose freedom flipped while the job ran: the next job's seeds.
+    pub(crate) pending: Vec<u32>,
+    /// Chunks that stopped being free while the job ran.
+    pub(crate) blocked: Vec<usize>,
+    /// Whether the job runs outside the world, as a [`GrowthTask`].
+    pub(crate) detached: bool,
+}
+
+/// Growth work taken out of a world by [`crate::World::start_growth`]: it owns a copy of what it
+/// reads, so it can run on another thread while the world keeps applying edits.
+#[derive(Debug)]
+pub struct GrowthTask {
+    /// The world's size.
+    pub(crate) size: WorldSize,
+    /// The chunks whose freedom changed: the job's region is around them.
+    pub(crate) seeds: Vec<u32>,
+    /// A copy of the chunk cells as the job started.
+    pub(crate) chunks: Vec<u32>,
+    /// A copy of the chunk entity fields (chunks holding entities are not free).
+    pub(crate) entities: Vec<u32>,
+    /// The job, once its region is known.
+    pub(crate) job: Option<GrowthJob>,
+}
+
+impl GrowthTask {
+    /// Runs the job to convergence (finding its region first: that, too, is work the
+    /// world's owner should not wait for).
+    pub fn run(&mut self) {
+        let job = self.job.get_or_insert_with(|| {
+            GrowthJob::around(self.size, &self.seeds, std::mem::take(&mut self.chunks), &self.entities)
+        });
+        while !job.step(self.size, &self.entities) {}
+    }
 }
 
 #[cfg(test)]

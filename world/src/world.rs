@@ -1,11 +1,11 @@
 //! The [`World`]: the mirrored buffers plus the bookkeeping that keeps them canonical.
 
+use crate::aadf::Growth;
 use crate::aadf::{self, build_chunk_aadf, cell_aadf4, chunk_is_free};
 use crate::build::{self, ChunkPlan, ChunkSource, group_words};
 use crate::cell::{self, Aadf, CHUNK_FIELD_BITS, CHUNK_VOXELS, GROUP_WORDS, State};
 use crate::dedup::GroupStore;
 use crate::digest::{BufferId, Digest, PagedDigest};
-use crate::edit::Growth;
 use crate::entity::{Entities, EntityTable, Pose};
 use crate::error::WorldError;
 use crate::material::MaterialTable;

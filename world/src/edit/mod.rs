@@ -26,7 +26,8 @@ pub use record::{Decoded, Record};
 pub use undo::UndoRecord;
 pub use writes::Writes;
 
-use crate::aadf::GrowthJob;
+pub use crate::aadf::GrowthTask;
+use crate::aadf::{Growth, GrowthJob};
 use crate::cell::{self, State};
 use crate::digest::{BufferId, Digest};
 use crate::entity::{self, Entities, EntityTable};
@@ -65,50 +66,6 @@ pub struct Applied {
     pub change: ChangeSet,
     /// What undoing the batch needs.
     pub undo: UndoRecord,
-}
-
-/// Background chunk-AADF growth: the chunks whose freedom changed since the world last
-/// converged, and the job recomputing the region around them.
-///
-/// Edits never restart a running job (under a steady stream of edits a restarted job would
-/// never finish). A job works on the chunk cells as they were when it started; chunks
-/// whose freedom flips meanwhile become the seeds of the next job, and those that stopped
-/// being free are clamped out of the job's fields when it publishes, so every published
-/// state is safe and the fields still converge to a from-scratch build.
-#[derive(Clone, Debug, Default)]
-pub struct Growth {
-    /// Seeds of the running job (or of the next one, when none runs).
-    seeds: Vec<u32>,
-    job: Option<GrowthJob>,
-    seq: u32,
-    /// Chunks whose freedom flipped while the job ran: the next job's seeds.
-    pending: Vec<u32>,
-    /// Chunks that stopped being free while the job ran.
-    blocked: Vec<usize>,
-    /// Whether the job runs outside the world, as a [`GrowthTask`].
-    detached: bool,
-}
-
-/// Growth work taken out of a world by [`World::start_growth`]: it owns a copy of what it
-/// reads, so it can run on another thread while the world keeps applying edits.
-#[derive(Debug)]
-pub struct GrowthTask {
-    size: crate::WorldSize,
-    seeds: Vec<u32>,
-    chunks: Vec<u32>,
-    entities: Vec<u32>,
-    job: Option<GrowthJob>,
-}
-
-impl GrowthTask {
-    /// Runs the job to convergence (finding its region first: that, too, is work the
-    /// world's owner should not wait for).
-    pub fn run(&mut self) {
-        let job = self.job.get_or_insert_with(|| {
-            GrowthJob::around(self.size, &self.seeds, std::mem::take(&mut self.chunks), &self.entities)
-        });
-        while !job.step(self.size, &self.entities) {}
-    }
 }
 
 impl World {
