@@ -664,3 +664,86 @@ fn cli_reference() -> String {
     }
     s
 }
+
+/// A scene file of a few hundred bytes whose two one-voxel models sit 4095 voxels apart in
+/// x and z: it asks for a world of 4096 × 64 × 4096 voxels, 262144 chunks.
+fn far_apart_scene(path: &Path) {
+    use dot_vox::{
+        DEFAULT_INDEX_MAP, DEFAULT_PALETTE, Dict, DotVoxData, Frame, Model, SceneNode, ShapeModel, Size, Voxel,
+    };
+    let one = Model {
+        size: Size { x: 1, y: 1, z: 1 },
+        voxels: vec![Voxel { x: 0, y: 0, z: 0, i: 0 }],
+    };
+    let trn = |child: u32, t: &str| SceneNode::Transform {
+        attributes: Dict::new(),
+        frames: vec![Frame::new(Dict::from([("_t".to_string(), t.to_string())]))],
+        child,
+        layer_id: 0,
+    };
+    let shp = || SceneNode::Shape {
+        attributes: Dict::new(),
+        models: vec![ShapeModel {
+            model_id: 0,
+            attributes: Dict::new(),
+        }],
+    };
+    let scene = DotVoxData {
+        version: 150,
+        index_map: DEFAULT_INDEX_MAP.to_vec(),
+        models: vec![one],
+        palette: DEFAULT_PALETTE.to_vec(),
+        materials: vec![],
+        scenes: vec![
+            trn(1, "0 0 0"),
+            SceneNode::Group {
+                attributes: Dict::new(),
+                children: vec![2, 4],
+            },
+            trn(3, "0 0 0"),
+            shp(),
+            trn(5, "4095 4095 0"),
+            shp(),
+        ],
+        layers: vec![],
+    };
+    let mut bytes = Vec::new();
+    scene.write_vox(&mut bytes).unwrap();
+    assert!(bytes.len() < 2048, "{} bytes", bytes.len());
+    std::fs::write(path, bytes).unwrap();
+}
+
+/// A small file cannot make the CLI build a huge, mostly empty world: the size it asks
+/// for is checked against `--max-chunks` before anything is built, and the refusal says
+/// how to go on. Under a raised bound the same file builds.
+#[test]
+fn worlds_larger_than_max_chunks_are_refused_before_building() {
+    let dir = tempfile::tempdir().unwrap();
+    let (vox, out) = (p(dir.path(), "far.vox"), p(dir.path(), "far.naadf"));
+    far_apart_scene(Path::new(&vox));
+    let started = std::time::Instant::now();
+    support::fails(
+        &["import", &vox, "-o", &out, "--max-chunks", "100000"],
+        None,
+        "262144 chunks, more than --max-chunks 100000 allows",
+    );
+    support::fails(
+        &["generate", "--preset", "test", "--size", "16384,4096,16384", "-o", &out],
+        None,
+        "268435456 chunks, more than --max-chunks 16777216 allows",
+    );
+    // Refused at once: building either world would take minutes (and 13 GB for the second).
+    assert!(started.elapsed().as_secs() < 30, "{:?}", started.elapsed());
+    assert!(!Path::new(&out).exists(), "nothing is written");
+    support::fails(
+        &["import", &vox, "-o", &out, "--max-chunks", "262143"],
+        None,
+        "pass --max-chunks 262144 to build it anyway",
+    );
+    let info: serde_json::Value = serde_json::from_str(&ok(
+        &["import", &vox, "-o", &out, "--max-chunks", "262144", "--json"],
+        None,
+    ))
+    .unwrap();
+    assert_eq!(info["solid_voxels"], 2, "{info}");
+}

@@ -6,8 +6,7 @@ mod support;
 
 use naadf_client::error::Code;
 use naadf_client::gpu::Mode;
-use naadf_client::node::NodeInfo;
-use naadf_client::{Client, Error};
+use naadf_client::{Client, Error, NodeInfo};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 use support::{http_get, http_get_bytes, naadf, ok, p, serve_world, start_world};
@@ -195,11 +194,13 @@ fn frames_from_render_nodes_equal_local_renders() {
     assert!(png == std::fs::read(p(dir.path(), "local-material.png")).unwrap());
     let (code, _) = http_get_bytes(&server.http, "/frame.png?camera=%7B%7D&token=vw");
     assert_eq!(code, 400, "a bad camera");
-    let (code, page) = http_get(&server.http, "/");
+    // With tokens, the page and the metrics want one too.
+    assert_eq!(http_get(&server.http, "/").0, 401);
+    let (code, page) = http_get(&server.http, "/?token=vw");
     assert_eq!(code, 200);
     let adapter = v["node"].as_str().unwrap().to_owned();
     assert!(page.contains("Render nodes") && page.contains(&adapter), "{page}");
-    let (_, metrics) = http_get(&server.http, "/metrics");
+    let (_, metrics) = http_get(&server.http, "/metrics?token=vw");
     assert!(metrics.contains("naadf_frames_total{node=\"all\"}"), "{metrics}");
     assert!(metrics.contains("naadf_frame_seconds_bucket"));
 
@@ -296,7 +297,7 @@ fn a_request_survives_the_death_of_its_node() {
     let Some((_, server)) = started(dir.path()) else { return };
     // Rows of the status page's node table.
     let count_nodes = || {
-        let page = http_get(&server.http, "/").1;
+        let page = http_get(&server.http, "/?token=vw").1;
         let table = page
             .split("<table id=nodes>")
             .nth(1)
@@ -350,7 +351,7 @@ fn a_request_survives_the_death_of_its_node() {
     assert_eq!((img.width(), img.height()), (1600, 1200));
     wait_for(1);
     // The frame came from the second node: the one left has served it.
-    let page = http_get(&server.http, "/").1;
+    let page = http_get(&server.http, "/?token=vw").1;
     let row = page
         .split("<table id=nodes>")
         .nth(1)

@@ -419,7 +419,8 @@ fn rate_limit_refuses_bursts() {
         .collect();
     std::fs::write(&ops, lines).unwrap();
 
-    let out = naadf(&["edit", "--server", url, "--ops", &ops], None);
+    // Without retries (`--retry-for 0`), the first refusal stops the run.
+    let out = naadf(&["edit", "--server", url, "--ops", &ops, "--retry-for", "0"], None);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success(), "ten edits at once passed a limit of 2/s");
     assert!(!err.contains("panicked"), "{err}");
@@ -746,5 +747,289 @@ fn grpcurl_lists_and_calls() {
     assert!(out.contains("InvalidArgument"), "{out}");
     assert!(out.contains("outside the world"), "{out}");
     assert_eq!(status(&server.url, None)["version"], 1);
+    server.stop();
+}
+
+/// Client strings of any length come back in short, clear refusals: model names are capped
+/// when a line is parsed, and every error quotes at most a clipped piece of client input.
+/// (Unclipped, a 20 KB name in the status message broke the HTTP/2 connection, and a 15 MB
+/// one passed the metadata limit.)
+#[test]
+fn long_names_are_refused_with_short_messages() {
+    let dir = tempfile::tempdir().unwrap();
+    let world = make_world(dir.path());
+    let server = serve_world(dir.path(), &world, &["--rate", "1000000"], &[]);
+    let url = server.url.as_str();
+    let start = settled(url, None);
+    let (k20, m15) = ("n".repeat(20_000), "n".repeat(15_000_000));
+    let cases = [
+        (
+            "place, 20 KB name",
+            format!(r#"{{"op":"place","model":"{k20}","at":[0,0,0]}}"#),
+            "longer than 64 bytes",
+        ),
+        (
+            "place, 15 MB name",
+            format!(r#"{{"op":"place","model":"{m15}","at":[0,0,0]}}"#),
+            "longer than 64 bytes",
+        ),
+        (
+            "define_model, 20 KB name",
+            format!(r#"{{"op":"define_model","name":"{k20}","size":[1,1,1],"voxels":[]}}"#),
+            "longer than 64 bytes",
+        ),
+        (
+            "define_model, 15 MB name",
+            format!(r#"{{"op":"define_model","name":"{m15}","size":[1,1,1],"voxels":[]}}"#),
+            "longer than 64 bytes",
+        ),
+        (
+            "unknown op, 20 KB name",
+            format!(r#"{{"op":"{k20}","at":[0,0,0]}}"#),
+            "unknown variant",
+        ),
+    ];
+    for (what, line, needle) in &cases {
+        let out = edit(url, None, line);
+        let message = assert_refused(&out, what, "InvalidArgument", needle);
+        assert!(
+            message.len() < 1024,
+            "{what}: a {} byte message: {message}",
+            message.len()
+        );
+        assert!(
+            message.contains("… (") && message.contains(" bytes)"),
+            "{what}: {message}"
+        );
+        assert!(out.stderr.len() < 2048, "{what}: {} bytes on stderr", out.stderr.len());
+    }
+    assert_eq!(
+        point(&status(url, None)),
+        point(&start),
+        "a refused edit changed the world"
+    );
+    assert_eq!(
+        edit_ok(url, None, r#"{"op":"set","voxels":[[1,1,1,1]]}"#),
+        start["version"].as_u64().unwrap() + 1
+    );
+    server.stop();
+
+    // Offline, `naadf apply` says the same in as few words.
+    let ops = p(dir.path(), "long.jsonl");
+    let name = "m".repeat(10_000_000);
+    std::fs::write(&ops, format!(r#"{{"op":"place","model":"{name}","at":[0,0,0]}}"#)).unwrap();
+    let out = naadf(
+        &["apply", &world, "--ops", &ops, "-o", &p(dir.path(), "out.naadf")],
+        None,
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "a 10 MB model name was applied");
+    assert!(err.contains("line 1") && err.contains("longer than 64 bytes"), "{err}");
+    assert!(err.len() < 2048, "naadf apply printed {} bytes", err.len());
+}
+
+/// An HTTP GET on loopback with extra header lines (`Name: value`); (status, body).
+fn http_get_with(addr: &str, path: &str, headers: &[&str]) -> (u16, String) {
+    use std::io::{Read, Write};
+    let mut s = std::net::TcpStream::connect(addr).unwrap();
+    let extra: String = headers.iter().map(|h| format!("{h}\r\n")).collect();
+    write!(
+        s,
+        "GET {path} HTTP/1.1\r\nHost: {addr}\r\n{extra}Connection: close\r\n\r\n"
+    )
+    .unwrap();
+    let mut buf = Vec::new();
+    s.read_to_end(&mut buf).unwrap();
+    let text = String::from_utf8_lossy(&buf).into_owned();
+    let (head, body) = text.split_once("\r\n\r\n").unwrap_or((&text, ""));
+    (
+        head.split_whitespace().nth(1).unwrap().parse().unwrap(),
+        body.to_owned(),
+    )
+}
+
+/// With tokens, the status page (user names, edits) and the metrics want a token, from the
+/// header or `?token=`; `/health` stays open. `/frame.png` authenticates before it looks at
+/// its parameters, and refuses a mode outside the protocol as a bad request.
+#[test]
+fn http_wants_a_token_when_the_server_has_tokens() {
+    let dir = tempfile::tempdir().unwrap();
+    let world = make_world(dir.path());
+    let server = serve_world(
+        dir.path(),
+        &world,
+        &[],
+        &[("NAADF_TOKENS", "vt=vera:viewer,et=edwin:editor")],
+    );
+    let (url, http) = (server.url.as_str(), server.http.as_str());
+    edit_ok(url, Some("et"), r#"{"op":"set","voxels":[[3,4,5,1]]}"#);
+
+    let (code, body) = http_get(http, "/health");
+    assert_eq!(code, 200, "{body}");
+    for path in ["/", "/metrics", "/?token=nope", "/metrics?token=nope"] {
+        let (code, body) = http_get(http, path);
+        assert_eq!(code, 401, "{path}: {body}");
+        assert!(!body.contains("edwin"), "{path} names a user without a token: {body}");
+    }
+    let (code, page) = http_get(http, "/?token=vt");
+    assert_eq!(code, 200, "{page}");
+    assert!(page.contains("edwin"), "{page}");
+    assert!(page.contains("token=vt"), "the live frame lacks the token: {page}");
+    let (code, page) = http_get_with(http, "/", &["Authorization: Bearer vt"]);
+    assert_eq!(code, 200, "{page}");
+    let (code, metrics) = http_get_with(http, "/metrics", &["Authorization: Bearer et"]);
+    assert_eq!(code, 200, "{metrics}");
+    assert!(metrics.lines().any(|l| l == "naadf_edits_total 1"), "{metrics}");
+    let (code, _) = http_get(http, "/metrics?token=vt");
+    assert_eq!(code, 200);
+
+    // Without a valid token, every frame request is 401, whatever its parameters.
+    let camera = "%7B%22pos%22%3A%5B0%2C80%2C0%5D%2C%22yaw%22%3A45%2C%22pitch%22%3A-30%7D";
+    for path in [
+        "/frame.png".to_owned(),
+        "/frame.png?min_version=abc".to_owned(),
+        "/frame.png?camera=nonsense&size=9x".to_owned(),
+        format!("/frame.png?camera={camera}&mode=bogus"),
+        format!("/frame.png?camera={camera}&mode=bogus&token=nope"),
+    ] {
+        let (code, body) = http_get(http, &path);
+        assert_eq!(code, 401, "{path}: {body}");
+    }
+    // With one, bad parameters are 400: a missing camera, a mode outside the protocol.
+    let (code, body) = http_get(http, "/frame.png?min_version=abc&token=vt");
+    assert_eq!(code, 400, "{body}");
+    let (code, body) = http_get(http, &format!("/frame.png?camera={camera}&mode=bogus&token=vt"));
+    assert_eq!(code, 400, "{body}");
+    assert!(body.contains("mode 'bogus'") && body.contains("albedo"), "{body}");
+    // A valid request reaches the render nodes (there are none).
+    let (code, body) = http_get(http, &format!("/frame.png?camera={camera}&mode=steps&token=vt"));
+    assert_eq!(code, 503, "{body}");
+    server.stop();
+    let log = std::fs::read_to_string(dir.path().join("server.log")).unwrap();
+    assert!(!log.contains("cleartext"), "a loopback server warned: {log}");
+}
+
+/// With tokens, a non-loopback bind without TLS warns at startup (tokens would cross the
+/// network in cleartext), unless `--insecure` accepts it.
+#[test]
+fn cleartext_tokens_on_the_network_are_warned_about() {
+    let dir = tempfile::tempdir().unwrap();
+    let world = make_world(dir.path());
+    let data = p(dir.path(), "data");
+    let tokens = [("NAADF_TOKENS", "t0k=ops:viewer")];
+    for (grpc, http, insecure, warned) in [
+        ("0.0.0.0:0", "127.0.0.1:0", false, Some("gRPC on 0.0.0.0")),
+        ("127.0.0.1:0", "0.0.0.0:0", false, Some("HTTP on 0.0.0.0")),
+        ("0.0.0.0:0", "0.0.0.0:0", true, None),
+    ] {
+        let log = dir.path().join(format!("{grpc}-{http}-{insecure}.log"));
+        let mut args = vec!["--world", &world, "--data", &data, "--grpc", grpc, "--http", http];
+        if insecure {
+            args.push("--insecure");
+        }
+        let server = support::Server::start(&args, &log, &tokens);
+        server.stop();
+        let log = std::fs::read_to_string(&log).unwrap();
+        match warned {
+            Some(what) => {
+                let line = log
+                    .lines()
+                    .find(|l| l.starts_with("WARNING: bearer tokens travel in cleartext"))
+                    .unwrap_or_else(|| panic!("no warning on stderr for {grpc} / {http}: {log}"));
+                assert!(line.contains(what) && line.contains("--insecure"), "{line}");
+                assert!(
+                    log.lines().any(|l| l.contains("WARN") && l.contains("cleartext")),
+                    "the warning is not logged: {log}"
+                );
+            }
+            None => assert!(!log.contains("cleartext"), "--insecure still warned: {log}"),
+        }
+    }
+}
+
+/// `naadf edit` backs off and retries a rate-limited line with the same client_seq, so a
+/// burst over `--rate` still lands every line exactly once; a batch over the edit limits is
+/// refused at once, not retried.
+#[test]
+fn edit_retries_rate_limited_lines_exactly_once() {
+    let dir = tempfile::tempdir().unwrap();
+    let world = make_world(dir.path());
+    let server = serve_world(dir.path(), &world, &["--rate", "2", "--max-ops", "2"], &[]);
+    let url = server.url.as_str();
+    let ops = p(dir.path(), "eight.jsonl");
+    let lines: String = (0..8)
+        .map(|i| format!("{{\"op\":\"set\",\"voxels\":[[{i},1,1,{}]]}}\n", i % 3 + 1))
+        .collect();
+    std::fs::write(&ops, &lines).unwrap();
+    let args = ["edit", "--server", url, "--ops", &ops, "--json", "--client-seq", "100"];
+
+    let out = naadf(&args, None);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let acks: Vec<Value> = String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    let versions: Vec<u64> = acks.iter().map(|a| a["version"].as_u64().unwrap()).collect();
+    assert_eq!(versions, (1..=8).collect::<Vec<_>>(), "{acks:?}");
+    assert!(acks.iter().all(|a| a["duplicate"] == false), "{acks:?}");
+    assert_eq!(
+        status(url, None)["version"],
+        8,
+        "a line was applied twice or not at all"
+    );
+    // The same run again is all repeats, answered with the original versions.
+    let out = naadf(&args, None);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let again: Vec<Value> = String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(
+        again.iter().map(|a| a["version"].as_u64().unwrap()).collect::<Vec<_>>(),
+        versions
+    );
+    assert!(again.iter().all(|a| a["duplicate"] == true), "{again:?}");
+
+    // A batch over --max-ops is RESOURCE_EXHAUSTED too, but no retry helps: it is refused
+    // as it is, not retried until --retry-for runs out.
+    let one = r#"{"op":"set","voxels":[[9,9,9,1]]}"#;
+    let out = edit(url, None, &format!(r#"{{"batch":[{one},{one},{one}]}}"#));
+    let message = assert_refused(&out, "a batch over --max-ops", "ResourceExhausted", "at most 2 ops");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!err.contains("after retrying"), "{message}");
+    assert_eq!(status(url, None)["version"], 8);
+
+    // A run that cannot keep to the rate within --retry-for says so: ten lines at 2/s take
+    // four seconds, and 0.1 s of retries per line allows 0.05 s of waiting.
+    let out = naadf(
+        &[
+            "edit",
+            "--server",
+            url,
+            "--token",
+            "dora",
+            "--ops",
+            &ops,
+            "--retry-for",
+            "0.1",
+        ],
+        None,
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "ten lines passed a rate of 2/s");
+    assert!(err.contains("still refused after retrying for 0.1 s"), "{err}");
+    assert!(
+        err.contains("server refused: ResourceExhausted: ") && err.contains("rate"),
+        "{err}"
+    );
+    for bad in ["-1", "x", "1e300"] {
+        let flag = format!("--retry-for={bad}");
+        let out = naadf(&["edit", "--server", url, "--ops", &ops, &flag], None);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            !out.status.success() && err.contains("not a number of seconds"),
+            "{flag}: {err}"
+        );
+    }
     server.stop();
 }

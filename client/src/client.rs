@@ -1,6 +1,8 @@
 //! [`Client`]: the world service's calls as typed methods. Every method takes `&self` (the
 //! client is a cheap handle to one connection; clone it for concurrent calls) and fails
-//! with a typed [`Error`].
+//! with a typed [`Error`]. Beside it, what the calls take and answer: [`ServerAddress`]
+//! (where to connect), edits, status and frames, and a render node's [`Registration`] with
+//! its [`Job`]s.
 //!
 //! ```no_run
 //! # async fn demo() -> Result<(), naadf_client::Error> {
@@ -15,17 +17,17 @@
 use crate::connect::{self, RawClient};
 use crate::error::Error;
 use crate::gpu::Mode;
-use crate::node::{NodeInfo, Registration};
 use crate::session::{Session, WorldStream};
+use naadf_proto::DEFAULT_FRAME_DEADLINE;
 use naadf_proto::requests::{entity_pose, entity_spawn};
 use naadf_proto::v1::{
-    DespawnEntitiesRequest, EditReply, EditRequest, FrameReply, FrameRequest, HistoryRequest, JoinRequest,
-    MoveEntitiesRequest, NodeHello, NodeMessage, SpawnEntitiesRequest, StatusRequest, node_message,
+    DespawnEntitiesRequest, EditReply, EditRequest, FrameJob, FrameReply, FrameRequest, FrameResult, HistoryRequest,
+    JoinRequest, MoveEntitiesRequest, NodeHello, NodeMessage, SpawnEntitiesRequest, StatusRequest, node_message,
 };
 use naadf_world::World;
 use naadf_world::camera::Camera;
 use naadf_world::digest::Digest;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Duration;
 use tokio::sync::mpsc;
 use tokio_stream::wrappers::ReceiverStream;
@@ -34,6 +36,24 @@ use tokio_stream::wrappers::ReceiverStream;
 #[derive(Clone, Debug)]
 pub struct Client {
     raw: RawClient,
+}
+
+/// Where a server is and who we are to it.
+#[derive(Clone, Debug)]
+pub struct ServerAddress {
+    /// Server URL (`http://` or `https://`).
+    pub url: String,
+    /// Bearer token.
+    pub token: Option<String>,
+    /// CA certificate (PEM) for `https://`.
+    pub ca: Option<PathBuf>,
+}
+
+impl ServerAddress {
+    /// Connects ([`Client::connect`]).
+    pub async fn connect(&self) -> Result<Client, Error> {
+        Client::connect(&self.url, self.token.as_deref(), self.ca.as_deref()).await
+    }
 }
 
 /// The acknowledgement of a durable edit.
@@ -207,14 +227,14 @@ impl Client {
     /// # Ok(()) }
     /// ```
     pub async fn join(&self, cache: Option<World>) -> Result<Session, Error> {
-        Session::start(self.clone(), cache).await
+        Session::start(self.raw.clone(), cache).await
     }
 
     /// Opens the world stream with `request` ([`crate::Mirror::join_request`]) and returns
     /// it unapplied: for a mirror that lives elsewhere (the viewer applies it on its window
     /// thread) or a relay that passes the messages on.
     pub async fn stream(&self, request: JoinRequest) -> Result<WorldStream, Error> {
-        Ok(WorldStream::new(self.raw.clone().join(request).await?.into_inner()))
+        WorldStream::open(&self.raw, request).await
     }
 
     /// Applies `ops` (one ops-JSON line: an op or `{"batch":[...]}`) as one version, and
@@ -353,13 +373,107 @@ impl Client {
             .register_node(ReceiverStream::new(rx))
             .await?
             .into_inner();
-        Ok(Registration::new(jobs, results))
+        Ok(Registration { jobs, results })
+    }
+}
+
+/// What a render node tells the server it can do ([`Client::register_node`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct NodeInfo {
+    /// Adapter name and backend, shown on the server's status page.
+    pub adapter: String,
+    /// Modes it renders.
+    pub modes: Vec<Mode>,
+    /// Largest frame it renders (width, height).
+    pub max_size: (u32, u32),
+}
+
+/// A frame job from the server.
+#[derive(Clone, Debug)]
+pub struct Job {
+    id: u64,
+    request: Option<FrameRequest>,
+}
+
+impl Job {
+    /// The id its result names.
+    pub fn id(&self) -> u64 {
+        self.id
+    }
+
+    /// The oldest world version the frame may show.
+    pub fn min_version(&self) -> u64 {
+        self.request.as_ref().map_or(0, |r| r.min_version)
+    }
+
+    /// How long the server waits for the result after sending the job.
+    pub fn deadline(&self) -> Duration {
+        match self.request.as_ref().map_or(0, |r| r.timeout_ms) {
+            0 => DEFAULT_FRAME_DEADLINE,
+            ms => Duration::from_millis(u64::from(ms)),
+        }
+    }
+
+    /// What to render, or why this client cannot.
+    pub fn spec(&self) -> Result<FrameSpec, String> {
+        FrameSpec::from_wire(self.request.as_ref().ok_or("the job has no request")?)
+    }
+}
+
+/// A node's registration with the server ([`Client::register_node`]): jobs in, results
+/// out. It ends when the server ends the job stream.
+#[derive(Debug)]
+pub struct Registration {
+    jobs: tonic::Streaming<FrameJob>,
+    results: mpsc::Sender<NodeMessage>,
+}
+
+impl Registration {
+    /// The next job; `None` once the server ended the registration. Cancel-safe.
+    pub async fn next_job(&mut self) -> Result<Option<Job>, Error> {
+        Ok(self.jobs.message().await?.map(|j| Job {
+            id: j.id,
+            request: j.request,
+        }))
+    }
+
+    /// Answers `job` with the frame rendered at world `version`, or with why it could not
+    /// be rendered.
+    pub async fn answer(&self, job: &Job, version: u64, frame: Result<FrameImage, String>) -> Result<(), Error> {
+        let result = match frame {
+            Ok(f) => FrameResult {
+                id: job.id,
+                version,
+                width: f.width,
+                height: f.height,
+                image: f.data,
+                error: String::new(),
+            },
+            Err(error) => FrameResult {
+                id: job.id,
+                error,
+                ..FrameResult::default()
+            },
+        };
+        self.results
+            .send(NodeMessage {
+                kind: Some(node_message::Kind::Result(result)),
+            })
+            .await
+            .map_err(|_| Error::ConnectionLost("the server stopped taking results".into()))
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The server refuses modes outside the protocol's list: every mode a node can render
+    /// must be on it.
+    #[test]
+    fn render_modes_are_the_protocols() {
+        assert_eq!(Mode::ALL.map(Mode::name), naadf_proto::FRAME_MODES);
+    }
 
     #[test]
     fn frame_specs_cross_the_wire_unchanged() {

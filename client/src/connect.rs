@@ -1,34 +1,15 @@
 //! Reaching a server: `http://` or `https://` URLs, an optional CA certificate for TLS, and
-//! the `authorization: Bearer <token>` metadata on every call. [`Client`] builds on this;
-//! nothing here knows the service's calls.
+//! the `authorization: Bearer <token>` metadata on every call. [`Client`](crate::Client)
+//! builds on this; nothing here knows the service's calls.
 
-use crate::Client;
-use crate::error::Error;
+use crate::error::ConnectError;
 use naadf_proto::v1::world_service_client::WorldServiceClient;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use tonic::codec::CompressionEncoding;
 use tonic::metadata::AsciiMetadataValue;
 use tonic::service::Interceptor;
 use tonic::service::interceptor::InterceptedService;
 use tonic::transport::{Certificate, Channel, ClientTlsConfig, Endpoint};
-
-/// Where a server is and who we are to it.
-#[derive(Clone, Debug)]
-pub struct ServerAddress {
-    /// Server URL (`http://` or `https://`).
-    pub url: String,
-    /// Bearer token.
-    pub token: Option<String>,
-    /// CA certificate (PEM) for `https://`.
-    pub ca: Option<PathBuf>,
-}
-
-impl ServerAddress {
-    /// Connects ([`Client::connect`]).
-    pub async fn connect(&self) -> Result<Client, Error> {
-        Client::connect(&self.url, self.token.as_deref(), self.ca.as_deref()).await
-    }
-}
 
 /// Adds the bearer token to every request.
 #[derive(Clone, Debug)]
@@ -44,25 +25,8 @@ impl Interceptor for Token {
 }
 
 /// The generated world-service client, sending the token with every call: what a
-/// [`Client`] wraps.
+/// [`Client`](crate::Client) wraps.
 pub(crate) type RawClient = WorldServiceClient<InterceptedService<Channel, Token>>;
-
-/// Errors while connecting.
-#[derive(Debug, thiserror::Error)]
-pub enum ConnectError {
-    /// The URL is not usable.
-    #[error("bad server URL '{0}': {1}")]
-    Url(String, String),
-    /// The token cannot be sent as a header.
-    #[error("the token must be visible ASCII")]
-    Token,
-    /// The CA certificate cannot be read.
-    #[error("cannot read CA certificate {0}: {1}")]
-    Ca(String, std::io::Error),
-    /// The connection failed.
-    #[error("cannot connect to {0}: {1}")]
-    Transport(String, tonic::transport::Error),
-}
 
 /// Connects to `url`, trusting `ca` (PEM) for TLS in addition to the system roots, and
 /// sending `token` with every call. The channel reconnects by itself after the connection

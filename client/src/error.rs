@@ -1,13 +1,30 @@
 //! [`Error`]: why a call to the server failed, sorted by what a caller does about it —
 //! reconnect and retry (a lost connection), back off (a rate limit), give up or fix the
-//! request (a refusal), or distrust the stream (a mirror error).
+//! request (a refusal), or distrust the stream (a mirror error). [`ConnectError`] says why
+//! no connection could be made.
 
-use crate::connect::ConnectError;
 use crate::mirror::MirrorError;
 use std::time::Duration;
 
 /// The gRPC status codes [`Error::Refused`] carries.
 pub use tonic::Code;
+
+/// Errors while connecting.
+#[derive(Debug, thiserror::Error)]
+pub enum ConnectError {
+    /// The URL is not usable.
+    #[error("bad server URL '{0}': {1}")]
+    Url(String, String),
+    /// The token cannot be sent as a header.
+    #[error("the token must be visible ASCII")]
+    Token,
+    /// The CA certificate cannot be read.
+    #[error("cannot read CA certificate {0}: {1}")]
+    Ca(String, std::io::Error),
+    /// The connection failed.
+    #[error("cannot connect to {0}: {1}")]
+    Transport(String, tonic::transport::Error),
+}
 
 /// Errors of the client.
 #[derive(Debug, thiserror::Error)]
@@ -22,10 +39,11 @@ pub enum Error {
     /// itself on the next call.
     #[error("connection lost: {0}")]
     ConnectionLost(String),
-    /// The server turned the request away with RESOURCE_EXHAUSTED: the caller is over its
-    /// rate limit, or the render queue is full. Back off and retry. (The server also uses
-    /// this code for a batch over its edit limits, which no retry fixes; the message says
-    /// which.)
+    /// The server turned the request away with RESOURCE_EXHAUSTED and asked for a retry
+    /// (the status carries [`naadf_proto::RETRY_AFTER_MS`]): the caller is over its rate
+    /// limit, or the render queue is full. Back off and retry. A RESOURCE_EXHAUSTED without
+    /// it (a batch over the server's edit limits, which no retry fixes) is
+    /// [`Error::Refused`].
     #[error("server refused: ResourceExhausted: {0}")]
     RateLimited(String),
     /// The server refused the request: its gRPC code and message.
@@ -94,7 +112,9 @@ impl From<tonic::Status> for Error {
             }
         }
         match s.code() {
-            Code::ResourceExhausted => Error::RateLimited(s.message().to_owned()),
+            Code::ResourceExhausted if s.metadata().contains_key(naadf_proto::RETRY_AFTER_MS) => {
+                Error::RateLimited(s.message().to_owned())
+            }
             code => Error::Refused {
                 code,
                 message: s.message().to_owned(),
@@ -115,9 +135,29 @@ mod tests {
             e.to_string(),
             "server refused: InvalidArgument: voxel outside the world"
         );
-        let e = Error::from(tonic::Status::resource_exhausted("over the rate limit"));
+        let mut limited = tonic::Status::resource_exhausted("over the rate limit");
+        limited
+            .metadata_mut()
+            .insert(naadf_proto::RETRY_AFTER_MS, "20".parse().unwrap());
+        let e = Error::from(limited);
         assert!(matches!(e, Error::RateLimited(_)), "{e:?}");
         assert_eq!(e.to_string(), "server refused: ResourceExhausted: over the rate limit");
+        // Without the retry hint, RESOURCE_EXHAUSTED is a batch over the edit limits:
+        // a refusal that no retry fixes.
+        let e = Error::from(tonic::Status::resource_exhausted(
+            "over limit: a batch holds at most 4 ops",
+        ));
+        assert!(
+            matches!(
+                e,
+                Error::Refused {
+                    code: Code::ResourceExhausted,
+                    ..
+                }
+            ),
+            "{e:?}"
+        );
+        assert_eq!(e.code(), Some(Code::ResourceExhausted));
         // The server's own UNAVAILABLE (no render node) is a refusal, not a lost connection.
         let e = Error::from(tonic::Status::unavailable("no render node"));
         assert_eq!(e.code(), Some(Code::Unavailable));

@@ -17,19 +17,20 @@
 //!
 //! The modules:
 //!
-//! - [`client`]: [`Client`] and the typed requests and replies (edits, status, frames);
-//! - [`connect`]: channels (plain or TLS), the bearer token every call carries, and
-//!   [`ServerAddress`];
+//! - [`client`]: [`Client`], [`ServerAddress`] and the typed requests and replies (edits,
+//!   status, frames, a render node's [`Registration`] and its jobs);
+//! - [`connect`]: channels (plain or TLS) and the bearer token every call carries, beneath
+//!   [`Client`];
 //! - [`error`]: [`Error`], which tells a lost connection from a refusal, a rate limit and a
-//!   mirror that broke;
+//!   mirror that broke, and [`ConnectError`], why no connection could be made;
 //! - [`session`]: [`Session`], a joined world stream applied to a mirror that it keeps
 //!   current, and [`WorldStream`], the stream alone;
 //! - [`mirror`]: the CPU mirror, which applies the stream's messages to local buffers and
 //!   checks every digest (no I/O of its own); the basis of the GPU client and of relays;
 //! - [`cache`]: [`PageCache`], the mirrored world on disk, so that rejoining after a restart
 //!   costs only what changed;
-//! - [`node`]: render nodes — the server's frame jobs, and [`node::RenderNode`], which keeps a
-//!   node registered and serving with any renderer;
+//! - [`node`]: [`node::RenderNode`], which keeps a render node registered and serving the
+//!   server's frame jobs with any renderer;
 //! - [`gpu`]: the GPU mirror ([`gpu::GpuWorld`]), the WGSL traversal and the renderer;
 //! - [`viewer`]: the interactive window (winit) that flies through a server's world and
 //!   edits it.
@@ -47,8 +48,10 @@ pub mod session;
 pub mod viewer;
 
 pub use cache::PageCache;
-pub use client::{Ack, Client, FrameImage, FrameSpec, Pose, RenderedFrame, ServerStatus, Spawn};
-pub use connect::ServerAddress;
-pub use error::Error;
+pub use client::{
+    Ack, Client, FrameImage, FrameSpec, Job, NodeInfo, Pose, Registration, RenderedFrame, ServerAddress, ServerStatus,
+    Spawn,
+};
+pub use error::{ConnectError, Error};
 pub use mirror::{Mirror, MirrorError, Progress, StreamedEdit};
 pub use session::{Ended, Session, WorldStream};

@@ -4,10 +4,10 @@
 //! ([`Session::follow`]). [`WorldStream`] is the stream alone, for programs that apply or
 //! pass on the messages themselves.
 
-use crate::Client;
+use crate::connect::RawClient;
 use crate::error::Error;
 use crate::mirror::{Mirror, Progress};
-use naadf_proto::v1::WorldMessage;
+use naadf_proto::v1::{JoinRequest, WorldMessage};
 use naadf_world::World;
 use std::future::Future;
 use std::ops::ControlFlow;
@@ -18,8 +18,9 @@ use std::time::Duration;
 pub struct WorldStream(tonic::Streaming<WorldMessage>);
 
 impl WorldStream {
-    pub(crate) fn new(stream: tonic::Streaming<WorldMessage>) -> Self {
-        Self(stream)
+    /// Opens the world stream with `request`.
+    pub(crate) async fn open(raw: &RawClient, request: JoinRequest) -> Result<Self, Error> {
+        Ok(Self(raw.clone().join(request).await?.into_inner()))
     }
 
     /// The next message; `None` once the server ended the stream. Cancel-safe.
@@ -39,7 +40,7 @@ pub enum Ended<T> {
     Done,
 }
 
-/// A mirror following a server's world stream ([`Client::join`]).
+/// A mirror following a server's world stream ([`Client::join`](crate::Client::join)).
 ///
 /// ```no_run
 /// # async fn demo() -> Result<(), naadf_client::Error> {
@@ -61,17 +62,17 @@ pub enum Ended<T> {
 /// ```
 #[derive(Debug)]
 pub struct Session {
-    client: Client,
+    raw: RawClient,
     stream: WorldStream,
     mirror: Mirror,
 }
 
 impl Session {
     /// Joins with `cache` as the mirror's world.
-    pub(crate) async fn start(client: Client, cache: Option<World>) -> Result<Self, Error> {
+    pub(crate) async fn start(raw: RawClient, cache: Option<World>) -> Result<Self, Error> {
         let mut mirror = Mirror::new(cache);
-        let stream = client.stream(mirror.join_request()).await?;
-        Ok(Self { client, stream, mirror })
+        let stream = WorldStream::open(&raw, mirror.join_request()).await?;
+        Ok(Self { raw, stream, mirror })
     }
 
     /// The mirror.
@@ -100,7 +101,7 @@ impl Session {
     /// deltas it missed, or sends only the pages that differ. On failure the session keeps
     /// its world for the next attempt.
     pub async fn rejoin(&mut self) -> Result<(), Error> {
-        self.stream = self.client.stream(self.mirror.join_request()).await?;
+        self.stream = WorldStream::open(&self.raw, self.mirror.join_request()).await?;
         Ok(())
     }
 

@@ -29,6 +29,16 @@ pub const FILE_DESCRIPTOR_SET: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "
 /// The protocol version this build speaks; `Join` refuses other versions.
 pub const PROTOCOL_VERSION: u32 = 1;
 
+/// The render modes a `FrameRequest` may name (render nodes advertise a subset); the
+/// server refuses any other with INVALID_ARGUMENT.
+pub const FRAME_MODES: [&str; 4] = ["albedo", "material", "normal", "steps"];
+
+/// The response metadata key of a RESOURCE_EXHAUSTED refusal that a retry may pass (the
+/// caller is over its rate limit, or the render queue is full): milliseconds to wait before
+/// retrying. A RESOURCE_EXHAUSTED refusal without it (a batch over the edit limits) fails
+/// the same way on every retry.
+pub const RETRY_AFTER_MS: &str = "retry-after-ms";
+
 /// How long the server waits for a frame whose request names no deadline (`timeout_ms`
 /// 0); a render node drops a job it has not rendered by then.
 pub const DEFAULT_FRAME_DEADLINE: std::time::Duration = std::time::Duration::from_secs(30);

@@ -61,6 +61,12 @@ pub struct Caller {
 }
 
 impl Caller {
+    /// The user name as a message quotes it: in open mode it is the caller's own token,
+    /// of any length.
+    pub fn quoted_user(&self) -> String {
+        naadf_world::ops::clip_input(&self.user, naadf_world::ops::MAX_QUOTED_CHARS)
+    }
+
     /// Fails with PERMISSION_DENIED unless the caller's role is one of `allowed`; the
     /// message says what the caller tried (`action`) and which roles may.
     fn require(&self, allowed: &[Role], action: &str) -> Result<(), Status> {
@@ -70,7 +76,7 @@ impl Caller {
         let names: Vec<_> = allowed.iter().map(|r| r.name()).collect();
         Err(Status::permission_denied(format!(
             "user '{}' has role {}, which cannot {action} ({} needed)",
-            self.user,
+            self.quoted_user(),
             self.role.name(),
             names.join(" or ")
         )))
@@ -94,7 +100,7 @@ impl Caller {
         }
         Err(Status::permission_denied(format!(
             "user '{}' has role {}; {what} needs admin",
-            self.user,
+            self.quoted_user(),
             self.role.name()
         )))
     }

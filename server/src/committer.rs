@@ -18,7 +18,7 @@ use crate::wal::Wal;
 use naadf_proto::v1::EditReply;
 use std::sync::Arc;
 use std::time::Instant;
-use tokio::sync::{broadcast, mpsc};
+use tokio::sync::{broadcast, mpsc, watch};
 
 /// Most queued items committed as one group.
 const MAX_GROUP: usize = 1024;
@@ -97,6 +97,8 @@ impl Committer {
             events: Default::default(),
             bytes: 0,
         };
+        // Bytes published so far: join tasks measure their backlog against it.
+        let (head, _) = watch::channel(0u64);
         while let Some(first) = rx.blocking_recv() {
             let mut group = vec![first];
             while group.len() < MAX_GROUP {
@@ -133,6 +135,7 @@ impl Committer {
                     Outgoing::Batch { event, reply, .. } => {
                         let version = event.version;
                         history.push(&event);
+                        head.send_modify(|h| *h += event.size() as u64);
                         let _ = self.events.send(event);
                         let _ = reply.send(Ok(EditReply {
                             version,
@@ -141,6 +144,7 @@ impl Committer {
                     }
                     Outgoing::Growth { event } => {
                         history.push(&event);
+                        head.send_modify(|h| *h += event.size() as u64);
                         let _ = self.events.send(event);
                     }
                     Outgoing::Ack { reply, result } => {
@@ -152,6 +156,8 @@ impl Committer {
                             events: self.events.subscribe(),
                             catch_up,
                             view,
+                            start: *head.borrow(),
+                            head: head.subscribe(),
                         });
                     }
                     Outgoing::Checkpoint { parts, state, reply } => {

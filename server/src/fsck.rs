@@ -16,7 +16,7 @@
 //!
 //! [`DataDir::open`]: crate::store::DataDir::open
 
-use crate::store::{self, Lock, Part, StoreError};
+use crate::layout::{self, Lock, Part, Refusal, StoreError};
 use crate::wal::{self, Segment, WalError};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -79,24 +79,6 @@ pub enum Verdict {
     },
     /// Refuses to start.
     Refuse(Refusal),
-}
-
-/// Why a server will not start on a directory, and what the operator can do.
-#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
-#[error(
-    "data directory {} {problem}. {remedy} `naadf data check {}` reports what it holds.",
-    .dir.display(),
-    .dir.display()
-)]
-pub struct Refusal {
-    /// The directory.
-    pub dir: PathBuf,
-    /// What is missing or damaged, and what was found.
-    pub problem: String,
-    /// What the operator can do.
-    pub remedy: String,
-    /// Whether `naadf data repair --apply` makes the directory servable.
-    pub repairable: bool,
 }
 
 /// A file no recovery reads.
@@ -194,10 +176,10 @@ pub fn inspect(dir: &Path) -> Result<Inspection, StoreError> {
             found.other.push(path);
             continue;
         };
-        if file_name == store::LOCK {
+        if file_name == layout::LOCK {
             continue;
         }
-        if let Some(s) = store::snapshot_name(file_name) {
+        if let Some(s) = layout::snapshot_name(file_name) {
             if s.temporary {
                 found.temporary.push(path);
                 continue;
@@ -313,7 +295,7 @@ impl Inspection {
             })
             .collect();
         for s in &self.snapshots {
-            let (world, state) = store::snapshot_paths(&self.dir, s.version);
+            let (world, state) = layout::snapshot_paths(&self.dir, s.version);
             found.push(if s.world {
                 format!("{} without its .state", name(&world))
             } else {
@@ -372,7 +354,7 @@ impl Inspection {
              move this one aside (to MOVED) and run `naadf serve --world MOVED/{} --data {}`, \
              giving up the undo histories, the retry answers and the edits logged after version \
              {version} ({lost} readable in the log).",
-            name(&store::snapshot_paths(&self.dir, version).0),
+            name(&layout::snapshot_paths(&self.dir, version).0),
             self.dir.display()
         )
     }
@@ -404,7 +386,7 @@ impl Inspection {
             why: "the temporary file of a snapshot write that never finished".into(),
         });
         let incomplete = self.snapshots.iter().filter(|s| !s.complete()).map(|s| {
-            let (world, state) = store::snapshot_paths(&self.dir, s.version);
+            let (world, state) = layout::snapshot_paths(&self.dir, s.version);
             let (path, missing) = if s.world { (world, state) } else { (state, world) };
             Orphan {
                 path,
@@ -450,7 +432,7 @@ impl Inspection {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::store::{DataDir, ServerState};
+    use crate::store::{self, DataDir, ServerState};
     use crate::wal::{Entry, Wal};
     use naadf_world::edit::BatchKind;
     use naadf_world::preset::Preset;
@@ -518,7 +500,10 @@ mod tests {
         assert!(r.repairable, "{r}");
         assert!(r.to_string().contains("naadf data repair"), "{r}");
         assert!(matches!(DataDir::open(&dir), Err(StoreError::Refused(_))));
-        assert!(!dir.join(store::LOCK).exists(), "a refused directory gets no lock file");
+        assert!(
+            !dir.join(layout::LOCK).exists(),
+            "a refused directory gets no lock file"
+        );
         for a in inspect(&dir).unwrap().repair().unwrap() {
             a.apply().unwrap();
         }
@@ -552,7 +537,7 @@ mod tests {
             for ext in missing {
                 std::fs::remove_file(dir.join(format!("snapshot-00000000000000000000.{ext}"))).unwrap();
             }
-            std::fs::remove_file(dir.join(store::LOCK)).unwrap();
+            std::fs::remove_file(dir.join(layout::LOCK)).unwrap();
             let before = contents(dir);
             let r = refusal(dir);
             let text = r.to_string();

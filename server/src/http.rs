@@ -1,19 +1,28 @@
 //! The HTTP side (axum): `/health`, `/metrics` (Prometheus text format), `/frame.png`
 //! (a frame from the render nodes) and a small HTML status page with the world, the joined
 //! clients, the render nodes, a live frame and the recent edits.
+//!
+//! With tokens configured, everything but `/health` wants one (any role), from
+//! `Authorization: Bearer` or `?token=` (browsers cannot send headers for a page or an
+//! `<img>`): the page names users and shows their edits, and the metrics describe the
+//! load. `/health` says only whether the server is up and at which version.
 
 use crate::Shared;
 use crate::actor::Request;
+use crate::auth::Caller;
 use axum::Router;
+use axum::extract::rejection::QueryRejection;
 use axum::extract::{ConnectInfo, Query, State};
 use axum::http::{HeaderMap, StatusCode, header};
 use axum::response::{Html, IntoResponse, Json, Response};
 use axum::routing::get;
 use naadf_proto::v1::FrameRequest;
+use naadf_world::ops::{MAX_QUOTED_CHARS, clip_input};
 use std::net::SocketAddr;
 use std::sync::Arc;
 use std::time::SystemTime;
 use tokio::sync::mpsc;
+use tonic::Status;
 
 #[derive(Clone)]
 struct App {
@@ -49,7 +58,10 @@ async fn health(State(app): State<App>) -> impl IntoResponse {
     }
 }
 
-async fn metrics(State(app): State<App>) -> impl IntoResponse {
+async fn metrics(State(app): State<App>, headers: HeaderMap, token: TokenQuery) -> Response {
+    if let Err(s) = authorize(&app, credentials(headers, token)) {
+        return http_error(&s);
+    }
     (
         [(
             header::CONTENT_TYPE,
@@ -57,9 +69,40 @@ async fn metrics(State(app): State<App>) -> impl IntoResponse {
         )],
         app.shared.metrics.render(),
     )
+        .into_response()
 }
 
-/// The query of `/frame.png`.
+/// The `token` query parameter that every authenticated route accepts.
+#[derive(serde::Deserialize)]
+struct Token {
+    token: Option<String>,
+}
+
+/// The `?token=` of a request, or why the query holds none that can be read (extracted
+/// apart from a route's other parameters, so that authentication comes first).
+type TokenQuery = Result<Query<Token>, QueryRejection>;
+
+/// A request's credentials as gRPC metadata: its `Authorization` header, replaced by
+/// `?token=` when the query has one.
+fn credentials(headers: HeaderMap, token: TokenQuery) -> Result<tonic::metadata::MetadataMap, Status> {
+    let mut md = tonic::metadata::MetadataMap::from_headers(headers);
+    let Query(Token { token }) =
+        token.map_err(|e| Status::unauthenticated(format!("the token query: {}", e.body_text())))?;
+    if let Some(t) = token {
+        let v = format!("Bearer {t}")
+            .parse()
+            .map_err(|_| Status::unauthenticated("the token must be visible ASCII"))?;
+        md.insert("authorization", v);
+    }
+    Ok(md)
+}
+
+/// The caller of a request with these credentials (any role will do).
+fn authorize(app: &App, md: Result<tonic::metadata::MetadataMap, Status>) -> Result<Caller, Status> {
+    md.and_then(|md| app.shared.auth.caller(&md))
+}
+
+/// The query of `/frame.png` (its token is read apart, see [`TokenQuery`]).
 #[derive(serde::Deserialize)]
 struct FrameQuery {
     /// Camera JSON.
@@ -70,12 +113,10 @@ struct FrameQuery {
     mode: Option<String>,
     /// Oldest version the frame may show.
     min_version: Option<u64>,
-    /// A token, for clients that cannot send headers (an `<img>` tag).
-    token: Option<String>,
 }
 
 /// A gRPC status as an HTTP status and message.
-fn http_error(s: &tonic::Status) -> Response {
+fn http_error(s: &Status) -> Response {
     use tonic::Code;
     let code = match s.code() {
         Code::InvalidArgument => StatusCode::BAD_REQUEST,
@@ -93,35 +134,39 @@ fn http_error(s: &tonic::Status) -> Response {
 /// `GET /frame.png?camera=<json>&size=WxH&mode=M[&min_version=n][&token=T]`: the same
 /// request, roles and errors as `RenderFrame`. The token comes from `Authorization: Bearer`
 /// or the query; a request without one from another machine is refused even in open mode.
+/// Authentication comes first: a caller without a valid token learns nothing about the
+/// other parameters.
 async fn frame_png(
     State(app): State<App>,
     ConnectInfo(peer): ConnectInfo<SocketAddr>,
     headers: HeaderMap,
-    Query(q): Query<FrameQuery>,
+    token: TokenQuery,
+    q: Result<Query<FrameQuery>, QueryRejection>,
 ) -> Response {
-    let mut md = tonic::metadata::MetadataMap::from_headers(headers);
-    if let Some(t) = &q.token {
-        match format!("Bearer {t}").parse() {
-            Ok(v) => {
-                md.insert("authorization", v);
-            }
-            Err(_) => return http_error(&tonic::Status::unauthenticated("the token must be visible ASCII")),
+    let md = credentials(headers, token).and_then(|md| {
+        if !md.contains_key("authorization") && !peer.ip().is_loopback() {
+            return Err(Status::unauthenticated(
+                "a frame request from another machine needs a token",
+            ));
         }
-    }
-    if !md.contains_key("authorization") && !peer.ip().is_loopback() {
-        return http_error(&tonic::Status::unauthenticated(
-            "a frame request from another machine needs a token",
-        ));
-    }
-    if let Err(s) = app.shared.auth.caller(&md) {
+        Ok(md)
+    });
+    if let Err(s) = authorize(&app, md) {
         return http_error(&s);
     }
+    let q = match q {
+        Ok(Query(q)) => q,
+        Err(e) => return http_error(&Status::invalid_argument(e.body_text())),
+    };
     let size = q.size.as_deref().unwrap_or("640x360");
     let Some((w, h)) = size
         .split_once(['x', 'X'])
         .and_then(|(w, h)| Some((w.parse().ok()?, h.parse().ok()?)))
     else {
-        return http_error(&tonic::Status::invalid_argument(format!("size '{size}': expected WxH")));
+        return http_error(&Status::invalid_argument(format!(
+            "size '{}': expected WxH",
+            clip_input(size, MAX_QUOTED_CHARS)
+        )));
     };
     let req = FrameRequest {
         camera: q.camera,
@@ -132,7 +177,7 @@ async fn frame_png(
         raw: false,
         timeout_ms: 0,
     };
-    if let Err(s) = crate::render_router::check_request(&req) {
+    if let Err(s) = crate::service::check_frame(&req) {
         return http_error(&s);
     }
     match app.shared.router.render(req).await {
@@ -171,15 +216,14 @@ fn url_escape(s: &str) -> String {
         .collect()
 }
 
-/// The query of the status page: a token for its live frame, on servers with tokens.
-#[derive(serde::Deserialize)]
-struct PageQuery {
-    token: Option<String>,
-}
-
-async fn status_page(State(app): State<App>, Query(page): Query<PageQuery>) -> impl IntoResponse {
+/// The status page; its `?token=` (on servers with tokens) is passed on to its live frame.
+async fn status_page(State(app): State<App>, headers: HeaderMap, token: TokenQuery) -> Response {
+    let page_token = token.as_ref().ok().and_then(|Query(t)| t.token.clone());
+    if let Err(s) = authorize(&app, credentials(headers, token)) {
+        return http_error(&s);
+    }
     let Some(s) = crate::status(&app.actor).await else {
-        return Html("<p>shutting down</p>".to_owned());
+        return Html("<p>shutting down</p>".to_owned()).into_response();
     };
     let mut clients = String::new();
     for c in app.shared.activity.clients() {
@@ -202,8 +246,7 @@ async fn status_page(State(app): State<App>, Query(page): Query<PageQuery>) -> i
         .and_then(|sz| naadf_world::raysets::fixed_cameras(sz).first().copied())
         .and_then(|c| serde_json::to_string(&c).ok())
         .unwrap_or_default();
-    let token = page
-        .token
+    let token = page_token
         .map(|t| format!("&token={}", url_escape(&t)))
         .unwrap_or_default();
     let live = format!(
@@ -247,4 +290,5 @@ async fn status_page(State(app): State<App>, Query(page): Query<PageQuery>) -> i
         s.quiescent,
         app.shared.activity.clients().len(),
     ))
+    .into_response()
 }

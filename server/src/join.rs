@@ -5,7 +5,8 @@
 //! every snapshot and delta it was sent. When the subscription lags (the client stopped
 //! reading while the bounded broadcast moved on), the task takes a new snapshot and sends
 //! only the pages whose hash differs from what the client holds, so the actor and the other
-//! clients never wait for a slow one.
+//! clients never wait for a slow one. A client falls behind when it is more deltas behind
+//! than the broadcast holds, or more bytes than the [`SlowClientLimits`] allow.
 
 use crate::Shared;
 use crate::actor::Request;
@@ -17,8 +18,9 @@ use naadf_proto::v1::{CachedBuffer, Header, Page, WorldMessage, world_message};
 use naadf_world::digest::PAGE_BYTES;
 use naadf_world::file::TRANSFERRED;
 use prost::Message;
+use std::collections::VecDeque;
 use std::sync::Arc;
-use tokio::sync::{broadcast, mpsc, oneshot};
+use tokio::sync::{broadcast, mpsc, oneshot, watch};
 use tonic::Status;
 
 /// Most page hashes a join request may announce (far more than the largest world has).
@@ -43,6 +45,35 @@ pub fn client_pages(cached: &[CachedBuffer]) -> Result<ClientPages, Status> {
     Ok(out)
 }
 
+/// How far behind clients may fall, in bytes, before they are cut to a re-snapshot.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SlowClientLimits {
+    /// Most bytes one client may have pending: published deltas it has not taken yet
+    /// plus messages queued in its stream that its transport has not taken yet.
+    pub client_bytes: u64,
+    /// Most bytes the subscribed clients may have pending together; over it, every one
+    /// that is not reading and has more than a sixteenth of `client_bytes` pending is cut
+    /// too. (A client already cut holds at most about `client_bytes` until it reads.)
+    pub total_bytes: u64,
+}
+
+impl Default for SlowClientLimits {
+    /// 64 MiB per client, 512 MiB in all.
+    fn default() -> Self {
+        Self {
+            client_bytes: 64 << 20,
+            total_bytes: 512 << 20,
+        }
+    }
+}
+
+impl SlowClientLimits {
+    /// Whether a client with `mine` bytes pending, while all clients have `total`, is cut.
+    fn exceeded(&self, mine: u64, total: u64) -> bool {
+        mine > self.client_bytes || (total > self.total_bytes && mine > self.client_bytes / 16)
+    }
+}
+
 /// Streams the world to one client until it leaves or the server shuts down. `resume` is
 /// the state the client's cache holds, `(version, digest)`.
 pub async fn run(
@@ -53,46 +84,186 @@ pub async fn run(
     tx: mpsc::Sender<Result<WorldMessage, Status>>,
 ) {
     let mut shutdown = shared.shutdown.clone();
-    let Some(sub) = subscribe(&actor, resume).await else {
-        return;
-    };
-    let mut rx = sub.events;
-    let started = match (sub.catch_up, resume) {
-        (Some(events), Some((version, digest))) => {
-            send_catch_up(&shared, &sub.view, version, digest, &events, &mut held, &tx).await
-        }
-        _ => send_snapshot(&shared, &sub.view, &mut held, false, &tx).await,
-    };
-    if started.is_err() {
-        return;
-    }
+    let mut out = Outbox::new(shared.clone(), tx);
+    let mut resync = false;
     loop {
-        let next = tokio::select! {
-            r = rx.recv() => r,
-            _ = shutdown.changed() => return,
-            // The client went away while nothing was being sent.
-            _ = tx.closed() => return,
-        };
-        match next {
-            Ok(ev) => {
-                track(&mut held, &ev);
-                if send(&shared, &tx, ev.message.clone()).await.is_err() {
-                    return;
-                }
+        if resync {
+            shared.metrics.resyncs.inc();
+            // A client that stays away costs nothing meanwhile: the new snapshot and
+            // subscription start once it has read everything queued for it.
+            tokio::select! {
+                room = out.tx.reserve_many(out.tx.max_capacity()) => if room.is_err() { return },
+                _ = shutdown.changed() => return,
             }
-            Err(broadcast::error::RecvError::Lagged(missed)) => {
-                tracing::info!(missed, "client fell behind; re-sending a snapshot");
-                shared.metrics.resyncs.inc();
-                let Some(sub) = subscribe(&actor, None).await else {
-                    return;
-                };
-                rx = sub.events;
-                if send_snapshot(&shared, &sub.view, &mut held, true, &tx).await.is_err() {
-                    return;
-                }
-            }
-            Err(broadcast::error::RecvError::Closed) => return,
         }
+        let from = resume.filter(|_| !resync);
+        let Some(sub) = subscribe(&actor, from).await else {
+            return;
+        };
+        out.attach(sub.events, sub.start, sub.head);
+        let started = match (sub.catch_up, from) {
+            (Some(events), Some((version, digest))) => {
+                send_catch_up(&mut out, &sub.view, version, digest, &events, &mut held).await
+            }
+            _ => send_snapshot(&mut out, &sub.view, &mut held, resync).await,
+        };
+        if started.is_err() {
+            return;
+        }
+        // Forward deltas until the client falls behind (the subscription is dropped).
+        while let Some(rx) = out.events.as_mut() {
+            let next = tokio::select! {
+                r = rx.recv() => r,
+                _ = shutdown.changed() => return,
+                // The client went away while nothing was being sent.
+                _ = out.tx.closed() => return,
+            };
+            match next {
+                Ok(ev) => {
+                    out.pos += ev.size() as u64;
+                    track(&mut held, &ev);
+                    if out.send(ev.message.clone()).await.is_err() {
+                        return;
+                    }
+                }
+                Err(broadcast::error::RecvError::Lagged(missed)) => {
+                    tracing::info!(missed, "client fell behind; re-sending a snapshot");
+                    out.detach();
+                }
+                Err(broadcast::error::RecvError::Closed) => return,
+            }
+        }
+        resync = true;
+    }
+}
+
+/// The client went away.
+struct Gone;
+
+/// The sizes of the messages handed to a client's stream, oldest first.
+#[derive(Default)]
+struct Queue {
+    sizes: VecDeque<u64>,
+    bytes: u64,
+}
+
+impl Queue {
+    /// Bytes still queued in `tx`: the stream's transport has taken the oldest messages.
+    fn pending(&mut self, tx: &mpsc::Sender<Result<WorldMessage, Status>>) -> u64 {
+        let queued = tx.max_capacity() - tx.capacity();
+        while self.sizes.len() > queued {
+            self.bytes -= self.sizes.pop_front().expect("non-empty");
+        }
+        self.bytes
+    }
+}
+
+/// One client's stream and its backlog. What a client that does not read pins is the
+/// published deltas it has not taken from its subscription (the broadcast keeps each one
+/// until every subscriber has taken it) plus the messages queued in its stream; the
+/// transport beyond holds at most about one more message. Once the backlog is over the
+/// [`SlowClientLimits`], the subscription is dropped, which releases the deltas, and the
+/// client is re-sent a snapshot when it reads again.
+struct Outbox {
+    shared: Arc<Shared>,
+    tx: mpsc::Sender<Result<WorldMessage, Status>>,
+    queue: Queue,
+    /// The subscription, while the client keeps up.
+    events: Option<broadcast::Receiver<Arc<Event>>>,
+    /// Published bytes up to the subscription's position.
+    pos: u64,
+    /// Published bytes in all.
+    head: watch::Receiver<u64>,
+    /// The handle of this client's backlog in the metrics.
+    id: u64,
+}
+
+impl Outbox {
+    fn new(shared: Arc<Shared>, tx: mpsc::Sender<Result<WorldMessage, Status>>) -> Self {
+        let id = shared.metrics.backlogs.register();
+        Self {
+            shared,
+            tx,
+            queue: Queue::default(),
+            events: None,
+            pos: 0,
+            head: watch::channel(0).1,
+            id,
+        }
+    }
+
+    /// Follows a new subscription, at position `start`.
+    fn attach(&mut self, events: broadcast::Receiver<Arc<Event>>, start: u64, head: watch::Receiver<u64>) {
+        self.events = Some(events);
+        self.pos = start;
+        self.head = head;
+    }
+
+    /// Drops the subscription, releasing the deltas it pins; what is queued stays.
+    fn detach(&mut self) {
+        self.events = None;
+        self.shared.metrics.backlogs.set(self.id, self.queue.bytes, false);
+    }
+
+    /// Queues `m` once the stream has room; drops the subscription if the backlog goes
+    /// over the limits meanwhile (the message itself is still sent, so that a snapshot
+    /// under way stays whole).
+    async fn send(&mut self, m: WorldMessage) -> Result<(), Gone> {
+        let size = m.encoded_len() as u64;
+        self.shared.metrics.bytes_sent.inc_by(size);
+        let permit = loop {
+            let Self {
+                shared,
+                tx,
+                queue,
+                events,
+                pos,
+                head,
+                id,
+            } = self;
+            if events.is_none() {
+                break tx.reserve().await.map_err(|_| Gone)?;
+            }
+            let limits = shared.slow_clients;
+            let mut behind = 0;
+            // Only whether it came matters: the value borrowed from the watch is not `Send`.
+            let over = async {
+                head.wait_for(|&h| {
+                    behind = h.saturating_sub(*pos) + queue.pending(tx) + size;
+                    limits.exceeded(behind, shared.metrics.backlogs.set(*id, behind, true))
+                })
+                .await
+                .is_ok()
+            };
+            // The bound is checked first: a stream with room must not take more than it
+            // allows either.
+            tokio::select! {
+                biased;
+                published = over => if !published {
+                    // The committer is gone: nothing more gets published.
+                    break tx.reserve().await.map_err(|_| Gone)?;
+                },
+                room = tx.reserve() => break room.map_err(|_| Gone)?,
+            }
+            tracing::info!(behind, "client fell behind; re-sending a snapshot when it reads again");
+            self.detach();
+        };
+        permit.send(Ok(m));
+        self.queue.sizes.push_back(size);
+        self.queue.bytes += size;
+        let mut behind = self.queue.pending(&self.tx);
+        let subscribed = self.events.is_some();
+        if subscribed {
+            behind += self.head.borrow().saturating_sub(self.pos);
+        }
+        self.shared.metrics.backlogs.set(self.id, behind, subscribed);
+        Ok(())
+    }
+}
+
+impl Drop for Outbox {
+    fn drop(&mut self) {
+        self.shared.metrics.backlogs.remove(self.id);
     }
 }
 
@@ -105,14 +276,13 @@ async fn subscribe(actor: &mpsc::Sender<Request>, resume: Option<(u64, u64)>) ->
 /// Resumes a client from its cached state: a header naming that state, then the deltas
 /// from it to the view.
 async fn send_catch_up(
-    shared: &Arc<Shared>,
+    out: &mut Outbox,
     view: &SnapshotView,
     version: u64,
     digest: u64,
     events: &[Arc<Event>],
     held: &mut ClientPages,
-    tx: &mpsc::Sender<Result<WorldMessage, Status>>,
-) -> Result<(), ()> {
+) -> Result<(), Gone> {
     let header = Header {
         protocol_version: PROTOCOL_VERSION,
         size: view.size.to_vec(),
@@ -126,10 +296,10 @@ async fn send_catch_up(
         resync: false,
         resume: true,
     };
-    send(shared, tx, message(world_message::Kind::Header(header))).await?;
+    out.send(message(world_message::Kind::Header(header))).await?;
     for ev in events {
         track(held, ev);
-        send(shared, tx, ev.message.clone()).await?;
+        out.send(ev.message.clone()).await?;
     }
     Ok(())
 }
@@ -153,20 +323,14 @@ fn message(kind: world_message::Kind) -> WorldMessage {
     WorldMessage { kind: Some(kind) }
 }
 
-async fn send(shared: &Shared, tx: &mpsc::Sender<Result<WorldMessage, Status>>, m: WorldMessage) -> Result<(), ()> {
-    shared.metrics.bytes_sent.inc_by(m.encoded_len() as u64);
-    tx.send(Ok(m)).await.map_err(|_| ())
-}
-
 /// Sends the header and the pages of `view` the client lacks; afterwards the client holds
 /// exactly the view's pages.
 async fn send_snapshot(
-    shared: &Arc<Shared>,
+    out: &mut Outbox,
     view: &Arc<SnapshotView>,
     held: &mut ClientPages,
     resync: bool,
-    tx: &mpsc::Sender<Result<WorldMessage, Status>>,
-) -> Result<(), ()> {
+) -> Result<(), Gone> {
     let mut groups = Vec::new();
     for (slot, pages) in view.pages.iter().enumerate() {
         let wanted: Vec<u32> = (0..pages.len())
@@ -188,12 +352,12 @@ async fn send_snapshot(
         resync,
         resume: false,
     };
-    send(shared, tx, message(world_message::Kind::Header(header))).await?;
+    out.send(message(world_message::Kind::Header(header))).await?;
     // Compress (or fetch from the shared cache) off the async threads, a few groups at a
     // time so that sending starts early.
     for part in groups.chunks(8) {
         let part = part.to_vec();
-        let (s, v) = (shared.clone(), view.clone());
+        let (s, v) = (out.shared.clone(), view.clone());
         let frames = tokio::task::spawn_blocking(move || {
             let pages: Vec<Vec<&StoredPage>> = part
                 .iter()
@@ -203,14 +367,14 @@ async fn send_snapshot(
             part.into_iter().zip(frames).collect::<Vec<_>>()
         })
         .await
-        .map_err(|_| ())?;
+        .map_err(|_| Gone)?;
         for ((slot, indices), frame) in frames {
             let page = Page {
                 buffer: TRANSFERRED[slot] as u32,
                 indices,
                 zstd: frame.as_ref().clone(),
             };
-            send(shared, tx, message(world_message::Kind::Page(page))).await?;
+            out.send(message(world_message::Kind::Page(page))).await?;
         }
     }
     for (slot, pages) in view.pages.iter().enumerate() {

@@ -20,9 +20,11 @@
 pub mod actor;
 pub mod auth;
 pub mod committer;
+pub mod conn;
 pub mod fsck;
 pub mod http;
 pub mod join;
+pub mod layout;
 pub mod messages;
 pub mod metrics;
 pub mod pages;
@@ -58,6 +60,8 @@ pub struct Shared {
     pub shutdown: watch::Receiver<bool>,
     /// Registered render nodes and the frame requests routed to them.
     pub router: render_router::Router,
+    /// How many bytes clients may fall behind before they are re-sent a snapshot.
+    pub slow_clients: join::SlowClientLimits,
 }
 
 impl Shared {
@@ -74,6 +78,7 @@ impl Shared {
             limiter: DefaultKeyedRateLimiter::keyed(Quota::per_second(NonZeroU32::new(rate).expect("rate ≥ 1"))),
             rate,
             shutdown,
+            slow_clients: join::SlowClientLimits::default(),
         }
     }
 }

@@ -8,7 +8,7 @@ use crate::store::ServerState;
 use naadf_proto::v1::{EditReply, WorldMessage};
 use naadf_world::file::WorldParts;
 use std::sync::Arc;
-use tokio::sync::{broadcast, oneshot};
+use tokio::sync::{broadcast, oneshot, watch};
 use tonic::Status;
 
 /// The answer to an edit request: the version its batch produced (or the earlier answer,
@@ -33,7 +33,8 @@ pub struct Event {
 }
 
 impl Event {
-    /// Approximate bytes the event holds (for bounding the history of recent deltas).
+    /// Approximate bytes the event holds (for bounding the history of recent deltas and
+    /// the backlog of slow clients).
     pub fn size(&self) -> usize {
         use prost::Message;
         self.message.encoded_len() + 16 * self.changes.len() + 64
@@ -51,6 +52,11 @@ pub struct Subscription {
     pub events: broadcast::Receiver<Arc<Event>>,
     /// The deltas from the client's state to `view`, if the server still has them all.
     pub catch_up: Option<Vec<Arc<Event>>>,
+    /// Bytes ([`Event::size`]) published before the subscription: the subscriber's
+    /// position in the published stream, to measure how far behind `head` it is.
+    pub start: u64,
+    /// Bytes published so far, kept current by the committer.
+    pub head: watch::Receiver<u64>,
 }
 
 /// What the actor hands to the committer.

@@ -7,7 +7,7 @@ use prometheus_client::metrics::family::Family;
 use prometheus_client::metrics::gauge::Gauge;
 use prometheus_client::metrics::histogram::{Histogram, exponential_buckets};
 use prometheus_client::registry::Registry;
-use std::collections::{BTreeMap, VecDeque};
+use std::collections::{BTreeMap, HashMap, VecDeque};
 use std::sync::Mutex;
 use std::sync::atomic::AtomicU64;
 use std::time::SystemTime;
@@ -57,6 +57,68 @@ pub struct Metrics {
     pub frame_seconds: LatencyFamily,
     /// Frame jobs in flight (the render queue's depth), per node and in total.
     pub frames_in_flight: Family<NodeLabel, Gauge>,
+    /// The joined clients' backlogs (what the stream gauges below report).
+    pub backlogs: Backlogs,
+    /// The sum of the clients' backlogs, bytes (set when rendered).
+    backlog_bytes: Gauge,
+    /// The largest client backlog, bytes (set when rendered).
+    backlog_max_client_bytes: Gauge,
+}
+
+/// Each joined client's backlog: bytes published or queued for it that it has not read
+/// yet (see [`crate::join`]), by a handle from [`Backlogs::register`].
+#[derive(Debug, Default)]
+pub struct Backlogs {
+    inner: Mutex<BacklogTable>,
+}
+
+#[derive(Debug, Default)]
+struct BacklogTable {
+    /// Each client's backlog and whether it is subscribed.
+    clients: HashMap<u64, (u64, bool)>,
+    /// The sum over subscribed clients.
+    subscribed: u64,
+    next: u64,
+}
+
+impl Backlogs {
+    /// A handle for a new client, with an empty backlog.
+    pub fn register(&self) -> u64 {
+        let mut t = self.inner.lock().expect("backlog lock");
+        t.next += 1;
+        let id = t.next;
+        t.clients.insert(id, (0, false));
+        id
+    }
+
+    /// Sets client `id`'s backlog and whether it is `subscribed` (a client that is not holds
+    /// only what is queued in its stream, which cutting it cannot release); returns the sum
+    /// over the subscribed clients.
+    pub fn set(&self, id: u64, bytes: u64, subscribed: bool) -> u64 {
+        let mut t = self.inner.lock().expect("backlog lock");
+        if let Some((old, true)) = t.clients.insert(id, (bytes, subscribed)) {
+            t.subscribed -= old;
+        }
+        if subscribed {
+            t.subscribed += bytes;
+        }
+        t.subscribed
+    }
+
+    /// Forgets client `id`.
+    pub fn remove(&self, id: u64) {
+        let mut t = self.inner.lock().expect("backlog lock");
+        if let Some((old, true)) = t.clients.remove(&id) {
+            t.subscribed -= old;
+        }
+    }
+
+    /// The sum of all backlogs and the largest one.
+    fn totals(&self) -> (u64, u64) {
+        let t = self.inner.lock().expect("backlog lock");
+        let bytes = t.clients.values().map(|&(b, _)| b);
+        (bytes.clone().sum(), bytes.max().unwrap_or(0))
+    }
 }
 
 impl Metrics {
@@ -97,6 +159,9 @@ impl Default for Metrics {
             frames: Family::default(),
             frame_seconds: LatencyFamily::new_with_constructor(latency_histogram),
             frames_in_flight: Family::default(),
+            backlogs: Backlogs::default(),
+            backlog_bytes: Gauge::default(),
+            backlog_max_client_bytes: Gauge::default(),
             registry: Registry::default(),
         };
         registry.register("clients", "Clients joined now", m.clients.clone());
@@ -135,6 +200,16 @@ impl Default for Metrics {
             "Frame jobs sent to render nodes and not answered yet",
             m.frames_in_flight.clone(),
         );
+        registry.register(
+            "backlog_bytes",
+            "Bytes published or queued for clients that they have not read, summed over clients",
+            m.backlog_bytes.clone(),
+        );
+        registry.register(
+            "backlog_max_client_bytes",
+            "The largest backlog of one client, bytes",
+            m.backlog_max_client_bytes.clone(),
+        );
         Metrics { registry, ..m }
     }
 }
@@ -142,6 +217,9 @@ impl Default for Metrics {
 impl Metrics {
     /// The Prometheus text exposition of every metric.
     pub fn render(&self) -> String {
+        let (total, max) = self.backlogs.totals();
+        self.backlog_bytes.set(total as i64);
+        self.backlog_max_client_bytes.set(max as i64);
         let mut out = String::new();
         encode(&mut out, &self.registry).expect("writing to a String cannot fail");
         out

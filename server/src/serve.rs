@@ -4,7 +4,9 @@
 use crate::actor::{Actor, Request};
 use crate::auth::Auth;
 use crate::committer::Committer;
+use crate::conn::{Acceptor, ConnLimits};
 use crate::fsck::Verdict;
+use crate::join::SlowClientLimits;
 use crate::service::WorldServer;
 use crate::store::{DataDir, ServerState, StoreError};
 use crate::wal::{Entry, Wal};
@@ -20,7 +22,6 @@ use std::sync::Arc;
 use std::time::Duration;
 use tokio::sync::{broadcast, mpsc, oneshot, watch};
 use tonic::codec::CompressionEncoding;
-use tonic::transport::server::TcpIncoming;
 use tonic::transport::{Identity, Server, ServerTlsConfig};
 
 /// Everything `naadf serve` can configure.
@@ -46,8 +47,17 @@ pub struct ServerConfig {
     pub checkpoint_interval: Duration,
     /// Deltas a client may fall behind before it is re-sent a snapshot.
     pub slow_client_events: usize,
+    /// Bytes a client, and all clients together, may fall behind before they are re-sent
+    /// a snapshot.
+    pub slow_clients: SlowClientLimits,
+    /// Open connections per listener and their idle timeout.
+    pub connections: ConnLimits,
     /// TLS certificate and key (PEM), if any.
     pub tls: Option<(PathBuf, PathBuf)>,
+    /// Whether bearer tokens may travel in cleartext (a non-loopback bind without TLS, or
+    /// HTTP on a non-loopback address) without a warning at startup
+    /// ([`ServerConfig::cleartext_warning`]).
+    pub insecure: bool,
 }
 
 /// The default gRPC listen address.
@@ -72,12 +82,37 @@ impl Default for ServerConfig {
             checkpoint_every: 10_000,
             checkpoint_interval: Duration::from_secs(300),
             slow_client_events: 4096,
+            slow_clients: SlowClientLimits::default(),
+            connections: ConnLimits::default(),
             tls: None,
+            insecure: false,
         }
     }
 }
 
 impl ServerConfig {
+    /// Why bearer tokens would travel in cleartext on another machine's network: tokens are
+    /// configured and gRPC listens on a non-loopback address without TLS, or HTTP (never
+    /// TLS) does. `None` when they would not, or when [`ServerConfig::insecure`] accepts it.
+    pub fn cleartext_warning(&self) -> Option<String> {
+        if self.auth.is_open() || self.insecure {
+            return None;
+        }
+        let exposed: Vec<String> = [("gRPC", self.grpc, self.tls.is_none()), ("HTTP", self.http, true)]
+            .into_iter()
+            .filter(|(_, addr, plain)| *plain && !addr.ip().is_loopback())
+            .map(|(what, addr, _)| format!("{what} on {addr}"))
+            .collect();
+        (!exposed.is_empty()).then(|| {
+            format!(
+                "bearer tokens travel in cleartext: {} without TLS; anyone on the network path can \
+                 read them. Serve behind TLS (--tls-cert/--tls-key for gRPC, a TLS proxy for HTTP), \
+                 bind loopback, or pass --insecure to accept this",
+                exposed.join(" and ")
+            )
+        })
+    }
+
     /// The defaults, with the data directory `data`.
     pub fn new(data: PathBuf) -> Self {
         Self {
@@ -167,6 +202,9 @@ pub async fn serve(
     ready: impl FnOnce(Bound),
     shutdown: impl std::future::Future<Output = ()>,
 ) -> Result<()> {
+    if let Some(w) = config.cleartext_warning() {
+        tracing::warn!("{w}");
+    }
     if config.auth.is_open() {
         if !config.grpc.ip().is_loopback() || !config.http.ip().is_loopback() {
             bail!(
@@ -190,7 +228,10 @@ pub async fn serve(
     };
     let data = Arc::new(data);
     let (shutdown_tx, shutdown_rx) = watch::channel(false);
-    let shared = Arc::new(Shared::new(config.auth.clone(), config.rate, shutdown_rx));
+    let shared = Arc::new(Shared {
+        slow_clients: config.slow_clients,
+        ..Shared::new(config.auth.clone(), config.rate, shutdown_rx)
+    });
 
     let (out_tx, out_rx) = mpsc::channel(4096);
     let (events, _) = broadcast::channel(config.slow_client_events.max(16));
@@ -263,7 +304,10 @@ pub async fn serve(
         .max_decoding_message_size(config.max_message_bytes)
         .max_encoding_message_size(usize::MAX)
         .accept_compressed(CompressionEncoding::Zstd);
-    let mut builder = Server::builder();
+    let keepalive = crate::conn::keepalive(config.connections.idle_timeout);
+    let mut builder = Server::builder()
+        .http2_keepalive_interval(Some(keepalive))
+        .http2_keepalive_timeout(Some(keepalive));
     if let Some((cert, key)) = &config.tls {
         let cert = std::fs::read(cert).with_context(|| format!("cannot read {}", cert.display()))?;
         let key = std::fs::read(key).with_context(|| format!("cannot read {}", key.display()))?;
@@ -276,12 +320,13 @@ pub async fn serve(
         .add_service(svc)
         .add_service(reflection_v1)
         .add_service(reflection_v1alpha)
-        .serve_with_incoming_shutdown(grpc_incoming(grpc_listener), async move {
+        .serve_with_incoming_shutdown(grpc_incoming(grpc_listener, config.connections), async move {
             let _ = stop.wait_for(|s| *s).await;
         });
     let mut stop = shutdown_tx.subscribe();
     let http = axum::serve(
-        http_listener,
+        // `tap_io` only so that axum hands the peer address to the handlers.
+        axum::serve::ListenerExt::tap_io(Acceptor::new(http_listener, config.connections, false), |_| {}),
         http::router(shared.clone(), req_tx.clone()).into_make_service_with_connect_info::<std::net::SocketAddr>(),
     )
     .with_graceful_shutdown(async move {
@@ -332,9 +377,13 @@ pub async fn serve(
 /// The gRPC connections accepted on `listener`, with `TCP_NODELAY` set (tonic applies its
 /// own `tcp_nodelay` only to listeners it binds itself). Deltas are small writes right
 /// behind bigger ones; without it, Nagle's algorithm holds them until the client's delayed
-/// ACK, up to 40 ms on Linux, for every client at once.
-fn grpc_incoming(listener: tokio::net::TcpListener) -> TcpIncoming {
-    TcpIncoming::from(listener).with_nodelay(Some(true))
+/// ACK, up to 40 ms on Linux, for every client at once. They are held to `limits` like
+/// the HTTP side's.
+fn grpc_incoming(
+    listener: tokio::net::TcpListener,
+    limits: ConnLimits,
+) -> tokio_stream::wrappers::ReceiverStream<std::io::Result<crate::conn::Conn>> {
+    crate::conn::incoming(Acceptor::new(listener, limits, true))
 }
 
 #[cfg(test)]
@@ -345,9 +394,9 @@ mod tests {
     async fn accepted_grpc_connections_send_without_delay() {
         let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
         let addr = listener.local_addr().unwrap();
-        let mut incoming = super::grpc_incoming(listener);
+        let mut incoming = super::grpc_incoming(listener, Default::default());
         let _client = tokio::net::TcpStream::connect(addr).await.unwrap();
         let accepted = incoming.next().await.unwrap().unwrap();
-        assert!(accepted.nodelay().unwrap());
+        assert!(accepted.get_ref().nodelay().unwrap());
     }
 }

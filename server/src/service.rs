@@ -4,16 +4,18 @@ use crate::Shared;
 use crate::actor::{Action, Request};
 use crate::auth::Caller;
 use crate::join;
-use naadf_proto::PROTOCOL_VERSION;
+use governor::clock::Clock;
 use naadf_proto::requests::{despawn_batch, move_batch, spawn_batch};
 use naadf_proto::v1::world_service_server::WorldService;
 use naadf_proto::v1::{
     DespawnEntitiesRequest, EditReply, EditRequest, FrameJob, FrameReply, FrameRequest, HistoryRequest, JoinRequest,
     MoveEntitiesRequest, NodeMessage, SpawnEntitiesRequest, StatusReply, StatusRequest, WorldMessage, node_message,
 };
+use naadf_proto::{PROTOCOL_VERSION, RETRY_AFTER_MS};
 use naadf_world::ops::{Batch, Op};
 use std::pin::Pin;
 use std::sync::Arc;
+use std::time::Duration;
 use tokio::sync::{mpsc, oneshot};
 use tokio_stream::Stream;
 use tokio_stream::wrappers::ReceiverStream;
@@ -21,6 +23,61 @@ use tonic::{Request as Req, Response, Status};
 
 /// Messages buffered per client stream before the join task waits for the client.
 const STREAM_BUFFER: usize = 64;
+
+/// Longest status message the service sends, in bytes. The message travels in a response
+/// header (`grpc-message`), and HTTP/2 peers drop a connection whose headers are too big;
+/// errors quote client input (clipped where they are made), and this is the backstop.
+pub const MAX_STATUS_MESSAGE: usize = 1024;
+
+/// `s` with its message cut to [`MAX_STATUS_MESSAGE`] bytes (at a character boundary,
+/// with an ellipsis); its code and metadata are kept.
+fn bounded(s: Status) -> Status {
+    if s.message().len() <= MAX_STATUS_MESSAGE {
+        return s;
+    }
+    let mut cut = MAX_STATUS_MESSAGE - '…'.len_utf8();
+    while !s.message().is_char_boundary(cut) {
+        cut -= 1;
+    }
+    let message = format!("{}…", &s.message()[..cut]);
+    let mut out = Status::new(s.code(), message);
+    *out.metadata_mut() = s.metadata().clone();
+    out
+}
+
+/// Every reply of the service passes here: a refusal leaves with a bounded message.
+fn reply<T>(r: Result<T, Status>) -> Result<T, Status> {
+    r.map_err(bounded)
+}
+
+/// Checks a frame request before routing it: camera and size
+/// ([`crate::render_router::check_request`]) and a mode of the protocol
+/// ([`naadf_proto::FRAME_MODES`]), so that a mode no node could ever render is a bad
+/// request, not an unavailable node.
+pub fn check_frame(req: &FrameRequest) -> Result<(), Status> {
+    crate::render_router::check_request(req)?;
+    if !naadf_proto::FRAME_MODES.contains(&req.mode.as_str()) {
+        return Err(Status::invalid_argument(format!(
+            "mode '{}': expected one of {}",
+            naadf_world::ops::clip_input(&req.mode, naadf_world::ops::MAX_QUOTED_CHARS),
+            naadf_proto::FRAME_MODES.join(", ")
+        )));
+    }
+    Ok(())
+}
+
+/// How long a caller turned away by a full render queue is asked to wait: about a frame.
+const RENDER_RETRY: Duration = Duration::from_millis(100);
+
+/// A RESOURCE_EXHAUSTED refusal that a retry after `after` may pass: it carries
+/// [`RETRY_AFTER_MS`], which tells clients to back off rather than give up.
+pub fn retry_later(message: String, after: Duration) -> Status {
+    let mut s = Status::resource_exhausted(message);
+    let ms = after.as_millis().max(1).to_string();
+    s.metadata_mut()
+        .insert(RETRY_AFTER_MS, ms.parse().expect("digits are valid metadata"));
+    s
+}
 
 /// The `WorldService` implementation.
 #[derive(Clone)]
@@ -44,7 +101,7 @@ impl WorldServer {
         if r.is_err() {
             self.shared.metrics.refused.inc();
         }
-        r
+        reply(r)
     }
 
     /// Checks role and rate, then has the actor apply `action`.
@@ -58,11 +115,16 @@ impl WorldServer {
         {
             caller.require_admin(op.name())?;
         }
-        if self.shared.limiter.check_key(&caller.user).is_err() {
-            return Err(Status::resource_exhausted(format!(
-                "user '{}' is over the request rate limit ({} edits/s); slow down",
-                caller.user, self.shared.rate
-            )));
+        if let Err(not_until) = self.shared.limiter.check_key(&caller.user) {
+            let wait = not_until.wait_time_from(self.shared.limiter.clock().now());
+            return Err(retry_later(
+                format!(
+                    "user '{}' is over the request rate limit ({} edits/s); slow down",
+                    caller.quoted_user(),
+                    self.shared.rate
+                ),
+                wait,
+            ));
         }
         let (reply, rx) = oneshot::channel();
         self.actor
@@ -94,59 +156,29 @@ impl WorldService for WorldServer {
     type RegisterNodeStream = JobStream;
 
     async fn register_node(&self, r: Req<tonic::Streaming<NodeMessage>>) -> Result<Response<JobStream>, Status> {
-        let caller = self.caller(&r)?;
-        caller.require_render_node()?;
-        let mut inbound = r.into_inner();
-        let hello = match inbound.message().await? {
-            Some(NodeMessage {
-                kind: Some(node_message::Kind::Hello(h)),
-            }) => h,
-            _ => return Err(Status::invalid_argument("a render node must start with a NodeHello")),
-        };
-        let (tx, rx) = mpsc::channel(STREAM_BUFFER);
-        let id = self.shared.router.register(&caller.user, hello, tx);
-        let shared = self.shared.clone();
-        tokio::spawn(async move {
-            // Results until the node leaves; a second hello is ignored.
-            while let Ok(Some(m)) = inbound.message().await {
-                if let Some(node_message::Kind::Result(res)) = m.kind {
-                    shared.router.deliver(id, res);
-                }
-            }
-            shared.router.unregister(id);
-        });
-        Ok(Response::new(Box::pin(ReceiverStream::new(rx))))
+        reply(self.register_node_inner(r).await)
     }
 
     async fn render_frame(&self, r: Req<FrameRequest>) -> Result<Response<FrameReply>, Status> {
-        self.caller(&r)?;
-        let req = r.into_inner();
-        crate::render_router::check_request(&req)?;
-        self.shared.router.render(req).await.map(Response::new)
+        let result = async {
+            self.caller(&r)?;
+            let req = r.into_inner();
+            check_frame(&req)?;
+            self.shared.router.render(req).await.map(Response::new).map_err(|s| {
+                // The router's only RESOURCE_EXHAUSTED is a full queue, which drains.
+                if s.code() == tonic::Code::ResourceExhausted {
+                    retry_later(s.message().to_owned(), RENDER_RETRY)
+                } else {
+                    s
+                }
+            })
+        }
+        .await;
+        reply(result)
     }
 
     async fn join(&self, r: Req<JoinRequest>) -> Result<Response<WorldStream>, Status> {
-        let caller = self.caller(&r)?;
-        let req = r.into_inner();
-        if req.protocol_version != PROTOCOL_VERSION {
-            return Err(Status::failed_precondition(format!(
-                "client speaks protocol {}, this server speaks {PROTOCOL_VERSION}; upgrade the client",
-                req.protocol_version
-            )));
-        }
-        let held = join::client_pages(&req.cached)?;
-        let resume = req.resume.map(|r| (r.version, r.digest));
-        let (tx, rx) = mpsc::channel(STREAM_BUFFER);
-        let shared = self.shared.clone();
-        let actor = self.actor.clone();
-        tokio::spawn(async move {
-            let id = shared.activity.joined(&caller.user);
-            shared.metrics.clients.inc();
-            join::run(shared.clone(), actor, held, resume, tx).await;
-            shared.metrics.clients.dec();
-            shared.activity.left(id);
-        });
-        Ok(Response::new(Box::pin(ReceiverStream::new(rx))))
+        reply(self.join_inner(r).await)
     }
 
     async fn edit(&self, r: Req<EditRequest>) -> Result<Response<EditReply>, Status> {
@@ -212,6 +244,63 @@ impl WorldService for WorldServer {
     }
 
     async fn status(&self, r: Req<StatusRequest>) -> Result<Response<StatusReply>, Status> {
+        reply(self.status_inner(r).await)
+    }
+}
+
+impl WorldServer {
+    /// A render node's registration: its hello, then its results until it leaves.
+    async fn register_node_inner(&self, r: Req<tonic::Streaming<NodeMessage>>) -> Result<Response<JobStream>, Status> {
+        let caller = self.caller(&r)?;
+        caller.require_render_node()?;
+        let mut inbound = r.into_inner();
+        let hello = match inbound.message().await? {
+            Some(NodeMessage {
+                kind: Some(node_message::Kind::Hello(h)),
+            }) => h,
+            _ => return Err(Status::invalid_argument("a render node must start with a NodeHello")),
+        };
+        let (tx, rx) = mpsc::channel(STREAM_BUFFER);
+        let id = self.shared.router.register(&caller.user, hello, tx);
+        let shared = self.shared.clone();
+        tokio::spawn(async move {
+            // Results until the node leaves; a second hello is ignored.
+            while let Ok(Some(m)) = inbound.message().await {
+                if let Some(node_message::Kind::Result(res)) = m.kind {
+                    shared.router.deliver(id, res);
+                }
+            }
+            shared.router.unregister(id);
+        });
+        Ok(Response::new(Box::pin(ReceiverStream::new(rx))))
+    }
+
+    /// A client's join: checks, then the task that streams the world to it.
+    async fn join_inner(&self, r: Req<JoinRequest>) -> Result<Response<WorldStream>, Status> {
+        let caller = self.caller(&r)?;
+        let req = r.into_inner();
+        if req.protocol_version != PROTOCOL_VERSION {
+            return Err(Status::failed_precondition(format!(
+                "client speaks protocol {}, this server speaks {PROTOCOL_VERSION}; upgrade the client",
+                req.protocol_version
+            )));
+        }
+        let held = join::client_pages(&req.cached)?;
+        let resume = req.resume.map(|r| (r.version, r.digest));
+        let (tx, rx) = mpsc::channel(STREAM_BUFFER);
+        let shared = self.shared.clone();
+        let actor = self.actor.clone();
+        tokio::spawn(async move {
+            let id = shared.activity.joined(&caller.user);
+            shared.metrics.clients.inc();
+            join::run(shared.clone(), actor, held, resume, tx).await;
+            shared.metrics.clients.dec();
+            shared.activity.left(id);
+        });
+        Ok(Response::new(Box::pin(ReceiverStream::new(rx))))
+    }
+
+    async fn status_inner(&self, r: Req<StatusRequest>) -> Result<Response<StatusReply>, Status> {
         let caller = self.caller(&r)?;
         let s = crate::status(&self.actor)
             .await
@@ -227,5 +316,23 @@ impl WorldService for WorldServer {
             user: caller.user,
             role: caller.role.name().to_owned(),
         }))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn long_status_messages_are_cut_and_keep_code_and_metadata() {
+        let short = bounded(Status::invalid_argument("fine"));
+        assert_eq!((short.code(), short.message()), (tonic::Code::InvalidArgument, "fine"));
+        let long = retry_later("é".repeat(20_000), Duration::from_millis(7));
+        let cut = bounded(long);
+        assert_eq!(cut.code(), tonic::Code::ResourceExhausted);
+        assert!(cut.message().len() <= MAX_STATUS_MESSAGE, "{}", cut.message().len());
+        assert!(cut.message().len() > MAX_STATUS_MESSAGE - 8);
+        assert!(cut.message().ends_with("é…"), "{}", cut.message());
+        assert_eq!(cut.metadata().get(RETRY_AFTER_MS).unwrap(), "7");
     }
 }

@@ -5,7 +5,8 @@
 use super::print_json;
 use anyhow::{Context, Result, anyhow, bail};
 use naadf_server::fsck::{self, Inspection, Verdict};
-use naadf_server::store::{self, Lock, StoreError};
+use naadf_server::layout::{Lock, StoreError};
+use naadf_server::store;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 

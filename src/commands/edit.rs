@@ -24,11 +24,26 @@ pub struct Args {
     /// Print one JSON object per acknowledged line.
     #[arg(long)]
     json: bool,
+    /// Longest time to keep retrying one line that the server rate-limits or cannot take
+    /// (unreachable, restarting), in seconds, backing off exponentially; 0 stops at the
+    /// first such refusal. A retry repeats the line's client sequence number, so it is
+    /// never applied twice.
+    #[arg(long, default_value = "30", value_parser = parse_seconds)]
+    retry_for: Duration,
 }
 
-/// Attempts per request when the server is unreachable or restarting (retries are safe:
-/// the server answers a repeated `client_seq` with the original version).
-const ATTEMPTS: u32 = 5;
+/// A duration given in seconds: a non-negative number that a `Duration` holds.
+fn parse_seconds(s: &str) -> Result<Duration, String> {
+    s.parse::<f64>()
+        .ok()
+        .and_then(|v| Duration::try_from_secs_f64(v).ok())
+        .ok_or_else(|| format!("'{s}' is not a number of seconds ≥ 0"))
+}
+
+/// The first pause before a retry; each later one doubles, up to [`MAX_BACKOFF`].
+const FIRST_BACKOFF: Duration = Duration::from_millis(50);
+/// The longest pause between two tries of one line.
+const MAX_BACKOFF: Duration = Duration::from_secs(2);
 
 #[derive(serde::Serialize)]
 struct Ack {
@@ -37,7 +52,14 @@ struct Ack {
     duplicate: bool,
 }
 
-/// Sends every line in order; stops at the first refused one.
+/// Whether a retry of the same request may pass: the caller was over the rate limit, or
+/// the server was out of reach.
+fn retryable(e: &naadf_client::Error) -> bool {
+    matches!(e, naadf_client::Error::RateLimited(_)) || e.is_unavailable()
+}
+
+/// Sends every line in order, retrying rate-limited and unreachable ones for up to
+/// `--retry-for`; stops at the first line refused for good.
 pub fn run(a: Args) -> Result<()> {
     let reader: Box<dyn BufRead> = if a.ops.as_os_str() == "-" {
         Box::new(std::io::stdin().lock())
@@ -52,19 +74,32 @@ pub fn run(a: Args) -> Result<()> {
         .collect::<Result<_, _>>()
         .with_context(|| format!("cannot read {}", a.ops.display()))?;
     let first = a.client_seq.unwrap_or_else(naadf_client::connect::session_client_seq);
+    let retry_for = a.retry_for;
     block_on(async move {
         // The client reconnects by itself on the call after a lost connection.
         let client = a.server.connect().await?;
         for (i, (n, line)) in lines.iter().filter(|(_, l)| !l.trim().is_empty()).enumerate() {
             let client_seq = first + i as u64;
-            let mut attempt = 0;
+            let (mut waited, mut pause) = (Duration::ZERO, FIRST_BACKOFF);
             let reply = loop {
-                attempt += 1;
                 match client.edit(line.as_str(), client_seq).await {
                     Ok(r) => break r,
-                    Err(e) if e.is_unavailable() && attempt < ATTEMPTS => {
-                        tracing::warn!("{e}; retrying line {n}");
-                        tokio::time::sleep(Duration::from_millis(200 << attempt)).await;
+                    Err(e) if retryable(&e) && waited + pause <= retry_for => {
+                        if e.is_unavailable() {
+                            tracing::warn!("{e}; retrying line {n} in {} ms", pause.as_millis());
+                        } else {
+                            tracing::debug!("{e}; retrying line {n} in {} ms", pause.as_millis());
+                        }
+                        tokio::time::sleep(pause).await;
+                        waited += pause;
+                        pause = (pause * 2).min(MAX_BACKOFF);
+                    }
+                    Err(e) if retryable(&e) && !waited.is_zero() => {
+                        let why = format!(
+                            "line {n}: still refused after retrying for {:.1} s",
+                            waited.as_secs_f64()
+                        );
+                        return Err(anyhow::Error::from(e).context(why));
                     }
                     Err(e) => return Err(anyhow::Error::from(e).context(format!("line {n}"))),
                 }

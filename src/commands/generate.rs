@@ -1,6 +1,6 @@
 //! `naadf generate --preset NAME [--size X,Y,Z] [--seed N] -o OUT.naadf`
 
-use super::{chunk_progress, print_json, save_world};
+use super::{BuildLimit, print_json, save_world};
 use anyhow::Result;
 use naadf_world::preset::Preset;
 use naadf_world::stats::WorldStats;
@@ -19,6 +19,8 @@ pub struct PresetArgs {
     /// Seed of the generator.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    #[command(flatten)]
+    pub limit: BuildLimit,
 }
 
 impl PresetArgs {
@@ -60,8 +62,5 @@ pub fn run(a: Args) -> Result<()> {
 /// Builds a preset world with a progress bar.
 pub fn generate(preset: &PresetArgs) -> Result<World> {
     let source = preset.source()?;
-    let bar = chunk_progress(source.size().chunk_count() as u64, "generating");
-    let world = World::build(&*source, &|n| bar.set_position(n))?;
-    bar.finish_and_clear();
-    Ok(world)
+    preset.limit.build(&*source, &format!("preset '{}'", preset.preset))
 }

@@ -1,10 +1,9 @@
 //! `naadf import IN.vox -o OUT.naadf`
 
-use super::{chunk_progress, print_json, save_world};
+use super::{BuildLimit, print_json, save_world};
 use anyhow::{Context, Result};
 use naadf_world::import::vox::VoxScene;
 use naadf_world::stats::WorldStats;
-use naadf_world::{ChunkSource, World};
 use std::path::PathBuf;
 
 /// Arguments of `import`.
@@ -18,15 +17,15 @@ pub struct Args {
     /// Print the new world's `info` as JSON on stdout.
     #[arg(long)]
     json: bool,
+    #[command(flatten)]
+    limit: BuildLimit,
 }
 
 /// Imports a `.vox` scene into a world file.
 pub fn run(a: Args) -> Result<()> {
     let scene = VoxScene::open(&a.input).with_context(|| format!("cannot import {}", a.input.display()))?;
     let size = scene.world_size()?;
-    let bar = chunk_progress(size.chunk_count() as u64, "building");
-    let world = World::build(&scene as &dyn ChunkSource, &|n| bar.set_position(n))?;
-    bar.finish_and_clear();
+    let world = a.limit.build(&scene, &format!("the scene {}", a.input.display()))?;
     save_world(&world, &a.output)?;
     tracing::info!(size = %size, "imported {}", a.input.display());
     if a.json {

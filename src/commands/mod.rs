@@ -25,7 +25,7 @@ pub mod view;
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use naadf_world::ops::Limits;
-use naadf_world::{World, file};
+use naadf_world::{ChunkSource, World, file};
 use std::path::Path;
 use std::process::ExitCode;
 
@@ -71,6 +71,47 @@ pub fn progress(total: u64, what: &str, unit: &str) -> ProgressBar {
 /// A chunk progress bar on stderr.
 pub fn chunk_progress(total: u64, what: &str) -> ProgressBar {
     progress(total, what, "chunks")
+}
+
+/// The default of `--max-chunks`: 2²⁴ chunks, e.g. a 4096 × 1024 × 4096 world.
+pub const DEFAULT_MAX_CHUNKS: u64 = 1 << 24;
+
+/// How large a world a command may build from a description: a preset and its size, or a
+/// scene file whose extent sets the size.
+///
+/// Building costs memory and time in proportion to the world's chunk count, about 50 bytes
+/// a chunk for the chunk cells and their distance fields, even where the world is empty. A
+/// scene file of a few hundred bytes can place two models at opposite corners of the largest
+/// world (268 million chunks, over 13 GB), so the size a file asks for is checked against
+/// this bound before anything is built.
+#[derive(clap::Args, Clone, Copy, Debug)]
+pub struct BuildLimit {
+    /// Refuse to build a world of more chunks (16³ voxels each) than this; building takes
+    /// about 50 bytes of memory per chunk, empty or not.
+    #[arg(long, default_value_t = DEFAULT_MAX_CHUNKS)]
+    pub max_chunks: u64,
+}
+
+impl BuildLimit {
+    /// Builds `source` with a progress bar, once its size is within the bound; `what` names
+    /// the source in the refusal.
+    pub fn build(&self, source: &dyn ChunkSource, what: &str) -> Result<World> {
+        let size = source.size();
+        let chunks = size.chunk_count() as u64;
+        if chunks > self.max_chunks {
+            anyhow::bail!(
+                "{what} needs a {size} world: {chunks} chunks, more than --max-chunks {} allows \
+                 (building takes about {:.1} GB of memory, empty space included); pass \
+                 --max-chunks {chunks} to build it anyway",
+                self.max_chunks,
+                chunks as f64 * 50.0 / 1e9
+            );
+        }
+        let bar = chunk_progress(chunks, "building");
+        let world = World::build(source, &|n| bar.set_position(n))?;
+        bar.finish_and_clear();
+        Ok(world)
+    }
 }
 
 /// The edit limits a server enforces (`naadf serve`) and an in-process replay applies

@@ -10,8 +10,8 @@ use super::remote::{ServerArgs, block_on};
 use super::render::parse_image_size;
 use anyhow::{Result, anyhow};
 use naadf_client::gpu::{Headless, Mode};
-use naadf_client::node::{NodeInfo, RenderNode};
-use naadf_client::{FrameImage, FrameSpec};
+use naadf_client::node::RenderNode;
+use naadf_client::{FrameImage, FrameSpec, NodeInfo};
 use naadf_world::World;
 
 /// Arguments of `render-node`.

@@ -2,7 +2,7 @@
 
 use super::generate::{PresetArgs, generate, parse_size};
 use super::remote::block_on;
-use super::{load_world, print_json};
+use super::{BuildLimit, load_world, print_json};
 use anyhow::{Context, Result};
 use naadf_server::auth::Auth;
 use naadf_server::{Bound, ServerConfig};
@@ -26,6 +26,8 @@ pub struct Args {
     /// Seed of a generated world.
     #[arg(long, default_value_t = 1)]
     seed: u64,
+    #[command(flatten)]
+    limit: BuildLimit,
     /// Data directory: snapshots and the write-ahead log. An existing one is resumed (and
     /// --world / --generate are ignored).
     #[arg(long, default_value = naadf_server::DEFAULT_DATA)]
@@ -46,6 +48,10 @@ pub struct Args {
     /// TLS private key (PEM); needs --tls-cert.
     #[arg(long, requires = "tls_cert")]
     tls_key: Option<PathBuf>,
+    /// Accept that bearer tokens travel in cleartext: serve gRPC without TLS, or HTTP, on a
+    /// non-loopback address without the startup warning.
+    #[arg(long)]
+    insecure: bool,
     /// Edits per second per user.
     #[arg(long, default_value_t = ServerConfig::default().rate)]
     rate: u32,
@@ -63,6 +69,24 @@ pub struct Args {
     /// Deltas a client may fall behind before it is re-sent a snapshot.
     #[arg(long, default_value_t = ServerConfig::default().slow_client_events)]
     slow_client_events: usize,
+    /// Bytes a client may fall behind (deltas it has not read) before it is re-sent a
+    /// snapshot.
+    #[arg(long, default_value_t = ServerConfig::default().slow_clients.client_bytes)]
+    slow_client_bytes: u64,
+    /// Bytes the subscribed clients together may fall behind; over it, every one that is
+    /// not reading and is more than a sixteenth of --slow-client-bytes behind is re-sent a
+    /// snapshot.
+    #[arg(long, default_value_t = ServerConfig::default().slow_clients.total_bytes)]
+    slow_clients_total_bytes: u64,
+    /// Most connections open at a time on each listener (gRPC and HTTP); more wait until
+    /// one closes. Keep twice this under the process's file descriptor limit.
+    #[arg(long, default_value_t = ServerConfig::default().connections.max_connections)]
+    max_connections: usize,
+    /// Close a connection whose peer sent nothing for this many seconds (unfinished
+    /// handshakes and requests, dead peers); gRPC connections are pinged at a third of it,
+    /// so live ones stay open.
+    #[arg(long, default_value_t = ServerConfig::default().connections.idle_timeout.as_secs_f64())]
+    idle_timeout: f64,
     /// Print the bound addresses as one JSON line on stdout once serving.
     #[arg(long)]
     json: bool,
@@ -88,15 +112,28 @@ pub fn run(a: Args) -> Result<()> {
     config.checkpoint_every = a.checkpoint_every.max(1);
     config.checkpoint_interval = Duration::from_secs(a.checkpoint_secs.max(1));
     config.slow_client_events = a.slow_client_events;
+    config.slow_clients = naadf_server::join::SlowClientLimits {
+        client_bytes: a.slow_client_bytes,
+        total_bytes: a.slow_clients_total_bytes,
+    };
+    config.connections = naadf_server::conn::ConnLimits {
+        max_connections: a.max_connections.max(1),
+        idle_timeout: super::seconds(a.idle_timeout, "--idle-timeout")?.max(Duration::from_millis(100)),
+    };
     config.tls = a.tls_cert.clone().zip(a.tls_key.clone());
+    config.insecure = a.insecure;
+    if let Some(w) = config.cleartext_warning() {
+        eprintln!("WARNING: {w}");
+    }
     let (world, preset) = (a.world.clone(), a.generate.clone());
-    let (size, seed) = (a.size, a.seed);
+    let (size, seed, limit) = (a.size, a.seed, a.limit);
     let initial = move || match world {
         Some(p) => load_world(&p),
         None => generate(&PresetArgs {
             preset: preset.unwrap_or_else(|| "terrain".into()),
             size,
             seed,
+            limit,
         }),
     };
     let json = a.json;
@@ -112,25 +149,31 @@ pub fn run(a: Args) -> Result<()> {
                     }));
                 }
             },
-            shutdown_signal(),
+            shutdown_signal().context("cannot install the signal handlers")?,
         )
         .await
         .context("server failed")
     })
 }
 
-/// Resolves on Ctrl-C or SIGTERM.
-async fn shutdown_signal() {
-    let ctrl_c = tokio::signal::ctrl_c();
+/// A future that resolves on Ctrl-C or SIGTERM. The handlers are installed now, before the
+/// server announces its addresses: a signal sent right after the announcement must stop
+/// the server cleanly, not find the default action (death by the signal) still in place.
+fn shutdown_signal() -> std::io::Result<impl std::future::Future<Output = ()>> {
     #[cfg(unix)]
     {
-        let mut term =
-            tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate()).expect("SIGTERM handler");
-        tokio::select! {
-            _ = ctrl_c => {}
-            _ = term.recv() => {}
-        }
+        use tokio::signal::unix::{SignalKind, signal};
+        let mut term = signal(SignalKind::terminate())?;
+        let mut interrupt = signal(SignalKind::interrupt())?;
+        Ok(async move {
+            tokio::select! {
+                _ = term.recv() => {}
+                _ = interrupt.recv() => {}
+            }
+        })
     }
     #[cfg(not(unix))]
-    let _ = ctrl_c.await;
+    Ok(async {
+        let _ = tokio::signal::ctrl_c().await;
+    })
 }

@@ -6,11 +6,14 @@ use dot_vox::{
     Color, DEFAULT_INDEX_MAP, DEFAULT_PALETTE, Dict, DotVoxData, Frame, Layer, Model, SceneNode, ShapeModel, Size,
     Voxel,
 };
+use naadf_world::cell::CHUNK_VOXELS;
 use naadf_world::import::vox::{TiledVox, VoxScene, import_vox};
-use naadf_world::{ChunkSource, MaterialKind, World, WorldError, WorldSize};
+use naadf_world::stats::WorldStats;
+use naadf_world::{ChunkSource, MaterialKind, MaterialTable, World, WorldError, WorldSize};
 use proptest::prelude::*;
 use std::collections::HashMap;
 use std::path::Path;
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 // ---------------------------------------------------------------------------------------
 // Building files.
@@ -220,8 +223,51 @@ fn oracle(d: &DotVoxData) -> ([u32; 3], HashMap<[u32; 3], u16>) {
     (std::array::from_fn(|a| (max[a] - min[a] + 1) as u32), map)
 }
 
+/// The brute-force reference source: the oracle's voxels rasterised into one dense volume
+/// of the whole world, with no empty-chunk hints, so construction sees every chunk.
+struct Dense {
+    size: WorldSize,
+    materials: MaterialTable,
+    /// `x + sx·(y + sy·z)`.
+    voxels: Vec<u16>,
+}
+
+impl Dense {
+    fn rasterise(size: WorldSize, materials: MaterialTable, solid: &HashMap<[u32; 3], u16>) -> Self {
+        let [sx, sy, sz] = size.voxels().map(|v| v as usize);
+        let mut voxels = vec![0; sx * sy * sz];
+        for (p, &m) in solid {
+            voxels[p[0] as usize + sx * (p[1] as usize + sy * p[2] as usize)] = m;
+        }
+        Dense {
+            size,
+            materials,
+            voxels,
+        }
+    }
+}
+
+impl ChunkSource for Dense {
+    fn size(&self) -> WorldSize {
+        self.size
+    }
+
+    fn materials(&self) -> MaterialTable {
+        self.materials.clone()
+    }
+
+    fn fill_chunk(&self, c: [u32; 3], out: &mut [u16; CHUNK_VOXELS]) {
+        let [sx, sy, _] = self.size.voxels().map(|v| v as usize);
+        for (i, v) in out.iter_mut().enumerate() {
+            let p: [usize; 3] = std::array::from_fn(|a| c[a] as usize * 16 + (i >> (4 * a) & 15));
+            *v = self.voxels[p[0] + sx * (p[1] + sy * p[2])];
+        }
+    }
+}
+
 /// Builds the world and checks it voxel by voxel against the oracle (and the scene's own
-/// `material_at`).
+/// `material_at`), and byte for byte (digest) against the world built from the oracle's
+/// dense rasterisation.
 fn check_against_oracle(d: &DotVoxData) -> (VoxScene, World) {
     let scene = import(d);
     let (extent, expected) = oracle(d);
@@ -240,6 +286,8 @@ fn check_against_oracle(d: &DotVoxData) -> (VoxScene, World) {
             }
         }
     }
+    let dense = World::build(&Dense::rasterise(size, scene.materials(), &expected), &|_| {}).unwrap();
+    assert_eq!(world.digest(), dense.digest(), "sparse and dense construction differ");
     (scene, world)
 }
 
@@ -623,24 +671,40 @@ fn cyclic_and_exploding_scene_graphs_are_refused() {
     assert!(e.contains("more than"), "{e}");
 }
 
+/// Two placements translated by `a` and `b`: of models 0 and 1, or twice of model 0 when
+/// there is only one.
+fn two_apart(models: Vec<Model>, a: &str, b: &str) -> DotVoxData {
+    let second = (models.len() - 1).min(1) as u32;
+    file(
+        models,
+        vec![
+            trn(1, &[]),
+            grp(&[2, 4]),
+            trn(3, &[("_t", a)]),
+            shp(0),
+            trn(5, &[("_t", b)]),
+            shp(second),
+        ],
+    )
+}
+
 #[test]
 fn scenes_larger_than_the_largest_world_are_refused() {
     let one = || vec![model([1, 1, 1], &[([0, 0, 0], 1)])];
-    let far = |t: &str| {
-        file(
-            one(),
-            vec![
-                trn(1, &[]),
-                grp(&[2, 4]),
-                trn(3, &[]),
-                shp(0),
-                trn(5, &[("_t", t)]),
-                shp(0),
-            ],
-        )
-    };
+    let far = |t: &str| two_apart(one(), "0 0 0", t);
     let e = import_err(&bytes(&far("20000 0 0")));
     assert!(e.contains("larger than the largest world"), "{e}");
+    assert!(e.contains("20001×1×1") && e.contains("16384×4096×16384"), "{e}");
+    // The widest translations: an extent of 2³² per axis, which no 32-bit size can hold
+    // (cast down, it wraps to 0 and the placements would lie outside the world they get).
+    // Refused before anything is sized from it.
+    let (lo, hi) = (i32::MIN, i32::MAX);
+    let e = import_err(&bytes(&two_apart(
+        one(),
+        &format!("{lo} {lo} {lo}"),
+        &format!("{hi} {hi} {hi}"),
+    )));
+    assert!(e.contains("4294967296×4294967296×4294967296"), "{e}");
     // vox z is world y, limited to 4096.
     let e = import_err(&bytes(&far("0 0 4096")));
     assert!(e.contains("larger than the largest world"), "{e}");
@@ -649,6 +713,73 @@ fn scenes_larger_than_the_largest_world_are_refused() {
     assert_eq!(s.extent(), [16384, 4096, 1]);
     assert_eq!(s.world_size().unwrap().voxels(), [16384, 4096, 64]);
     assert_eq!(s.material_at([16383, 4095, 0]), 1);
+}
+
+/// Two 8³ models 16000 voxels apart, from a file of under 4 KB: the empty space between
+/// them costs only its chunk cells; block arrays and voxel groups exist only for the two
+/// chunks the models touch.
+#[test]
+fn far_apart_models_build_only_their_chunks() {
+    let d = two_apart(
+        vec![noisy_model([8, 8, 8], 31), noisy_model([8, 8, 8], 32)],
+        "0 0 0",
+        "16000 0 0",
+    );
+    let b = bytes(&d);
+    assert!(b.len() < 4096, "{} bytes", b.len());
+    let path = std::env::temp_dir().join(format!("naadf-vox-far-{}.vox", std::process::id()));
+    std::fs::write(&path, &b).unwrap();
+    let start = std::time::Instant::now();
+    let w = import_vox(&path, &|_| {});
+    let took = start.elapsed();
+    std::fs::remove_file(&path).ok();
+    let w = w.unwrap();
+    // A generous bound: the point is that it finishes, not how fast.
+    assert!(took.as_secs() < 60, "{took:?}");
+
+    let (extent, expected) = oracle(&d);
+    assert_eq!(extent, [16008, 8, 8]);
+    assert_eq!(w.size().voxels(), [16064, 64, 64]);
+    // Both models, voxel by voxel, at their places (x 0..8 and 16000..16008).
+    for x in (0..8).chain(16000..16008) {
+        for y in 0..8 {
+            for z in 0..8 {
+                let want = expected.get(&[x, y, z]).copied().unwrap_or(0);
+                assert_eq!(w.material_at([x, y, z]), want, "{x},{y},{z}");
+            }
+        }
+    }
+    // Nothing else: exactly the models' solid voxels, in two mixed chunks.
+    let stats = WorldStats::of(&w);
+    assert_eq!(stats.solid_voxels, expected.len() as u64);
+    assert_eq!(stats.blocks, 2 * 64);
+    // And the scene is sampled only there: every other chunk is reported empty up front.
+    let scene = import(&d);
+    let counted = Counting(&scene, AtomicUsize::new(0));
+    assert_eq!(World::build(&counted, &|_| {}).unwrap().digest(), w.digest());
+    assert_eq!(counted.1.into_inner(), 2);
+}
+
+/// A source that counts the chunks construction asks it to fill.
+struct Counting<'a>(&'a VoxScene, AtomicUsize);
+
+impl ChunkSource for Counting<'_> {
+    fn size(&self) -> WorldSize {
+        ChunkSource::size(self.0)
+    }
+
+    fn materials(&self) -> MaterialTable {
+        ChunkSource::materials(self.0)
+    }
+
+    fn uniform_hint(&self, chunk: [u32; 3]) -> Option<u16> {
+        self.0.uniform_hint(chunk)
+    }
+
+    fn fill_chunk(&self, chunk: [u32; 3], out: &mut [u16; CHUNK_VOXELS]) {
+        self.1.fetch_add(1, Ordering::Relaxed);
+        self.0.fill_chunk(chunk, out);
+    }
 }
 
 #[test]

@@ -3,8 +3,8 @@
 //! the world itself is only touched on that thread.
 
 use super::ViewerError;
-use crate::Client;
-use crate::connect::{ServerAddress, session_client_seq};
+use crate::client::{Client, ServerAddress};
+use crate::connect::session_client_seq;
 use naadf_proto::v1::{JoinRequest, WorldMessage};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};

@@ -25,7 +25,7 @@ pub use link::{Event, Link};
 pub use pick::{Click, edit_for_click};
 pub use present::Presenter;
 
-use crate::connect::ServerAddress;
+use crate::client::ServerAddress;
 use crate::gpu::{Frame, Gpu, GpuError, GpuWorld, Mode, Renderer};
 use crate::mirror::{Mirror, MirrorError};
 use naadf_world::camera::Camera;

@@ -1,13 +1,14 @@
 //! Resolution of ops into voxel writes on a [`Canvas`] and table updates.
 
-use super::{Batch, Canvas, EditError, Limits, Op};
+use super::{Batch, Canvas, EditError, Limits, MAX_QUOTED_CHARS, Op, clip_input};
 use crate::cell::MAX_MATERIAL;
 use crate::material::{Material, MaterialTable};
 use crate::model::{MAX_MODEL_EDGE, Model, ModelTable};
 use crate::size::WorldSize;
 use rustc_hash::FxHashMap;
 
-/// Longest model name, in bytes.
+/// Longest model name, in bytes: checked when a line is parsed, for every op that names a
+/// model (`place`, `spawn_entity`, `define_model`).
 pub const MAX_MODEL_NAME: usize = 64;
 
 impl Op {
@@ -37,6 +38,23 @@ impl Op {
         )
     }
 
+    /// Fails with an `Invalid` error if the op names a model by more than
+    /// [`MAX_MODEL_NAME`] bytes. `index` is the op's position in its batch.
+    pub fn check_model_name(&self, index: usize) -> Result<(), EditError> {
+        let name = match self {
+            Op::Place { model, .. } | Op::SpawnEntity { model, .. } => model,
+            Op::DefineModel { name, .. } => name,
+            _ => return Ok(()),
+        };
+        if name.len() <= MAX_MODEL_NAME {
+            return Ok(());
+        }
+        Err(Ctx { index, op: self.name() }.invalid(format!(
+            "model name '{}' is longer than {MAX_MODEL_NAME} bytes",
+            clip_input(name, MAX_QUOTED_CHARS)
+        )))
+    }
+
     /// Checks the shape of an entity op: finite `pos`, `rot` a non-zero finite quaternion,
     /// and (spawn) a model that `models` defines. Whether the entity id exists is the
     /// world's business. Other ops pass unchecked.
@@ -56,7 +74,10 @@ impl Op {
             Op::SpawnEntity { model, pos, rot, .. } => {
                 check_pose(pos, rot)?;
                 if models.get(model).is_none() {
-                    return Err(cx.invalid(format!("model '{model}' is not defined")));
+                    return Err(cx.invalid(format!(
+                        "model '{}' is not defined",
+                        clip_input(model, MAX_QUOTED_CHARS)
+                    )));
                 }
                 Ok(())
             }
@@ -135,7 +156,10 @@ impl Op {
             Op::Copy { min, max, to } => apply_copy(&cx, *min, *max, *to, canvas, limits),
             Op::Place { model, at } => {
                 let Some(m) = models.get(model) else {
-                    return Err(cx.invalid(format!("model '{model}' is not defined")));
+                    return Err(cx.invalid(format!(
+                        "model '{}' is not defined",
+                        clip_input(model, MAX_QUOTED_CHARS)
+                    )));
                 };
                 apply_place(&cx, model, m, *at, canvas, materials, limits)
             }
@@ -163,6 +187,7 @@ impl Op {
                 materials.set(*id, m).map_err(|e| cx.invalid(e.to_string()))
             }
             Op::DefineModel { name, size, voxels } => {
+                self.check_model_name(index)?;
                 apply_define_model(&cx, name, *size, voxels, materials, models, limits)
             }
         }
@@ -593,10 +618,9 @@ fn apply_define_model(
     models: &mut ModelTable,
     limits: &Limits,
 ) -> Result<(), EditError> {
-    if name.is_empty() || name.len() > MAX_MODEL_NAME {
+    if name.is_empty() {
         return Err(cx.invalid(format!(
-            "model name '{name}' must be 1..={MAX_MODEL_NAME} bytes, not {}",
-            name.len()
+            "the model name is empty; it must be 1..={MAX_MODEL_NAME} bytes"
         )));
     }
     if size.iter().any(|&v| v == 0 || v > MAX_MODEL_EDGE) {

@@ -27,6 +27,62 @@ mod apply;
 mod dense;
 
 pub use apply::{MAX_MODEL_NAME, apply_batch};
+
+/// Most characters of a client-supplied string (an op, model or field name, a value) that
+/// an error message quotes; longer ones are cut with [`clip_input`]. An error travels back to the
+/// client in gRPC metadata and into logs, so it must stay small whatever the input.
+pub const MAX_QUOTED_CHARS: usize = 64;
+
+/// Most characters of a parse error message (serde's, with every quoted input clipped):
+/// a bound for the rare input that defeats the quoting, e.g. a name holding a backtick.
+const MAX_PARSE_MESSAGE_CHARS: usize = 512;
+
+/// A client-supplied string as an error message may quote it: unchanged when it has at most
+/// `max` characters, else its first `max` characters, an ellipsis and its length in bytes.
+///
+/// ```
+/// use naadf_world::ops::clip_input;
+/// assert_eq!(clip_input("tree", 64), "tree");
+/// assert_eq!(clip_input(&"x".repeat(100), 3), "xxx… (100 bytes)");
+/// ```
+pub fn clip_input(s: &str, max: usize) -> String {
+    match s.char_indices().nth(max) {
+        None => s.to_owned(),
+        Some((cut, _)) => format!("{}… ({} bytes)", &s[..cut], s.len()),
+    }
+}
+
+/// A serde message with every `` `quoted` `` or `"quoted"` part clipped to
+/// [`MAX_QUOTED_CHARS`] (serde quotes the unknown variant or field, or the string of a
+/// wrong type, verbatim), and the whole clipped to [`MAX_PARSE_MESSAGE_CHARS`].
+fn clip_quoted(msg: &str) -> String {
+    let mut out = String::new();
+    let mut rest = msg;
+    while let Some(open) = rest.find(['`', '"']) {
+        let delim = &rest[open..=open];
+        out.push_str(&rest[..=open]);
+        let inner = &rest[open + 1..];
+        let (quoted, tail) = match inner.find(delim) {
+            Some(close) => (&inner[..close], &inner[close..]),
+            None => (inner, ""),
+        };
+        out.push_str(&clip_input(quoted, MAX_QUOTED_CHARS));
+        rest = tail;
+        if let Some(after) = rest.strip_prefix(delim) {
+            out.push_str(delim);
+            rest = after;
+        }
+    }
+    out.push_str(rest);
+    clip_input(&out, MAX_PARSE_MESSAGE_CHARS)
+}
+
+/// A parse error of the op at `index` (named `name` in the JSON, if it has a name), with
+/// serde's message `e`; every client string in it clipped.
+fn op_parse_error(index: usize, name: Option<&str>, e: &impl std::fmt::Display) -> EditError {
+    let name = name.map_or_else(|| "?".to_owned(), |n| clip_input(n, MAX_QUOTED_CHARS));
+    EditError::Parse(format!("op {index} ({name}): {}", clip_quoted(&e.to_string())))
+}
 pub use dense::DenseCanvas;
 
 use crate::material::MaterialKind;
@@ -182,8 +238,11 @@ struct BatchLineRef<'a> {
 }
 
 impl Batch {
-    /// Fails with a `Limit` error if the batch holds more than `limits.max_ops` ops.
+    /// Fails with a `Limit` error if the batch holds more than `limits.max_ops` ops, and
+    /// with an `Invalid` one if an op names a model by more than [`MAX_MODEL_NAME`] bytes
+    /// (a fixed limit of the format, whatever `limits` say).
     pub fn check_size(&self, limits: &Limits) -> Result<(), EditError> {
+        self.check_names()?;
         if self.ops.len() <= limits.max_ops {
             return Ok(());
         }
@@ -199,11 +258,28 @@ impl Batch {
         })
     }
 
-    /// Parses one ops-JSON line: a single op object, or `{"batch":[op,...]}`.
+    /// Fails with an `Invalid` error at the first op that names a model by more than
+    /// [`MAX_MODEL_NAME`] bytes.
+    pub fn check_names(&self) -> Result<(), EditError> {
+        self.ops
+            .iter()
+            .enumerate()
+            .try_for_each(|(i, op)| op.check_model_name(i))
+    }
+
+    /// Parses one ops-JSON line: a single op object, or `{"batch":[op,...]}`, and checks
+    /// its model names ([`Batch::check_names`]).
     ///
     /// Errors are [`EditError::Parse`] with serde's message, prefixed by the op's index and
-    /// name where they are known.
+    /// name where they are known; client strings quoted in them are clipped ([`clip_input`]).
     pub fn parse_line(line: &str) -> Result<Batch, EditError> {
+        let batch = Self::parse_ops(line)?;
+        batch.check_names()?;
+        Ok(batch)
+    }
+
+    /// [`Batch::parse_line`] without the name check.
+    fn parse_ops(line: &str) -> Result<Batch, EditError> {
         let line = line.trim();
         if line.is_empty() {
             return Err(EditError::Parse(
@@ -213,7 +289,7 @@ impl Batch {
         if first_key(line).as_deref() == Some("batch") {
             match serde_json::from_str::<BatchLine>(line) {
                 Ok(b) => Ok(Batch { ops: b.batch }),
-                Err(e) => Err(EditError::Parse(explain_batch_error(line, e))),
+                Err(e) => Err(explain_batch_error(line, e)),
             }
         } else {
             match serde_json::from_str::<Op>(line) {
@@ -222,10 +298,10 @@ impl Batch {
                     let name = serde_json::from_str::<serde_json::Value>(line)
                         .ok()
                         .and_then(|v| v.get("op").and_then(|n| n.as_str()).map(str::to_owned));
-                    Err(EditError::Parse(match name {
-                        Some(name) => format!("op 0 ({name}): {e}"),
-                        None => e.to_string(),
-                    }))
+                    Err(match name {
+                        Some(name) => op_parse_error(0, Some(&name), &e),
+                        None => EditError::Parse(clip_quoted(&e.to_string())),
+                    })
                 }
             }
         }
@@ -267,18 +343,17 @@ fn first_key(line: &str) -> Option<String> {
 }
 
 /// Turns a batch-level serde error into one that names the failing op, where possible.
-fn explain_batch_error(line: &str, e: serde_json::Error) -> String {
+fn explain_batch_error(line: &str, e: serde_json::Error) -> EditError {
     if let Ok(serde_json::Value::Object(obj)) = serde_json::from_str::<serde_json::Value>(line)
         && let Some(serde_json::Value::Array(items)) = obj.get("batch")
     {
         for (i, item) in items.iter().enumerate() {
             if let Err(item_err) = Op::deserialize(item) {
-                let name = item.get("op").and_then(|n| n.as_str()).unwrap_or("?");
-                return format!("op {i} ({name}): {item_err}");
+                return op_parse_error(i, item.get("op").and_then(|n| n.as_str()), &item_err);
             }
         }
     }
-    format!("batch: {e}")
+    EditError::Parse(format!("batch: {}", clip_quoted(&e.to_string())))
 }
 
 /// Limits that keep one request bounded.
@@ -481,6 +556,62 @@ mod tests {
             let e = parse_err(bad);
             assert!(e.starts_with("cannot parse ops JSON"), "{e}");
         }
+    }
+
+    /// Long client strings are cut in every message that quotes them: model names at parse
+    /// time, op and field names and values in serde's messages.
+    #[test]
+    fn long_inputs_give_short_errors() {
+        let long = "n".repeat(20_000);
+        let cut = format!("{}… (20000 bytes)", "n".repeat(MAX_QUOTED_CHARS));
+        let lines = [
+            format!(r#"{{"op":"place","model":"{long}","at":[0,0,0]}}"#),
+            format!(r#"{{"op":"spawn_entity","id":1,"model":"{long}","pos":[0,0,0],"rot":[0,0,0,1]}}"#),
+            format!(
+                r#"{{"batch":[{{"op":"despawn_entity","id":1}},{{"op":"define_model","name":"{long}","size":[1,1,1],"voxels":[]}}]}}"#
+            ),
+            format!(r#"{{"op":"{long}","min":[0,0,0]}}"#),
+            format!(r#"{{"batch":[{{"op":"{long}"}}]}}"#),
+            format!(r#"{{"op":"box","min":[0,0,0],"max":[1,1,1],"material":1,"{long}":3}}"#),
+            format!(r#"{{"op":"define_material","id":1,"kind":"{long}","albedo":[1,1,1]}}"#),
+            format!(r#"{{"op":"box","min":"{long}","max":[1,1,1],"material":1}}"#),
+            format!(r#"{{"batch":[],"{long}":1}}"#),
+        ];
+        for line in &lines {
+            let e = Batch::parse_line(line).expect_err("a long name is refused").to_string();
+            assert!(e.len() < 700, "{} bytes: {e}", e.len());
+            assert!(e.contains(&cut), "{e}");
+        }
+        // The limit is the model name's byte length: 64 bytes pass, 65 do not.
+        let place = |name: &str| format!(r#"{{"op":"place","model":"{name}","at":[0,0,0]}}"#);
+        assert!(Batch::parse_line(&place(&"é".repeat(32))).is_ok());
+        let e = Batch::parse_line(&place(&"n".repeat(MAX_MODEL_NAME + 1))).unwrap_err();
+        assert!(
+            matches!(
+                e,
+                EditError::Invalid {
+                    index: 0,
+                    op: "place",
+                    ..
+                }
+            ) && e.to_string().contains("longer than 64 bytes"),
+            "{e}"
+        );
+        // A quoted string holding a delimiter still ends in a short message.
+        let tricky = format!(r#"{{"op":"box","min":[0,0,0],"max":[1,1,1],"material":1,"a`{long}":3}}"#);
+        let e = Batch::parse_line(&tricky).unwrap_err().to_string();
+        assert!(e.len() < 700, "{} bytes", e.len());
+    }
+
+    #[test]
+    fn clip_counts_characters_and_reports_bytes() {
+        assert_eq!(clip_input("", 3), "");
+        assert_eq!(clip_input("abc", 3), "abc");
+        assert_eq!(clip_input("éééé", 3), "ééé… (8 bytes)");
+        assert_eq!(
+            clip_quoted("unknown variant `abcdef`, expected `set`"),
+            "unknown variant `abcdef`, expected `set`"
+        );
     }
 
     fn coord() -> impl Strategy<Value = i64> {
