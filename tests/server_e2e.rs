@@ -312,18 +312,9 @@ async fn a_slow_client_is_resnapshotted_and_does_not_stall_others() {
     let dir = tempfile::tempdir().unwrap();
     let (_, server) = serve_fresh(dir.path(), &["--slow-client-events", "16"]);
     let c = client(&server.url, "ed").await;
-    // The slow client joins, then does not read. Small HTTP/2 windows make its transport
-    // buffers fill after 64 KiB instead of megabytes.
-    let channel = tonic::transport::Endpoint::from_shared(server.url.clone())
-        .unwrap()
-        .initial_stream_window_size(Some(65_535))
-        .initial_connection_window_size(Some(65_535))
-        .connect()
-        .await
-        .unwrap();
-    let mut slow = naadf_proto::v1::world_service_client::WorldServiceClient::new(channel);
+    // The slow client joins, then does not read.
+    let mut slow_stream = support::stalled_client(&server.url).await;
     let mut slow_mirror = Mirror::new(None);
-    let mut slow_stream = slow.join(slow_mirror.join_request()).await.unwrap().into_inner();
     let fast = Follower::start(&server.url, "fast", None).await;
     // Enough delta bytes to fill the slow client's transport buffers many times over.
     for k in 0..300u64 {

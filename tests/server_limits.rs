@@ -6,7 +6,7 @@ mod support;
 use naadf_client::{Client, Mirror};
 use naadf_proto::v1::world_service_client::WorldServiceClient;
 use std::time::{Duration, Instant};
-use support::{Server, serve_world, start_world};
+use support::{Server, serve_world, stalled_client, start_world};
 use tokio::sync::watch;
 
 /// The server process's resident memory, in MiB.
@@ -45,20 +45,6 @@ fn scattered_set(n: usize, seed: u64) -> String {
         .map(|_| format!("[{},{},{},{}]", next(128), next(64), next(128), next(6)))
         .collect();
     format!(r#"{{"op":"set","voxels":[{}]}}"#, voxels.join(","))
-}
-
-/// A client that joins and then never reads. Small HTTP/2 windows keep its transport
-/// from taking megabytes first, so what it pins is what the server queues for it.
-async fn stalled_client(url: &str) -> tonic::Streaming<naadf_proto::v1::WorldMessage> {
-    let channel = tonic::transport::Endpoint::from_shared(url.to_owned())
-        .unwrap()
-        .initial_stream_window_size(Some(65_535))
-        .initial_connection_window_size(Some(65_535))
-        .connect()
-        .await
-        .unwrap();
-    let mut raw = WorldServiceClient::new(channel);
-    raw.join(Mirror::new(None).join_request()).await.unwrap().into_inner()
 }
 
 /// A mirror that reads all the time; its version is published in the returned watch.

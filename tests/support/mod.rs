@@ -222,3 +222,20 @@ pub fn random_op(state: &mut u64) -> String {
         ),
     }
 }
+
+/// A client that joins and then never reads. Small HTTP/2 windows keep its transport
+/// from taking megabytes first, so what it pins is what the server queues for it.
+pub async fn stalled_client(url: &str) -> tonic::Streaming<naadf_proto::v1::WorldMessage> {
+    let channel = tonic::transport::Endpoint::from_shared(url.to_owned())
+        .unwrap()
+        .initial_stream_window_size(Some(65_535))
+        .initial_connection_window_size(Some(65_535))
+        .connect()
+        .await
+        .unwrap();
+    let mut raw = naadf_proto::v1::world_service_client::WorldServiceClient::new(channel);
+    raw.join(naadf_client::Mirror::new(None).join_request())
+        .await
+        .unwrap()
+        .into_inner()
+}
