@@ -229,6 +229,25 @@ pub fn buffers_of(world: &World) -> [Vec<u8>; 6] {
     TRANSFERRED.map(|id: BufferId| world.buffer_bytes(id).into_owned())
 }
 
+/// The header of a quiescent snapshot of all of `world` sent as `pages` page groups: what
+/// a server sends first to a client without a cache (tests and fuzz seeds build streams
+/// with it).
+pub fn header_for(world: &World, pages: u32) -> Header {
+    Header {
+        protocol_version: crate::PROTOCOL_VERSION,
+        size: world.size().voxels().to_vec(),
+        version: world.version(),
+        growth_seq: 0,
+        quiescent: true,
+        digest: world.digest().0,
+        buffers: buffer_lengths(TRANSFERRED.map(|id| world.buffer_bytes(id).len())),
+        entity_table: world.entity_table().encode(),
+        pages,
+        resync: false,
+        resume: false,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -272,27 +291,11 @@ mod tests {
         out
     }
 
-    fn header_of(world: &World, pages: u32) -> Header {
-        Header {
-            protocol_version: crate::PROTOCOL_VERSION,
-            size: world.size().voxels().to_vec(),
-            version: world.version(),
-            growth_seq: 0,
-            quiescent: true,
-            digest: world.digest().0,
-            buffers: buffer_lengths(TRANSFERRED.map(|id| world.buffer_bytes(id).len())),
-            entity_table: world.entity_table().encode(),
-            pages,
-            resync: false,
-            resume: false,
-        }
-    }
-
     #[test]
     fn a_snapshot_rebuilds_the_world_and_a_cache_skips_equal_pages() {
         let w = world();
         let pages = pages_for(&w, &[]);
-        let mut a = Assembly::start(header_of(&w, pages.len() as u32), Default::default()).unwrap();
+        let mut a = Assembly::start(header_for(&w, pages.len() as u32), Default::default()).unwrap();
         for p in &pages {
             a.page(p).unwrap();
         }
@@ -313,7 +316,7 @@ mod tests {
             delta.len(),
             pages.len()
         );
-        let mut a = Assembly::start(header_of(&w2, delta.len() as u32), buffers_of(&got)).unwrap();
+        let mut a = Assembly::start(header_for(&w2, delta.len() as u32), buffers_of(&got)).unwrap();
         for p in &delta {
             a.page(p).unwrap();
         }
@@ -334,13 +337,13 @@ mod tests {
         let w = world();
         let pages = pages_for(&w, &[]);
         // Missing a page.
-        let mut a = Assembly::start(header_of(&w, pages.len() as u32), Default::default()).unwrap();
+        let mut a = Assembly::start(header_for(&w, pages.len() as u32), Default::default()).unwrap();
         for p in &pages[1..] {
             a.page(p).unwrap();
         }
         assert!(a.finish().unwrap_err().to_string().contains("pages"));
         // A page with the wrong content: the digest check catches it.
-        let mut a = Assembly::start(header_of(&w, pages.len() as u32), Default::default()).unwrap();
+        let mut a = Assembly::start(header_for(&w, pages.len() as u32), Default::default()).unwrap();
         for (i, p) in pages.iter().enumerate() {
             let mut p = p.clone();
             if i == 0 {
@@ -352,13 +355,13 @@ mod tests {
         }
         assert!(a.finish().is_err());
         // Hostile headers and pages.
-        let mut h = header_of(&w, 1);
+        let mut h = header_for(&w, 1);
         h.buffers[3].bytes = u64::MAX;
         assert!(Assembly::start(h, Default::default()).is_err());
-        let mut h = header_of(&w, 1);
+        let mut h = header_for(&w, 1);
         h.size = vec![64, 64];
         assert!(Assembly::start(h, Default::default()).is_err());
-        let mut a = Assembly::start(header_of(&w, 1), Default::default()).unwrap();
+        let mut a = Assembly::start(header_for(&w, 1), Default::default()).unwrap();
         let junk = Page {
             buffer: 2,
             indices: vec![0],

@@ -192,12 +192,13 @@ pub enum Op {
         /// Scattering model.
         kind: MaterialKind,
         /// Linear albedo, 0..1 per channel.
+        #[serde(deserialize_with = "finite_f32s")]
         albedo: [f32; 3],
         /// Emission strength (default 0).
-        #[serde(default)]
+        #[serde(default, deserialize_with = "finite_f32")]
         emission: f32,
         /// GGX roughness (default 0).
-        #[serde(default)]
+        #[serde(default, deserialize_with = "finite_f32")]
         roughness: f32,
     },
     /// `{"op":"define_model","name":"NAME","size":[x,y,z],"voxels":[[x,y,z,m],...]}`.
@@ -322,6 +323,32 @@ impl Batch {
     pub fn has_entity_ops(&self) -> bool {
         self.ops.iter().any(Op::is_entity_op)
     }
+}
+
+/// An `f32` field: a JSON number that fits. serde narrows a larger number to infinity,
+/// which the canonical line would then write as `null`, so it is refused here, as an
+/// integer field refuses a number outside its type.
+fn finite_f32<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f32, D::Error> {
+    let v = <f64 as serde::Deserialize>::deserialize(d)?;
+    let narrowed = v as f32;
+    if narrowed.is_finite() {
+        Ok(narrowed)
+    } else {
+        Err(serde::de::Error::custom(format!("{v} does not fit a 32-bit float")))
+    }
+}
+
+/// Three [`finite_f32`] numbers.
+fn finite_f32s<'de, D: serde::Deserializer<'de>>(d: D) -> Result<[f32; 3], D::Error> {
+    let v = <[f64; 3] as serde::Deserialize>::deserialize(d)?;
+    let mut out = [0.0; 3];
+    for (o, x) in out.iter_mut().zip(v) {
+        *o = x as f32;
+        if !o.is_finite() {
+            return Err(serde::de::Error::custom(format!("{x} does not fit a 32-bit float")));
+        }
+    }
+    Ok(out)
 }
 
 /// The first key of a JSON object line, if the line starts like one.
