@@ -325,7 +325,7 @@ impl Actor {
             history => {
                 let redo = !matches!(history, Action::Undo);
                 match self.histories.history_batch(&user, redo, &self.world) {
-                    Ok(b) => (b, if redo { BatchKind::Redo } else { BatchKind::Undo }),
+                    Ok(found) => found,
                     Err(why) => {
                         let _ = reply.send(Err(Status::failed_precondition(why)));
                         return;

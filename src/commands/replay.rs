@@ -150,11 +150,11 @@ impl Target for Local {
     }
 
     fn history(&mut self, user: &str, redo: bool) -> Result<u64> {
-        let batch = self
+        let (batch, kind) = self
             .histories
             .history_batch(user, redo, &self.world)
             .map_err(|e| anyhow!(e))?;
-        self.apply(user, &batch, if redo { BatchKind::Redo } else { BatchKind::Undo })
+        self.apply(user, &batch, kind)
     }
 
     fn wait_version(&mut self, v: u64) -> Result<()> {

@@ -75,16 +75,16 @@ impl Histories {
         }
     }
 
-    /// The batch an undo (`redo` false) or redo of `user` applies to `world` now, or why
-    /// there is none.
-    pub fn history_batch(&self, user: &str, redo: bool, world: &World) -> Result<Batch, String> {
-        let (record, what) = if redo {
-            (self.next_redo(user), "redo")
+    /// The batch an undo (`redo` false) or redo of `user` applies to `world` now, with the
+    /// kind to [`Histories::record`] it as, or why there is none.
+    pub fn history_batch(&self, user: &str, redo: bool, world: &World) -> Result<(Batch, BatchKind), String> {
+        let (record, kind, what) = if redo {
+            (self.next_redo(user), BatchKind::Redo, "redo")
         } else {
-            (self.next_undo(user), "undo")
+            (self.next_undo(user), BatchKind::Undo, "undo")
         };
         record
-            .map(|r| r.undo_batch(world))
+            .map(|r| (r.undo_batch(world), kind))
             .ok_or_else(|| format!("user '{user}' has nothing to {what}"))
     }
 
