@@ -54,6 +54,24 @@ async fn the_page_cache_round_trips_and_makes_a_rejoin_cheap() {
     server.stop();
 }
 
+/// A client refuses a world larger than its limit as soon as the snapshot's header
+/// announces it, with an error that says so; the same client with the default limit joins.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_world_over_the_client_limit_is_refused_at_the_header() {
+    let dir = tempfile::tempdir().unwrap();
+    let world = start_world(dir.path());
+    let server = serve_world(dir.path(), &world, &[], &[]);
+    let c = Client::connect(&server.url, Some("ed"), None).await.unwrap();
+    let mut small = c.clone().with_max_world_bytes(4096).join(None).await.unwrap();
+    let e = small.until_quiescent(0, SETTLE).await.unwrap_err();
+    assert!(e.to_string().contains("more than the 4096 this client accepts"), "{e}");
+    assert_eq!(small.mirror().stats.pages, 0, "refused before any page");
+    let mut fits = c.join(None).await.unwrap();
+    let s = c.status().await.unwrap();
+    assert_eq!(fits.until_quiescent(0, SETTLE).await.unwrap().digest(), s.digest);
+    server.stop();
+}
+
 /// Refusals, rate limits, timeouts and lost connections are different errors; after a
 /// restart on the same address, the same client and session carry on.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]

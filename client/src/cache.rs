@@ -33,7 +33,7 @@ impl PageCache {
                 .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cache")))?
                 .join("naadf"),
         };
-        let name = format!("mirror-{:016x}.naadf", xxhash_rust::xxh3::xxh3_64(url.as_bytes()));
+        let name = format!("mirror-{:016x}.naadf", naadf_world::hash::xxh3_64(url.as_bytes()));
         Some(PageCache { path: dir.join(name) })
     }
 

@@ -31,12 +31,22 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 use tokio::sync::mpsc;
 use tokio_stream::wrappers::ReceiverStream;
+use tonic::codec::CompressionEncoding;
 
 /// A connection to a server.
 #[derive(Clone, Debug)]
 pub struct Client {
     raw: RawClient,
+    /// The same connection, compressing what it sends: for large edits only.
+    compressed: RawClient,
+    /// The largest world [`Client::join`] accepts.
+    max_world_bytes: u64,
 }
+
+/// Edits of at least this many bytes of ops JSON go compressed (zstd). Below it,
+/// compressing costs more than it saves: tonic starts a fresh zstd context for every
+/// message, on both sides, which takes longer than sending a few hundred bytes.
+pub const COMPRESS_EDITS_FROM: usize = 16 * 1024;
 
 /// Where a server is and who we are to it.
 #[derive(Clone, Debug)]
@@ -47,12 +57,26 @@ pub struct ServerAddress {
     pub token: Option<String>,
     /// CA certificate (PEM) for `https://`.
     pub ca: Option<PathBuf>,
+    /// The largest world (bytes of buffers) to accept from the server
+    /// ([`Mirror::with_max_world_bytes`](crate::Mirror::with_max_world_bytes)).
+    pub max_world_bytes: u64,
 }
 
 impl ServerAddress {
-    /// Connects ([`Client::connect`]).
+    /// Where `url` is, with no token, no extra CA and the default world limit.
+    pub fn new(url: impl Into<String>) -> Self {
+        Self {
+            url: url.into(),
+            token: None,
+            ca: None,
+            max_world_bytes: crate::mirror::DEFAULT_MAX_WORLD_BYTES,
+        }
+    }
+
+    /// Connects ([`Client::connect`]), with this address's world limit.
     pub async fn connect(&self) -> Result<Client, Error> {
-        Client::connect(&self.url, self.token.as_deref(), self.ca.as_deref()).await
+        let client = Client::connect(&self.url, self.token.as_deref(), self.ca.as_deref()).await?;
+        Ok(client.with_max_world_bytes(self.max_world_bytes))
     }
 }
 
@@ -211,9 +235,19 @@ impl Client {
     /// # Ok(()) }
     /// ```
     pub async fn connect(url: &str, token: Option<&str>, ca: Option<&Path>) -> Result<Client, Error> {
+        let raw = connect::connect(url, token, ca).await?;
         Ok(Client {
-            raw: connect::connect(url, token, ca).await?,
+            compressed: raw.clone().send_compressed(CompressionEncoding::Zstd),
+            raw,
+            max_world_bytes: crate::mirror::DEFAULT_MAX_WORLD_BYTES,
         })
+    }
+
+    /// Makes [`Client::join`] refuse worlds whose buffers need more than `bytes` in all
+    /// (default [`DEFAULT_MAX_WORLD_BYTES`](crate::mirror::DEFAULT_MAX_WORLD_BYTES)).
+    pub fn with_max_world_bytes(mut self, bytes: u64) -> Self {
+        self.max_world_bytes = bytes;
+        self
     }
 
     /// Joins the world stream, announcing `cache` (a world from an earlier session) so
@@ -227,7 +261,7 @@ impl Client {
     /// # Ok(()) }
     /// ```
     pub async fn join(&self, cache: Option<World>) -> Result<Session, Error> {
-        Session::start(self.raw.clone(), cache).await
+        Session::start(self.raw.clone(), cache, self.max_world_bytes).await
     }
 
     /// Opens the world stream with `request` ([`crate::Mirror::join_request`]) and returns
@@ -245,7 +279,12 @@ impl Client {
             ops: ops.into(),
             client_seq,
         };
-        Ok(self.raw.clone().edit(req).await?.into_inner().into())
+        let raw = if req.ops.len() >= COMPRESS_EDITS_FROM {
+            &self.compressed
+        } else {
+            &self.raw
+        };
+        Ok(raw.clone().edit(req).await?.into_inner().into())
     }
 
     /// Undoes the caller's latest edit that is not undone yet (a new version).

@@ -56,7 +56,6 @@ pub(crate) async fn connect(url: &str, token: Option<&str>, ca: Option<&Path>) -
     };
     Ok(WorldServiceClient::with_interceptor(channel, Token(token))
         .max_decoding_message_size(usize::MAX)
-        .send_compressed(CompressionEncoding::Zstd)
         .accept_compressed(CompressionEncoding::Zstd))
 }
 

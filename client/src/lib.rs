@@ -53,5 +53,5 @@ pub use client::{
     Spawn,
 };
 pub use error::{ConnectError, Error};
-pub use mirror::{Mirror, MirrorError, Progress, StreamedEdit};
+pub use mirror::{DEFAULT_MAX_WORLD_BYTES, Mirror, MirrorError, Progress, StreamedEdit};
 pub use session::{Ended, Session, WorldStream};

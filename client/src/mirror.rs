@@ -10,6 +10,7 @@
 //! a program that reads the stream itself ([`Client::stream`](crate::Client::stream))
 //! calls [`Mirror::handle`].
 
+pub use naadf_proto::snapshot::DEFAULT_MAX_WORLD_BYTES;
 use naadf_proto::snapshot::{Assembly, buffers_of, cache_of};
 use naadf_proto::v1::{JoinRequest, ResumePoint, WorldMessage, world_message};
 use naadf_proto::{PROTOCOL_VERSION, WireError};
@@ -78,7 +79,7 @@ pub struct StreamedEdit {
 }
 
 /// A mirrored world.
-#[derive(Debug, Default)]
+#[derive(Debug)]
 pub struct Mirror {
     world: Option<World>,
     assembly: Option<Assembly>,
@@ -88,8 +89,16 @@ pub struct Mirror {
     /// a copy of every batch.
     keep_edits: bool,
     last_edit: Option<StreamedEdit>,
+    /// The most bytes of buffers a snapshot may need ([`Mirror::with_max_world_bytes`]).
+    max_world_bytes: u64,
     /// What was received so far.
     pub stats: Stats,
+}
+
+impl Default for Mirror {
+    fn default() -> Self {
+        Self::new(None)
+    }
 }
 
 impl Mirror {
@@ -101,8 +110,22 @@ impl Mirror {
         }
         Self {
             world: cache,
-            ..Self::default()
+            assembly: None,
+            quiescent: false,
+            growth_seq: 0,
+            keep_edits: false,
+            last_edit: None,
+            max_world_bytes: DEFAULT_MAX_WORLD_BYTES,
+            stats: Stats::default(),
         }
+    }
+
+    /// Refuses snapshots whose buffers need more than `bytes` in all (default
+    /// [`DEFAULT_MAX_WORLD_BYTES`]), before allocating them: a header of a few bytes may
+    /// announce gigabytes.
+    pub fn with_max_world_bytes(mut self, bytes: u64) -> Self {
+        self.max_world_bytes = bytes;
+        self
     }
 
     /// Starts a new stream: forgets the one in progress (a partial snapshot, and the
@@ -191,7 +214,7 @@ impl Mirror {
                 }
                 self.stats.snapshots += 1;
                 let cache = self.world.as_ref().map(buffers_of).unwrap_or_default();
-                self.assembly = Some(Assembly::start(h.clone(), cache)?);
+                self.assembly = Some(Assembly::start(h.clone(), cache, self.max_world_bytes)?);
                 self.finish_if_complete()
             }
             world_message::Kind::Page(p) => {

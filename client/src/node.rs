@@ -18,7 +18,7 @@ use std::time::{Duration, Instant};
 /// # async fn demo() {
 /// use naadf_client::node::RenderNode;
 /// use naadf_client::{FrameImage, NodeInfo, ServerAddress, gpu::Mode};
-/// let address = ServerAddress { url: "http://127.0.0.1:50051".into(), token: Some("node".into()), ca: None };
+/// let address = ServerAddress { token: Some("node".into()), ..ServerAddress::new("http://127.0.0.1:50051") };
 /// let info = NodeInfo { adapter: "a test pattern".into(), modes: vec![Mode::Albedo], max_size: (64, 64) };
 /// let render = |_world: &naadf_world::World, spec: &naadf_client::FrameSpec| -> Result<FrameImage, String> {
 ///     let (width, height) = spec.size;

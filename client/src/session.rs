@@ -68,9 +68,10 @@ pub struct Session {
 }
 
 impl Session {
-    /// Joins with `cache` as the mirror's world.
-    pub(crate) async fn start(raw: RawClient, cache: Option<World>) -> Result<Self, Error> {
-        let mut mirror = Mirror::new(cache);
+    /// Joins with `cache` as the mirror's world, accepting worlds of up to
+    /// `max_world_bytes` ([`Mirror::with_max_world_bytes`]).
+    pub(crate) async fn start(raw: RawClient, cache: Option<World>, max_world_bytes: u64) -> Result<Self, Error> {
+        let mut mirror = Mirror::new(cache).with_max_world_bytes(max_world_bytes);
         let stream = WorldStream::open(&raw, mirror.join_request()).await?;
         Ok(Self { raw, stream, mirror })
     }

@@ -170,7 +170,7 @@ pub fn wal(data: &[u8]) {
                 break;
             }
             out.extend_from_slice(&(payload.len() as u32).to_le_bytes());
-            out.extend_from_slice(&xxhash_rust::xxh3::xxh3_64(payload).to_le_bytes());
+            out.extend_from_slice(&naadf_world::hash::xxh3_64(payload).to_le_bytes());
             out.extend_from_slice(payload);
         }
         out
@@ -292,6 +292,9 @@ pub fn proto(data: &[u8]) {
     }
 }
 
+/// The world budget of the fuzzed client: far below the fuzzer's memory cap.
+const FUZZ_WORLD_BYTES: u64 = 256 << 20;
+
 /// A client's snapshot assembly: length-delimited `WorldMessage`s, a header first, then
 /// pages, over an empty cache.
 fn snapshot(mut data: &[u8]) {
@@ -300,10 +303,9 @@ fn snapshot(mut data: &[u8]) {
     while let Ok(msg) = WorldMessage::decode_length_delimited(&mut data) {
         match (msg.kind, assembly.as_mut()) {
             (Some(world_message::Kind::Header(h)), None) => {
-                // A header's buffer lengths are checked only against its world size, so a
-                // few bytes can announce gigabytes: the fuzzer's memory cap catches that
-                // (see RELIABILITY.md, findings).
-                let Ok(a) = Assembly::start(h, Default::default()) else {
+                // A client with a small budget: the fuzzer's memory cap catches any
+                // allocation out of proportion to it.
+                let Ok(a) = Assembly::start(h, Default::default(), FUZZ_WORLD_BYTES) else {
                     return;
                 };
                 assembly = Some(a);

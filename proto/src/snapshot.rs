@@ -17,6 +17,13 @@ use naadf_world::{World, WorldSize};
 /// cached by the server, so a higher level than the world file's costs little.
 pub const PAGE_ZSTD_LEVEL: i32 = 9;
 
+/// The most bytes of buffers a client allocates for a snapshot unless it is told
+/// otherwise (2 GiB). A header announces the buffers' lengths and the client sizes its
+/// buffers to them before any page arrives; the lengths are checked against the announced
+/// world size, but a few bytes of header may still announce gigabytes, so a client bounds
+/// what it accepts.
+pub const DEFAULT_MAX_WORLD_BYTES: u64 = 2 << 30;
+
 /// Most pages in one `Page` message: one aligned run of 16 pages (1 MiB).
 pub const GROUP_PAGES: usize = 16;
 
@@ -123,9 +130,18 @@ pub struct Assembly {
 impl Assembly {
     /// Starts assembling the snapshot `header` describes over `cache` (the client's copy of
     /// the transferred buffers, in [`TRANSFERRED`] order; empty vectors when it has none).
-    pub fn start(header: Header, cache: [Vec<u8>; 6]) -> Result<Self, WireError> {
+    /// A header whose buffers hold more than `max_bytes` in all is refused before anything
+    /// is allocated.
+    pub fn start(header: Header, cache: [Vec<u8>; 6], max_bytes: u64) -> Result<Self, WireError> {
         let size = header_size(&header)?;
         let lens = lengths(&header, size)?;
+        let total = lens.iter().fold(0u64, |t, &l| t.saturating_add(l));
+        if total > max_bytes {
+            return Err(bad(format!(
+                "the snapshot of a {size} world needs {total} bytes of buffers, more than the \
+                 {max_bytes} this client accepts"
+            )));
+        }
         let mut buffers = cache;
         for (b, &len) in buffers.iter_mut().zip(&lens) {
             b.resize(len as usize, 0);
@@ -295,7 +311,12 @@ mod tests {
     fn a_snapshot_rebuilds_the_world_and_a_cache_skips_equal_pages() {
         let w = world();
         let pages = pages_for(&w, &[]);
-        let mut a = Assembly::start(header_for(&w, pages.len() as u32), Default::default()).unwrap();
+        let mut a = Assembly::start(
+            header_for(&w, pages.len() as u32),
+            Default::default(),
+            DEFAULT_MAX_WORLD_BYTES,
+        )
+        .unwrap();
         for p in &pages {
             a.page(p).unwrap();
         }
@@ -316,11 +337,38 @@ mod tests {
             delta.len(),
             pages.len()
         );
-        let mut a = Assembly::start(header_for(&w2, delta.len() as u32), buffers_of(&got)).unwrap();
+        let mut a = Assembly::start(
+            header_for(&w2, delta.len() as u32),
+            buffers_of(&got),
+            DEFAULT_MAX_WORLD_BYTES,
+        )
+        .unwrap();
         for p in &delta {
             a.page(p).unwrap();
         }
         assert_eq!(a.finish().unwrap().digest(), w2.digest());
+    }
+
+    #[test]
+    fn a_header_over_the_budget_is_refused_before_allocating() {
+        // The world's own buffers: accepted at exactly their size, refused one byte below.
+        let w = world();
+        let need: u64 = TRANSFERRED.iter().map(|&id| w.buffer_bytes(id).len() as u64).sum();
+        assert!(Assembly::start(header_for(&w, 1), Default::default(), need).is_ok());
+        let e = Assembly::start(header_for(&w, 1), Default::default(), need - 1).unwrap_err();
+        assert!(e.to_string().contains("bytes of buffers"), "{e}");
+        // A 70-byte header announcing the largest world with 1 GiB in each of its four
+        // cell buffers and 1 KiB of blocks: within what such a world may hold, but past the
+        // default budget, so nothing is allocated.
+        let mut h = header_for(&w, 1);
+        h.size = vec![16384, 4096, 16384];
+        h.buffers = buffer_lengths([1 << 30, 1 << 30, 1 << 30, 1 << 30, 1024, 0]);
+        assert!(prost::Message::encoded_len(&h) < 100);
+        let e = Assembly::start(h, Default::default(), DEFAULT_MAX_WORLD_BYTES).unwrap_err();
+        assert!(
+            e.to_string().contains("more than the 2147483648 this client accepts"),
+            "{e}"
+        );
     }
 
     #[test]
@@ -337,13 +385,23 @@ mod tests {
         let w = world();
         let pages = pages_for(&w, &[]);
         // Missing a page.
-        let mut a = Assembly::start(header_for(&w, pages.len() as u32), Default::default()).unwrap();
+        let mut a = Assembly::start(
+            header_for(&w, pages.len() as u32),
+            Default::default(),
+            DEFAULT_MAX_WORLD_BYTES,
+        )
+        .unwrap();
         for p in &pages[1..] {
             a.page(p).unwrap();
         }
         assert!(a.finish().unwrap_err().to_string().contains("pages"));
         // A page with the wrong content: the digest check catches it.
-        let mut a = Assembly::start(header_for(&w, pages.len() as u32), Default::default()).unwrap();
+        let mut a = Assembly::start(
+            header_for(&w, pages.len() as u32),
+            Default::default(),
+            DEFAULT_MAX_WORLD_BYTES,
+        )
+        .unwrap();
         for (i, p) in pages.iter().enumerate() {
             let mut p = p.clone();
             if i == 0 {
@@ -357,11 +415,11 @@ mod tests {
         // Hostile headers and pages.
         let mut h = header_for(&w, 1);
         h.buffers[3].bytes = u64::MAX;
-        assert!(Assembly::start(h, Default::default()).is_err());
+        assert!(Assembly::start(h, Default::default(), DEFAULT_MAX_WORLD_BYTES).is_err());
         let mut h = header_for(&w, 1);
         h.size = vec![64, 64];
-        assert!(Assembly::start(h, Default::default()).is_err());
-        let mut a = Assembly::start(header_for(&w, 1), Default::default()).unwrap();
+        assert!(Assembly::start(h, Default::default(), DEFAULT_MAX_WORLD_BYTES).is_err());
+        let mut a = Assembly::start(header_for(&w, 1), Default::default(), DEFAULT_MAX_WORLD_BYTES).unwrap();
         let junk = Page {
             buffer: 2,
             indices: vec![0],

@@ -6,6 +6,7 @@
 //! in order to the [committer](crate::committer), which makes batches durable before it
 //! publishes them or answers their senders.
 
+use crate::growth::GrowthWorker;
 use crate::messages::{EditResult, Event, Outgoing, Subscription};
 use crate::metrics::Metrics;
 use crate::pages::{PageStore, SnapshotView};
@@ -18,19 +19,6 @@ use naadf_world::ops::{Batch, EditError, Limits};
 use std::sync::Arc;
 use tokio::sync::{mpsc, oneshot};
 use tonic::Status;
-
-/// The pause after a growth job before the next may start: bursts of edits coalesce into
-/// one job, and growth takes at most about half of one core under a steady edit stream.
-const GROWTH_PAUSE: std::time::Duration = std::time::Duration::from_millis(400);
-
-/// Gives the calling thread the lowest priority of its scheduling class (nice 19 on Linux),
-/// so that it runs on what edits, acknowledgements and streaming leave, yet is never
-/// starved outright (the actor sometimes waits for it).
-fn run_in_background() {
-    if let Err(e) = thread_priority::set_current_thread_priority(thread_priority::ThreadPriority::Min) {
-        tracing::debug!("background growth keeps its priority: {e:?}");
-    }
-}
 
 /// What an edit request asks for.
 #[derive(Debug)]
@@ -108,8 +96,8 @@ pub struct Actor {
     view: Option<Arc<SnapshotView>>,
     checkpoint_every: u64,
     since_checkpoint: u64,
-    /// Background growth running on its own thread, if any.
-    growing: Option<std::thread::JoinHandle<GrowthTask>>,
+    /// The thread running background growth (started by [`Actor::run`]).
+    growth: Option<GrowthWorker>,
 }
 
 /// The gRPC status for an edit error.
@@ -143,7 +131,7 @@ impl Actor {
             view: None,
             checkpoint_every,
             since_checkpoint: 0,
-            growing: None,
+            growth: None,
         }
     }
 
@@ -184,54 +172,38 @@ impl Actor {
     /// thread of its own (on a copy of what it reads), so edits never wait for it; the
     /// thread reports back through the request queue.
     pub fn run(mut self, mut rx: mpsc::Receiver<Request>, notify: mpsc::WeakSender<Request>) {
+        self.growth = Some(GrowthWorker::start(notify));
         loop {
-            self.start_growth(&notify);
+            self.start_growth();
             match rx.blocking_recv() {
                 Some(r) => self.handle(r),
                 None => break,
             }
         }
-        self.collect_growth();
+        self.collect_growth(true);
     }
 
-    fn start_growth(&mut self, notify: &mpsc::WeakSender<Request>) {
-        if self.growing.is_some() {
+    fn start_growth(&mut self) {
+        let Some(worker) = self.growth.as_mut().filter(|w| !w.is_busy()) else {
             return;
-        }
-        if let Some(mut task) = self.world.start_growth() {
-            let notify = notify.clone();
-            self.growing = Some(std::thread::spawn(move || {
-                // One core at most, and only what edits, acknowledgements and streaming
-                // leave idle: growth is never what a client waits for.
-                let pool = rayon::ThreadPoolBuilder::new()
-                    .num_threads(1)
-                    .thread_name(|_| "naadf-growth".into())
-                    .start_handler(|_| run_in_background())
-                    .build();
-                match pool {
-                    Ok(pool) => pool.install(|| task.run()),
-                    Err(_) => {
-                        run_in_background();
-                        task.run()
-                    }
-                }
-                // Edits that arrive meanwhile queue seeds for one coalesced next job.
-                std::thread::sleep(GROWTH_PAUSE);
-                if let Some(tx) = notify.upgrade() {
-                    let _ = tx.blocking_send(Request::Grown);
-                }
-                task
-            }));
+        };
+        if let Some(task) = self.world.start_growth()
+            && let Some(finished) = worker.submit(task)
+        {
+            self.publish_task(finished);
         }
     }
 
-    /// Publishes the growth task's result, waiting for it if it still runs.
-    fn collect_growth(&mut self) {
-        if let Some(handle) = self.growing.take() {
-            let task = handle.join().expect("the growth thread does not panic");
-            let cs = self.world.finish_growth(task);
-            self.publish_growth(&cs);
+    /// Publishes the growth task's result; waits for it if it still runs and `wait`.
+    fn collect_growth(&mut self, wait: bool) {
+        if let Some(task) = self.growth.as_mut().and_then(|g| g.collect(wait)) {
+            self.publish_task(task);
         }
+    }
+
+    fn publish_task(&mut self, task: GrowthTask) {
+        let cs = self.world.finish_growth(task);
+        self.publish_growth(&cs);
     }
 
     fn publish_growth(&mut self, cs: &ChangeSet) {
@@ -287,7 +259,7 @@ impl Actor {
                     digest: self.world.digest(),
                 });
             }
-            Request::Grown => self.collect_growth(),
+            Request::Grown => self.collect_growth(false),
             Request::Checkpoint { reply } => self.checkpoint(reply),
         }
     }
@@ -366,7 +338,7 @@ impl Actor {
     }
 
     fn checkpoint(&mut self, reply: Option<oneshot::Sender<Result<u64, String>>>) {
-        self.collect_growth();
+        self.collect_growth(true);
         for cs in self.world.grow_until_quiescent() {
             self.publish_growth(&cs);
         }

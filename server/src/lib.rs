@@ -22,6 +22,7 @@ pub mod auth;
 pub mod committer;
 pub mod conn;
 pub mod fsck;
+pub mod growth;
 pub mod http;
 pub mod join;
 pub mod layout;

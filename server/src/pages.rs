@@ -119,7 +119,7 @@ pub struct PageCache {
 /// The cache key of a group of pages.
 fn group_key(pages: &[&StoredPage]) -> u64 {
     let hashes: Vec<u8> = pages.iter().flat_map(|p| p.hash.to_le_bytes()).collect();
-    xxhash_rust::xxh3::xxh3_64(&hashes)
+    naadf_world::hash::xxh3_64(&hashes)
 }
 
 impl PageCache {

@@ -13,9 +13,9 @@ use crate::wal;
 use naadf_world::World;
 use naadf_world::edit::Histories;
 use naadf_world::file::{self, WorldParts};
+use naadf_world::hash::xxh3_64;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
-use xxhash_rust::xxh3::xxh3_64;
 
 pub use crate::layout::StoreError;
 

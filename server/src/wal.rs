@@ -20,11 +20,11 @@
 //! losing acknowledged edits.
 
 use naadf_world::edit::BatchKind;
+use naadf_world::hash::xxh3_64;
 use serde::{Deserialize, Serialize};
 use std::fs::{File, OpenOptions};
 use std::io::{BufWriter, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
-use xxhash_rust::xxh3::xxh3_64;
 
 /// The segment magic.
 const MAGIC: &[u8; 8] = b"NAADFWAL";

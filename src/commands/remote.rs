@@ -17,6 +17,10 @@ pub struct ServerArgs {
     /// CA certificate (PEM) to trust for `https://` servers, besides the system roots.
     #[arg(long)]
     pub ca: Option<PathBuf>,
+    /// The largest world, in bytes of buffers, to accept from the server: a snapshot that
+    /// announces more is refused before anything is allocated.
+    #[arg(long, value_name = "BYTES", default_value_t = naadf_client::DEFAULT_MAX_WORLD_BYTES)]
+    pub max_world_bytes: u64,
 }
 
 impl ServerArgs {
@@ -26,12 +30,13 @@ impl ServerArgs {
             url: self.server.clone(),
             token: self.token.clone(),
             ca: self.ca.clone(),
+            max_world_bytes: self.max_world_bytes,
         }
     }
 
     /// Connects.
     pub async fn connect(&self) -> Result<Client> {
-        Ok(Client::connect(&self.server, self.token.as_deref(), self.ca.as_deref()).await?)
+        Ok(self.address().connect().await?)
     }
 }
 

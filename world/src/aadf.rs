@@ -207,61 +207,42 @@ pub fn build_chunk_aadf(size: WorldSize, chunks: &mut Vec<u32>, entities: &[u32]
 /// chunks at most 31 levels plus one neighbour away; two more for margin.
 pub const REGROW_RADIUS: u32 = MAX_CHUNK_FIELD as u32 + 3;
 
-/// The free chunks within [`REGROW_RADIUS`] (Chebyshev) of any seed chunk, ascending:
-/// a separable dilation of the seed mask, O(chunks) whatever the number of seeds.
-fn regrow_region(size: WorldSize, seeds: &[u32], free: impl Fn(usize) -> bool) -> Vec<u32> {
-    let d = size.chunks().map(|v| v as usize);
-    let n = size.chunk_count();
-    let mut mask = vec![false; n];
+/// Chebyshev distance (in chunks) from each chunk to the nearest seed, for the chunks
+/// within `reach` of one; `u8::MAX` for the others.
+///
+/// A breadth-first search over the 26 neighbours: a king's-move step changes each
+/// coordinate by at most one, so the search's depth is exactly the Chebyshev distance. It
+/// visits only the chunks within `reach`, each once, whatever the number of seeds.
+fn seed_distance(size: WorldSize, seeds: &[u32], reach: u8) -> Vec<u8> {
+    let d = size.chunks().map(i64::from);
+    let mut dist = vec![u8::MAX; size.chunk_count()];
+    let mut frontier: Vec<u32> = Vec::new();
     for &s in seeds {
-        mask[s as usize] = true;
+        if std::mem::replace(&mut dist[s as usize], 0) != 0 {
+            frontier.push(s);
+        }
     }
-    let r = REGROW_RADIUS as usize;
-    let stride = [1, d[0], d[0] * d[1]];
-    for axis in 0..3 {
-        let mut out = vec![false; n];
-        for (i, _) in mask.iter().enumerate().filter(|(_, m)| **m) {
-            let p = (i / stride[axis]) % d[axis];
-            let base = i - p * stride[axis];
-            for q in p.saturating_sub(r)..(p + r + 1).min(d[axis]) {
-                out[base + q * stride[axis]] = true;
+    for depth in 1..=reach {
+        let mut next = Vec::new();
+        for &i in &frontier {
+            let p = size.chunk_coords(i as usize).map(i64::from);
+            for dz in -1..=1 {
+                for dy in -1..=1 {
+                    for dx in -1..=1 {
+                        let q = [p[0] + dx, p[1] + dy, p[2] + dz];
+                        if (0..3).any(|a| q[a] < 0 || q[a] >= d[a]) {
+                            continue;
+                        }
+                        let j = size.chunk_index(q.map(|v| v as u32));
+                        if dist[j] == u8::MAX {
+                            dist[j] = depth;
+                            next.push(j as u32);
+                        }
+                    }
+                }
             }
         }
-        mask = out;
-    }
-    (0..n as u32)
-        .filter(|&i| mask[i as usize] && free(i as usize))
-        .collect()
-}
-
-/// Chebyshev distance (in chunks) from each chunk to the nearest seed, capped at `cap`.
-fn seed_distance(size: WorldSize, seeds: &[u32], cap: u8) -> Vec<u8> {
-    let d = size.chunks().map(|v| v as usize);
-    let stride = [1, d[0], d[0] * d[1]];
-    let mut dist = vec![cap; size.chunk_count()];
-    for &s in seeds {
-        dist[s as usize] = 0;
-    }
-    // The Chebyshev distance transform is separable: a 1-D min-plus pass per axis, where
-    // after the x pass a cell holds its distance along x, then max-combined along y, z:
-    // dist(p) = min over seeds of max(|dx|, |dy|, |dz|) = min over q of max(|dz|, dist_xy(q)).
-    for (axis, &len) in d.iter().enumerate() {
-        let st = stride[axis];
-        for base in (0..size.chunk_count()).filter(|&i| (i / st) % len == 0) {
-            let line: Vec<u8> = (0..len).map(|k| dist[base + k * st]).collect();
-            for k in 0..len {
-                // Nearest q along this axis minimising max(|k − q|, line[q]).
-                let reach = usize::from(line[k].min(cap));
-                let lo = k.saturating_sub(reach);
-                let best = line[lo..(k + reach + 1).min(len)]
-                    .iter()
-                    .enumerate()
-                    .map(|(j, &v)| (k.abs_diff(lo + j) as u8).max(v))
-                    .min()
-                    .unwrap_or(line[k]);
-                dist[base + k * st] = best;
-            }
-        }
+        frontier = next;
     }
     dist
 }
@@ -298,8 +279,13 @@ impl GrowthJob {
     /// the work near the seeds remains, and the result is still a from-scratch build. A
     /// chunk whose cell is zero (reset by a clamp, or genuinely boxed in) starts cold.
     pub fn around(size: WorldSize, seeds: &[u32], chunks: Vec<u32>, entities: &[u32]) -> Self {
-        let region = regrow_region(size, seeds, |i| chunk_is_free(chunks[i], entities[i]));
+        // The region: the free chunks within REGROW_RADIUS of a seed, ascending.
         let distance = seed_distance(size, seeds, REGROW_RADIUS as u8);
+        let region: Vec<u32> = (0..size.chunk_count() as u32)
+            .filter(|&i| {
+                distance[i as usize] <= REGROW_RADIUS as u8 && chunk_is_free(chunks[i as usize], entities[i as usize])
+            })
+            .collect();
         let mut shadow = chunks;
         let mut entering: Vec<Vec<u32>> = vec![Vec::new(); usize::from(MAX_CHUNK_FIELD) + 1];
         let mut active = Vec::new();
@@ -370,7 +356,9 @@ impl GrowthJob {
             if let Some(joining) = self.entering.get_mut(usize::from(self.level)) {
                 self.active.append(joining);
             }
-            self.active.sort_unstable();
+            // Four ascending runs (one per axis, and the joining chunks): the stable sort
+            // finds and merges runs, where an unstable sort would start from scratch.
+            self.active.sort();
             self.active.dedup();
         }
         self.is_done()
@@ -496,10 +484,24 @@ impl GrowthTask {
     /// Runs the job to convergence (finding its region first: that, too, is work the
     /// world's owner should not wait for).
     pub fn run(&mut self) {
+        self.run_until(|| false);
+    }
+
+    /// Runs the job until it converges or `stop()` says so, asked between (level, axis)
+    /// phases, each a few milliseconds at most; returns whether it converged. A stopped
+    /// task resumes where it stopped, on any thread ([`GrowthTask::run`],
+    /// [`crate::World::finish_growth`]).
+    pub fn run_until(&mut self, stop: impl Fn() -> bool) -> bool {
         let job = self.job.get_or_insert_with(|| {
             GrowthJob::around(self.size, &self.seeds, std::mem::take(&mut self.chunks), &self.entities)
         });
-        while !job.step(self.size, &self.entities) {}
+        while !job.is_done() {
+            if stop() {
+                return false;
+            }
+            job.step(self.size, &self.entities);
+        }
+        true
     }
 }
 
@@ -554,6 +556,32 @@ mod tests {
                 if !outside {
                     prop_assert!((0..3).all(|a| lo[a] >= 0 && hi[a] < dims[a] as i64));
                 }
+            }
+        }
+    }
+
+    proptest! {
+        #[test]
+        fn seed_distance_is_chebyshev(dims in prop::array::uniform3(1u32..4), picks in prop::collection::vec(any::<u32>(), 0..5), reach in 0u8..8) {
+            let size = WorldSize::new(64 * dims[0], 64 * dims[1], 64 * dims[2]).unwrap();
+            let n = size.chunk_count() as u32;
+            let seeds: Vec<u32> = picks.iter().map(|p| p % n).collect();
+            let dist = seed_distance(size, &seeds, reach);
+            for i in 0..n {
+                let p = size.chunk_coords(i as usize);
+                // The oracle: the nearest seed by brute force.
+                let nearest = seeds
+                    .iter()
+                    .map(|&s| {
+                        let q = size.chunk_coords(s as usize);
+                        (0..3).map(|a| p[a].abs_diff(q[a])).max().unwrap()
+                    })
+                    .min();
+                let want = match nearest {
+                    Some(d) if d <= u32::from(reach) => d as u8,
+                    _ => u8::MAX,
+                };
+                prop_assert_eq!(dist[i as usize], want, "chunk {:?}", p);
             }
         }
     }

@@ -12,7 +12,7 @@
 //! whatever the number of threads. Chunk AADFs are built last, level-major.
 
 use crate::aadf::cell_aadf4;
-use crate::cell::{self, CHUNK_VOXELS, GROUP_WORDS, MAX_MATERIAL};
+use crate::cell::{self, CHUNK_VOXELS, GROUP_WORDS, MAX_MATERIAL, State};
 use crate::error::WorldError;
 use crate::hash::block_hash;
 use crate::material::MaterialTable;
@@ -62,7 +62,8 @@ pub(crate) enum ChunkPlan {
     /// One material throughout (0 = empty).
     Uniform(u16),
     /// Block cells (uniform ones final, new mixed ones 0 until placed), the new mixed
-    /// groups, and the mask of blocks whose existing mixed cell was kept.
+    /// groups, and the mask of blocks whose existing mixed cell was kept (whose group
+    /// reference carries over).
     Mixed {
         blocks: Box<[u32; 64]>,
         groups: Vec<GroupPlan>,
@@ -73,6 +74,15 @@ pub(crate) enum ChunkPlan {
 /// Classifies a raw chunk (material ids, `x + 16y + 256z`). Fails with the offending id
 /// on ids above `max_id`.
 pub(crate) fn plan_chunk(raw: &[u16; CHUNK_VOXELS], max_id: u16) -> Result<ChunkPlan, u16> {
+    // Most chunks of a generated world are uniform: one pass finds them.
+    let first = raw[0];
+    if raw.iter().all(|&v| v == first) {
+        return if first > max_id {
+            Err(first)
+        } else {
+            Ok(ChunkPlan::Uniform(first))
+        };
+    }
     plan_chunk_keeping(raw, max_id, &|_| None)
 }
 
@@ -96,29 +106,43 @@ pub(crate) fn block_equal(a: &[u16; CHUNK_VOXELS], b: &[u16; CHUNK_VOXELS], bloc
     })
 }
 
-/// [`plan_chunk`] for an edited chunk: `keep(b)` gives the existing mixed cell of a block
-/// whose content did not change, which is kept as is (no rehash, no new reference).
+/// [`plan_chunk`] for an edited chunk: `keep(b)` gives the existing cell of a block whose
+/// content did not change, and `raw` need only hold the other blocks. A mixed or full cell
+/// is kept as is (no gather, no rehash, no new reference); an empty one only counts as
+/// empty, since its field depends on its neighbours.
 pub(crate) fn plan_chunk_keeping(
     raw: &[u16; CHUNK_VOXELS],
     max_id: u16,
     keep: &dyn Fn(usize) -> Option<u32>,
 ) -> Result<ChunkPlan, u16> {
-    let first = raw[0];
-    if raw.iter().all(|&v| v == first) {
-        return if first > max_id {
-            Err(first)
-        } else {
-            Ok(ChunkPlan::Uniform(first))
-        };
-    }
     let mut blocks = [0u32; 64];
     let mut groups = Vec::new();
     let mut empty_blocks = 0u64;
     let mut kept = 0u64;
+    // The material of every block so far, while they are all uniform and alike.
+    let mut uniform: Option<u16> = None;
+    let mut alike = true;
+    let mut block_is = |m: Option<u16>, b: u32| {
+        alike &= m.is_some() && (b == 0 || m == uniform);
+        uniform = m;
+    };
     for b in 0..64u32 {
         if let Some(c) = keep(b as usize) {
-            blocks[b as usize] = c;
-            kept |= 1 << b;
+            match cell::state(c) {
+                State::Empty => {
+                    empty_blocks |= 1 << b;
+                    block_is(Some(0), b);
+                }
+                State::Full => {
+                    blocks[b as usize] = c;
+                    block_is(Some(cell::material(c)), b);
+                }
+                State::Mixed => {
+                    blocks[b as usize] = c;
+                    kept |= 1 << b;
+                    block_is(None, b);
+                }
+            }
             continue;
         }
         let v = gather_block(raw, b);
@@ -130,13 +154,18 @@ pub(crate) fn plan_chunk_keeping(
             if v[0] == 0 {
                 empty_blocks |= 1 << b;
             }
+            block_is(Some(v[0]), b);
             continue;
         }
+        block_is(None, b);
         groups.push(GroupPlan {
             block: b as u8,
             hash: block_hash(&v),
             words: group_words(&v),
         });
+    }
+    if let (true, Some(m)) = (alike, uniform) {
+        return Ok(ChunkPlan::Uniform(m));
     }
     let fields = cell_aadf4(empty_blocks);
     for b in 0..64 {

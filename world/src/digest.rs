@@ -6,11 +6,11 @@
 //! XOR. Empty buffers contribute nothing; the version is not included. The digest prints as
 //! 16 lowercase hex digits.
 
+use crate::hash::Xxh3;
 use rayon::prelude::*;
 use std::fmt;
 use std::ops::BitXor;
 use std::str::FromStr;
-use xxhash_rust::xxh3::Xxh3;
 
 /// Bytes per digest page.
 pub const PAGE_BYTES: usize = 64 * 1024;
@@ -197,7 +197,7 @@ mod tests {
         let mut msg = 3u32.to_le_bytes().to_vec();
         msg.extend_from_slice(&0u32.to_le_bytes());
         msg.extend_from_slice(&bytes);
-        assert_eq!(digest_of(BufferId::Voxels, &bytes).0, xxhash_rust::xxh3::xxh3_64(&msg));
+        assert_eq!(digest_of(BufferId::Voxels, &bytes).0, crate::hash::xxh3_64(&msg));
     }
 
     proptest! {

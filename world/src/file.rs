@@ -35,13 +35,13 @@ use crate::cell::MAX_MATERIAL;
 use crate::digest::BufferId;
 use crate::entity::EntityTable;
 use crate::error::WorldError;
+use crate::hash::{Xxh3, xxh3_64};
 use crate::material::{Material, MaterialTable};
 use crate::model::ModelTable;
 use crate::size::{MAX_SIZE, WorldSize};
 use crate::world::{World, bytemuck_u32};
 use std::io::{BufRead, BufWriter, Read, Write};
 use std::path::{Path, PathBuf};
-use xxhash_rust::xxh3::{Xxh3, xxh3_64};
 
 /// The raw parts a world file stores (see [`read_parts`] and [`write_parts`]).
 pub use crate::world::WorldParts;

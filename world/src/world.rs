@@ -490,29 +490,50 @@ impl World {
             State::Empty => out.fill(0),
             State::Full => out.fill(cell::material(cellv)),
             State::Mixed => {
-                let ptr = cell::pointer(cellv) as usize;
-                for b in 0..64u32 {
-                    let bc = self.blocks[ptr + b as usize];
-                    let base = cell::index16(b % 4 * 4, b / 4 % 4 * 4, b / 16 * 4);
-                    let uniform = match cell::state(bc) {
-                        State::Empty => Some(0),
-                        State::Full => Some(cell::material(bc)),
-                        State::Mixed => None,
-                    };
-                    // 16 rows of 4 voxels: x is contiguous in the chunk layout.
-                    for row in 0..16usize {
-                        let at = base + 16 * (row % 4) + 256 * (row / 4);
-                        let dst = &mut out[at..at + 4];
-                        match uniform {
-                            Some(m) => dst.fill(m),
-                            None => {
-                                let g = cell::pointer(bc) as usize;
-                                for (x, d) in dst.iter_mut().enumerate() {
-                                    *d = cell::voxel_material(cell::group_voxel(&self.voxels, g, 4 * row + x));
-                                }
-                            }
-                        }
-                    }
+                for b in 0..64 {
+                    self.decode_block_cell(self.block_cell(cellv, b), b, out);
+                }
+            }
+        }
+    }
+
+    /// The cell of block `b` (`bx + 4by + 16bz`) of the chunk whose cell is `chunk`. The
+    /// blocks of a uniform chunk have its state and material (an empty one's field is
+    /// meaningless here).
+    pub(crate) fn block_cell(&self, chunk: u32, b: u32) -> u32 {
+        match cell::state(chunk) {
+            State::Mixed => self.blocks[cell::pointer(chunk) as usize + b as usize],
+            _ => chunk,
+        }
+    }
+
+    /// Decodes block `b` of chunk `ci` into its 64 places of `out` (the chunk's material
+    /// ids, `x + 16y + 256z`); the rest of `out` is left as it is.
+    pub(crate) fn decode_block(&self, ci: usize, b: u32, out: &mut [u16; CHUNK_VOXELS]) {
+        self.decode_block_cell(self.block_cell(self.chunks[ci], b), b, out);
+    }
+
+    /// [`World::decode_block`] for the block whose cell is `bc`.
+    fn decode_block_cell(&self, bc: u32, b: u32, out: &mut [u16; CHUNK_VOXELS]) {
+        let base = cell::index16(b % 4 * 4, b / 4 % 4 * 4, b / 16 * 4);
+        // 16 rows of 4 voxels: x is contiguous in the chunk layout, and a row is two words
+        // of the block's voxel group.
+        let row_at = |row: usize| base + 16 * (row % 4) + 256 * (row / 4);
+        match cell::state(bc) {
+            State::Mixed => {
+                let words = &self.voxels[cell::pointer(bc) as usize..][..cell::GROUP_WORDS];
+                for (row, pair) in words.chunks_exact(2).enumerate() {
+                    let at = row_at(row);
+                    let dst: &mut [u16; 4] = (&mut out[at..at + 4]).try_into().expect("4 voxels");
+                    let v = |w: u32, half: u32| cell::voxel_material((w >> (16 * half)) as u16);
+                    *dst = [v(pair[0], 0), v(pair[0], 1), v(pair[1], 0), v(pair[1], 1)];
+                }
+            }
+            state => {
+                let m = if state == State::Full { cell::material(bc) } else { 0 };
+                for row in 0..16 {
+                    let at = row_at(row);
+                    out[at..at + 4].fill(m);
                 }
             }
         }

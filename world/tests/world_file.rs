@@ -3,12 +3,12 @@
 
 use naadf_world::cell::CHUNK_VOXELS;
 use naadf_world::file::{self, FORMAT_VERSION, HEADER_LEN, MAGIC, TRAILER_LEN, WorldParts};
+use naadf_world::hash::xxh3_64;
 use naadf_world::material::MaterialKind;
 use naadf_world::model::{Model, ModelTable};
 use naadf_world::{ChunkSource, Material, MaterialTable, World, WorldError, WorldSize};
 use proptest::prelude::*;
 use std::path::PathBuf;
-use xxhash_rust::xxh3::xxh3_64;
 
 // ---------------------------------------------------------------------------------------
 // Test worlds

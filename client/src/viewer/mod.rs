@@ -123,7 +123,7 @@ pub fn run(opts: ViewerOptions) -> Result<ViewerSummary, ViewerError> {
             let _ = p.send_event(e);
         }
     })?;
-    let mut mirror = Mirror::new(None);
+    let mut mirror = Mirror::new(None).with_max_world_bytes(opts.server.max_world_bytes);
     link.join(mirror.join_request());
     let mut app = App {
         opts,

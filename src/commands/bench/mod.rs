@@ -3,6 +3,7 @@
 //! on a shared, noisy machine.
 
 mod build;
+mod cpu;
 mod edit;
 mod frames;
 mod gpu;

@@ -2,6 +2,7 @@
 //! bytes, rejoin cost, edit-to-every-client latency with 8/16/64 mirrors, bytes on the wire
 //! per single-voxel edit (counted at the TCP level), and sustained durable edits per second.
 
+use super::cpu::{Sample, UnitUsage};
 use super::{percentile, surface};
 use crate::commands::generate::{PresetArgs, generate};
 use crate::commands::print_json;
@@ -12,7 +13,7 @@ use naadf_server::{Bound, ServerConfig};
 use naadf_world::World;
 use naadf_world::raysets::SplitMix64;
 use serde::Serialize;
-use std::collections::HashMap;
+use std::collections::{BTreeMap, HashMap};
 use std::net::SocketAddr;
 use std::ops::ControlFlow;
 use std::sync::Arc;
@@ -65,6 +66,9 @@ struct LatencyReport {
     ack_p50_ms: f64,
     ack_p99_ms: f64,
     incomplete: usize,
+    /// CPU time per edit by thread group, from the first edit sent until every mirror
+    /// applied the last (`clients` holds every mirror).
+    cpu_per_edit: BTreeMap<String, UnitUsage>,
 }
 
 #[derive(Serialize)]
@@ -74,6 +78,8 @@ struct Report {
     wire_bytes_per_voxel_edit: f64,
     delta_message_bytes_per_voxel_edit: f64,
     sustained_edits_per_second: f64,
+    /// CPU time per durable edit in the sustained run, by thread group.
+    sustained_cpu_per_edit: BTreeMap<String, UnitUsage>,
     threads: usize,
 }
 
@@ -265,6 +271,58 @@ async fn edit(c: &Client, ops: String) -> Result<u64> {
     Ok(c.edit(ops, 0).await?.version)
 }
 
+/// The editing client, on a tokio runtime of its own (one thread, `editor`), as the server
+/// is: on the mirrors' runtime its requests and acknowledgements would queue behind their
+/// work on every delta, which a remote editor never does.
+struct Editor {
+    client: Client,
+    /// Taken by `Drop`, which must not block inside the benchmark's runtime.
+    rt: Option<tokio::runtime::Runtime>,
+}
+
+impl Editor {
+    async fn connect(url: &str) -> Result<Self> {
+        let rt = tokio::runtime::Builder::new_multi_thread()
+            .worker_threads(1)
+            .thread_name("editor")
+            .enable_all()
+            .build()?;
+        let url = url.to_owned();
+        // Connecting there puts the connection's own task on the editor's thread too.
+        let client = rt
+            .spawn(async move { Client::connect(&url, None, None).await })
+            .await??;
+        Ok(Self { client, rt: Some(rt) })
+    }
+
+    /// Runs `f` with the client on the editor's thread.
+    fn spawn<T, F>(&self, f: impl FnOnce(Client) -> F) -> tokio::task::JoinHandle<T>
+    where
+        T: Send + 'static,
+        F: std::future::Future<Output = T> + Send + 'static,
+    {
+        let rt = self.rt.as_ref().expect("the runtime lives until drop");
+        rt.spawn(f(self.client.clone()))
+    }
+
+    /// Applies one edit; returns its version.
+    async fn edit(&self, ops: String) -> Result<u64> {
+        self.spawn(|c| async move { edit(&c, ops).await }).await?
+    }
+
+    async fn quiescent(&self) -> Result<bool> {
+        Ok(self.spawn(|c| async move { c.status().await }).await??.quiescent)
+    }
+}
+
+impl Drop for Editor {
+    fn drop(&mut self) {
+        if let Some(rt) = self.rt.take() {
+            rt.shutdown_background();
+        }
+    }
+}
+
 /// Runs the benchmark.
 pub fn run(a: StreamArgs) -> Result<()> {
     let world = generate(&a.preset)?;
@@ -277,7 +335,7 @@ pub fn run(a: StreamArgs) -> Result<()> {
     block_on(async move {
         let server = LocalServer::start(world).await?;
         let url = server.url();
-        let editor = Client::connect(&url, None, None).await?;
+        let editor = Editor::connect(&url).await?;
 
         // Join: a fresh client, no cache.
         let t = Instant::now();
@@ -289,7 +347,7 @@ pub fn run(a: StreamArgs) -> Result<()> {
         // Rejoin after 100 small edits.
         let mut last = 0;
         for (k, p) in pts.iter().take(100).enumerate() {
-            last = edit(&editor, voxel_op(*p, k)).await?;
+            last = editor.edit(voxel_op(*p, k)).await?;
         }
         let mut f = follow(&url, mirror.into_world()).await?;
         f.wait_for(last).await?;
@@ -316,7 +374,7 @@ pub fn run(a: StreamArgs) -> Result<()> {
         let (before, msg_before) = (count.load(Ordering::Relaxed), f.bytes.load(Ordering::Relaxed));
         let n = 1000;
         for k in 0..n {
-            last = edit(&editor, voxel_op(pts[(100 + k) % pts.len()], k + 1)).await?;
+            last = editor.edit(voxel_op(pts[(100 + k) % pts.len()], k + 1)).await?;
         }
         f.wait_for(last).await?;
         tokio::time::sleep(Duration::from_millis(200)).await;
@@ -328,7 +386,7 @@ pub fn run(a: StreamArgs) -> Result<()> {
 
         // Let the distance-field growth queued by the edits so far finish first.
         let t = Instant::now();
-        while !editor.status().await?.quiescent {
+        while !editor.quiescent().await? {
             tokio::time::sleep(Duration::from_millis(10)).await;
         }
         eprintln!("growth backlog drained in {:.2} s", t.elapsed().as_secs_f64());
@@ -344,13 +402,13 @@ pub fn run(a: StreamArgs) -> Result<()> {
                 f.wait_for(last).await?;
             }
             let edits = (f64::from(a.rate) * a.seconds) as usize;
+            let cpu_before = Sample::now();
             let start = tokio::time::Instant::now();
             let mut sent = Vec::new();
             // Each run edits new places: repeating a run's edits would make them no-ops.
             let first = run * edits;
             for k in first..first + edits {
                 tokio::time::sleep_until(start + Duration::from_secs_f64(k as f64 / f64::from(a.rate))).await;
-                let c = editor.clone();
                 let p = pts[(k * 7 + 3) % pts.len()];
                 let r = 1 + k % 8;
                 let ops = format!(
@@ -360,7 +418,7 @@ pub fn run(a: StreamArgs) -> Result<()> {
                     p[2],
                     (k % 3) * 2
                 );
-                sent.push(tokio::spawn(async move {
+                sent.push(editor.spawn(|c| async move {
                     let t0 = Instant::now();
                     edit(&c, ops).await.map(|v| (v, t0, t0.elapsed()))
                 }));
@@ -374,10 +432,13 @@ pub fn run(a: StreamArgs) -> Result<()> {
                 last = last.max(v);
             }
             acks.sort_by(f64::total_cmp);
+            for f in &mut followers {
+                f.wait_for(last).await?;
+            }
+            let cpu = Sample::now().per_unit_since(&cpu_before, edits as f64);
             let mut done: HashMap<u64, Instant> = HashMap::new();
             let mut incomplete = 0;
-            for mut f in followers {
-                f.wait_for(last).await?;
+            for f in followers {
                 let (_, times) = f.finish().await?;
                 let seen: HashMap<u64, Instant> = times.into_iter().collect();
                 for &v in sent_at.keys() {
@@ -405,11 +466,13 @@ pub fn run(a: StreamArgs) -> Result<()> {
                 ack_p50_ms: percentile(&acks, 0.5),
                 ack_p99_ms: percentile(&acks, 0.99),
                 incomplete,
+                cpu_per_edit: cpu,
             };
             eprintln!(
                 "latency, {clients} clients: p50 {:.2} ms, p99 {:.2} ms, max {:.2} ms (acknowledged: p50 {:.2} ms, p99 {:.2} ms)",
                 r.p50_ms, r.p99_ms, r.max_ms, r.ack_p50_ms, r.ack_p99_ms
             );
+            eprintln!("  CPU per edit: {}", describe(&r.cpu_per_edit));
             latency.push(r);
         }
 
@@ -418,10 +481,9 @@ pub fn run(a: StreamArgs) -> Result<()> {
         let done = Arc::new(AtomicU64::new(0));
         let mut workers = Vec::new();
         for w in 0..32usize {
-            let c = editor.clone();
             let done = done.clone();
             let pts = pts.clone();
-            workers.push(tokio::spawn(async move {
+            workers.push(editor.spawn(|c| async move {
                 let mut k = w;
                 while Instant::now() < stop_at {
                     edit(&c, voxel_op(pts[k % pts.len()], k)).await?;
@@ -432,11 +494,15 @@ pub fn run(a: StreamArgs) -> Result<()> {
             }));
         }
         let t = Instant::now();
+        let cpu_before = Sample::now();
         for w in workers {
             w.await??;
         }
-        let sustained = done.load(Ordering::Relaxed) as f64 / t.elapsed().as_secs_f64();
+        let edits = done.load(Ordering::Relaxed);
+        let sustained = edits as f64 / t.elapsed().as_secs_f64();
+        let sustained_cpu = Sample::now().per_unit_since(&cpu_before, edits.max(1) as f64);
         eprintln!("sustained: {sustained:.0} durable edits/s");
+        eprintln!("  CPU per edit: {}", describe(&sustained_cpu));
         server.shutdown().await?;
 
         let report = Report {
@@ -445,6 +511,7 @@ pub fn run(a: StreamArgs) -> Result<()> {
             wire_bytes_per_voxel_edit: wire,
             delta_message_bytes_per_voxel_edit: delta_msg,
             sustained_edits_per_second: sustained,
+            sustained_cpu_per_edit: sustained_cpu,
             threads: rayon::current_num_threads(),
         };
         if a.json {
@@ -455,6 +522,21 @@ pub fn run(a: StreamArgs) -> Result<()> {
         }
         Ok(())
     })
+}
+
+/// "group 0.123 ms (wait 0.010 ms), ..." for a log line.
+fn describe(usage: &BTreeMap<String, UnitUsage>) -> String {
+    usage
+        .iter()
+        .map(|(g, u)| {
+            if u.wait_ms.is_nan() {
+                format!("{g} {:.3} ms", u.cpu_ms)
+            } else {
+                format!("{g} {:.3} ms (waiting {:.3} ms)", u.cpu_ms, u.wait_ms)
+            }
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 /// Counts bytes written.

@@ -3,7 +3,7 @@
 
 use super::overlay::Touched;
 use super::writes::Writes;
-use crate::build::{ChunkPlan, block_equal, plan_chunk_keeping};
+use crate::build::{ChunkPlan, plan_chunk_keeping};
 use crate::cell::{self, GROUP_WORDS, State};
 use crate::digest::BufferId;
 use crate::error::WorldError;
@@ -26,15 +26,9 @@ impl World {
         let i = t.index;
         let max_id = (self.materials.len() - 1) as u16;
         let old = self.chunks[i];
-        let old_blocks: Option<[u32; BLOCK_ARRAY]> = (cell::state(old) == State::Mixed).then(|| {
-            self.blocks[cell::pointer(old) as usize..][..BLOCK_ARRAY]
-                .try_into()
-                .expect("64 cells")
-        });
-        let keep = |b: usize| {
-            let c = old_blocks?[b];
-            (cell::state(c) == State::Mixed && block_equal(&t.old, &t.new, b as u32)).then_some(c)
-        };
+        // Blocks the batch did not change keep their cells (an empty one's field is
+        // recomputed: its neighbours may have changed). Only changed blocks are decoded.
+        let keep = |b: usize| (t.changed >> b & 1 == 0).then(|| self.block_cell(old, b as u32));
         let plan = plan_chunk_keeping(&t.new, max_id, &keep)
             .map_err(|m| WorldError::InvalidMaterial(format!("material {m} is not defined (1..={max_id})")))?;
         let new = match plan {

@@ -72,6 +72,13 @@ impl World {
     /// Applies a batch atomically: on any error the world is untouched. Returns the new
     /// version's change set and the undo record.
     pub fn apply(&mut self, batch: &Batch, limits: &Limits) -> Result<Applied, EditError> {
+        self.apply_batch(batch, limits, true)
+    }
+
+    /// [`World::apply`], with the undo record left empty unless `undo` (a mirror applying
+    /// the server's records keeps no history, and the diff costs a pass over every
+    /// touched chunk).
+    fn apply_batch(&mut self, batch: &Batch, limits: &Limits, undo: bool) -> Result<Applied, EditError> {
         let mut materials = self.materials.clone();
         let mut models = self.models.clone();
         let mut overlay = Overlay::new(self);
@@ -121,7 +128,11 @@ impl World {
             None
         };
 
-        let undo = UndoRecord::diff(self, &touched, entities.as_ref().map(|e| &e.table));
+        let undo = if undo {
+            UndoRecord::diff(self, &touched, entities.as_ref().map(|e| &e.table))
+        } else {
+            UndoRecord::default()
+        };
         let mut w = Writes::default();
         if materials != self.materials {
             self.materials = materials;
@@ -347,7 +358,7 @@ impl World {
                         self.version
                     )));
                 }
-                Ok(self.apply(batch, limits)?.change)
+                Ok(self.apply_batch(batch, limits, false)?.change)
             }
             Record::Chunks(writes) => {
                 if version != self.version {

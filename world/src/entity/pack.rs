@@ -298,11 +298,14 @@ mod tests {
             let q = q.map(|v| v * scale);
             let w = encode_quat(q);
             let d = decode_quat(w);
-            // Within about 1e-4 per component (up to sign), and a fixed point.
+            // Within three quantisation steps (3/8192) per component, up to sign, and a
+            // fixed point. One step is the rounding; near a tie between the two largest
+            // components the encoder moves the others further toward zero until the rebuilt
+            // one is the largest, and the rebuilt one absorbs those moves.
             let u = unit(q);
             let sign = if (0..4).map(|i| u[i] * d[i]).sum::<f64>() < 0.0 { -1.0 } else { 1.0 };
             for i in 0..4 {
-                prop_assert!((u[i] - sign * d[i]).abs() < 2e-4, "{:?} → {:?}", u, d);
+                prop_assert!((u[i] - sign * d[i]).abs() < 3.0 / 8192.0, "{:?} → {:?}", u, d);
             }
             prop_assert!(((0..4).map(|i| d[i] * d[i]).sum::<f64>() - 1.0).abs() < 1e-12);
             prop_assert_eq!(encode_quat(d), w);
