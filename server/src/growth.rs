@@ -1,18 +1,18 @@
 //! The background growth thread: runs the actor's distance-field growth tasks one at a
-//! time, on a thread that lives as long as the actor, only on CPU time nothing else wants.
+//! time, on a thread that lives as long as the actor, at the lowest priority of its
+//! scheduling class (nice 19), so that it runs on what edits, acknowledgements and
+//! streaming leave.
 //!
 //! One long-lived thread (rather than one per task) keeps a task's start cheap, and keeps
 //! the work on one named thread, `naadf-growth`, where profilers and `bench stream`'s CPU
 //! accounting find it.
 //!
-//! The thread runs under `SCHED_IDLE` on Linux: any other thread that wakes up preempts it
-//! at once, where a `nice 19` thread may keep the CPU for the rest of its time slice (a
-//! millisecond or more), and every hop of an edit (request, actor, committer, streams,
-//! each mirror) would queue behind it on a busy machine. An idle-policy thread may starve
-//! while the machine is saturated; that only delays growth (the fields stay safe, just not
-//! yet grown), except where the actor must wait for it (a checkpoint, shutdown). Then it
-//! asks for the task back ([`GrowthWorker::collect`]): the thread stops at the next phase
-//! and the actor finishes the task itself, at its own priority.
+//! The actor sometimes must wait for growth (a checkpoint, shutdown). Then it asks for the
+//! task back ([`GrowthWorker::collect`]): the thread stops at the next phase and skips its
+//! pause, and the actor finishes the task itself, at its own priority. The thread must
+//! still get the CPU to notice, which is why it is not `SCHED_IDLE` (that policy would
+//! make it preempted at once by any waking thread, but can starve it for as long as the
+//! machine is saturated, and the actor with it).
 
 use crate::actor::Request;
 use naadf_world::edit::GrowthTask;
@@ -33,21 +33,8 @@ pub const THREAD_NAME: &str = "naadf-growth";
 /// a 400 ms pause, 0.8 ms with this one).
 const GROWTH_PAUSE: Duration = Duration::from_millis(1000);
 
-/// Puts the calling thread in the background: `SCHED_IDLE` where the OS has it, else the
-/// lowest priority of its scheduling class (nice 19).
+/// Gives the calling thread the lowest priority of its scheduling class (nice 19 on Linux).
 fn run_in_background() {
-    #[cfg(any(target_os = "linux", target_os = "android"))]
-    {
-        use thread_priority::{
-            NormalThreadSchedulePolicy, ThreadPriority, ThreadSchedulePolicy, set_thread_priority_and_policy,
-            thread_native_id,
-        };
-        let idle = ThreadSchedulePolicy::Normal(NormalThreadSchedulePolicy::Idle);
-        match set_thread_priority_and_policy(thread_native_id(), ThreadPriority::Min, idle) {
-            Ok(()) => return,
-            Err(e) => tracing::debug!("background growth is not SCHED_IDLE: {e:?}"),
-        }
-    }
     if let Err(e) = thread_priority::set_current_thread_priority(thread_priority::ThreadPriority::Min) {
         tracing::debug!("background growth keeps its priority: {e:?}");
     }
@@ -181,6 +168,47 @@ impl Drop for GrowthWorker {
         if let Some(t) = self.thread.take() {
             t.thread().unpark();
             let _ = t.join();
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use naadf_world::ops::{Batch, Limits};
+    use naadf_world::preset::Preset;
+    use naadf_world::{World, WorldSize};
+
+    /// A world with growth queued: a box emptied through the terrain.
+    fn world_with_growth() -> World {
+        let size = WorldSize::new(512, 128, 512).unwrap();
+        let mut w = World::build(&*Preset::Terrain.source(Some(size), 4).unwrap(), &|_| {}).unwrap();
+        let dig = Batch::parse_line(r#"{"op":"box","min":[100,0,100],"max":[300,100,300],"material":0}"#).unwrap();
+        w.apply(&dig, &Limits::default()).unwrap();
+        assert!(!w.is_quiescent());
+        w
+    }
+
+    /// Taken back at once while it runs or pauses (as a checkpoint does), a task may come
+    /// back unfinished; the world finishes it, and ends as if it had grown in place.
+    #[test]
+    fn a_task_taken_back_early_still_converges() {
+        let mut in_place = world_with_growth();
+        in_place.grow_until_quiescent();
+        for wait_ms in [0, 5, 50] {
+            let (tx, _rx) = mpsc::channel(4);
+            let mut worker = GrowthWorker::start(tx.downgrade());
+            let mut w = world_with_growth();
+            let task = w.start_growth().expect("growth is queued");
+            assert!(worker.submit(task).is_none(), "the thread takes it");
+            assert!(worker.is_busy());
+            std::thread::sleep(Duration::from_millis(wait_ms));
+            let task = worker.collect(true).expect("the task comes back");
+            assert!(!worker.is_busy());
+            w.finish_growth(task);
+            w.grow_until_quiescent();
+            assert_eq!(w.digest(), in_place.digest(), "taken back after {wait_ms} ms");
+            drop(tx);
         }
     }
 }
