@@ -194,7 +194,8 @@ impl Actor {
         }
     }
 
-    /// Publishes the growth task's result; waits for it if it still runs and `wait`.
+    /// Publishes the growth task: with `wait`, takes it back at once (finishing it here if
+    /// the thread stopped it early); without, only once the thread is done with it.
     fn collect_growth(&mut self, wait: bool) {
         if let Some(task) = self.growth.as_mut().and_then(|g| g.collect(wait)) {
             self.publish_task(task);

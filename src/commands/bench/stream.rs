@@ -1,6 +1,7 @@
 //! `naadf bench stream`: the server under load, in one process on loopback — join time and
 //! bytes, rejoin cost, edit-to-every-client latency with 8/16/64 mirrors, bytes on the wire
-//! per single-voxel edit (counted at the TCP level), and sustained durable edits per second.
+//! per single-voxel edit (counted at the TCP level), sustained durable edits per second, and
+//! the CPU time of an edit in each group of threads ([`super::cpu`]).
 
 use super::cpu::{Sample, UnitUsage};
 use super::{percentile, surface};
