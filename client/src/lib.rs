@@ -31,7 +31,10 @@
 //!   costs only what changed;
 //! - [`node`]: [`node::RenderNode`], which keeps a render node registered and serving the
 //!   server's frame jobs with any renderer;
-//! - [`gpu`]: the GPU mirror ([`gpu::GpuWorld`]), the WGSL traversal and the renderer;
+//! - [`gpu`]: the GPU mirror ([`gpu::GpuWorld`]), the WGSL traversal, the renderer and the
+//!   path tracer;
+//! - [`light`]: the light model of the lit modes (sky, sun, materials, bounces), its CPU
+//!   path tracer and radiance images;
 //! - [`viewer`]: the interactive window (winit) that flies through a server's world and
 //!   edits it.
 
@@ -42,6 +45,7 @@ pub mod client;
 pub mod connect;
 pub mod error;
 pub mod gpu;
+pub mod light;
 pub mod mirror;
 pub mod node;
 pub mod session;

@@ -83,9 +83,16 @@ impl Camera {
     /// The primary ray through pixel `(px, py)` of a `w × h` image. Fails only for a
     /// position beyond [`crate::traverse::ray::MAX_COORD`].
     pub fn ray(&self, basis: &Basis, px: u32, py: u32, w: u32, h: u32) -> Result<Ray, WorldError> {
+        self.ray_through(basis, f64::from(px) + 0.5, f64::from(py) + 0.5, w, h)
+    }
+
+    /// The ray through the image point `(x, y)` of a `w × h` image, in pixel units from the
+    /// top-left corner (pixel `(px, py)` spans `[px, px + 1) × [py, py + 1)`; its centre is
+    /// the contract's ray). Path tracers jitter inside the pixel with it.
+    pub fn ray_through(&self, basis: &Basis, x: f64, y: f64, w: u32, h: u32) -> Result<Ray, WorldError> {
         let a = (self.fov_y.to_radians() / 2.0).tan();
-        let sx = (2.0 * (f64::from(px) + 0.5) / f64::from(w) - 1.0) * a * f64::from(w) / f64::from(h);
-        let sy = (1.0 - 2.0 * (f64::from(py) + 0.5) / f64::from(h)) * a;
+        let sx = (2.0 * x / f64::from(w) - 1.0) * a * f64::from(w) / f64::from(h);
+        let sy = (1.0 - 2.0 * y / f64::from(h)) * a;
         let d: [f64; 3] = std::array::from_fn(|i| basis.forward[i] + sx * basis.right[i] + sy * basis.up[i]);
         Ray::new(self.pos, normalize(d))
     }

@@ -1,9 +1,12 @@
-//! [`Headless`]: frames of a changing world without a window — a device, a renderer and
-//! a GPU copy of the world that follows it (`naadf render`, `naadf replay`).
+//! [`Headless`]: frames of a changing world without a window — a device, a renderer, a
+//! path tracer and a GPU copy of the world that follows it (`naadf render`, `naadf replay`).
 
 use super::context::{Gpu, GpuError};
+use super::pathtrace::PathTracer;
 use super::render::{Frame, Mode, Renderer};
 use super::world::GpuWorld;
+use crate::light::Light;
+use crate::light::hdr::Radiance;
 use naadf_world::World;
 use naadf_world::camera::Camera;
 
@@ -12,6 +15,7 @@ pub struct Headless {
     /// The device.
     pub gpu: Gpu,
     renderer: Renderer,
+    path_tracer: PathTracer,
     world: Option<GpuWorld>,
 }
 
@@ -20,9 +24,11 @@ impl Headless {
     pub fn new() -> Result<Self, GpuError> {
         let gpu = Gpu::new()?;
         let renderer = Renderer::new(&gpu);
+        let path_tracer = PathTracer::new(&gpu);
         Ok(Headless {
             gpu,
             renderer,
+            path_tracer,
             world: None,
         })
     }
@@ -38,5 +44,23 @@ impl Headless {
     ) -> Result<Frame, GpuError> {
         let gw = GpuWorld::follow(&mut self.world, &self.gpu, world)?;
         self.renderer.render(&self.gpu, gw, camera, size, mode, gbuffer)
+    }
+
+    /// Path-traces `world` to `spp` samples per pixel ([`PathTracer::render`]: samples of
+    /// the same view and world add up; a change restarts them).
+    #[allow(clippy::too_many_arguments)]
+    pub fn path_trace(
+        &mut self,
+        world: &World,
+        camera: &Camera,
+        size: (u32, u32),
+        light: &Light,
+        seed: u32,
+        spp: u32,
+        progress: &mut dyn FnMut(u32),
+    ) -> Result<Radiance, GpuError> {
+        let gw = GpuWorld::follow(&mut self.world, &self.gpu, world)?;
+        self.path_tracer
+            .render(&self.gpu, gw, camera, size, light, seed, spp, progress)
     }
 }

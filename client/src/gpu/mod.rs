@@ -9,17 +9,20 @@
 //! - [`shaders`]: the WGSL of `shaders/`, assembled per pass after a generated prelude:
 //!   the bindings the world's current buffer split needs, the [`WorldInfo`] uniform and
 //!   the constants the shaders share with the Rust code;
-//! - [`WorldInfo`]: the world uniform, one definition for Rust and WGSL
-//!   ([`WgslStruct`]);
+//! - [`WorldInfo`], [`FrameInfo`], [`LightInfo`]: the uniforms, one definition for Rust
+//!   and WGSL each ([`WgslStruct`]);
 //! - [`RayTracer`]: traces lists of rays with any traversal method (tests against the
 //!   CPU, benchmarks);
 //! - [`Renderer`]: renders camera frames in the modes of [`Mode`];
+//! - [`PathTracer`]: the progressive path tracer of the light model
+//!   ([`crate::light`]), the ground truth of the lit modes;
 //! - [`Headless`]: a device, a renderer and a GPU copy that follows a changing world.
 //!
 //! [`World`]: naadf_world::World
 
 mod context;
 mod headless;
+mod pathtrace;
 mod pipeline;
 mod rays;
 mod render;
@@ -29,7 +32,8 @@ mod world;
 
 pub use context::{Gpu, GpuError};
 pub use headless::Headless;
+pub use pathtrace::PathTracer;
 pub use rays::{GpuHit, GpuRay, RayBatch, RayTracer};
 pub use render::{DEFAULT_SUN, Frame, GBUFFER_MAGIC, Mode, Renderer, STEPS_FULL_SCALE, write_gbuffer};
-pub use uniform::{Member, WgslStruct, WgslType, WorldInfo};
+pub use uniform::{FrameInfo, LightInfo, Member, WgslStruct, WgslType, WorldInfo};
 pub use world::{DEFAULT_MAX_STEPS, GPU_BUFFERS, GpuWorld, Upload};

@@ -6,7 +6,7 @@ use super::world::GpuWorld;
 use std::collections::HashMap;
 
 /// The pipelines of one pass: group 0 is the world ([`GpuWorld::layout`]), group 1 the
-/// pass's own bindings (a uniform, then storage buffers).
+/// pass's own bindings (uniforms, then storage buffers).
 pub(crate) struct PassPipelines {
     pass: Pass,
     group1: wgpu::BindGroupLayout,
@@ -14,12 +14,17 @@ pub(crate) struct PassPipelines {
 }
 
 impl PassPipelines {
-    /// Pipelines for `pass`, whose group 1 is a uniform followed by storage buffers with
-    /// the given read-only flags.
-    pub fn new(gpu: &Gpu, pass: Pass, storage_read_only: &[bool]) -> Self {
-        let mut entries = vec![entry(0, wgpu::BufferBindingType::Uniform)];
+    /// Pipelines for `pass`, whose group 1 is `uniforms` uniform buffers followed by
+    /// storage buffers with the given read-only flags.
+    pub fn new(gpu: &Gpu, pass: Pass, uniforms: u32, storage_read_only: &[bool]) -> Self {
+        let mut entries: Vec<_> = (0..uniforms)
+            .map(|i| entry(i, wgpu::BufferBindingType::Uniform))
+            .collect();
         for (i, &read_only) in storage_read_only.iter().enumerate() {
-            entries.push(entry(i as u32 + 1, wgpu::BufferBindingType::Storage { read_only }));
+            entries.push(entry(
+                uniforms + i as u32,
+                wgpu::BufferBindingType::Storage { read_only },
+            ));
         }
         let group1 = gpu.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some(pass.entry()),
@@ -32,7 +37,7 @@ impl PassPipelines {
         }
     }
 
-    /// A group-1 bind group of the pass's own buffers: its uniform, then its storage
+    /// A group-1 bind group of the pass's own buffers: its uniforms, then its storage
     /// buffers, at bindings 0, 1, 2, … in that order.
     pub fn group1(&self, gpu: &Gpu, buffers: &[&wgpu::Buffer]) -> wgpu::BindGroup {
         let entries: Vec<wgpu::BindGroupEntry> = buffers

@@ -72,7 +72,7 @@ impl RayTracer {
     /// Prepares the pass (pipelines are built on first use).
     pub fn new(gpu: &Gpu) -> Self {
         RayTracer {
-            pipes: PassPipelines::new(gpu, Pass::Rays, &[true, false]),
+            pipes: PassPipelines::new(gpu, Pass::Rays, 1, &[true, false]),
         }
     }
 

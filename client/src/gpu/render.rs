@@ -133,6 +133,61 @@ pub fn write_gbuffer(out: &mut dyn Write, width: u32, height: u32, words: &[[u32
     out.write_all(&bytes)
 }
 
+/// Checks a frame size against [`MAX_EDGE`] and against one storage binding of
+/// `bytes_per_pixel` per pixel; returns the pixel count.
+pub(crate) fn check_frame_size(gpu: &Gpu, (width, height): (u32, u32), bytes_per_pixel: u64) -> Result<u64, GpuError> {
+    let pixels = u64::from(width) * u64::from(height);
+    if width == 0
+        || height == 0
+        || width > MAX_EDGE
+        || height > MAX_EDGE
+        || pixels * bytes_per_pixel > gpu.limits.max_storage_buffer_binding_size
+    {
+        return Err(GpuError::Unsupported(format!(
+            "frame size {width}x{height}: each edge must be 1..={MAX_EDGE} and the frame small enough for one binding of the adapter ({} bytes)",
+            gpu.limits.max_storage_buffer_binding_size
+        )));
+    }
+    Ok(pixels)
+}
+
+/// A camera as the frame passes take it (docs/CAMERA.md): the position split into integer
+/// and fraction, `forward`, and `right` and `up` scaled by `a·W/H` and `a`
+/// (`a = tan(fov_y/2)`), so that a pass forms `dir = forward + sx·right + sy·up`.
+pub(crate) struct CameraRays {
+    pub int: [i32; 3],
+    pub frac: [f32; 3],
+    pub forward: [f32; 3],
+    pub right: [f32; 3],
+    pub up: [f32; 3],
+}
+
+impl CameraRays {
+    /// The rays of `camera` for a `width × height` frame; fails for a position the shaders
+    /// cannot hold.
+    pub fn new(camera: &Camera, (width, height): (u32, u32)) -> Result<Self, GpuError> {
+        // The shaders take the origin's floor as an i32: the CPU's ray range applies.
+        if camera.pos.iter().any(|c| c.abs() > MAX_COORD) {
+            return Err(GpuError::Unsupported(format!(
+                "camera position {:?} is out of range (within ±2^30)",
+                camera.pos
+            )));
+        }
+        let basis = camera.basis();
+        let a = (camera.fov_y.to_radians() / 2.0).tan();
+        let aspect = f64::from(width) / f64::from(height);
+        let (int, frac) = split_origin(camera.pos);
+        let v3 = |v: [f64; 3], s: f64| v.map(|c| (c * s) as f32);
+        Ok(CameraRays {
+            int,
+            frac,
+            forward: v3(basis.forward, 1.0),
+            right: v3(basis.right, a * aspect),
+            up: v3(basis.up, a),
+        })
+    }
+}
+
 /// The frame pass.
 pub struct Renderer {
     pipes: PassPipelines,
@@ -144,7 +199,7 @@ impl Renderer {
     /// Prepares the pass (pipelines are built on first use).
     pub fn new(gpu: &Gpu) -> Self {
         Renderer {
-            pipes: PassPipelines::new(gpu, Pass::Render, &[false, false]),
+            pipes: PassPipelines::new(gpu, Pass::Render, 1, &[false, false]),
             sun: DEFAULT_SUN,
         }
     }
@@ -160,42 +215,22 @@ impl Renderer {
         mode: Mode,
         gbuffer: bool,
     ) -> Result<Frame, GpuError> {
-        let pixels = u64::from(width) * u64::from(height);
-        if width == 0
-            || height == 0
-            || width > MAX_EDGE
-            || height > MAX_EDGE
-            || pixels * 16 > gpu.limits.max_storage_buffer_binding_size
-        {
-            return Err(GpuError::Unsupported(format!(
-                "frame size {width}x{height}: each edge must be 1..={MAX_EDGE} and the frame small enough for one binding"
-            )));
-        }
-        // The shaders take the origin's floor as an i32: the CPU's ray range applies.
-        if camera.pos.iter().any(|c| c.abs() > MAX_COORD) {
-            return Err(GpuError::Unsupported(format!(
-                "camera position {:?} is out of range (within ±2^30)",
-                camera.pos
-            )));
-        }
+        let pixels = check_frame_size(gpu, (width, height), 16)?;
+        let rays = CameraRays::new(camera, (width, height))?;
         let pipeline = self.pipes.get(gpu, world, Loop::Hierarchy, true)?;
-        let basis = camera.basis();
-        let a = (camera.fov_y.to_radians() / 2.0).tan();
-        let aspect = f64::from(width) / f64::from(height);
-        let (int, frac) = split_origin(camera.pos);
-        let v3 = |v: [f64; 3], s: f64| v.map(|c| ((c * s) as f32).to_bits());
-        let [fx, fy, fz] = v3(basis.forward, 1.0);
-        let [rx, ry, rz] = v3(basis.right, a * aspect);
-        let [ux, uy, uz] = v3(basis.up, a);
+        let (int, frac) = (rays.int, rays.frac.map(f32::to_bits));
+        let [fx, fy, fz] = rays.forward.map(f32::to_bits);
+        let [rx, ry, rz] = rays.right.map(f32::to_bits);
+        let [ux, uy, uz] = rays.up.map(f32::to_bits);
         let sun = self.sun.map(f32::to_bits);
         let view: [u32; 24] = [
             int[0] as u32,
             int[1] as u32,
             int[2] as u32,
             mode.code(),
-            frac[0].to_bits(),
-            frac[1].to_bits(),
-            frac[2].to_bits(),
+            frac[0],
+            frac[1],
+            frac[2],
             width,
             fx,
             fy,

@@ -15,7 +15,7 @@
 //! name, so a hand-written copy fails the naga test of every pass.
 
 use super::render::Mode;
-use super::uniform::{WgslStruct, WorldInfo};
+use super::uniform::{FrameInfo, LightInfo, WgslStruct, WorldInfo};
 use naadf_world::cell;
 use naadf_world::entity::{self, MAX_ENTITY_ID, pack};
 use naadf_world::material::MaterialKind;
@@ -35,6 +35,10 @@ pub const GRID: &str = include_str!("../../../shaders/grid.wgsl");
 pub const RAYS: &str = include_str!("../../../shaders/rays.wgsl");
 /// `shaders/render.wgsl`: the frame pass.
 pub const RENDER: &str = include_str!("../../../shaders/render.wgsl");
+/// `shaders/light.wgsl`: the light model of the lit passes (sky, sun, scattering, paths).
+pub const LIGHT: &str = include_str!("../../../shaders/light.wgsl");
+/// `shaders/pathtrace.wgsl`: the progressive path tracer.
+pub const PATHTRACE: &str = include_str!("../../../shaders/pathtrace.wgsl");
 
 /// The logical storage buffers of group 0, in binding order, with their accessor names.
 pub const BUFFERS: [(&str, &str); 8] = [
@@ -115,19 +119,35 @@ pub enum Pass {
     Rays,
     /// [`RENDER`], entry point `render`.
     Render,
+    /// [`LIGHT`] and [`PATHTRACE`], entry point `path_trace`.
+    PathTrace,
 }
 
 impl Pass {
+    /// Every pass.
+    pub const ALL: [Pass; 3] = [Pass::Rays, Pass::Render, Pass::PathTrace];
+
     /// The entry point.
     pub fn entry(self) -> &'static str {
         match self {
             Pass::Rays => "trace_rays",
             Pass::Render => "render",
+            Pass::PathTrace => "path_trace",
+        }
+    }
+
+    /// The pass's own files, in order, after the shared ones.
+    fn files(self) -> &'static [&'static str] {
+        match self {
+            Pass::Rays => &[RAYS],
+            Pass::Render => &[RENDER],
+            Pass::PathTrace => &[LIGHT, PATHTRACE],
         }
     }
 }
 
-/// The prelude of every pass: the world uniform ([`WorldInfo`]) and its binding, the
+/// The prelude of every pass: the world uniform ([`WorldInfo`]) and its binding, the lit
+/// passes' uniform structs ([`FrameInfo`], [`LightInfo`]; each pass binds what it uses), the
 /// [`CONSTANTS`], and the group-0 storage declarations and accessors for `split`.
 pub fn prelude(split: &Split) -> String {
     let mut s = String::from(
@@ -136,6 +156,8 @@ pub fn prelude(split: &Split) -> String {
     );
     s.push_str(&WorldInfo::wgsl());
     s.push_str("@group(0) @binding(0) var<uniform> world_info: WorldInfo;\n");
+    s.push_str(&FrameInfo::wgsl());
+    s.push_str(&LightInfo::wgsl());
     for (name, value) in CONSTANTS {
         let _ = writeln!(s, "const {name}: u32 = {value}u;");
     }
@@ -172,11 +194,10 @@ pub fn source(pass: Pass, world_loop: Loop, split: &Split) -> String {
         Loop::Hierarchy => TRAVERSE,
         Loop::Grid => GRID,
     };
-    let own = match pass {
-        Pass::Rays => RAYS,
-        Pass::Render => RENDER,
-    };
-    [prelude(split).as_str(), WORLD, RAY, TRACE, world_loop, own].join("\n")
+    let prelude = prelude(split);
+    let mut files = vec![prelude.as_str(), WORLD, RAY, TRACE, world_loop];
+    files.extend(pass.files());
+    files.join("\n")
 }
 
 #[cfg(test)]
@@ -212,7 +233,7 @@ mod tests {
             parts: [2, 1, 3, 4, 1, 1, 2, 5],
         };
         for s in [whole(), split] {
-            for pass in [Pass::Rays, Pass::Render] {
+            for pass in Pass::ALL {
                 for lp in [Loop::Hierarchy, Loop::Grid] {
                     if let Err(e) = validate(&source(pass, lp, &s)) {
                         panic!("{pass:?} with {lp:?} over {s:?}:\n{e}");
@@ -222,26 +243,33 @@ mod tests {
         }
     }
 
-    #[test]
-    fn the_prelude_lays_world_info_out_at_the_rust_offsets() {
-        let module = parse(&prelude(&whole()));
+    /// Checks that the prelude lays `T` out at the Rust offsets and size.
+    fn assert_rust_layout<T: WgslStruct>(module: &naga::Module) {
         let (members, span) = module
             .types
             .iter()
             .find_map(|(_, t)| match &t.inner {
-                naga::TypeInner::Struct { members, span } if t.name.as_deref() == Some(WorldInfo::NAME) => {
+                naga::TypeInner::Struct { members, span } if t.name.as_deref() == Some(T::NAME) => {
                     Some((members, *span))
                 }
                 _ => None,
             })
-            .expect("the prelude declares WorldInfo");
+            .unwrap_or_else(|| panic!("the prelude declares {}", T::NAME));
         let wgsl: Vec<(&str, usize)> = members
             .iter()
             .map(|m| (m.name.as_deref().unwrap_or_default(), m.offset as usize))
             .collect();
-        let rust: Vec<(&str, usize)> = WorldInfo::MEMBERS.iter().map(|m| (m.name, m.offset)).collect();
-        assert_eq!(wgsl, rust);
-        assert_eq!(span as usize, size_of::<WorldInfo>());
+        let rust: Vec<(&str, usize)> = T::MEMBERS.iter().map(|m| (m.name, m.offset)).collect();
+        assert_eq!(wgsl, rust, "{}", T::NAME);
+        assert_eq!(span as usize, size_of::<T>(), "{}", T::NAME);
+    }
+
+    #[test]
+    fn the_prelude_lays_its_uniforms_out_at_the_rust_offsets() {
+        let module = parse(&prelude(&whole()));
+        assert_rust_layout::<WorldInfo>(&module);
+        assert_rust_layout::<FrameInfo>(&module);
+        assert_rust_layout::<LightInfo>(&module);
     }
 
     #[test]

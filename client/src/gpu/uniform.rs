@@ -22,6 +22,18 @@ impl WgslType for [u32; 3] {
     const WGSL: &'static str = "vec3<u32>";
 }
 
+impl WgslType for [i32; 3] {
+    const WGSL: &'static str = "vec3<i32>";
+}
+
+impl WgslType for f32 {
+    const WGSL: &'static str = "f32";
+}
+
+impl WgslType for [f32; 3] {
+    const WGSL: &'static str = "vec3<f32>";
+}
+
 /// One field of a [`WgslStruct`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Member {
@@ -104,3 +116,56 @@ wgsl_struct! {
 
 // Two 16-byte rows: a vec3 and a scalar each.
 const _: () = assert!(size_of::<WorldInfo>() == 32);
+
+wgsl_struct! {
+    /// What a lit pass renders, `frame` (group 1, binding 0 of `path_trace`): the camera,
+    /// the image size and which sample to add. The camera's rays follow the contract
+    /// (docs/CAMERA.md): `dir = forward + sx·right + sy·up` with `right` and `up` already
+    /// scaled by `a·W/H` and `a`.
+    pub struct FrameInfo {
+        /// Camera position, integer part (floor).
+        pub cam_int: [i32; 3],
+        /// Image width in pixels.
+        pub width: u32,
+        /// Camera position, fractional part in [0, 1).
+        pub cam_frac: [f32; 3],
+        /// Image height in pixels.
+        pub height: u32,
+        /// View direction.
+        pub forward: [f32; 3],
+        /// The run's seed.
+        pub seed: u32,
+        /// Image right, scaled by a·W/H.
+        pub right: [f32; 3],
+        /// Number of the sample this dispatch adds.
+        pub sample: u32,
+        /// Image up, scaled by a.
+        pub up: [f32; 3],
+        /// Padding to the 16-byte multiple of uniform structs; 0.
+        pub pad: u32,
+    }
+}
+
+wgsl_struct! {
+    /// The light, `light` (group 1, binding 1 of `path_trace`; docs/RENDERING.md, "Light").
+    pub struct LightInfo {
+        /// Uniform sky: its radiance. Physical sky: the irradiance of the sun lighting it.
+        pub sky: [f32; 3],
+        /// 1 for the physical sky.
+        pub sky_physical: u32,
+        /// Unit vector toward the sun (the sun lighting the physical sky when it is off).
+        pub sun_dir: [f32; 3],
+        /// 1 when the sun shines (its disc and its samples).
+        pub sun_on: u32,
+        /// The disc's radiance.
+        pub sun_disc: f32,
+        /// The weight of one disc sample: radiance times solid angle.
+        pub sun_weight: f32,
+        /// 1 − cos of the disc's angular radius.
+        pub sun_omc: f32,
+        /// Scattered rays after the camera ray.
+        pub bounces: u32,
+    }
+}
+
+const _: () = assert!(size_of::<FrameInfo>() == 80 && size_of::<LightInfo>() == 48);

@@ -68,6 +68,8 @@ pub struct GpuWorld {
     bind_group: wgpu::BindGroup,
     split: Split,
     max_storage_buffers: u32,
+    /// Counts the syncs that changed anything on the device.
+    generation: u64,
 }
 
 impl std::fmt::Debug for GpuWorld {
@@ -131,6 +133,7 @@ impl GpuWorld {
             layout,
             split,
             max_storage_buffers: gpu.limits.max_storage_buffers_per_shader_stage,
+            generation: 0,
         };
         w.check_bindings(&split)?;
         w.sync(world)?;
@@ -186,6 +189,9 @@ impl GpuWorld {
             chunks: size.chunks(),
             max_steps: self.world_info.max_steps,
         };
+        if up.pages > 0 || up.reallocated || info != self.world_info {
+            self.generation += 1;
+        }
         if info != self.world_info || up.reallocated {
             self.world_info = info;
             self.queue.write_buffer(&self.info, 0, bytemuck::bytes_of(&info));
@@ -194,6 +200,12 @@ impl GpuWorld {
             self.rebind();
         }
         Ok(up)
+    }
+
+    /// How many syncs changed the device's copy: renderers that accumulate over frames
+    /// restart when it moves.
+    pub fn generation(&self) -> u64 {
+        self.generation
     }
 
     /// Uploads a dense decode of `world` (16-bit material ids, x fastest) for the `grid`

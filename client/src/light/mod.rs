@@ -1,0 +1,228 @@
+//! The light model of the lit modes (`pathtrace`; docs/RENDERING.md, "Light").
+//!
+//! One model, two implementations that must agree: the GPU path tracer
+//! (`shaders/light.wgsl`, driven by [`crate::gpu::PathTracer`]) and the CPU path tracer
+//! ([`cpu::CpuPathTracer`]), which walks the CPU traversal and serves as a second method in
+//! the tests. This module holds what both share: the sky and sun settings and their CLI
+//! syntax ([`Sky`], [`Sun`], [`Light`]), the random-number stream ([`rng`]) and the
+//! physical sky ([`sky`]); [`hdr`] writes radiance images and tone-maps them.
+//!
+//! - Materials: `diffuse` is Lambertian; `emissive` adds `albedo · emission` and reflects
+//!   as diffuse; `metal` is GGX with α = roughness and Schlick's Fresnel with F0 = albedo;
+//!   `mirror` reflects perfectly, tinted by albedo.
+//! - The sun is a disc of angular radius [`SUN_ANGULAR_RADIUS_DEG`] whose radiance makes its
+//!   irradiance on a surface facing it exactly `E`. Camera rays and rays leaving a mirror
+//!   see the disc; diffuse and metal surfaces receive the sun only through an explicit
+//!   sample of the disc (next-event estimation), so it is never counted twice.
+//! - `bounces` counts the scattered rays after the camera ray; the sun is sampled at a hit
+//!   only when one more scattered ray is still allowed.
+
+pub mod cpu;
+pub mod hdr;
+pub mod rng;
+pub mod scatter;
+pub mod sky;
+
+use std::f64::consts::PI;
+
+/// Angular radius of the sun disc, in degrees.
+pub const SUN_ANGULAR_RADIUS_DEG: f64 = 0.27;
+/// Most scattered rays a path may have (`--bounces`).
+pub const MAX_BOUNCES: u32 = 64;
+/// Bounces of `pathtrace` when none are given.
+pub const DEFAULT_PATHTRACE_BOUNCES: u32 = 8;
+/// How far a scattered or shadow ray starts off the surface, along its normal, in voxels.
+pub const SURFACE_OFFSET: f64 = 0.01;
+
+/// The sky: the radiance of every ray that leaves the world's box.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Sky {
+    /// The single-scattering atmosphere of [`sky`], lit by the sun (or by the default sun's
+    /// direction and strength when the sun is off).
+    Physical,
+    /// The same linear RGB radiance from every direction, below the horizon included.
+    Uniform([f32; 3]),
+}
+
+impl Sky {
+    /// Parses `physical`, `uniform:L` or `uniform:R,G,B` (finite, non-negative radiance).
+    ///
+    /// ```
+    /// use naadf_client::light::Sky;
+    /// assert_eq!(Sky::parse("uniform:2").unwrap(), Sky::Uniform([2.0; 3]));
+    /// assert_eq!(Sky::parse("uniform:1,0.5,0").unwrap(), Sky::Uniform([1.0, 0.5, 0.0]));
+    /// assert!(Sky::parse("uniform:-1").is_err());
+    /// assert!(Sky::parse("cloudy").is_err());
+    /// ```
+    pub fn parse(s: &str) -> Result<Sky, String> {
+        if s == "physical" {
+            return Ok(Sky::Physical);
+        }
+        let Some(values) = s.strip_prefix("uniform:") else {
+            return Err(format!(
+                "sky '{s}': expected 'physical', 'uniform:L' or 'uniform:R,G,B'"
+            ));
+        };
+        let v = parse_numbers(values).map_err(|e| format!("sky '{s}': {e}"))?;
+        let rgb = match v[..] {
+            [l] => [l; 3],
+            [r, g, b] => [r, g, b],
+            _ => return Err(format!("sky '{s}': give one radiance or three (R,G,B)")),
+        };
+        if rgb.iter().any(|c| !(0.0..=65504.0).contains(c)) {
+            return Err(format!("sky '{s}': radiance must lie in 0..=65504"));
+        }
+        Ok(Sky::Uniform(rgb.map(|c| c as f32)))
+    }
+}
+
+/// A directional light with a small disc.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sun {
+    /// Azimuth in degrees: 0 = from +Z, 90 = from +X.
+    pub azimuth: f64,
+    /// Elevation above the horizon in degrees.
+    pub elevation: f64,
+    /// Irradiance on a surface facing the sun.
+    pub irradiance: f64,
+}
+
+/// The sun of `--sky physical` when none is given: azimuth 300°, elevation 30°, E = 3.
+pub const DEFAULT_SUN: Sun = Sun {
+    azimuth: 300.0,
+    elevation: 30.0,
+    irradiance: 3.0,
+};
+
+impl Sun {
+    /// Parses `off` (`None`) or `AZ,EL,E` (degrees, degrees, irradiance).
+    ///
+    /// ```
+    /// use naadf_client::light::Sun;
+    /// assert_eq!(Sun::parse("off").unwrap(), None);
+    /// let sun = Sun::parse("90,30,2").unwrap().unwrap();
+    /// assert!((sun.direction()[0] - 30f64.to_radians().cos()).abs() < 1e-12);
+    /// assert!(Sun::parse("0,95,1").is_err());
+    /// assert!(Sun::parse("0,30").is_err());
+    /// ```
+    pub fn parse(s: &str) -> Result<Option<Sun>, String> {
+        if s == "off" {
+            return Ok(None);
+        }
+        let v = parse_numbers(s).map_err(|e| format!("sun '{s}': {e}"))?;
+        let [azimuth, elevation, irradiance] = v[..] else {
+            return Err(format!(
+                "sun '{s}': expected 'off' or 'AZ,EL,E' (degrees, degrees, irradiance)"
+            ));
+        };
+        if !(-90.0..=90.0).contains(&elevation) {
+            return Err(format!("sun '{s}': elevation must lie in -90..=90 degrees"));
+        }
+        if !(0.0..=1e6).contains(&irradiance) {
+            return Err(format!("sun '{s}': irradiance must lie in 0..=1e6"));
+        }
+        Ok(Some(Sun {
+            azimuth,
+            elevation,
+            irradiance,
+        }))
+    }
+
+    /// Unit vector toward the sun.
+    pub fn direction(&self) -> [f64; 3] {
+        let (az, el) = (self.azimuth.to_radians(), self.elevation.to_radians());
+        [az.sin() * el.cos(), el.sin(), az.cos() * el.cos()]
+    }
+
+    /// `1 − cos r` of the disc's angular radius r, computed without cancellation.
+    pub fn one_minus_cos() -> f64 {
+        2.0 * (SUN_ANGULAR_RADIUS_DEG.to_radians() / 2.0).sin().powi(2)
+    }
+
+    /// The disc's radiance, `E / (π sin² r)`: a surface facing the sun receives exactly E.
+    pub fn disc_radiance(&self) -> f64 {
+        self.irradiance / (PI * SUN_ANGULAR_RADIUS_DEG.to_radians().sin().powi(2))
+    }
+
+    /// The disc's radiance times its solid angle `2π(1 − cos r)`: the weight of one sample
+    /// drawn uniformly from the disc.
+    pub fn sample_weight(&self) -> f64 {
+        self.disc_radiance() * 2.0 * PI * Self::one_minus_cos()
+    }
+}
+
+/// Everything that lights a frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Light {
+    /// The sky.
+    pub sky: Sky,
+    /// The sun, if any.
+    pub sun: Option<Sun>,
+    /// Scattered rays after the camera ray (0..=[`MAX_BOUNCES`]).
+    pub bounces: u32,
+}
+
+impl Light {
+    /// The light of `--sky`, `--sun` and `--bounces`. Without `--sun`, a uniform sky has no
+    /// sun and the physical sky has [`DEFAULT_SUN`].
+    pub fn new(sky: Sky, sun: Option<Option<Sun>>, bounces: u32) -> Result<Light, String> {
+        if bounces > MAX_BOUNCES {
+            return Err(format!("{bounces} bounces: at most {MAX_BOUNCES}"));
+        }
+        let sun = sun.unwrap_or(match sky {
+            Sky::Physical => Some(DEFAULT_SUN),
+            Sky::Uniform(_) => None,
+        });
+        Ok(Light { sky, sun, bounces })
+    }
+
+    /// The sun that lights the physical sky: the sun, or [`DEFAULT_SUN`] when it is off.
+    pub fn sky_sun(&self) -> Sun {
+        self.sun.unwrap_or(DEFAULT_SUN)
+    }
+}
+
+fn parse_numbers(s: &str) -> Result<Vec<f64>, String> {
+    s.split(',')
+        .map(|v| {
+            let x: f64 = v.trim().parse().map_err(|e| format!("'{v}': {e}"))?;
+            if x.is_finite() {
+                Ok(x)
+            } else {
+                Err(format!("'{v}' is not finite"))
+            }
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_disc_gives_its_irradiance_on_a_facing_surface() {
+        let sun = Sun {
+            azimuth: 0.0,
+            elevation: 90.0,
+            irradiance: 3.0,
+        };
+        // ∫ cosθ dω over the cone is π sin² r.
+        let r = SUN_ANGULAR_RADIUS_DEG.to_radians();
+        assert!((sun.disc_radiance() * PI * r.sin().powi(2) - 3.0).abs() < 1e-12);
+        // The mean cosine of a uniform cone sample is 1 − (1 − cos r)/2.
+        let mean_cos = 1.0 - Sun::one_minus_cos() / 2.0;
+        assert!((sun.sample_weight() * mean_cos - 3.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn light_defaults_follow_the_sky() {
+        assert_eq!(Light::new(Sky::Physical, None, 8).unwrap().sun, Some(DEFAULT_SUN));
+        assert_eq!(Light::new(Sky::Uniform([1.0; 3]), None, 8).unwrap().sun, None);
+        assert!(Light::new(Sky::Physical, None, MAX_BOUNCES + 1).is_err());
+        let d = DEFAULT_SUN.direction();
+        assert!(
+            (d[1] - 0.5).abs() < 1e-12 && d[0] < 0.0,
+            "300° is from −X, 30° up: {d:?}"
+        );
+    }
+}

@@ -1,0 +1,313 @@
+// The light model of the lit modes (docs/RENDERING.md, "Light"): random streams, the
+// physical sky, the sun, BRDF sampling and one path's radiance. The GPU twin of
+// client/src/light/ (rng.rs, sky.rs, scatter.rs, cpu.rs), written operation by operation
+// like it so that the two path tracers agree up to rounding.
+//
+// The pass binds `light: LightInfo` (generated in the prelude from the Rust `LightInfo`).
+
+const PI: f32 = 3.14159265358979;
+// Offset of scattered and shadow ray origins along the surface normal, in voxels.
+const PATH_OFFSET: f32 = 0.01;
+// The smallest GGX α a metal is traced with (scatter.rs: MIN_ALPHA).
+const MIN_ALPHA: f32 = 1e-3;
+
+// ---- Random streams (rng.rs) ----
+
+fn pcg_hash(v: u32) -> u32 {
+    let state = v * 747796405u + 2891336453u;
+    let word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+    return (word >> 22u) ^ word;
+}
+
+// The stream of sample `sample` of pixel `pixel` under `seed`.
+fn rng_new(seed: u32, pixel: u32, sample: u32) -> u32 {
+    return pcg_hash(seed ^ pcg_hash(pixel ^ pcg_hash(sample)));
+}
+
+// A uniform number in [0, 1) with 24 random bits.
+fn rng_next(state: ptr<function, u32>) -> f32 {
+    *state = pcg_hash(*state);
+    return f32(*state >> 8u) * (1.0 / 16777216.0);
+}
+
+// ---- The physical sky (sky.rs) ----
+
+const PLANET_RADIUS: f32 = 6360000.0;
+const ATMOSPHERE_HEIGHT: f32 = 60000.0;
+const EYE_HEIGHT: f32 = 100.0;
+const VIEW_STEPS: u32 = 24u;
+const LIGHT_STEPS: u32 = 6u;
+const RAYLEIGH: vec3<f32> = vec3<f32>(5.802e-6, 13.558e-6, 33.1e-6);
+const RAYLEIGH_SCALE: f32 = 8000.0;
+const MIE_SCATTER: f32 = 3.996e-6;
+const MIE_EXTINCTION: f32 = 4.44e-6;
+const MIE_SCALE: f32 = 1200.0;
+const MIE_G: f32 = 0.8;
+const OZONE: vec3<f32> = vec3<f32>(0.650e-6, 1.881e-6, 0.085e-6);
+const OZONE_CENTRE: f32 = 25000.0;
+const OZONE_HALF_WIDTH: f32 = 15000.0;
+
+// Distance from height `h` along zenith cosine `mu` to the sphere at height `top`; a
+// negative value when it is not reached going forward.
+fn sphere_distance(h: f32, mu: f32, top: f32) -> f32 {
+    let r = PLANET_RADIUS + h;
+    let disc = (top - h) * (2.0 * PLANET_RADIUS + top + h) + r * r * mu * mu;
+    if disc < 0.0 {
+        return -1.0;
+    }
+    let s = sqrt(disc);
+    let far = -r * mu + s;
+    if far < 0.0 {
+        return -1.0;
+    }
+    let near = -r * mu - s;
+    return select(far, near, near > 0.0);
+}
+
+struct Medium {
+    sigma: vec3<f32>,
+    rayleigh: f32,
+    mie: f32,
+}
+
+fn medium(h: f32) -> Medium {
+    let rayleigh = exp(-h / RAYLEIGH_SCALE);
+    let mie = exp(-h / MIE_SCALE);
+    let ozone = max(1.0 - abs(h - OZONE_CENTRE) / OZONE_HALF_WIDTH, 0.0);
+    return Medium(RAYLEIGH * rayleigh + MIE_EXTINCTION * mie + OZONE * ozone, rayleigh, mie);
+}
+
+fn sun_transmittance(h: f32, mu: f32) -> vec3<f32> {
+    if mu < 0.0 && sphere_distance(h, mu, 0.0) >= 0.0 {
+        return vec3<f32>(0.0);
+    }
+    let length = max(sphere_distance(h, mu, ATMOSPHERE_HEIGHT), 0.0);
+    let dt = length / f32(LIGHT_STEPS);
+    let r = PLANET_RADIUS + h;
+    var depth = vec3<f32>(0.0);
+    for (var i = 0u; i < LIGHT_STEPS; i++) {
+        let t = (f32(i) + 0.5) * dt;
+        let hi = sqrt(t * t + 2.0 * r * mu * t + r * r) - PLANET_RADIUS;
+        depth += medium(hi).sigma * dt;
+    }
+    return exp(-depth);
+}
+
+// Sky radiance along unit `dir` for unit sun direction `sun`, per unit of irradiance.
+fn sky_physical(dir: vec3<f32>, sun: vec3<f32>) -> vec3<f32> {
+    let mu = dir.y;
+    let nu = dot(dir, sun);
+    let h0 = EYE_HEIGHT;
+    let r0 = PLANET_RADIUS + h0;
+    var length = sphere_distance(h0, mu, 0.0);
+    if !(mu < 0.0 && length >= 0.0) {
+        length = max(sphere_distance(h0, mu, ATMOSPHERE_HEIGHT), 0.0);
+    }
+    let dt = length / f32(VIEW_STEPS);
+    let phase_r = 3.0 / (16.0 * PI) * (1.0 + nu * nu);
+    let g2 = MIE_G * MIE_G;
+    let phase_m = (1.0 - g2) / (4.0 * PI * pow(1.0 + g2 - 2.0 * MIE_G * nu, 1.5));
+    var depth = vec3<f32>(0.0);
+    var inscatter = vec3<f32>(0.0);
+    for (var i = 0u; i < VIEW_STEPS; i++) {
+        let t = (f32(i) + 0.5) * dt;
+        let r = sqrt(t * t + 2.0 * r0 * mu * t + r0 * r0);
+        let h = r - PLANET_RADIUS;
+        let mu_sun = (r0 * sun.y + t * nu) / r;
+        let m = medium(h);
+        let to_sun = sun_transmittance(h, mu_sun);
+        let view = exp(-(depth + 0.5 * m.sigma * dt));
+        let scatter = RAYLEIGH * m.rayleigh * phase_r + MIE_SCATTER * m.mie * phase_m;
+        inscatter += view * to_sun * scatter * dt;
+        depth += m.sigma * dt;
+    }
+    return inscatter;
+}
+
+// The sky along unit `d`; with `disc`, the sun's disc too.
+fn sky_radiance(d: vec3<f32>, disc: bool) -> vec3<f32> {
+    var l = light.sky;
+    if light.sky_physical != 0u {
+        l = sky_physical(d, light.sun_dir) * light.sky;
+    }
+    if disc && light.sun_on != 0u && 1.0 - dot(d, light.sun_dir) <= light.sun_omc {
+        l += vec3<f32>(light.sun_disc);
+    }
+    return l;
+}
+
+// ---- Scattering (scatter.rs) ----
+
+struct Basis {
+    t: vec3<f32>,
+    b: vec3<f32>,
+}
+
+fn basis(n: vec3<f32>) -> Basis {
+    let sign = select(-1.0, 1.0, n.z >= 0.0);
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    return Basis(vec3<f32>(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x), vec3<f32>(b, sign + n.y * n.y * a, -n.y));
+}
+
+fn sample_cosine(n: vec3<f32>, u: vec2<f32>) -> vec3<f32> {
+    let f = basis(n);
+    let r = sqrt(u.x);
+    let phi = 2.0 * PI * u.y;
+    return normalize(f.t * (r * cos(phi)) + f.b * (r * sin(phi)) + n * sqrt(max(1.0 - u.x, 0.0)));
+}
+
+fn sample_cone(axis: vec3<f32>, omc: f32, u: vec2<f32>) -> vec3<f32> {
+    let f = basis(axis);
+    let x = u.x * omc;
+    let c = 1.0 - x;
+    let s = sqrt(max(x * (2.0 - x), 0.0));
+    let phi = 2.0 * PI * u.y;
+    return normalize(f.t * (s * cos(phi)) + f.b * (s * sin(phi)) + axis * c);
+}
+
+fn schlick(f0: vec3<f32>, c: f32) -> vec3<f32> {
+    let k = 1.0 - clamp(c, 0.0, 1.0);
+    let k2 = k * k;
+    return f0 + (vec3<f32>(1.0) - f0) * (k2 * k2 * k);
+}
+
+fn smith_lambda(alpha: f32, c: f32) -> f32 {
+    let c2 = max(c * c, 1e-12);
+    let tan2 = max(1.0 - c2, 0.0) / c2;
+    return 0.5 * (-1.0 + sqrt(1.0 + alpha * alpha * tan2));
+}
+
+fn ggx_d(alpha: f32, c: f32) -> f32 {
+    let a2 = alpha * alpha;
+    let k = c * c * (a2 - 1.0) + 1.0;
+    return a2 / (PI * k * k);
+}
+
+fn ggx(n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>, alpha: f32, f0: vec3<f32>) -> vec3<f32> {
+    let co = dot(n, wo);
+    let ci = dot(n, wi);
+    if co <= 0.0 || ci <= 0.0 {
+        return vec3<f32>(0.0);
+    }
+    let h = normalize(wo + wi);
+    let g2 = 1.0 / (1.0 + smith_lambda(alpha, co) + smith_lambda(alpha, ci));
+    return schlick(f0, dot(wo, h)) * (ggx_d(alpha, dot(n, h)) * g2 / (4.0 * co * ci));
+}
+
+struct Scattered {
+    dir: vec3<f32>,
+    weight: vec3<f32>,
+}
+
+fn ggx_sample(n: vec3<f32>, wo: vec3<f32>, alpha: f32, f0: vec3<f32>, u: vec2<f32>) -> Scattered {
+    let f = basis(n);
+    let v = vec3<f32>(dot(wo, f.t), dot(wo, f.b), dot(wo, n));
+    let vh = normalize(vec3<f32>(alpha * v.x, alpha * v.y, v.z));
+    let lensq = vh.x * vh.x + vh.y * vh.y;
+    var t1 = vec3<f32>(1.0, 0.0, 0.0);
+    if lensq > 0.0 {
+        t1 = vec3<f32>(-vh.y, vh.x, 0.0) / sqrt(lensq);
+    }
+    let t2 = cross(vh, t1);
+    let r = sqrt(u.x);
+    let phi = 2.0 * PI * u.y;
+    let p1 = r * cos(phi);
+    let s = 0.5 * (1.0 + vh.z);
+    let p2 = (1.0 - s) * sqrt(max(1.0 - p1 * p1, 0.0)) + s * r * sin(phi);
+    let nh = t1 * p1 + t2 * p2 + vh * sqrt(max(1.0 - p1 * p1 - p2 * p2, 0.0));
+    let m = normalize(vec3<f32>(alpha * nh.x, alpha * nh.y, max(nh.z, 0.0)));
+    let lwi = m * (2.0 * dot(v, m)) - v;
+    let wi = normalize(f.t * lwi.x + f.b * lwi.y + n * lwi.z);
+    let lo = smith_lambda(alpha, v.z);
+    let li = smith_lambda(alpha, lwi.z);
+    return Scattered(wi, schlick(f0, dot(v, m)) * ((1.0 + lo) / (1.0 + lo + li)));
+}
+
+// ---- Paths (cpu.rs) ----
+
+// Whether a shadow ray meets anything before leaving the world (a ray out of cells counts
+// as blocked).
+fn blocked(r: Ray, p: vec3<f32>, dir: vec3<f32>) -> bool {
+    let h = trace(ray_at(r, p, dir));
+    return h.hit || h.exhausted;
+}
+
+// One step of a path: what it adds and whether it goes on.
+struct PathState {
+    r: Ray,
+    radiance: vec3<f32>,
+    throughput: vec3<f32>,
+    sees_disc: bool,
+    alive: bool,
+}
+
+// Follows the path in `s` to its next surface: adds the light found there and, when
+// `scatter`, picks the next ray (or ends the path).
+fn path_step(s: ptr<function, PathState>, scatter: bool, rng: ptr<function, u32>) {
+    let r = (*s).r;
+    let h = trace(r);
+    let d = r.d / r.len;
+    (*s).alive = false;
+    if h.exhausted {
+        return;
+    }
+    if !h.hit {
+        (*s).radiance += (*s).throughput * sky_radiance(d, (*s).sees_disc);
+        return;
+    }
+    if h.axis == NO_AXIS {
+        return;
+    }
+    // Before any other trace: world_normal reads the last trace's entity rotation.
+    let n = world_normal(h);
+    let m = material(h.material);
+    if m.kind == KIND_EMISSIVE {
+        (*s).radiance += (*s).throughput * m.albedo * m.emission;
+    }
+    if !scatter {
+        return;
+    }
+    let p = ray_local(r, h.t) + n * PATH_OFFSET;
+    var next: Scattered;
+    if m.kind == KIND_MIRROR {
+        (*s).sees_disc = true;
+        next = Scattered(d - n * (2.0 * dot(d, n)), m.albedo);
+    } else {
+        let wo = -d;
+        let alpha = max(m.roughness, MIN_ALPHA);
+        if light.sun_on != 0u {
+            let u = vec2<f32>(rng_next(rng), rng_next(rng));
+            let wi = sample_cone(light.sun_dir, light.sun_omc, u);
+            let c = dot(n, wi);
+            if c > 0.0 && !blocked(r, p, wi) {
+                var f = m.albedo / PI;
+                if m.kind == KIND_METAL {
+                    f = ggx(n, wo, wi, alpha, m.albedo);
+                }
+                (*s).radiance += (*s).throughput * f * (c * light.sun_weight);
+            }
+        }
+        let u = vec2<f32>(rng_next(rng), rng_next(rng));
+        (*s).sees_disc = false;
+        if m.kind == KIND_METAL {
+            next = ggx_sample(n, wo, alpha, m.albedo, u);
+        } else {
+            next = Scattered(sample_cosine(n, u), m.albedo);
+        }
+    }
+    if dot(next.dir, n) > 0.0 {
+        (*s).throughput *= next.weight;
+        (*s).r = ray_at(r, p, next.dir);
+        (*s).alive = true;
+    }
+}
+
+// The radiance arriving along the camera ray `primary`, drawing from `rng`.
+fn path_radiance(primary: Ray, rng: ptr<function, u32>) -> vec3<f32> {
+    var s = PathState(primary, vec3<f32>(0.0), vec3<f32>(1.0), true, true);
+    for (var bounce = 0u; bounce <= light.bounces && s.alive; bounce++) {
+        path_step(&s, bounce < light.bounces, rng);
+    }
+    return s.radiance;
+}
