@@ -505,6 +505,119 @@ fn render_writes_the_image_and_first_hit_buffer() {
     );
 }
 
+/// Reads a PFM file: (width, height, RGB rows from the top).
+fn read_pfm(path: &str) -> (u32, u32, Vec<[f32; 3]>) {
+    let bytes = std::fs::read(path).unwrap();
+    let mut lines = bytes.splitn(4, |&b| b == b'\n');
+    assert_eq!(lines.next(), Some(&b"PF"[..]));
+    let dims = String::from_utf8(lines.next().unwrap().to_vec()).unwrap();
+    let (w, h) = dims.split_once(' ').unwrap();
+    let (w, h): (u32, u32) = (w.parse().unwrap(), h.parse().unwrap());
+    assert_eq!(lines.next(), Some(&b"-1.0"[..]), "little-endian scale");
+    let data = lines.next().unwrap();
+    assert_eq!(data.len(), 12 * (w * h) as usize);
+    let px: Vec<[f32; 3]> = data
+        .chunks_exact(12)
+        .map(|c| std::array::from_fn(|i| f32::from_le_bytes(c[4 * i..4 * i + 4].try_into().unwrap())))
+        .collect();
+    // Rows are stored from the bottom up.
+    let rows: Vec<Vec<[f32; 3]>> = px.chunks(w as usize).rev().map(<[_]>::to_vec).collect();
+    (w, h, rows.concat())
+}
+
+#[test]
+fn render_pathtrace_writes_radiance_and_refuses_bad_light() {
+    let dir = tempfile::tempdir().unwrap();
+    let world = p(dir.path(), "t.naadf");
+    ok(&["generate", "--preset", "test", "-o", &world], None);
+    if !have_gpu(&world, dir.path()) {
+        return;
+    }
+    let camera = r#"{"pos":[-10.5,70.25,-12.5],"yaw":45,"pitch":-35,"fov_y":60}"#;
+    let (png, hdr) = (p(dir.path(), "pt.png"), p(dir.path(), "pt.pfm"));
+    let run = |extra: &[&str]| {
+        let mut args = vec![
+            "render",
+            "--world",
+            &world,
+            "--camera",
+            camera,
+            "--size",
+            "24x16",
+            "--mode",
+            "pathtrace",
+            "--spp",
+            "4",
+            "-o",
+            &png,
+            "--hdr",
+            &hdr,
+            "--json",
+        ];
+        args.extend_from_slice(extra);
+        let v: serde_json::Value = serde_json::from_str(&ok(&args, None)).unwrap();
+        assert_eq!((v["mode"].as_str(), v["spp"].as_u64()), (Some("pathtrace"), Some(4)));
+        (read_pfm(&hdr), std::fs::read(&png).unwrap())
+    };
+    let ((w, h, radiance), first_png) = run(&[]);
+    assert_eq!((w, h), (24, 16));
+    assert!(radiance.iter().flatten().all(|c| c.is_finite() && *c >= 0.0));
+    assert!(radiance.iter().any(|c| c[2] > 0.0), "the physical sky lights the frame");
+    // The PNG is the tone-mapped radiance: brighter radiance, brighter pixel.
+    let img = image::load_from_memory(&first_png).unwrap().to_rgba8();
+    let (dark, bright) = (0..radiance.len())
+        .map(|i| (radiance[i].iter().sum::<f32>(), i))
+        .fold(((f32::MAX, 0), (0.0f32, 0)), |(lo, hi), (l, i)| {
+            (if l < lo.0 { (l, i) } else { lo }, if l > hi.0 { (l, i) } else { hi })
+        });
+    let luma = |i: usize| {
+        img.as_raw()[4 * i..4 * i + 3]
+            .iter()
+            .map(|&b| u32::from(b))
+            .sum::<u32>()
+    };
+    assert!(luma(bright.1) > luma(dark.1));
+    // The same seed gives the same bytes; another seed does not.
+    assert_eq!(run(&[]).1, first_png);
+    assert_ne!(run(&["--seed", "9"]).0.2, radiance);
+    // A uniform sky with no bounces is seen as it is wherever the camera sees no world.
+    let ((_, _, flat), _) = run(&["--sky", "uniform:0.25,0.5,1", "--bounces", "0"]);
+    assert!(flat.contains(&[0.25, 0.5, 1.0]) && flat.contains(&[0.0; 3]));
+
+    for (args, why) in [
+        (&["--sky", "uniform:-1"][..], "radiance must lie"),
+        (&["--sky", "cloudy"], "expected 'physical'"),
+        (&["--sun", "0,30"], "expected 'off' or 'AZ,EL,E'"),
+        (&["--sun", "0,91,1"], "elevation"),
+        (&["--spp", "0"], "0 is not in 1.."),
+        (&["--frames", "2"], "--frames does not apply to pathtrace"),
+        (&["--exposure", "0"], "--exposure 0: must be a positive"),
+        (&["--bounces", "65"], "65 is not in 0..=64"),
+        (&["--size", "20000x10"], "frame size"),
+    ] {
+        let mut all = vec![
+            "render",
+            "--world",
+            &world,
+            "--camera",
+            camera,
+            "--mode",
+            "pathtrace",
+            "-o",
+            &png,
+        ];
+        all.extend_from_slice(args);
+        fails(&all, None, why);
+    }
+    fails(
+        &[
+            "render", "--world", &world, "--camera", camera, "--sky", "physical", "-o", &png,
+        ],
+        None,
+        "--sky applies to pathtrace only",
+    );
+}
+
 #[test]
 fn bench_gpu_measures_every_variant_against_the_cpu() {
     let dir = tempfile::tempdir().unwrap();

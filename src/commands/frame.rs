@@ -3,7 +3,7 @@
 
 use super::print_json;
 use super::remote::{ServerArgs, block_on};
-use super::render::ViewArgs;
+use super::render::{ViewArgs, parse_mode};
 use anyhow::{Context, Result};
 use naadf_client::FrameSpec;
 use std::path::PathBuf;
@@ -16,6 +16,9 @@ pub struct Args {
     server: ServerArgs,
     #[command(flatten)]
     view: ViewArgs,
+    /// What to show (a mode of the render pass, as render nodes serve them).
+    #[arg(long, default_value = "albedo", value_parser = parse_mode)]
+    mode: naadf_client::gpu::Mode,
     /// The oldest world version the frame may show.
     #[arg(long, default_value_t = 0)]
     min_version: u64,
@@ -44,7 +47,7 @@ pub fn run(a: Args) -> Result<()> {
     let spec = FrameSpec {
         min_version: a.min_version,
         timeout: (a.timeout_ms != 0).then(|| Duration::from_millis(u64::from(a.timeout_ms))),
-        ..a.view.spec()?
+        ..a.view.spec(a.mode)?
     };
     let reply = block_on(async { Ok(a.server.connect().await?.frame(&spec).await?) })?;
     let image = &reply.image;

@@ -1,11 +1,14 @@
 //! `naadf render (--world FILE | --server URL) --camera JSON --size WxH --mode M
-//! [--frames N] -o OUT.png [--gbuffer OUT.bin]`
+//! [--frames N] -o OUT.png [--gbuffer OUT.bin]`, and for `--mode pathtrace`
+//! `[--spp N] [--seed S] [--bounces B] [--sky SKY] [--sun SUN] [--exposure X] [--hdr OUT.pfm]`.
 
 use super::remote::{ServerArgs, block_on, quiescent_world};
-use super::{load_world, print_json, seconds};
-use anyhow::{Context, Result};
+use super::{load_world, print_json, progress, seconds};
+use anyhow::{Context, Result, bail};
 use naadf_client::FrameSpec;
-use naadf_client::gpu::{Headless, Mode, write_gbuffer};
+use naadf_client::gpu::{Frame, Headless, Mode, write_gbuffer};
+use naadf_client::light::{DEFAULT_PATHTRACE_BOUNCES, Light, Sky, Sun};
+use naadf_world::World;
 use naadf_world::camera::Camera;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -21,9 +24,16 @@ pub struct Args {
     server: ServerArgs,
     #[command(flatten)]
     view: ViewArgs,
-    /// Frames to render (all identical: the modes are deterministic); the last is written.
-    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
-    frames: u32,
+    /// What to show: albedo, material, normal, steps, or pathtrace (the light model,
+    /// path-traced).
+    #[arg(long, default_value = "albedo", value_parser = parse_render_mode)]
+    mode: RenderMode,
+    /// Frames to render (all identical in the deterministic modes); the last is written.
+    /// Not for pathtrace, which takes --spp.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    frames: Option<u32>,
+    #[command(flatten)]
+    light: LightArgs,
     /// PNG file to write.
     #[arg(short, long)]
     output: PathBuf,
@@ -38,7 +48,128 @@ pub struct Args {
     json: bool,
 }
 
-/// What a frame shows: camera, size and mode (`render`, `frame`).
+/// The options of the lit modes (docs/RENDERING.md, "Light").
+#[derive(clap::Args)]
+pub struct LightArgs {
+    /// Samples per pixel in total (pathtrace; default 64).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    spp: Option<u32>,
+    /// Seed of the random samples: the same seed, device and inputs give the same image.
+    #[arg(long)]
+    seed: Option<u32>,
+    /// Scattered rays after the camera ray (default 8 for pathtrace).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(0..=i64::from(naadf_client::light::MAX_BOUNCES)))]
+    bounces: Option<u32>,
+    /// The sky: `physical` (default) or `uniform:L` / `uniform:R,G,B` (linear radiance).
+    #[arg(long, value_parser = Sky::parse)]
+    sky: Option<Sky>,
+    /// The sun: `off` or `AZ,EL,E` (azimuth from +Z toward +X and elevation in degrees,
+    /// irradiance). Default: `300,30,3` under the physical sky, off under a uniform one.
+    #[arg(long, value_parser = parse_sun)]
+    sun: Option<SunArg>,
+    /// Exposure: the PNG holds sRGB(ACES(radiance · exposure)).
+    #[arg(long)]
+    exposure: Option<f32>,
+    /// Also write the linear radiance before exposure and tone mapping: PFM, or OpenEXR
+    /// for a name ending in `.exr`.
+    #[arg(long)]
+    hdr: Option<PathBuf>,
+}
+
+/// A parsed `--sun` (`off` is a value, so it is not an `Option` itself).
+#[derive(Clone, Copy, Debug)]
+pub struct SunArg(Option<Sun>);
+
+fn parse_sun(s: &str) -> Result<SunArg, String> {
+    Sun::parse(s).map(SunArg)
+}
+
+/// Samples per pixel of `pathtrace` when `--spp` is not given.
+pub const DEFAULT_SPP: u32 = 64;
+
+/// What `run` does, decided from the arguments before any work.
+enum Job {
+    /// Frames of the render pass.
+    Frame(Mode),
+    /// A path-traced frame.
+    Path(PathSettings),
+}
+
+/// How a path-traced frame is made: the light, the samples and the output.
+struct PathSettings {
+    light: Light,
+    spp: u32,
+    seed: u32,
+    exposure: f32,
+}
+
+impl LightArgs {
+    /// The options given, by name (for a mode that takes none).
+    fn given(&self) -> Vec<&'static str> {
+        let flags = [
+            ("--spp", self.spp.is_some()),
+            ("--seed", self.seed.is_some()),
+            ("--bounces", self.bounces.is_some()),
+            ("--sky", self.sky.is_some()),
+            ("--sun", self.sun.is_some()),
+            ("--exposure", self.exposure.is_some()),
+            ("--hdr", self.hdr.is_some()),
+        ];
+        flags.iter().filter(|f| f.1).map(|f| f.0).collect()
+    }
+
+    /// The settings of a path-traced frame, with the defaults of docs/RENDERING.md.
+    fn path_settings(&self) -> Result<PathSettings> {
+        let exposure = self.exposure.unwrap_or(1.0);
+        if !(exposure.is_finite() && exposure > 0.0) {
+            bail!("--exposure {exposure}: must be a positive finite number");
+        }
+        let light = Light::new(
+            self.sky.unwrap_or(Sky::Physical),
+            self.sun.map(|s| s.0),
+            self.bounces.unwrap_or(DEFAULT_PATHTRACE_BOUNCES),
+        )
+        .map_err(anyhow::Error::msg)?;
+        Ok(PathSettings {
+            light,
+            spp: self.spp.unwrap_or(DEFAULT_SPP),
+            seed: self.seed.unwrap_or(0),
+            exposure,
+        })
+    }
+}
+
+/// What `render` draws: a frame of the render pass, or the path tracer's estimate.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RenderMode {
+    /// A mode of the render pass (also served by render nodes).
+    Frame(Mode),
+    /// The light model, path-traced progressively (`pathtrace`).
+    PathTrace,
+}
+
+impl RenderMode {
+    /// The CLI name.
+    pub fn name(self) -> &'static str {
+        match self {
+            RenderMode::Frame(m) => m.name(),
+            RenderMode::PathTrace => "pathtrace",
+        }
+    }
+}
+
+/// Parses a `render` mode name.
+pub fn parse_render_mode(s: &str) -> Result<RenderMode, String> {
+    if s == RenderMode::PathTrace.name() {
+        return Ok(RenderMode::PathTrace);
+    }
+    Mode::parse(s).map(RenderMode::Frame).ok_or_else(|| {
+        let names: Vec<_> = Mode::ALL.iter().map(|m| m.name()).collect();
+        format!("unknown mode '{s}' (one of: {}, pathtrace)", names.join(", "))
+    })
+}
+
+/// Where a frame looks from and how large it is (`render`, `frame`).
 #[derive(clap::Args)]
 pub struct ViewArgs {
     /// Camera JSON `{"pos":[x,y,z],"yaw":deg,"pitch":deg,"fov_y":deg}`, or a file holding it.
@@ -47,16 +178,13 @@ pub struct ViewArgs {
     /// Image size `WxH`.
     #[arg(long, default_value = "1280x720", value_parser = parse_image_size)]
     pub size: (u32, u32),
-    /// What to show.
-    #[arg(long, default_value = "albedo", value_parser = parse_mode)]
-    pub mode: Mode,
 }
 
 impl ViewArgs {
-    /// The frame these arguments ask for (PNG, of any version, the server's default
-    /// deadline).
-    pub fn spec(&self) -> Result<FrameSpec> {
-        Ok(FrameSpec::new(read_camera(&self.camera)?, self.size, self.mode))
+    /// The frame these arguments ask for in `mode` (PNG, of any version, the server's
+    /// default deadline).
+    pub fn spec(&self, mode: Mode) -> Result<FrameSpec> {
+        Ok(FrameSpec::new(read_camera(&self.camera)?, self.size, mode))
     }
 }
 
@@ -67,7 +195,7 @@ pub fn parse_image_size(s: &str) -> Result<(u32, u32), String> {
     Ok((p(w)?, p(h)?))
 }
 
-/// Parses a render mode name.
+/// Parses a render-pass mode name.
 pub fn parse_mode(s: &str) -> Result<Mode, String> {
     Mode::parse(s).ok_or_else(|| {
         let names: Vec<_> = Mode::ALL.iter().map(|m| m.name()).collect();
@@ -96,31 +224,74 @@ struct Summary {
     frames: u32,
     /// Mean milliseconds per frame (dispatch and readback).
     frame_ms: f64,
+    /// Samples per pixel (pathtrace).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    spp: Option<u32>,
+    /// Seconds the samples took (pathtrace).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    seconds: Option<f64>,
 }
 
 /// Renders and writes the image.
 pub fn run(a: Args) -> Result<()> {
     let camera = read_camera(&a.view.camera)?;
+    // Refuse what the mode would ignore before any work.
+    let job = match a.mode {
+        RenderMode::PathTrace => {
+            if a.frames.is_some() {
+                bail!("--frames does not apply to pathtrace: give the samples per pixel with --spp");
+            }
+            if a.gbuffer.is_some() {
+                bail!("--gbuffer is written by the render pass modes, not by pathtrace");
+            }
+            Job::Path(a.light.path_settings()?)
+        }
+        RenderMode::Frame(mode) => {
+            if let Some(flag) = a.light.given().first() {
+                bail!("{flag} applies to pathtrace only, not to --mode {}", mode.name());
+            }
+            Job::Frame(mode)
+        }
+    };
     let world = match &a.world {
         Some(path) => load_world(path)?,
         None => block_on(quiescent_world(&a.server, None, 0, seconds(a.timeout, "--timeout")?))?,
     };
     let mut headless = Headless::new()?;
-    let want_gbuffer = a.gbuffer.is_some();
-    // The first frame uploads the world and builds the pipeline; time the rest.
-    let (size, mode) = (a.view.size, a.view.mode);
-    let mut frame = headless.frame(&world, &camera, size, mode, want_gbuffer)?;
-    let t0 = Instant::now();
-    for _ in 1..a.frames {
-        frame = headless.frame(&world, &camera, size, mode, want_gbuffer)?;
-    }
-    let frame_ms = if a.frames > 1 {
-        t0.elapsed().as_secs_f64() * 1e3 / f64::from(a.frames - 1)
-    } else {
-        f64::NAN
+    let (frame, summary) = match &job {
+        Job::Frame(mode) => render_frames(&mut headless, &world, &camera, &a, *mode)?,
+        Job::Path(settings) => path_trace(&mut headless, &world, &camera, &a, settings)?,
     };
     let png = frame.png()?;
     std::fs::write(&a.output, png).with_context(|| format!("cannot write {}", a.output.display()))?;
+    if a.json {
+        print_json(&summary)?;
+    }
+    Ok(())
+}
+
+/// Renders `--frames` frames of the render pass; writes the first-hit buffer if asked.
+fn render_frames(
+    headless: &mut Headless,
+    world: &World,
+    camera: &Camera,
+    a: &Args,
+    mode: Mode,
+) -> Result<(Frame, Summary)> {
+    let frames = a.frames.unwrap_or(1);
+    let want_gbuffer = a.gbuffer.is_some();
+    let size = a.view.size;
+    // The first frame uploads the world and builds the pipeline; time the rest.
+    let mut frame = headless.frame(world, camera, size, mode, want_gbuffer)?;
+    let t0 = Instant::now();
+    for _ in 1..frames {
+        frame = headless.frame(world, camera, size, mode, want_gbuffer)?;
+    }
+    let frame_ms = if frames > 1 {
+        t0.elapsed().as_secs_f64() * 1e3 / f64::from(frames - 1)
+    } else {
+        0.0
+    };
     if let (Some(path), Some(words)) = (&a.gbuffer, &frame.gbuffer) {
         let mut out = std::io::BufWriter::new(
             std::fs::File::create(path).with_context(|| format!("cannot create {}", path.display()))?,
@@ -129,17 +300,53 @@ pub fn run(a: Args) -> Result<()> {
             .and_then(|()| std::io::Write::flush(&mut out))
             .with_context(|| format!("cannot write {}", path.display()))?;
     }
-    if a.json {
-        print_json(&Summary {
-            width: frame.width,
-            height: frame.height,
-            mode: mode.name(),
-            version: world.version(),
-            digest: world.digest().to_string(),
-            adapter: headless.gpu.describe(),
-            frames: a.frames,
-            frame_ms: if frame_ms.is_nan() { 0.0 } else { frame_ms },
-        })?;
+    let summary = summary(headless, world, &frame, mode.name(), frames, frame_ms);
+    Ok((frame, summary))
+}
+
+/// Path-traces `--spp` samples per pixel with a progress bar; writes the radiance if asked.
+fn path_trace(
+    headless: &mut Headless,
+    world: &World,
+    camera: &Camera,
+    a: &Args,
+    s: &PathSettings,
+) -> Result<(Frame, Summary)> {
+    let bar = progress(u64::from(s.spp), "path tracing", "spp");
+    let t0 = Instant::now();
+    let radiance = headless.path_trace(world, camera, a.view.size, &s.light, s.seed, s.spp, &mut |n| {
+        bar.set_position(u64::from(n))
+    })?;
+    bar.finish_and_clear();
+    let secs = t0.elapsed().as_secs_f64();
+    if let Some(path) = &a.light.hdr {
+        radiance.save(path).map_err(anyhow::Error::msg)?;
     }
-    Ok(())
+    let frame = radiance.tone_mapped(s.exposure);
+    let mut summary = summary(headless, world, &frame, RenderMode::PathTrace.name(), 1, secs * 1e3);
+    summary.spp = Some(s.spp);
+    summary.seconds = Some(secs);
+    Ok((frame, summary))
+}
+
+fn summary(
+    headless: &Headless,
+    world: &World,
+    frame: &Frame,
+    mode: &'static str,
+    frames: u32,
+    frame_ms: f64,
+) -> Summary {
+    Summary {
+        width: frame.width,
+        height: frame.height,
+        mode,
+        version: world.version(),
+        digest: world.digest().to_string(),
+        adapter: headless.gpu.describe(),
+        frames,
+        frame_ms,
+        spp: None,
+        seconds: None,
+    }
 }
