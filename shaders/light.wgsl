@@ -1,7 +1,7 @@
-// The light model of the lit modes (docs/RENDERING.md, "Light"): random streams, the
-// physical sky, the sun, BRDF sampling and one path's radiance. The GPU twin of
-// client/src/light/ (rng.rs, sky.rs, scatter.rs, cpu.rs), written operation by operation
-// like it so that the two path tracers agree up to rounding.
+// The light model of the lit modes (docs/RENDERING.md §3a): the physical sky, the sun,
+// BRDF sampling and one path's radiance. The GPU twin of client/src/light/ (sky.rs,
+// scatter.rs, cpu.rs), written operation by operation like it so that the two path
+// tracers agree up to rounding. Needs random.wgsl before it.
 //
 // The pass binds `light: LightInfo` (generated in the prelude from the Rust `LightInfo`).
 
@@ -10,25 +10,6 @@ const PI: f32 = 3.14159265358979;
 const PATH_OFFSET: f32 = 0.01;
 // The smallest GGX α a metal is traced with (scatter.rs: MIN_ALPHA).
 const MIN_ALPHA: f32 = 1e-3;
-
-// ---- Random streams (rng.rs) ----
-
-fn pcg_hash(v: u32) -> u32 {
-    let state = v * 747796405u + 2891336453u;
-    let word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
-    return (word >> 22u) ^ word;
-}
-
-// The stream of sample `sample` of pixel `pixel` under `seed`.
-fn rng_new(seed: u32, pixel: u32, sample: u32) -> u32 {
-    return pcg_hash(seed ^ pcg_hash(pixel ^ pcg_hash(sample)));
-}
-
-// A uniform number in [0, 1) with 24 random bits.
-fn rng_next(state: ptr<function, u32>) -> f32 {
-    *state = pcg_hash(*state);
-    return f32(*state >> 8u) * (1.0 / 16777216.0);
-}
 
 // ---- The physical sky (sky.rs) ----
 
@@ -243,21 +224,23 @@ struct PathState {
 }
 
 // Follows the path in `s` to its next surface: adds the light found there and, when
-// `scatter`, picks the next ray (or ends the path).
-fn path_step(s: ptr<function, PathState>, scatter: bool, rng: ptr<function, u32>) {
+// `scatter`, picks the next ray (or ends the path). Returns the distance to the surface
+// (−1 when the ray found none).
+fn path_step(s: ptr<function, PathState>, scatter: bool, rng: ptr<function, u32>) -> f32 {
     let r = (*s).r;
     let h = trace(r);
     let d = r.d / r.len;
     (*s).alive = false;
     if h.exhausted {
-        return;
+        return -1.0;
     }
     if !h.hit {
         (*s).radiance += (*s).throughput * sky_radiance(d, (*s).sees_disc);
-        return;
+        return -1.0;
     }
+    let distance = h.t * r.len;
     if h.axis == NO_AXIS {
-        return;
+        return distance;
     }
     // Before any other trace: world_normal reads the last trace's entity rotation.
     let n = world_normal(h);
@@ -266,7 +249,7 @@ fn path_step(s: ptr<function, PathState>, scatter: bool, rng: ptr<function, u32>
         (*s).radiance += (*s).throughput * m.albedo * m.emission;
     }
     if !scatter {
-        return;
+        return distance;
     }
     let p = ray_local(r, h.t) + n * PATH_OFFSET;
     var next: Scattered;
@@ -301,13 +284,22 @@ fn path_step(s: ptr<function, PathState>, scatter: bool, rng: ptr<function, u32>
         (*s).r = ray_at(r, p, next.dir);
         (*s).alive = true;
     }
+    return distance;
+}
+
+// One path: the radiance it brought back, and the distance from the camera to the first
+// surface (−1 for the sky).
+struct PathSample {
+    radiance: vec3<f32>,
+    distance: f32,
 }
 
 // The radiance arriving along the camera ray `primary`, drawing from `rng`.
-fn path_radiance(primary: Ray, rng: ptr<function, u32>) -> vec3<f32> {
+fn path_radiance(primary: Ray, rng: ptr<function, u32>) -> PathSample {
     var s = PathState(primary, vec3<f32>(0.0), vec3<f32>(1.0), true, true);
-    for (var bounce = 0u; bounce <= light.bounces && s.alive; bounce++) {
+    let distance = path_step(&s, light.bounces > 0u, rng);
+    for (var bounce = 1u; bounce <= light.bounces && s.alive; bounce++) {
         path_step(&s, bounce < light.bounces, rng);
     }
-    return s.radiance;
+    return PathSample(s.radiance, distance);
 }

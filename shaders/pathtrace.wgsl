@@ -1,6 +1,8 @@
-// Pass: progressive path tracing (`pathtrace`, docs/RENDERING.md), one invocation per
-// pixel. Each dispatch adds sample number `frame.sample` to every pixel's running sum; the
-// host divides by the count. A sample's random stream depends only on (seed, pixel, sample
+// Passes `path_trace` (progressive path tracing, `pathtrace`) and `path_sample` (one sample
+// per pixel per frame, `baseline`), one invocation per pixel (docs/RENDERING.md §3a, §3b).
+//
+// `path_trace`: each dispatch adds sample number `frame.sample` to every pixel's running
+// sum; the host divides by the count. A sample's random stream depends only on (seed, pixel, sample
 // number), and every pixel adds its samples in number order, so the sums are the same bit
 // for bit however the dispatches are grouped into submissions.
 //
@@ -12,19 +14,32 @@
 
 @group(1) @binding(0) var<uniform> frame: FrameInfo;
 @group(1) @binding(1) var<uniform> light: LightInfo;
-@group(1) @binding(2) var<storage, read_write> sums: array<vec4<f32>>;
+// `path_trace`: running sums (RGB, count). `path_sample`: this frame's sample (RGB, and
+// the distance to the first surface, −1 for the sky).
+@group(1) @binding(2) var<storage, read_write> radiance: array<vec4<f32>>;
+
+// Sample `frame.sample` of pixel `gid`.
+fn pixel_sample(gid: vec2<u32>) -> PathSample {
+    let stream = pixel_stream(frame.seed, gid.x + gid.y * frame.width, frame.sample);
+    var rng = stream.rng;
+    let r = ray_new(frame.cam_int, frame.cam_frac, camera_dir(frame, gid, stream.jitter));
+    return path_radiance(r, &rng);
+}
 
 @compute @workgroup_size(8, 8)
 fn path_trace(@builtin(global_invocation_id) gid: vec3<u32>) {
     if gid.x >= frame.width || gid.y >= frame.height {
         return;
     }
-    let i = gid.x + gid.y * frame.width;
-    var rng = rng_new(frame.seed, i, frame.sample);
-    let jx = rng_next(&rng);
-    let jy = rng_next(&rng);
-    let sx = 2.0 * (f32(gid.x) + jx) / f32(frame.width) - 1.0;
-    let sy = 1.0 - 2.0 * (f32(gid.y) + jy) / f32(frame.height);
-    let r = ray_new(frame.cam_int, frame.cam_frac, frame.forward + sx * frame.right + sy * frame.up);
-    sums[i] += vec4<f32>(path_radiance(r, &rng), 1.0);
+    let s = pixel_sample(gid.xy);
+    radiance[gid.x + gid.y * frame.width] += vec4<f32>(s.radiance, 1.0);
+}
+
+@compute @workgroup_size(8, 8)
+fn path_sample(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if gid.x >= frame.width || gid.y >= frame.height {
+        return;
+    }
+    let s = pixel_sample(gid.xy);
+    radiance[gid.x + gid.y * frame.width] = vec4<f32>(s.radiance, s.distance);
 }

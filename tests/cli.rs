@@ -614,7 +614,38 @@ fn render_pathtrace_writes_radiance_and_refuses_bad_light() {
             "render", "--world", &world, "--camera", camera, "--sky", "physical", "-o", &png,
         ],
         None,
-        "--sky applies to pathtrace only",
+        "--sky applies to the lit modes only",
+    );
+
+    // The baseline follows a camera path and refuses what it does not take.
+    let path = p(dir.path(), "path.jsonl");
+    std::fs::write(&path, format!("{camera}\n\n{}\n", camera.replace("-10.5", "-9.5"))).unwrap();
+    let base = [
+        "render", "--world", &world, "--size", "24x16", "--mode", "baseline", "-o", &png,
+    ];
+    let out = ok(
+        &[&base[..], &["--camera-path", &path, "--frames", "3", "--json"]].concat(),
+        None,
+    );
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!((v["mode"].as_str(), v["frames"].as_u64()), (Some("baseline"), Some(3)));
+    std::fs::write(&path, "{\"pos\":[1,2]}\n").unwrap();
+    fails(&[&base[..], &["--camera-path", &path]].concat(), None, "line 1");
+    std::fs::write(&path, "\n").unwrap();
+    fails(
+        &[&base[..], &["--camera-path", &path]].concat(),
+        None,
+        "holds no camera",
+    );
+    fails(
+        &[&base[..], &["--camera", camera, "--spp", "4"]].concat(),
+        None,
+        "--spp does not apply",
+    );
+    fails(
+        &["render", "--world", &world, "--camera-path", &path, "-o", &png],
+        None,
+        "--camera-path applies to the lit modes only",
     );
 }
 

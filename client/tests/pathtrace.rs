@@ -14,7 +14,7 @@
 mod common;
 
 use common::Raw;
-use naadf_client::gpu::{Gpu, GpuWorld, PathTracer};
+use naadf_client::gpu::{Baseline, Gpu, GpuWorld, PathTracer};
 use naadf_client::light::cpu::CpuPathTracer;
 use naadf_client::light::hdr::Radiance;
 use naadf_client::light::{Light, Sky, Sun};
@@ -301,4 +301,63 @@ fn bad_requests_are_errors() {
     assert!(run((8, 8), 0).unwrap_err().to_string().contains("at least one sample"));
     assert!(run((20000, 8), 1).unwrap_err().to_string().contains("frame size"));
     assert!(run((0, 8), 1).is_err());
+}
+
+/// The baseline's mean squared difference from `reference` over the image.
+fn mse(a: &Radiance, reference: &Radiance) -> f64 {
+    let sum: f64 = a
+        .rgb
+        .iter()
+        .zip(&reference.rgb)
+        .map(|(x, y)| (0..3).map(|c| f64::from(x[c] - y[c]).powi(2)).sum::<f64>())
+        .sum();
+    sum / (3 * a.rgb.len()) as f64
+}
+
+#[test]
+fn the_baseline_keeps_an_exact_image_exact_and_converges_toward_the_path_tracer() {
+    let Some(gpu) = gpu() else { return };
+    // A floor under a uniform sky has no variance: every frame of the baseline is a·L, also
+    // while the camera moves.
+    let floor = world(&[GREY, FLOOR]);
+    let light = Light::new(Sky::parse("uniform:2").unwrap(), None, 3).unwrap();
+    let gw = GpuWorld::new(gpu, &floor).unwrap();
+    let mut baseline = Baseline::new(gpu);
+    for i in 0..6 {
+        let cam = camera(&format!(
+            r#"{{"pos":[{},40,32],"yaw":{},"pitch":-80,"fov_y":50}}"#,
+            30 + i,
+            2 * i
+        ));
+        baseline.frame(gpu, &gw, &cam, (16, 12), &light, 0).unwrap();
+        let img = baseline.radiance(gpu).unwrap().unwrap();
+        assert!(
+            img.rgb.iter().flatten().all(|c| (c - 1.0).abs() < 1e-5),
+            "frame {i}: {:?}",
+            img.rgb[0]
+        );
+    }
+    assert_eq!(baseline.frames(), 6);
+
+    // On a scene with variance, 32 frames are much closer to a 256-spp reference than the
+    // first frame, and the same seed gives the same bytes.
+    let w = showcase();
+    let cam = camera(r#"{"pos":[32,20,14],"yaw":0,"pitch":-10,"fov_y":70}"#);
+    let size = (24, 16);
+    let light = Light::new(Sky::Physical, None, 3).unwrap();
+    let gw = GpuWorld::new(gpu, &w).unwrap();
+    let reference = PathTracer::new(gpu)
+        .render(gpu, &gw, &cam, size, &light, 7, 256, &mut |_| {})
+        .unwrap();
+    let run = |frames: u32| {
+        let mut b = Baseline::new(gpu);
+        for _ in 0..frames {
+            b.frame(gpu, &gw, &cam, size, &light, 0).unwrap();
+        }
+        b.radiance(gpu).unwrap().unwrap()
+    };
+    let (first, later) = (run(1), run(32));
+    let (e1, e32) = (mse(&first, &reference), mse(&later, &reference));
+    assert!(e32 < 0.4 * e1, "MSE after 32 frames {e32} vs after 1 {e1}");
+    assert_eq!(later, run(32), "same seed, same bytes");
 }

@@ -3,7 +3,7 @@
 
 use super::print_json;
 use super::remote::{ServerArgs, block_on};
-use super::render::{ViewArgs, parse_mode};
+use super::render::{parse_image_size, parse_mode, read_camera};
 use anyhow::{Context, Result};
 use naadf_client::FrameSpec;
 use std::path::PathBuf;
@@ -14,8 +14,12 @@ use std::time::Duration;
 pub struct Args {
     #[command(flatten)]
     server: ServerArgs,
-    #[command(flatten)]
-    view: ViewArgs,
+    /// Camera JSON `{"pos":[x,y,z],"yaw":deg,"pitch":deg,"fov_y":deg}`, or a file holding it.
+    #[arg(long)]
+    camera: String,
+    /// Image size `WxH`.
+    #[arg(long, default_value = "1280x720", value_parser = parse_image_size)]
+    size: (u32, u32),
     /// What to show (a mode of the render pass, as render nodes serve them).
     #[arg(long, default_value = "albedo", value_parser = parse_mode)]
     mode: naadf_client::gpu::Mode,
@@ -47,7 +51,7 @@ pub fn run(a: Args) -> Result<()> {
     let spec = FrameSpec {
         min_version: a.min_version,
         timeout: (a.timeout_ms != 0).then(|| Duration::from_millis(u64::from(a.timeout_ms))),
-        ..a.view.spec(a.mode)?
+        ..FrameSpec::new(read_camera(&a.camera)?, a.size, a.mode)
     };
     let reply = block_on(async { Ok(a.server.connect().await?.frame(&spec).await?) })?;
     let image = &reply.image;

@@ -1,13 +1,15 @@
 //! `naadf render (--world FILE | --server URL) --camera JSON --size WxH --mode M
-//! [--frames N] -o OUT.png [--gbuffer OUT.bin]`, and for `--mode pathtrace`
-//! `[--spp N] [--seed S] [--bounces B] [--sky SKY] [--sun SUN] [--exposure X] [--hdr OUT.pfm]`.
+//! [--frames N] -o OUT.png [--gbuffer OUT.bin]`; for `--mode pathtrace`
+//! `[--spp N] [--seed S] [--bounces B] [--sky SKY] [--sun SUN] [--exposure X] [--hdr OUT.pfm]`;
+//! for `--mode baseline` the same without `--spp`, with `--frames N` and
+//! `[--camera-path FILE.jsonl]`.
 
 use super::remote::{ServerArgs, block_on, quiescent_world};
 use super::{load_world, print_json, progress, seconds};
 use anyhow::{Context, Result, bail};
-use naadf_client::FrameSpec;
 use naadf_client::gpu::{Frame, Headless, Mode, write_gbuffer};
-use naadf_client::light::{DEFAULT_PATHTRACE_BOUNCES, Light, Sky, Sun};
+use naadf_client::light::hdr::Radiance;
+use naadf_client::light::{DEFAULT_LIT_BOUNCES, DEFAULT_PATHTRACE_BOUNCES, Light, Sky, Sun};
 use naadf_world::World;
 use naadf_world::camera::Camera;
 use std::path::PathBuf;
@@ -22,14 +24,22 @@ pub struct Args {
     world: Option<PathBuf>,
     #[command(flatten)]
     server: ServerArgs,
-    #[command(flatten)]
-    view: ViewArgs,
-    /// What to show: albedo, material, normal, steps, or pathtrace (the light model,
-    /// path-traced).
+    /// Camera JSON `{"pos":[x,y,z],"yaw":deg,"pitch":deg,"fov_y":deg}`, or a file holding it.
+    #[arg(long, required_unless_present = "camera_path")]
+    camera: Option<String>,
+    /// A camera per line (JSON Lines); frame i uses line min(i, last) (baseline).
+    #[arg(long, conflicts_with = "camera")]
+    camera_path: Option<PathBuf>,
+    /// Image size `WxH`.
+    #[arg(long, default_value = "1280x720", value_parser = parse_image_size)]
+    size: (u32, u32),
+    /// What to show: albedo, material, normal, steps, pathtrace (the light model,
+    /// path-traced) or baseline (1-spp path tracing with an exponential TAA).
     #[arg(long, default_value = "albedo", value_parser = parse_render_mode)]
     mode: RenderMode,
-    /// Frames to render (all identical in the deterministic modes); the last is written.
-    /// Not for pathtrace, which takes --spp.
+    /// Frames to render; the last is written. All identical in the render-pass modes; for
+    /// baseline, each adds one sample per pixel to the history. Not for pathtrace, which
+    /// takes --spp.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     frames: Option<u32>,
     #[command(flatten)]
@@ -57,7 +67,7 @@ pub struct LightArgs {
     /// Seed of the random samples: the same seed, device and inputs give the same image.
     #[arg(long)]
     seed: Option<u32>,
-    /// Scattered rays after the camera ray (default 8 for pathtrace).
+    /// Scattered rays after the camera ray (default 8 for pathtrace, 3 for baseline).
     #[arg(long, value_parser = clap::value_parser!(u32).range(0..=i64::from(naadf_client::light::MAX_BOUNCES)))]
     bounces: Option<u32>,
     /// The sky: `physical` (default) or `uniform:L` / `uniform:R,G,B` (linear radiance).
@@ -92,12 +102,15 @@ enum Job {
     /// Frames of the render pass.
     Frame(Mode),
     /// A path-traced frame.
-    Path(PathSettings),
+    Path(LitSettings),
+    /// Frames of the baseline.
+    Baseline(LitSettings),
 }
 
-/// How a path-traced frame is made: the light, the samples and the output.
-struct PathSettings {
+/// How a lit frame is made: the light, the samples and the output.
+struct LitSettings {
     light: Light,
+    /// Samples per pixel (pathtrace).
     spp: u32,
     seed: u32,
     exposure: f32,
@@ -118,8 +131,9 @@ impl LightArgs {
         flags.iter().filter(|f| f.1).map(|f| f.0).collect()
     }
 
-    /// The settings of a path-traced frame, with the defaults of docs/RENDERING.md.
-    fn path_settings(&self) -> Result<PathSettings> {
+    /// The settings of a lit frame, with the defaults of docs/RENDERING.md (`bounces` is
+    /// the mode's default).
+    fn settings(&self, bounces: u32) -> Result<LitSettings> {
         let exposure = self.exposure.unwrap_or(1.0);
         if !(exposure.is_finite() && exposure > 0.0) {
             bail!("--exposure {exposure}: must be a positive finite number");
@@ -127,10 +141,10 @@ impl LightArgs {
         let light = Light::new(
             self.sky.unwrap_or(Sky::Physical),
             self.sun.map(|s| s.0),
-            self.bounces.unwrap_or(DEFAULT_PATHTRACE_BOUNCES),
+            self.bounces.unwrap_or(bounces),
         )
         .map_err(anyhow::Error::msg)?;
-        Ok(PathSettings {
+        Ok(LitSettings {
             light,
             spp: self.spp.unwrap_or(DEFAULT_SPP),
             seed: self.seed.unwrap_or(0),
@@ -146,6 +160,8 @@ pub enum RenderMode {
     Frame(Mode),
     /// The light model, path-traced progressively (`pathtrace`).
     PathTrace,
+    /// One path-traced sample per pixel per frame with an exponential TAA (`baseline`).
+    Baseline,
 }
 
 impl RenderMode {
@@ -154,38 +170,23 @@ impl RenderMode {
         match self {
             RenderMode::Frame(m) => m.name(),
             RenderMode::PathTrace => "pathtrace",
+            RenderMode::Baseline => "baseline",
         }
     }
 }
 
 /// Parses a `render` mode name.
 pub fn parse_render_mode(s: &str) -> Result<RenderMode, String> {
-    if s == RenderMode::PathTrace.name() {
-        return Ok(RenderMode::PathTrace);
+    if let Some(lit) = [RenderMode::PathTrace, RenderMode::Baseline]
+        .into_iter()
+        .find(|m| m.name() == s)
+    {
+        return Ok(lit);
     }
     Mode::parse(s).map(RenderMode::Frame).ok_or_else(|| {
         let names: Vec<_> = Mode::ALL.iter().map(|m| m.name()).collect();
-        format!("unknown mode '{s}' (one of: {}, pathtrace)", names.join(", "))
+        format!("unknown mode '{s}' (one of: {}, pathtrace, baseline)", names.join(", "))
     })
-}
-
-/// Where a frame looks from and how large it is (`render`, `frame`).
-#[derive(clap::Args)]
-pub struct ViewArgs {
-    /// Camera JSON `{"pos":[x,y,z],"yaw":deg,"pitch":deg,"fov_y":deg}`, or a file holding it.
-    #[arg(long)]
-    pub camera: String,
-    /// Image size `WxH`.
-    #[arg(long, default_value = "1280x720", value_parser = parse_image_size)]
-    pub size: (u32, u32),
-}
-
-impl ViewArgs {
-    /// The frame these arguments ask for in `mode` (PNG, of any version, the server's
-    /// default deadline).
-    pub fn spec(&self, mode: Mode) -> Result<FrameSpec> {
-        Ok(FrameSpec::new(read_camera(&self.camera)?, self.size, mode))
-    }
 }
 
 /// Parses `WxH`.
@@ -213,6 +214,21 @@ pub fn read_camera(arg: &str) -> Result<Camera> {
     Ok(Camera::from_json(&text)?)
 }
 
+/// Reads a camera path: one camera JSON per non-blank line, at least one.
+pub fn read_camera_path(path: &std::path::Path) -> Result<Vec<Camera>> {
+    let text = std::fs::read_to_string(path).with_context(|| format!("cannot read camera path {}", path.display()))?;
+    let cameras = text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty())
+        .map(|(i, l)| Camera::from_json(l).with_context(|| format!("{} line {}", path.display(), i + 1)))
+        .collect::<Result<Vec<_>>>()?;
+    if cameras.is_empty() {
+        bail!("camera path {} holds no camera", path.display());
+    }
+    Ok(cameras)
+}
+
 #[derive(serde::Serialize)]
 struct Summary {
     width: u32,
@@ -234,24 +250,32 @@ struct Summary {
 
 /// Renders and writes the image.
 pub fn run(a: Args) -> Result<()> {
-    let camera = read_camera(&a.view.camera)?;
     // Refuse what the mode would ignore before any work.
     let job = match a.mode {
         RenderMode::PathTrace => {
             if a.frames.is_some() {
                 bail!("--frames does not apply to pathtrace: give the samples per pixel with --spp");
             }
-            if a.gbuffer.is_some() {
-                bail!("--gbuffer is written by the render pass modes, not by pathtrace");
-            }
-            Job::Path(a.light.path_settings()?)
+            refuse_for(&a, &["--gbuffer", "--camera-path"])?;
+            Job::Path(a.light.settings(DEFAULT_PATHTRACE_BOUNCES)?)
+        }
+        RenderMode::Baseline => {
+            refuse_for(&a, &["--gbuffer", "--spp"])?;
+            Job::Baseline(a.light.settings(DEFAULT_LIT_BOUNCES)?)
         }
         RenderMode::Frame(mode) => {
-            if let Some(flag) = a.light.given().first() {
-                bail!("{flag} applies to pathtrace only, not to --mode {}", mode.name());
+            let mut lit = a.light.given();
+            lit.extend(a.camera_path.as_ref().map(|_| "--camera-path"));
+            if let Some(flag) = lit.first() {
+                bail!("{flag} applies to the lit modes only, not to --mode {}", mode.name());
             }
             Job::Frame(mode)
         }
+    };
+    let cameras = match (&a.camera, &a.camera_path) {
+        (Some(c), _) => vec![read_camera(c)?],
+        (None, Some(path)) => read_camera_path(path)?,
+        (None, None) => bail!("give --camera or --camera-path"),
     };
     let world = match &a.world {
         Some(path) => load_world(path)?,
@@ -259,8 +283,9 @@ pub fn run(a: Args) -> Result<()> {
     };
     let mut headless = Headless::new()?;
     let (frame, summary) = match &job {
-        Job::Frame(mode) => render_frames(&mut headless, &world, &camera, &a, *mode)?,
-        Job::Path(settings) => path_trace(&mut headless, &world, &camera, &a, settings)?,
+        Job::Frame(mode) => render_frames(&mut headless, &world, &cameras[0], &a, *mode)?,
+        Job::Path(settings) => path_trace(&mut headless, &world, &cameras[0], &a, settings)?,
+        Job::Baseline(settings) => baseline(&mut headless, &world, &cameras, &a, settings)?,
     };
     let png = frame.png()?;
     std::fs::write(&a.output, png).with_context(|| format!("cannot write {}", a.output.display()))?;
@@ -268,6 +293,19 @@ pub fn run(a: Args) -> Result<()> {
         print_json(&summary)?;
     }
     Ok(())
+}
+
+/// Fails if one of `flags` (among `--gbuffer`, `--spp`, `--camera-path`) was given.
+fn refuse_for(a: &Args, flags: &[&str]) -> Result<()> {
+    let given = |f: &str| match f {
+        "--gbuffer" => a.gbuffer.is_some(),
+        "--spp" => a.light.spp.is_some(),
+        _ => a.camera_path.is_some(),
+    };
+    match flags.iter().find(|f| given(f)) {
+        Some(f) => bail!("{f} does not apply to --mode {}", a.mode.name()),
+        None => Ok(()),
+    }
 }
 
 /// Renders `--frames` frames of the render pass; writes the first-hit buffer if asked.
@@ -280,7 +318,7 @@ fn render_frames(
 ) -> Result<(Frame, Summary)> {
     let frames = a.frames.unwrap_or(1);
     let want_gbuffer = a.gbuffer.is_some();
-    let size = a.view.size;
+    let size = a.size;
     // The first frame uploads the world and builds the pipeline; time the rest.
     let mut frame = headless.frame(world, camera, size, mode, want_gbuffer)?;
     let t0 = Instant::now();
@@ -310,22 +348,58 @@ fn path_trace(
     world: &World,
     camera: &Camera,
     a: &Args,
-    s: &PathSettings,
+    s: &LitSettings,
 ) -> Result<(Frame, Summary)> {
     let bar = progress(u64::from(s.spp), "path tracing", "spp");
     let t0 = Instant::now();
-    let radiance = headless.path_trace(world, camera, a.view.size, &s.light, s.seed, s.spp, &mut |n| {
+    let radiance = headless.path_trace(world, camera, a.size, &s.light, s.seed, s.spp, &mut |n| {
         bar.set_position(u64::from(n))
     })?;
     bar.finish_and_clear();
     let secs = t0.elapsed().as_secs_f64();
+    let (frame, mut summary) = lit_output(headless, world, a, s, &radiance, 1, secs * 1e3)?;
+    summary.spp = Some(s.spp);
+    summary.seconds = Some(secs);
+    Ok((frame, summary))
+}
+
+/// Renders `--frames` baseline frames along the camera path; writes the last.
+fn baseline(
+    headless: &mut Headless,
+    world: &World,
+    cameras: &[Camera],
+    a: &Args,
+    s: &LitSettings,
+) -> Result<(Frame, Summary)> {
+    let frames = a.frames.unwrap_or(1);
+    let bar = progress(u64::from(frames), "baseline", "frames");
+    let t0 = Instant::now();
+    for i in 0..frames {
+        let camera = &cameras[(i as usize).min(cameras.len() - 1)];
+        headless.baseline_frame(world, camera, a.size, &s.light, s.seed)?;
+        bar.set_position(u64::from(i + 1));
+    }
+    let radiance = headless.baseline_radiance()?;
+    bar.finish_and_clear();
+    let frame_ms = t0.elapsed().as_secs_f64() * 1e3 / f64::from(frames);
+    lit_output(headless, world, a, s, &radiance, frames, frame_ms)
+}
+
+/// Writes `--hdr` and tone-maps the radiance of a lit mode.
+fn lit_output(
+    headless: &Headless,
+    world: &World,
+    a: &Args,
+    s: &LitSettings,
+    radiance: &Radiance,
+    frames: u32,
+    frame_ms: f64,
+) -> Result<(Frame, Summary)> {
     if let Some(path) = &a.light.hdr {
         radiance.save(path).map_err(anyhow::Error::msg)?;
     }
     let frame = radiance.tone_mapped(s.exposure);
-    let mut summary = summary(headless, world, &frame, RenderMode::PathTrace.name(), 1, secs * 1e3);
-    summary.spp = Some(s.spp);
-    summary.seconds = Some(secs);
+    let summary = summary(headless, world, &frame, a.mode.name(), frames, frame_ms);
     Ok((frame, summary))
 }
 

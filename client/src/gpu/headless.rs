@@ -1,6 +1,7 @@
 //! [`Headless`]: frames of a changing world without a window — a device, a renderer, a
 //! path tracer and a GPU copy of the world that follows it (`naadf render`, `naadf replay`).
 
+use super::baseline::Baseline;
 use super::context::{Gpu, GpuError};
 use super::pathtrace::PathTracer;
 use super::render::{Frame, Mode, Renderer};
@@ -16,6 +17,7 @@ pub struct Headless {
     pub gpu: Gpu,
     renderer: Renderer,
     path_tracer: PathTracer,
+    baseline: Baseline,
     world: Option<GpuWorld>,
 }
 
@@ -25,10 +27,12 @@ impl Headless {
         let gpu = Gpu::new()?;
         let renderer = Renderer::new(&gpu);
         let path_tracer = PathTracer::new(&gpu);
+        let baseline = Baseline::new(&gpu);
         Ok(Headless {
             gpu,
             renderer,
             path_tracer,
+            baseline,
             world: None,
         })
     }
@@ -62,5 +66,25 @@ impl Headless {
         let gw = GpuWorld::follow(&mut self.world, &self.gpu, world)?;
         self.path_tracer
             .render(&self.gpu, gw, camera, size, light, seed, spp, progress)
+    }
+
+    /// Renders the next `baseline` frame of `world` ([`Baseline::frame`]).
+    pub fn baseline_frame(
+        &mut self,
+        world: &World,
+        camera: &Camera,
+        size: (u32, u32),
+        light: &Light,
+        seed: u32,
+    ) -> Result<(), GpuError> {
+        let gw = GpuWorld::follow(&mut self.world, &self.gpu, world)?;
+        self.baseline.frame(&self.gpu, gw, camera, size, light, seed)
+    }
+
+    /// The newest `baseline` frame as linear radiance.
+    pub fn baseline_radiance(&self) -> Result<Radiance, GpuError> {
+        self.baseline
+            .radiance(&self.gpu)?
+            .ok_or_else(|| GpuError::Readback("no baseline frame was rendered".into()))
     }
 }

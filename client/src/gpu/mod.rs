@@ -16,10 +16,12 @@
 //! - [`Renderer`]: renders camera frames in the modes of [`Mode`];
 //! - [`PathTracer`]: the progressive path tracer of the light model
 //!   ([`crate::light`]), the ground truth of the lit modes;
+//! - [`Baseline`]: 1-spp path tracing with an exponential TAA, the paper's comparison;
 //! - [`Headless`]: a device, a renderer and a GPU copy that follows a changing world.
 //!
 //! [`World`]: naadf_world::World
 
+mod baseline;
 mod context;
 mod headless;
 mod pathtrace;
@@ -30,6 +32,7 @@ pub mod shaders;
 mod uniform;
 mod world;
 
+pub use baseline::Baseline;
 pub use context::{Gpu, GpuError};
 pub use headless::Headless;
 pub use pathtrace::PathTracer;

@@ -146,7 +146,7 @@ impl PathTracer {
                         right: rays.right,
                         sample,
                         up: rays.up,
-                        pad: 0,
+                        history: 0,
                     };
                     gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                         label: Some("frame"),

@@ -35,10 +35,14 @@ pub const GRID: &str = include_str!("../../../shaders/grid.wgsl");
 pub const RAYS: &str = include_str!("../../../shaders/rays.wgsl");
 /// `shaders/render.wgsl`: the frame pass.
 pub const RENDER: &str = include_str!("../../../shaders/render.wgsl");
+/// `shaders/sample.wgsl`: per-sample random streams and jittered camera rays.
+pub const SAMPLE: &str = include_str!("../../../shaders/sample.wgsl");
 /// `shaders/light.wgsl`: the light model of the lit passes (sky, sun, scattering, paths).
 pub const LIGHT: &str = include_str!("../../../shaders/light.wgsl");
-/// `shaders/pathtrace.wgsl`: the progressive path tracer.
+/// `shaders/pathtrace.wgsl`: path-traced samples (progressive sums, or one per frame).
 pub const PATHTRACE: &str = include_str!("../../../shaders/pathtrace.wgsl");
+/// `shaders/taa.wgsl`: the baseline's temporal accumulation.
+pub const TAA: &str = include_str!("../../../shaders/taa.wgsl");
 
 /// The logical storage buffers of group 0, in binding order, with their accessor names.
 pub const BUFFERS: [(&str, &str); 8] = [
@@ -119,13 +123,17 @@ pub enum Pass {
     Rays,
     /// [`RENDER`], entry point `render`.
     Render,
-    /// [`LIGHT`] and [`PATHTRACE`], entry point `path_trace`.
+    /// [`SAMPLE`], [`LIGHT`] and [`PATHTRACE`], entry point `path_trace`.
     PathTrace,
+    /// The same files, entry point `path_sample`.
+    PathSample,
+    /// [`SAMPLE`] and [`TAA`], entry point `taa_resolve`.
+    Taa,
 }
 
 impl Pass {
     /// Every pass.
-    pub const ALL: [Pass; 3] = [Pass::Rays, Pass::Render, Pass::PathTrace];
+    pub const ALL: [Pass; 5] = [Pass::Rays, Pass::Render, Pass::PathTrace, Pass::PathSample, Pass::Taa];
 
     /// The entry point.
     pub fn entry(self) -> &'static str {
@@ -133,6 +141,8 @@ impl Pass {
             Pass::Rays => "trace_rays",
             Pass::Render => "render",
             Pass::PathTrace => "path_trace",
+            Pass::PathSample => "path_sample",
+            Pass::Taa => "taa_resolve",
         }
     }
 
@@ -141,7 +151,8 @@ impl Pass {
         match self {
             Pass::Rays => &[RAYS],
             Pass::Render => &[RENDER],
-            Pass::PathTrace => &[LIGHT, PATHTRACE],
+            Pass::PathTrace | Pass::PathSample => &[SAMPLE, LIGHT, PATHTRACE],
+            Pass::Taa => &[SAMPLE, TAA],
         }
     }
 }

@@ -141,8 +141,8 @@ wgsl_struct! {
         pub sample: u32,
         /// Image up, scaled by a.
         pub up: [f32; 3],
-        /// Padding to the 16-byte multiple of uniform structs; 0.
-        pub pad: u32,
+        /// 1 when a temporal pass has a history to blend with (0 for the path tracer).
+        pub history: u32,
     }
 }
 

@@ -31,6 +31,8 @@ pub const SUN_ANGULAR_RADIUS_DEG: f64 = 0.27;
 pub const MAX_BOUNCES: u32 = 64;
 /// Bounces of `pathtrace` when none are given.
 pub const DEFAULT_PATHTRACE_BOUNCES: u32 = 8;
+/// Bounces of `baseline` (and the GI pipeline) when none are given.
+pub const DEFAULT_LIT_BOUNCES: u32 = 3;
 /// How far a scattered or shadow ray starts off the surface, along its normal, in voxels.
 pub const SURFACE_OFFSET: f64 = 0.01;
 

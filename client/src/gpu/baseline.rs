@@ -1,0 +1,185 @@
+//! [`Baseline`]: the paper's comparison for the GI pipeline (`baseline`; docs/RENDERING.md
+//! §3b): each frame one path-traced sample per pixel, blended into the reprojected
+//! history with an exponential moving average (α = 0.1) after clamping the history to the
+//! 3×3 neighbourhood of the new samples in YCoCg.
+
+use super::context::{Gpu, GpuError};
+use super::pipeline::PassPipelines;
+use super::render::{CameraRays, check_frame_size};
+use super::shaders::{Loop, Pass};
+use super::uniform::{FrameInfo, LightInfo};
+use super::world::GpuWorld;
+use crate::light::Light;
+use crate::light::hdr::Radiance;
+use naadf_world::camera::Camera;
+use wgpu::util::DeviceExt;
+
+/// Bytes per pixel of each frame buffer (RGB and the first-hit distance, `f32` each).
+const PIXEL_BYTES: u64 = 16;
+
+/// What a history is of: when any of it changes, the history restarts.
+#[derive(Clone, Debug, PartialEq)]
+struct Subject {
+    size: (u32, u32),
+    light: Light,
+    seed: u32,
+}
+
+/// The buffers of a running history.
+struct History {
+    subject: Subject,
+    /// This frame's samples.
+    samples: wgpu::Buffer,
+    /// The results of the last two frames; `latest` indexes the newest.
+    results: [wgpu::Buffer; 2],
+    latest: usize,
+    /// Frames rendered so far.
+    frames: u32,
+    /// The camera of the newest result.
+    camera: Camera,
+}
+
+/// The baseline renderer: a history per (size, light, seed).
+pub struct Baseline {
+    sample: PassPipelines,
+    taa: PassPipelines,
+    history: Option<History>,
+}
+
+/// The uniform of `camera` for a `size` frame, with its position taken relative to
+/// `origin` and the given sample number and history flag.
+fn frame_info(
+    camera: &Camera,
+    origin: [f64; 3],
+    size: (u32, u32),
+    seed: u32,
+    sample: u32,
+    history: bool,
+) -> Result<FrameInfo, GpuError> {
+    let relative = Camera {
+        pos: std::array::from_fn(|a| camera.pos[a] - origin[a]),
+        ..*camera
+    };
+    let rays = CameraRays::new(&relative, size)?;
+    Ok(FrameInfo {
+        cam_int: rays.int,
+        width: size.0,
+        cam_frac: rays.frac,
+        height: size.1,
+        forward: rays.forward,
+        seed,
+        right: rays.right,
+        sample,
+        up: rays.up,
+        history: u32::from(history),
+    })
+}
+
+impl Baseline {
+    /// Prepares the passes (pipelines are built on first use).
+    pub fn new(gpu: &Gpu) -> Self {
+        Baseline {
+            sample: PassPipelines::new(gpu, Pass::PathSample, 2, &[false]),
+            taa: PassPipelines::new(gpu, Pass::Taa, 2, &[true, true, false]),
+            history: None,
+        }
+    }
+
+    /// Frames in the current history.
+    pub fn frames(&self) -> u32 {
+        self.history.as_ref().map_or(0, |h| h.frames)
+    }
+
+    /// Renders the next frame of `camera`'s view of `world` (sample number = frames so far).
+    /// A new size, light or seed starts a new history; a new camera or world does not: the
+    /// history is reprojected and clamped, as the baseline does.
+    pub fn frame(
+        &mut self,
+        gpu: &Gpu,
+        world: &GpuWorld,
+        camera: &Camera,
+        size: (u32, u32),
+        light: &Light,
+        seed: u32,
+    ) -> Result<(), GpuError> {
+        let pixels = check_frame_size(gpu, size, PIXEL_BYTES)?;
+        // Validates the camera before any state changes.
+        CameraRays::new(camera, size)?;
+        let sample_pipe = self.sample.get(gpu, world, Loop::Hierarchy, true)?;
+        let taa_pipe = self.taa.get(gpu, world, Loop::Hierarchy, true)?;
+        let subject = Subject {
+            size,
+            light: *light,
+            seed,
+        };
+        let buffer = |label| {
+            gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: pixels * PIXEL_BYTES,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            })
+        };
+        let h = match self.history.take() {
+            Some(h) if h.subject == subject => h,
+            _ => History {
+                subject,
+                samples: buffer("baseline samples"),
+                results: [buffer("baseline result 0"), buffer("baseline result 1")],
+                latest: 0,
+                frames: 0,
+                camera: *camera,
+            },
+        };
+        let h = self.history.insert(h);
+        let uniform = |label, bytes: &[u8]| {
+            gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(label),
+                contents: bytes,
+                usage: wgpu::BufferUsages::UNIFORM,
+            })
+        };
+        // The sample pass needs the camera where it is; the resolve pass reads only the
+        // current camera's directions, and the previous camera relative to it.
+        let now = frame_info(camera, [0.0; 3], size, seed, h.frames, false)?;
+        let before = frame_info(&h.camera, camera.pos, size, seed, h.frames, h.frames > 0)?;
+        let now = uniform("frame", bytemuck::bytes_of(&now));
+        let before = uniform("previous frame", bytemuck::bytes_of(&before));
+        let light = uniform("light", bytemuck::bytes_of(&LightInfo::new(light)));
+        let (old, new) = (&h.results[h.latest], &h.results[1 - h.latest]);
+        let groups = (size.0.div_ceil(8), size.1.div_ceil(8));
+        gpu.checked(|| {
+            let sample_group = self.sample.group1(gpu, &[&now, &light, &h.samples]);
+            let taa_group = self.taa.group1(gpu, &[&now, &before, &h.samples, old, new]);
+            let mut enc = gpu.device.create_command_encoder(&Default::default());
+            {
+                let mut pass = enc.begin_compute_pass(&Default::default());
+                pass.set_bind_group(0, world.bind_group(), &[]);
+                pass.set_pipeline(&sample_pipe);
+                pass.set_bind_group(1, &sample_group, &[]);
+                pass.dispatch_workgroups(groups.0, groups.1, 1);
+                pass.set_pipeline(&taa_pipe);
+                pass.set_bind_group(1, &taa_group, &[]);
+                pass.dispatch_workgroups(groups.0, groups.1, 1);
+            }
+            gpu.queue.submit([enc.finish()]);
+        })?;
+        h.latest = 1 - h.latest;
+        h.frames += 1;
+        h.camera = *camera;
+        Ok(())
+    }
+
+    /// The newest result as linear radiance; `None` before the first frame.
+    pub fn radiance(&self, gpu: &Gpu) -> Result<Option<Radiance>, GpuError> {
+        let Some(h) = &self.history else { return Ok(None) };
+        let (w, ht) = h.subject.size;
+        let bytes = gpu.read_buffer(&h.results[h.latest], u64::from(w) * u64::from(ht) * PIXEL_BYTES)?;
+        let px: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&bytes);
+        Ok(Some(Radiance {
+            width: w,
+            height: ht,
+            rgb: px.iter().map(|p| [p[0], p[1], p[2]]).collect(),
+        }))
+    }
+}
