@@ -41,27 +41,31 @@ impl Drop for Node {
 
 /// `naadf frame` as the viewer; returns (success, stdout, stderr).
 fn frame(url: &str, out: &str, mode: &str, min_version: u64) -> (bool, String, String) {
-    let o = naadf(
-        &[
-            "frame",
-            "--server",
-            url,
-            "--token",
-            "vw",
-            "--camera",
-            CAMERA,
-            "--size",
-            "96x64",
-            "--mode",
-            mode,
-            "--min-version",
-            &min_version.to_string(),
-            "-o",
-            out,
-            "--json",
-        ],
-        None,
-    );
+    frame_with(url, out, mode, min_version, &[])
+}
+
+/// [`frame`] with more arguments.
+fn frame_with(url: &str, out: &str, mode: &str, min_version: u64, extra: &[&str]) -> (bool, String, String) {
+    let version = min_version.to_string();
+    let args = [
+        "frame",
+        "--server",
+        url,
+        "--token",
+        "vw",
+        "--camera",
+        CAMERA,
+        "--size",
+        "96x64",
+        "--mode",
+        mode,
+        "--min-version",
+        &version,
+        "-o",
+        out,
+        "--json",
+    ];
+    let o = naadf(&[&args[..], extra].concat(), None);
     (
         o.status.success(),
         String::from_utf8_lossy(&o.stdout).into_owned(),
@@ -97,12 +101,15 @@ fn started(dir: &std::path::Path) -> Option<(String, support::Server)> {
 
 /// `naadf render --world` of the same view.
 fn local(world: &str, out: &str, mode: &str) -> Vec<u8> {
-    ok(
-        &[
-            "render", "--world", world, "--camera", CAMERA, "--size", "96x64", "--mode", mode, "-o", out,
-        ],
-        None,
-    );
+    local_with(world, out, mode, &[])
+}
+
+/// [`local`] with more arguments.
+fn local_with(world: &str, out: &str, mode: &str, extra: &[&str]) -> Vec<u8> {
+    let args = [
+        "render", "--world", world, "--camera", CAMERA, "--size", "96x64", "--mode", mode, "-o", out,
+    ];
+    ok(&[&args[..], extra].concat(), None);
     std::fs::read(out).unwrap()
 }
 
@@ -172,6 +179,35 @@ fn frames_from_render_nodes_equal_local_renders() {
             "{mode}: the node's frame differs from render --world"
         );
     }
+
+    // The lit modes: a path-traced frame equals the local one; a camera stream's baseline
+    // frames continue one history on the node, so two requests of 2 frames give the local
+    // render of 4 frames.
+    let (done, _, err) = frame_with(&server.url, &out, "pathtrace", 0, &["--spp", "3", "--bounces", "2"]);
+    assert!(done, "pathtrace: {err}");
+    let want = local_with(
+        &world,
+        &p(dir.path(), "local-pt.png"),
+        "pathtrace",
+        &["--spp", "3", "--bounces", "2"],
+    );
+    assert!(
+        std::fs::read(&out).unwrap() == want,
+        "pathtrace: the node's frame differs"
+    );
+    let stream = ["--frames", "2", "--stream", "viewer-1", "--sky", "uniform:0.5,0.7,1"];
+    for _ in 0..2 {
+        let (done, _, err) = frame_with(&server.url, &out, "baseline", 0, &stream);
+        assert!(done, "baseline: {err}");
+    }
+    let four = ["--frames", "4", "--sky", "uniform:0.5,0.7,1"];
+    let want = local_with(&world, &p(dir.path(), "local-base.png"), "baseline", &four);
+    assert!(
+        std::fs::read(&out).unwrap() == want,
+        "baseline: the stream's history did not continue"
+    );
+    let (done, _, err) = frame_with(&server.url, &out, "baseline", 0, &["--sky", "cloudy"]);
+    assert!(!done && err.contains("sky 'cloudy'"), "{err}");
 
     // Over HTTP: the same frame, the same roles (a token is needed here), the node listed.
     let query = |token: &str| {

@@ -17,6 +17,7 @@
 use crate::connect::{self, RawClient};
 use crate::error::Error;
 use crate::gpu::Mode;
+use crate::light::{DEFAULT_SPP, LitOptions, Sky, Sun};
 use crate::session::{Session, WorldStream};
 use naadf_proto::DEFAULT_FRAME_DEADLINE;
 use naadf_proto::requests::{entity_pose, entity_spawn};
@@ -149,6 +150,8 @@ pub struct FrameSpec {
     /// The deadline, or the server's default ([`naadf_proto::DEFAULT_FRAME_DEADLINE`]).
     /// Sent in whole milliseconds; one under a millisecond means the default.
     pub timeout: Option<Duration>,
+    /// The options of the lit modes (ignored by the others).
+    pub lit: LitOptions,
 }
 
 impl FrameSpec {
@@ -161,6 +164,7 @@ impl FrameSpec {
             min_version: 0,
             raw: false,
             timeout: None,
+            lit: LitOptions::default(),
         }
     }
 
@@ -177,6 +181,18 @@ impl FrameSpec {
             timeout_ms: self
                 .timeout
                 .map_or(0, |t| t.as_millis().min(u128::from(u32::MAX)) as u32),
+            spp: self.lit.spp,
+            frames: self.lit.frames,
+            seed: self.lit.seed,
+            bounces: self.lit.bounces,
+            sky: self.lit.sky.map(|s| s.to_string()).unwrap_or_default(),
+            sun: match self.lit.sun {
+                None => String::new(),
+                Some(None) => "off".into(),
+                Some(Some(sun)) => sun.to_string(),
+            },
+            exposure: self.lit.exposure,
+            stream: self.lit.stream.clone(),
         }
     }
 
@@ -189,6 +205,16 @@ impl FrameSpec {
             min_version: r.min_version,
             raw: r.raw,
             timeout: (r.timeout_ms != 0).then(|| Duration::from_millis(u64::from(r.timeout_ms))),
+            lit: LitOptions {
+                spp: if r.spp == 0 { DEFAULT_SPP } else { r.spp },
+                frames: r.frames.max(1),
+                seed: r.seed,
+                bounces: r.bounces,
+                sky: (!r.sky.is_empty()).then(|| Sky::parse(&r.sky)).transpose()?,
+                sun: (!r.sun.is_empty()).then(|| Sun::parse(&r.sun)).transpose()?,
+                exposure: if r.exposure == 0.0 { 1.0 } else { r.exposure },
+                stream: r.stream.clone(),
+            },
         })
     }
 }
@@ -527,5 +553,22 @@ mod tests {
         let mut wire = spec.to_wire();
         wire.mode = "x-ray".into();
         assert_eq!(FrameSpec::from_wire(&wire), Err("unknown mode 'x-ray'".into()));
+        spec.mode = Mode::Baseline;
+        spec.lit = LitOptions {
+            spp: 9,
+            frames: 3,
+            seed: 4,
+            bounces: Some(0),
+            sky: Some(Sky::Uniform([0.5, 1.0, 2.0])),
+            sun: Some(Sun::parse("10,20,30").unwrap()),
+            exposure: 0.5,
+            stream: "me".into(),
+        };
+        assert_eq!(FrameSpec::from_wire(&spec.to_wire()), Ok(spec.clone()));
+        spec.lit.sun = Some(None);
+        assert_eq!(FrameSpec::from_wire(&spec.to_wire()), Ok(spec.clone()));
+        let mut wire = spec.to_wire();
+        wire.sky = "cloudy".into();
+        assert!(FrameSpec::from_wire(&wire).unwrap_err().contains("sky 'cloudy'"));
     }
 }

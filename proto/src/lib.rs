@@ -31,7 +31,14 @@ pub const PROTOCOL_VERSION: u32 = 1;
 
 /// The render modes a `FrameRequest` may name (render nodes advertise a subset); the
 /// server refuses any other with INVALID_ARGUMENT.
-pub const FRAME_MODES: [&str; 4] = ["albedo", "material", "normal", "steps"];
+pub const FRAME_MODES: [&str; 6] = ["albedo", "material", "normal", "steps", "pathtrace", "baseline"];
+
+/// Most samples per pixel a `FrameRequest` may ask for.
+pub const MAX_FRAME_SPP: u32 = 4096;
+/// Most frames a `FrameRequest` may ask a node to render before answering.
+pub const MAX_FRAME_FRAMES: u32 = 1024;
+/// Longest `sky`, `sun` or `stream` string of a `FrameRequest`, in bytes.
+pub const MAX_FRAME_STRING: usize = 128;
 
 /// The response metadata key of a RESOURCE_EXHAUSTED refusal that a retry may pass (the
 /// caller is over its rate limit, or the render queue is full): milliseconds to wait before

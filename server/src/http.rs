@@ -113,6 +113,15 @@ struct FrameQuery {
     mode: Option<String>,
     /// Oldest version the frame may show.
     min_version: Option<u64>,
+    /// The lit modes' options, as in `FrameRequest` (docs/RENDERING.md).
+    spp: Option<u32>,
+    frames: Option<u32>,
+    seed: Option<u32>,
+    bounces: Option<u32>,
+    sky: Option<String>,
+    sun: Option<String>,
+    exposure: Option<f32>,
+    stream: Option<String>,
 }
 
 /// A gRPC status as an HTTP status and message.
@@ -131,8 +140,9 @@ fn http_error(s: &Status) -> Response {
     (code, format!("{}\n", s.message())).into_response()
 }
 
-/// `GET /frame.png?camera=<json>&size=WxH&mode=M[&min_version=n][&token=T]`: the same
-/// request, roles and errors as `RenderFrame`. The token comes from `Authorization: Bearer`
+/// `GET /frame.png?camera=<json>&size=WxH&mode=M[&min_version=n][&token=T]`, plus the lit
+/// modes' `spp`, `frames`, `seed`, `bounces`, `sky`, `sun`, `exposure` and `stream`: the
+/// same request, roles and errors as `RenderFrame`. The token comes from `Authorization: Bearer`
 /// or the query; a request without one from another machine is refused even in open mode.
 /// Authentication comes first: a caller without a valid token learns nothing about the
 /// other parameters.
@@ -176,6 +186,14 @@ async fn frame_png(
         min_version: q.min_version.unwrap_or(0),
         raw: false,
         timeout_ms: 0,
+        spp: q.spp.unwrap_or(0),
+        frames: q.frames.unwrap_or(0),
+        seed: q.seed.unwrap_or(0),
+        bounces: q.bounces,
+        sky: q.sky.unwrap_or_default(),
+        sun: q.sun.unwrap_or_default(),
+        exposure: q.exposure.unwrap_or(0.0),
+        stream: q.stream.unwrap_or_default(),
     };
     if let Err(s) = crate::service::check_frame(&req) {
         return http_error(&s);

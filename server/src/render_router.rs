@@ -75,8 +75,14 @@ struct Inner {
     nodes: BTreeMap<u64, Node>,
     /// Job id → (node, where its answer goes).
     pending: HashMap<u64, (u64, oneshot::Sender<Answer>)>,
+    /// Camera stream → the node that renders it (it keeps the stream's history).
+    streams: HashMap<String, u64>,
     next_id: u64,
 }
+
+/// Most camera streams the router remembers; past it, one is forgotten per new stream
+/// (its next frame may then go to another node and start a new history there).
+const MAX_STREAMS: usize = 4096;
 
 /// The router.
 pub struct Router {
@@ -132,6 +138,7 @@ impl Router {
     pub fn unregister(&self, id: u64) {
         let mut g = self.lock();
         g.nodes.remove(&id);
+        g.streams.retain(|_, node| *node != id);
         let gone: Vec<u64> = g
             .pending
             .iter()
@@ -187,8 +194,9 @@ impl Router {
             .collect()
     }
 
-    /// Sends `req` to the least loaded node that can take it, other than `avoid`; returns
-    /// the node and where its answer arrives.
+    /// Sends `req` to the node of its camera stream if it has one that can still take it,
+    /// else to the least loaded node that can, other than `avoid`; returns the node and
+    /// where its answer arrives.
     fn dispatch(
         &self,
         req: &FrameRequest,
@@ -199,12 +207,18 @@ impl Router {
         let fits = |n: &Node| {
             n.hello.modes.contains(&req.mode) && req.width <= n.hello.max_width && req.height <= n.hello.max_height
         };
-        let Some((&node, _)) = g
-            .nodes
-            .iter()
-            .filter(|(id, n)| Some(**id) != avoid && fits(n))
-            .min_by_key(|(id, n)| (n.inflight, **id))
-        else {
+        let sticky = (!req.stream.is_empty())
+            .then(|| g.streams.get(&req.stream).copied())
+            .flatten()
+            .filter(|id| Some(*id) != avoid && g.nodes.get(id).is_some_and(fits));
+        let least_loaded = || {
+            g.nodes
+                .iter()
+                .filter(|(id, n)| Some(**id) != avoid && fits(n))
+                .min_by_key(|(id, n)| (n.inflight, **id))
+                .map(|(&id, _)| id)
+        };
+        let Some(node) = sticky.or_else(least_loaded) else {
             return Err(Status::unavailable(format!(
                 "no render node can take a {}x{} {} frame ({} registered)",
                 req.width,
@@ -217,6 +231,14 @@ impl Router {
             return Err(Status::resource_exhausted(format!(
                 "the render queue is full ({inflight} frames in flight); retry later"
             )));
+        }
+        if !req.stream.is_empty() && g.streams.get(&req.stream) != Some(&node) {
+            if g.streams.len() >= MAX_STREAMS
+                && let Some(old) = g.streams.keys().next().cloned()
+            {
+                g.streams.remove(&old);
+            }
+            g.streams.insert(req.stream.clone(), node);
         }
         g.next_id += 1;
         let id = g.next_id;
@@ -324,6 +346,7 @@ mod tests {
             min_version: 0,
             raw: true,
             timeout_ms,
+            ..Default::default()
         }
     }
 
@@ -364,6 +387,28 @@ mod tests {
         big.width = 65;
         assert_eq!(r.render(big).await.unwrap_err().code(), Code::Unavailable);
         assert_eq!(r.render(req("material", 0)).await.unwrap().version, 1);
+    }
+
+    #[tokio::test]
+    async fn a_camera_stream_stays_on_its_node_while_the_node_can_take_it() {
+        let r = Arc::new(Router::new(DEFAULT_QUEUE, Arc::default()));
+        let first = node(&r, &["baseline"], Some(5));
+        node(&r, &["baseline"], Some(6));
+        let stream = |name: &str| FrameRequest {
+            stream: name.into(),
+            ..req("baseline", 0)
+        };
+        assert_eq!(r.render(stream("s")).await.unwrap().version, 5);
+        // The stream's node is now the busier one; the stream stays, others go elsewhere.
+        r.lock().nodes.get_mut(&first).unwrap().inflight = 3;
+        assert_eq!(r.render(stream("s")).await.unwrap().version, 5);
+        assert_eq!(r.render(stream("t")).await.unwrap().version, 6);
+        assert_eq!(r.render(req("baseline", 0)).await.unwrap().version, 6);
+        // When the node leaves, the stream moves and stays on its new node.
+        r.unregister(first);
+        assert_eq!(r.render(stream("s")).await.unwrap().version, 6);
+        let g = r.lock();
+        assert_eq!(g.streams.get("s"), g.streams.get("t"));
     }
 
     #[tokio::test]

@@ -63,6 +63,21 @@ pub fn check_frame(req: &FrameRequest) -> Result<(), Status> {
             naadf_proto::FRAME_MODES.join(", ")
         )));
     }
+    use naadf_proto::{MAX_FRAME_FRAMES, MAX_FRAME_SPP, MAX_FRAME_STRING};
+    if req.spp > MAX_FRAME_SPP || req.frames > MAX_FRAME_FRAMES {
+        return Err(Status::invalid_argument(format!(
+            "{} spp and {} frames: at most {MAX_FRAME_SPP} and {MAX_FRAME_FRAMES}",
+            req.spp, req.frames
+        )));
+    }
+    if [&req.sky, &req.sun, &req.stream]
+        .iter()
+        .any(|s| s.len() > MAX_FRAME_STRING)
+    {
+        return Err(Status::invalid_argument(format!(
+            "sky, sun and stream are at most {MAX_FRAME_STRING} bytes each"
+        )));
+    }
     Ok(())
 }
 

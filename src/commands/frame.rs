@@ -3,9 +3,10 @@
 
 use super::print_json;
 use super::remote::{ServerArgs, block_on};
-use super::render::{parse_image_size, parse_mode, read_camera};
+use super::render::{LightArgs, parse_image_size, parse_mode, read_camera};
 use anyhow::{Context, Result};
 use naadf_client::FrameSpec;
+use naadf_client::light::LitOptions;
 use std::path::PathBuf;
 use std::time::Duration;
 
@@ -20,9 +21,18 @@ pub struct Args {
     /// Image size `WxH`.
     #[arg(long, default_value = "1280x720", value_parser = parse_image_size)]
     size: (u32, u32),
-    /// What to show (a mode of the render pass, as render nodes serve them).
+    /// What to show: albedo, material, normal, steps, pathtrace or baseline.
     #[arg(long, default_value = "albedo", value_parser = parse_mode)]
     mode: naadf_client::gpu::Mode,
+    #[command(flatten)]
+    light: LightArgs,
+    /// Baseline frames the node renders before answering, continuing the stream's history.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
+    frames: u32,
+    /// Names this requester's camera stream: its frames go to one node, which keeps the
+    /// stream's history (baseline) and sums (pathtrace) between requests.
+    #[arg(long, default_value = "")]
+    stream: String,
     /// The oldest world version the frame may show.
     #[arg(long, default_value_t = 0)]
     min_version: u64,
@@ -51,6 +61,11 @@ pub fn run(a: Args) -> Result<()> {
     let spec = FrameSpec {
         min_version: a.min_version,
         timeout: (a.timeout_ms != 0).then(|| Duration::from_millis(u64::from(a.timeout_ms))),
+        lit: LitOptions {
+            frames: a.frames,
+            stream: a.stream.clone(),
+            ..a.light.options()?
+        },
         ..FrameSpec::new(read_camera(&a.camera)?, a.size, a.mode)
     };
     let reply = block_on(async { Ok(a.server.connect().await?.frame(&spec).await?) })?;

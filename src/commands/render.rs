@@ -9,7 +9,7 @@ use super::{load_world, print_json, progress, seconds};
 use anyhow::{Context, Result, bail};
 use naadf_client::gpu::{Frame, Headless, Mode, write_gbuffer};
 use naadf_client::light::hdr::Radiance;
-use naadf_client::light::{DEFAULT_LIT_BOUNCES, DEFAULT_PATHTRACE_BOUNCES, Light, Sky, Sun};
+use naadf_client::light::{DEFAULT_LIT_BOUNCES, DEFAULT_PATHTRACE_BOUNCES, Light, LitOptions, Sky, Sun};
 use naadf_world::World;
 use naadf_world::camera::Camera;
 use std::path::PathBuf;
@@ -35,8 +35,8 @@ pub struct Args {
     size: (u32, u32),
     /// What to show: albedo, material, normal, steps, pathtrace (the light model,
     /// path-traced) or baseline (1-spp path tracing with an exponential TAA).
-    #[arg(long, default_value = "albedo", value_parser = parse_render_mode)]
-    mode: RenderMode,
+    #[arg(long, default_value = "albedo", value_parser = parse_mode)]
+    mode: Mode,
     /// Frames to render; the last is written. All identical in the render-pass modes; for
     /// baseline, each adds one sample per pixel to the history. Not for pathtrace, which
     /// takes --spp.
@@ -44,6 +44,10 @@ pub struct Args {
     frames: Option<u32>,
     #[command(flatten)]
     light: LightArgs,
+    /// Also write the linear radiance before exposure and tone mapping (lit modes): PFM, or
+    /// OpenEXR for a name ending in `.exr`.
+    #[arg(long)]
+    hdr: Option<PathBuf>,
     /// PNG file to write.
     #[arg(short, long)]
     output: PathBuf,
@@ -58,7 +62,7 @@ pub struct Args {
     json: bool,
 }
 
-/// The options of the lit modes (docs/RENDERING.md, "Light").
+/// The options of the lit modes (docs/RENDERING.md §3a–b; `render`, `frame`).
 #[derive(clap::Args)]
 pub struct LightArgs {
     /// Samples per pixel in total (pathtrace; default 64).
@@ -80,10 +84,6 @@ pub struct LightArgs {
     /// Exposure: the PNG holds sRGB(ACES(radiance · exposure)).
     #[arg(long)]
     exposure: Option<f32>,
-    /// Also write the linear radiance before exposure and tone mapping: PFM, or OpenEXR
-    /// for a name ending in `.exr`.
-    #[arg(long)]
-    hdr: Option<PathBuf>,
 }
 
 /// A parsed `--sun` (`off` is a value, so it is not an `Option` itself).
@@ -94,26 +94,12 @@ fn parse_sun(s: &str) -> Result<SunArg, String> {
     Sun::parse(s).map(SunArg)
 }
 
-/// Samples per pixel of `pathtrace` when `--spp` is not given.
-pub const DEFAULT_SPP: u32 = 64;
-
 /// What `run` does, decided from the arguments before any work.
 enum Job {
     /// Frames of the render pass.
     Frame(Mode),
-    /// A path-traced frame.
-    Path(LitSettings),
-    /// Frames of the baseline.
-    Baseline(LitSettings),
-}
-
-/// How a lit frame is made: the light, the samples and the output.
-struct LitSettings {
-    light: Light,
-    /// Samples per pixel (pathtrace).
-    spp: u32,
-    seed: u32,
-    exposure: f32,
+    /// A path-traced frame, or baseline frames: the options and the light.
+    Lit(LitOptions, Light),
 }
 
 impl LightArgs {
@@ -126,67 +112,25 @@ impl LightArgs {
             ("--sky", self.sky.is_some()),
             ("--sun", self.sun.is_some()),
             ("--exposure", self.exposure.is_some()),
-            ("--hdr", self.hdr.is_some()),
         ];
         flags.iter().filter(|f| f.1).map(|f| f.0).collect()
     }
 
-    /// The settings of a lit frame, with the defaults of docs/RENDERING.md (`bounces` is
-    /// the mode's default).
-    fn settings(&self, bounces: u32) -> Result<LitSettings> {
-        let exposure = self.exposure.unwrap_or(1.0);
-        if !(exposure.is_finite() && exposure > 0.0) {
-            bail!("--exposure {exposure}: must be a positive finite number");
-        }
-        let light = Light::new(
-            self.sky.unwrap_or(Sky::Physical),
-            self.sun.map(|s| s.0),
-            self.bounces.unwrap_or(bounces),
-        )
-        .map_err(anyhow::Error::msg)?;
-        Ok(LitSettings {
-            light,
-            spp: self.spp.unwrap_or(DEFAULT_SPP),
-            seed: self.seed.unwrap_or(0),
-            exposure,
-        })
+    /// The options given, over the defaults of docs/RENDERING.md.
+    pub fn options(&self) -> Result<LitOptions> {
+        let d = LitOptions::default();
+        let options = LitOptions {
+            spp: self.spp.unwrap_or(d.spp),
+            seed: self.seed.unwrap_or(d.seed),
+            bounces: self.bounces,
+            sky: self.sky,
+            sun: self.sun.map(|s| s.0),
+            exposure: self.exposure.unwrap_or(d.exposure),
+            ..d
+        };
+        options.check().map_err(anyhow::Error::msg)?;
+        Ok(options)
     }
-}
-
-/// What `render` draws: a frame of the render pass, or the path tracer's estimate.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum RenderMode {
-    /// A mode of the render pass (also served by render nodes).
-    Frame(Mode),
-    /// The light model, path-traced progressively (`pathtrace`).
-    PathTrace,
-    /// One path-traced sample per pixel per frame with an exponential TAA (`baseline`).
-    Baseline,
-}
-
-impl RenderMode {
-    /// The CLI name.
-    pub fn name(self) -> &'static str {
-        match self {
-            RenderMode::Frame(m) => m.name(),
-            RenderMode::PathTrace => "pathtrace",
-            RenderMode::Baseline => "baseline",
-        }
-    }
-}
-
-/// Parses a `render` mode name.
-pub fn parse_render_mode(s: &str) -> Result<RenderMode, String> {
-    if let Some(lit) = [RenderMode::PathTrace, RenderMode::Baseline]
-        .into_iter()
-        .find(|m| m.name() == s)
-    {
-        return Ok(lit);
-    }
-    Mode::parse(s).map(RenderMode::Frame).ok_or_else(|| {
-        let names: Vec<_> = Mode::ALL.iter().map(|m| m.name()).collect();
-        format!("unknown mode '{s}' (one of: {}, pathtrace, baseline)", names.join(", "))
-    })
 }
 
 /// Parses `WxH`.
@@ -252,19 +196,27 @@ struct Summary {
 pub fn run(a: Args) -> Result<()> {
     // Refuse what the mode would ignore before any work.
     let job = match a.mode {
-        RenderMode::PathTrace => {
+        Mode::PathTrace => {
             if a.frames.is_some() {
                 bail!("--frames does not apply to pathtrace: give the samples per pixel with --spp");
             }
             refuse_for(&a, &["--gbuffer", "--camera-path"])?;
-            Job::Path(a.light.settings(DEFAULT_PATHTRACE_BOUNCES)?)
+            let options = a.light.options()?;
+            let light = options.light(DEFAULT_PATHTRACE_BOUNCES).map_err(anyhow::Error::msg)?;
+            Job::Lit(options, light)
         }
-        RenderMode::Baseline => {
+        Mode::Baseline => {
             refuse_for(&a, &["--gbuffer", "--spp"])?;
-            Job::Baseline(a.light.settings(DEFAULT_LIT_BOUNCES)?)
+            let options = LitOptions {
+                frames: a.frames.unwrap_or(1),
+                ..a.light.options()?
+            };
+            let light = options.light(DEFAULT_LIT_BOUNCES).map_err(anyhow::Error::msg)?;
+            Job::Lit(options, light)
         }
-        RenderMode::Frame(mode) => {
+        mode => {
             let mut lit = a.light.given();
+            lit.extend(a.hdr.as_ref().map(|_| "--hdr"));
             lit.extend(a.camera_path.as_ref().map(|_| "--camera-path"));
             if let Some(flag) = lit.first() {
                 bail!("{flag} applies to the lit modes only, not to --mode {}", mode.name());
@@ -284,8 +236,10 @@ pub fn run(a: Args) -> Result<()> {
     let mut headless = Headless::new()?;
     let (frame, summary) = match &job {
         Job::Frame(mode) => render_frames(&mut headless, &world, &cameras[0], &a, *mode)?,
-        Job::Path(settings) => path_trace(&mut headless, &world, &cameras[0], &a, settings)?,
-        Job::Baseline(settings) => baseline(&mut headless, &world, &cameras, &a, settings)?,
+        Job::Lit(options, light) if a.mode == Mode::PathTrace => {
+            path_trace(&mut headless, &world, &cameras[0], &a, options, light)?
+        }
+        Job::Lit(options, light) => baseline(&mut headless, &world, &cameras, &a, options, light)?,
     };
     let png = frame.png()?;
     std::fs::write(&a.output, png).with_context(|| format!("cannot write {}", a.output.display()))?;
@@ -348,11 +302,12 @@ fn path_trace(
     world: &World,
     camera: &Camera,
     a: &Args,
-    s: &LitSettings,
+    s: &LitOptions,
+    light: &Light,
 ) -> Result<(Frame, Summary)> {
     let bar = progress(u64::from(s.spp), "path tracing", "spp");
     let t0 = Instant::now();
-    let radiance = headless.path_trace(world, camera, a.size, &s.light, s.seed, s.spp, &mut |n| {
+    let radiance = headless.path_trace(world, camera, a.size, light, s.seed, s.spp, &mut |n| {
         bar.set_position(u64::from(n))
     })?;
     bar.finish_and_clear();
@@ -369,14 +324,15 @@ fn baseline(
     world: &World,
     cameras: &[Camera],
     a: &Args,
-    s: &LitSettings,
+    s: &LitOptions,
+    light: &Light,
 ) -> Result<(Frame, Summary)> {
-    let frames = a.frames.unwrap_or(1);
+    let frames = s.frames;
     let bar = progress(u64::from(frames), "baseline", "frames");
     let t0 = Instant::now();
     for i in 0..frames {
         let camera = &cameras[(i as usize).min(cameras.len() - 1)];
-        headless.baseline_frame(world, camera, a.size, &s.light, s.seed)?;
+        headless.baseline_frame(world, camera, a.size, light, s.seed)?;
         bar.set_position(u64::from(i + 1));
     }
     let radiance = headless.baseline_radiance()?;
@@ -390,12 +346,12 @@ fn lit_output(
     headless: &Headless,
     world: &World,
     a: &Args,
-    s: &LitSettings,
+    s: &LitOptions,
     radiance: &Radiance,
     frames: u32,
     frame_ms: f64,
 ) -> Result<(Frame, Summary)> {
-    if let Some(path) = &a.light.hdr {
+    if let Some(path) = &a.hdr {
         radiance.save(path).map_err(anyhow::Error::msg)?;
     }
     let frame = radiance.tone_mapped(s.exposure);

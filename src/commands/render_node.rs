@@ -23,7 +23,11 @@ pub struct Args {
     #[arg(long, default_value = "4096x4096", value_parser = parse_image_size)]
     max_size: (u32, u32),
     /// Modes this node renders (comma-separated).
-    #[arg(long, value_delimiter = ',', default_value = "albedo,material,normal,steps")]
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "albedo,material,normal,steps,pathtrace,baseline"
+    )]
     modes: Vec<String>,
     /// Seconds between reconnection attempts.
     #[arg(long, default_value_t = 1.0)]
@@ -57,7 +61,7 @@ pub fn run(a: Args) -> Result<()> {
 
 /// Renders one job's frame, PNG unless raw RGBA was asked for.
 fn render_frame(headless: &mut Headless, world: &World, spec: &FrameSpec) -> Result<FrameImage> {
-    let frame = headless.frame(world, &spec.camera, spec.size, spec.mode, false)?;
+    let frame = headless.render_spec(world, spec)?;
     let (width, height) = (frame.width, frame.height);
     let data = if spec.raw { frame.rgba } else { frame.png()? };
     Ok(FrameImage { width, height, data })

@@ -26,7 +26,7 @@ struct Subject {
 }
 
 /// The buffers of a running history.
-struct History {
+pub struct History {
     subject: Subject,
     /// This frame's samples.
     samples: wgpu::Buffer,
@@ -88,6 +88,12 @@ impl Baseline {
     /// Frames in the current history.
     pub fn frames(&self) -> u32 {
         self.history.as_ref().map_or(0, |h| h.frames)
+    }
+
+    /// Swaps the history with `other`: a caller that renders several camera streams in
+    /// turn keeps each stream's history and swaps it in before rendering it.
+    pub fn swap_history(&mut self, other: &mut Option<History>) {
+        std::mem::swap(&mut self.history, other);
     }
 
     /// Renders the next frame of `camera`'s view of `world` (sample number = frames so far).

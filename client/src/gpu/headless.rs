@@ -1,13 +1,14 @@
 //! [`Headless`]: frames of a changing world without a window — a device, a renderer, a
 //! path tracer and a GPU copy of the world that follows it (`naadf render`, `naadf replay`).
 
-use super::baseline::Baseline;
+use super::baseline::{Baseline, History};
 use super::context::{Gpu, GpuError};
-use super::pathtrace::PathTracer;
+use super::pathtrace::{Accumulation, PathTracer};
 use super::render::{Frame, Mode, Renderer};
 use super::world::GpuWorld;
-use crate::light::Light;
+use crate::FrameSpec;
 use crate::light::hdr::Radiance;
+use crate::light::{DEFAULT_LIT_BOUNCES, DEFAULT_PATHTRACE_BOUNCES, Light};
 use naadf_world::World;
 use naadf_world::camera::Camera;
 
@@ -19,6 +20,19 @@ pub struct Headless {
     path_tracer: PathTracer,
     baseline: Baseline,
     world: Option<GpuWorld>,
+    /// The camera streams of [`Headless::render_spec`], least recently used first.
+    streams: Vec<Stream>,
+}
+
+/// Most camera streams a headless renderer keeps the state of; the least recently used
+/// one is dropped for a new one.
+pub const MAX_STREAMS: usize = 8;
+
+/// What a camera stream keeps between its frames.
+struct Stream {
+    name: String,
+    sums: Option<Accumulation>,
+    history: Option<History>,
 }
 
 impl Headless {
@@ -34,6 +48,7 @@ impl Headless {
             path_tracer,
             baseline,
             world: None,
+            streams: Vec::new(),
         })
     }
 
@@ -86,5 +101,55 @@ impl Headless {
         self.baseline
             .radiance(&self.gpu)?
             .ok_or_else(|| GpuError::Readback("no baseline frame was rendered".into()))
+    }
+
+    /// Renders the frame `spec` asks for, in any mode: the lit modes continue the state of
+    /// `spec.lit.stream` (its path-tracer sums and its baseline history) and are
+    /// tone-mapped with its exposure.
+    pub fn render_spec(&mut self, world: &World, spec: &FrameSpec) -> Result<Frame, GpuError> {
+        if !spec.mode.is_lit() {
+            return self.frame(world, &spec.camera, spec.size, spec.mode, false);
+        }
+        let lit = &spec.lit;
+        lit.check().map_err(GpuError::Unsupported)?;
+        let bounces = match spec.mode {
+            Mode::PathTrace => DEFAULT_PATHTRACE_BOUNCES,
+            _ => DEFAULT_LIT_BOUNCES,
+        };
+        let light = lit.light(bounces).map_err(GpuError::Unsupported)?;
+        let at = match self.streams.iter().position(|s| s.name == lit.stream) {
+            Some(at) => at,
+            None => {
+                if self.streams.len() == MAX_STREAMS {
+                    self.streams.remove(0);
+                }
+                self.streams.push(Stream {
+                    name: lit.stream.clone(),
+                    sums: None,
+                    history: None,
+                });
+                self.streams.len() - 1
+            }
+        };
+        let mut stream = self.streams.remove(at);
+        self.path_tracer.swap_sums(&mut stream.sums);
+        self.baseline.swap_history(&mut stream.history);
+        let radiance = self.render_lit(world, spec, &light);
+        self.path_tracer.swap_sums(&mut stream.sums);
+        self.baseline.swap_history(&mut stream.history);
+        self.streams.push(stream);
+        Ok(radiance?.tone_mapped(lit.exposure))
+    }
+
+    /// The radiance of a lit `spec` with the stream's state swapped in.
+    fn render_lit(&mut self, world: &World, spec: &FrameSpec, light: &Light) -> Result<Radiance, GpuError> {
+        let lit = &spec.lit;
+        if spec.mode == Mode::PathTrace {
+            return self.path_trace(world, &spec.camera, spec.size, light, lit.seed, lit.spp, &mut |_| {});
+        }
+        for _ in 0..lit.frames {
+            self.baseline_frame(world, &spec.camera, spec.size, light, lit.seed)?;
+        }
+        self.baseline_radiance()
     }
 }

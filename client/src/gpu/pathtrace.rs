@@ -56,7 +56,7 @@ struct Subject {
 }
 
 /// The running sums on the device.
-struct Accumulation {
+pub struct Accumulation {
     subject: Subject,
     sums: wgpu::Buffer,
     samples: u32,
@@ -80,6 +80,38 @@ impl PathTracer {
     /// Samples per pixel in the running sums.
     pub fn samples(&self) -> u32 {
         self.acc.as_ref().map_or(0, |a| a.samples)
+    }
+
+    /// Adds one sample per pixel to the sums of this view (the first, if the view, the light,
+    /// the seed or the world changed) and returns their mean: progressive rendering, one
+    /// sample per frame, in a viewer.
+    pub fn add_sample(
+        &mut self,
+        gpu: &Gpu,
+        world: &GpuWorld,
+        camera: &Camera,
+        size: (u32, u32),
+        light: &Light,
+        seed: u32,
+    ) -> Result<Radiance, GpuError> {
+        let subject = Subject {
+            camera: *camera,
+            size,
+            light: *light,
+            seed,
+            generation: world.generation(),
+        };
+        let next = match &self.acc {
+            Some(a) if a.subject == subject => a.samples + 1,
+            _ => 1,
+        };
+        self.render(gpu, world, camera, size, light, seed, next, &mut |_| {})
+    }
+
+    /// Swaps the running sums with `other`: a caller that renders several views in turn
+    /// keeps each view's sums and swaps them in before rendering it.
+    pub fn swap_sums(&mut self, other: &mut Option<Accumulation>) {
+        std::mem::swap(&mut self.acc, other);
     }
 
     /// Brings the sums of `camera`'s view of `world` under `light` with `seed` to `spp`

@@ -22,11 +22,23 @@ pub enum Mode {
     Normal,
     /// Heat map of the cells the primary ray visited.
     Steps,
+    /// The light model, path-traced progressively ([`super::PathTracer`]).
+    PathTrace,
+    /// One path-traced sample per pixel per frame with an exponential TAA
+    /// ([`super::Baseline`]).
+    Baseline,
 }
 
 impl Mode {
     /// Every mode, in CLI order.
-    pub const ALL: [Mode; 4] = [Mode::Albedo, Mode::Material, Mode::Normal, Mode::Steps];
+    pub const ALL: [Mode; 6] = [
+        Mode::Albedo,
+        Mode::Material,
+        Mode::Normal,
+        Mode::Steps,
+        Mode::PathTrace,
+        Mode::Baseline,
+    ];
 
     /// The CLI name.
     pub fn name(self) -> &'static str {
@@ -35,6 +47,8 @@ impl Mode {
             Mode::Material => "material",
             Mode::Normal => "normal",
             Mode::Steps => "steps",
+            Mode::PathTrace => "pathtrace",
+            Mode::Baseline => "baseline",
         }
     }
 
@@ -43,13 +57,21 @@ impl Mode {
         Mode::ALL.into_iter().find(|m| m.name() == s)
     }
 
-    /// The mode's code in the shaders (their `MODE_*` constants).
+    /// Whether the mode renders the light model (docs/RENDERING.md §3a–b) rather than a
+    /// pass of [`Renderer`].
+    pub fn is_lit(self) -> bool {
+        matches!(self, Mode::PathTrace | Mode::Baseline)
+    }
+
+    /// The mode's code in the render pass (its `MODE_*` constants); the lit modes have
+    /// none, as that pass does not render them.
     pub(super) const fn code(self) -> u32 {
         match self {
             Mode::Albedo => 0,
             Mode::Material => 1,
             Mode::Normal => 2,
             Mode::Steps => 3,
+            Mode::PathTrace | Mode::Baseline => u32::MAX,
         }
     }
 }
@@ -215,6 +237,12 @@ impl Renderer {
         mode: Mode,
         gbuffer: bool,
     ) -> Result<Frame, GpuError> {
+        if mode.is_lit() {
+            return Err(GpuError::Unsupported(format!(
+                "the render pass does not render {}: the path tracer and the baseline do",
+                mode.name()
+            )));
+        }
         let pixels = check_frame_size(gpu, (width, height), 16)?;
         let rays = CameraRays::new(camera, (width, height))?;
         let pipeline = self.pipes.get(gpu, world, Loop::Hierarchy, true)?;

@@ -184,6 +184,86 @@ impl Light {
     }
 }
 
+impl std::fmt::Display for Sky {
+    /// The CLI syntax ([`Sky::parse`] reads it back).
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Sky::Physical => write!(f, "physical"),
+            Sky::Uniform([r, g, b]) => write!(f, "uniform:{r},{g},{b}"),
+        }
+    }
+}
+
+impl std::fmt::Display for Sun {
+    /// The CLI syntax `AZ,EL,E` ([`Sun::parse`] reads it back).
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{},{},{}", self.azimuth, self.elevation, self.irradiance)
+    }
+}
+
+/// Samples per pixel of `pathtrace` when none are given.
+pub const DEFAULT_SPP: u32 = 64;
+
+/// The options of a lit frame, as the CLI and a frame request give them (docs/RENDERING.md
+/// §3a–b); `None` takes the mode's default.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LitOptions {
+    /// Samples per pixel (`pathtrace`).
+    pub spp: u32,
+    /// Frames to render (`baseline`).
+    pub frames: u32,
+    /// Seed of the random samples.
+    pub seed: u32,
+    /// Scattered rays after the camera ray.
+    pub bounces: Option<u32>,
+    /// The sky (default physical).
+    pub sky: Option<Sky>,
+    /// The sun: `Some(None)` is `off` (default: by the sky, see [`Light::new`]).
+    pub sun: Option<Option<Sun>>,
+    /// Exposure of the tone-mapped image.
+    pub exposure: f32,
+    /// The requester's camera stream: frames of one stream continue one history ("" for
+    /// none).
+    pub stream: String,
+}
+
+impl Default for LitOptions {
+    fn default() -> Self {
+        LitOptions {
+            spp: DEFAULT_SPP,
+            frames: 1,
+            seed: 0,
+            bounces: None,
+            sky: None,
+            sun: None,
+            exposure: 1.0,
+            stream: String::new(),
+        }
+    }
+}
+
+impl LitOptions {
+    /// The light for a frame of a mode whose default bounce count is `bounces`.
+    pub fn light(&self, bounces: u32) -> Result<Light, String> {
+        Light::new(
+            self.sky.unwrap_or(Sky::Physical),
+            self.sun,
+            self.bounces.unwrap_or(bounces),
+        )
+    }
+
+    /// Checks the numbers: at least one sample and frame, a positive finite exposure.
+    pub fn check(&self) -> Result<(), String> {
+        if self.spp == 0 || self.frames == 0 {
+            return Err("a lit frame needs at least one sample per pixel and one frame".into());
+        }
+        if !(self.exposure.is_finite() && self.exposure > 0.0) {
+            return Err(format!("exposure {}: must be a positive finite number", self.exposure));
+        }
+        Ok(())
+    }
+}
+
 fn parse_numbers(s: &str) -> Result<Vec<f64>, String> {
     s.split(',')
         .map(|v| {
@@ -214,6 +294,15 @@ mod tests {
         // The mean cosine of a uniform cone sample is 1 − (1 − cos r)/2.
         let mean_cos = 1.0 - Sun::one_minus_cos() / 2.0;
         assert!((sun.sample_weight() * mean_cos - 3.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn sky_and_sun_print_what_they_parse() {
+        for sky in ["physical", "uniform:0.25,1,3"] {
+            assert_eq!(Sky::parse(sky).unwrap().to_string(), sky);
+        }
+        let sun = Sun::parse("300.5,-2,3").unwrap().unwrap();
+        assert_eq!(Sun::parse(&sun.to_string()).unwrap(), Some(sun));
     }
 
     #[test]

@@ -26,7 +26,8 @@ pub use pick::{Click, edit_for_click};
 pub use present::Presenter;
 
 use crate::client::ServerAddress;
-use crate::gpu::{Frame, Gpu, GpuError, GpuWorld, Mode, Renderer};
+use crate::gpu::{Baseline, Frame, Gpu, GpuError, GpuWorld, Mode, PathTracer, Renderer};
+use crate::light::{DEFAULT_LIT_BOUNCES, DEFAULT_PATHTRACE_BOUNCES, LitOptions};
 use crate::mirror::{Mirror, MirrorError};
 use naadf_world::camera::Camera;
 use naadf_world::raysets::fixed_cameras;
@@ -169,7 +170,43 @@ struct Graphics {
     gpu: Gpu,
     presenter: Presenter,
     renderer: Renderer,
+    path_tracer: PathTracer,
+    baseline: Baseline,
     world: Option<GpuWorld>,
+}
+
+impl Graphics {
+    /// One frame of `mode` of the synced world: the lit modes with their defaults
+    /// (docs/RENDERING.md §3a–b), the path tracer adding one sample per frame while the view
+    /// and the world stay the same.
+    fn render(&mut self, camera: &Camera, size: (u32, u32), mode: Mode) -> Result<Frame, GpuError> {
+        let Graphics {
+            gpu,
+            renderer,
+            path_tracer,
+            baseline,
+            world,
+            ..
+        } = self;
+        let gw = world
+            .as_ref()
+            .ok_or_else(|| GpuError::Unsupported("no world on the device yet".into()))?;
+        let lit = LitOptions::default();
+        let light = |bounces| lit.light(bounces).map_err(GpuError::Unsupported);
+        let radiance = match mode {
+            Mode::PathTrace => {
+                path_tracer.add_sample(gpu, gw, camera, size, &light(DEFAULT_PATHTRACE_BOUNCES)?, lit.seed)?
+            }
+            Mode::Baseline => {
+                baseline.frame(gpu, gw, camera, size, &light(DEFAULT_LIT_BOUNCES)?, lit.seed)?;
+                baseline
+                    .radiance(gpu)?
+                    .ok_or_else(|| GpuError::Readback("no baseline frame".into()))?
+            }
+            _ => return renderer.render(gpu, gw, camera, size, mode, false),
+        };
+        Ok(radiance.tone_mapped(lit.exposure))
+    }
 }
 
 struct App {
@@ -218,10 +255,14 @@ impl App {
         let size = window.inner_size();
         let presenter = Presenter::new(&gpu, surface, (size.width, size.height))?;
         let renderer = Renderer::new(&gpu);
+        let path_tracer = PathTracer::new(&gpu);
+        let baseline = Baseline::new(&gpu);
         self.gfx = Some(Graphics {
             gpu,
             presenter,
             renderer,
+            path_tracer,
+            baseline,
             world: None,
         });
         self.window = Some(window);
@@ -361,18 +402,19 @@ impl App {
             };
         }
         self.last_frame = Some(now);
-        let gw = gfx.world.as_ref().expect("synced above");
         let size = gfx.presenter.size();
-        let mut frame: Frame = gfx
-            .renderer
-            .render(&gfx.gpu, gw, &fly.camera, size, self.opts.mode, false)?;
+        let mut frame = gfx.render(&fly.camera, size, self.opts.mode)?;
         let swatch = world.materials().get(self.material).map(|m| m.albedo.map(srgb8));
+        let mode = match self.opts.mode {
+            Mode::PathTrace => format!("pathtrace {} spp", gfx.path_tracer.samples()),
+            m => m.name().to_owned(),
+        };
         let mut lines = vec![format!(
-            "{:.1} fps  v{}  {} clients  {}",
+            "{:.1} fps {:.1} ms  v{}  {} clients  {mode}",
             self.fps,
+            1e3 / self.fps.max(1e-3),
             world.version(),
             self.clients,
-            self.opts.mode.name()
         )];
         if !self.notice.is_empty() {
             lines.push(self.notice.clone());
