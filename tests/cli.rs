@@ -591,7 +591,7 @@ fn render_pathtrace_writes_radiance_and_refuses_bad_light() {
         (&["--sun", "0,91,1"], "elevation"),
         (&["--spp", "0"], "0 is not in 1.."),
         (&["--frames", "2"], "--frames does not apply to pathtrace"),
-        (&["--exposure", "0"], "--exposure 0: must be a positive"),
+        (&["--exposure", "0"], "exposure 0: must be a positive"),
         (&["--bounces", "65"], "65 is not in 0..=64"),
         (&["--size", "20000x10"], "frame size"),
     ] {
