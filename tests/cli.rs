@@ -647,6 +647,37 @@ fn render_pathtrace_writes_radiance_and_refuses_bad_light() {
         None,
         "--camera-path applies to the lit modes only",
     );
+
+    // bench gi: references, the noise floor between them, and the baseline after each
+    // frame count; more frames come closer to the reference.
+    let out = ok(
+        &[
+            "bench",
+            "gi",
+            &world,
+            "--camera",
+            camera,
+            "--size",
+            "24x16",
+            "--reference-spp",
+            "16",
+            "--frames",
+            "1,16",
+            "--json",
+        ],
+        None,
+    );
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["reference_spp"], 16);
+    assert!(v["noise_floor"]["flip"].as_f64().unwrap() > 0.0, "two seeds differ");
+    let base = &v["modes"]["baseline"];
+    let mse = |f: &str| base[f]["rel_mse"].as_f64().unwrap();
+    assert!(mse("16") < mse("1"), "{base}");
+    fails(
+        &["bench", "gi", &world, "--frames", "8,4", "--reference-spp", "1"],
+        None,
+        "increasing frame counts",
+    );
 }
 
 #[test]

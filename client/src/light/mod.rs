@@ -5,7 +5,8 @@
 //! ([`cpu::CpuPathTracer`]), which walks the CPU traversal and serves as a second method in
 //! the tests. This module holds what both share: the sky and sun settings and their CLI
 //! syntax ([`Sky`], [`Sun`], [`Light`]), the random-number stream ([`rng`]) and the
-//! physical sky ([`sky`]); [`hdr`] writes radiance images and tone-maps them.
+//! physical sky ([`sky`]); [`hdr`] writes radiance images and tone-maps them, and
+//! [`quality`] measures an image against a reference.
 //!
 //! - Materials: `diffuse` is Lambertian; `emissive` adds `albedo · emission` and reflects
 //!   as diffuse; `metal` is GGX with α = roughness and Schlick's Fresnel with F0 = albedo;
@@ -19,6 +20,7 @@
 
 pub mod cpu;
 pub mod hdr;
+pub mod quality;
 pub mod rng;
 pub mod scatter;
 pub mod sky;

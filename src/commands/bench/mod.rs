@@ -6,6 +6,7 @@ mod build;
 mod cpu;
 mod edit;
 mod frames;
+mod gi;
 mod gpu;
 mod stream;
 mod traverse;
@@ -31,6 +32,8 @@ pub enum Bench {
     Gpu(gpu::GpuArgs),
     /// Frames through a server's render nodes: frames per second, latency, routing overhead.
     Frames(frames::FramesArgs),
+    /// Image quality of the lit modes against a path-traced reference, and the noise floor.
+    Gi(gi::GiArgs),
 }
 
 /// Runs a benchmark.
@@ -42,6 +45,7 @@ pub fn run(b: Bench) -> Result<()> {
         Bench::Stream(a) => stream::run(a),
         Bench::Gpu(a) => gpu::run(a),
         Bench::Frames(a) => frames::run(a),
+        Bench::Gi(a) => gi::run(a),
     }
 }
 
