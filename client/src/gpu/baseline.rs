@@ -12,7 +12,6 @@ use super::world::GpuWorld;
 use crate::light::Light;
 use crate::light::hdr::Radiance;
 use naadf_world::camera::Camera;
-use wgpu::util::DeviceExt;
 
 /// Bytes per pixel of each frame buffer (RGB and the first-hit distance, `f32` each).
 const PIXEL_BYTES: u64 = 16;
@@ -60,19 +59,13 @@ fn frame_info(
         pos: std::array::from_fn(|a| camera.pos[a] - origin[a]),
         ..*camera
     };
-    let rays = CameraRays::new(&relative, size)?;
-    Ok(FrameInfo {
-        cam_int: rays.int,
-        width: size.0,
-        cam_frac: rays.frac,
-        height: size.1,
-        forward: rays.forward,
+    Ok(FrameInfo::new(
+        &CameraRays::new(&relative, size)?,
+        size,
         seed,
-        right: rays.right,
         sample,
-        up: rays.up,
-        history: u32::from(history),
-    })
+        history,
+    ))
 }
 
 impl Baseline {
@@ -138,20 +131,13 @@ impl Baseline {
             },
         };
         let h = self.history.insert(h);
-        let uniform = |label, bytes: &[u8]| {
-            gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents: bytes,
-                usage: wgpu::BufferUsages::UNIFORM,
-            })
-        };
         // The sample pass needs the camera where it is; the resolve pass reads only the
         // current camera's directions, and the previous camera relative to it.
         let now = frame_info(camera, [0.0; 3], size, seed, h.frames, false)?;
         let before = frame_info(&h.camera, camera.pos, size, seed, h.frames, h.frames > 0)?;
-        let now = uniform("frame", bytemuck::bytes_of(&now));
-        let before = uniform("previous frame", bytemuck::bytes_of(&before));
-        let light = uniform("light", bytemuck::bytes_of(&LightInfo::new(light)));
+        let now = gpu.uniform("frame", bytemuck::bytes_of(&now));
+        let before = gpu.uniform("previous frame", bytemuck::bytes_of(&before));
+        let light = gpu.uniform("light", bytemuck::bytes_of(&LightInfo::new(light)));
         let (old, new) = (&h.results[h.latest], &h.results[1 - h.latest]);
         let groups = (size.0.div_ceil(8), size.1.div_ceil(8));
         gpu.checked(|| {

@@ -129,6 +129,16 @@ impl Gpu {
         checked_on(&self.device, f)
     }
 
+    /// A uniform buffer holding `contents`.
+    pub(crate) fn uniform(&self, label: &str, contents: &[u8]) -> wgpu::Buffer {
+        use wgpu::util::DeviceExt;
+        self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents,
+            usage: wgpu::BufferUsages::UNIFORM,
+        })
+    }
+
     /// Copies `size` bytes of `src` (a `COPY_SRC` buffer) back to the host.
     pub(crate) fn read_buffer(&self, src: &wgpu::Buffer, size: u64) -> Result<Vec<u8>, GpuError> {
         if size == 0 {

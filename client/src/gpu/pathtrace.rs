@@ -45,6 +45,25 @@ impl LightInfo {
     }
 }
 
+impl FrameInfo {
+    /// The uniform of a lit pass: `rays` at `size`, sample number `sample` of `seed`, and
+    /// whether a temporal pass has a history.
+    pub(crate) fn new(rays: &CameraRays, size: (u32, u32), seed: u32, sample: u32, history: bool) -> Self {
+        FrameInfo {
+            cam_int: rays.int,
+            width: size.0,
+            cam_frac: rays.frac,
+            height: size.1,
+            forward: rays.forward,
+            seed,
+            right: rays.right,
+            sample,
+            up: rays.up,
+            history: u32::from(history),
+        }
+    }
+}
+
 /// What the running sums are of: when any of it changes, they restart.
 #[derive(Clone, Debug, PartialEq)]
 struct Subject {
@@ -158,33 +177,14 @@ impl PathTracer {
             },
         };
         let acc = self.acc.insert(acc);
-        let light_uniform = gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("light"),
-            contents: bytemuck::bytes_of(&LightInfo::new(light)),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
+        let light_uniform = gpu.uniform("light", bytemuck::bytes_of(&LightInfo::new(light)));
         let per_submit = (SUBMIT_PIXEL_SAMPLES / pixels).clamp(1, 256) as u32;
         while acc.samples < spp {
             let batch = per_submit.min(spp - acc.samples);
             let frames: Vec<wgpu::Buffer> = (acc.samples..acc.samples + batch)
                 .map(|sample| {
-                    let frame = FrameInfo {
-                        cam_int: rays.int,
-                        width: size.0,
-                        cam_frac: rays.frac,
-                        height: size.1,
-                        forward: rays.forward,
-                        seed,
-                        right: rays.right,
-                        sample,
-                        up: rays.up,
-                        history: 0,
-                    };
-                    gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                        label: Some("frame"),
-                        contents: bytemuck::bytes_of(&frame),
-                        usage: wgpu::BufferUsages::UNIFORM,
-                    })
+                    let frame = FrameInfo::new(&rays, size, seed, sample, false);
+                    gpu.uniform("frame", bytemuck::bytes_of(&frame))
                 })
                 .collect();
             gpu.checked(|| {

@@ -108,11 +108,7 @@ impl RayTracer {
         }
         let groups = count.div_ceil(WORKGROUP);
         let (gx, _) = dispatch_2d(groups);
-        let uniform = gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("ray count"),
-            contents: bytemuck::cast_slice(&[count, gx * WORKGROUP, 0, 0]),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
+        let uniform = gpu.uniform("ray count", bytemuck::cast_slice(&[count, gx * WORKGROUP, 0, 0]));
         let rays_buf = gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("rays"),
             contents: bytemuck::cast_slice(&words),

@@ -8,7 +8,6 @@ use super::world::GpuWorld;
 use naadf_world::camera::Camera;
 use naadf_world::traverse::MAX_COORD;
 use std::io::Write;
-use wgpu::util::DeviceExt;
 
 /// What a frame shows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -277,11 +276,7 @@ impl Renderer {
             sun[2],
             0,
         ];
-        let uniform = gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("view"),
-            contents: bytemuck::cast_slice(&view),
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
+        let uniform = gpu.uniform("view", bytemuck::cast_slice(&view));
         let storage = |label, size: u64| {
             gpu.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
