@@ -135,4 +135,28 @@ mod tests {
             .collect();
         assert_eq!(floats, [4.0, 5.0, 6.0, 1.0, 2.0, 3.0]);
     }
+
+    #[test]
+    fn exr_files_hold_the_radiance() {
+        let img = Radiance {
+            width: 3,
+            height: 2,
+            rgb: (0..6)
+                .map(|i| [i as f32 * 0.5, 1e3 + i as f32, 1e-3 * i as f32])
+                .collect(),
+        };
+        let path = std::env::temp_dir().join(format!("naadf-hdr-{}.exr", std::process::id()));
+        img.save(&path).unwrap();
+        let back = image::open(&path).unwrap().into_rgb32f();
+        let _ = std::fs::remove_file(&path);
+        assert_eq!(back.dimensions(), (3, 2));
+        let rgb: Vec<[f32; 3]> = back.pixels().map(|p| p.0).collect();
+        assert_eq!(rgb, img.rgb, "rows from the top, f32 exactly");
+        let missing = std::path::Path::new("/nonexistent-dir/x.pfm");
+        assert!(
+            img.save(missing)
+                .unwrap_err()
+                .contains("cannot write /nonexistent-dir/x.pfm")
+        );
+    }
 }
