@@ -678,6 +678,11 @@ fn render_pathtrace_writes_radiance_and_refuses_bad_light() {
         None,
         "increasing frame counts",
     );
+    fails(
+        &["bench", "gi", &world, "--spp", "4"],
+        None,
+        "--spp does not apply to bench gi",
+    );
 }
 
 #[test]

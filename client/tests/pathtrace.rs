@@ -1,6 +1,6 @@
 //! The path tracers against analytic answers, against each other, and against themselves.
 //!
-//! - Scenes with a closed-form radiance (docs/RENDERING.md, "Light"): a diffuse floor under
+//! - Scenes with a closed-form radiance (docs/RENDERING.md §3a): a diffuse floor under
 //!   a uniform sky (a·L), the same floor lit only by the sun (a·E·sin(EL)/π, and 0 in the
 //!   shadow of a black pillar), a closed box of emissive walls (a·e·(1 − a^(B+1))/(1 − a)).
 //!   Means over pixels are compared as |Δ| ≤ 4·SE + 1e-4·expected. Each scene runs on the

@@ -104,7 +104,7 @@ enum Job {
 
 impl LightArgs {
     /// The options given, by name (for a mode that takes none).
-    fn given(&self) -> Vec<&'static str> {
+    pub fn given(&self) -> Vec<&'static str> {
         let flags = [
             ("--spp", self.spp.is_some()),
             ("--seed", self.seed.is_some()),

@@ -104,8 +104,8 @@ impl Headless {
     }
 
     /// Renders the frame `spec` asks for, in any mode: the lit modes continue the state of
-    /// `spec.lit.stream` (its path-tracer sums and its baseline history) and are
-    /// tone-mapped with its exposure.
+    /// `spec.lit.stream` (its path-tracer sums and its baseline history; a request without
+    /// a stream starts afresh) and are tone-mapped with its exposure.
     pub fn render_spec(&mut self, world: &World, spec: &FrameSpec) -> Result<Frame, GpuError> {
         if !spec.mode.is_lit() {
             return self.frame(world, &spec.camera, spec.size, spec.mode, false);
@@ -117,27 +117,28 @@ impl Headless {
             _ => DEFAULT_LIT_BOUNCES,
         };
         let light = lit.light(bounces).map_err(GpuError::Unsupported)?;
-        let at = match self.streams.iter().position(|s| s.name == lit.stream) {
-            Some(at) => at,
-            None => {
-                if self.streams.len() == MAX_STREAMS {
-                    self.streams.remove(0);
-                }
-                self.streams.push(Stream {
-                    name: lit.stream.clone(),
-                    sums: None,
-                    history: None,
-                });
-                self.streams.len() - 1
-            }
+        // A request without a stream starts from nothing and leaves nothing behind, so that
+        // it does not depend on whoever came before it.
+        let fresh = Stream {
+            name: lit.stream.clone(),
+            sums: None,
+            history: None,
         };
-        let mut stream = self.streams.remove(at);
+        let mut stream = match self.streams.iter().position(|s| s.name == lit.stream) {
+            Some(at) if !lit.stream.is_empty() => self.streams.remove(at),
+            _ => fresh,
+        };
         self.path_tracer.swap_sums(&mut stream.sums);
         self.baseline.swap_history(&mut stream.history);
         let radiance = self.render_lit(world, spec, &light);
         self.path_tracer.swap_sums(&mut stream.sums);
         self.baseline.swap_history(&mut stream.history);
-        self.streams.push(stream);
+        if !lit.stream.is_empty() {
+            if self.streams.len() == MAX_STREAMS {
+                self.streams.remove(0);
+            }
+            self.streams.push(stream);
+        }
         Ok(radiance?.tone_mapped(lit.exposure))
     }
 

@@ -118,7 +118,7 @@ wgsl_struct! {
 const _: () = assert!(size_of::<WorldInfo>() == 32);
 
 wgsl_struct! {
-    /// What a lit pass renders, `frame` (group 1, binding 0 of `path_trace`): the camera,
+    /// What a lit pass renders, `frame` (group 1, binding 0 of the lit passes): the camera,
     /// the image size and which sample to add. The camera's rays follow the contract
     /// (docs/CAMERA.md): `dir = forward + sx·right + sy·up` with `right` and `up` already
     /// scaled by `a·W/H` and `a`.
@@ -147,7 +147,7 @@ wgsl_struct! {
 }
 
 wgsl_struct! {
-    /// The light, `light` (group 1, binding 1 of `path_trace`; docs/RENDERING.md, "Light").
+    /// The light, `light` (group 1, binding 1 of the lit passes; docs/RENDERING.md §3a).
     pub struct LightInfo {
         /// Uniform sky: its radiance. Physical sky: the irradiance of the sun lighting it.
         pub sky: [f32; 3],

@@ -81,7 +81,7 @@ impl<'w> CpuPathTracer<'w> {
         }
     }
 
-    /// The radiance arriving along `ray` (docs/RENDERING.md, "Light").
+    /// The radiance arriving along `ray` (docs/RENDERING.md §3a).
     fn radiance(&self, mut ray: Ray, rng: &mut Rng) -> DVec3 {
         let sun = self.light.sun;
         let sun_dir = DVec3::from(self.light.sky_sun().direction());

@@ -1,4 +1,4 @@
-//! The light model of the lit modes (`pathtrace`; docs/RENDERING.md, "Light").
+//! The light model of the lit modes (`pathtrace`, `baseline`; docs/RENDERING.md §3a).
 //!
 //! One model, two implementations that must agree: the GPU path tracer
 //! (`shaders/light.wgsl`, driven by [`crate::gpu::PathTracer`]) and the CPU path tracer

@@ -36,8 +36,8 @@ pub struct GiArgs {
     /// After how many frames each mode is measured (comma-separated, increasing).
     #[arg(long, value_delimiter = ',', default_value = "8,32,64")]
     frames: Vec<u32>,
-    /// The light (`--spp` is ignored: the references take `--reference-spp`). Bounces
-    /// default to 3, as in the compared modes.
+    /// The light (not `--spp`: the references take `--reference-spp`). Bounces default to
+    /// 3, as in the compared modes.
     #[command(flatten)]
     light: LightArgs,
     /// Print one JSON object.
@@ -64,6 +64,9 @@ struct Report {
 pub fn run(a: GiArgs) -> Result<()> {
     if a.frames.is_empty() || a.frames.contains(&0) || !a.frames.is_sorted() {
         bail!("--frames: give increasing frame counts, each at least 1");
+    }
+    if a.light.given().contains(&"--spp") {
+        bail!("--spp does not apply to bench gi: the references take --reference-spp");
     }
     let world = load_world(&a.world)?;
     let camera = match &a.camera {
