@@ -410,15 +410,23 @@ fn have_gpu(world: &str, dir: &Path) -> bool {
     true
 }
 
+/// A view of the `test` preset that sees both the world and the sky.
+const TEST_CAMERA: &str = r#"{"pos":[-10.5,70.25,-12.5],"yaw":45,"pitch":-35,"fov_y":60}"#;
+
+/// The `test` preset written into `dir`, or `None` (with a message) without a GPU adapter.
+fn gpu_test_world(dir: &Path) -> Option<String> {
+    let world = p(dir, "t.naadf");
+    ok(&["generate", "--preset", "test", "-o", &world], None);
+    have_gpu(&world, dir).then_some(world)
+}
+
 #[test]
 fn render_writes_the_image_and_first_hit_buffer() {
     let dir = tempfile::tempdir().unwrap();
-    let world = p(dir.path(), "t.naadf");
-    ok(&["generate", "--preset", "test", "-o", &world], None);
-    if !have_gpu(&world, dir.path()) {
+    let Some(world) = gpu_test_world(dir.path()) else {
         return;
-    }
-    let camera = r#"{"pos":[-10.5,70.25,-12.5],"yaw":45,"pitch":-35,"fov_y":60}"#;
+    };
+    let camera = TEST_CAMERA;
     let (png, gb) = (p(dir.path(), "m.png"), p(dir.path(), "m.gb"));
     let out = ok(
         &[
@@ -528,12 +536,10 @@ fn read_pfm(path: &str) -> (u32, u32, Vec<[f32; 3]>) {
 #[test]
 fn render_pathtrace_writes_radiance_and_refuses_bad_light() {
     let dir = tempfile::tempdir().unwrap();
-    let world = p(dir.path(), "t.naadf");
-    ok(&["generate", "--preset", "test", "-o", &world], None);
-    if !have_gpu(&world, dir.path()) {
+    let Some(world) = gpu_test_world(dir.path()) else {
         return;
-    }
-    let camera = r#"{"pos":[-10.5,70.25,-12.5],"yaw":45,"pitch":-35,"fov_y":60}"#;
+    };
+    let camera = TEST_CAMERA;
     let (png, hdr) = (p(dir.path(), "pt.png"), p(dir.path(), "pt.pfm"));
     let run = |extra: &[&str]| {
         let mut args = vec![
