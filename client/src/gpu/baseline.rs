@@ -162,16 +162,19 @@ impl Baseline {
         Ok(())
     }
 
-    /// The newest result as linear radiance; `None` before the first frame.
-    pub fn radiance(&self, gpu: &Gpu) -> Result<Option<Radiance>, GpuError> {
-        let Some(h) = &self.history else { return Ok(None) };
+    /// The newest result as linear radiance; an error before the first frame.
+    pub fn radiance(&self, gpu: &Gpu) -> Result<Radiance, GpuError> {
+        let h = self
+            .history
+            .as_ref()
+            .ok_or_else(|| GpuError::Readback("no baseline frame was rendered".into()))?;
         let (w, ht) = h.subject.size;
         let bytes = gpu.read_buffer(&h.results[h.latest], u64::from(w) * u64::from(ht) * PIXEL_BYTES)?;
         let px: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&bytes);
-        Ok(Some(Radiance {
+        Ok(Radiance {
             width: w,
             height: ht,
             rgb: px.iter().map(|p| [p[0], p[1], p[2]]).collect(),
-        }))
+        })
     }
 }

@@ -74,6 +74,18 @@ struct Subject {
     generation: u64,
 }
 
+impl Subject {
+    fn new(world: &GpuWorld, camera: &Camera, size: (u32, u32), light: &Light, seed: u32) -> Self {
+        Subject {
+            camera: *camera,
+            size,
+            light: *light,
+            seed,
+            generation: world.generation(),
+        }
+    }
+}
+
 /// The running sums on the device.
 pub struct Accumulation {
     subject: Subject,
@@ -113,13 +125,7 @@ impl PathTracer {
         light: &Light,
         seed: u32,
     ) -> Result<Radiance, GpuError> {
-        let subject = Subject {
-            camera: *camera,
-            size,
-            light: *light,
-            seed,
-            generation: world.generation(),
-        };
+        let subject = Subject::new(world, camera, size, light, seed);
         let next = match &self.acc {
             Some(a) if a.subject == subject => a.samples + 1,
             _ => 1,
@@ -157,13 +163,7 @@ impl PathTracer {
         let pixels = check_frame_size(gpu, size, SUM_BYTES)?;
         let rays = CameraRays::new(camera, size)?;
         let pipeline = self.pipes.get(gpu, world, Loop::Hierarchy, true)?;
-        let subject = Subject {
-            camera: *camera,
-            size,
-            light: *light,
-            seed,
-            generation: world.generation(),
-        };
+        let subject = Subject::new(world, camera, size, light, seed);
         let acc = match self.acc.take() {
             Some(a) if a.subject == subject && a.samples <= spp => a,
             _ => Accumulation {

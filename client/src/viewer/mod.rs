@@ -199,9 +199,7 @@ impl Graphics {
             }
             Mode::Baseline => {
                 baseline.frame(gpu, gw, camera, size, &light(DEFAULT_LIT_BOUNCES)?, lit.seed)?;
-                baseline
-                    .radiance(gpu)?
-                    .ok_or_else(|| GpuError::Readback("no baseline frame".into()))?
+                baseline.radiance(gpu)?
             }
             _ => return renderer.render(gpu, gw, camera, size, mode, false),
         };
