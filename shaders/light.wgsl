@@ -105,12 +105,18 @@ fn sky_physical(dir: vec3<f32>, sun: vec3<f32>) -> vec3<f32> {
     return inscatter;
 }
 
-// The sky along unit `d`; with `disc`, the sun's disc too.
-fn sky_radiance(d: vec3<f32>, disc: bool) -> vec3<f32> {
-    var l = light.sky;
+// The sky along unit `d`, evaluated directly (no disc).
+fn sky_direct(d: vec3<f32>) -> vec3<f32> {
     if light.sky_physical != 0u {
-        l = sky_physical(d, light.sun_dir) * light.sky;
+        return sky_physical(d, light.sun_dir) * light.sky;
     }
+    return light.sky;
+}
+
+// The sky along unit `d`; with `disc`, the sun's disc too. `sky_base(d)` is the including
+// pass's choice: `sky_direct` (the path tracer) or the atmosphere table (`gi`).
+fn sky_radiance(d: vec3<f32>, disc: bool) -> vec3<f32> {
+    var l = sky_base(d);
     if disc && light.sun_on != 0u && 1.0 - dot(d, light.sun_dir) <= light.sun_omc {
         l += vec3<f32>(light.sun_disc);
     }
@@ -221,6 +227,8 @@ struct PathState {
     throughput: vec3<f32>,
     sees_disc: bool,
     alive: bool,
+    // The normal of the first surface met (zero until then).
+    first_normal: vec3<f32>,
 }
 
 // Follows the path in `s` to its next surface: adds the light found there and, when
@@ -244,6 +252,9 @@ fn path_step(s: ptr<function, PathState>, scatter: bool, rng: ptr<function, u32>
     }
     // Before any other trace: world_normal reads the last trace's entity rotation.
     let n = world_normal(h);
+    if all((*s).first_normal == vec3<f32>(0.0)) {
+        (*s).first_normal = n;
+    }
     let m = material(h.material);
     if m.kind == KIND_EMISSIVE {
         (*s).radiance += (*s).throughput * m.albedo * m.emission;
@@ -287,19 +298,22 @@ fn path_step(s: ptr<function, PathState>, scatter: bool, rng: ptr<function, u32>
     return distance;
 }
 
-// One path: the radiance it brought back, and the distance from the camera to the first
-// surface (−1 for the sky).
+// One path: the radiance it brought back, the distance from its origin to the first
+// surface (−1 for the sky) and that surface's normal.
 struct PathSample {
     radiance: vec3<f32>,
     distance: f32,
+    normal: vec3<f32>,
 }
 
-// The radiance arriving along the camera ray `primary`, drawing from `rng`.
-fn path_radiance(primary: Ray, rng: ptr<function, u32>) -> PathSample {
-    var s = PathState(primary, vec3<f32>(0.0), vec3<f32>(1.0), true, true);
-    let distance = path_step(&s, light.bounces > 0u, rng);
-    for (var bounce = 1u; bounce <= light.bounces && s.alive; bounce++) {
-        path_step(&s, bounce < light.bounces, rng);
+// The radiance arriving along `primary` when the path may scatter `bounces` more times,
+// drawing from `rng`. `sees_disc`: whether the ray sees the sun's disc (camera and mirror
+// rays do; rays scattered by other surfaces get the sun by next-event estimation instead).
+fn path_radiance(primary: Ray, bounces: u32, sees_disc: bool, rng: ptr<function, u32>) -> PathSample {
+    var s = PathState(primary, vec3<f32>(0.0), vec3<f32>(1.0), sees_disc, true, vec3<f32>(0.0));
+    let distance = path_step(&s, bounces > 0u, rng);
+    for (var bounce = 1u; bounce <= bounces && s.alive; bounce++) {
+        path_step(&s, bounce < bounces, rng);
     }
-    return PathSample(s.radiance, distance);
+    return PathSample(s.radiance, distance, s.first_normal);
 }

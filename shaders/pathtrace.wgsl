@@ -18,12 +18,17 @@
 // the distance to the first surface, −1 for the sky).
 @group(1) @binding(2) var<storage, read_write> radiance: array<vec4<f32>>;
 
+// The path tracer sees the sky as the light model defines it, direction by direction.
+fn sky_base(d: vec3<f32>) -> vec3<f32> {
+    return sky_direct(d);
+}
+
 // Sample `frame.sample` of pixel `gid`.
 fn pixel_sample(gid: vec2<u32>) -> PathSample {
     let stream = pixel_stream(frame.seed, gid.x + gid.y * frame.width, frame.sample);
     var rng = stream.rng;
     let r = ray_new(frame.cam_int, frame.cam_frac, camera_dir(frame, gid, stream.jitter));
-    return path_radiance(r, &rng);
+    return path_radiance(r, light.bounces, true, &rng);
 }
 
 @compute @workgroup_size(8, 8)

@@ -28,16 +28,9 @@ struct View {
 @group(1) @binding(1) var<storage, read_write> pixels: array<u32>;
 @group(1) @binding(2) var<storage, read_write> gbuffer: array<vec4<u32>>;
 
-// Hit-plane sentinels of the first-hit record (docs/NAADF.md §10).
-const HIT_NOTHING: u32 = 0x1FFFFu;
-const HIT_UNDEFINED: u32 = 0u;
-// Mirror segments a path may follow (the primary segment included).
-const MAX_SEGMENTS: u32 = 4u;
 const SUN_COLOR: vec3<f32> = vec3<f32>(1.0, 0.96, 0.88);
 // Cosine of the sun disc's angular radius (about 1.8°).
 const SUN_DISC_COS: f32 = 0.9995;
-// Offset of secondary-ray origins along the surface normal (docs/NAADF.md §12).
-const SURFACE_OFFSET: f32 = 0.01;
 
 fn srgb(c: vec3<f32>) -> vec3<f32> {
     let x = clamp(c, vec3<f32>(0.0), vec3<f32>(1.0));
@@ -75,80 +68,40 @@ fn heat(v: f32) -> vec3<f32> {
     return clamp(vec3<f32>(x - 2.0, select(x, 4.0 - x, x > 3.0), 2.0 - x), vec3<f32>(0.0), vec3<f32>(1.0));
 }
 
-// The 17-bit hit plane: normal id (1 −x, 2 +x, 3 −y, 4 +y, 5 −z, 6 +z; 7 = origin inside
-// the voxel) in bits 0–2, the plane's integer coordinate in bits 3–16.
-fn encode_plane(h: Hit) -> u32 {
-    if h.axis == NO_AXIS {
-        return 7u;
-    }
-    let positive = h.normal[h.axis] > 0;
-    let id = 2u * h.axis + select(1u, 2u, positive);
-    let coord = u32(h.voxel[h.axis] + select(0, 1, positive)) & 0x3FFFu;
-    return id | (coord << 3u);
-}
-
 // Follows the primary hit through up to MAX_SEGMENTS − 1 mirror bounces and shades the
 // first non-mirror surface: albedo × (hard sun shadow + ambient) + emission, Schlick
 // weights on mirrors, the sky on a miss. Returns the colour and writes the first-hit
 // record.
 fn shade_path(primary: Ray, first: Hit, gb: ptr<function, vec4<u32>>) -> vec3<f32> {
-    var r = primary;
-    var h = first;
-    var throughput = vec3<f32>(1.0);
-    var planes = array<u32, 4>(HIT_UNDEFINED, HIT_UNDEFINED, HIT_UNDEFINED, HIT_UNDEFINED);
-    var distance = 0.0;
+    let c = first_hit_chain(primary, first, true);
     var light = vec3<f32>(0.0);
     var kind = KIND_DIFFUSE;
     var mat_id = 0u;
     var entity = NO_ENTITY;
-    for (var seg = 0u; seg < MAX_SEGMENTS; seg++) {
-        if seg > 0u {
-            h = trace(r);
-        }
-        let dn = r.d / r.len;
-        if !h.hit {
-            planes[seg] = HIT_NOTHING;
-            distance = -1.0;
-            light += throughput * sky(dn);
-            break;
-        }
-        planes[seg] = encode_plane(h);
-        distance += h.t * r.len;
-        let n = world_normal(h);
-        let m = material(h.material);
-        if m.kind == KIND_MIRROR {
-            if seg + 1u == MAX_SEGMENTS {
-                planes[seg] = HIT_NOTHING;
-                distance = -1.0;
-                break;
-            }
-            let cos_i = clamp(-dot(n, dn), 0.0, 1.0);
-            throughput *= m.albedo + (1.0 - m.albedo) * pow(1.0 - cos_i, 5.0);
-            let p = ray_local(r, h.t) + n * SURFACE_OFFSET;
-            r = ray_at(r, p, reflect(dn, n));
-            continue;
-        }
+    if c.end == CHAIN_SKY {
+        light = c.throughput * sky(c.r.d / c.r.len);
+    } else if c.end == CHAIN_SURFACE {
+        let m = material(c.h.material);
         kind = m.kind;
-        mat_id = h.material;
-        entity = h.entity;
-        let p = ray_local(r, h.t) + n * SURFACE_OFFSET;
-        let shadow = trace(ray_at(r, p, view.sun));
+        mat_id = c.h.material;
+        entity = c.h.entity;
+        let p = ray_local(c.r, c.h.t) + c.n * SURFACE_OFFSET;
+        let shadow = trace(ray_at(c.r, p, view.sun));
         let lit = select(1.0, 0.0, shadow.hit);
-        let direct = 2.0 * max(dot(n, view.sun), 0.0) * lit;
-        let ambient = 0.2 * max(dot(view.sun, normalize(n + 1.01 * view.sun)), 0.0);
-        var c = m.albedo * (direct + ambient) * SUN_COLOR;
+        let direct = 2.0 * max(dot(c.n, view.sun), 0.0) * lit;
+        let ambient = 0.2 * max(dot(view.sun, normalize(c.n + 1.01 * view.sun)), 0.0);
+        var col = m.albedo * (direct + ambient) * SUN_COLOR;
         if m.kind == KIND_EMISSIVE {
-            c += m.albedo * m.emission;
+            col += m.albedo * m.emission;
         }
-        light += throughput * c;
-        break;
+        light = c.throughput * col;
     }
-    let dist_bits = pack2x16float(vec2<f32>(distance, 0.0)) & 0x7FFFu;
+    let dist_bits = pack2x16float(vec2<f32>(c.distance, 0.0)) & 0x7FFFu;
     *gb = vec4<u32>(
-        entity | (planes[0] << 15u),
-        select(0u, 1u, kind != KIND_METAL) | (planes[1] << 15u),
-        mat_id | (planes[2] << 15u),
-        dist_bits | (planes[3] << 15u),
+        entity | (c.planes[0] << 15u),
+        select(0u, 1u, kind != KIND_METAL) | (c.planes[1] << 15u),
+        mat_id | (c.planes[2] << 15u),
+        dist_bits | (c.planes[3] << 15u),
     );
     return light;
 }

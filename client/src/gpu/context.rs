@@ -141,6 +141,11 @@ impl Gpu {
 
     /// Copies `size` bytes of `src` (a `COPY_SRC` buffer) back to the host.
     pub(crate) fn read_buffer(&self, src: &wgpu::Buffer, size: u64) -> Result<Vec<u8>, GpuError> {
+        self.read_buffer_at(src, 0, size)
+    }
+
+    /// [`Gpu::read_buffer`] of the `size` bytes from `offset` (both multiples of 4).
+    pub(crate) fn read_buffer_at(&self, src: &wgpu::Buffer, offset: u64, size: u64) -> Result<Vec<u8>, GpuError> {
         if size == 0 {
             return Ok(Vec::new());
         }
@@ -151,7 +156,7 @@ impl Gpu {
             mapped_at_creation: false,
         });
         let mut enc = self.device.create_command_encoder(&Default::default());
-        enc.copy_buffer_to_buffer(src, 0, &staging, 0, size);
+        enc.copy_buffer_to_buffer(src, offset, &staging, 0, size);
         self.queue.submit([enc.finish()]);
         let (tx, rx) = std::sync::mpsc::channel();
         staging.map_async(wgpu::MapMode::Read, .., move |r| {

@@ -17,12 +17,15 @@
 //! - [`PathTracer`]: the progressive path tracer of the light model
 //!   ([`crate::light`]), the ground truth of the lit modes;
 //! - [`Baseline`]: 1-spp path tracing with an exponential TAA, the paper's comparison;
+//! - [`Gi`]: the paper's GI pipeline (first hit, long-term TAA, ray queue, sample ring,
+//!   region projection, spatial resampling, denoiser);
 //! - [`Headless`]: a device, a renderer and a GPU copy that follows a changing world.
 //!
 //! [`World`]: naadf_world::World
 
 mod baseline;
 mod context;
+mod gi;
 mod headless;
 mod pathtrace;
 mod pipeline;
@@ -34,9 +37,10 @@ mod world;
 
 pub use baseline::Baseline;
 pub use context::{Gpu, GpuError};
+pub use gi::{Gi, GiHistory, GiPass};
 pub use headless::Headless;
 pub use pathtrace::PathTracer;
 pub use rays::{GpuHit, GpuRay, RayBatch, RayTracer};
 pub use render::{DEFAULT_SUN, Frame, GBUFFER_MAGIC, Mode, Renderer, STEPS_FULL_SCALE, write_gbuffer};
-pub use uniform::{FrameInfo, LightInfo, Member, WgslStruct, WgslType, WorldInfo};
+pub use uniform::{FrameInfo, GiInfo, LightInfo, Member, WgslStruct, WgslType, WorldInfo};
 pub use world::{DEFAULT_MAX_STEPS, GPU_BUFFERS, GpuWorld, Upload};

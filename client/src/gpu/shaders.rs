@@ -14,8 +14,9 @@
 //! The files in `shaders/` declare none of these: WGSL rejects a second declaration of a
 //! name, so a hand-written copy fails the naga test of every pass.
 
+use super::gi::{self, GiPass};
 use super::render::Mode;
-use super::uniform::{FrameInfo, LightInfo, WgslStruct, WorldInfo};
+use super::uniform::{FrameInfo, GiInfo, LightInfo, WgslStruct, WorldInfo};
 use naadf_world::cell;
 use naadf_world::entity::{self, MAX_ENTITY_ID, pack};
 use naadf_world::material::MaterialKind;
@@ -43,6 +44,16 @@ pub const LIGHT: &str = include_str!("../../../shaders/light.wgsl");
 pub const PATHTRACE: &str = include_str!("../../../shaders/pathtrace.wgsl");
 /// `shaders/taa.wgsl`: the baseline's temporal accumulation.
 pub const TAA: &str = include_str!("../../../shaders/taa.wgsl");
+/// `shaders/first_hit.wgsl`: the first-hit chain through mirrors (`albedo` and `gi`).
+pub const FIRST_HIT: &str = include_str!("../../../shaders/first_hit.wgsl");
+/// `shaders/gi_common.wgsl`: the GI passes' bindings, encodings and atmosphere table.
+pub const GI_COMMON: &str = include_str!("../../../shaders/gi_common.wgsl");
+/// `shaders/gi_primary.wgsl`: the GI first hit, TAA gather and TAA merge.
+pub const GI_PRIMARY: &str = include_str!("../../../shaders/gi_primary.wgsl");
+/// `shaders/gi_samples.wgsl`: the ray queue, secondary rays, projection and refinement.
+pub const GI_SAMPLES: &str = include_str!("../../../shaders/gi_samples.wgsl");
+/// `shaders/gi_resample.wgsl`: spatial resampling and the denoiser.
+pub const GI_RESAMPLE: &str = include_str!("../../../shaders/gi_resample.wgsl");
 
 /// The logical storage buffers of group 0, in binding order, with their accessor names.
 pub const BUFFERS: [(&str, &str); 8] = [
@@ -62,7 +73,7 @@ pub const NO_ENTITY: u32 = MAX_ENTITY_ID + 1;
 
 /// The `u32` constants of the prelude by WGSL name, each the value of its Rust counterpart:
 /// the constant of the same name, or an enum's code.
-pub const CONSTANTS: [(&str, u32); 21] = [
+pub const CONSTANTS: [(&str, u32); 31] = [
     // Cells and voxels (naadf_world::cell).
     ("STATE_SHIFT", cell::STATE_SHIFT),
     ("STATE_EMPTY", cell::STATE_EMPTY),
@@ -88,6 +99,17 @@ pub const CONSTANTS: [(&str, u32); 21] = [
     ("MODE_MATERIAL", Mode::Material.code()),
     ("MODE_NORMAL", Mode::Normal.code()),
     ("MODE_STEPS", Mode::Steps.code()),
+    // The GI pipeline (gi.rs).
+    ("TAA_SLOTS", gi::TAA_SLOTS),
+    ("CONTROL_WORDS", gi::CONTROL_WORDS),
+    ("CAMERA_HISTORY", gi::CAMERA_HISTORY),
+    ("LUT_SIZE", gi::LUT_SIZE),
+    ("BUCKET_SLOTS", gi::BUCKET_SLOTS),
+    ("MAX_KEPT", gi::MAX_KEPT),
+    ("RING_VEC4", gi::RING_VEC4),
+    ("EDIT_HISTORY_FRAMES", gi::EDIT_HISTORY_FRAMES),
+    ("CONTROL_TRACE_ARGS", gi::CONTROL_TRACE_ARGS),
+    ("CONTROL_PROJECT_ARGS", gi::CONTROL_PROJECT_ARGS),
 ];
 
 /// How the buffers of group 0 are split: each logical buffer has `parts[i]` bindings of
@@ -129,11 +151,33 @@ pub enum Pass {
     PathSample,
     /// [`SAMPLE`] and [`TAA`], entry point `taa_resolve`.
     Taa,
+    /// A pass of the GI pipeline: [`SAMPLE`], [`LIGHT`], [`FIRST_HIT`] and the `gi_*`
+    /// files, entry point [`GiPass::entry`].
+    Gi(GiPass),
 }
 
 impl Pass {
     /// Every pass.
-    pub const ALL: [Pass; 5] = [Pass::Rays, Pass::Render, Pass::PathTrace, Pass::PathSample, Pass::Taa];
+    pub const ALL: [Pass; 18] = [
+        Pass::Rays,
+        Pass::Render,
+        Pass::PathTrace,
+        Pass::PathSample,
+        Pass::Taa,
+        Pass::Gi(GiPass::ALL[0]),
+        Pass::Gi(GiPass::ALL[1]),
+        Pass::Gi(GiPass::ALL[2]),
+        Pass::Gi(GiPass::ALL[3]),
+        Pass::Gi(GiPass::ALL[4]),
+        Pass::Gi(GiPass::ALL[5]),
+        Pass::Gi(GiPass::ALL[6]),
+        Pass::Gi(GiPass::ALL[7]),
+        Pass::Gi(GiPass::ALL[8]),
+        Pass::Gi(GiPass::ALL[9]),
+        Pass::Gi(GiPass::ALL[10]),
+        Pass::Gi(GiPass::ALL[11]),
+        Pass::Gi(GiPass::ALL[12]),
+    ];
 
     /// The entry point.
     pub fn entry(self) -> &'static str {
@@ -143,6 +187,7 @@ impl Pass {
             Pass::PathTrace => "path_trace",
             Pass::PathSample => "path_sample",
             Pass::Taa => "taa_resolve",
+            Pass::Gi(p) => p.entry(),
         }
     }
 
@@ -150,9 +195,10 @@ impl Pass {
     fn files(self) -> &'static [&'static str] {
         match self {
             Pass::Rays => &[RAYS],
-            Pass::Render => &[RENDER],
+            Pass::Render => &[FIRST_HIT, RENDER],
             Pass::PathTrace | Pass::PathSample => &[SAMPLE, LIGHT, PATHTRACE],
             Pass::Taa => &[SAMPLE, TAA],
+            Pass::Gi(_) => &[SAMPLE, LIGHT, FIRST_HIT, GI_COMMON, GI_PRIMARY, GI_SAMPLES, GI_RESAMPLE],
         }
     }
 }
@@ -169,6 +215,7 @@ pub fn prelude(split: &Split) -> String {
     s.push_str("@group(0) @binding(0) var<uniform> world_info: WorldInfo;\n");
     s.push_str(&FrameInfo::wgsl());
     s.push_str(&LightInfo::wgsl());
+    s.push_str(&GiInfo::wgsl());
     for (name, value) in CONSTANTS {
         let _ = writeln!(s, "const {name}: u32 = {value}u;");
     }
@@ -281,6 +328,7 @@ mod tests {
         assert_rust_layout::<WorldInfo>(&module);
         assert_rust_layout::<FrameInfo>(&module);
         assert_rust_layout::<LightInfo>(&module);
+        assert_rust_layout::<GiInfo>(&module);
     }
 
     #[test]

@@ -168,4 +168,59 @@ wgsl_struct! {
     }
 }
 
-const _: () = assert!(size_of::<FrameInfo>() == 80 && size_of::<LightInfo>() == 48);
+wgsl_struct! {
+    /// The GI pipeline's frame state, `gi` (group 1, binding 2 of the `gi` passes;
+    /// docs/RENDERING.md §3c).
+    pub struct GiInfo {
+        /// Frames rendered in this history before this one.
+        pub frame: u32,
+        /// The long-term TAA slot this frame writes (`frame % TAA_SLOTS`).
+        pub taa_slot: u32,
+        /// Earlier frames the TAA may read (at most `TAA_SLOTS − 1`).
+        pub taa_valid: u32,
+        /// The first frame rendered after the newest world change (0: none).
+        pub edit_frame: u32,
+        /// This frame's Halton (3, 7) jitter in the pixel, x.
+        pub jitter_x: f32,
+        /// This frame's Halton (3, 7) jitter in the pixel, y.
+        pub jitter_y: f32,
+        /// 8×8 regions across.
+        pub regions_x: u32,
+        /// 8×8 regions down.
+        pub regions_y: u32,
+        /// Samples the sample ring holds.
+        pub ring_capacity: u32,
+        /// Earlier frames whose cameras `cams` holds (at most `CAMERA_HISTORY − 1`).
+        pub cams_valid: u32,
+        /// 1 when the bilateral denoiser runs.
+        pub denoise: u32,
+        /// Unused; keeps the struct a multiple of 16 bytes.
+        pub pad: u32,
+        /// Where the atmosphere table starts in `mem` (vec4 words; the cameras start at 0).
+        pub off_lut: u32,
+        /// Where the first-hit surfaces start in `mem`.
+        pub off_gbuf: u32,
+        /// Where the first-hit materials start in `mem`.
+        pub off_gmat: u32,
+        /// Where the first-hit light starts in `mem`.
+        pub off_emitted: u32,
+        /// Where the TAA's per-pixel sums and ranges start in `mem`.
+        pub off_taa_info: u32,
+        /// Where the incoming light starts in `mem`.
+        pub off_illum: u32,
+        /// Where the denoiser's intermediate starts in `mem`.
+        pub off_illum2: u32,
+        /// Where the results start in `mem`.
+        pub off_result: u32,
+        /// Where the refined samples start in `mem`.
+        pub off_refined: u32,
+        /// Where the regions' statistics start in `mem`.
+        pub off_region_info: u32,
+        /// Where the sample ring starts in `mem`.
+        pub off_ring: u32,
+        /// Where the queued pixels start in `words`.
+        pub off_queue_list: u32,
+    }
+}
+
+const _: () = assert!(size_of::<FrameInfo>() == 80 && size_of::<LightInfo>() == 48 && size_of::<GiInfo>() == 96);

@@ -1,0 +1,473 @@
+//! [`Gi`]: the paper's global illumination pipeline (`gi`; docs/RENDERING.md §3c), on the
+//! mirrored world buffers.
+//!
+//! Each frame runs the passes of [`GiPass::ALL`] in order: the atmosphere table (when a
+//! history starts), the jittered first hit, the long-term TAA's gather, the ray queue,
+//! one secondary path per queued pixel into the sample ring, the projection of the ring's
+//! samples into this frame's 8×8 regions and their refinement, spatial resampling with a
+//! visibility ray and the sun, the bilateral denoiser, and the TAA merge. A history (the
+//! TAA, the ring, the cameras of earlier frames) is kept per (size, light, seed); the
+//! camera may move and the world may change within it.
+
+use super::context::{Gpu, GpuError};
+use super::pipeline::PassPipelines;
+use super::render::{CameraRays, check_frame_size};
+use super::shaders::{Loop, Pass};
+use super::uniform::{FrameInfo, GiInfo, LightInfo};
+use super::world::GpuWorld;
+use crate::light::Light;
+use crate::light::hdr::Radiance;
+use naadf_world::camera::Camera;
+use std::collections::VecDeque;
+
+/// Frames the long-term TAA keeps a sample of, per pixel.
+pub const TAA_SLOTS: u32 = 32;
+/// Frames whose cameras are kept: how far back the sample ring's samples may come from.
+pub const CAMERA_HISTORY: u32 = 128;
+/// Edge of the atmosphere table in texels.
+pub const LUT_SIZE: u32 = 256;
+/// Sample slots per region in the projection.
+pub const BUCKET_SLOTS: u32 = 32;
+/// Samples a region keeps after refinement.
+pub const MAX_KEPT: u32 = 7;
+/// `vec4<u32>` per sample in the ring.
+pub const RING_VEC4: u32 = 3;
+/// After a world change, the TAA and the ring use samples from before it for at most this
+/// many more frames, so that light that changed (an emitter removed or added) updates
+/// within them.
+pub const EDIT_HISTORY_FRAMES: u32 = 8;
+/// Word offset of the secondary rays' indirect arguments in the control buffer.
+pub const CONTROL_TRACE_ARGS: u32 = 0;
+/// Word offset of the projection's indirect arguments in the control buffer.
+pub const CONTROL_PROJECT_ARGS: u32 = 4;
+
+/// Control words at the start of `words`: indirect arguments and ring bookkeeping, then the
+/// sample count of each of the last [`CAMERA_HISTORY`] frames.
+pub const CONTROL_WORDS: u32 = 16 + CAMERA_HISTORY;
+/// vec4 words per camera in `mem`.
+const CAM_VEC4: usize = 5;
+/// Bytes per pixel of the TAA binding.
+const TAA_PIXEL_BYTES: u64 = TAA_SLOTS as u64 * 8;
+/// Ring samples per pixel, at most (the adapter's binding limit may allow fewer).
+const RING_PER_PIXEL: u64 = 2;
+
+/// One pass of the pipeline, in frame order.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum GiPass {
+    /// Fills the atmosphere table (first frame of a history only).
+    Atmosphere,
+    /// The jittered first hit and its mirror chain.
+    FirstHit,
+    /// The long-term TAA's gather of earlier frames' samples.
+    Taa,
+    /// Which pixels trace a secondary ray, compacted per region.
+    Queue,
+    /// The queue's layout, the ring's bookkeeping and the indirect arguments.
+    QueueScan,
+    /// One secondary path per queued pixel, into the sample ring.
+    Trace,
+    /// The ring's samples counted into this frame's regions.
+    Project,
+    /// The winning samples stored in their regions' slots.
+    ProjectStore,
+    /// At most [`MAX_KEPT`] levelled samples per region.
+    Refine,
+    /// Spatial resampling, the visibility ray and the sun.
+    Resample,
+    /// The denoiser along x.
+    DenoiseX,
+    /// The denoiser along y.
+    DenoiseY,
+    /// This frame's colour into the TAA, and the result.
+    Merge,
+}
+
+impl GiPass {
+    /// Every pass, in frame order.
+    pub const ALL: [GiPass; 13] = [
+        GiPass::Atmosphere,
+        GiPass::FirstHit,
+        GiPass::Taa,
+        GiPass::Queue,
+        GiPass::QueueScan,
+        GiPass::Trace,
+        GiPass::Project,
+        GiPass::ProjectStore,
+        GiPass::Refine,
+        GiPass::Resample,
+        GiPass::DenoiseX,
+        GiPass::DenoiseY,
+        GiPass::Merge,
+    ];
+
+    /// The WGSL entry point.
+    pub fn entry(self) -> &'static str {
+        match self {
+            GiPass::Atmosphere => "gi_atmosphere",
+            GiPass::FirstHit => "gi_first_hit",
+            GiPass::Taa => "gi_taa",
+            GiPass::Queue => "gi_queue",
+            GiPass::QueueScan => "gi_queue_scan",
+            GiPass::Trace => "gi_trace",
+            GiPass::Project => "gi_project",
+            GiPass::ProjectStore => "gi_project_store",
+            GiPass::Refine => "gi_refine",
+            GiPass::Resample => "gi_resample",
+            GiPass::DenoiseX => "gi_denoise_x",
+            GiPass::DenoiseY => "gi_denoise_y",
+            GiPass::Merge => "gi_merge",
+        }
+    }
+}
+
+/// Where each array of `mem` starts (vec4 words) for `p` pixels and `r` regions, with the
+/// ring last; and the start of the queued pixels in `words`.
+#[derive(Clone, Copy, Debug)]
+struct Layout {
+    offsets: [u32; 12],
+    /// vec4 words of `mem` before the ring.
+    ring_start: u64,
+    /// Words of `words`.
+    words: u64,
+}
+
+impl Layout {
+    fn new(p: u64, r: u64) -> Self {
+        let sizes = [
+            u64::from(LUT_SIZE * LUT_SIZE), // lut
+            p,                              // gbuf
+            p,                              // gmat
+            p,                              // emitted
+            2 * p,                          // taa_info
+            p,                              // illum
+            p,                              // illum2
+            p,                              // result
+            r * u64::from(MAX_KEPT) * 2,    // refined
+            2 * r,                          // region_info
+        ];
+        let mut offsets = [0u32; 12];
+        let mut at = CAMERA_HISTORY as u64 * CAM_VEC4 as u64;
+        for (k, size) in sizes.iter().enumerate() {
+            offsets[k] = at as u32;
+            at += size;
+        }
+        offsets[10] = at as u32; // ring
+        let queue = u64::from(CONTROL_WORDS) + 2 * r;
+        offsets[11] = queue as u32;
+        Layout {
+            offsets,
+            ring_start: at,
+            words: queue + 64 * r,
+        }
+    }
+}
+
+/// Index of the result array in [`Layout::offsets`].
+const RESULT: usize = 7;
+/// Bytes of indirect arguments at the start of `words`, copied each frame into a buffer of
+/// their own (a dispatch cannot read its arguments from a buffer it binds).
+const ARGS_BYTES: u64 = 32;
+
+/// What a history is of: when any of it changes, the history restarts.
+#[derive(Clone, Debug, PartialEq)]
+struct Subject {
+    size: (u32, u32),
+    light: Light,
+    seed: u32,
+}
+
+/// A camera of an earlier frame and the jitter it was rendered with.
+#[derive(Clone, Copy, Debug)]
+struct Past {
+    camera: Camera,
+    jitter: [f32; 2],
+}
+
+/// The buffers and state of a running GI history.
+pub struct GiHistory {
+    subject: Subject,
+    layout: Layout,
+    /// `mem`, `words`, `buckets` and `taa` (docs in gi_common.wgsl).
+    storage: [wgpu::Buffer; 4],
+    /// The indirect arguments, copied from `words`.
+    args: wgpu::Buffer,
+    ring_capacity: u32,
+    /// Frames rendered so far.
+    frames: u32,
+    /// The cameras of this frame and earlier ones, newest first.
+    cameras: VecDeque<Past>,
+    /// The world generation of the last frame.
+    generation: u64,
+    /// The first frame after the newest world change (0: none).
+    edit_frame: u32,
+}
+
+/// The GI renderer: a history per (size, light, seed).
+pub struct Gi {
+    pipes: Vec<PassPipelines>,
+    history: Option<GiHistory>,
+    /// Whether the bilateral denoiser runs (default on).
+    pub denoise: bool,
+}
+
+/// Element `index` (from 1) of the Halton sequence in `base`, in [0, 1).
+fn halton(mut index: u32, base: u32) -> f32 {
+    let mut f = 1.0;
+    let mut r = 0.0;
+    while index > 0 {
+        f /= base as f32;
+        r += f * (index % base) as f32;
+        index /= base;
+    }
+    r
+}
+
+/// The jitter of frame `frame` in the pixel: Halton (3, 7) over 32 frames.
+fn jitter(frame: u32) -> [f32; 2] {
+    let i = frame % TAA_SLOTS + 1;
+    [halton(i, 3), halton(i, 7)]
+}
+
+impl Gi {
+    /// Prepares the passes (pipelines are built on first use).
+    pub fn new(gpu: &Gpu) -> Self {
+        let storage = [false; 4];
+        Gi {
+            pipes: GiPass::ALL
+                .iter()
+                .map(|&p| PassPipelines::new(gpu, Pass::Gi(p), 3, &storage))
+                .collect(),
+            history: None,
+            denoise: true,
+        }
+    }
+
+    /// Frames in the current history.
+    pub fn frames(&self) -> u32 {
+        self.history.as_ref().map_or(0, |h| h.frames)
+    }
+
+    /// Swaps the history with `other` (one history per camera stream).
+    pub fn swap_history(&mut self, other: &mut Option<GiHistory>) {
+        std::mem::swap(&mut self.history, other);
+    }
+
+    /// Renders the next frame of `camera`'s view of `world`. A new size, light or seed
+    /// starts a new history; a camera move or a world change does not: the history is
+    /// reprojected, and light from before a world change fades out within
+    /// [`EDIT_HISTORY_FRAMES`].
+    pub fn frame(
+        &mut self,
+        gpu: &Gpu,
+        world: &GpuWorld,
+        camera: &Camera,
+        size: (u32, u32),
+        light: &Light,
+        seed: u32,
+    ) -> Result<(), GpuError> {
+        let pixels = check_frame_size(gpu, size, TAA_PIXEL_BYTES)?;
+        let now_rays = CameraRays::new(camera, size)?;
+        let mut pipelines = Vec::with_capacity(self.pipes.len());
+        for p in &mut self.pipes {
+            pipelines.push(p.get(gpu, world, Loop::Hierarchy, true)?);
+        }
+        let (rx, ry) = (size.0.div_ceil(8), size.1.div_ceil(8));
+        let regions = u64::from(rx) * u64::from(ry);
+        let max_binding = gpu.limits.max_storage_buffer_binding_size;
+        let layout = Layout::new(pixels, regions);
+        let room = (max_binding / 16).saturating_sub(layout.ring_start) / u64::from(RING_VEC4);
+        if room < pixels {
+            return Err(GpuError::Unsupported(format!(
+                "frame size {}x{}: the GI pipeline's memory does not fit one binding of the adapter ({max_binding} bytes)",
+                size.0, size.1
+            )));
+        }
+        let ring = (pixels * RING_PER_PIXEL).min(room);
+        let ring_capacity = u32::try_from(ring).unwrap_or(u32::MAX);
+        let subject = Subject {
+            size,
+            light: *light,
+            seed,
+        };
+        let h = match self.history.take() {
+            Some(h) if h.subject == subject => h,
+            _ => GiHistory {
+                subject,
+                storage: [
+                    ("gi mem", (layout.ring_start + ring * u64::from(RING_VEC4)) * 16),
+                    ("gi words", layout.words * 4),
+                    ("gi buckets", regions * (2 * u64::from(BUCKET_SLOTS) + 2) * 4),
+                    ("gi taa", pixels * TAA_PIXEL_BYTES),
+                ]
+                .map(|(label, bytes)| {
+                    gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                        label: Some(label),
+                        size: bytes,
+                        usage: wgpu::BufferUsages::STORAGE
+                            | wgpu::BufferUsages::COPY_SRC
+                            | wgpu::BufferUsages::COPY_DST,
+                        mapped_at_creation: false,
+                    })
+                }),
+                layout,
+                args: gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("gi indirect args"),
+                    size: ARGS_BYTES,
+                    usage: wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                }),
+                ring_capacity,
+                frames: 0,
+                cameras: VecDeque::new(),
+                generation: world.generation(),
+                edit_frame: 0,
+            },
+        };
+        let h = self.history.insert(h);
+        if h.generation != world.generation() {
+            h.generation = world.generation();
+            h.edit_frame = h.frames;
+        }
+        let jit = jitter(h.frames);
+        h.cameras.push_front(Past {
+            camera: *camera,
+            jitter: jit,
+        });
+        h.cameras.truncate(CAMERA_HISTORY as usize);
+        // Every camera relative to this frame's integer position, so that nothing on the
+        // device subtracts two large coordinates.
+        let floor_now = now_rays.int.map(f64::from);
+        let mut cams = vec![[0f32; 4]; CAMERA_HISTORY as usize * CAM_VEC4];
+        for (age, past) in h.cameras.iter().enumerate() {
+            let relative = Camera {
+                pos: std::array::from_fn(|a| past.camera.pos[a] - floor_now[a]),
+                ..past.camera
+            };
+            let r = CameraRays::new(&relative, size)?;
+            let pos: [f32; 3] = std::array::from_fn(|a| r.int[a] as f32 + r.frac[a]);
+            let origin: [f32; 3] = std::array::from_fn(|a| r.int[a] as f32);
+            let c = &mut cams[age * CAM_VEC4..(age + 1) * CAM_VEC4];
+            c[0] = [pos[0], pos[1], pos[2], past.jitter[0]];
+            c[1] = [r.forward[0], r.forward[1], r.forward[2], past.jitter[1]];
+            c[2] = [r.right[0], r.right[1], r.right[2], 0.0];
+            c[3] = [r.up[0], r.up[1], r.up[2], 0.0];
+            c[4] = [origin[0], origin[1], origin[2], 0.0];
+        }
+        gpu.queue.write_buffer(&h.storage[0], 0, bytemuck::cast_slice(&cams));
+        let info = GiInfo {
+            frame: h.frames,
+            taa_slot: h.frames % TAA_SLOTS,
+            taa_valid: h.frames.min(TAA_SLOTS - 1),
+            edit_frame: h.edit_frame,
+            jitter_x: jit[0],
+            jitter_y: jit[1],
+            regions_x: rx,
+            regions_y: ry,
+            ring_capacity: h.ring_capacity,
+            cams_valid: h.cameras.len() as u32 - 1,
+            denoise: u32::from(self.denoise),
+            pad: 0,
+            off_lut: h.layout.offsets[0],
+            off_gbuf: h.layout.offsets[1],
+            off_gmat: h.layout.offsets[2],
+            off_emitted: h.layout.offsets[3],
+            off_taa_info: h.layout.offsets[4],
+            off_illum: h.layout.offsets[5],
+            off_illum2: h.layout.offsets[6],
+            off_result: h.layout.offsets[7],
+            off_refined: h.layout.offsets[8],
+            off_region_info: h.layout.offsets[9],
+            off_ring: h.layout.offsets[10],
+            off_queue_list: h.layout.offsets[11],
+        };
+        let frame = FrameInfo::new(&now_rays, size, seed, h.frames, h.frames > 0);
+        let uniforms = [
+            gpu.uniform("frame", bytemuck::bytes_of(&frame)),
+            gpu.uniform("light", bytemuck::bytes_of(&LightInfo::new(light))),
+            gpu.uniform("gi", bytemuck::bytes_of(&info)),
+        ];
+        let buffers: Vec<&wgpu::Buffer> = uniforms.iter().chain(h.storage.iter()).collect();
+        let pixel_groups = (size.0.div_ceil(8), size.1.div_ceil(8));
+        let (control, args) = (&h.storage[1], &h.args);
+        let first = h.frames == 0;
+        let denoise = self.denoise;
+        gpu.checked(|| {
+            let mut enc = gpu.device.create_command_encoder(&Default::default());
+            for (k, &pass) in GiPass::ALL.iter().enumerate() {
+                let skip = match pass {
+                    GiPass::Atmosphere => !first,
+                    GiPass::DenoiseX | GiPass::DenoiseY => !denoise,
+                    _ => false,
+                };
+                if skip {
+                    continue;
+                }
+                if pass == GiPass::Trace {
+                    enc.copy_buffer_to_buffer(control, 0, args, 0, ARGS_BYTES);
+                }
+                let group = self.pipes[k].group1(gpu, &buffers);
+                // One compute pass per dispatch, so that the copy of the indirect arguments
+                // can sit between two of them.
+                let mut cp = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some(pass.entry()),
+                    timestamp_writes: None,
+                });
+                cp.set_pipeline(&pipelines[k]);
+                cp.set_bind_group(0, world.bind_group(), &[]);
+                cp.set_bind_group(1, &group, &[]);
+                match pass {
+                    GiPass::Atmosphere => cp.dispatch_workgroups(LUT_SIZE / 8, LUT_SIZE / 8, 1),
+                    GiPass::QueueScan => cp.dispatch_workgroups(1, 1, 1),
+                    GiPass::Trace => cp.dispatch_workgroups_indirect(args, u64::from(CONTROL_TRACE_ARGS) * 4),
+                    GiPass::Project | GiPass::ProjectStore => {
+                        cp.dispatch_workgroups_indirect(args, u64::from(CONTROL_PROJECT_ARGS) * 4)
+                    }
+                    GiPass::Refine => cp.dispatch_workgroups(regions.div_ceil(64) as u32, 1, 1),
+                    _ => cp.dispatch_workgroups(pixel_groups.0, pixel_groups.1, 1),
+                }
+            }
+            gpu.queue.submit([enc.finish()]);
+        })?;
+        h.frames += 1;
+        Ok(())
+    }
+
+    /// The newest result as linear radiance; an error before the first frame.
+    pub fn radiance(&self, gpu: &Gpu) -> Result<Radiance, GpuError> {
+        let h = self
+            .history
+            .as_ref()
+            .ok_or_else(|| GpuError::Readback("no gi frame was rendered".into()))?;
+        let (w, ht) = h.subject.size;
+        let bytes = gpu.read_buffer_at(
+            &h.storage[0],
+            u64::from(h.layout.offsets[RESULT]) * 16,
+            u64::from(w) * u64::from(ht) * 16,
+        )?;
+        let px: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&bytes);
+        Ok(Radiance {
+            width: w,
+            height: ht,
+            rgb: px.iter().map(|p| [p[0], p[1], p[2]]).collect(),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn halton_jitter_is_the_3_7_sequence_in_the_pixel() {
+        let close = |a: [f32; 2], b: [f32; 2]| a.iter().zip(&b).all(|(x, y)| (x - y).abs() < 1e-6);
+        assert!(close(jitter(0), [1.0 / 3.0, 1.0 / 7.0]));
+        assert!(close(jitter(1), [2.0 / 3.0, 2.0 / 7.0]));
+        assert!(close(jitter(2), [1.0 / 9.0, 3.0 / 7.0]));
+        assert!(close(jitter(3), [4.0 / 9.0, 4.0 / 7.0]));
+        // The sequence restarts with the TAA's slots.
+        assert_eq!(jitter(TAA_SLOTS), jitter(0));
+        for f in 0..TAA_SLOTS {
+            assert!(jitter(f).iter().all(|&j| (0.0..1.0).contains(&j)));
+        }
+    }
+}
