@@ -3,9 +3,9 @@
 // the constants in capitals without a definition here (TAA_SLOTS, CAMERA_HISTORY, …) come
 // from the prelude, generated from client/src/gpu/gi.rs.
 
-@group(1) @binding(0) var<uniform> frame: FrameInfo;
-@group(1) @binding(1) var<uniform> light: LightInfo;
-@group(1) @binding(2) var<uniform> gi: GiInfo;
+@group(1) @binding(0) var<storage, read> frame: FrameInfo;
+@group(1) @binding(1) var<storage, read> light: LightInfo;
+@group(1) @binding(2) var<storage, read> gi: GiInfo;
 // The pipeline's memory (docs/RENDERING.md §3c). Lavapipe (Mesa 22.3) reports 32 storage
 // buffers per stage, but crashes on some passes when the layout holds many more than 16;
 // so the GI's arrays share four bindings, each array at an offset that `gi` carries

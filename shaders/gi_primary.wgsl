@@ -151,8 +151,10 @@ fn gi_taa(@builtin(global_invocation_id) gid: vec3<u32>) {
     var sum = vec3<f32>(0.0);
     var count = 0.0;
     for (var age = 1u; age <= gi.taa_valid; age++) {
-        // Light from before the newest world change fades out within EDIT_HISTORY_FRAMES.
-        if gi.frame - age < gi.edit_frame && age > EDIT_HISTORY_FRAMES {
+        // Light from before the newest world change fades out within EDIT_HISTORY_FRAMES
+        // frames; so does light resampled from the ring while it still held samples from
+        // before the change (the first EDIT_HISTORY_FRAMES frames after it).
+        if gi.edit_frame > 0u && gi.frame - age < gi.edit_frame + EDIT_HISTORY_FRAMES && age > EDIT_HISTORY_FRAMES {
             break;
         }
         let c = cam(age);

@@ -10,44 +10,17 @@
 //! - Same seed, same bytes; sums added in several steps equal one step; an edit restarts
 //!   the sums.
 
-#[path = "../../world/tests/common/mod.rs"]
-mod common;
+mod scenes;
 
-use common::Raw;
-use naadf_client::gpu::{Baseline, Gpu, GpuWorld, PathTracer};
+use naadf_client::gpu::{Baseline, GpuWorld, PathTracer};
 use naadf_client::light::cpu::CpuPathTracer;
 use naadf_client::light::hdr::Radiance;
 use naadf_client::light::{Light, Sky, Sun};
+use naadf_world::World;
 use naadf_world::camera::Camera;
 use naadf_world::ops::{Batch, Limits};
 use naadf_world::traverse::trace_naadf;
-use naadf_world::{World, WorldSize};
-use std::sync::OnceLock;
-
-/// One device for the whole test binary, or `None` with a message.
-fn gpu() -> Option<&'static Gpu> {
-    static GPU: OnceLock<Option<Gpu>> = OnceLock::new();
-    GPU.get_or_init(|| match Gpu::new() {
-        Ok(g) => Some(g),
-        Err(e) => {
-            eprintln!("skipping the GPU half of the path-tracer tests: {e}");
-            None
-        }
-    })
-    .as_ref()
-}
-
-/// A 64³ world made by `ops` (JSON lines of the ops format) from empty.
-fn world(ops: &[&str]) -> World {
-    let mut w = Raw::empty(WorldSize::new(64, 64, 64).unwrap(), 1).build();
-    let batch = Batch::parse_line(&format!(r#"{{"batch":[{}]}}"#, ops.join(","))).expect("ops");
-    w.apply(&batch, &Limits::default()).expect("apply");
-    w
-}
-
-fn camera(json: &str) -> Camera {
-    Camera::from_json(json).unwrap()
-}
+use scenes::{FLOOR, GREY, SHOWCASE_CAMERA, camera, gpu, mse, showcase, world};
 
 /// The frame of `light` at `size` and `spp`: the GPU's, and the CPU's (per pixel, the mean
 /// of the same samples).
@@ -90,9 +63,6 @@ fn assert_mean(what: &str, (mean, se): ([f64; 3], f64), expected: [f64; 3]) {
         );
     }
 }
-
-const FLOOR: &str = r#"{"op":"box","min":[0,0,0],"max":[64,8,64],"material":1}"#;
-const GREY: &str = r#"{"op":"define_material","id":1,"kind":"diffuse","albedo":[0.5,0.5,0.5]}"#;
 
 #[test]
 fn a_floor_under_a_uniform_sky_has_radiance_albedo_times_sky() {
@@ -175,25 +145,11 @@ fn a_closed_box_of_emissive_walls_sums_its_bounces() {
     }
 }
 
-/// Every material kind, an entity-free world lit by the physical sky and the sun.
-fn showcase() -> World {
-    world(&[
-        GREY,
-        r#"{"op":"define_material","id":2,"kind":"metal","albedo":[0.9,0.6,0.3],"roughness":0.3}"#,
-        r#"{"op":"define_material","id":3,"kind":"emissive","albedo":[1,0.8,0.5],"emission":4}"#,
-        r#"{"op":"define_material","id":4,"kind":"mirror","albedo":[0.8,0.8,0.9]}"#,
-        FLOOR,
-        r#"{"op":"sphere","center":[26,14,40],"radius":6,"material":2}"#,
-        r#"{"op":"box","min":[36,8,36],"max":[40,12,40],"material":3}"#,
-        r#"{"op":"box","min":[20,8,50],"max":[44,28,51],"material":4}"#,
-    ])
-}
-
 #[test]
 fn gpu_pixels_fall_within_the_cpu_estimate() {
     let Some(gpu) = gpu() else { return };
     let w = showcase();
-    let cam = camera(r#"{"pos":[32,20,14],"yaw":0,"pitch":-10,"fov_y":70}"#);
+    let cam = camera(SHOWCASE_CAMERA);
     let size = (24, 16);
     let light = Light::new(Sky::Physical, None, 3).unwrap();
     let spp = 256;
@@ -230,7 +186,7 @@ fn gpu_pixels_fall_within_the_cpu_estimate() {
 fn the_gpu_path_tracer_is_deterministic_and_progressive() {
     let Some(gpu) = gpu() else { return };
     let w = showcase();
-    let cam = camera(r#"{"pos":[32,20,14],"yaw":0,"pitch":-10,"fov_y":70}"#);
+    let cam = camera(SHOWCASE_CAMERA);
     let size = (20, 12);
     let light = Light::new(Sky::Physical, None, 3).unwrap();
     let gw = GpuWorld::new(gpu, &w).expect("upload");
@@ -258,7 +214,7 @@ fn the_gpu_path_tracer_is_deterministic_and_progressive() {
 fn an_edit_restarts_the_sums() {
     let Some(gpu) = gpu() else { return };
     let mut w = showcase();
-    let cam = camera(r#"{"pos":[32,20,14],"yaw":0,"pitch":-10,"fov_y":70}"#);
+    let cam = camera(SHOWCASE_CAMERA);
     let size = (16, 12);
     let light = Light::new(Sky::Physical, None, 2).unwrap();
     let mut slot = None;
@@ -303,17 +259,6 @@ fn bad_requests_are_errors() {
     assert!(run((0, 8), 1).is_err());
 }
 
-/// The baseline's mean squared difference from `reference` over the image.
-fn mse(a: &Radiance, reference: &Radiance) -> f64 {
-    let sum: f64 = a
-        .rgb
-        .iter()
-        .zip(&reference.rgb)
-        .map(|(x, y)| (0..3).map(|c| f64::from(x[c] - y[c]).powi(2)).sum::<f64>())
-        .sum();
-    sum / (3 * a.rgb.len()) as f64
-}
-
 #[test]
 fn the_baseline_keeps_an_exact_image_exact_and_converges_toward_the_path_tracer() {
     let Some(gpu) = gpu() else { return };
@@ -342,7 +287,7 @@ fn the_baseline_keeps_an_exact_image_exact_and_converges_toward_the_path_tracer(
     // On a scene with variance, 32 frames are much closer to a 256-spp reference than the
     // first frame, and the same seed gives the same bytes.
     let w = showcase();
-    let cam = camera(r#"{"pos":[32,20,14],"yaw":0,"pitch":-10,"fov_y":70}"#);
+    let cam = camera(SHOWCASE_CAMERA);
     let size = (24, 16);
     let light = Light::new(Sky::Physical, None, 3).unwrap();
     let gw = GpuWorld::new(gpu, &w).unwrap();

@@ -231,11 +231,11 @@ fn jitter(frame: u32) -> [f32; 2] {
 impl Gi {
     /// Prepares the passes (pipelines are built on first use).
     pub fn new(gpu: &Gpu) -> Self {
-        let storage = [false; 4];
+        let storage = [true, true, true, false, false, false, false];
         Gi {
             pipes: GiPass::ALL
                 .iter()
-                .map(|&p| PassPipelines::new(gpu, Pass::Gi(p), 3, &storage))
+                .map(|&p| PassPipelines::new(gpu, Pass::Gi(p), 0, &storage))
                 .collect(),
             history: None,
             denoise: true,

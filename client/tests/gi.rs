@@ -1,0 +1,145 @@
+//! The GI pipeline (`gi`, docs/RENDERING.md §3c) against an analytic answer, the path
+//! tracer, the baseline and itself:
+//! - a floor under a uniform sky converges to a·L at every pixel (within 5 %);
+//! - on the showcase scene, 32 GI frames are closer to a 256-spp path-traced reference
+//!   than 32 baseline frames;
+//! - an emitter added or removed during GI shows within the paper's 32 frames;
+//! - the same seed gives the same bytes; bad sizes are errors.
+//!
+//! Skips without an adapter.
+
+mod scenes;
+
+use naadf_client::gpu::{Baseline, Gi, Gpu, GpuWorld, PathTracer};
+use naadf_client::light::hdr::Radiance;
+use naadf_client::light::{Light, Sky};
+use naadf_world::World;
+use naadf_world::camera::Camera;
+use scenes::{FLOOR, GREY, SHOWCASE_CAMERA, apply, camera, gpu, mse, showcase, world};
+
+/// Renders `frames` more GI frames and returns the last.
+fn run(gi: &mut Gi, gpu: &Gpu, gw: &GpuWorld, cam: &Camera, size: (u32, u32), light: &Light, frames: u32) -> Radiance {
+    for _ in 0..frames {
+        gi.frame(gpu, gw, cam, size, light, 0).expect("gi frame");
+    }
+    gi.radiance(gpu).expect("gi radiance")
+}
+
+#[test]
+fn a_floor_under_a_uniform_sky_converges_to_albedo_times_sky() {
+    let Some(gpu) = gpu() else { return };
+    let w = world(&[GREY, FLOOR]);
+    let gw = GpuWorld::new(gpu, &w).unwrap();
+    let cam = camera(r#"{"pos":[32,40,32],"yaw":0,"pitch":-89.9,"fov_y":60}"#);
+    let light = Light::new(Sky::parse("uniform:2").unwrap(), None, 3).unwrap();
+    let mut gi = Gi::new(gpu);
+    let img = run(&mut gi, gpu, &gw, &cam, (32, 24), &light, 64);
+    assert_eq!(gi.frames(), 64);
+    for (i, p) in img.rgb.iter().enumerate() {
+        assert!(p.iter().all(|&c| (c - 1.0).abs() <= 0.05), "pixel {i}: {p:?}, expected 1.0 within 5 %");
+    }
+}
+
+#[test]
+fn gi_is_closer_to_the_path_tracer_than_the_baseline_after_32_frames() {
+    let Some(gpu) = gpu() else { return };
+    let w = showcase();
+    let cam = camera(SHOWCASE_CAMERA);
+    let size = (24, 16);
+    let light = Light::new(Sky::Physical, None, 3).unwrap();
+    let gw = GpuWorld::new(gpu, &w).unwrap();
+    let reference = PathTracer::new(gpu)
+        .render(gpu, &gw, &cam, size, &light, 7, 256, &mut |_| {})
+        .unwrap();
+    let mut baseline = Baseline::new(gpu);
+    for _ in 0..32 {
+        baseline.frame(gpu, &gw, &cam, size, &light, 0).unwrap();
+    }
+    let b = mse(&baseline.radiance(gpu).unwrap(), &reference);
+    let g = mse(&run(&mut Gi::new(gpu), gpu, &gw, &cam, size, &light, 32), &reference);
+    eprintln!("MSE after 32 frames: gi {g}, baseline {b}");
+    assert!(g < b, "gi MSE {g} vs baseline {b}");
+}
+
+/// The mean radiance over the image.
+fn mean(img: &Radiance) -> f64 {
+    img.mean_where(|_, _| true).unwrap().0.iter().sum::<f64>() / 3.0
+}
+
+/// Frames after `edit` until the image mean is within 10 % of the change of `target`, at
+/// most `limit`.
+fn frames_to_settle(
+    gpu: &Gpu,
+    w: &mut World,
+    cam: &Camera,
+    light: &Light,
+    edit: &str,
+    target: f64,
+    limit: u32,
+) -> (u32, f64) {
+    let size = (24, 16);
+    let mut slot = None;
+    let mut gi = Gi::new(gpu);
+    let before = run(&mut gi, gpu, GpuWorld::follow(&mut slot, gpu, w).unwrap(), cam, size, light, 32);
+    let start = mean(&before);
+    apply(w, &[edit]);
+    for k in 1..=limit {
+        let img = run(&mut gi, gpu, GpuWorld::follow(&mut slot, gpu, w).unwrap(), cam, size, light, 1);
+        if (mean(&img) - target).abs() <= 0.1 * (start - target).abs() {
+            return (k, start);
+        }
+    }
+    (limit + 1, start)
+}
+
+#[test]
+fn an_emitter_added_or_removed_during_gi_shows_within_32_frames() {
+    let Some(gpu) = gpu() else { return };
+    // A floor in the dark, lit only by an emissive slab above it, out of view.
+    let glow = r#"{"op":"define_material","id":3,"kind":"emissive","albedo":[1,1,1],"emission":8}"#;
+    let slab = r#"{"op":"box","min":[16,30,16],"max":[48,32,48],"material":3}"#;
+    let remove = r#"{"op":"box","min":[16,30,16],"max":[48,32,48],"material":0}"#;
+    let cam = camera(r#"{"pos":[32,20,32],"yaw":0,"pitch":-89.9,"fov_y":60}"#);
+    let light = Light::new(Sky::parse("uniform:0").unwrap(), None, 3).unwrap();
+    let lit = world(&[GREY, glow, FLOOR, slab]);
+    let converged = {
+        let gw = GpuWorld::new(gpu, &lit).unwrap();
+        mean(&run(&mut Gi::new(gpu), gpu, &gw, &cam, (24, 16), &light, 64))
+    };
+    assert!(converged > 0.1, "the slab lights the floor: {converged}");
+
+    let (added, dark) = frames_to_settle(gpu, &mut world(&[GREY, glow, FLOOR]), &cam, &light, slab, converged, 32);
+    assert_eq!(dark, 0.0, "nothing lights the floor before the slab");
+    assert!(added <= 32, "adding the emitter took {added} frames");
+
+    let (removed, before) = frames_to_settle(gpu, &mut lit.clone(), &cam, &light, remove, 0.0, 32);
+    assert!(before > 0.1);
+    assert!(removed <= 32, "removing the emitter took {removed} frames");
+    eprintln!("frames to within 10 %: added {added}, removed {removed}");
+}
+
+#[test]
+fn the_same_seed_gives_the_same_bytes_and_bad_sizes_are_errors() {
+    let Some(gpu) = gpu() else { return };
+    let w = showcase();
+    let cam = camera(SHOWCASE_CAMERA);
+    let light = Light::new(Sky::Physical, None, 3).unwrap();
+    let gw = GpuWorld::new(gpu, &w).unwrap();
+    let frames = |seed| {
+        let mut gi = Gi::new(gpu);
+        for _ in 0..6 {
+            gi.frame(gpu, &gw, &cam, (20, 12), &light, seed).unwrap();
+        }
+        gi.radiance(gpu).unwrap()
+    };
+    let a = frames(1);
+    assert_eq!(a, frames(1), "same seed, same bytes");
+    assert_ne!(a, frames(2), "another seed, other samples");
+
+    let mut gi = Gi::new(gpu);
+    assert!(gi.radiance(gpu).is_err(), "no frame yet");
+    for size in [(0, 8), (20000, 8), (8192, 8192)] {
+        let e = gi.frame(gpu, &gw, &cam, size, &light, 0).unwrap_err();
+        assert!(e.to_string().contains("frame size"), "{size:?}: {e}");
+    }
+}
