@@ -14,7 +14,7 @@
 //   - cams: CAMERA_HISTORY cameras, newest first (index = frames ago), CAM_WORDS each:
 //     (position relative to this frame's integer camera position, jitter x), (forward,
 //     jitter y), (right, 0), (up, 0), (that frame's integer position minus this one's, 0);
-//   - lut: the atmosphere table, LUT_SIZE² octahedral texels of sky radiance;
+//   - lut: the atmosphere table, LUT_SIZE² latitude–longitude texels of sky radiance;
 //   - gbuf, per pixel: the final surface of the first-hit chain relative to the integer
 //     camera position, and the chain's length (−1: sky or mirror limit);
 //   - gmat, per pixel: x = kind | class << 4 | normal id << 8 | material << 16;
@@ -27,14 +27,15 @@
 //     throughput, and the denoiser's guide (illum2: the denoiser's intermediate);
 //   - result, per pixel: the frame's linear radiance after the TAA merge;
 //   - refined, per region: MAX_KEPT refined samples, 2 vec4 each;
-//   - region_info, per region, 2 vec4: (lit ratio, kept, samples, 0) and (normal mask,
-//     least and greatest chain length, 0);
+//   - region_info, per region, 3 vec4: the lit ratio per normal id (0–3), (lit ratio of
+//     ids 4 and 5, samples kept, samples projected) and (normal mask, least and greatest
+//     chain length, 0);
 //   - ring: the sample ring, RING_VEC4 vec4 per secondary sample (gi_samples.wgsl).
 // - `words`: the control words (indirect arguments at CONTROL_TRACE_ARGS and
 //   CONTROL_PROJECT_ARGS, ring bookkeeping, per-frame sample counts), then per region the
 //   queued count and (at R + region) the queue offset, then per region 64 queued pixels.
-// - `buckets`: per region BUCKET_SLOTS priorities, BUCKET_SLOTS ring indices, then lit
-//   and unlit counts.
+// - `buckets`: per region BUCKET_SLOTS priorities, BUCKET_SLOTS ring indices, then the
+//   lit and unlit counts of each normal id (2 × NORMALS words).
 // - `taa`: the long-term TAA, TAA_SLOTS frames of 64-bit samples.
 @group(1) @binding(3) var<storage, read_write> mem: array<vec4<u32>>;
 @group(1) @binding(4) var<storage, read_write> words: array<u32>;
@@ -49,6 +50,8 @@ const CLASS_DIFFUSE: u32 = 0u;
 const CLASS_GLOSSY: u32 = 1u;
 const CLASS_NONE: u32 = 2u;
 const NO_NORMAL: u32 = 7u;
+// Normal ids of surfaces (0–5).
+const NORMALS: u32 = 6u;
 // Control words.
 const CONTROL_QUEUED: u32 = 8u;
 const CONTROL_START: u32 = 9u;
@@ -170,75 +173,55 @@ fn surface_normal_id(g: vec4<u32>) -> u32 {
     return (g.x >> 8u) & 7u;
 }
 
-// The pdf of `wi` under GGX VNDF sampling (scatter.rs) from `wo` about `n`.
-fn vndf_pdf(n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>, alpha: f32) -> f32 {
-    let co = dot(n, wo);
-    if co <= 0.0 || dot(n, wi) <= 0.0 {
-        return 0.0;
-    }
-    let h = normalize(wo + wi);
-    let g1 = 1.0 / (1.0 + smith_lambda(alpha, co));
-    return g1 * ggx_d(alpha, max(dot(n, h), 0.0)) / (4.0 * co);
-}
-
 fn luminance(c: vec3<f32>) -> f32 {
     return dot(c, vec3<f32>(0.2126, 0.7152, 0.0722));
 }
 
 // ---- The atmosphere table ----
 
-// The table's texel coordinates (continuous, texel centres at +0.5) of unit `d`. The
-// direction is warped first, y' = sign(y)·y², which spends the texels near the horizon.
+// The table is latitude–longitude: columns are azimuth, rows elevation warped as
+// v = sign(e)·sqrt(|e|/(π/2)) to spend rows near the horizon, which lies exactly between
+// rows LUT_SIZE/2 − 1 and LUT_SIZE/2, so that no lookup blends the sky with the ground.
+
+// The table coordinates (continuous, texel centres at +0.5) of unit `d`.
 fn lut_coords(d: vec3<f32>) -> vec2<f32> {
-    let y = sign(d.y) * d.y * d.y;
-    let s = sqrt(max(1.0 - y * y, 0.0) / max(1.0 - d.y * d.y, 1e-12));
-    var w = vec3<f32>(d.x * s, y, d.z * s);
-    if 1.0 - d.y * d.y <= 1e-12 {
-        w = vec3<f32>(0.0, sign(d.y), 0.0);
-    }
-    // Octahedral map with y as the pole axis.
-    var p = w.xz / (abs(w.x) + abs(w.y) + abs(w.z));
-    if w.y < 0.0 {
-        p = (vec2<f32>(1.0) - abs(p.yx)) * select(vec2<f32>(-1.0), vec2<f32>(1.0), p >= vec2<f32>(0.0));
-    }
-    return (p * 0.5 + 0.5) * f32(LUT_SIZE);
+    let e = asin(clamp(d.y, -1.0, 1.0)) / (0.5 * PI);
+    let v = sign(e) * sqrt(abs(e));
+    let a = atan2(d.x, d.z) / (2.0 * PI) + 0.5;
+    return vec2<f32>(a, v * 0.5 + 0.5) * f32(LUT_SIZE);
 }
 
 // The unit direction at the centre of texel `t`.
 fn lut_direction(t: vec2<u32>) -> vec3<f32> {
-    let p = (vec2<f32>(t) + 0.5) / f32(LUT_SIZE) * 2.0 - 1.0;
-    var w = vec3<f32>(p.x, 1.0 - abs(p.x) - abs(p.y), p.y);
-    if w.y < 0.0 {
-        let xz = (vec2<f32>(1.0) - abs(w.zx)) * select(vec2<f32>(-1.0), vec2<f32>(1.0), w.xz >= vec2<f32>(0.0));
-        w = vec3<f32>(xz.x, w.y, xz.y);
-    }
-    w = normalize(w);
-    let y = sign(w.y) * sqrt(abs(w.y));
-    let s = sqrt(max(1.0 - y * y, 0.0) / max(1.0 - w.y * w.y, 1e-12));
-    if 1.0 - w.y * w.y <= 1e-12 {
-        return vec3<f32>(0.0, sign(w.y), 0.0);
-    }
-    return normalize(vec3<f32>(w.x * s, y, w.z * s));
+    let uv = (vec2<f32>(t) + 0.5) / f32(LUT_SIZE);
+    let v = uv.y * 2.0 - 1.0;
+    let e = sign(v) * v * v * 0.5 * PI;
+    let a = (uv.x - 0.5) * 2.0 * PI;
+    return vec3<f32>(cos(e) * sin(a), sin(e), cos(e) * cos(a));
 }
 
-fn lut_texel(x: i32, y: i32) -> vec3<f32> {
-    let cx = u32(clamp(x, 0, i32(LUT_SIZE) - 1));
-    let cy = u32(clamp(y, 0, i32(LUT_SIZE) - 1));
+// Texel (x, y) with x wrapping around the azimuth and y clamped to the rows of the
+// hemisphere `upper` names.
+fn lut_texel(x: i32, y: i32, upper: bool) -> vec3<f32> {
+    let half = i32(LUT_SIZE) / 2;
+    let cx = u32((x + i32(LUT_SIZE)) % i32(LUT_SIZE));
+    let cy = u32(select(clamp(y, 0, half - 1), clamp(y, half, i32(LUT_SIZE) - 1), upper));
     return bitcast<vec4<f32>>(mem[gi.off_lut + cx + cy * LUT_SIZE]).rgb;
 }
 
-// The sky along unit `d` from the table, bilinearly filtered.
+// The sky along unit `d` from the table, bilinearly filtered within its hemisphere.
 fn sky_base(d: vec3<f32>) -> vec3<f32> {
     if light.sky_physical == 0u {
         return light.sky;
     }
+    let upper = d.y >= 0.0;
     let t = lut_coords(d) - 0.5;
     let b = floor(t);
     let f = t - b;
     let x = i32(b.x);
     let y = i32(b.y);
-    let top = mix(lut_texel(x, y), lut_texel(x + 1, y), f.x);
-    let bottom = mix(lut_texel(x, y + 1), lut_texel(x + 1, y + 1), f.x);
+    let top = mix(lut_texel(x, y, upper), lut_texel(x + 1, y, upper), f.x);
+    let bottom = mix(lut_texel(x, y + 1, upper), lut_texel(x + 1, y + 1, upper), f.x);
     return mix(top, bottom, f.y);
 }
 

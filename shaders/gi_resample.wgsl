@@ -36,6 +36,100 @@ struct Candidate {
     goal: f32,
 }
 
+// The light a diffuse surface at `p` (normal `n`, id `nid`; `origin` just off it) of pixel
+// `gid` reflects (before its albedo), by resampling the regions' refined samples.
+fn resampled(gid: vec2<u32>, p: vec3<f32>, n: vec3<f32>, nid: u32, dist_here: f32, rng: ptr<function, u32>) -> vec3<f32> {
+    let origin = p + n * (2.0 * SURFACE_OFFSET);
+    let base = ray_new(frame.cam_int, vec3<f32>(0.0), n);
+    let big = WINDOW * f32(frame.height);
+    var wsum = 0.0;
+    var count = 0u;
+    var chosen = Candidate(vec3<f32>(0.0), n, 0.0, true, 0.0);
+    for (var c = 0u; c < CANDIDATES; c++) {
+        let side = select(big, big * SMALL_WINDOW, c < CANDIDATES / 2u);
+        let off = (vec2<f32>(rng_next(rng), rng_next(rng)) - 0.5) * side;
+        let qx = mirrored(i32(gid.x) + i32(round(off.x)), i32(frame.width));
+        let qy = mirrored(i32(gid.y) + i32(round(off.y)), i32(frame.height));
+        let region = region_of(qx, qy);
+        let ratios = bitcast<vec4<f32>>(mem[gi.off_region_info + 3u * region]);
+        let info = bitcast<vec4<f32>>(mem[gi.off_region_info + 3u * region + 1u]);
+        let shape = bitcast<vec4<f32>>(mem[gi.off_region_info + 3u * region + 2u]);
+        let pick = rng_next(rng);
+        // A region with no samples says nothing; one whose surfaces differ from this one
+        // does not speak for it.
+        if info.w == 0.0 || (u32(shape.x) & (1u << nid)) == 0u || dist_here < 0.5 * shape.y || dist_here > 2.0 * shape.z {
+            continue;
+        }
+        let kept = u32(info.z);
+        if kept == 0u {
+            // Every sample of the region was unlit: a zero that counts.
+            count++;
+            continue;
+        }
+        let at = 2u * (region * MAX_KEPT + min(u32(pick * f32(kept)), kept - 1u));
+        let r0 = mem[gi.off_refined + at];
+        let r1 = mem[gi.off_refined + at + 1u];
+        // A sample of another kind of surface, or of a surface facing elsewhere, was drawn
+        // from another distribution: it is not a candidate for this one.
+        if ((r0.w >> 1u) & 3u) != CLASS_DIFFUSE || ((r0.w >> 4u) & 7u) != nid {
+            continue;
+        }
+        let sky = (r0.w & 1u) != 0u;
+        var dir = bitcast<vec4<f32>>(r0).xyz;
+        var distance = 0.0;
+        var jac = 1.0;
+        if !sky {
+            let v = dir - origin;
+            distance = length(v);
+            dir = v / max(distance, 1e-6);
+            jac = abs(dot(oct_decode(r0.w >> 16u), dir)) / max(distance * distance, 1e-8) / max(bitcast<f32>(r1.w), 1e-12);
+            if jac < 0.3 || jac > 2.5 {
+                continue;
+            }
+        }
+        let cos_now = dot(n, dir);
+        let pdf_then = bitcast<f32>(r1.z);
+        if cos_now <= 1e-4 || pdf_then < 0.01 {
+            continue;
+        }
+        let f = cos_now / PI;
+        let ratio = f / pdf_then;
+        if ratio < 0.25 || ratio > 2.0 {
+            continue;
+        }
+        var lit_ratio = info.x;
+        if nid < 4u {
+            lit_ratio = ratios[nid];
+        } else if nid == 5u {
+            lit_ratio = info.y;
+        }
+        let colour = vec3<f32>(unpack2x16float(r1.x), unpack2x16float(r1.y).x) * lit_ratio;
+        let fc = colour * f;
+        let goal = luminance(fc);
+        if goal <= 0.0 {
+            continue;
+        }
+        count++;
+        let w = goal / pdf_then * jac;
+        wsum += w;
+        if rng_next(rng) * wsum < w {
+            chosen = Candidate(fc, dir, distance, sky, goal);
+        }
+    }
+    if wsum > 0.0 {
+        // One visibility ray toward the chosen sample.
+        let h = trace(ray_at(base, origin, chosen.dir));
+        var visible = !h.hit && !h.exhausted;
+        if !chosen.sky {
+            visible = h.hit && (h.t * length(chosen.dir) + 0.15) * 1.04 >= chosen.distance;
+        }
+        if visible {
+            return chosen.f * (wsum / (f32(count) * chosen.goal));
+        }
+    }
+    return vec3<f32>(0.0);
+}
+
 // ---- Pass gi_resample ----
 @compute @workgroup_size(8, 8)
 fn gi_resample(@builtin(global_invocation_id) gid: vec3<u32>) {
@@ -58,89 +152,19 @@ fn gi_resample(@builtin(global_invocation_id) gid: vec3<u32>) {
     let m = material(g.x >> 16u);
     let alpha = max(m.roughness, MIN_ALPHA);
     let wo = oct_decode(g.w >> 16u);
-    let origin = p + n * (2.0 * SURFACE_OFFSET);
     let base = ray_new(frame.cam_int, vec3<f32>(0.0), n);
     var rng = rng_new(frame.seed ^ 0x2E5Au, i, gi.frame);
-    let big = WINDOW * f32(frame.height);
-    var wsum = 0.0;
-    var count = 0u;
-    var chosen = Candidate(vec3<f32>(0.0), n, 0.0, true, 0.0);
-    for (var c = 0u; c < CANDIDATES; c++) {
-        let side = select(big, big * SMALL_WINDOW, c < CANDIDATES / 2u);
-        let off = (vec2<f32>(rng_next(&rng), rng_next(&rng)) - 0.5) * side;
-        let qx = mirrored(i32(gid.x) + i32(round(off.x)), i32(frame.width));
-        let qy = mirrored(i32(gid.y) + i32(round(off.y)), i32(frame.height));
-        let region = region_of(qx, qy);
-        let info = bitcast<vec4<f32>>(mem[gi.off_region_info + 2u * region]);
-        let shape = bitcast<vec4<f32>>(mem[gi.off_region_info + 2u * region + 1u]);
-        let pick = rng_next(&rng);
-        // A region with no samples says nothing; one whose surfaces differ from this one
-        // does not speak for it.
-        if info.z == 0.0 || (u32(shape.x) & (1u << nid)) == 0u || dist_here < 0.5 * shape.y || dist_here > 2.0 * shape.z {
-            continue;
-        }
-        count++;
-        let kept = u32(info.y);
-        if kept == 0u {
-            continue;
-        }
-        let at = 2u * (region * MAX_KEPT + min(u32(pick * f32(kept)), kept - 1u));
-        let r0 = mem[gi.off_refined + at];
-        let r1 = mem[gi.off_refined + at + 1u];
-        if ((r0.w >> 1u) & 3u) != cls {
-            continue;
-        }
-        let sky = (r0.w & 1u) != 0u;
-        var dir = bitcast<vec4<f32>>(r0).xyz;
-        var distance = 0.0;
-        var jac = 1.0;
-        if !sky {
-            let v = dir - origin;
-            distance = length(v);
-            dir = v / max(distance, 1e-6);
-            jac = abs(dot(oct_decode(r0.w >> 16u), dir)) / max(distance * distance, 1e-8) / max(bitcast<f32>(r1.w), 1e-12);
-            if jac < 0.3 || jac > 2.5 {
-                continue;
-            }
-        }
-        let cos_now = dot(n, dir);
-        let pdf_then = bitcast<f32>(r1.z);
-        if cos_now <= 1e-4 || pdf_then < 0.01 {
-            continue;
-        }
-        var f = vec3<f32>(cos_now / PI);
-        var pdf_now = cos_now / PI;
-        if cls == CLASS_GLOSSY {
-            f = ggx(n, wo, dir, alpha, m.albedo) * cos_now;
-            pdf_now = vndf_pdf(n, wo, dir, alpha);
-        }
-        let ratio = pdf_now / pdf_then;
-        if ratio < 0.25 || ratio > 2.0 {
-            continue;
-        }
-        let colour = vec3<f32>(unpack2x16float(r1.x), unpack2x16float(r1.y).x) * info.x;
-        let fc = colour * f;
-        let goal = luminance(fc);
-        if goal <= 0.0 {
-            continue;
-        }
-        let w = goal / pdf_then * jac;
-        wsum += w;
-        if rng_next(&rng) * wsum < w {
-            chosen = Candidate(fc, dir, distance, sky, goal);
-        }
-    }
     var light_in = vec3<f32>(0.0);
-    if wsum > 0.0 {
-        // One visibility ray toward the chosen sample.
-        let h = trace(ray_at(base, origin, chosen.dir));
-        var visible = !h.hit && !h.exhausted;
-        if !chosen.sky {
-            visible = h.hit && (h.t * length(chosen.dir) + 0.15) * 1.04 >= chosen.distance;
+    if cls == CLASS_GLOSSY {
+        // A metal traces its own path every frame: its lobe depends on the view, so its
+        // neighbours' samples rarely serve it.
+        let s = ggx_sample(n, wo, alpha, m.albedo, vec2<f32>(rng_next(&rng), rng_next(&rng)));
+        if dot(s.dir, n) > 0.0 {
+            let r = ray_at(base, p + n * SURFACE_OFFSET, s.dir);
+            light_in = s.weight * path_radiance(r, light.bounces - 1u, false, &rng).radiance;
         }
-        if visible {
-            light_in = chosen.f * (wsum / (f32(count) * chosen.goal));
-        }
+    } else {
+        light_in = resampled(gid.xy, p, n, nid, dist_here, &rng);
     }
     // The sun, by next-event estimation over its disc.
     if light.sun_on != 0u {

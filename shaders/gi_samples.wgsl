@@ -23,8 +23,9 @@ fn bucket_index(region: u32, slot: u32) -> u32 {
     return (region_count() + region) * BUCKET_SLOTS + slot;
 }
 
+// The lit and unlit counts of `region`, per normal id: lit at + 2·id, unlit at + 2·id + 1.
 fn bucket_counts(region: u32) -> u32 {
-    return 2u * region_count() * BUCKET_SLOTS + 2u * region;
+    return 2u * region_count() * BUCKET_SLOTS + 2u * NORMALS * region;
 }
 
 // ---- Pass gi_queue: which pixels trace a secondary ray this frame ----
@@ -40,12 +41,13 @@ fn gi_queue(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invoca
     if li < BUCKET_SLOTS {
         atomicStore(&buckets[bucket_priority(region, li)], NO_PRIORITY);
     }
-    if li < 2u {
+    if li < 2u * NORMALS {
         atomicStore(&buckets[bucket_counts(region) + li], 0u);
     }
     var queued = 0u;
     let i = gid.x + gid.y * frame.width;
-    if gid.x < frame.width && gid.y < frame.height && light.bounces > 0u && surface_class(mem[gi.off_gmat + i]) != CLASS_NONE {
+    // Only diffuse surfaces share samples; a metal traces its own (gi_resample.wgsl).
+    if gid.x < frame.width && gid.y < frame.height && light.bounces > 0u && surface_class(mem[gi.off_gmat + i]) == CLASS_DIFFUSE {
         let m = u32(min(taa_accum(i).w, 3.0)) + 1u;
         if (gi.frame + gid.x + 2u * gid.y) % m == 0u {
             queued = 1u;
@@ -165,20 +167,9 @@ fn gi_trace(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) grou
     let p = bitcast<vec4<f32>>(mem[gi.off_gbuf + pixel]).xyz;
     let n = surface_normal(g);
     let cls = surface_class(g);
-    let m = material(g.x >> 16u);
-    let wo = oct_decode(g.w >> 16u);
     let origin = p + n * SURFACE_OFFSET;
-    let u = vec2<f32>(rng_next(&rng), rng_next(&rng));
-    var dir: vec3<f32>;
-    var pdf: f32;
-    if cls == CLASS_GLOSSY {
-        let alpha = max(m.roughness, MIN_ALPHA);
-        dir = ggx_sample(n, wo, alpha, m.albedo, u).dir;
-        pdf = vndf_pdf(n, wo, dir, alpha);
-    } else {
-        dir = sample_cosine(n, u);
-        pdf = max(dot(n, dir), 0.0) / PI;
-    }
+    let dir = sample_cosine(n, vec2<f32>(rng_next(&rng), rng_next(&rng)));
+    let pdf = max(dot(n, dir), 0.0) / PI;
     var s = PathSample(vec3<f32>(0.0), -1.0, n);
     if pdf > 0.0 {
         let base = ray_new(frame.cam_int, vec3<f32>(0.0), dir);
@@ -203,6 +194,8 @@ fn gi_trace(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) grou
 struct Projected {
     ok: bool,
     region: u32,
+    // The primary surface's normal id.
+    nid: u32,
     lit: bool,
     priority: u32,
     idx: u32,
@@ -211,7 +204,7 @@ struct Projected {
 // Ring sample number `t` counting back from the newest, projected into this frame: its
 // primary surface must land on a pixel of the same cls and normal, on the same plane.
 fn project_sample(t: u32) -> Projected {
-    let none = Projected(false, 0u, false, NO_PRIORITY, 0u);
+    let none = Projected(false, 0u, 0u, false, NO_PRIORITY, 0u);
     if t >= words[CONTROL_VALID] {
         return none;
     }
@@ -242,7 +235,7 @@ fn project_sample(t: u32) -> Projected {
     }
     let rgb = bitcast<vec4<f32>>(mem[gi.off_ring + RING_VEC4 * idx + 2u]).xyz;
     let priority = min(pcg_hash(pcg_hash(e0.w) ^ idx), NO_PRIORITY - 1u);
-    return Projected(true, region_of(q.x, q.y), any(rgb > vec3<f32>(0.0)), priority, idx);
+    return Projected(true, region_of(q.x, q.y), (e1.w >> 4u) & 7u, any(rgb > vec3<f32>(0.0)), priority, idx);
 }
 
 // Counts lit and unlit samples per region; each lit sample bids for one of its region's
@@ -256,10 +249,10 @@ fn gi_project(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) gr
         return;
     }
     if s.lit {
-        atomicAdd(&buckets[bucket_counts(s.region)], 1u);
+        atomicAdd(&buckets[bucket_counts(s.region) + 2u * s.nid], 1u);
         atomicMin(&buckets[bucket_priority(s.region, pcg_hash(s.priority) % BUCKET_SLOTS)], s.priority);
     } else {
-        atomicAdd(&buckets[bucket_counts(s.region) + 1u], 1u);
+        atomicAdd(&buckets[bucket_counts(s.region) + 2u * s.nid + 1u], 1u);
     }
 }
 
@@ -308,20 +301,20 @@ fn gi_refine(@builtin(global_invocation_id) gid: vec3<u32>) {
             }
         }
     }
-    let lit = atomicLoad(&buckets[bucket_counts(region)]);
-    let unlit = atomicLoad(&buckets[bucket_counts(region) + 1u]);
-    var filled = 0u;
+    // Per normal id: slots filled and samples that survive levelling.
+    var filled = array<u32, 6>(0u, 0u, 0u, 0u, 0u, 0u);
+    var survivors = array<u32, 6>(0u, 0u, 0u, 0u, 0u, 0u);
     var peak = 0.0;
     for (var s = 0u; s < BUCKET_SLOTS; s++) {
         if atomicLoad(&buckets[bucket_priority(region, s)]) != NO_PRIORITY {
-            filled++;
-            let rgb = bitcast<vec3<f32>>(mem[gi.off_ring + RING_VEC4 * atomicLoad(&buckets[bucket_index(region, s)]) + 2u].xyz);
+            let idx = atomicLoad(&buckets[bucket_index(region, s)]);
+            filled[min((mem[gi.off_ring + RING_VEC4 * idx + 1u].w >> 4u) & 7u, NORMALS - 1u)]++;
+            let rgb = bitcast<vec4<f32>>(mem[gi.off_ring + RING_VEC4 * idx + 2u]).xyz;
             peak = max(peak, max(rgb.r, max(rgb.g, rgb.b)));
         }
     }
     var rng = rng_new(frame.seed ^ 0x7E71u, region, gi.frame);
     var kept = 0u;
-    var survivors = 0u;
     for (var s = 0u; s < BUCKET_SLOTS; s++) {
         if atomicLoad(&buckets[bucket_priority(region, s)]) == NO_PRIORITY {
             continue;
@@ -335,7 +328,7 @@ fn gi_refine(@builtin(global_invocation_id) gid: vec3<u32>) {
         if rng_next(&rng) * peak >= m {
             continue;
         }
-        survivors++;
+        survivors[min((e1.w >> 4u) & 7u, NORMALS - 1u)]++;
         if kept == MAX_KEPT {
             continue;
         }
@@ -352,12 +345,23 @@ fn gi_refine(@builtin(global_invocation_id) gid: vec3<u32>) {
             jac = abs(dot(oct_decode(e1.w >> 16u), v * inverseSqrt(d2))) / d2;
         }
         let at = 2u * (region * MAX_KEPT + kept);
-        mem[gi.off_refined + at] = vec4<u32>(bitcast<vec3<u32>>(point), e1.w & 0xFFFF000Fu);
+        mem[gi.off_refined + at] = vec4<u32>(bitcast<vec3<u32>>(point), e1.w & 0xFFFF007Fu);
         mem[gi.off_refined + at + 1u] = vec4<u32>(pack2x16float(col.rg), pack2x16float(vec2<f32>(col.b, 0.0)), e2.w, bitcast<u32>(jac));
         kept++;
     }
-    let unlit_scaled = f32(unlit) * f32(filled) / max(f32(lit), 1.0);
-    let ratio = f32(survivors) / max(f32(filled) + unlit_scaled, 1.0);
-    mem[gi.off_region_info + 2u * region] = bitcast<vec4<u32>>(vec4<f32>(ratio, f32(kept), f32(lit + unlit), 0.0));
-    mem[gi.off_region_info + 2u * region + 1u] = bitcast<vec4<u32>>(vec4<f32>(f32(mask), lo, hi, 0.0));
+    // The lit ratio per normal: the light a surface facing one way gets says nothing of
+    // another's in the same region.
+    var ratio = array<f32, 6>(0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+    var total = 0u;
+    for (var n = 0u; n < NORMALS; n++) {
+        let lit = atomicLoad(&buckets[bucket_counts(region) + 2u * n]);
+        let unlit = atomicLoad(&buckets[bucket_counts(region) + 2u * n + 1u]);
+        total += lit + unlit;
+        let unlit_scaled = f32(unlit) * f32(filled[n]) / max(f32(lit), 1.0);
+        ratio[n] = f32(survivors[n]) / max(f32(filled[n]) + unlit_scaled, 1.0);
+    }
+    let base = gi.off_region_info + 3u * region;
+    mem[base] = bitcast<vec4<u32>>(vec4<f32>(ratio[0], ratio[1], ratio[2], ratio[3]));
+    mem[base + 1u] = bitcast<vec4<u32>>(vec4<f32>(ratio[4], ratio[5], f32(kept), f32(total)));
+    mem[base + 2u] = bitcast<vec4<u32>>(vec4<f32>(f32(mask), lo, hi, 0.0));
 }

@@ -488,7 +488,7 @@ fn render_writes_the_image_and_first_hit_buffer() {
 
     fails(
         &[
-            "render", "--world", &world, "--camera", camera, "--mode", "gi", "-o", &png,
+            "render", "--world", &world, "--camera", camera, "--mode", "sketch", "-o", &png,
         ],
         None,
         "unknown mode",
@@ -623,39 +623,43 @@ fn render_pathtrace_writes_radiance_and_refuses_bad_light() {
         "--sky applies to the lit modes only",
     );
 
-    // The baseline follows a camera path and refuses what it does not take.
+    // The temporal modes follow a camera path and refuse what they do not take.
     let path = p(dir.path(), "path.jsonl");
-    std::fs::write(&path, format!("{camera}\n\n{}\n", camera.replace("-10.5", "-9.5"))).unwrap();
-    let base = [
-        "render", "--world", &world, "--size", "24x16", "--mode", "baseline", "-o", &png,
-    ];
-    let out = ok(
-        &[&base[..], &["--camera-path", &path, "--frames", "3", "--json"]].concat(),
-        None,
-    );
-    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
-    assert_eq!((v["mode"].as_str(), v["frames"].as_u64()), (Some("baseline"), Some(3)));
-    std::fs::write(&path, "{\"pos\":[1,2]}\n").unwrap();
-    fails(&[&base[..], &["--camera-path", &path]].concat(), None, "line 1");
-    std::fs::write(&path, "\n").unwrap();
-    fails(
-        &[&base[..], &["--camera-path", &path]].concat(),
-        None,
-        "holds no camera",
-    );
-    fails(
-        &[&base[..], &["--camera", camera, "--spp", "4"]].concat(),
-        None,
-        "--spp does not apply",
-    );
+    for mode in ["baseline", "gi"] {
+        std::fs::write(&path, format!("{camera}\n\n{}\n", camera.replace("-10.5", "-9.5"))).unwrap();
+        let base = [
+            "render", "--world", &world, "--size", "24x16", "--mode", mode, "-o", &png,
+        ];
+        let out = ok(
+            &[&base[..], &["--camera-path", &path, "--frames", "3", "--json"]].concat(),
+            None,
+        );
+        let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+        assert_eq!((v["mode"].as_str(), v["frames"].as_u64()), (Some(mode), Some(3)));
+        std::fs::write(&path, "{\"pos\":[1,2]}\n").unwrap();
+        fails(&[&base[..], &["--camera-path", &path]].concat(), None, "line 1");
+        std::fs::write(&path, "\n").unwrap();
+        fails(
+            &[&base[..], &["--camera-path", &path]].concat(),
+            None,
+            "holds no camera",
+        );
+        fails(
+            &[&base[..], &["--camera", camera, "--spp", "4"]].concat(),
+            None,
+            "--spp does not apply",
+        );
+    }
     fails(
         &["render", "--world", &world, "--camera-path", &path, "-o", &png],
         None,
         "--camera-path applies to the lit modes only",
     );
 
-    // bench gi: references, the noise floor between them, and the baseline after each
-    // frame count; more frames come closer to the reference.
+    // bench gi: references, the noise floor between them, baseline and gi after each frame
+    // count (more baseline frames come closer to the reference; GI's quality is tested
+    // in client/tests/gi.rs), the timing rounds and their ratios, GI's memory, the motion
+    // poses and the edit response.
     let out = ok(
         &[
             "bench",
@@ -669,6 +673,12 @@ fn render_pathtrace_writes_radiance_and_refuses_bad_light() {
             "16",
             "--frames",
             "1,16",
+            "--rounds",
+            "1",
+            "--timing-frames",
+            "1",
+            "--motion-spp",
+            "4",
             "--json",
         ],
         None,
@@ -679,6 +689,22 @@ fn render_pathtrace_writes_radiance_and_refuses_bad_light() {
     let base = &v["modes"]["baseline"];
     let mse = |f: &str| base[f]["rel_mse"].as_f64().unwrap();
     assert!(mse("16") < mse("1"), "{base}");
+    for mode in ["baseline", "gi"] {
+        let m = &v["modes"][mode];
+        assert!(m["16"]["flip"].as_f64().unwrap() > 0.0, "{mode}: {m}");
+        assert!(v["flicker"][mode].as_f64().unwrap() >= 0.0);
+        assert!(v["frame_ms"][mode]["median"].as_f64().unwrap() > 0.0);
+        let [added, removed] = [0, 1].map(|k| v["edit_response"][mode][k].as_u64().unwrap());
+        assert!(added >= 1 && removed >= 1, "{mode}: {}", v["edit_response"]);
+    }
+    assert!(v["ratios"]["gi/albedo"]["median"].as_f64().unwrap() > 0.0);
+    assert_eq!(v["motion"].as_object().unwrap().len(), 3, "three poses");
+    let memory = v["gi_memory"].as_array().unwrap();
+    assert!(
+        memory
+            .iter()
+            .any(|m| m[0] == "TAA samples" && m[1].as_u64() == Some(24 * 16 * 32 * 8))
+    );
     fails(
         &["bench", "gi", &world, "--frames", "8,4", "--reference-spp", "1"],
         None,

@@ -181,8 +181,8 @@ fn frames_from_render_nodes_equal_local_renders() {
     }
 
     // The lit modes: a path-traced frame equals the local one; a camera stream's baseline
-    // frames continue one history on the node, so two requests of 2 frames give the local
-    // render of 4 frames.
+    // and gi frames continue one history on the node, so two requests of 2 frames give the
+    // local render of 4 frames.
     let (done, _, err) = frame_with(&server.url, &out, "pathtrace", 0, &["--spp", "3", "--bounces", "2"]);
     assert!(done, "pathtrace: {err}");
     let want = local_with(
@@ -195,17 +195,20 @@ fn frames_from_render_nodes_equal_local_renders() {
         std::fs::read(&out).unwrap() == want,
         "pathtrace: the node's frame differs"
     );
-    let stream = ["--frames", "2", "--stream", "viewer-1", "--sky", "uniform:0.5,0.7,1"];
-    for _ in 0..2 {
-        let (done, _, err) = frame_with(&server.url, &out, "baseline", 0, &stream);
-        assert!(done, "baseline: {err}");
+    for mode in ["baseline", "gi"] {
+        let name = format!("viewer-{mode}");
+        let stream = ["--frames", "2", "--stream", &name, "--sky", "uniform:0.5,0.7,1"];
+        for _ in 0..2 {
+            let (done, _, err) = frame_with(&server.url, &out, mode, 0, &stream);
+            assert!(done, "{mode}: {err}");
+        }
+        let four = ["--frames", "4", "--sky", "uniform:0.5,0.7,1"];
+        let want = local_with(&world, &p(dir.path(), &format!("local-{mode}.png")), mode, &four);
+        assert!(
+            std::fs::read(&out).unwrap() == want,
+            "{mode}: the stream's history did not continue"
+        );
     }
-    let four = ["--frames", "4", "--sky", "uniform:0.5,0.7,1"];
-    let want = local_with(&world, &p(dir.path(), "local-base.png"), "baseline", &four);
-    assert!(
-        std::fs::read(&out).unwrap() == want,
-        "baseline: the stream's history did not continue"
-    );
     let (done, _, err) = frame_with(&server.url, &out, "baseline", 0, &["--sky", "cloudy"]);
     assert!(!done && err.contains("sky 'cloudy'"), "{err}");
 

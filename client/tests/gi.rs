@@ -36,7 +36,10 @@ fn a_floor_under_a_uniform_sky_converges_to_albedo_times_sky() {
     let img = run(&mut gi, gpu, &gw, &cam, (32, 24), &light, 64);
     assert_eq!(gi.frames(), 64);
     for (i, p) in img.rgb.iter().enumerate() {
-        assert!(p.iter().all(|&c| (c - 1.0).abs() <= 0.05), "pixel {i}: {p:?}, expected 1.0 within 5 %");
+        assert!(
+            p.iter().all(|&c| (c - 1.0).abs() <= 0.05),
+            "pixel {i}: {p:?}, expected 1.0 within 5 %"
+        );
     }
 }
 
@@ -80,11 +83,27 @@ fn frames_to_settle(
     let size = (24, 16);
     let mut slot = None;
     let mut gi = Gi::new(gpu);
-    let before = run(&mut gi, gpu, GpuWorld::follow(&mut slot, gpu, w).unwrap(), cam, size, light, 32);
+    let before = run(
+        &mut gi,
+        gpu,
+        GpuWorld::follow(&mut slot, gpu, w).unwrap(),
+        cam,
+        size,
+        light,
+        32,
+    );
     let start = mean(&before);
     apply(w, &[edit]);
     for k in 1..=limit {
-        let img = run(&mut gi, gpu, GpuWorld::follow(&mut slot, gpu, w).unwrap(), cam, size, light, 1);
+        let img = run(
+            &mut gi,
+            gpu,
+            GpuWorld::follow(&mut slot, gpu, w).unwrap(),
+            cam,
+            size,
+            light,
+            1,
+        );
         if (mean(&img) - target).abs() <= 0.1 * (start - target).abs() {
             return (k, start);
         }

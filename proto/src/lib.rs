@@ -31,7 +31,7 @@ pub const PROTOCOL_VERSION: u32 = 1;
 
 /// The render modes a `FrameRequest` may name (render nodes advertise a subset); the
 /// server refuses any other with INVALID_ARGUMENT.
-pub const FRAME_MODES: [&str; 6] = ["albedo", "material", "normal", "steps", "pathtrace", "baseline"];
+pub const FRAME_MODES: [&str; 7] = ["albedo", "material", "normal", "steps", "pathtrace", "baseline", "gi"];
 
 /// Most samples per pixel a `FrameRequest` may ask for.
 pub const MAX_FRAME_SPP: u32 = 4096;

@@ -1,7 +1,7 @@
 //! `naadf render (--world FILE | --server URL) --camera JSON --size WxH --mode M
 //! [--frames N] -o OUT.png [--gbuffer OUT.bin]`; for `--mode pathtrace`
 //! `[--spp N] [--seed S] [--bounces B] [--sky SKY] [--sun SUN] [--exposure X] [--hdr OUT.pfm]`;
-//! for `--mode baseline` the same without `--spp`, with `--frames N` and
+//! for `--mode baseline` and `--mode gi` the same without `--spp`, with `--frames N` and
 //! `[--camera-path FILE.jsonl]`.
 
 use super::remote::{ServerArgs, block_on, quiescent_world};
@@ -27,19 +27,19 @@ pub struct Args {
     /// Camera JSON `{"pos":[x,y,z],"yaw":deg,"pitch":deg,"fov_y":deg}`, or a file holding it.
     #[arg(long, required_unless_present = "camera_path")]
     camera: Option<String>,
-    /// A camera per line (JSON Lines); frame i uses line min(i, last) (baseline).
+    /// A camera per line (JSON Lines); frame i uses line min(i, last) (baseline, gi).
     #[arg(long, conflicts_with = "camera")]
     camera_path: Option<PathBuf>,
     /// Image size `WxH`.
     #[arg(long, default_value = "1280x720", value_parser = parse_image_size)]
     size: (u32, u32),
     /// What to show: albedo, material, normal, steps, pathtrace (the light model,
-    /// path-traced) or baseline (1-spp path tracing with an exponential TAA).
+    /// path-traced), baseline (1-spp path tracing with an exponential TAA) or gi (the
+    /// paper's GI pipeline).
     #[arg(long, default_value = "albedo", value_parser = parse_mode)]
     mode: Mode,
     /// Frames to render; the last is written. All identical in the render-pass modes; for
-    /// baseline, each adds one sample per pixel to the history. Not for pathtrace, which
-    /// takes --spp.
+    /// baseline and gi, each builds on the history. Not for pathtrace, which takes --spp.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     frames: Option<u32>,
     #[command(flatten)]
@@ -62,7 +62,7 @@ pub struct Args {
     json: bool,
 }
 
-/// The options of the lit modes (docs/RENDERING.md §3a–b; `render`, `frame`).
+/// The options of the lit modes (docs/RENDERING.md §3a–c; `render`, `frame`).
 #[derive(clap::Args)]
 pub struct LightArgs {
     /// Samples per pixel in total (pathtrace; default 64).
@@ -71,7 +71,7 @@ pub struct LightArgs {
     /// Seed of the random samples: the same seed, device and inputs give the same image.
     #[arg(long)]
     seed: Option<u32>,
-    /// Scattered rays after the camera ray (default 8 for pathtrace, 3 for baseline).
+    /// Scattered rays after the camera ray (default 8 for pathtrace, 3 for baseline and gi).
     #[arg(long, value_parser = clap::value_parser!(u32).range(0..=i64::from(naadf_client::light::MAX_BOUNCES)))]
     bounces: Option<u32>,
     /// The sky: `physical` (default) or `uniform:L` / `uniform:R,G,B` (linear radiance).
@@ -98,7 +98,7 @@ fn parse_sun(s: &str) -> Result<SunArg, String> {
 enum Job {
     /// Frames of the render pass.
     Frame(Mode),
-    /// A path-traced frame, or baseline frames: the options and the light.
+    /// A path-traced frame, or frames of a temporal mode: the options and the light.
     Lit(LitOptions, Light),
 }
 
@@ -205,7 +205,7 @@ pub fn run(a: Args) -> Result<()> {
             let light = options.light(DEFAULT_PATHTRACE_BOUNCES).map_err(anyhow::Error::msg)?;
             Job::Lit(options, light)
         }
-        Mode::Baseline => {
+        mode if mode.is_temporal() => {
             refuse_for(&a, &["--gbuffer", "--spp"])?;
             let options = LitOptions {
                 frames: a.frames.unwrap_or(1),
@@ -239,7 +239,7 @@ pub fn run(a: Args) -> Result<()> {
         Job::Lit(options, light) if a.mode == Mode::PathTrace => {
             path_trace(&mut headless, &world, &cameras[0], &a, options, light)?
         }
-        Job::Lit(options, light) => baseline(&mut headless, &world, &cameras, &a, options, light)?,
+        Job::Lit(options, light) => temporal(&mut headless, &world, &cameras, &a, options, light)?,
     };
     let png = frame.png()?;
     std::fs::write(&a.output, png).with_context(|| format!("cannot write {}", a.output.display()))?;
@@ -318,8 +318,9 @@ fn path_trace(
     Ok((frame, summary))
 }
 
-/// Renders `--frames` baseline frames along the camera path; writes the last.
-fn baseline(
+/// Renders `--frames` frames of a temporal mode (`baseline`, `gi`) along the camera path;
+/// writes the last.
+fn temporal(
     headless: &mut Headless,
     world: &World,
     cameras: &[Camera],
@@ -328,14 +329,14 @@ fn baseline(
     light: &Light,
 ) -> Result<(Frame, Summary)> {
     let frames = s.frames;
-    let bar = progress(u64::from(frames), "baseline", "frames");
+    let bar = progress(u64::from(frames), a.mode.name(), "frames");
     let t0 = Instant::now();
     for i in 0..frames {
         let camera = &cameras[(i as usize).min(cameras.len() - 1)];
-        headless.baseline_frame(world, camera, a.size, light, s.seed)?;
+        headless.temporal_frame(a.mode, world, camera, a.size, light, s.seed)?;
         bar.set_position(u64::from(i + 1));
     }
-    let radiance = headless.baseline_radiance()?;
+    let radiance = headless.temporal_radiance(a.mode)?;
     bar.finish_and_clear();
     let frame_ms = t0.elapsed().as_secs_f64() * 1e3 / f64::from(frames);
     lit_output(headless, world, a, s, &radiance, frames, frame_ms)

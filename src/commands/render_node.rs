@@ -26,7 +26,7 @@ pub struct Args {
     #[arg(
         long,
         value_delimiter = ',',
-        default_value = "albedo,material,normal,steps,pathtrace,baseline"
+        default_value = "albedo,material,normal,steps,pathtrace,baseline,gi"
     )]
     modes: Vec<String>,
     /// Seconds between reconnection attempts.

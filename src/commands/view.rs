@@ -19,8 +19,9 @@ pub struct Args {
     /// Starting camera (JSON or a file holding it); by default a view over the world.
     #[arg(long)]
     camera: Option<String>,
-    /// Render mode (M cycles through them in the window).
-    #[arg(long, default_value = "albedo", value_parser = parse_mode)]
+    /// Render mode (M cycles through them in the window); `gi` falls back to albedo on an
+    /// adapter that cannot run it.
+    #[arg(long, default_value = "gi", value_parser = parse_mode)]
     mode: Mode,
     /// Flying speed in voxels per second (by default an eighth of the world's width).
     #[arg(long)]

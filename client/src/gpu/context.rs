@@ -33,6 +33,8 @@ pub struct Gpu {
     pub info: wgpu::AdapterInfo,
     /// The limits the device was created with.
     pub limits: wgpu::Limits,
+    /// The optional features the device was created with (timestamp queries).
+    pub features: wgpu::Features,
 }
 
 impl std::fmt::Debug for Gpu {
@@ -101,9 +103,12 @@ impl Gpu {
             })
         }?;
         let limits = adapter.limits();
+        // Timestamps time the GI passes where the adapter has them.
+        let features = adapter.features() & wgpu::Features::TIMESTAMP_QUERY;
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("naadf"),
             required_limits: limits.clone(),
+            required_features: features,
             ..Default::default()
         }))
         .map_err(|e| GpuError::NoAdapter(e.to_string()))?;
@@ -115,6 +120,7 @@ impl Gpu {
             queue,
             info,
             limits,
+            features,
         };
         Ok((gpu, surface))
     }

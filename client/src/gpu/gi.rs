@@ -143,7 +143,7 @@ impl Layout {
             p,                              // illum2
             p,                              // result
             r * u64::from(MAX_KEPT) * 2,    // refined
-            2 * r,                          // region_info
+            3 * r,                          // region_info
         ];
         let mut offsets = [0u32; 12];
         let mut at = CAMERA_HISTORY as u64 * CAM_VEC4 as u64;
@@ -208,7 +208,22 @@ pub struct Gi {
     history: Option<GiHistory>,
     /// Whether the bilateral denoiser runs (default on).
     pub denoise: bool,
+    /// Whether each pass's GPU time is measured ([`Gi::pass_times`]; needs the adapter's
+    /// timestamp queries).
+    pub profile: bool,
+    timer: Option<Timer>,
 }
+
+/// Timestamps at the start and end of every pass of a frame.
+struct Timer {
+    queries: wgpu::QuerySet,
+    resolved: wgpu::Buffer,
+    /// Which passes the last frame ran.
+    ran: [bool; GiPass::ALL.len()],
+}
+
+/// Timestamps per frame: two per pass.
+const TIMESTAMPS: u32 = 2 * GiPass::ALL.len() as u32;
 
 /// Element `index` (from 1) of the Halton sequence in `base`, in [0, 1).
 fn halton(mut index: u32, base: u32) -> f32 {
@@ -239,6 +254,8 @@ impl Gi {
                 .collect(),
             history: None,
             denoise: true,
+            profile: false,
+            timer: None,
         }
     }
 
@@ -296,7 +313,7 @@ impl Gi {
                 storage: [
                     ("gi mem", (layout.ring_start + ring * u64::from(RING_VEC4)) * 16),
                     ("gi words", layout.words * 4),
-                    ("gi buckets", regions * (2 * u64::from(BUCKET_SLOTS) + 2) * 4),
+                    ("gi buckets", regions * (2 * u64::from(BUCKET_SLOTS) + 12) * 4),
                     ("gi taa", pixels * TAA_PIXEL_BYTES),
                 ]
                 .map(|(label, bytes)| {
@@ -391,6 +408,23 @@ impl Gi {
         let (control, args) = (&h.storage[1], &h.args);
         let first = h.frames == 0;
         let denoise = self.denoise;
+        if self.profile && self.timer.is_none() && gpu.features.contains(wgpu::Features::TIMESTAMP_QUERY) {
+            self.timer = Some(Timer {
+                queries: gpu.device.create_query_set(&wgpu::QuerySetDescriptor {
+                    label: Some("gi pass times"),
+                    ty: wgpu::QueryType::Timestamp,
+                    count: TIMESTAMPS,
+                }),
+                resolved: gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("gi pass times"),
+                    size: u64::from(TIMESTAMPS) * 8,
+                    usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                    mapped_at_creation: false,
+                }),
+                ran: [false; GiPass::ALL.len()],
+            });
+        }
+        let timer = self.timer.as_mut().filter(|_| self.profile);
         gpu.checked(|| {
             let mut enc = gpu.device.create_command_encoder(&Default::default());
             for (k, &pass) in GiPass::ALL.iter().enumerate() {
@@ -410,7 +444,11 @@ impl Gi {
                 // can sit between two of them.
                 let mut cp = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some(pass.entry()),
-                    timestamp_writes: None,
+                    timestamp_writes: timer.as_ref().map(|t| wgpu::ComputePassTimestampWrites {
+                        query_set: &t.queries,
+                        beginning_of_pass_write_index: Some(2 * k as u32),
+                        end_of_pass_write_index: Some(2 * k as u32 + 1),
+                    }),
                 });
                 cp.set_pipeline(&pipelines[k]);
                 cp.set_bind_group(0, world.bind_group(), &[]);
@@ -426,10 +464,69 @@ impl Gi {
                     _ => cp.dispatch_workgroups(pixel_groups.0, pixel_groups.1, 1),
                 }
             }
+            if let Some(t) = timer {
+                enc.resolve_query_set(&t.queries, 0..TIMESTAMPS, &t.resolved, 0);
+                for (k, &pass) in GiPass::ALL.iter().enumerate() {
+                    t.ran[k] = match pass {
+                        GiPass::Atmosphere => first,
+                        GiPass::DenoiseX | GiPass::DenoiseY => denoise,
+                        _ => true,
+                    };
+                }
+            }
             gpu.queue.submit([enc.finish()]);
         })?;
         h.frames += 1;
         Ok(())
+    }
+
+    /// The GPU milliseconds of each pass of the last frame, in frame order, when
+    /// [`Gi::profile`] is on and the adapter has timestamp queries.
+    pub fn pass_times(&self, gpu: &Gpu) -> Option<Vec<(GiPass, f64)>> {
+        let t = self.timer.as_ref().filter(|_| self.profile && self.history.is_some())?;
+        let bytes = gpu.read_buffer(&t.resolved, u64::from(TIMESTAMPS) * 8).ok()?;
+        let ticks: Vec<u64> = bytemuck::pod_collect_to_vec(&bytes);
+        let ns_per_tick = f64::from(gpu.queue.get_timestamp_period());
+        Some(
+            GiPass::ALL
+                .iter()
+                .enumerate()
+                .filter(|&(k, _)| t.ran[k])
+                .map(|(k, &p)| {
+                    (
+                        p,
+                        ticks[2 * k + 1].saturating_sub(ticks[2 * k]) as f64 * ns_per_tick * 1e-6,
+                    )
+                })
+                .collect(),
+        )
+    }
+
+    /// The bytes of each array of the current history (docs/RENDERING.md §3c), largest
+    /// first; `None` before the first frame.
+    pub fn memory(&self) -> Option<Vec<(&'static str, u64)>> {
+        let h = self.history.as_ref()?;
+        let o = &h.layout.offsets;
+        let vec4s = |k: usize| u64::from(o[k + 1] - o[k]) * 16;
+        let mut out = vec![
+            ("cameras", u64::from(o[0]) * 16),
+            ("atmosphere table", vec4s(0)),
+            ("first-hit surfaces", vec4s(1)),
+            ("first-hit materials", vec4s(2)),
+            ("first-hit light", vec4s(3)),
+            ("TAA sums and ranges", vec4s(4)),
+            ("incoming light", vec4s(5)),
+            ("denoiser intermediate", vec4s(6)),
+            ("result", vec4s(7)),
+            ("refined samples", vec4s(8)),
+            ("region statistics", vec4s(9)),
+            ("sample ring", u64::from(h.ring_capacity) * u64::from(RING_VEC4) * 16),
+            ("queue and control", h.layout.words * 4),
+            ("region buckets", h.storage[2].size()),
+            ("TAA samples", h.storage[3].size()),
+        ];
+        out.sort_by_key(|&(_, bytes)| std::cmp::Reverse(bytes));
+        Some(out)
     }
 
     /// The newest result as linear radiance; an error before the first frame.

@@ -1,10 +1,13 @@
-//! [`Headless`]: frames of a changing world without a window — a device, a renderer, a
-//! path tracer and a GPU copy of the world that follows it (`naadf render`, `naadf replay`).
+//! [`Headless`]: frames of a changing world without a window — a device, a renderer, the
+//! lit renderers (path tracer, baseline, GI) and a GPU copy of the world that follows it
+//! (`naadf render`, `naadf replay`, render nodes).
 
 use super::baseline::{Baseline, History};
 use super::context::{Gpu, GpuError};
+use super::gi::{Gi, GiHistory};
 use super::pathtrace::{Accumulation, PathTracer};
 use super::render::{Frame, Mode, Renderer};
+use super::temporal::Temporal;
 use super::world::GpuWorld;
 use crate::FrameSpec;
 use crate::light::hdr::Radiance;
@@ -19,6 +22,7 @@ pub struct Headless {
     renderer: Renderer,
     path_tracer: PathTracer,
     baseline: Baseline,
+    gi: Gi,
     world: Option<GpuWorld>,
     /// The camera streams of [`Headless::render_spec`], least recently used first.
     streams: Vec<Stream>,
@@ -33,6 +37,7 @@ struct Stream {
     name: String,
     sums: Option<Accumulation>,
     history: Option<History>,
+    gi: Option<GiHistory>,
 }
 
 impl Headless {
@@ -42,11 +47,13 @@ impl Headless {
         let renderer = Renderer::new(&gpu);
         let path_tracer = PathTracer::new(&gpu);
         let baseline = Baseline::new(&gpu);
+        let gi = Gi::new(&gpu);
         Ok(Headless {
             gpu,
             renderer,
             path_tracer,
             baseline,
+            gi,
             world: None,
             streams: Vec::new(),
         })
@@ -83,9 +90,12 @@ impl Headless {
             .render(&self.gpu, gw, camera, size, light, seed, spp, progress)
     }
 
-    /// Renders the next `baseline` frame of `world` ([`Baseline::frame`]).
-    pub fn baseline_frame(
+    /// Renders the next frame of a temporal mode ([`Mode::is_temporal`]: `baseline` with
+    /// [`Baseline::frame`], `gi` with [`Gi::frame`]) of `world`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn temporal_frame(
         &mut self,
+        mode: Mode,
         world: &World,
         camera: &Camera,
         size: (u32, u32),
@@ -93,16 +103,30 @@ impl Headless {
         seed: u32,
     ) -> Result<(), GpuError> {
         let gw = GpuWorld::follow(&mut self.world, &self.gpu, world)?;
-        self.baseline.frame(&self.gpu, gw, camera, size, light, seed)
+        let renderer: &mut dyn Temporal = match mode {
+            Mode::Baseline => &mut self.baseline,
+            Mode::Gi => &mut self.gi,
+            _ => return Err(not_temporal(mode)),
+        };
+        renderer.frame(&self.gpu, gw, camera, size, light, seed)
     }
 
-    /// The newest `baseline` frame as linear radiance.
-    pub fn baseline_radiance(&self) -> Result<Radiance, GpuError> {
-        self.baseline.radiance(&self.gpu)
+    /// The newest frame of a temporal mode as linear radiance.
+    pub fn temporal_radiance(&self, mode: Mode) -> Result<Radiance, GpuError> {
+        match mode {
+            Mode::Baseline => self.baseline.radiance(&self.gpu),
+            Mode::Gi => self.gi.radiance(&self.gpu),
+            _ => Err(not_temporal(mode)),
+        }
+    }
+
+    /// The GI renderer (its options, such as the denoiser).
+    pub fn gi_mut(&mut self) -> &mut Gi {
+        &mut self.gi
     }
 
     /// Renders the frame `spec` asks for, in any mode: the lit modes continue the state of
-    /// `spec.lit.stream` (its path-tracer sums and its baseline history; a request without
+    /// `spec.lit.stream` (its path-tracer sums and its baseline and GI histories; a request without
     /// a stream starts afresh) and are tone-mapped with its exposure.
     pub fn render_spec(&mut self, world: &World, spec: &FrameSpec) -> Result<Frame, GpuError> {
         if !spec.mode.is_lit() {
@@ -121,16 +145,20 @@ impl Headless {
             name: lit.stream.clone(),
             sums: None,
             history: None,
+            gi: None,
         };
         let mut stream = match self.streams.iter().position(|s| s.name == lit.stream) {
             Some(at) if !lit.stream.is_empty() => self.streams.remove(at),
             _ => fresh,
         };
-        self.path_tracer.swap_sums(&mut stream.sums);
-        self.baseline.swap_history(&mut stream.history);
+        let swap = |h: &mut Self, s: &mut Stream| {
+            h.path_tracer.swap_sums(&mut s.sums);
+            h.baseline.swap_history(&mut s.history);
+            h.gi.swap_history(&mut s.gi);
+        };
+        swap(self, &mut stream);
         let radiance = self.render_lit(world, spec, &light);
-        self.path_tracer.swap_sums(&mut stream.sums);
-        self.baseline.swap_history(&mut stream.history);
+        swap(self, &mut stream);
         if !lit.stream.is_empty() {
             if self.streams.len() == MAX_STREAMS {
                 self.streams.remove(0);
@@ -147,8 +175,12 @@ impl Headless {
             return self.path_trace(world, &spec.camera, spec.size, light, lit.seed, lit.spp, &mut |_| {});
         }
         for _ in 0..lit.frames {
-            self.baseline_frame(world, &spec.camera, spec.size, light, lit.seed)?;
+            self.temporal_frame(spec.mode, world, &spec.camera, spec.size, light, lit.seed)?;
         }
-        self.baseline_radiance()
+        self.temporal_radiance(spec.mode)
     }
+}
+
+fn not_temporal(mode: Mode) -> GpuError {
+    GpuError::Unsupported(format!("{} is not a temporal mode (baseline, gi)", mode.name()))
 }

@@ -32,6 +32,7 @@ mod pipeline;
 mod rays;
 mod render;
 pub mod shaders;
+mod temporal;
 mod uniform;
 mod world;
 
@@ -42,5 +43,6 @@ pub use headless::Headless;
 pub use pathtrace::PathTracer;
 pub use rays::{GpuHit, GpuRay, RayBatch, RayTracer};
 pub use render::{DEFAULT_SUN, Frame, GBUFFER_MAGIC, Mode, Renderer, STEPS_FULL_SCALE, write_gbuffer};
+pub use temporal::Temporal;
 pub use uniform::{FrameInfo, GiInfo, LightInfo, Member, WgslStruct, WgslType, WorldInfo};
 pub use world::{DEFAULT_MAX_STEPS, GPU_BUFFERS, GpuWorld, Upload};

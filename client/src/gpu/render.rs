@@ -26,17 +26,20 @@ pub enum Mode {
     /// One path-traced sample per pixel per frame with an exponential TAA
     /// ([`super::Baseline`]).
     Baseline,
+    /// The paper's GI pipeline ([`super::Gi`]).
+    Gi,
 }
 
 impl Mode {
     /// Every mode, in CLI order.
-    pub const ALL: [Mode; 6] = [
+    pub const ALL: [Mode; 7] = [
         Mode::Albedo,
         Mode::Material,
         Mode::Normal,
         Mode::Steps,
         Mode::PathTrace,
         Mode::Baseline,
+        Mode::Gi,
     ];
 
     /// The CLI name.
@@ -48,6 +51,7 @@ impl Mode {
             Mode::Steps => "steps",
             Mode::PathTrace => "pathtrace",
             Mode::Baseline => "baseline",
+            Mode::Gi => "gi",
         }
     }
 
@@ -56,10 +60,16 @@ impl Mode {
         Mode::ALL.into_iter().find(|m| m.name() == s)
     }
 
-    /// Whether the mode renders the light model (docs/RENDERING.md §3a–b) rather than a
+    /// Whether the mode renders the light model (docs/RENDERING.md §3a–c) rather than a
     /// pass of [`Renderer`].
     pub fn is_lit(self) -> bool {
-        matches!(self, Mode::PathTrace | Mode::Baseline)
+        matches!(self, Mode::PathTrace | Mode::Baseline | Mode::Gi)
+    }
+
+    /// Whether each frame builds on the frames before it (`baseline`, `gi`): these take
+    /// `--frames` and a camera path, and keep a history per camera stream.
+    pub fn is_temporal(self) -> bool {
+        matches!(self, Mode::Baseline | Mode::Gi)
     }
 
     /// The mode's code in the render pass (its `MODE_*` constants); the lit modes have
@@ -70,7 +80,7 @@ impl Mode {
             Mode::Material => 1,
             Mode::Normal => 2,
             Mode::Steps => 3,
-            Mode::PathTrace | Mode::Baseline => u32::MAX,
+            Mode::PathTrace | Mode::Baseline | Mode::Gi => u32::MAX,
         }
     }
 }
@@ -238,7 +248,7 @@ impl Renderer {
     ) -> Result<Frame, GpuError> {
         if mode.is_lit() {
             return Err(GpuError::Unsupported(format!(
-                "the render pass does not render {}: the path tracer and the baseline do",
+                "the render pass does not render {}: the path tracer, the baseline and the GI pipeline do",
                 mode.name()
             )));
         }

@@ -23,6 +23,35 @@ fn luminance(c: &[f32; 3]) -> f64 {
     0.2126 * f64::from(c[0]) + 0.7152 * f64::from(c[1]) + 0.0722 * f64::from(c[2])
 }
 
+/// The mean Rec. 709 luminance of an image (0 for an empty one).
+pub fn mean_luminance(img: &Radiance) -> f64 {
+    img.rgb.iter().map(luminance).sum::<f64>() / img.rgb.len().max(1) as f64
+}
+
+/// The temporal flicker between two frames of the same view: the mean absolute difference
+/// of their luminance, relative to the mean luminance of the first; `None` when their sizes
+/// differ or the first is black.
+///
+/// ```
+/// use naadf_client::light::{hdr::Radiance, quality::flicker};
+/// let a = Radiance { width: 2, height: 1, rgb: vec![[1.0; 3], [1.0; 3]] };
+/// let b = Radiance { rgb: vec![[1.5; 3], [0.5; 3]], ..a.clone() };
+/// assert!((flicker(&a, &b).unwrap() - 0.5).abs() < 1e-9);
+/// ```
+pub fn flicker(a: &Radiance, b: &Radiance) -> Option<f64> {
+    let mean = mean_luminance(a);
+    if (a.width, a.height) != (b.width, b.height) || mean <= 0.0 {
+        return None;
+    }
+    let diff: f64 = a
+        .rgb
+        .iter()
+        .zip(&b.rgb)
+        .map(|(x, y)| (luminance(x) - luminance(y)).abs())
+        .sum();
+    Some(diff / a.rgb.len() as f64 / mean)
+}
+
 impl Quality {
     /// Measures `test` against `reference`, both tone-mapped with `exposure` for FLIP;
     /// `None` when their sizes differ or they are empty.

@@ -26,7 +26,7 @@ pub use pick::{Click, edit_for_click};
 pub use present::Presenter;
 
 use crate::client::ServerAddress;
-use crate::gpu::{Baseline, Frame, Gpu, GpuError, GpuWorld, Mode, PathTracer, Renderer};
+use crate::gpu::{Baseline, Frame, Gi, Gpu, GpuError, GpuWorld, Mode, PathTracer, Renderer};
 use crate::light::{DEFAULT_LIT_BOUNCES, DEFAULT_PATHTRACE_BOUNCES, LitOptions};
 use crate::mirror::{Mirror, MirrorError};
 use naadf_world::camera::Camera;
@@ -172,12 +172,13 @@ struct Graphics {
     renderer: Renderer,
     path_tracer: PathTracer,
     baseline: Baseline,
+    gi: Gi,
     world: Option<GpuWorld>,
 }
 
 impl Graphics {
     /// One frame of `mode` of the synced world: the lit modes with their defaults
-    /// (docs/RENDERING.md §3a–b), the path tracer adding one sample per frame while the view
+    /// (docs/RENDERING.md §3a–c), the path tracer adding one sample per frame while the view
     /// and the world stay the same.
     fn render(&mut self, camera: &Camera, size: (u32, u32), mode: Mode) -> Result<Frame, GpuError> {
         let Graphics {
@@ -185,6 +186,7 @@ impl Graphics {
             renderer,
             path_tracer,
             baseline,
+            gi,
             world,
             ..
         } = self;
@@ -200,6 +202,10 @@ impl Graphics {
             Mode::Baseline => {
                 baseline.frame(gpu, gw, camera, size, &light(DEFAULT_LIT_BOUNCES)?, lit.seed)?;
                 baseline.radiance(gpu)?
+            }
+            Mode::Gi => {
+                gi.frame(gpu, gw, camera, size, &light(DEFAULT_LIT_BOUNCES)?, lit.seed)?;
+                gi.radiance(gpu)?
             }
             _ => return renderer.render(gpu, gw, camera, size, mode, false),
         };
@@ -255,12 +261,15 @@ impl App {
         let renderer = Renderer::new(&gpu);
         let path_tracer = PathTracer::new(&gpu);
         let baseline = Baseline::new(&gpu);
+        let mut gi = Gi::new(&gpu);
+        gi.profile = true;
         self.gfx = Some(Graphics {
             gpu,
             presenter,
             renderer,
             path_tracer,
             baseline,
+            gi,
             world: None,
         });
         self.window = Some(window);
@@ -401,7 +410,15 @@ impl App {
         }
         self.last_frame = Some(now);
         let size = gfx.presenter.size();
-        let mut frame = gfx.render(&fly.camera, size, self.opts.mode)?;
+        let mut frame = match gfx.render(&fly.camera, size, self.opts.mode) {
+            // `gi` is the default; an adapter that cannot run it shows albedo instead.
+            Err(e) if self.opts.mode == Mode::Gi => {
+                self.notice = format!("gi is not available here ({e}); showing albedo");
+                self.opts.mode = Mode::Albedo;
+                gfx.render(&fly.camera, size, Mode::Albedo)?
+            }
+            r => r?,
+        };
         let swatch = world.materials().get(self.material).map(|m| m.albedo.map(srgb8));
         let mode = match self.opts.mode {
             Mode::PathTrace => format!("pathtrace {} spp", gfx.path_tracer.samples()),
@@ -414,6 +431,11 @@ impl App {
             world.version(),
             self.clients,
         )];
+        if self.opts.mode == Mode::Gi
+            && let Some(times) = gfx.gi.pass_times(&gfx.gpu)
+        {
+            lines.extend(pass_time_lines(&times));
+        }
         if !self.notice.is_empty() {
             lines.push(self.notice.clone());
         }
@@ -541,4 +563,17 @@ impl ApplicationHandler<Event> for App {
             w.request_redraw();
         }
     }
+}
+
+/// The GI passes' GPU times for the HUD, a few passes per line.
+fn pass_time_lines(times: &[(crate::gpu::GiPass, f64)]) -> Vec<String> {
+    times
+        .chunks(5)
+        .map(|row| {
+            row.iter()
+                .map(|(p, ms)| format!("{} {ms:.2}", p.entry().trim_start_matches("gi_")))
+                .collect::<Vec<_>>()
+                .join("  ")
+        })
+        .collect()
 }

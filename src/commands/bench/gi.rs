@@ -1,19 +1,31 @@
-//! `naadf bench gi WORLD`: the image quality of the lit modes against a path-traced
-//! reference (docs/RENDERING.md §3a–b): after `--frames` frames of each mode, FLIP, relative
-//! MSE and the mean-luminance bias against a `--reference-spp` path-traced image; and the
-//! noise floor, the same figures between two references of different seeds. The modes
-//! measured are those built so far: `baseline` (the GI pipeline joins it when it lands).
+//! `naadf bench gi WORLD`: the lit modes measured against the path tracer
+//! (docs/RENDERING.md §3a–c, BENCHMARKS.md "Global illumination"):
+//! - **static quality**: `baseline` and `gi` after `--frames` frames, FLIP, relative MSE and
+//!   mean-luminance bias against a `--reference-spp` path-traced image; the noise floor is
+//!   the same figures between two references of different seeds; the temporal flicker of
+//!   each mode over the frames after the last;
+//! - **cost**: milliseconds per frame of `albedo`, `baseline` and `gi`, timed in
+//!   alternating rounds, with the ratios per round (median and range), GI's per-pass GPU
+//!   times from timestamp queries where the adapter has them, and GI's memory by array;
+//! - **motion**: a camera path (strafe plus yaw), FLIP against per-pose references at three
+//!   poses;
+//! - **edit response**: an emitter added in front of the camera, then removed; the frames
+//!   until the image mean is within 10 % of the change of its converged value.
 
 use crate::commands::load_world;
 use crate::commands::print_json;
 use crate::commands::progress;
 use crate::commands::render::{LightArgs, parse_image_size, read_camera};
 use anyhow::{Context, Result, bail};
-use naadf_client::gpu::Headless;
-use naadf_client::light::DEFAULT_LIT_BOUNCES;
+use naadf_client::gpu::{Baseline, Gi, GiPass, Gpu, GpuWorld, Mode, PathTracer, Renderer, Temporal};
 use naadf_client::light::hdr::Radiance;
-use naadf_client::light::quality::Quality;
+use naadf_client::light::quality::{Quality, flicker, mean_luminance};
+use naadf_client::light::{DEFAULT_LIT_BOUNCES, Light};
+use naadf_world::World;
+use naadf_world::camera::Camera;
+use naadf_world::ops::{Batch, Limits};
 use naadf_world::raysets::fixed_cameras;
+use naadf_world::traverse::{Ray, trace_naadf};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -30,12 +42,24 @@ pub struct GiArgs {
     /// Image size.
     #[arg(long, default_value = "256x144", value_parser = parse_image_size)]
     size: (u32, u32),
-    /// Samples per pixel of each reference.
+    /// Samples per pixel of each static reference.
     #[arg(long, default_value_t = 1024, value_parser = clap::value_parser!(u32).range(1..))]
     reference_spp: u32,
     /// After how many frames each mode is measured (comma-separated, increasing).
     #[arg(long, value_delimiter = ',', default_value = "8,32,64")]
     frames: Vec<u32>,
+    /// Timing rounds (each times every mode once, in a rotating order).
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..))]
+    rounds: u32,
+    /// Frames per mode in each timing round.
+    #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(1..))]
+    timing_frames: u32,
+    /// Samples per pixel of each motion reference (0 skips the motion section).
+    #[arg(long, default_value_t = 256)]
+    motion_spp: u32,
+    /// Skip the edit-response section.
+    #[arg(long)]
+    no_edit: bool,
     /// The light (not `--spp`: the references take `--reference-spp`). Bounces default to
     /// 3, as in the compared modes.
     #[command(flatten)]
@@ -45,8 +69,28 @@ pub struct GiArgs {
     json: bool,
 }
 
+/// A median with its range over repeated measurements.
+#[derive(Clone, Copy, Debug, Serialize)]
+struct Spread {
+    median: f64,
+    min: f64,
+    max: f64,
+}
+
+impl Spread {
+    fn of(mut v: Vec<f64>) -> Spread {
+        v.sort_by(f64::total_cmp);
+        Spread {
+            median: v[v.len() / 2],
+            min: v[0],
+            max: v[v.len() - 1],
+        }
+    }
+}
+
 #[derive(Serialize)]
 struct Report {
+    adapter: String,
     size: [u32; 2],
     reference_spp: u32,
     bounces: u32,
@@ -56,9 +100,60 @@ struct Report {
     noise_floor: Quality,
     /// Mode → frames → quality against the first reference.
     modes: BTreeMap<&'static str, BTreeMap<u32, Quality>>,
-    /// Mode → milliseconds per frame.
-    frame_ms: BTreeMap<&'static str, f64>,
+    /// Mode → mean relative luminance change between consecutive frames after the last.
+    flicker: BTreeMap<&'static str, f64>,
+    /// Mode → milliseconds per frame, over the timing rounds.
+    frame_ms: BTreeMap<&'static str, Spread>,
+    /// gi / albedo and gi / baseline frame time, per round.
+    ratios: BTreeMap<&'static str, Spread>,
+    /// GI pass → GPU milliseconds (median over the timed frames); empty without timestamps.
+    gi_pass_ms: Vec<(&'static str, f64)>,
+    /// GI array → bytes.
+    gi_memory: Vec<(&'static str, u64)>,
+    /// Pose frame → mode → quality against that pose's reference.
+    motion: BTreeMap<u32, BTreeMap<&'static str, Quality>>,
+    /// Mode → (frames after adding, frames after removing) an emitter.
+    edit_response: BTreeMap<&'static str, [u32; 2]>,
 }
+
+/// What every section shares.
+struct Bench {
+    gpu: Gpu,
+    world: World,
+    gw: GpuWorld,
+    light: Light,
+    seed: u32,
+    exposure: f32,
+    size: (u32, u32),
+}
+
+impl Bench {
+    fn reference(&self, camera: &Camera, seed: u32, spp: u32, done: &mut dyn FnMut(u32)) -> Result<Radiance> {
+        Ok(PathTracer::new(&self.gpu).render(&self.gpu, &self.gw, camera, self.size, &self.light, seed, spp, done)?)
+    }
+
+    fn frame(&self, r: &mut dyn Temporal, camera: &Camera) -> Result<()> {
+        Ok(r.frame(&self.gpu, &self.gw, camera, self.size, &self.light, self.seed)?)
+    }
+
+    fn measure(&self, img: &Radiance, reference: &Radiance) -> Result<Quality> {
+        Quality::measure(img, reference, self.exposure).context("image sizes differ")
+    }
+}
+
+/// A fresh renderer of a temporal mode.
+fn temporal(gpu: &Gpu, mode: Mode) -> Box<dyn Temporal> {
+    match mode {
+        Mode::Gi => Box::new(Gi::new(gpu)),
+        _ => Box::new(Baseline::new(gpu)),
+    }
+}
+
+const COMPARED: [Mode; 2] = [Mode::Baseline, Mode::Gi];
+/// Frames the edit response may take before it counts as not settled.
+const EDIT_LIMIT: u32 = 64;
+/// Frames over which the flicker is averaged.
+const FLICKER_FRAMES: u32 = 8;
 
 /// Runs the benchmark.
 pub fn run(a: GiArgs) -> Result<()> {
@@ -77,61 +172,301 @@ pub fn run(a: GiArgs) -> Result<()> {
     };
     let options = a.light.options()?;
     let light = options.light(DEFAULT_LIT_BOUNCES).map_err(anyhow::Error::msg)?;
-    let mut headless = Headless::new()?;
-    let last = *a.frames.last().expect("checked above");
-    let bar = progress(u64::from(2 * a.reference_spp + last), "bench gi", "steps");
-
-    let mut reference = |seed: u32, done: u64| -> Result<_> {
-        let t0 = Instant::now();
-        let img = headless.path_trace(&world, &camera, a.size, &light, seed, a.reference_spp, &mut |n| {
-            bar.set_position(done + u64::from(n))
-        })?;
-        Ok((img, t0.elapsed().as_secs_f64()))
+    let gpu = Gpu::new()?;
+    let gw = GpuWorld::new(&gpu, &world)?;
+    let mut b = Bench {
+        gpu,
+        world,
+        gw,
+        light,
+        seed: options.seed,
+        exposure: options.exposure,
+        size: a.size,
     };
-    let (ref_a, secs) = reference(options.seed.wrapping_add(1000), 0)?;
-    let (ref_b, _) = reference(options.seed.wrapping_add(2000), u64::from(a.reference_spp))?;
-    let measure = |img: &Radiance| Quality::measure(img, &ref_a, options.exposure).context("image sizes differ");
-    let noise_floor = measure(&ref_b)?;
+    let last = *a.frames.last().expect("checked above");
+    let motion_poses = if a.motion_spp > 0 { 3 } else { 0 };
+    let steps = 2 * a.reference_spp + motion_poses * a.motion_spp;
+    let bar = progress(u64::from(steps), "bench gi: references", "spp");
 
-    let mut baseline = BTreeMap::new();
+    // Static quality.
     let t0 = Instant::now();
-    for frame in 1..=last {
-        headless.baseline_frame(&world, &camera, a.size, &light, options.seed)?;
-        bar.set_position(u64::from(2 * a.reference_spp + frame));
-        if a.frames.contains(&frame) {
-            baseline.insert(frame, measure(&headless.baseline_radiance()?)?);
+    let ref_a = b.reference(&camera, options.seed.wrapping_add(1000), a.reference_spp, &mut |n| {
+        bar.set_position(u64::from(n))
+    })?;
+    let secs = t0.elapsed().as_secs_f64();
+    let ref_b = b.reference(&camera, options.seed.wrapping_add(2000), a.reference_spp, &mut |n| {
+        bar.set_position(u64::from(a.reference_spp + n))
+    })?;
+    let noise_floor = b.measure(&ref_b, &ref_a)?;
+    let mut modes = BTreeMap::new();
+    let mut flickers = BTreeMap::new();
+    for mode in COMPARED {
+        bar.set_message(format!("bench gi: {} frames", mode.name()));
+        let mut r = temporal(&b.gpu, mode);
+        let mut by_frames = BTreeMap::new();
+        for frame in 1..=last {
+            b.frame(r.as_mut(), &camera)?;
+            if a.frames.contains(&frame) {
+                by_frames.insert(frame, b.measure(&r.radiance(&b.gpu)?, &ref_a)?);
+            }
+        }
+        let mut prev = r.radiance(&b.gpu)?;
+        let mut sum = 0.0;
+        for _ in 0..FLICKER_FRAMES {
+            b.frame(r.as_mut(), &camera)?;
+            let now = r.radiance(&b.gpu)?;
+            sum += flicker(&prev, &now).unwrap_or(0.0);
+            prev = now;
+        }
+        modes.insert(mode.name(), by_frames);
+        flickers.insert(mode.name(), sum / f64::from(FLICKER_FRAMES));
+    }
+
+    // Cost.
+    bar.set_message("bench gi: timing");
+    let (frame_ms, ratios, gi_pass_ms, gi_memory) = timing(&b, &camera, &a)?;
+
+    // Motion.
+    let mut motion = BTreeMap::new();
+    if a.motion_spp > 0 {
+        let poses = [last / 4, last * 5 / 8, last].map(|f| f.max(1));
+        let path: Vec<Camera> = (0..last).map(|i| moved(&camera, i)).collect();
+        let mut references = BTreeMap::new();
+        for (k, &f) in poses.iter().enumerate() {
+            let done = 2 * a.reference_spp + k as u32 * a.motion_spp;
+            let img = b.reference(
+                &path[f as usize - 1],
+                options.seed.wrapping_add(3000),
+                a.motion_spp,
+                &mut |n| bar.set_position(u64::from(done + n)),
+            )?;
+            references.insert(f, img);
+        }
+        for mode in COMPARED {
+            let mut r = temporal(&b.gpu, mode);
+            for (i, cam) in path.iter().enumerate() {
+                b.frame(r.as_mut(), cam)?;
+                if let Some(reference) = references.get(&(i as u32 + 1)) {
+                    let q = b.measure(&r.radiance(&b.gpu)?, reference)?;
+                    motion
+                        .entry(i as u32 + 1)
+                        .or_insert_with(BTreeMap::new)
+                        .insert(mode.name(), q);
+                }
+            }
         }
     }
-    let baseline_ms = t0.elapsed().as_secs_f64() * 1e3 / f64::from(last);
+
+    // Edit response.
+    let mut edit_response = BTreeMap::new();
+    if !a.no_edit {
+        bar.set_message("bench gi: edit response");
+        let (add, remove) = emitter_ops(&b.world, &camera)?;
+        for mode in COMPARED {
+            edit_response.insert(mode.name(), edit_frames(&mut b, mode, &camera, &add, &remove)?);
+        }
+    }
     bar.finish_and_clear();
 
     let report = Report {
+        adapter: b.gpu.describe(),
         size: [a.size.0, a.size.1],
         reference_spp: a.reference_spp,
-        bounces: light.bounces,
+        bounces: b.light.bounces,
         reference_seconds: secs,
         noise_floor,
-        modes: BTreeMap::from([("baseline", baseline)]),
-        frame_ms: BTreeMap::from([("baseline", baseline_ms)]),
+        modes,
+        flicker: flickers,
+        frame_ms,
+        ratios,
+        gi_pass_ms,
+        gi_memory,
+        motion,
+        edit_response,
     };
     if a.json {
         return print_json(&report);
     }
+    print_report(&report);
+    Ok(())
+}
+
+type Timing = (
+    BTreeMap<&'static str, Spread>,
+    BTreeMap<&'static str, Spread>,
+    Vec<(&'static str, f64)>,
+    Vec<(&'static str, u64)>,
+);
+
+/// Times `albedo`, `baseline` and `gi` in `--rounds` rounds of `--timing-frames` frames,
+/// rotating the order each round (each frame read back, as a client does).
+fn timing(b: &Bench, camera: &Camera, a: &GiArgs) -> Result<Timing> {
+    let mut renderer = Renderer::new(&b.gpu);
+    let mut baseline = Baseline::new(&b.gpu);
+    let mut gi = Gi::new(&b.gpu);
+    gi.profile = true;
+    let order = [Mode::Albedo, Mode::Baseline, Mode::Gi];
+    let mut ms: BTreeMap<&'static str, Vec<f64>> = BTreeMap::new();
+    let mut pass_ms: BTreeMap<&'static str, Vec<f64>> = BTreeMap::new();
+    // Warm up: pipelines built, histories past their first frame.
+    renderer.render(&b.gpu, &b.gw, camera, b.size, Mode::Albedo, false)?;
+    b.frame(&mut baseline, camera)?;
+    b.frame(&mut gi, camera)?;
+    for round in 0..a.rounds as usize {
+        for k in 0..order.len() {
+            let mode = order[(round + k) % order.len()];
+            let t0 = Instant::now();
+            for _ in 0..a.timing_frames {
+                match mode {
+                    Mode::Albedo => drop(renderer.render(&b.gpu, &b.gw, camera, b.size, mode, false)?),
+                    Mode::Baseline => {
+                        b.frame(&mut baseline, camera)?;
+                        baseline.radiance(&b.gpu)?;
+                    }
+                    _ => {
+                        b.frame(&mut gi, camera)?;
+                        gi.radiance(&b.gpu)?;
+                        for (p, t) in gi.pass_times(&b.gpu).unwrap_or_default() {
+                            pass_ms.entry(p.entry()).or_default().push(t);
+                        }
+                    }
+                }
+            }
+            ms.entry(mode.name())
+                .or_default()
+                .push(t0.elapsed().as_secs_f64() * 1e3 / f64::from(a.timing_frames));
+        }
+    }
+    let per_round = |num: &str, den: &str| Spread::of(ms[num].iter().zip(&ms[den]).map(|(n, d)| n / d).collect());
+    let ratios = BTreeMap::from([
+        ("gi/albedo", per_round("gi", "albedo")),
+        ("gi/baseline", per_round("gi", "baseline")),
+    ]);
+    let passes = GiPass::ALL
+        .iter()
+        .filter_map(|p| pass_ms.remove(p.entry()).map(|v| (p.entry(), Spread::of(v).median)))
+        .collect();
+    let memory = gi.memory().unwrap_or_default();
+    Ok((
+        ms.into_iter().map(|(k, v)| (k, Spread::of(v))).collect(),
+        ratios,
+        passes,
+        memory,
+    ))
+}
+
+/// The camera `i` frames along the motion path: a strafe to the right of 0.25 voxels and
+/// a yaw of 0.5° per frame.
+fn moved(camera: &Camera, i: u32) -> Camera {
+    let right = camera.basis().right;
+    let s = 0.25 * f64::from(i);
+    Camera {
+        pos: std::array::from_fn(|k| camera.pos[k] + right[k] * s),
+        yaw: camera.yaw + 0.5 * f64::from(i),
+        ..*camera
+    }
+}
+
+/// The ops that add an emissive 4³ box in front of `camera` (halfway to the first surface
+/// along its view, at most 24 voxels away) and that remove it again.
+fn emitter_ops(world: &World, camera: &Camera) -> Result<(Batch, Batch)> {
+    let forward = camera.basis().forward;
+    let ray = Ray::new(camera.pos, forward)?;
+    let distance = trace_naadf(world, &ray).map_or(48.0, |h| h.t);
+    let reach = (distance * 0.5).min(24.0);
+    if reach < 4.0 {
+        bail!("the camera faces a surface {distance:.1} voxels away: no room for the test emitter");
+    }
+    let size = world.size().voxels();
+    let centre: [f64; 3] = std::array::from_fn(|k| camera.pos[k] + forward[k] * reach);
+    let lo: [i64; 3] = std::array::from_fn(|k| (centre[k].floor() as i64 - 2).clamp(0, i64::from(size[k]) - 4));
+    let hi: [i64; 3] = std::array::from_fn(|k| lo[k] + 4);
+    let id = world.materials().len();
+    let parse = |ops: String| Batch::parse_line(&format!(r#"{{"batch":[{ops}]}}"#)).context("emitter ops");
+    let add = parse(format!(
+        r#"{{"op":"define_material","id":{id},"kind":"emissive","albedo":[1,1,1],"emission":8}},{{"op":"box","min":{lo:?},"max":{hi:?},"material":{id}}}"#
+    ))?;
+    let remove = parse(format!(r#"{{"op":"box","min":{lo:?},"max":{hi:?},"material":0}}"#))?;
+    Ok((add, remove))
+}
+
+/// The image's mean luminance after `frames` more frames of `r`.
+fn settle(b: &Bench, r: &mut dyn Temporal, camera: &Camera, frames: u32) -> Result<f64> {
+    for _ in 0..frames {
+        b.frame(r, camera)?;
+    }
+    Ok(mean_luminance(&r.radiance(&b.gpu)?))
+}
+
+/// Frames until `mode` settles within 10 % of the change after adding the emitter, and
+/// after removing it again (EDIT_LIMIT + 1: not within EDIT_LIMIT).
+fn edit_frames(b: &mut Bench, mode: Mode, camera: &Camera, add: &Batch, remove: &Batch) -> Result<[u32; 2]> {
+    let limits = Limits::default();
+    let apply = |b: &mut Bench, batch: &Batch| -> Result<()> {
+        b.world.apply(batch, &limits).context("the test emitter")?;
+        b.gw.sync(&b.world)?;
+        Ok(())
+    };
+    // Converged values without and with the emitter, from fresh histories.
+    let without = settle(b, temporal(&b.gpu, mode).as_mut(), camera, 64)?;
+    apply(b, add)?;
+    let with = settle(b, temporal(&b.gpu, mode).as_mut(), camera, 64)?;
+    apply(b, remove)?;
+    let mut r = temporal(&b.gpu, mode);
+    settle(b, r.as_mut(), camera, 32)?;
+    let mut out = [EDIT_LIMIT + 1; 2];
+    for (k, (batch, from, to)) in [(add, without, with), (remove, with, without)].into_iter().enumerate() {
+        apply(b, batch)?;
+        for f in 1..=EDIT_LIMIT {
+            if (settle(b, r.as_mut(), camera, 1)? - to).abs() <= 0.1 * (to - from).abs() {
+                out[k] = f;
+                break;
+            }
+        }
+        // Converge before the next change.
+        settle(b, r.as_mut(), camera, 32)?;
+    }
+    Ok(out)
+}
+
+fn print_report(r: &Report) {
     println!(
-        "{}x{}, references of {} spp (B = {}, {:.1} s each)",
-        a.size.0, a.size.1, a.reference_spp, light.bounces, secs
+        "{} — {}x{}, references of {} spp (B = {}, {:.1} s each)",
+        r.adapter, r.size[0], r.size[1], r.reference_spp, r.bounces, r.reference_seconds
     );
     let row = |name: &str, q: &Quality| {
         println!(
-            "{name:<22} FLIP {:.4}  relMSE {:.5}  bias {:+.4}",
+            "{name:<24} FLIP {:.4}  relMSE {:.5}  bias {:+.4}",
             q.flip, q.rel_mse, q.bias
         )
     };
-    row("noise floor", &report.noise_floor);
-    for (mode, by_frames) in &report.modes {
+    row("noise floor", &r.noise_floor);
+    for (mode, by_frames) in &r.modes {
         for (frames, q) in by_frames {
             row(&format!("{mode} after {frames}"), q);
         }
     }
-    Ok(())
+    for (mode, f) in &r.flicker {
+        println!("{:<24} flicker {f:.4}", mode);
+    }
+    for (mode, s) in &r.frame_ms {
+        println!("{mode:<24} {:.1} ms/frame ({:.1}–{:.1})", s.median, s.min, s.max);
+    }
+    for (name, s) in &r.ratios {
+        println!("{name:<24} ×{:.2} ({:.2}–{:.2})", s.median, s.min, s.max);
+    }
+    for (pass, ms) in &r.gi_pass_ms {
+        println!("  {pass:<22} {ms:.3} ms");
+    }
+    for (name, bytes) in &r.gi_memory {
+        println!("  {name:<22} {:.2} MB", *bytes as f64 / 1e6);
+    }
+    for (frame, by_mode) in &r.motion {
+        for (mode, q) in by_mode {
+            row(&format!("motion {mode} at {frame}"), q);
+        }
+    }
+    for (mode, [added, removed]) in &r.edit_response {
+        println!("{mode:<24} edit response: {added} frames (added), {removed} frames (removed)");
+    }
 }
