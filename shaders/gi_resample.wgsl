@@ -14,6 +14,10 @@ const DENOISE_TAPS: i32 = 10;
 const DENOISE_SIGMA: f32 = 10.0;
 const DENOISE_GUIDE: f32 = 8.0;
 const DENOISE_BLEND: f32 = 0.92;
+// How much nearer than a surface sample (in voxels, before the 4 % margin) the visibility
+// ray may stop and still see it: a ray toward a voxel face at a grazing angle often clips
+// the neighbouring voxel's edge first.
+const VISIBLE_SLACK: f32 = 1.0;
 
 // A coordinate mirrored back into [0, size).
 fn mirrored(v: i32, size: i32) -> u32 {
@@ -36,9 +40,10 @@ struct Candidate {
     goal: f32,
 }
 
-// The light a diffuse surface at `p` (normal `n`, id `nid`; `origin` just off it) of pixel
-// `gid` reflects (before its albedo), by resampling the regions' refined samples.
-fn resampled(gid: vec2<u32>, p: vec3<f32>, n: vec3<f32>, nid: u32, dist_here: f32, rng: ptr<function, u32>) -> vec3<f32> {
+// The light a diffuse surface at `p` (normal `n`, id `nid`) of pixel `gid` reflects (before
+// its albedo), by resampling the regions' refined samples; w is 0 when no candidate could
+// speak for this surface (no estimate, which is not the same as darkness).
+fn resampled(gid: vec2<u32>, p: vec3<f32>, n: vec3<f32>, nid: u32, dist_here: f32, rng: ptr<function, u32>) -> vec4<f32> {
     let origin = p + n * (2.0 * SURFACE_OFFSET);
     let base = ray_new(frame.cam_int, vec3<f32>(0.0), n);
     let big = WINDOW * f32(frame.height);
@@ -66,14 +71,29 @@ fn resampled(gid: vec2<u32>, p: vec3<f32>, n: vec3<f32>, nid: u32, dist_here: f3
             count++;
             continue;
         }
-        let at = 2u * (region * MAX_KEPT + min(u32(pick * f32(kept)), kept - 1u));
-        let r0 = mem[gi.off_refined + at];
-        let r1 = mem[gi.off_refined + at + 1u];
-        // A sample of another kind of surface, or of a surface facing elsewhere, was drawn
-        // from another distribution: it is not a candidate for this one.
-        if ((r0.w >> 1u) & 3u) != CLASS_DIFFUSE || ((r0.w >> 4u) & 7u) != nid {
+        // One of the region's kept samples drawn by a surface facing this way (the others
+        // were drawn from other distributions and do not speak for this surface).
+        var matching = 0u;
+        for (var k = 0u; k < kept; k++) {
+            matching += select(0u, 1u, ((mem[gi.off_refined + 2u * (region * MAX_KEPT + k)].w >> 4u) & 7u) == nid);
+        }
+        if matching == 0u {
             continue;
         }
+        var want = min(u32(pick * f32(matching)), matching - 1u);
+        var at = 0u;
+        for (var k = 0u; k < kept; k++) {
+            let here_at = 2u * (region * MAX_KEPT + k);
+            if ((mem[gi.off_refined + here_at].w >> 4u) & 7u) == nid {
+                if want == 0u {
+                    at = here_at;
+                    break;
+                }
+                want--;
+            }
+        }
+        let r0 = mem[gi.off_refined + at];
+        let r1 = mem[gi.off_refined + at + 1u];
         let sky = (r0.w & 1u) != 0u;
         var dir = bitcast<vec4<f32>>(r0).xyz;
         var distance = 0.0;
@@ -121,13 +141,13 @@ fn resampled(gid: vec2<u32>, p: vec3<f32>, n: vec3<f32>, nid: u32, dist_here: f3
         let h = trace(ray_at(base, origin, chosen.dir));
         var visible = !h.hit && !h.exhausted;
         if !chosen.sky {
-            visible = h.hit && (h.t * length(chosen.dir) + 0.15) * 1.04 >= chosen.distance;
+            visible = h.hit && (h.t * length(chosen.dir) + VISIBLE_SLACK) * 1.04 >= chosen.distance;
         }
         if visible {
-            return chosen.f * (wsum / (f32(count) * chosen.goal));
+            return vec4<f32>(chosen.f * (wsum / (f32(count) * chosen.goal)), 1.0);
         }
     }
-    return vec3<f32>(0.0);
+    return vec4<f32>(0.0, 0.0, 0.0, select(0.0, 1.0, count > 0u));
 }
 
 // ---- Pass gi_resample ----
@@ -155,16 +175,25 @@ fn gi_resample(@builtin(global_invocation_id) gid: vec3<u32>) {
     let base = ray_new(frame.cam_int, vec3<f32>(0.0), n);
     var rng = rng_new(frame.seed ^ 0x2E5Au, i, gi.frame);
     var light_in = vec3<f32>(0.0);
-    if cls == CLASS_GLOSSY {
-        // A metal traces its own path every frame: its lobe depends on the view, so its
-        // neighbours' samples rarely serve it.
-        let s = ggx_sample(n, wo, alpha, m.albedo, vec2<f32>(rng_next(&rng), rng_next(&rng)));
+    // A metal traces its own path every frame: its lobe depends on the view, so its
+    // neighbours' samples rarely serve it. So does a diffuse surface that no candidate
+    // could speak for (rather than count as dark).
+    var own = cls == CLASS_GLOSSY;
+    if !own {
+        let r = resampled(gid.xy, p, n, nid, dist_here, &rng);
+        light_in = r.rgb;
+        own = r.w == 0.0;
+    }
+    if own {
+        let u = vec2<f32>(rng_next(&rng), rng_next(&rng));
+        var s = Scattered(sample_cosine(n, u), vec3<f32>(1.0));
+        if cls == CLASS_GLOSSY {
+            s = ggx_sample(n, wo, alpha, m.albedo, u);
+        }
         if dot(s.dir, n) > 0.0 {
             let r = ray_at(base, p + n * SURFACE_OFFSET, s.dir);
             light_in = s.weight * path_radiance(r, light.bounces - 1u, false, &rng).radiance;
         }
-    } else {
-        light_in = resampled(gid.xy, p, n, nid, dist_here, &rng);
     }
     // The sun, by next-event estimation over its disc.
     if light.sun_on != 0u {
@@ -218,6 +247,15 @@ fn denoise_tap(gid: vec2<u32>, k: i32, axis: u32, rng: ptr<function, u32>) -> u3
     return u32(x) + u32(y) * frame.width;
 }
 
+// A pixel's value after one denoiser pass: `here` blended toward the weighted mean of the
+// taps, with the mean guide value.
+fn denoised(here: vec4<f32>, sum: vec3<f32>, guide_sum: f32, wsum: f32) -> vec4<f32> {
+    if wsum <= 0.0 {
+        return here;
+    }
+    return vec4<f32>(mix(here.rgb, sum / wsum, DENOISE_BLEND), guide_sum / wsum);
+}
+
 @compute @workgroup_size(8, 8)
 fn gi_denoise_x(@builtin(global_invocation_id) gid: vec3<u32>) {
     if gid.x >= frame.width || gid.y >= frame.height {
@@ -237,11 +275,7 @@ fn gi_denoise_x(@builtin(global_invocation_id) gid: vec3<u32>) {
             wsum += w;
         }
     }
-    var out = here;
-    if wsum > 0.0 {
-        out = vec4<f32>(mix(here.rgb, sum.rgb / wsum, DENOISE_BLEND), sum.w / wsum);
-    }
-    mem[gi.off_illum2 + i] = bitcast<vec4<u32>>(out);
+    mem[gi.off_illum2 + i] = bitcast<vec4<u32>>(denoised(here, sum.rgb, sum.w, wsum));
 }
 
 @compute @workgroup_size(8, 8)
@@ -252,20 +286,16 @@ fn gi_denoise_y(@builtin(global_invocation_id) gid: vec3<u32>) {
     let i = gid.x + gid.y * frame.width;
     let here = bitcast<vec4<f32>>(mem[gi.off_illum2 + i]);
     var rng = rng_new(frame.seed ^ 0xD0E2u, i, gi.frame);
-    var sum = vec3<f32>(0.0);
+    var sum = vec4<f32>(0.0);
     var wsum = 0.0;
     if surface_class(mem[gi.off_gmat + i]) != CLASS_NONE {
         for (var k = -DENOISE_TAPS; k <= DENOISE_TAPS; k++) {
             let j = denoise_tap(gid.xy, k, 1u, &rng);
             let v = bitcast<vec4<f32>>(mem[gi.off_illum2 + j]);
             let w = denoise_weight(i, j, k, here.w, v.w);
-            sum += v.rgb * w;
+            sum += v * w;
             wsum += w;
         }
     }
-    var out = here.rgb;
-    if wsum > 0.0 {
-        out = mix(here.rgb, sum / wsum, DENOISE_BLEND);
-    }
-    mem[gi.off_illum + i] = bitcast<vec4<u32>>(vec4<f32>(out, here.w));
+    mem[gi.off_illum + i] = bitcast<vec4<u32>>(denoised(here, sum.rgb, sum.w, wsum));
 }
