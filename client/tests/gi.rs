@@ -10,7 +10,7 @@
 
 mod scenes;
 
-use naadf_client::gpu::{Baseline, Gi, Gpu, GpuWorld, PathTracer};
+use naadf_client::gpu::{Baseline, Gi, Gpu, GpuWorld, PathTracer, Temporal};
 use naadf_client::light::hdr::Radiance;
 use naadf_client::light::{Light, Sky};
 use naadf_world::World;

@@ -12,7 +12,7 @@
 
 mod scenes;
 
-use naadf_client::gpu::{Baseline, GpuWorld, PathTracer};
+use naadf_client::gpu::{Baseline, GpuWorld, PathTracer, Temporal};
 use naadf_client::light::cpu::CpuPathTracer;
 use naadf_client::light::hdr::Radiance;
 use naadf_client::light::{Light, Sky, Sun};

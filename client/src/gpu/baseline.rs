@@ -7,6 +7,7 @@ use super::context::{Gpu, GpuError};
 use super::pipeline::PassPipelines;
 use super::render::{CameraRays, check_frame_size};
 use super::shaders::{Loop, Pass};
+use super::temporal::Temporal;
 use super::uniform::{FrameInfo, LightInfo};
 use super::world::GpuWorld;
 use crate::light::Light;
@@ -88,11 +89,13 @@ impl Baseline {
     pub fn swap_history(&mut self, other: &mut Option<History>) {
         std::mem::swap(&mut self.history, other);
     }
+}
 
+impl Temporal for Baseline {
     /// Renders the next frame of `camera`'s view of `world` (sample number = frames so far).
     /// A new size, light or seed starts a new history; a new camera or world does not: the
     /// history is reprojected and clamped, as the baseline does.
-    pub fn frame(
+    fn frame(
         &mut self,
         gpu: &Gpu,
         world: &GpuWorld,
@@ -163,7 +166,7 @@ impl Baseline {
     }
 
     /// The newest result as linear radiance; an error before the first frame.
-    pub fn radiance(&self, gpu: &Gpu) -> Result<Radiance, GpuError> {
+    fn radiance(&self, gpu: &Gpu) -> Result<Radiance, GpuError> {
         let h = self
             .history
             .as_ref()

@@ -13,6 +13,7 @@ use super::context::{Gpu, GpuError};
 use super::pipeline::PassPipelines;
 use super::render::{CameraRays, check_frame_size};
 use super::shaders::{Loop, Pass};
+use super::temporal::Temporal;
 use super::uniform::{FrameInfo, GiInfo, LightInfo};
 use super::world::GpuWorld;
 use crate::light::Light;
@@ -269,11 +270,62 @@ impl Gi {
         std::mem::swap(&mut self.history, other);
     }
 
+    /// The GPU milliseconds of each pass of the last frame, in frame order, when
+    /// [`Gi::profile`] is on and the adapter has timestamp queries.
+    pub fn pass_times(&self, gpu: &Gpu) -> Option<Vec<(GiPass, f64)>> {
+        let t = self.timer.as_ref().filter(|_| self.profile && self.history.is_some())?;
+        let bytes = gpu.read_buffer(&t.resolved, u64::from(TIMESTAMPS) * 8).ok()?;
+        let ticks: Vec<u64> = bytemuck::pod_collect_to_vec(&bytes);
+        let ns_per_tick = f64::from(gpu.queue.get_timestamp_period());
+        Some(
+            GiPass::ALL
+                .iter()
+                .enumerate()
+                .filter(|&(k, _)| t.ran[k])
+                .map(|(k, &p)| {
+                    (
+                        p,
+                        ticks[2 * k + 1].saturating_sub(ticks[2 * k]) as f64 * ns_per_tick * 1e-6,
+                    )
+                })
+                .collect(),
+        )
+    }
+
+    /// The bytes of each array of the current history (docs/RENDERING.md §3c), largest
+    /// first; `None` before the first frame.
+    pub fn memory(&self) -> Option<Vec<(&'static str, u64)>> {
+        let h = self.history.as_ref()?;
+        let o = &h.layout.offsets;
+        let vec4s = |k: usize| u64::from(o[k + 1] - o[k]) * 16;
+        let mut out = vec![
+            ("cameras", u64::from(o[0]) * 16),
+            ("atmosphere table", vec4s(0)),
+            ("first-hit surfaces", vec4s(1)),
+            ("first-hit materials", vec4s(2)),
+            ("first-hit light", vec4s(3)),
+            ("TAA sums and ranges", vec4s(4)),
+            ("incoming light", vec4s(5)),
+            ("denoiser intermediate", vec4s(6)),
+            ("result", vec4s(7)),
+            ("refined samples", vec4s(8)),
+            ("region statistics", vec4s(9)),
+            ("sample ring", u64::from(h.ring_capacity) * u64::from(RING_VEC4) * 16),
+            ("queue and control", h.layout.words * 4),
+            ("region buckets", h.storage[2].size()),
+            ("TAA samples", h.storage[3].size()),
+        ];
+        out.sort_by_key(|&(_, bytes)| std::cmp::Reverse(bytes));
+        Some(out)
+    }
+}
+
+impl Temporal for Gi {
     /// Renders the next frame of `camera`'s view of `world`. A new size, light or seed
     /// starts a new history; a camera move or a world change does not: the history is
     /// reprojected, and light from before a world change fades out within
     /// [`EDIT_HISTORY_FRAMES`].
-    pub fn frame(
+    fn frame(
         &mut self,
         gpu: &Gpu,
         world: &GpuWorld,
@@ -480,57 +532,8 @@ impl Gi {
         Ok(())
     }
 
-    /// The GPU milliseconds of each pass of the last frame, in frame order, when
-    /// [`Gi::profile`] is on and the adapter has timestamp queries.
-    pub fn pass_times(&self, gpu: &Gpu) -> Option<Vec<(GiPass, f64)>> {
-        let t = self.timer.as_ref().filter(|_| self.profile && self.history.is_some())?;
-        let bytes = gpu.read_buffer(&t.resolved, u64::from(TIMESTAMPS) * 8).ok()?;
-        let ticks: Vec<u64> = bytemuck::pod_collect_to_vec(&bytes);
-        let ns_per_tick = f64::from(gpu.queue.get_timestamp_period());
-        Some(
-            GiPass::ALL
-                .iter()
-                .enumerate()
-                .filter(|&(k, _)| t.ran[k])
-                .map(|(k, &p)| {
-                    (
-                        p,
-                        ticks[2 * k + 1].saturating_sub(ticks[2 * k]) as f64 * ns_per_tick * 1e-6,
-                    )
-                })
-                .collect(),
-        )
-    }
-
-    /// The bytes of each array of the current history (docs/RENDERING.md §3c), largest
-    /// first; `None` before the first frame.
-    pub fn memory(&self) -> Option<Vec<(&'static str, u64)>> {
-        let h = self.history.as_ref()?;
-        let o = &h.layout.offsets;
-        let vec4s = |k: usize| u64::from(o[k + 1] - o[k]) * 16;
-        let mut out = vec![
-            ("cameras", u64::from(o[0]) * 16),
-            ("atmosphere table", vec4s(0)),
-            ("first-hit surfaces", vec4s(1)),
-            ("first-hit materials", vec4s(2)),
-            ("first-hit light", vec4s(3)),
-            ("TAA sums and ranges", vec4s(4)),
-            ("incoming light", vec4s(5)),
-            ("denoiser intermediate", vec4s(6)),
-            ("result", vec4s(7)),
-            ("refined samples", vec4s(8)),
-            ("region statistics", vec4s(9)),
-            ("sample ring", u64::from(h.ring_capacity) * u64::from(RING_VEC4) * 16),
-            ("queue and control", h.layout.words * 4),
-            ("region buckets", h.storage[2].size()),
-            ("TAA samples", h.storage[3].size()),
-        ];
-        out.sort_by_key(|&(_, bytes)| std::cmp::Reverse(bytes));
-        Some(out)
-    }
-
     /// The newest result as linear radiance; an error before the first frame.
-    pub fn radiance(&self, gpu: &Gpu) -> Result<Radiance, GpuError> {
+    fn radiance(&self, gpu: &Gpu) -> Result<Radiance, GpuError> {
         let h = self
             .history
             .as_ref()

@@ -113,11 +113,12 @@ impl Headless {
 
     /// The newest frame of a temporal mode as linear radiance.
     pub fn temporal_radiance(&self, mode: Mode) -> Result<Radiance, GpuError> {
-        match mode {
-            Mode::Baseline => self.baseline.radiance(&self.gpu),
-            Mode::Gi => self.gi.radiance(&self.gpu),
-            _ => Err(not_temporal(mode)),
-        }
+        let renderer: &dyn Temporal = match mode {
+            Mode::Baseline => &self.baseline,
+            Mode::Gi => &self.gi,
+            _ => return Err(not_temporal(mode)),
+        };
+        renderer.radiance(&self.gpu)
     }
 
     /// The GI renderer (its options, such as the denoiser).

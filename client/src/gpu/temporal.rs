@@ -1,5 +1,5 @@
-//! [`Temporal`]: a renderer whose frames build on a history (`baseline`, `gi`), so that
-//! callers drive either one the same way.
+//! [`Temporal`]: a renderer whose frames build on a history ([`super::Baseline`],
+//! [`super::Gi`]), so that callers drive either one the same way.
 
 use super::context::{Gpu, GpuError};
 use super::world::GpuWorld;
@@ -24,28 +24,3 @@ pub trait Temporal {
     /// The newest frame as linear radiance; an error before the first frame.
     fn radiance(&self, gpu: &Gpu) -> Result<Radiance, GpuError>;
 }
-
-/// Implements [`Temporal`] by the type's inherent methods of the same names.
-macro_rules! temporal_by_inherent {
-    ($($t:ty),*) => {$(
-        impl Temporal for $t {
-            fn frame(
-                &mut self,
-                gpu: &Gpu,
-                world: &GpuWorld,
-                camera: &Camera,
-                size: (u32, u32),
-                light: &Light,
-                seed: u32,
-            ) -> Result<(), GpuError> {
-                <$t>::frame(self, gpu, world, camera, size, light, seed)
-            }
-
-            fn radiance(&self, gpu: &Gpu) -> Result<Radiance, GpuError> {
-                <$t>::radiance(self, gpu)
-            }
-        }
-    )*};
-}
-
-temporal_by_inherent!(super::Baseline, super::Gi);

@@ -26,7 +26,7 @@ pub use pick::{Click, edit_for_click};
 pub use present::Presenter;
 
 use crate::client::ServerAddress;
-use crate::gpu::{Baseline, Frame, Gi, Gpu, GpuError, GpuWorld, Mode, PathTracer, Renderer};
+use crate::gpu::{Baseline, Frame, Gi, Gpu, GpuError, GpuWorld, Mode, PathTracer, Renderer, Temporal};
 use crate::light::{DEFAULT_LIT_BOUNCES, DEFAULT_PATHTRACE_BOUNCES, LitOptions};
 use crate::mirror::{Mirror, MirrorError};
 use naadf_world::camera::Camera;
@@ -199,13 +199,10 @@ impl Graphics {
             Mode::PathTrace => {
                 path_tracer.add_sample(gpu, gw, camera, size, &light(DEFAULT_PATHTRACE_BOUNCES)?, lit.seed)?
             }
-            Mode::Baseline => {
-                baseline.frame(gpu, gw, camera, size, &light(DEFAULT_LIT_BOUNCES)?, lit.seed)?;
-                baseline.radiance(gpu)?
-            }
-            Mode::Gi => {
-                gi.frame(gpu, gw, camera, size, &light(DEFAULT_LIT_BOUNCES)?, lit.seed)?;
-                gi.radiance(gpu)?
+            Mode::Baseline | Mode::Gi => {
+                let r: &mut dyn Temporal = if mode == Mode::Gi { gi } else { baseline };
+                r.frame(gpu, gw, camera, size, &light(DEFAULT_LIT_BOUNCES)?, lit.seed)?;
+                r.radiance(gpu)?
             }
             _ => return renderer.render(gpu, gw, camera, size, mode, false),
         };
