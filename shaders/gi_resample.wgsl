@@ -247,55 +247,40 @@ fn denoise_tap(gid: vec2<u32>, k: i32, axis: u32, rng: ptr<function, u32>) -> u3
     return u32(x) + u32(y) * frame.width;
 }
 
-// A pixel's value after one denoiser pass: `here` blended toward the weighted mean of the
-// taps, with the mean guide value.
-fn denoised(here: vec4<f32>, sum: vec3<f32>, guide_sum: f32, wsum: f32) -> vec4<f32> {
-    if wsum <= 0.0 {
-        return here;
+// One denoiser pass along `axis` (0: x, 1: y) from the `mem` array at `src` to the one at
+// `dst`: each pixel blended toward the weighted mean of its taps, with the mean guide
+// value; `salt` picks the pass's random stream.
+fn denoise_pass(gid: vec3<u32>, axis: u32, src: u32, dst: u32, salt: u32) {
+    if gid.x >= frame.width || gid.y >= frame.height {
+        return;
     }
-    return vec4<f32>(mix(here.rgb, sum / wsum, DENOISE_BLEND), guide_sum / wsum);
+    let i = gid.x + gid.y * frame.width;
+    let here = bitcast<vec4<f32>>(mem[src + i]);
+    var rng = rng_new(frame.seed ^ salt, i, gi.frame);
+    var sum = vec4<f32>(0.0);
+    var wsum = 0.0;
+    if surface_class(mem[gi.off_gmat + i]) != CLASS_NONE {
+        for (var k = -DENOISE_TAPS; k <= DENOISE_TAPS; k++) {
+            let j = denoise_tap(gid.xy, k, axis, &rng);
+            let v = bitcast<vec4<f32>>(mem[src + j]);
+            let w = denoise_weight(i, j, k, here.w, v.w);
+            sum += v * w;
+            wsum += w;
+        }
+    }
+    var out = here;
+    if wsum > 0.0 {
+        out = vec4<f32>(mix(here.rgb, sum.rgb / wsum, DENOISE_BLEND), sum.w / wsum);
+    }
+    mem[dst + i] = bitcast<vec4<u32>>(out);
 }
 
 @compute @workgroup_size(8, 8)
 fn gi_denoise_x(@builtin(global_invocation_id) gid: vec3<u32>) {
-    if gid.x >= frame.width || gid.y >= frame.height {
-        return;
-    }
-    let i = gid.x + gid.y * frame.width;
-    let here = bitcast<vec4<f32>>(mem[gi.off_illum + i]);
-    var rng = rng_new(frame.seed ^ 0xD0E1u, i, gi.frame);
-    var sum = vec4<f32>(0.0);
-    var wsum = 0.0;
-    if surface_class(mem[gi.off_gmat + i]) != CLASS_NONE {
-        for (var k = -DENOISE_TAPS; k <= DENOISE_TAPS; k++) {
-            let j = denoise_tap(gid.xy, k, 0u, &rng);
-            let v = bitcast<vec4<f32>>(mem[gi.off_illum + j]);
-            let w = denoise_weight(i, j, k, here.w, v.w);
-            sum += v * w;
-            wsum += w;
-        }
-    }
-    mem[gi.off_illum2 + i] = bitcast<vec4<u32>>(denoised(here, sum.rgb, sum.w, wsum));
+    denoise_pass(gid, 0u, gi.off_illum, gi.off_illum2, 0xD0E1u);
 }
 
 @compute @workgroup_size(8, 8)
 fn gi_denoise_y(@builtin(global_invocation_id) gid: vec3<u32>) {
-    if gid.x >= frame.width || gid.y >= frame.height {
-        return;
-    }
-    let i = gid.x + gid.y * frame.width;
-    let here = bitcast<vec4<f32>>(mem[gi.off_illum2 + i]);
-    var rng = rng_new(frame.seed ^ 0xD0E2u, i, gi.frame);
-    var sum = vec4<f32>(0.0);
-    var wsum = 0.0;
-    if surface_class(mem[gi.off_gmat + i]) != CLASS_NONE {
-        for (var k = -DENOISE_TAPS; k <= DENOISE_TAPS; k++) {
-            let j = denoise_tap(gid.xy, k, 1u, &rng);
-            let v = bitcast<vec4<f32>>(mem[gi.off_illum2 + j]);
-            let w = denoise_weight(i, j, k, here.w, v.w);
-            sum += v * w;
-            wsum += w;
-        }
-    }
-    mem[gi.off_illum + i] = bitcast<vec4<u32>>(denoised(here, sum.rgb, sum.w, wsum));
+    denoise_pass(gid, 1u, gi.off_illum2, gi.off_illum, 0xD0E2u);
 }

@@ -477,15 +477,16 @@ impl Temporal for Gi {
             });
         }
         let timer = self.timer.as_mut().filter(|_| self.profile);
+        // The table is filled when a history starts; the denoiser runs when asked for.
+        let runs = GiPass::ALL.map(|pass| match pass {
+            GiPass::Atmosphere => first,
+            GiPass::DenoiseX | GiPass::DenoiseY => denoise,
+            _ => true,
+        });
         gpu.checked(|| {
             let mut enc = gpu.device.create_command_encoder(&Default::default());
             for (k, &pass) in GiPass::ALL.iter().enumerate() {
-                let skip = match pass {
-                    GiPass::Atmosphere => !first,
-                    GiPass::DenoiseX | GiPass::DenoiseY => !denoise,
-                    _ => false,
-                };
-                if skip {
+                if !runs[k] {
                     continue;
                 }
                 if pass == GiPass::Trace {
@@ -518,13 +519,7 @@ impl Temporal for Gi {
             }
             if let Some(t) = timer {
                 enc.resolve_query_set(&t.queries, 0..TIMESTAMPS, &t.resolved, 0);
-                for (k, &pass) in GiPass::ALL.iter().enumerate() {
-                    t.ran[k] = match pass {
-                        GiPass::Atmosphere => first,
-                        GiPass::DenoiseX | GiPass::DenoiseY => denoise,
-                        _ => true,
-                    };
-                }
+                t.ran = runs;
             }
             gpu.queue.submit([enc.finish()]);
         })?;
