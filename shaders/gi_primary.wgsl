@@ -66,7 +66,8 @@ fn gi_first_hit(@builtin(global_invocation_id) gid: vec3<u32>) {
     var mat_id = 0u;
     var entity = NO_ENTITY;
     var p = vec3<f32>(0.0);
-    if c.end == CHAIN_SKY {
+    // A ray that ran out of steps brings no light, as in the path tracer.
+    if c.end == CHAIN_SKY && !c.h.exhausted {
         emit = c.throughput * sky_radiance(dn, true);
     } else if c.end == CHAIN_SURFACE {
         let m = material(c.h.material);
@@ -181,22 +182,28 @@ fn gi_taa(@builtin(global_invocation_id) gid: vec3<u32>) {
         if !same {
             continue;
         }
-        if sky {
-            if sd < SKY_DIST {
+        // Where the old sample's surface was (or, for the sky, its direction), seen from
+        // this camera. On a silhouette the sky and the ground each keep their share: a
+        // sample of either kind counts when the 3×3 neighbourhood still holds its kind
+        // and it lands on this pixel.
+        var back: Projection;
+        let old_dir = normalize(cam_dir(c, qp));
+        if sd >= SKY_DIST {
+            if hi < SKY_DIST {
                 continue;
             }
+            back = project(here, old_dir);
         } else {
-            // Where the old sample's surface was, seen from this camera.
-            let old = c.pos + normalize(cam_dir(c, qp)) * sd;
+            let old = c.pos + old_dir * sd;
             let dist = length(old);
             if dist < lo * (1022.0 / 1024.0) || dist > hi * (1026.0 / 1024.0) || sd > 2.0 * hi {
                 continue;
             }
-            let back = project(here, old);
-            let off = back.px - (vec2<f32>(gid.xy) + vec2<f32>(gi.jitter_x, gi.jitter_y));
-            if back.z <= 0.0 || dot(off, off) > TAA_RADIUS * TAA_RADIUS {
-                continue;
-            }
+            back = project(here, old);
+        }
+        let off = back.px - (vec2<f32>(gid.xy) + vec2<f32>(gi.jitter_x, gi.jitter_y));
+        if back.z <= 0.0 || dot(off, off) > TAA_RADIUS * TAA_RADIUS {
+            continue;
         }
         sum += taa_colour(s.y);
         count += 1.0;

@@ -8,10 +8,13 @@ const CANDIDATES: u32 = 12u;
 // fraction of the large one's.
 const WINDOW: f32 = 0.35;
 const SMALL_WINDOW: f32 = 0.1;
-// The denoiser: taps each side, their spacing in pixels, the Gaussian's σ in taps, the
-// guide's strength, and how much of the filtered value it keeps.
-const DENOISE_TAPS: i32 = 10;
-const DENOISE_SIGMA: f32 = 10.0;
+// The denoiser: taps each side at DENOISE_HEIGHT rows (the paper's 1440p; fewer in
+// proportion on smaller images, where the TAA's samples already span a larger share of
+// the picture), the Gaussian's σ in taps, the guide's strength, and how much of the
+// filtered value it keeps. The taps are 2 px apart.
+const DENOISE_TAPS: f32 = 10.0;
+const DENOISE_HEIGHT: f32 = 1440.0;
+const DENOISE_SIGMA: f32 = 1.0;
 const DENOISE_GUIDE: f32 = 8.0;
 const DENOISE_BLEND: f32 = 0.92;
 // How much nearer than a surface sample (in voxels, before the 4 % margin) the visibility
@@ -179,7 +182,12 @@ fn gi_resample(@builtin(global_invocation_id) gid: vec3<u32>) {
     // neighbours' samples rarely serve it. So does a diffuse surface that no candidate
     // could speak for (rather than count as dark).
     var own = cls == CLASS_GLOSSY;
-    if !own {
+    let mine = mem[gi.off_own + i];
+    if !own && mine.w == gi.frame + 1u {
+        // The pixel traced its own secondary path this frame (gi_queue): an unbiased
+        // estimate of its own light.
+        light_in = bitcast<vec3<f32>>(mine.xyz);
+    } else if !own {
         let r = resampled(gid.xy, p, n, nid, dist_here, &rng);
         light_in = r.rgb;
         own = r.w == 0.0;
@@ -219,8 +227,8 @@ fn gi_resample(@builtin(global_invocation_id) gid: vec3<u32>) {
 // ---- Passes gi_denoise_x and gi_denoise_y ----
 
 // The weight of tap `j` for pixel `i`: the same plane and cls, a close guide value, and
-// a Gaussian in the tap number.
-fn denoise_weight(i: u32, j: u32, k: i32, gi_: f32, gj: f32) -> f32 {
+// a Gaussian in `k`, the tap's place in the filter's reach (−1 to 1).
+fn denoise_weight(i: u32, j: u32, k: f32, gi_: f32, gj: f32) -> f32 {
     let a = mem[gi.off_gmat + i];
     let b = mem[gi.off_gmat + j];
     if surface_class(a) != surface_class(b) || surface_normal_id(a) != surface_normal_id(b) {
@@ -229,7 +237,7 @@ fn denoise_weight(i: u32, j: u32, k: i32, gi_: f32, gj: f32) -> f32 {
     if abs(dot(surface_normal(a), bitcast<vec4<f32>>(mem[gi.off_gbuf + j]).xyz - bitcast<vec4<f32>>(mem[gi.off_gbuf + i]).xyz)) > 0.05 {
         return 0.0;
     }
-    let kk = f32(k) / DENOISE_SIGMA;
+    let kk = k / DENOISE_SIGMA;
     return exp(-0.5 * kk * kk) / (1.0 + DENOISE_GUIDE * abs(gj - gi_) / (gi_ + gj + 0.01));
 }
 
@@ -259,11 +267,14 @@ fn denoise_pass(gid: vec3<u32>, axis: u32, src: u32, dst: u32, salt: u32) {
     var rng = rng_new(frame.seed ^ salt, i, gi.frame);
     var sum = vec4<f32>(0.0);
     var wsum = 0.0;
-    if surface_class(mem[gi.off_gmat + i]) != CLASS_NONE {
-        for (var k = -DENOISE_TAPS; k <= DENOISE_TAPS; k++) {
+    let taps = i32(round(min(DENOISE_TAPS * f32(frame.height) / DENOISE_HEIGHT, DENOISE_TAPS)));
+    // Only diffuse light is denoised: a metal's own path is view-dependent, and spreading
+    // its sun glints would brighten its whole surface.
+    if surface_class(mem[gi.off_gmat + i]) == CLASS_DIFFUSE && taps > 0 {
+        for (var k = -taps; k <= taps; k++) {
             let j = denoise_tap(gid.xy, k, axis, &rng);
             let v = bitcast<vec4<f32>>(mem[src + j]);
-            let w = denoise_weight(i, j, k, here.w, v.w);
+            let w = denoise_weight(i, j, f32(k) / f32(taps), here.w, v.w);
             sum += v * w;
             wsum += w;
         }

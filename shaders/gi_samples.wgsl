@@ -30,8 +30,9 @@ fn bucket_counts(region: u32) -> u32 {
 
 // ---- Pass gi_queue: which pixels trace a secondary ray this frame ----
 //
-// One workgroup per region. A pixel with m − 1 accepted TAA samples (m ≤ 4) is traced one
-// frame in m, on a pattern that rotates every frame for every m: (frame + x + 2y) mod m.
+// One workgroup per region. A pixel with m − 1 accepted TAA samples (m ≤ QUEUE_PERIOD) is
+// traced one frame in m, on a pattern that rotates every frame for every m:
+// (frame + x + 2y) mod m. A traced pixel's path is also its own light that frame.
 // The region's queued pixels are compacted in pixel order, so the queue is the same on
 // every run. The pass also clears the region's buckets for the projection.
 @compute @workgroup_size(8, 8)
@@ -48,7 +49,7 @@ fn gi_queue(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invoca
     let i = gid.x + gid.y * frame.width;
     // Only diffuse surfaces share samples; a metal traces its own (gi_resample.wgsl).
     if gid.x < frame.width && gid.y < frame.height && light.bounces > 0u && surface_class(mem[gi.off_gmat + i]) == CLASS_DIFFUSE {
-        let m = u32(min(taa_accum(i).w, 3.0)) + 1u;
+        let m = u32(min(taa_accum(i).w, f32(QUEUE_PERIOD - 1u))) + 1u;
         if (gi.frame + gid.x + 2u * gid.y) % m == 0u {
             queued = 1u;
         }
@@ -187,6 +188,9 @@ fn gi_trace(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) grou
     mem[gi.off_ring + RING_VEC4 * idx + 1u] = vec4<u32>(bitcast<vec3<u32>>(point),
         select(0u, 1u, sky) | (cls << 1u) | (surface_normal_id(g) << 4u) | (oct_encode(ns) << 16u));
     mem[gi.off_ring + RING_VEC4 * idx + 2u] = vec4<u32>(bitcast<vec3<u32>>(max(s.radiance, vec3<f32>(0.0))), bitcast<u32>(pdf));
+    // The pixel's own estimate of its incoming light this frame (cosine-weighted, so the
+    // radiance itself), tagged with the frame + 1 (the array starts zeroed).
+    mem[gi.off_own + pixel] = vec4<u32>(bitcast<vec3<u32>>(max(s.radiance, vec3<f32>(0.0))), gi.frame + 1u);
 }
 
 // ---- Passes gi_project and gi_project_store: the ring's samples into this frame's regions ----
@@ -234,13 +238,15 @@ fn project_sample(t: u32) -> Projected {
         return none;
     }
     let rgb = bitcast<vec4<f32>>(mem[gi.off_ring + RING_VEC4 * idx + 2u]).xyz;
-    let priority = min(pcg_hash(pcg_hash(e0.w) ^ idx), NO_PRIORITY - 1u);
+    // Drawn anew each frame, so that a region's winners (and the light its pixels
+    // resample) change from frame to frame and the TAA averages independent draws.
+    let priority = min(pcg_hash(pcg_hash(pcg_hash(e0.w) ^ idx) ^ gi.frame), NO_PRIORITY - 1u);
     return Projected(true, region_of(q.x, q.y), (e1.w >> 4u) & 7u, any(rgb > vec3<f32>(0.0)), priority, idx);
 }
 
 // Counts lit and unlit samples per region; each lit sample bids for one of its region's
-// BUCKET_SLOTS slots with a priority hashed from its frame and ring index, so that the
-// winners are a random subset that does not depend on the order threads run in.
+// BUCKET_SLOTS slots with a priority hashed from its frame, its ring index and this frame,
+// so that the winners are a random subset that does not depend on the order threads run in.
 @compute @workgroup_size(64)
 fn gi_project(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
     @builtin(local_invocation_index) li: u32) {

@@ -31,6 +31,10 @@ pub const LUT_SIZE: u32 = 256;
 pub const BUCKET_SLOTS: u32 = 32;
 /// Samples a region keeps after refinement.
 pub const MAX_KEPT: u32 = 7;
+/// The ray queue traces a pixel whose TAA holds enough samples one frame in this many, and
+/// every frame a pixel with none (docs/RENDERING.md §3c: the paper's 4 lets resampled
+/// light, darker than the truth where nearby walls occlude, make up three frames in four).
+pub const QUEUE_PERIOD: u32 = 2;
 /// `vec4<u32>` per sample in the ring.
 pub const RING_VEC4: u32 = 3;
 /// After a world change, the TAA and the ring use samples from before it for at most this
@@ -125,7 +129,7 @@ impl GiPass {
 /// ring last; and the start of the queued pixels in `words`.
 #[derive(Clone, Copy, Debug)]
 struct Layout {
-    offsets: [u32; 12],
+    offsets: [u32; 13],
     /// vec4 words of `mem` before the ring.
     ring_start: u64,
     /// Words of `words`.
@@ -145,16 +149,17 @@ impl Layout {
             p,                              // result
             r * u64::from(MAX_KEPT) * 2,    // refined
             3 * r,                          // region_info
+            p,                              // own
         ];
-        let mut offsets = [0u32; 12];
+        let mut offsets = [0u32; 13];
         let mut at = CAMERA_HISTORY as u64 * CAM_VEC4 as u64;
         for (k, size) in sizes.iter().enumerate() {
             offsets[k] = at as u32;
             at += size;
         }
-        offsets[10] = at as u32; // ring
+        offsets[11] = at as u32; // ring
         let queue = u64::from(CONTROL_WORDS) + 2 * r;
-        offsets[11] = queue as u32;
+        offsets[12] = queue as u32;
         Layout {
             offsets,
             ring_start: at,
@@ -310,6 +315,7 @@ impl Gi {
             ("result", vec4s(7)),
             ("refined samples", vec4s(8)),
             ("region statistics", vec4s(9)),
+            ("own samples", vec4s(10)),
             ("sample ring", u64::from(h.ring_capacity) * u64::from(RING_VEC4) * 16),
             ("queue and control", h.layout.words * 4),
             ("region buckets", h.storage[2].size()),
@@ -435,7 +441,7 @@ impl Temporal for Gi {
             ring_capacity: h.ring_capacity,
             cams_valid: h.cameras.len() as u32 - 1,
             denoise: u32::from(self.denoise),
-            pad: 0,
+            off_own: h.layout.offsets[10],
             off_lut: h.layout.offsets[0],
             off_gbuf: h.layout.offsets[1],
             off_gmat: h.layout.offsets[2],
@@ -446,8 +452,8 @@ impl Temporal for Gi {
             off_result: h.layout.offsets[7],
             off_refined: h.layout.offsets[8],
             off_region_info: h.layout.offsets[9],
-            off_ring: h.layout.offsets[10],
-            off_queue_list: h.layout.offsets[11],
+            off_ring: h.layout.offsets[11],
+            off_queue_list: h.layout.offsets[12],
         };
         let frame = FrameInfo::new(&now_rays, size, seed, h.frames, h.frames > 0);
         let uniforms = [

@@ -73,7 +73,7 @@ pub const NO_ENTITY: u32 = MAX_ENTITY_ID + 1;
 
 /// The `u32` constants of the prelude by WGSL name, each the value of its Rust counterpart:
 /// the constant of the same name, or an enum's code.
-pub const CONSTANTS: [(&str, u32); 31] = [
+pub const CONSTANTS: [(&str, u32); 32] = [
     // Cells and voxels (naadf_world::cell).
     ("STATE_SHIFT", cell::STATE_SHIFT),
     ("STATE_EMPTY", cell::STATE_EMPTY),
@@ -106,6 +106,7 @@ pub const CONSTANTS: [(&str, u32); 31] = [
     ("LUT_SIZE", gi::LUT_SIZE),
     ("BUCKET_SLOTS", gi::BUCKET_SLOTS),
     ("MAX_KEPT", gi::MAX_KEPT),
+    ("QUEUE_PERIOD", gi::QUEUE_PERIOD),
     ("RING_VEC4", gi::RING_VEC4),
     ("EDIT_HISTORY_FRAMES", gi::EDIT_HISTORY_FRAMES),
     ("CONTROL_TRACE_ARGS", gi::CONTROL_TRACE_ARGS),

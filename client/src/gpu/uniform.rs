@@ -194,8 +194,9 @@ wgsl_struct! {
         pub cams_valid: u32,
         /// 1 when the bilateral denoiser runs.
         pub denoise: u32,
-        /// Unused; keeps the struct a multiple of 16 bytes.
-        pub pad: u32,
+        /// Where each pixel's own secondary sample starts in `mem` (tagged with the
+        /// frame that traced it).
+        pub off_own: u32,
         /// Where the atmosphere table starts in `mem` (vec4 words; the cameras start at 0).
         pub off_lut: u32,
         /// Where the first-hit surfaces start in `mem`.
