@@ -175,9 +175,15 @@ fn gi_taa(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
         let sd = taa_distance(s.x);
         let shash = s.x >> 16u;
-        var same = false;
-        for (var h = 0u; h < 9u; h++) {
-            same = same || shash == hashes[h];
+        // A sample may show any of the 3×3 neighbours' surfaces (the pixel's footprint
+        // straddles an edge across the jitters), except one from before a world change:
+        // an entity that moved in (or a block placed) would take the old surface's
+        // samples where its edge is, so those must show this pixel's own surface.
+        var same = shash == hashes[4];
+        if gi.edit_frame == 0u || gi.frame - age >= gi.edit_frame {
+            for (var h = 0u; h < 9u; h++) {
+                same = same || shash == hashes[h];
+            }
         }
         if !same {
             continue;

@@ -6,6 +6,7 @@
 //! - on a shared MagicaVoxel scene (an extended test: it skips without the shared sample
 //!   data), 32 and 64 GI frames beat 32 and 64 baseline frames on FLIP;
 //! - an emitter added or removed during GI shows within the paper's 32 frames;
+//! - a moved entity leaves no ghost where it stood;
 //! - the same seed gives the same bytes; bad sizes are errors.
 //!
 //! Skips without an adapter.
@@ -175,6 +176,82 @@ fn an_emitter_added_or_removed_during_gi_shows_within_32_frames() {
     assert!(before > 0.1);
     assert!(removed <= 32, "removing the emitter took {removed} frames");
     eprintln!("frames to within 10 %: added {added}, removed {removed}");
+}
+
+/// The pixels that look red (an entity's colour on the grey floor).
+fn red_pixels(img: &Radiance) -> Vec<bool> {
+    img.rgb.iter().map(|p| p[0] > 2.0 * p[1] + 0.01).collect()
+}
+
+#[test]
+fn a_moved_entity_leaves_no_ghost() {
+    let Some(gpu) = gpu() else { return };
+    let red = r#"{"op":"define_material","id":2,"kind":"diffuse","albedo":[0.8,0.1,0.1]}"#;
+    let mut voxels = Vec::new();
+    for z in 0..6 {
+        for y in 0..6 {
+            for x in 0..6 {
+                voxels.push(format!("[{x},{y},{z},2]"));
+            }
+        }
+    }
+    let model = format!(
+        r#"{{"op":"define_model","name":"crate","size":[6,6,6],"voxels":[{}]}}"#,
+        voxels.join(",")
+    );
+    let spawn = r#"{"op":"spawn_entity","id":1,"model":"crate","pos":[22,11,32],"rot":[0,0,0,1]}"#;
+    let moved = r#"{"op":"move_entity","id":1,"pos":[42,11,32],"rot":[0,0,0,1]}"#;
+    let cam = camera(r#"{"pos":[32,40,32],"yaw":0,"pitch":-89.9,"fov_y":60}"#);
+    let light = Light::new(Sky::parse("uniform:1").unwrap(), None, 3).unwrap();
+    let size = (32, 24);
+    let mut w = world(&[GREY, red, FLOOR, &model, spawn]);
+    let mut slot = None;
+    let mut gi = Gi::new(gpu);
+    let before = run(
+        &mut gi,
+        gpu,
+        GpuWorld::follow(&mut slot, gpu, &w).unwrap(),
+        &cam,
+        size,
+        &light,
+        32,
+    );
+    apply(&mut w, &[moved]);
+    let after = run(
+        &mut gi,
+        gpu,
+        GpuWorld::follow(&mut slot, gpu, &w).unwrap(),
+        &cam,
+        size,
+        &light,
+        1,
+    );
+    // Where the entity is now, from a history that never saw it elsewhere.
+    let settled = run(
+        &mut Gi::new(gpu),
+        gpu,
+        &GpuWorld::new(gpu, &w).unwrap(),
+        &cam,
+        size,
+        &light,
+        16,
+    );
+    let (was, now) = (red_pixels(&before), red_pixels(&settled));
+    assert!(
+        was.iter().filter(|&&r| r).count() >= 10,
+        "the entity shows before the move"
+    );
+    assert!(
+        now.iter().filter(|&&r| r).count() >= 10,
+        "the entity shows after the move"
+    );
+    let is = red_pixels(&after);
+    // Where it stood, nothing red remains; where it went, no grey floor shows through (a
+    // red surface has little green, the floor about 0.45).
+    let left_behind = (0..was.len()).filter(|&i| was[i] && !now[i] && is[i]).count();
+    let shows_through = (0..was.len()).filter(|&i| now[i] && after.rgb[i][1] > 0.25).count();
+    assert_eq!(left_behind, 0, "pixels still red where the entity stood");
+    assert_eq!(shows_through, 0, "pixels where the entity went still show the floor");
 }
 
 #[test]
