@@ -205,27 +205,14 @@ fn a_moved_entity_leaves_no_ghost() {
     let light = Light::new(Sky::parse("uniform:1").unwrap(), None, 3).unwrap();
     let size = (32, 24);
     let mut w = world(&[GREY, red, FLOOR, &model, spawn]);
-    let mut slot = None;
-    let mut gi = Gi::new(gpu);
-    let before = run(
-        &mut gi,
-        gpu,
-        GpuWorld::follow(&mut slot, gpu, &w).unwrap(),
-        &cam,
-        size,
-        &light,
-        32,
-    );
+    let (mut slot, mut gi) = (None, Gi::new(gpu));
+    let mut step = |w: &World, frames| {
+        let gw = GpuWorld::follow(&mut slot, gpu, w).unwrap();
+        run(&mut gi, gpu, gw, &cam, size, &light, frames)
+    };
+    let before = step(&w, 32);
     apply(&mut w, &[moved]);
-    let after = run(
-        &mut gi,
-        gpu,
-        GpuWorld::follow(&mut slot, gpu, &w).unwrap(),
-        &cam,
-        size,
-        &light,
-        1,
-    );
+    let after = step(&w, 1);
     // Where the entity is now, from a history that never saw it elsewhere.
     let settled = run(
         &mut Gi::new(gpu),
