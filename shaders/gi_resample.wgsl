@@ -9,8 +9,8 @@ const CANDIDATES: u32 = 12u;
 const WINDOW: f32 = 0.35;
 const SMALL_WINDOW: f32 = 0.1;
 // The denoiser: taps each side at DENOISE_HEIGHT rows (the paper's 1440p; fewer in
-// proportion on smaller images, where the TAA's samples already span a larger share of
-// the picture), the Gaussian's σ in taps, the guide's strength, and how much of the
+// proportion on smaller images, so that it covers the same share of the picture), the
+// Gaussian's σ as a share of its reach, the guide's strength, and how much of the
 // filtered value it keeps. The taps are 2 px apart.
 const DENOISE_TAPS: f32 = 10.0;
 const DENOISE_HEIGHT: f32 = 1440.0;
