@@ -182,15 +182,17 @@ fn gi_resample(@builtin(global_invocation_id) gid: vec3<u32>) {
     // neighbours' samples rarely serve it. So does a diffuse surface that no candidate
     // could speak for (rather than count as dark).
     var own = cls == CLASS_GLOSSY;
-    let mine = mem[gi.off_own + i];
-    if !own && mine.w == gi.frame + 1u {
-        // The pixel traced its own secondary path this frame (gi_queue): an unbiased
-        // estimate of its own light.
-        light_in = bitcast<vec3<f32>>(mine.xyz);
-    } else if !own {
-        let r = resampled(gid.xy, p, n, nid, dist_here, &rng);
-        light_in = r.rgb;
-        own = r.w == 0.0;
+    if !own {
+        let mine = mem[gi.off_own + i];
+        if mine.w == gi.frame + 1u {
+            // The pixel traced its own secondary path this frame (gi_queue): an unbiased
+            // estimate of its own light.
+            light_in = bitcast<vec3<f32>>(mine.xyz);
+        } else {
+            let r = resampled(gid.xy, p, n, nid, dist_here, &rng);
+            light_in = r.rgb;
+            own = r.w == 0.0;
+        }
     }
     if own {
         let u = vec2<f32>(rng_next(&rng), rng_next(&rng));

@@ -187,10 +187,11 @@ fn gi_trace(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) grou
     mem[gi.off_ring + RING_VEC4 * idx] = vec4<u32>(bitcast<vec3<u32>>(p), gi.frame);
     mem[gi.off_ring + RING_VEC4 * idx + 1u] = vec4<u32>(bitcast<vec3<u32>>(point),
         select(0u, 1u, sky) | (cls << 1u) | (surface_normal_id(g) << 4u) | (oct_encode(ns) << 16u));
-    mem[gi.off_ring + RING_VEC4 * idx + 2u] = vec4<u32>(bitcast<vec3<u32>>(max(s.radiance, vec3<f32>(0.0))), bitcast<u32>(pdf));
+    let radiance = bitcast<vec3<u32>>(max(s.radiance, vec3<f32>(0.0)));
+    mem[gi.off_ring + RING_VEC4 * idx + 2u] = vec4<u32>(radiance, bitcast<u32>(pdf));
     // The pixel's own estimate of its incoming light this frame (cosine-weighted, so the
     // radiance itself), tagged with the frame + 1 (the array starts zeroed).
-    mem[gi.off_own + pixel] = vec4<u32>(bitcast<vec3<u32>>(max(s.radiance, vec3<f32>(0.0))), gi.frame + 1u);
+    mem[gi.off_own + pixel] = vec4<u32>(radiance, gi.frame + 1u);
 }
 
 // ---- Passes gi_project and gi_project_store: the ring's samples into this frame's regions ----
