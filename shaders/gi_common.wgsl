@@ -6,10 +6,11 @@
 @group(1) @binding(0) var<storage, read> frame: FrameInfo;
 @group(1) @binding(1) var<storage, read> light: LightInfo;
 @group(1) @binding(2) var<storage, read> gi: GiInfo;
-// The pipeline's memory (docs/RENDERING.md §3c). Lavapipe (Mesa 22.3) reports 32 storage
-// buffers per stage, but crashes on some passes when the layout holds many more than 16;
-// so the GI's arrays share four bindings, each array at an offset that `gi` carries
-// (computed in gi.rs):
+// The pipeline's memory (docs/RENDERING.md §3c). The GI's arrays live in four logical
+// buffers, each array at an offset that `gi` carries (computed in gi.rs). `words` and
+// `buckets` are bound here; `mem` and `taa` can outgrow one binding of the adapter, so the
+// generated declarations after the GI files split each across bindings (from binding 6)
+// and give their accessors: `mem_get(i)`, `mem_set(i, v)`, `taa_get(i)`, `taa_set(i, v)`.
 // - `mem` (vec4 words; f32 data is stored bitcast):
 //   - cams: CAMERA_HISTORY cameras, newest first (index = frames ago), CAM_WORDS each:
 //     (position relative to this frame's integer camera position, jitter x), (forward,
@@ -37,10 +38,12 @@
 // - `buckets`: per region BUCKET_SLOTS priorities, BUCKET_SLOTS ring indices, then the
 //   lit and unlit counts of each normal id (2 × NORMALS words).
 // - `taa`: the long-term TAA, TAA_SLOTS frames of 64-bit samples.
-@group(1) @binding(3) var<storage, read_write> mem: array<vec4<u32>>;
-@group(1) @binding(4) var<storage, read_write> words: array<u32>;
-@group(1) @binding(5) var<storage, read_write> buckets: array<atomic<u32>>;
-@group(1) @binding(6) var<storage, read_write> taa: array<vec2<u32>>;
+@group(1) @binding(3) var<storage, read_write> words: array<u32>;
+@group(1) @binding(4) var<storage, read_write> buckets: array<atomic<u32>>;
+// Per chunk (`chunk_index`): the first frame after its newest change, and after the newest
+// change within CHANGE_REACH chunks of it (0: none); written by gi.rs from the world's
+// changed chunks.
+@group(1) @binding(5) var<storage, read> changes: array<vec2<u32>>;
 
 const CAM_WORDS: u32 = 5u;
 // The chain length of the sky in the TAA (the largest finite f16).
@@ -68,11 +71,28 @@ fn region_count() -> u32 {
 }
 
 fn taa_accum(i: u32) -> vec4<f32> {
-    return bitcast<vec4<f32>>(mem[gi.off_taa_info + 2u * i]);
+    return bitcast<vec4<f32>>(mem_get(gi.off_taa_info + 2u * i));
 }
 
 fn taa_range(i: u32) -> vec2<f32> {
-    return bitcast<vec4<f32>>(mem[gi.off_taa_info + 2u * i + 1u]).xy;
+    return bitcast<vec4<f32>>(mem_get(gi.off_taa_info + 2u * i + 1u)).xy;
+}
+
+// The unit vector of normal id `id`.
+fn normal_of_id(id: u32) -> vec3<f32> {
+    let sign = select(-1.0, 1.0, (id & 1u) == 1u);
+    return vec3<f32>(select(0.0, sign, id / 2u == 0u), select(0.0, sign, id / 2u == 1u), select(0.0, sign, id / 2u == 2u));
+}
+
+// The change marks (`changes`) of the chunk holding the solid voxel behind surface point
+// `p` (relative to this frame's integer camera position) of normal `n`; none outside the
+// world.
+fn changes_at(p: vec3<f32>, n: vec3<f32>) -> vec2<u32> {
+    let v = floor(vec3<f32>(frame.cam_int) + p - 0.5 * n);
+    if any(v < vec3<f32>(0.0)) || any(v >= vec3<f32>(world_info.size)) {
+        return vec2<u32>(0u);
+    }
+    return changes[chunk_index(vec3<u32>(v) / 16u)];
 }
 
 fn region_of(x: u32, y: u32) -> u32 {
@@ -92,9 +112,9 @@ struct Cam {
 
 fn cam(age: u32) -> Cam {
     let b = min(age, CAMERA_HISTORY - 1u) * CAM_WORDS;
-    let a = bitcast<vec4<f32>>(mem[b]);
-    let f = bitcast<vec4<f32>>(mem[b + 1u]);
-    return Cam(a.xyz, vec2<f32>(a.w, f.w), f.xyz, bitcast<vec4<f32>>(mem[b + 2u]).xyz, bitcast<vec4<f32>>(mem[b + 3u]).xyz, bitcast<vec4<f32>>(mem[b + 4u]).xyz);
+    let a = bitcast<vec4<f32>>(mem_get(b));
+    let f = bitcast<vec4<f32>>(mem_get(b + 1u));
+    return Cam(a.xyz, vec2<f32>(a.w, f.w), f.xyz, bitcast<vec4<f32>>(mem_get(b + 2u)).xyz, bitcast<vec4<f32>>(mem_get(b + 3u)).xyz, bitcast<vec4<f32>>(mem_get(b + 4u)).xyz);
 }
 
 // Where `v` (relative to the camera) falls on camera `c`'s image, in pixels from its
@@ -206,7 +226,7 @@ fn lut_texel(x: i32, y: i32, upper: bool) -> vec3<f32> {
     let half = i32(LUT_SIZE) / 2;
     let cx = u32((x + i32(LUT_SIZE)) % i32(LUT_SIZE));
     let cy = u32(select(clamp(y, 0, half - 1), clamp(y, half, i32(LUT_SIZE) - 1), upper));
-    return bitcast<vec4<f32>>(mem[gi.off_lut + cx + cy * LUT_SIZE]).rgb;
+    return bitcast<vec4<f32>>(mem_get(gi.off_lut + cx + cy * LUT_SIZE)).rgb;
 }
 
 // The sky along unit `d` from the table, bilinearly filtered within its hemisphere.
@@ -232,5 +252,5 @@ fn gi_atmosphere(@builtin(global_invocation_id) gid: vec3<u32>) {
     if gid.x >= LUT_SIZE || gid.y >= LUT_SIZE {
         return;
     }
-    mem[gi.off_lut + gid.x + gid.y * LUT_SIZE] = bitcast<vec4<u32>>(vec4<f32>(sky_direct(lut_direction(gid.xy)), 0.0));
+    mem_set(gi.off_lut + gid.x + gid.y * LUT_SIZE, bitcast<vec4<u32>>(vec4<f32>(sky_direct(lut_direction(gid.xy)), 0.0)));
 }

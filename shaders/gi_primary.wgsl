@@ -14,12 +14,12 @@ const TAA_RADIUS: f32 = 1.0;
 
 fn taa_read(slot: u32, pixel: u32) -> vec2<u32> {
     let i = slot * pixel_count() + pixel;
-    return taa[i];
+    return taa_get(i);
 }
 
 fn taa_write(slot: u32, pixel: u32, v: vec2<u32>) {
     let i = slot * pixel_count() + pixel;
-    taa[i] = v;
+    taa_set(i, v);
 }
 
 // One channel on the log scale, rounded up or down at random (`u` uniform in [0, 1)) so
@@ -96,26 +96,26 @@ fn gi_first_hit(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
     }
     let hash = pcg_hash(key ^ nid) & 0xFFFFu;
-    mem[gi.off_gbuf + i] = bitcast<vec4<u32>>(vec4<f32>(p, c.distance));
+    mem_set(gi.off_gbuf + i, bitcast<vec4<u32>>(vec4<f32>(p, c.distance)));
     let wo = oct_encode(-dn);
-    mem[gi.off_gmat + i] = vec4<u32>(
+    mem_set(gi.off_gmat + i, vec4<u32>(
         kind | (cls << 4u) | (nid << 8u) | (mat_id << 16u),
         hash | (oct_encode(c.n) << 16u),
         pack2x16float(thr.rg),
         (pack2x16float(vec2<f32>(thr.b, 0.0)) & 0xFFFFu) | (wo << 16u),
-    );
-    mem[gi.off_emitted + i] = bitcast<vec4<u32>>(vec4<f32>(emit, 0.0));
+    ));
+    mem_set(gi.off_emitted + i, bitcast<vec4<u32>>(vec4<f32>(emit, 0.0)));
 }
 
 // ---- Pass gi_taa: the long-term TAA's gather ----
 
 fn chain_length(i: u32) -> f32 {
-    let d = bitcast<vec4<f32>>(mem[gi.off_gbuf + i]).w;
+    let d = bitcast<vec4<f32>>(mem_get(gi.off_gbuf + i)).w;
     return select(d, SKY_DIST, d < 0.0);
 }
 
 fn hash_at(i: u32) -> u32 {
-    return mem[gi.off_gmat + i].y & 0xFFFFu;
+    return mem_get(gi.off_gmat + i).y & 0xFFFFu;
 }
 
 @compute @workgroup_size(8, 8)
@@ -140,7 +140,7 @@ fn gi_taa(@builtin(global_invocation_id) gid: vec3<u32>) {
             k++;
         }
     }
-    mem[gi.off_taa_info + 2u * i + 1u] = bitcast<vec4<u32>>(vec4<f32>(lo, hi, 0.0, 0.0));
+    mem_set(gi.off_taa_info + 2u * i + 1u, bitcast<vec4<u32>>(vec4<f32>(lo, hi, 0.0, 0.0)));
     let sky = d >= SKY_DIST;
     // The point the pixel sees along its unjittered ray (the sky: its direction).
     let dir = normalize(camera_dir(frame, gid.xy, vec2<f32>(0.5)));
@@ -149,13 +149,25 @@ fn gi_taa(@builtin(global_invocation_id) gid: vec3<u32>) {
     if sky {
         point = dir;
     }
+    // How recently the pixel's surface changed, or light near it (none for the sky).
+    var marks = vec2<u32>(0u);
+    if !sky {
+        marks = changes_at(bitcast<vec4<f32>>(mem_get(gi.off_gbuf + i)).xyz, surface_normal(mem_get(gi.off_gmat + i)));
+    }
+    let edit = max(gi.edit_frame, marks.y);
     var sum = vec3<f32>(0.0);
     var count = 0.0;
     for (var age = 1u; age <= gi.taa_valid; age++) {
-        // Light from before the newest world change fades out within EDIT_HISTORY_FRAMES
-        // frames; so does light resampled from the ring while it still held samples from
-        // before the change (the first EDIT_HISTORY_FRAMES frames after it).
-        if gi.edit_frame > 0u && gi.frame - age < gi.edit_frame + EDIT_HISTORY_FRAMES && age > EDIT_HISTORY_FRAMES {
+        let taken = gi.frame - age;
+        // A sample from before the surface's own chunk changed shows what is gone.
+        if taken < marks.x {
+            break;
+        }
+        // Light from before a world change near the surface (or a change of the
+        // materials) fades out within EDIT_HISTORY_FRAMES frames; so does light resampled
+        // from the ring while it still held samples from before the change (the first
+        // EDIT_HISTORY_FRAMES frames after it).
+        if edit > 0u && taken < edit + EDIT_HISTORY_FRAMES && age > EDIT_HISTORY_FRAMES {
             break;
         }
         let c = cam(age);
@@ -180,7 +192,7 @@ fn gi_taa(@builtin(global_invocation_id) gid: vec3<u32>) {
         // an entity that moved in (or a block placed) would take the old surface's
         // samples where its edge is, so those must show this pixel's own surface.
         var same = shash == hashes[4];
-        if gi.edit_frame == 0u || gi.frame - age >= gi.edit_frame {
+        if edit == 0u || taken >= edit {
             for (var h = 0u; h < 9u; h++) {
                 same = same || shash == hashes[h];
             }
@@ -214,7 +226,7 @@ fn gi_taa(@builtin(global_invocation_id) gid: vec3<u32>) {
         sum += taa_colour(s.y);
         count += 1.0;
     }
-    mem[gi.off_taa_info + 2u * i] = bitcast<vec4<u32>>(vec4<f32>(sum, count));
+    mem_set(gi.off_taa_info + 2u * i, bitcast<vec4<u32>>(vec4<f32>(sum, count)));
 }
 
 // ---- Pass gi_merge: this frame's colour, its TAA sample and the result ----
@@ -225,9 +237,9 @@ fn gi_merge(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let i = gid.x + gid.y * frame.width;
-    let g = mem[gi.off_gmat + i];
+    let g = mem_get(gi.off_gmat + i);
     let thr = vec3<f32>(unpack2x16float(g.z), unpack2x16float(g.w).x);
-    let colour = bitcast<vec4<f32>>(mem[gi.off_emitted + i]).rgb + thr * bitcast<vec4<f32>>(mem[gi.off_illum + i]).rgb;
+    let colour = bitcast<vec4<f32>>(mem_get(gi.off_emitted + i)).rgb + thr * bitcast<vec4<f32>>(mem_get(gi.off_illum + i)).rgb;
     var rng = rng_new(frame.seed ^ 0x5A17u, i, gi.frame);
     var c = colour;
     let peak = max(c.r, max(c.g, c.b));
@@ -240,5 +252,5 @@ fn gi_merge(@builtin(global_invocation_id) gid: vec3<u32>) {
     let x = (pack2x16float(vec2<f32>(dist, 0.0)) & 0x7FFFu) | ((g.y & 0xFFFFu) << 16u);
     taa_write(gi.taa_slot, i, vec2<u32>(x, y));
     let a = taa_accum(i);
-    mem[gi.off_result + i] = bitcast<vec4<u32>>(vec4<f32>((a.rgb + colour) / (a.w + 1.0), dist));
+    mem_set(gi.off_result + i, bitcast<vec4<u32>>(vec4<f32>((a.rgb + colour) / (a.w + 1.0), dist)));
 }

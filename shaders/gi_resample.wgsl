@@ -59,9 +59,9 @@ fn resampled(gid: vec2<u32>, p: vec3<f32>, n: vec3<f32>, nid: u32, dist_here: f3
         let qx = mirrored(i32(gid.x) + i32(round(off.x)), i32(frame.width));
         let qy = mirrored(i32(gid.y) + i32(round(off.y)), i32(frame.height));
         let region = region_of(qx, qy);
-        let ratios = bitcast<vec4<f32>>(mem[gi.off_region_info + 3u * region]);
-        let info = bitcast<vec4<f32>>(mem[gi.off_region_info + 3u * region + 1u]);
-        let shape = bitcast<vec4<f32>>(mem[gi.off_region_info + 3u * region + 2u]);
+        let ratios = bitcast<vec4<f32>>(mem_get(gi.off_region_info + 3u * region));
+        let info = bitcast<vec4<f32>>(mem_get(gi.off_region_info + 3u * region + 1u));
+        let shape = bitcast<vec4<f32>>(mem_get(gi.off_region_info + 3u * region + 2u));
         let pick = rng_next(rng);
         // A region with no samples says nothing; one whose surfaces differ from this one
         // does not speak for it.
@@ -78,7 +78,7 @@ fn resampled(gid: vec2<u32>, p: vec3<f32>, n: vec3<f32>, nid: u32, dist_here: f3
         // were drawn from other distributions and do not speak for this surface).
         var matching = 0u;
         for (var k = 0u; k < kept; k++) {
-            matching += select(0u, 1u, ((mem[gi.off_refined + 2u * (region * MAX_KEPT + k)].w >> 4u) & 7u) == nid);
+            matching += select(0u, 1u, ((mem_get(gi.off_refined + 2u * (region * MAX_KEPT + k)).w >> 4u) & 7u) == nid);
         }
         if matching == 0u {
             continue;
@@ -87,7 +87,7 @@ fn resampled(gid: vec2<u32>, p: vec3<f32>, n: vec3<f32>, nid: u32, dist_here: f3
         var at = 0u;
         for (var k = 0u; k < kept; k++) {
             let here_at = 2u * (region * MAX_KEPT + k);
-            if ((mem[gi.off_refined + here_at].w >> 4u) & 7u) == nid {
+            if ((mem_get(gi.off_refined + here_at).w >> 4u) & 7u) == nid {
                 if want == 0u {
                     at = here_at;
                     break;
@@ -95,8 +95,8 @@ fn resampled(gid: vec2<u32>, p: vec3<f32>, n: vec3<f32>, nid: u32, dist_here: f3
                 want--;
             }
         }
-        let r0 = mem[gi.off_refined + at];
-        let r1 = mem[gi.off_refined + at + 1u];
+        let r0 = mem_get(gi.off_refined + at);
+        let r1 = mem_get(gi.off_refined + at + 1u);
         let sky = (r0.w & 1u) != 0u;
         var dir = bitcast<vec4<f32>>(r0).xyz;
         var distance = 0.0;
@@ -160,16 +160,16 @@ fn gi_resample(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let i = gid.x + gid.y * frame.width;
-    let g = mem[gi.off_gmat + i];
+    let g = mem_get(gi.off_gmat + i);
     let cls = surface_class(g);
     let a = taa_accum(i);
     let thr = vec3<f32>(unpack2x16float(g.z), unpack2x16float(g.w).x);
     if cls == CLASS_NONE || light.bounces == 0u {
-        mem[gi.off_illum + i] = bitcast<vec4<u32>>(vec4<f32>(0.0));
+        mem_set(gi.off_illum + i, bitcast<vec4<u32>>(vec4<f32>(0.0)));
         return;
     }
-    let p = bitcast<vec4<f32>>(mem[gi.off_gbuf + i]).xyz;
-    let dist_here = bitcast<vec4<f32>>(mem[gi.off_gbuf + i]).w;
+    let p = bitcast<vec4<f32>>(mem_get(gi.off_gbuf + i)).xyz;
+    let dist_here = bitcast<vec4<f32>>(mem_get(gi.off_gbuf + i)).w;
     let n = surface_normal(g);
     let nid = surface_normal_id(g);
     let m = material(g.x >> 16u);
@@ -183,7 +183,7 @@ fn gi_resample(@builtin(global_invocation_id) gid: vec3<u32>) {
     // could speak for (rather than count as dark).
     var own = cls == CLASS_GLOSSY;
     if !own {
-        let mine = mem[gi.off_own + i];
+        let mine = mem_get(gi.off_own + i);
         if mine.w == gi.frame + 1u {
             // The pixel traced its own secondary path this frame (gi_queue): an unbiased
             // estimate of its own light.
@@ -223,7 +223,7 @@ fn gi_resample(@builtin(global_invocation_id) gid: vec3<u32>) {
     if a.w > 1.0 {
         guide = luminance(a.rgb / a.w) / (luminance(thr) + 0.01);
     }
-    mem[gi.off_illum + i] = bitcast<vec4<u32>>(vec4<f32>(light_in, guide));
+    mem_set(gi.off_illum + i, bitcast<vec4<u32>>(vec4<f32>(light_in, guide)));
 }
 
 // ---- Passes gi_denoise_x and gi_denoise_y ----
@@ -231,12 +231,12 @@ fn gi_resample(@builtin(global_invocation_id) gid: vec3<u32>) {
 // The weight of tap `j` for pixel `i`: the same plane and cls, a close guide value, and
 // a Gaussian in `k`, the tap's place in the filter's reach (−1 to 1).
 fn denoise_weight(i: u32, j: u32, k: f32, gi_: f32, gj: f32) -> f32 {
-    let a = mem[gi.off_gmat + i];
-    let b = mem[gi.off_gmat + j];
+    let a = mem_get(gi.off_gmat + i);
+    let b = mem_get(gi.off_gmat + j);
     if surface_class(a) != surface_class(b) || surface_normal_id(a) != surface_normal_id(b) {
         return 0.0;
     }
-    if abs(dot(surface_normal(a), bitcast<vec4<f32>>(mem[gi.off_gbuf + j]).xyz - bitcast<vec4<f32>>(mem[gi.off_gbuf + i]).xyz)) > 0.05 {
+    if abs(dot(surface_normal(a), bitcast<vec4<f32>>(mem_get(gi.off_gbuf + j)).xyz - bitcast<vec4<f32>>(mem_get(gi.off_gbuf + i)).xyz)) > 0.05 {
         return 0.0;
     }
     let kk = k / DENOISE_SIGMA;
@@ -265,17 +265,17 @@ fn denoise_pass(gid: vec3<u32>, axis: u32, src: u32, dst: u32, salt: u32) {
         return;
     }
     let i = gid.x + gid.y * frame.width;
-    let here = bitcast<vec4<f32>>(mem[src + i]);
+    let here = bitcast<vec4<f32>>(mem_get(src + i));
     var rng = rng_new(frame.seed ^ salt, i, gi.frame);
     var sum = vec4<f32>(0.0);
     var wsum = 0.0;
     let taps = i32(round(min(DENOISE_TAPS * f32(frame.height) / DENOISE_HEIGHT, DENOISE_TAPS)));
     // Only diffuse light is denoised: a metal's own path is view-dependent, and spreading
     // its sun glints would brighten its whole surface.
-    if surface_class(mem[gi.off_gmat + i]) == CLASS_DIFFUSE && taps > 0 {
+    if surface_class(mem_get(gi.off_gmat + i)) == CLASS_DIFFUSE && taps > 0 {
         for (var k = -taps; k <= taps; k++) {
             let j = denoise_tap(gid.xy, k, axis, &rng);
-            let v = bitcast<vec4<f32>>(mem[src + j]);
+            let v = bitcast<vec4<f32>>(mem_get(src + j));
             let w = denoise_weight(i, j, f32(k) / f32(taps), here.w, v.w);
             sum += v * w;
             wsum += w;
@@ -285,7 +285,7 @@ fn denoise_pass(gid: vec3<u32>, axis: u32, src: u32, dst: u32, salt: u32) {
     if wsum > 0.0 {
         out = vec4<f32>(mix(here.rgb, sum.rgb / wsum, DENOISE_BLEND), sum.w / wsum);
     }
-    mem[dst + i] = bitcast<vec4<u32>>(out);
+    mem_set(dst + i, bitcast<vec4<u32>>(out));
 }
 
 @compute @workgroup_size(8, 8)

@@ -48,7 +48,7 @@ fn gi_queue(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invoca
     var queued = 0u;
     let i = gid.x + gid.y * frame.width;
     // Only diffuse surfaces share samples; a metal traces its own (gi_resample.wgsl).
-    if gid.x < frame.width && gid.y < frame.height && light.bounces > 0u && surface_class(mem[gi.off_gmat + i]) == CLASS_DIFFUSE {
+    if gid.x < frame.width && gid.y < frame.height && light.bounces > 0u && surface_class(mem_get(gi.off_gmat + i)) == CLASS_DIFFUSE {
         let m = u32(min(taa_accum(i).w, f32(QUEUE_PERIOD - 1u))) + 1u;
         if (gi.frame + gid.x + 2u * gid.y) % m == 0u {
             queued = 1u;
@@ -164,8 +164,8 @@ fn gi_trace(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) grou
     let pixel = words[gi.off_queue_list + lo * 64u + t - words[CONTROL_WORDS + regions + lo]];
     // Seeded by the pixel and the frame, never by the queue slot.
     var rng = rng_new(frame.seed, pixel, gi.frame);
-    let g = mem[gi.off_gmat + pixel];
-    let p = bitcast<vec4<f32>>(mem[gi.off_gbuf + pixel]).xyz;
+    let g = mem_get(gi.off_gmat + pixel);
+    let p = bitcast<vec4<f32>>(mem_get(gi.off_gbuf + pixel)).xyz;
     let n = surface_normal(g);
     let cls = surface_class(g);
     let origin = p + n * SURFACE_OFFSET;
@@ -184,14 +184,14 @@ fn gi_trace(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) grou
         ns = s.normal;
     }
     let idx = (words[CONTROL_START] + t) % gi.ring_capacity;
-    mem[gi.off_ring + RING_VEC4 * idx] = vec4<u32>(bitcast<vec3<u32>>(p), gi.frame);
-    mem[gi.off_ring + RING_VEC4 * idx + 1u] = vec4<u32>(bitcast<vec3<u32>>(point),
-        select(0u, 1u, sky) | (cls << 1u) | (surface_normal_id(g) << 4u) | (oct_encode(ns) << 16u));
+    mem_set(gi.off_ring + RING_VEC4 * idx, vec4<u32>(bitcast<vec3<u32>>(p), gi.frame));
+    mem_set(gi.off_ring + RING_VEC4 * idx + 1u, vec4<u32>(bitcast<vec3<u32>>(point),
+        select(0u, 1u, sky) | (cls << 1u) | (surface_normal_id(g) << 4u) | (oct_encode(ns) << 16u)));
     let radiance = bitcast<vec3<u32>>(max(s.radiance, vec3<f32>(0.0)));
-    mem[gi.off_ring + RING_VEC4 * idx + 2u] = vec4<u32>(radiance, bitcast<u32>(pdf));
+    mem_set(gi.off_ring + RING_VEC4 * idx + 2u, vec4<u32>(radiance, bitcast<u32>(pdf)));
     // The pixel's own estimate of its incoming light this frame (cosine-weighted, so the
     // radiance itself), tagged with the frame + 1 (the array starts zeroed).
-    mem[gi.off_own + pixel] = vec4<u32>(radiance, gi.frame + 1u);
+    mem_set(gi.off_own + pixel, vec4<u32>(radiance, gi.frame + 1u));
 }
 
 // ---- Passes gi_project and gi_project_store: the ring's samples into this frame's regions ----
@@ -216,29 +216,40 @@ fn project_sample(t: u32) -> Projected {
     let cap = gi.ring_capacity;
     let newest = (words[CONTROL_START] + min(words[CONTROL_QUEUED], cap) + cap - 1u) % cap;
     let idx = (newest + cap - t) % cap;
-    let e0 = mem[gi.off_ring + RING_VEC4 * idx];
-    let e1 = mem[gi.off_ring + RING_VEC4 * idx + 1u];
+    let e0 = mem_get(gi.off_ring + RING_VEC4 * idx);
+    let e1 = mem_get(gi.off_ring + RING_VEC4 * idx + 1u);
     let age = gi.frame - e0.w;
-    if age > gi.cams_valid || (e0.w < gi.edit_frame && age > EDIT_HISTORY_FRAMES) {
+    if age > gi.cams_valid {
         return none;
     }
     let here = cam(0u);
     let p = bitcast<vec4<f32>>(e0).xyz + cam(age).origin;
+    // Light traced before a change of the sample's surface, or of the surface its path
+    // hit (a removed or added emitter), is dropped; light traced before a change near
+    // either lasts EDIT_HISTORY_FRAMES frames, as after a change of the materials.
+    var marks = changes_at(p, normal_of_id((e1.w >> 4u) & 7u));
+    if (e1.w & 1u) == 0u {
+        marks = max(marks, changes_at(bitcast<vec4<f32>>(e1).xyz + cam(age).origin, oct_decode(e1.w >> 16u)));
+    }
+    let edit = max(gi.edit_frame, marks.y);
+    if e0.w < marks.x || (e0.w < edit && age > EDIT_HISTORY_FRAMES) {
+        return none;
+    }
     let pr = project(here, p - here.pos);
     if !on_image(pr.px) || pr.z <= 0.0 {
         return none;
     }
     let q = vec2<u32>(pr.px);
     let qi = q.x + q.y * frame.width;
-    let g = mem[gi.off_gmat + qi];
+    let g = mem_get(gi.off_gmat + qi);
     if surface_class(g) != ((e1.w >> 1u) & 3u) || surface_normal_id(g) != ((e1.w >> 4u) & 7u) {
         return none;
     }
-    let off = abs(dot(surface_normal(g), p - bitcast<vec4<f32>>(mem[gi.off_gbuf + qi]).xyz));
+    let off = abs(dot(surface_normal(g), p - bitcast<vec4<f32>>(mem_get(gi.off_gbuf + qi)).xyz));
     if off > 0.05 + 0.002 * length(p - here.pos) {
         return none;
     }
-    let rgb = bitcast<vec4<f32>>(mem[gi.off_ring + RING_VEC4 * idx + 2u]).xyz;
+    let rgb = bitcast<vec4<f32>>(mem_get(gi.off_ring + RING_VEC4 * idx + 2u)).xyz;
     // Drawn anew each frame, so that a region's winners (and the light its pixels
     // resample) change from frame to frame and the TAA averages independent draws.
     let priority = min(pcg_hash(pcg_hash(pcg_hash(e0.w) ^ idx) ^ gi.frame), NO_PRIORITY - 1u);
@@ -300,11 +311,11 @@ fn gi_refine(@builtin(global_invocation_id) gid: vec3<u32>) {
         let y = y0 + k / 8u;
         if x < frame.width && y < frame.height {
             let i = x + y * frame.width;
-            let g = mem[gi.off_gmat + i];
+            let g = mem_get(gi.off_gmat + i);
             if surface_class(g) != CLASS_NONE {
                 mask |= 1u << surface_normal_id(g);
-                lo = min(lo, bitcast<vec4<f32>>(mem[gi.off_gbuf + i]).w);
-                hi = max(hi, bitcast<vec4<f32>>(mem[gi.off_gbuf + i]).w);
+                lo = min(lo, bitcast<vec4<f32>>(mem_get(gi.off_gbuf + i)).w);
+                hi = max(hi, bitcast<vec4<f32>>(mem_get(gi.off_gbuf + i)).w);
             }
         }
     }
@@ -315,8 +326,8 @@ fn gi_refine(@builtin(global_invocation_id) gid: vec3<u32>) {
     for (var s = 0u; s < BUCKET_SLOTS; s++) {
         if atomicLoad(&buckets[bucket_priority(region, s)]) != NO_PRIORITY {
             let idx = atomicLoad(&buckets[bucket_index(region, s)]);
-            filled[min((mem[gi.off_ring + RING_VEC4 * idx + 1u].w >> 4u) & 7u, NORMALS - 1u)]++;
-            let rgb = bitcast<vec4<f32>>(mem[gi.off_ring + RING_VEC4 * idx + 2u]).xyz;
+            filled[min((mem_get(gi.off_ring + RING_VEC4 * idx + 1u).w >> 4u) & 7u, NORMALS - 1u)]++;
+            let rgb = bitcast<vec4<f32>>(mem_get(gi.off_ring + RING_VEC4 * idx + 2u)).xyz;
             peak = max(peak, max(rgb.r, max(rgb.g, rgb.b)));
         }
     }
@@ -327,9 +338,9 @@ fn gi_refine(@builtin(global_invocation_id) gid: vec3<u32>) {
             continue;
         }
         let idx = atomicLoad(&buckets[bucket_index(region, s)]);
-        let e0 = mem[gi.off_ring + RING_VEC4 * idx];
-        let e1 = mem[gi.off_ring + RING_VEC4 * idx + 1u];
-        let e2 = mem[gi.off_ring + RING_VEC4 * idx + 2u];
+        let e0 = mem_get(gi.off_ring + RING_VEC4 * idx);
+        let e1 = mem_get(gi.off_ring + RING_VEC4 * idx + 1u);
+        let e2 = mem_get(gi.off_ring + RING_VEC4 * idx + 2u);
         let rgb = bitcast<vec4<f32>>(e2).xyz;
         let m = max(rgb.r, max(rgb.g, rgb.b));
         if rng_next(&rng) * peak >= m {
@@ -352,8 +363,8 @@ fn gi_refine(@builtin(global_invocation_id) gid: vec3<u32>) {
             jac = abs(dot(oct_decode(e1.w >> 16u), v * inverseSqrt(d2))) / d2;
         }
         let at = 2u * (region * MAX_KEPT + kept);
-        mem[gi.off_refined + at] = vec4<u32>(bitcast<vec3<u32>>(point), e1.w & 0xFFFF007Fu);
-        mem[gi.off_refined + at + 1u] = vec4<u32>(pack2x16float(col.rg), pack2x16float(vec2<f32>(col.b, 0.0)), e2.w, bitcast<u32>(jac));
+        mem_set(gi.off_refined + at, vec4<u32>(bitcast<vec3<u32>>(point), e1.w & 0xFFFF007Fu));
+        mem_set(gi.off_refined + at + 1u, vec4<u32>(pack2x16float(col.rg), pack2x16float(vec2<f32>(col.b, 0.0)), e2.w, bitcast<u32>(jac)));
         kept++;
     }
     // The lit ratio per normal: the light a surface facing one way gets says nothing of
@@ -368,7 +379,7 @@ fn gi_refine(@builtin(global_invocation_id) gid: vec3<u32>) {
         ratio[n] = f32(survivors[n]) / max(f32(filled[n]) + unlit_scaled, 1.0);
     }
     let base = gi.off_region_info + 3u * region;
-    mem[base] = bitcast<vec4<u32>>(vec4<f32>(ratio[0], ratio[1], ratio[2], ratio[3]));
-    mem[base + 1u] = bitcast<vec4<u32>>(vec4<f32>(ratio[4], ratio[5], f32(kept), f32(total)));
-    mem[base + 2u] = bitcast<vec4<u32>>(vec4<f32>(f32(mask), lo, hi, 0.0));
+    mem_set(base, bitcast<vec4<u32>>(vec4<f32>(ratio[0], ratio[1], ratio[2], ratio[3])));
+    mem_set(base + 1u, bitcast<vec4<u32>>(vec4<f32>(ratio[4], ratio[5], f32(kept), f32(total))));
+    mem_set(base + 2u, bitcast<vec4<u32>>(vec4<f32>(f32(mask), lo, hi, 0.0)));
 }

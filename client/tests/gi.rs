@@ -7,19 +7,25 @@
 //!   data), 32 and 64 GI frames beat 32 and 64 baseline frames on FLIP;
 //! - an emitter added or removed during GI shows within the paper's 32 frames;
 //! - a moved entity leaves no ghost where it stood;
-//! - the same seed gives the same bytes; bad sizes are errors.
+//! - a change drops the history of its own chunk, shortens it nearby and keeps it
+//!   elsewhere;
+//! - the same seed gives the same bytes; bad sizes are errors;
+//! - a history split across many small bindings gives the same bytes as one in whole
+//!   bindings.
 //!
 //! Skips without an adapter.
 
 mod scenes;
 
+use naadf_client::gpu::CHANGE_REACH;
 use naadf_client::gpu::{Baseline, Gi, Gpu, GpuWorld, PathTracer, Temporal};
 use naadf_client::light::hdr::Radiance;
 use naadf_client::light::quality::Quality;
 use naadf_client::light::{Light, Sky};
 use naadf_world::World;
 use naadf_world::camera::Camera;
-use scenes::{FLOOR, GREY, SHOWCASE_CAMERA, apply, camera, gpu, mse, showcase, world};
+use naadf_world::traverse::trace_naadf;
+use scenes::{FLOOR, GREY, SHOWCASE_CAMERA, apply, camera, gpu, mse, showcase, world, world_of};
 
 /// Renders `frames` more GI frames and returns the last.
 fn run(gi: &mut Gi, gpu: &Gpu, gw: &GpuWorld, cam: &Camera, size: (u32, u32), light: &Light, frames: u32) -> Radiance {
@@ -265,4 +271,91 @@ fn the_same_seed_gives_the_same_bytes_and_bad_sizes_are_errors() {
         let e = gi.frame(gpu, &gw, &cam, size, &light, 0).unwrap_err();
         assert!(e.to_string().contains("frame size"), "{size:?}: {e}");
     }
+}
+
+#[test]
+fn a_history_split_across_bindings_gives_the_same_bytes() {
+    let Some(gpu) = gpu() else { return };
+    let w = showcase();
+    let light = Light::new(Sky::Physical, None, 3).unwrap();
+    let gw = GpuWorld::new(gpu, &w).unwrap();
+    let size = (48, 32);
+    // The camera strafes, so that the TAA and the ring reproject across parts.
+    let render = |gi: &mut Gi| {
+        for f in 0..10 {
+            let mut cam = camera(SHOWCASE_CAMERA);
+            cam.pos[0] += 0.3 * f64::from(f);
+            gi.frame(gpu, &gw, &cam, size, &light, 0).unwrap();
+        }
+        gi.radiance(gpu).unwrap()
+    };
+    let mut whole = Gi::new(gpu);
+    let mut split = Gi::with_max_part_bytes(gpu, 256 << 10);
+    let expected = render(&mut whole);
+    let got = render(&mut split);
+    let (a, b) = (whole.bindings().unwrap(), split.bindings().unwrap());
+    eprintln!("group-1 storage bindings: whole {a}, split {b}");
+    assert_eq!(a, 8);
+    assert!(b >= 13, "the history spans {b} bindings");
+    assert_eq!(got, expected, "a split history renders the same bytes");
+}
+
+#[test]
+fn a_change_drops_the_history_of_its_chunk_shortens_it_nearby_and_keeps_it_elsewhere() {
+    let Some(gpu) = gpu() else { return };
+    let floor = r#"{"op":"box","min":[0,0,0],"max":[128,8,128],"material":1}"#;
+    let other = r#"{"op":"define_material","id":2,"kind":"diffuse","albedo":[0.2,0.6,0.2]}"#;
+    let mut w = world_of([128, 64, 128], &[GREY, other, floor]);
+    let cam = camera(r#"{"pos":[64,90,64],"yaw":0,"pitch":-89.9,"fov_y":60}"#);
+    let light = Light::new(Sky::parse("uniform:1").unwrap(), None, 3).unwrap();
+    let size = (48, 48);
+    // Two histories, one of which sees a voxel inside the floor change (no ray can see it,
+    // but its chunk changed): after one more frame, the other's history lengths are the
+    // oracle for the pixels far from the change.
+    let plain_world = GpuWorld::new(gpu, &w).unwrap();
+    let mut edited_world = GpuWorld::new(gpu, &w).unwrap();
+    let (mut plain, mut edited) = (Gi::new(gpu), Gi::new(gpu));
+    for _ in 0..33 {
+        plain.frame(gpu, &plain_world, &cam, size, &light, 0).unwrap();
+        edited.frame(gpu, &edited_world, &cam, size, &light, 0).unwrap();
+    }
+    apply(&mut w, &[r#"{"op":"set","voxels":[[24,2,24,2]]}"#]);
+    edited_world.sync(&w).unwrap();
+    plain.frame(gpu, &plain_world, &cam, size, &light, 0).unwrap();
+    edited.frame(gpu, &edited_world, &cam, size, &light, 0).unwrap();
+    let (kept, now) = (
+        plain.history_lengths(gpu).unwrap(),
+        edited.history_lengths(gpu).unwrap(),
+    );
+
+    // The chunk each pixel's floor point lies in (its centre's ray, on the CPU), at least a
+    // voxel from the chunk's sides so that no jitter crosses them.
+    let changed = [1i64, 0, 1];
+    let basis = cam.basis();
+    let (mut own, mut near, mut far) = (0, 0, 0);
+    for y in 0..size.1 {
+        for x in 0..size.0 {
+            let ray = cam.ray(&basis, x, y, size.0, size.1).unwrap();
+            let v = trace_naadf(&w, &ray).expect("the floor").voxel;
+            if [v[0], v[2]].iter().any(|&c| c % 16 == 0 || c % 16 == 15) {
+                continue;
+            }
+            let c = v.map(|c| i64::from(c / 16));
+            let apart = (0..3).map(|a| (c[a] - changed[a]).abs()).max().unwrap();
+            let i = (x + y * size.0) as usize;
+            if apart == 0 {
+                assert_eq!(now[i], 0, "pixel ({x}, {y}) on the changed chunk");
+                own += 1;
+            } else if apart <= i64::from(CHANGE_REACH) {
+                assert!(now[i] <= 8, "pixel ({x}, {y}) near the change keeps {} samples", now[i]);
+                near += 1;
+            } else {
+                assert_eq!(now[i], kept[i], "pixel ({x}, {y}) far from the change");
+                // A history longer than the edit rule allows: a global rule would cut it.
+                far += usize::from(kept[i] > 8);
+            }
+        }
+    }
+    eprintln!("pixels on the changed chunk {own}, near it {near}, far from it {far}");
+    assert!(own > 10 && near > 100 && far > 200, "{own} / {near} / {far}");
 }

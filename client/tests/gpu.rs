@@ -14,6 +14,7 @@ mod common;
 use common::{Rng, adversarial, random_world, rays};
 use naadf_client::gpu::{Gpu, GpuRay, GpuWorld, Mode, RayTracer, Renderer};
 use naadf_world::camera::Camera;
+use naadf_world::fingerprint::ChunkChanges;
 use naadf_world::material::MaterialKind;
 use naadf_world::ops::{Batch, Limits, Op};
 use naadf_world::preset::Preset;
@@ -315,4 +316,58 @@ fn synced_buffers_equal_the_worlds_after_edits_also_when_split() {
     let a = tracer.trace(gpu, &split, &rays, Method::Naadf).unwrap();
     let b = tracer.trace(gpu, &whole, &rays, Method::Naadf).unwrap();
     assert_eq!(a, b);
+}
+
+#[test]
+fn a_synced_copy_logs_which_chunks_each_sync_changed() {
+    let Some(gpu) = gpu() else { return };
+    let src = Preset::Test.source(Some(size(256, 64, 256)), 3).unwrap();
+    let mut world = World::build(&*src, &|_| {}).unwrap();
+    let mut gw = GpuWorld::new(gpu, &world).unwrap();
+    let start = gw.generation();
+    assert_eq!(gw.changes_since(start), ChunkChanges::Chunks(Vec::new()));
+    let mut rng = Rng(5);
+    let mut expected = Vec::new();
+    let mut after_first = start;
+    for step in 0..4 {
+        // One voxel per sync, set to a material it does not have.
+        let p = [0, 1, 2].map(|a| rng.below([256, 64, 256][a]) as u32);
+        let m = world.material_at(p) % 9 + 1;
+        let op = Op::Set {
+            voxels: vec![[p[0], p[1], p[2], u32::from(m)].map(i64::from)],
+        };
+        world.apply(&Batch { ops: vec![op] }, &Limits::default()).unwrap();
+        // Distance fields grow over later syncs; they change nothing a ray sees.
+        gw.sync(&world).unwrap();
+        while !world.is_quiescent() {
+            world.grow_distance_fields(1 << 20);
+            gw.sync(&world).unwrap();
+        }
+        expected.push(world.size().chunk_index(p.map(|v| v / 16)) as u32);
+        if step == 0 {
+            after_first = gw.generation();
+        }
+    }
+    let mut all = expected.clone();
+    all.sort_unstable();
+    all.dedup();
+    assert_eq!(gw.changes_since(start), ChunkChanges::Chunks(all));
+    let mut later = expected[1..].to_vec();
+    later.sort_unstable();
+    later.dedup();
+    assert_eq!(gw.changes_since(after_first), ChunkChanges::Chunks(later));
+    assert_eq!(gw.changes_since(gw.generation()), ChunkChanges::Chunks(Vec::new()));
+    // A material changes the light of every chunk.
+    let recolour = Op::DefineMaterial {
+        id: 1,
+        kind: MaterialKind::Diffuse,
+        albedo: [0.1, 0.2, 0.3],
+        emission: 0.0,
+        roughness: 0.0,
+    };
+    let before = gw.generation();
+    world.apply(&Batch { ops: vec![recolour] }, &Limits::default()).unwrap();
+    gw.sync(&world).unwrap();
+    assert_eq!(gw.changes_since(before), ChunkChanges::Everything);
+    assert_eq!(gw.changes_since(start), ChunkChanges::Everything);
 }

@@ -41,6 +41,7 @@ pub mod edit;
 pub mod entity;
 pub mod error;
 pub mod file;
+pub mod fingerprint;
 pub mod hash;
 pub mod import;
 pub mod material;

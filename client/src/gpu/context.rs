@@ -150,6 +150,30 @@ impl Gpu {
         self.read_buffer_at(src, 0, size)
     }
 
+    /// The `size` bytes from byte `offset` of a logical buffer split into `parts` of
+    /// `part_bytes` each (the last may be shorter), read part by part.
+    pub(crate) fn read_parts(
+        &self,
+        parts: &[wgpu::Buffer],
+        part_bytes: u64,
+        offset: u64,
+        size: u64,
+    ) -> Result<Vec<u8>, GpuError> {
+        let mut out = Vec::with_capacity(size as usize);
+        let end = offset + size;
+        let mut at = offset;
+        while at < end {
+            let within = at % part_bytes;
+            let n = (end - at).min(part_bytes - within);
+            let part = parts
+                .get((at / part_bytes) as usize)
+                .ok_or_else(|| GpuError::Readback(format!("byte {at} lies past the buffer's {} parts", parts.len())))?;
+            out.extend(self.read_buffer_at(part, within, n)?);
+            at += n;
+        }
+        Ok(out)
+    }
+
     /// [`Gpu::read_buffer`] of the `size` bytes from `offset` (both multiples of 4).
     pub(crate) fn read_buffer_at(&self, src: &wgpu::Buffer, offset: u64, size: u64) -> Result<Vec<u8>, GpuError> {
         if size == 0 {

@@ -12,14 +12,15 @@
 use super::context::{Gpu, GpuError};
 use super::pipeline::PassPipelines;
 use super::render::{CameraRays, check_frame_size};
-use super::shaders::{Loop, Pass};
+use super::shaders::{GiSplit, Loop, Pass};
 use super::temporal::Temporal;
 use super::uniform::{FrameInfo, GiInfo, LightInfo};
 use super::world::GpuWorld;
 use crate::light::Light;
 use crate::light::hdr::Radiance;
 use naadf_world::camera::Camera;
-use std::collections::VecDeque;
+use naadf_world::fingerprint::ChunkChanges;
+use std::collections::{HashMap, VecDeque};
 
 /// Frames the long-term TAA keeps a sample of, per pixel.
 pub const TAA_SLOTS: u32 = 32;
@@ -38,9 +39,16 @@ pub const QUEUE_PERIOD: u32 = 2;
 /// `vec4<u32>` per sample in the ring.
 pub const RING_VEC4: u32 = 3;
 /// After a world change, the TAA and the ring use samples from before it for at most this
-/// many more frames, so that light that changed (an emitter removed or added) updates
-/// within them.
+/// many more frames near it (or everywhere, after a change of the materials), so that light
+/// that changed (an emitter removed or added) updates within them.
 pub const EDIT_HISTORY_FRAMES: u32 = 8;
+/// How near a changed chunk (in chunks, along each axis) the light counts as changed: the
+/// TAA and ring samples of surfaces there follow [`EDIT_HISTORY_FRAMES`]. Samples of the
+/// changed chunks themselves, and ring samples whose light came from them, are dropped at
+/// once; history elsewhere is kept.
+pub const CHANGE_REACH: u32 = 2;
+/// Above this many changed chunks in one frame, the change counts as global.
+pub const MAX_LOCAL_CHANGES: usize = 4096;
 /// Word offset of the secondary rays' indirect arguments in the control buffer.
 pub const CONTROL_TRACE_ARGS: u32 = 0;
 /// Word offset of the projection's indirect arguments in the control buffer.
@@ -53,8 +61,10 @@ pub const CONTROL_WORDS: u32 = 16 + CAMERA_HISTORY;
 const CAM_VEC4: usize = 5;
 /// Bytes per pixel of the TAA binding.
 const TAA_PIXEL_BYTES: u64 = TAA_SLOTS as u64 * 8;
-/// Ring samples per pixel, at most (the adapter's binding limit may allow fewer).
+/// Ring samples per pixel.
 const RING_PER_PIXEL: u64 = 2;
+/// The smallest part of a split array: the cameras (written from the CPU) fit in the first.
+const MIN_PART_BYTES: u64 = 1 << 16;
 
 /// One pass of the pipeline, in frame order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -168,6 +178,8 @@ impl Layout {
     }
 }
 
+/// Index of the TAA's sums and ranges in [`Layout::offsets`].
+const TAA_INFO: usize = 4;
 /// Index of the result array in [`Layout::offsets`].
 const RESULT: usize = 7;
 /// Bytes of indirect arguments at the start of `words`, copied each frame into a buffer of
@@ -180,6 +192,8 @@ struct Subject {
     size: (u32, u32),
     light: Light,
     seed: u32,
+    /// The world's size in chunks (the change marks are per chunk).
+    chunks: [u32; 3],
 }
 
 /// A camera of an earlier frame and the jitter it was rendered with.
@@ -193,8 +207,18 @@ struct Past {
 pub struct GiHistory {
     subject: Subject,
     layout: Layout,
-    /// `mem`, `words`, `buckets` and `taa` (docs in gi_common.wgsl).
-    storage: [wgpu::Buffer; 4],
+    /// How `mem` and `taa` are split across bindings.
+    split: GiSplit,
+    /// `words` and `buckets` (docs in gi_common.wgsl).
+    words: wgpu::Buffer,
+    buckets: wgpu::Buffer,
+    /// The parts of `mem` and of `taa`.
+    mem: Vec<wgpu::Buffer>,
+    taa: Vec<wgpu::Buffer>,
+    /// Per chunk, the first frame after its newest change and after the newest change
+    /// within [`CHANGE_REACH`] of it (0: none); `marks` on the device.
+    marks: Vec<[u32; 2]>,
+    changes: wgpu::Buffer,
     /// The indirect arguments, copied from `words`.
     args: wgpu::Buffer,
     ring_capacity: u32,
@@ -208,9 +232,48 @@ pub struct GiHistory {
     edit_frame: u32,
 }
 
+impl GiHistory {
+    /// Marks `changed` chunks, and those within [`CHANGE_REACH`] of them, as changed
+    /// before this frame, and uploads the marks that moved.
+    fn mark(&mut self, gpu: &Gpu, changed: &[u32]) {
+        let [cx, cy, cz] = self.subject.chunks;
+        let reach = CHANGE_REACH as i64;
+        // The lowest and one past the highest mark set.
+        let (mut lo, mut hi) = (usize::MAX, 0);
+        let mut set = |i: usize, k: usize, marks: &mut Vec<[u32; 2]>| {
+            marks[i][k] = self.frames;
+            (lo, hi) = (lo.min(i), hi.max(i + 1));
+        };
+        for &c in changed {
+            let c = c as i64;
+            let at = [
+                c % i64::from(cx),
+                c / i64::from(cx) % i64::from(cy),
+                c / (i64::from(cx) * i64::from(cy)),
+            ];
+            set(c as usize, 0, &mut self.marks);
+            for z in (at[2] - reach).max(0)..=(at[2] + reach).min(i64::from(cz) - 1) {
+                for y in (at[1] - reach).max(0)..=(at[1] + reach).min(i64::from(cy) - 1) {
+                    for x in (at[0] - reach).max(0)..=(at[0] + reach).min(i64::from(cx) - 1) {
+                        let i = x + i64::from(cx) * (y + i64::from(cy) * z);
+                        set(i as usize, 1, &mut self.marks);
+                    }
+                }
+            }
+        }
+        if lo < hi {
+            gpu.queue
+                .write_buffer(&self.changes, lo as u64 * 8, bytemuck::cast_slice(&self.marks[lo..hi]));
+        }
+    }
+}
+
 /// The GI renderer: a history per (size, light, seed).
 pub struct Gi {
-    pipes: Vec<PassPipelines>,
+    /// The passes' pipelines, per split of the history's arrays.
+    pipes: HashMap<GiSplit, Vec<PassPipelines>>,
+    /// The largest part of a split array, in bytes.
+    max_part_bytes: u64,
     history: Option<GiHistory>,
     /// Whether the bilateral denoiser runs (default on).
     pub denoise: bool,
@@ -250,14 +313,24 @@ fn jitter(frame: u32) -> [f32; 2] {
 }
 
 impl Gi {
-    /// Prepares the passes (pipelines are built on first use).
+    /// Prepares the passes (pipelines are built on first use). The history's large arrays
+    /// are split across bindings at the adapter's storage-binding limit.
     pub fn new(gpu: &Gpu) -> Self {
-        let storage = [true, true, true, false, false, false, false];
+        Self::with_max_part_bytes(gpu, gpu.limits.max_storage_buffer_binding_size)
+    }
+
+    /// As [`Gi::new`], with parts of at most `max_part_bytes` (rounded down to a power of
+    /// two, at least 64 KiB, at most the adapter's limit): tests use it to exercise splitting.
+    pub fn with_max_part_bytes(gpu: &Gpu, max_part_bytes: u64) -> Self {
+        let limit = gpu
+            .limits
+            .max_storage_buffer_binding_size
+            .min(gpu.limits.max_buffer_size)
+            .min(max_part_bytes)
+            .max(MIN_PART_BYTES);
         Gi {
-            pipes: GiPass::ALL
-                .iter()
-                .map(|&p| PassPipelines::new(gpu, Pass::Gi(p), 0, &storage))
-                .collect(),
+            pipes: HashMap::new(),
+            max_part_bytes: 1 << (63 - limit.leading_zeros()),
             history: None,
             denoise: true,
             profile: false,
@@ -268,6 +341,12 @@ impl Gi {
     /// Frames in the current history.
     pub fn frames(&self) -> u32 {
         self.history.as_ref().map_or(0, |h| h.frames)
+    }
+
+    /// The storage bindings of the current history's own group: more than the fewest (8)
+    /// when its arrays are split across bindings.
+    pub fn bindings(&self) -> Option<u32> {
+        self.history.as_ref().map(|h| h.split.bindings())
     }
 
     /// Swaps the history with `other` (one history per camera stream).
@@ -297,6 +376,24 @@ impl Gi {
         )
     }
 
+    /// How many earlier frames' samples the TAA merged into each pixel of the last frame
+    /// (row by row): how converged the pixel is.
+    pub fn history_lengths(&self, gpu: &Gpu) -> Result<Vec<u32>, GpuError> {
+        let h = self
+            .history
+            .as_ref()
+            .ok_or_else(|| GpuError::Readback("no gi frame was rendered".into()))?;
+        let (w, ht) = h.subject.size;
+        let bytes = gpu.read_parts(
+            &h.mem,
+            1 << h.split.part_bytes_shift,
+            u64::from(h.layout.offsets[TAA_INFO]) * 16,
+            u64::from(w) * u64::from(ht) * 32,
+        )?;
+        let info: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&bytes);
+        Ok(info.iter().step_by(2).map(|v| v[3] as u32).collect())
+    }
+
     /// The bytes of each array of the current history (docs/RENDERING.md §3c), largest
     /// first; `None` before the first frame.
     pub fn memory(&self) -> Option<Vec<(&'static str, u64)>> {
@@ -318,8 +415,8 @@ impl Gi {
             ("own samples", vec4s(10)),
             ("sample ring", u64::from(h.ring_capacity) * u64::from(RING_VEC4) * 16),
             ("queue and control", h.layout.words * 4),
-            ("region buckets", h.storage[2].size()),
-            ("TAA samples", h.storage[3].size()),
+            ("region buckets", h.buckets.size()),
+            ("TAA samples", h.taa.iter().map(wgpu::Buffer::size).sum()),
         ];
         out.sort_by_key(|&(_, bytes)| std::cmp::Reverse(bytes));
         Some(out)
@@ -340,50 +437,75 @@ impl Temporal for Gi {
         light: &Light,
         seed: u32,
     ) -> Result<(), GpuError> {
-        let pixels = check_frame_size(gpu, size, TAA_PIXEL_BYTES)?;
+        let pixels = check_frame_size(gpu, size, 0)?;
         let now_rays = CameraRays::new(camera, size)?;
-        let mut pipelines = Vec::with_capacity(self.pipes.len());
-        for p in &mut self.pipes {
-            pipelines.push(p.get(gpu, world, Loop::Hierarchy, true)?);
-        }
         let (rx, ry) = (size.0.div_ceil(8), size.1.div_ceil(8));
         let regions = u64::from(rx) * u64::from(ry);
-        let max_binding = gpu.limits.max_storage_buffer_binding_size;
         let layout = Layout::new(pixels, regions);
-        let room = (max_binding / 16).saturating_sub(layout.ring_start) / u64::from(RING_VEC4);
-        if room < pixels {
+        let ring = pixels * RING_PER_PIXEL;
+        let mem_bytes = (layout.ring_start + ring * u64::from(RING_VEC4)) * 16;
+        let taa_bytes = pixels * TAA_PIXEL_BYTES;
+        let part = self.max_part_bytes;
+        let split = GiSplit {
+            part_bytes_shift: part.trailing_zeros(),
+            mem_parts: mem_bytes.div_ceil(part) as u32,
+            taa_parts: taa_bytes.div_ceil(part) as u32,
+        };
+        let bindings = world.split().bindings() + split.bindings();
+        let allowed = gpu.limits.max_storage_buffers_per_shader_stage;
+        if bindings > allowed || mem_bytes / 16 > u64::from(u32::MAX) {
             return Err(GpuError::Unsupported(format!(
-                "frame size {}x{}: the GI pipeline's memory does not fit one binding of the adapter ({max_binding} bytes)",
-                size.0, size.1
+                "frame size {}x{}: the GI history ({} MiB) needs {bindings} storage bindings of at most {} MiB with the world's; the adapter allows {allowed} per shader stage",
+                size.0,
+                size.1,
+                (mem_bytes + taa_bytes) >> 20,
+                part >> 20
             )));
         }
-        let ring = (pixels * RING_PER_PIXEL).min(room);
-        let ring_capacity = u32::try_from(ring).unwrap_or(u32::MAX);
+        let pipes = self.pipes.entry(split).or_insert_with(|| {
+            // The frame, light and GI state, and the change marks, are read-only.
+            let storage: Vec<bool> = (0..split.bindings()).map(|b| b < 3 || b == 5).collect();
+            GiPass::ALL
+                .iter()
+                .map(|&p| PassPipelines::new(gpu, Pass::Gi(p, split), 0, &storage))
+                .collect()
+        });
+        let mut pipelines = Vec::with_capacity(pipes.len());
+        for p in pipes.iter_mut() {
+            pipelines.push(p.get(gpu, world, Loop::Hierarchy, true)?);
+        }
+        let chunks = world.chunk_dims();
         let subject = Subject {
             size,
             light: *light,
             seed,
+            chunks,
+        };
+        let chunk_count = chunks.iter().map(|&c| c as usize).product::<usize>();
+        let storage_buffer = |label: &str, bytes: u64| {
+            gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: bytes,
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        };
+        let parts = |label: &str, bytes: u64| -> Vec<wgpu::Buffer> {
+            (0..bytes.div_ceil(part))
+                .map(|p| storage_buffer(label, (bytes - p * part).min(part)))
+                .collect()
         };
         let h = match self.history.take() {
             Some(h) if h.subject == subject => h,
             _ => GiHistory {
                 subject,
-                storage: [
-                    ("gi mem", (layout.ring_start + ring * u64::from(RING_VEC4)) * 16),
-                    ("gi words", layout.words * 4),
-                    ("gi buckets", regions * (2 * u64::from(BUCKET_SLOTS) + 12) * 4),
-                    ("gi taa", pixels * TAA_PIXEL_BYTES),
-                ]
-                .map(|(label, bytes)| {
-                    gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                        label: Some(label),
-                        size: bytes,
-                        usage: wgpu::BufferUsages::STORAGE
-                            | wgpu::BufferUsages::COPY_SRC
-                            | wgpu::BufferUsages::COPY_DST,
-                        mapped_at_creation: false,
-                    })
-                }),
+                split,
+                words: storage_buffer("gi words", layout.words * 4),
+                buckets: storage_buffer("gi buckets", regions * (2 * u64::from(BUCKET_SLOTS) + 12) * 4),
+                mem: parts("gi mem", mem_bytes),
+                taa: parts("gi taa", taa_bytes),
+                marks: vec![[0; 2]; chunk_count],
+                changes: storage_buffer("gi chunk changes", (chunk_count as u64 * 8).max(16)),
                 layout,
                 args: gpu.device.create_buffer(&wgpu::BufferDescriptor {
                     label: Some("gi indirect args"),
@@ -391,7 +513,7 @@ impl Temporal for Gi {
                     usage: wgpu::BufferUsages::INDIRECT | wgpu::BufferUsages::COPY_DST,
                     mapped_at_creation: false,
                 }),
-                ring_capacity,
+                ring_capacity: ring as u32,
                 frames: 0,
                 cameras: VecDeque::new(),
                 generation: world.generation(),
@@ -400,8 +522,11 @@ impl Temporal for Gi {
         };
         let h = self.history.insert(h);
         if h.generation != world.generation() {
+            match world.changes_since(h.generation) {
+                ChunkChanges::Chunks(list) if list.len() <= MAX_LOCAL_CHANGES => h.mark(gpu, &list),
+                _ => h.edit_frame = h.frames,
+            }
             h.generation = world.generation();
-            h.edit_frame = h.frames;
         }
         let jit = jitter(h.frames);
         h.cameras.push_front(Past {
@@ -428,7 +553,7 @@ impl Temporal for Gi {
             c[3] = [r.up[0], r.up[1], r.up[2], 0.0];
             c[4] = [origin[0], origin[1], origin[2], 0.0];
         }
-        gpu.queue.write_buffer(&h.storage[0], 0, bytemuck::cast_slice(&cams));
+        gpu.queue.write_buffer(&h.mem[0], 0, bytemuck::cast_slice(&cams));
         let info = GiInfo {
             frame: h.frames,
             taa_slot: h.frames % TAA_SLOTS,
@@ -461,9 +586,14 @@ impl Temporal for Gi {
             gpu.uniform("light", bytemuck::bytes_of(&LightInfo::new(light))),
             gpu.uniform("gi", bytemuck::bytes_of(&info)),
         ];
-        let buffers: Vec<&wgpu::Buffer> = uniforms.iter().chain(h.storage.iter()).collect();
+        let buffers: Vec<&wgpu::Buffer> = uniforms
+            .iter()
+            .chain([&h.words, &h.buckets, &h.changes])
+            .chain(&h.mem)
+            .chain(&h.taa)
+            .collect();
         let pixel_groups = (size.0.div_ceil(8), size.1.div_ceil(8));
-        let (control, args) = (&h.storage[1], &h.args);
+        let (control, args) = (&h.words, &h.args);
         let first = h.frames == 0;
         let denoise = self.denoise;
         if self.profile && self.timer.is_none() && gpu.features.contains(wgpu::Features::TIMESTAMP_QUERY) {
@@ -498,7 +628,7 @@ impl Temporal for Gi {
                 if pass == GiPass::Trace {
                     enc.copy_buffer_to_buffer(control, 0, args, 0, ARGS_BYTES);
                 }
-                let group = self.pipes[k].group1(gpu, &buffers);
+                let group = pipes[k].group1(gpu, &buffers);
                 // One compute pass per dispatch, so that the copy of the indirect arguments
                 // can sit between two of them.
                 let mut cp = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -540,8 +670,9 @@ impl Temporal for Gi {
             .as_ref()
             .ok_or_else(|| GpuError::Readback("no gi frame was rendered".into()))?;
         let (w, ht) = h.subject.size;
-        let bytes = gpu.read_buffer_at(
-            &h.storage[0],
+        let bytes = gpu.read_parts(
+            &h.mem,
+            1 << h.split.part_bytes_shift,
             u64::from(h.layout.offsets[RESULT]) * 16,
             u64::from(w) * u64::from(ht) * 16,
         )?;

@@ -38,7 +38,7 @@ mod world;
 
 pub use baseline::Baseline;
 pub use context::{Gpu, GpuError};
-pub use gi::{Gi, GiHistory, GiPass};
+pub use gi::{CHANGE_REACH, Gi, GiHistory, GiPass};
 pub use headless::Headless;
 pub use pathtrace::PathTracer;
 pub use rays::{GpuHit, GpuRay, RayBatch, RayTracer};

@@ -130,6 +130,37 @@ impl Split {
     }
 }
 
+/// How a GI history's two large arrays (`mem` and `taa`, shaders/gi_common.wgsl) are split
+/// across the bindings of group 1: `mem_parts` and `taa_parts` bindings of
+/// `1 << part_bytes_shift` bytes each (the last one may be shorter).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct GiSplit {
+    /// log2 of the bytes per binding.
+    pub part_bytes_shift: u32,
+    /// Bindings of `mem` (vec4 elements).
+    pub mem_parts: u32,
+    /// Bindings of `taa` (vec2 elements).
+    pub taa_parts: u32,
+}
+
+impl GiSplit {
+    /// Each array in one binding.
+    pub const WHOLE: GiSplit = GiSplit {
+        part_bytes_shift: 27,
+        mem_parts: 1,
+        taa_parts: 1,
+    };
+
+    /// Group-1 bindings before `mem`'s: the frame, light and GI state, `words`, `buckets`
+    /// and `changes`.
+    pub const FIRST_PART_BINDING: u32 = 6;
+
+    /// Storage bindings of group 1 in all.
+    pub fn bindings(&self) -> u32 {
+        Self::FIRST_PART_BINDING + self.mem_parts + self.taa_parts
+    }
+}
+
 /// Which world loop a pass uses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Loop {
@@ -153,8 +184,9 @@ pub enum Pass {
     /// [`SAMPLE`] and [`TAA`], entry point `taa_resolve`.
     Taa,
     /// A pass of the GI pipeline: [`SAMPLE`], [`LIGHT`], [`FIRST_HIT`] and the `gi_*`
-    /// files, entry point [`GiPass::entry`].
-    Gi(GiPass),
+    /// files, entry point [`GiPass::entry`], with the history's arrays split as the
+    /// [`GiSplit`] says.
+    Gi(GiPass, GiSplit),
 }
 
 impl Pass {
@@ -165,19 +197,19 @@ impl Pass {
         Pass::PathTrace,
         Pass::PathSample,
         Pass::Taa,
-        Pass::Gi(GiPass::ALL[0]),
-        Pass::Gi(GiPass::ALL[1]),
-        Pass::Gi(GiPass::ALL[2]),
-        Pass::Gi(GiPass::ALL[3]),
-        Pass::Gi(GiPass::ALL[4]),
-        Pass::Gi(GiPass::ALL[5]),
-        Pass::Gi(GiPass::ALL[6]),
-        Pass::Gi(GiPass::ALL[7]),
-        Pass::Gi(GiPass::ALL[8]),
-        Pass::Gi(GiPass::ALL[9]),
-        Pass::Gi(GiPass::ALL[10]),
-        Pass::Gi(GiPass::ALL[11]),
-        Pass::Gi(GiPass::ALL[12]),
+        Pass::Gi(GiPass::ALL[0], GiSplit::WHOLE),
+        Pass::Gi(GiPass::ALL[1], GiSplit::WHOLE),
+        Pass::Gi(GiPass::ALL[2], GiSplit::WHOLE),
+        Pass::Gi(GiPass::ALL[3], GiSplit::WHOLE),
+        Pass::Gi(GiPass::ALL[4], GiSplit::WHOLE),
+        Pass::Gi(GiPass::ALL[5], GiSplit::WHOLE),
+        Pass::Gi(GiPass::ALL[6], GiSplit::WHOLE),
+        Pass::Gi(GiPass::ALL[7], GiSplit::WHOLE),
+        Pass::Gi(GiPass::ALL[8], GiSplit::WHOLE),
+        Pass::Gi(GiPass::ALL[9], GiSplit::WHOLE),
+        Pass::Gi(GiPass::ALL[10], GiSplit::WHOLE),
+        Pass::Gi(GiPass::ALL[11], GiSplit::WHOLE),
+        Pass::Gi(GiPass::ALL[12], GiSplit::WHOLE),
     ];
 
     /// The entry point.
@@ -188,7 +220,7 @@ impl Pass {
             Pass::PathTrace => "path_trace",
             Pass::PathSample => "path_sample",
             Pass::Taa => "taa_resolve",
-            Pass::Gi(p) => p.entry(),
+            Pass::Gi(p, _) => p.entry(),
         }
     }
 
@@ -199,7 +231,7 @@ impl Pass {
             Pass::Render => &[FIRST_HIT, RENDER],
             Pass::PathTrace | Pass::PathSample => &[SAMPLE, LIGHT, PATHTRACE],
             Pass::Taa => &[SAMPLE, TAA],
-            Pass::Gi(_) => &[SAMPLE, LIGHT, FIRST_HIT, GI_COMMON, GI_PRIMARY, GI_SAMPLES, GI_RESAMPLE],
+            Pass::Gi(..) => &[SAMPLE, LIGHT, FIRST_HIT, GI_COMMON, GI_PRIMARY, GI_SAMPLES, GI_RESAMPLE],
         }
     }
 }
@@ -221,28 +253,106 @@ pub fn prelude(split: &Split) -> String {
         let _ = writeln!(s, "const {name}: u32 = {value}u;");
     }
     let mut binding = 1;
-    let mask = (1u64 << split.part_shift) - 1;
     for (&(name, accessor), &parts) in BUFFERS.iter().zip(&split.parts) {
-        for p in 0..parts {
-            let _ = writeln!(
-                s,
-                "@group(0) @binding({binding}) var<storage, read> {name}_{p}: array<u32>;"
-            );
-            binding += 1;
-        }
-        if parts == 1 {
-            let _ = writeln!(s, "fn {accessor}(i: u32) -> u32 {{ return {name}_0[i]; }}");
-            continue;
-        }
+        declare_parts(
+            &mut s,
+            &PartedArray {
+                group: 0,
+                first_binding: binding,
+                name,
+                element: "u32",
+                parts,
+                shift: split.part_shift,
+                read: accessor,
+                write: None,
+            },
+        );
+        binding += parts;
+    }
+    s
+}
+
+/// A logical storage array declared as `parts` bindings `{name}_0`, `{name}_1`, … of
+/// `1 << shift` elements each, with accessor functions that hide the split.
+struct PartedArray<'a> {
+    group: u32,
+    first_binding: u32,
+    name: &'a str,
+    /// The WGSL element type.
+    element: &'a str,
+    parts: u32,
+    shift: u32,
+    /// The reader `fn read(i: u32) -> element`.
+    read: &'a str,
+    /// The writer `fn write(i: u32, v: element)`, for a read-write array.
+    write: Option<&'a str>,
+}
+
+/// Declares `a`'s bindings and accessors. With one part the accessors index it directly;
+/// with more, they switch on the part.
+fn declare_parts(s: &mut String, a: &PartedArray) {
+    let (name, element) = (a.name, a.element);
+    let access = if a.write.is_some() { "read_write" } else { "read" };
+    for p in 0..a.parts {
         let _ = writeln!(
             s,
-            "fn {accessor}(i: u32) -> u32 {{\n    let j = i & {mask}u;\n    switch i >> {}u {{",
-            split.part_shift
+            "@group({}) @binding({}) var<storage, {access}> {name}_{p}: array<{element}>;",
+            a.group,
+            a.first_binding + p
         );
-        for p in 0..parts - 1 {
-            let _ = writeln!(s, "        case {p}u: {{ return {name}_{p}[j]; }}");
+    }
+    // Each accessor's signature and body (given the element it reads or writes).
+    type Body = fn(&str) -> String;
+    let mut accessors: Vec<(String, Body)> = vec![(format!("fn {}(i: u32) -> {element}", a.read), |e| {
+        format!("return {e};")
+    })];
+    if let Some(w) = a.write {
+        accessors.push((format!("fn {w}(i: u32, v: {element})"), |e| format!("{e} = v;")));
+    }
+    for (signature, body) in accessors {
+        let statement = |part: u32, index: &str| body(&format!("{name}_{part}[{index}]"));
+        if a.parts == 1 {
+            let _ = writeln!(s, "{signature} {{ {} }}", statement(0, "i"));
+            continue;
         }
-        let _ = writeln!(s, "        default: {{ return {name}_{}[j]; }}\n    }}\n}}", parts - 1);
+        let mask = (1u64 << a.shift) - 1;
+        let _ = writeln!(
+            s,
+            "{signature} {{\n    let j = i & {mask}u;\n    switch i >> {}u {{",
+            a.shift
+        );
+        for p in 0..a.parts - 1 {
+            let _ = writeln!(s, "        case {p}u: {{ {} }}", statement(p, "j"));
+        }
+        let _ = writeln!(s, "        default: {{ {} }}\n    }}\n}}", statement(a.parts - 1, "j"));
+    }
+}
+
+/// The group-1 declarations of the GI history's split arrays: `mem` (vec4, accessors
+/// `mem_get`/`mem_set`) and `taa` (vec2, `taa_get`/`taa_set`), after the bindings
+/// shaders/gi_common.wgsl declares.
+fn gi_parts(split: &GiSplit) -> String {
+    let mut s = String::from("// Generated by naadf-client (shaders.rs): the GI history's split arrays.\n");
+    let arrays = [
+        ("mem", "vec4<u32>", split.mem_parts, 4, "mem_get", "mem_set"),
+        ("taa", "vec2<u32>", split.taa_parts, 3, "taa_get", "taa_set"),
+    ];
+    let mut binding = GiSplit::FIRST_PART_BINDING;
+    for (name, element, parts, element_shift, read, write) in arrays {
+        declare_parts(
+            &mut s,
+            &PartedArray {
+                group: 1,
+                first_binding: binding,
+                name,
+                element,
+                parts,
+                shift: split.part_bytes_shift - element_shift,
+                read,
+                write: Some(write),
+            },
+        );
+        binding += parts;
     }
     s
 }
@@ -256,6 +366,11 @@ pub fn source(pass: Pass, world_loop: Loop, split: &Split) -> String {
     let prelude = prelude(split);
     let mut files = vec![prelude.as_str(), WORLD, RAY, TRACE, world_loop];
     files.extend(pass.files());
+    let gi = match pass {
+        Pass::Gi(_, gi_split) => gi_parts(&gi_split),
+        _ => String::new(),
+    };
+    files.push(&gi);
     files.join("\n")
 }
 
@@ -291,8 +406,14 @@ mod tests {
             part_shift: 14,
             parts: [2, 1, 3, 4, 1, 1, 2, 5],
         };
+        let gi_split = GiSplit {
+            part_bytes_shift: 16,
+            mem_parts: 3,
+            taa_parts: 2,
+        };
+        let split_gi = GiPass::ALL.map(|p| Pass::Gi(p, gi_split));
         for s in [whole(), split] {
-            for pass in Pass::ALL {
+            for pass in Pass::ALL.into_iter().chain(split_gi) {
                 for lp in [Loop::Hierarchy, Loop::Grid] {
                     if let Err(e) = validate(&source(pass, lp, &s)) {
                         panic!("{pass:?} with {lp:?} over {s:?}:\n{e}");
@@ -359,5 +480,22 @@ mod tests {
         assert!(p.contains("case 1u: { return voxels_1[j]; }"));
         assert!(p.contains("default: { return voxels_2[j]; }"));
         assert!(p.contains("fn chunk_word(i: u32) -> u32 { return chunks_0[i]; }"));
+    }
+
+    #[test]
+    fn the_gi_arrays_follow_the_pass_bindings_and_write_through_their_accessors() {
+        let g = gi_parts(&GiSplit {
+            part_bytes_shift: 16,
+            mem_parts: 2,
+            taa_parts: 1,
+        });
+        assert!(g.contains("@group(1) @binding(6) var<storage, read_write> mem_0: array<vec4<u32>>;"));
+        assert!(g.contains("@group(1) @binding(7) var<storage, read_write> mem_1: array<vec4<u32>>;"));
+        assert!(g.contains("@group(1) @binding(8) var<storage, read_write> taa_0: array<vec2<u32>>;"));
+        // 64 KiB parts hold 4096 vec4s.
+        assert!(g.contains("fn mem_set(i: u32, v: vec4<u32>) {\n    let j = i & 4095u;\n    switch i >> 12u {"));
+        assert!(g.contains("case 0u: { mem_0[j] = v; }"));
+        assert!(g.contains("default: { return mem_1[j]; }"));
+        assert!(g.contains("fn taa_set(i: u32, v: vec2<u32>) { taa_0[i] = v; }"));
     }
 }

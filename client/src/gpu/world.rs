@@ -7,12 +7,19 @@
 //! doubling (old contents are copied on the device). A buffer larger than the adapter's
 //! storage-binding limit is split into parts of `2^k` words, each its own binding; the
 //! shaders read it through a generated accessor ([`super::shaders::prelude`]).
+//!
+//! Each sync also works out which chunks now show something else ([`ChunkPrints`], from
+//! the pages that changed) and logs them by generation, so that renderers with a history
+//! of earlier frames can drop or revalidate just the light those chunks touch
+//! ([`GpuWorld::changes_since`]).
 
 use super::context::{Gpu, GpuError, checked_on};
 use super::shaders::{BUFFERS, Split};
 use super::uniform::WorldInfo;
 use naadf_world::digest::{BufferId, Digest, PAGE_BYTES, digest_of};
+use naadf_world::fingerprint::{ChunkChanges, ChunkPrints, stale_words};
 use naadf_world::{World, WorldError};
+use std::collections::VecDeque;
 
 /// The digested buffers that live on the GPU, in the binding order of [`BUFFERS`] (the
 /// model table is not a GPU buffer; the eighth binding, the dense grid, is not digested).
@@ -32,6 +39,11 @@ const MIN_PART_WORDS: u64 = (PAGE_BYTES / 4) as u64;
 const PASS_STORAGE_BUFFERS: u32 = 2;
 /// Smallest buffer allocated (bindings must not be empty).
 const MIN_BYTES: u64 = 16;
+/// Syncs whose changed chunks are kept in the log; a renderer further behind than that is
+/// told that everything changed.
+const CHANGE_LOG_SYNCS: usize = 256;
+/// Changed chunks the log keeps over all its syncs, at most.
+const CHANGE_LOG_CHUNKS: usize = 1 << 20;
 /// Step budget of a ray unless set otherwise: far more cells than any ray crosses in
 /// the largest world with AADFs, a guard against runaway loops only.
 pub const DEFAULT_MAX_STEPS: u32 = 1 << 16;
@@ -70,6 +82,13 @@ pub struct GpuWorld {
     max_storage_buffers: u32,
     /// Counts the syncs that changed anything on the device.
     generation: u64,
+    /// The fingerprints of the synced world's chunks (none until the first upload).
+    prints: Option<ChunkPrints>,
+    /// The chunks each generation changed, oldest first, back to just after
+    /// `changes_from`.
+    changes: VecDeque<(u64, ChunkChanges)>,
+    /// The generation the log starts after: changes since an older one are unknown.
+    changes_from: u64,
 }
 
 impl std::fmt::Debug for GpuWorld {
@@ -134,9 +153,14 @@ impl GpuWorld {
             split,
             max_storage_buffers: gpu.limits.max_storage_buffers_per_shader_stage,
             generation: 0,
+            prints: None,
+            changes: VecDeque::new(),
+            changes_from: 0,
         };
         w.check_bindings(&split)?;
         w.sync(world)?;
+        w.prints = Some(ChunkPrints::new(world));
+        w.changes_from = w.generation;
         Ok(w)
     }
 
@@ -161,23 +185,26 @@ impl GpuWorld {
     /// [`GpuWorld::sync`] without the error scope.
     fn sync_pages(&mut self, world: &World) -> Result<Upload, GpuError> {
         let mut up = Upload::default();
+        let mut stale = Vec::with_capacity(GPU_BUFFERS.len());
         for (k, &id) in GPU_BUFFERS.iter().enumerate() {
             let len = world.buffer_len(id) as u64;
             up.reallocated |= self.reserve(k, len)?;
             let hashes = world.page_hashes(id);
-            let stale: Vec<usize> = (0..hashes.len())
-                .filter(|&p| self.buffers[k].hashes.get(p) != Some(&hashes[p]))
-                .collect();
-            if !stale.is_empty() {
+            // Whole pages, in words; the last page of a buffer may be shorter.
+            let words = stale_words(&self.buffers[k].hashes, hashes);
+            if !words.is_empty() {
                 let bytes = world.buffer_bytes(id);
-                for p in stale {
-                    let lo = p * PAGE_BYTES;
-                    let hi = (lo + PAGE_BYTES).min(bytes.len());
-                    self.write(k, lo as u64, &bytes[lo..hi]);
-                    up.bytes += (hi - lo) as u64;
-                    up.pages += 1;
+                for r in &words {
+                    let lo = (4 * r.start).min(bytes.len());
+                    let hi = (4 * r.end).min(bytes.len());
+                    if lo < hi {
+                        self.write(k, lo as u64, &bytes[lo..hi]);
+                        up.bytes += (hi - lo) as u64;
+                        up.pages += 1;
+                    }
                 }
             }
+            stale.push((id, words));
             let b = &mut self.buffers[k];
             b.hashes = hashes.to_vec();
             b.len = len;
@@ -191,6 +218,10 @@ impl GpuWorld {
         };
         if up.pages > 0 || up.reallocated || info != self.world_info {
             self.generation += 1;
+            if let Some(prints) = &mut self.prints {
+                let changed = prints.update(world, &stale);
+                self.log_changes(changed);
+            }
         }
         if info != self.world_info || up.reallocated {
             self.world_info = info;
@@ -206,6 +237,47 @@ impl GpuWorld {
     /// restart when it moves.
     pub fn generation(&self) -> u64 {
         self.generation
+    }
+
+    /// The world's size in chunks along x, y and z.
+    pub fn chunk_dims(&self) -> [u32; 3] {
+        self.world_info.chunks
+    }
+
+    /// The chunks that show something else now than at `generation` (an earlier
+    /// [`GpuWorld::generation`]): distance fields aside, their voxels, their entity records
+    /// or those entities' types changed. [`ChunkChanges::Everything`] when the materials or
+    /// the world's size changed, or when `generation` is older than the log reaches.
+    pub fn changes_since(&self, generation: u64) -> ChunkChanges {
+        if generation < self.changes_from {
+            return ChunkChanges::Everything;
+        }
+        let mut chunks = Vec::new();
+        for (_, c) in self.changes.iter().filter(|(g, _)| *g > generation) {
+            match c {
+                ChunkChanges::Everything => return ChunkChanges::Everything,
+                ChunkChanges::Chunks(list) => chunks.extend_from_slice(list),
+            }
+        }
+        chunks.sort_unstable();
+        chunks.dedup();
+        ChunkChanges::Chunks(chunks)
+    }
+
+    /// Logs what this generation changed, forgetting the oldest entries beyond the log's
+    /// bounds.
+    fn log_changes(&mut self, changed: ChunkChanges) {
+        self.changes.push_back((self.generation, changed));
+        let size = |c: &ChunkChanges| match c {
+            ChunkChanges::Chunks(list) => list.len(),
+            ChunkChanges::Everything => 1,
+        };
+        let mut total: usize = self.changes.iter().map(|(_, c)| size(c)).sum();
+        while self.changes.len() > CHANGE_LOG_SYNCS || total > CHANGE_LOG_CHUNKS {
+            let Some((g, c)) = self.changes.pop_front() else { break };
+            total -= size(&c);
+            self.changes_from = g;
+        }
     }
 
     /// Uploads a dense decode of `world` (16-bit material ids, x fastest) for the `grid`
@@ -245,16 +317,7 @@ impl GpuWorld {
             .position(|&b| b == id)
             .ok_or_else(|| GpuError::Unsupported(format!("{id:?} is not a GPU buffer")))?;
         let b = &self.buffers[k];
-        let mut out = Vec::with_capacity(b.len as usize);
-        let part_bytes = self.part_words * 4;
-        for (p, buf) in b.parts.iter().enumerate() {
-            let start = p as u64 * part_bytes;
-            if start >= b.len {
-                break;
-            }
-            out.extend(gpu.read_buffer(buf, (b.len - start).min(part_bytes))?);
-        }
-        Ok(out)
+        gpu.read_parts(&b.parts, self.part_words * 4, 0, b.len)
     }
 
     /// The digest of the device copy: every GPU buffer read back, combined (as

@@ -36,7 +36,12 @@ pub fn apply(w: &mut World, ops: &[&str]) {
 
 /// A 64³ world made by `ops` from empty.
 pub fn world(ops: &[&str]) -> World {
-    let mut w = Raw::empty(WorldSize::new(64, 64, 64).unwrap(), 1).build();
+    world_of([64, 64, 64], ops)
+}
+
+/// A world of `size` voxels made by `ops` from empty.
+pub fn world_of(size: [u32; 3], ops: &[&str]) -> World {
+    let mut w = Raw::empty(WorldSize::new(size[0], size[1], size[2]).unwrap(), 1).build();
     apply(&mut w, ops);
     w
 }

@@ -1,0 +1,223 @@
+//! [`ChunkPrints`]: a fingerprint of what each chunk shows a ray (its voxels' materials and
+//! the entity records over it), so that a mirror of the world's buffers can tell which
+//! chunks an update changed without knowing the edits that made it.
+//!
+//! Renderers that keep light from earlier frames use it: light on and from a chunk that
+//! changed is stale (docs/RENDERING.md §3c). Distance fields are left out: they change
+//! across wide empty areas after any edit, but change nothing a ray sees.
+//!
+//! An update looks only at the chunks whose words, block array, voxel groups or entity
+//! records lie in words that may have changed (a mirror knows the 64 KiB pages of the
+//! world's digest that changed: [`stale_words`]), and rehashes those.
+
+use crate::World;
+use crate::cell::{self, State};
+use crate::digest::{BufferId, PAGE_BYTES};
+use crate::entity::ENTITY_SOLID;
+use crate::entity::pack::{InstanceRecord, RECORD_WORDS};
+use crate::hash::Xxh3;
+use rayon::prelude::*;
+use std::collections::HashMap;
+use std::ops::Range;
+
+/// Words per digest page.
+const PAGE_WORDS: usize = PAGE_BYTES / 4;
+/// Blocks per chunk.
+const BLOCKS: usize = cell::CELLS;
+
+/// The fingerprint of every chunk of a world version.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ChunkPrints {
+    prints: Vec<u64>,
+}
+
+/// What changed between two versions of a world, chunk by chunk.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum ChunkChanges {
+    /// These chunks (indices, ascending) show something else; the rest are as they were.
+    Chunks(Vec<u32>),
+    /// Something every chunk's light depends on changed: the materials or the world's size.
+    Everything,
+}
+
+/// The word ranges of a buffer that may differ between two versions, from the hashes of
+/// its 64 KiB pages: every page whose hash differs, or that only one version has.
+///
+/// ```
+/// use naadf_world::fingerprint::stale_words;
+/// let page = 16384; // words
+/// assert_eq!(stale_words(&[1, 2, 3], &[1, 5, 3, 4]), vec![page..2 * page, 3 * page..4 * page]);
+/// ```
+pub fn stale_words(before: &[u64], after: &[u64]) -> Vec<Range<usize>> {
+    (0..before.len().max(after.len()))
+        .filter(|&p| before.get(p) != after.get(p))
+        .map(|p| p * PAGE_WORDS..(p + 1) * PAGE_WORDS)
+        .collect()
+}
+
+impl ChunkPrints {
+    /// The fingerprints of every chunk of `world`.
+    pub fn new(world: &World) -> Self {
+        let types = type_prints(world);
+        ChunkPrints {
+            prints: (0..world.chunks().len())
+                .into_par_iter()
+                .map(|i| print(world, &types, i))
+                .collect(),
+        }
+    }
+
+    /// Moves to `world`, whose buffers differ from the version these prints are of only in
+    /// the words `stale` lists (per buffer, ranges in ascending order that do not overlap;
+    /// [`stale_words`]), and says which chunks now show something else.
+    pub fn update(&mut self, world: &World, stale: &[(BufferId, Vec<Range<usize>>)]) -> ChunkChanges {
+        let pages = |id: BufferId| -> &[Range<usize>] {
+            stale.iter().find(|(b, _)| *b == id).map_or(&[], |(_, p)| p.as_slice())
+        };
+        if world.chunks().len() != self.prints.len() || !pages(BufferId::Materials).is_empty() {
+            *self = ChunkPrints::new(world);
+            return ChunkChanges::Everything;
+        }
+        let [
+            chunk_pages,
+            entity_pages,
+            block_pages,
+            voxel_pages,
+            type_pages,
+            record_pages,
+        ] = [
+            BufferId::Chunks,
+            BufferId::ChunkEntities,
+            BufferId::Blocks,
+            BufferId::Voxels,
+            BufferId::EntityTypes,
+            BufferId::EntityInstances,
+        ]
+        .map(pages);
+        if [
+            chunk_pages,
+            entity_pages,
+            block_pages,
+            voxel_pages,
+            type_pages,
+            record_pages,
+        ]
+        .iter()
+        .all(|p| p.is_empty())
+        {
+            return ChunkChanges::Chunks(Vec::new());
+        }
+        let types = type_prints(world);
+        let (chunks, blocks, entities) = (world.chunks(), world.blocks(), world.chunk_entities());
+        let candidate = |i: usize| {
+            if touches(chunk_pages, i, 1) || touches(entity_pages, i, 1) {
+                return true;
+            }
+            // A redefined model changes its type's voxels (and may move the types after it).
+            let (first, count) = records(entities[i]);
+            if touches(record_pages, first * RECORD_WORDS, count * RECORD_WORDS)
+                || (count > 0 && !type_pages.is_empty())
+            {
+                return true;
+            }
+            let c = chunks[i];
+            if cell::state(c) != State::Mixed {
+                return false;
+            }
+            let array = cell::pointer(c) as usize;
+            touches(block_pages, array, BLOCKS)
+                || (!voxel_pages.is_empty()
+                    && blocks[array..array + BLOCKS].iter().any(|&b| {
+                        cell::state(b) == State::Mixed
+                            && touches(voxel_pages, cell::pointer(b) as usize, cell::GROUP_WORDS)
+                    }))
+        };
+        let old = &self.prints;
+        let changed: Vec<(u32, u64)> = (0..chunks.len())
+            .into_par_iter()
+            .filter(|&i| candidate(i))
+            .filter_map(|i| {
+                let p = print(world, &types, i);
+                (p != old[i]).then_some((i as u32, p))
+            })
+            .collect();
+        for &(i, p) in &changed {
+            self.prints[i as usize] = p;
+        }
+        ChunkChanges::Chunks(changed.into_iter().map(|(i, _)| i).collect())
+    }
+}
+
+/// Whether the words `start..start + len` of a buffer meet any of `stale` (ascending,
+/// disjoint).
+fn touches(stale: &[Range<usize>], start: usize, len: usize) -> bool {
+    let k = stale.partition_point(|r| r.end <= start);
+    len > 0 && stale.get(k).is_some_and(|r| r.start < start + len)
+}
+
+/// The first record and the record count of a chunk entity field.
+fn records(field: u32) -> (usize, usize) {
+    ((field >> 8) as usize, (field & 0xFF) as usize)
+}
+
+/// The fingerprint of each entity type an instance record uses, by `voxelStart`: its
+/// voxels' materials (empty as 0, whatever their fields).
+fn type_prints(world: &World) -> HashMap<u32, u64> {
+    let mut out = HashMap::new();
+    for words in world.entity_instances().chunks_exact(RECORD_WORDS) {
+        let r = InstanceRecord::unpack(words);
+        out.entry(r.voxel_start).or_insert_with(|| {
+            let start = r.voxel_start as usize * 64;
+            let len = r.size.iter().product::<u32>() as usize;
+            let solid: Vec<u32> = world.entity_type_voxels()[start..start + len]
+                .iter()
+                .map(|&v| if v & ENTITY_SOLID != 0 { v } else { 0 })
+                .collect();
+            let mut h = Xxh3::new();
+            h.update(bytemuck::cast_slice(&solid));
+            h.digest()
+        });
+    }
+    out
+}
+
+/// The fingerprint of chunk `i`: its blocks' materials (empty cells as 0, whatever their
+/// distance fields), its entity records and their types' prints.
+fn print(world: &World, types: &HashMap<u32, u64>, i: usize) -> u64 {
+    let mut h = Xxh3::new();
+    let c = world.chunks()[i];
+    let uniform = |cell: u32| -> u16 {
+        match cell::state(cell) {
+            State::Full => cell::material(cell),
+            _ => 0,
+        }
+    };
+    if cell::state(c) == State::Mixed {
+        let array = cell::pointer(c) as usize;
+        for &b in &world.blocks()[array..array + BLOCKS] {
+            if cell::state(b) == State::Mixed {
+                let ptr = cell::pointer(b) as usize;
+                let mut v = [0u8; 2 * cell::CELLS];
+                for (k, pair) in v.chunks_exact_mut(2).enumerate() {
+                    let m = cell::voxel_material(cell::group_voxel(world.voxels(), ptr, k));
+                    pair.copy_from_slice(&m.to_le_bytes());
+                }
+                h.update(&[1]);
+                h.update(&v);
+            } else {
+                h.update(&[0]);
+                h.update(&uniform(b).to_le_bytes());
+            }
+        }
+    } else {
+        h.update(&[2]);
+        h.update(&uniform(c).to_le_bytes());
+    }
+    let (first, count) = records(world.chunk_entities()[i]);
+    let words = &world.entity_instances()[first * RECORD_WORDS..(first + count) * RECORD_WORDS];
+    h.update(bytemuck::cast_slice(words));
+    for r in words.chunks_exact(RECORD_WORDS) {
+        h.update(&types[&InstanceRecord::unpack(r).voxel_start].to_le_bytes());
+    }
+    h.digest()
+}
