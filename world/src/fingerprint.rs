@@ -196,14 +196,11 @@ fn print(world: &World, types: &HashMap<u32, u64>, i: usize) -> u64 {
         let array = cell::pointer(c) as usize;
         for &b in &world.blocks()[array..array + BLOCKS] {
             if cell::state(b) == State::Mixed {
+                // A group's empty voxels hold fields local to its block, which change only
+                // with the block's content: the raw words are as good as the materials.
                 let ptr = cell::pointer(b) as usize;
-                let mut v = [0u8; 2 * cell::CELLS];
-                for (k, pair) in v.chunks_exact_mut(2).enumerate() {
-                    let m = cell::voxel_material(cell::group_voxel(world.voxels(), ptr, k));
-                    pair.copy_from_slice(&m.to_le_bytes());
-                }
                 h.update(&[1]);
-                h.update(&v);
+                h.update(bytemuck::cast_slice(&world.voxels()[ptr..ptr + cell::GROUP_WORDS]));
             } else {
                 h.update(&[0]);
                 h.update(&uniform(b).to_le_bytes());
