@@ -32,6 +32,7 @@
 #![warn(missing_docs)]
 
 pub mod aadf;
+pub mod baselines;
 pub mod build;
 pub mod camera;
 pub mod cell;

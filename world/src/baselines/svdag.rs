@@ -1,0 +1,208 @@
+//! [`Svdag`]: the sparse voxel DAG (Kämpe et al.) in HashDAG's layout.
+//!
+//! Leaves are 4³ occupancy bitmasks (8 bytes, bit `x + 4y + 16z`). An inner node of side
+//! `s ≥ 8` is a `u32` child mask (bit `x + 2y + 4z` for the child octant) followed by one
+//! `u32` per non-empty child, in octant order: a word offset into the next level's array,
+//! or a leaf index at the lowest inner level (side 8). Every level is deduplicated: an
+//! identical subtree is stored once, so a node's children may be shared. The root is node
+//! 0 of the first level.
+//!
+//! Bytes (docs/BASELINES.md): 8 per unique leaf plus 4·(1 + children) per unique inner
+//! node.
+
+use super::{block_masks, cube_depth};
+use crate::WorldError;
+use crate::traverse::{Hit, Ray};
+use crate::world::World;
+use rayon::prelude::*;
+use std::collections::HashMap;
+
+/// The most cells a trace visits: far more than any ray crosses, a guard against loops.
+const MAX_STEPS: u32 = 1 << 24;
+
+/// A sparse voxel DAG of a world's static geometry.
+#[derive(Clone, Debug)]
+pub struct Svdag {
+    /// The world's size in voxels (rays enter and leave its box, not the cube's).
+    size: [u32; 3],
+    /// log2 of the cube's side (at least 3: the root is an inner node).
+    depth: u32,
+    /// Inner node words per level, from the root (side `2^depth`) down to side 8.
+    levels: Vec<Vec<u32>>,
+    /// The unique leaf masks.
+    leaves: Vec<u64>,
+}
+
+/// An inner node while building: its mask and up to 8 child references.
+type NodeKey = [u32; 9];
+
+impl Svdag {
+    /// Builds the DAG of `world`'s static voxels (entities left out), in parallel. Fails
+    /// on a world with no solid voxel.
+    ///
+    /// ```
+    /// use naadf_world::{World, preset::Preset, baselines::Svdag};
+    /// let src = Preset::Test.source(None, 1).unwrap();
+    /// let dag = Svdag::build(&World::build(&*src, &|_| {}).unwrap()).unwrap();
+    /// assert!(dag.bytes() > 0);
+    /// ```
+    pub fn build(world: &World) -> Result<Self, WorldError> {
+        let size = world.size().voxels();
+        let depth = cube_depth(size).max(3);
+        let masks = block_masks(world)?;
+        // Leaves, numbered in block order; `refs` holds each grid cell's reference (or
+        // NONE) at the level being built.
+        let mut leaves = Vec::new();
+        let mut leaf_ids = HashMap::new();
+        let mut refs: Vec<u32> = masks
+            .iter()
+            .map(|&m| match m {
+                0 => NONE,
+                m => *leaf_ids.entry(m).or_insert_with(|| {
+                    leaves.push(m);
+                    (leaves.len() - 1) as u32
+                }),
+            })
+            .collect();
+        let mut dims = size.map(|v| v / 4);
+        let mut levels = Vec::new();
+        for _ in 3..=depth {
+            let up = dims.map(|d| d.div_ceil(2));
+            let (below, d) = (&refs, dims);
+            // Each parent's key in parallel; numbering (dedup) in order, so that the
+            // layout is a pure function of the world.
+            let keys: Vec<NodeKey> = (0..up.iter().map(|&v| v as usize).product::<usize>())
+                .into_par_iter()
+                .map(|i| {
+                    let p = [
+                        i % up[0] as usize,
+                        i / up[0] as usize % up[1] as usize,
+                        i / (up[0] as usize * up[1] as usize),
+                    ];
+                    let mut key = [NONE; 9];
+                    let (mut mask, mut n) = (0u32, 1);
+                    for oct in 0..8 {
+                        let c = [0, 1, 2].map(|a| 2 * p[a] + (oct >> a & 1));
+                        if (0..3).any(|a| c[a] >= d[a] as usize) {
+                            continue;
+                        }
+                        let r = below[c[0] + d[0] as usize * (c[1] + d[1] as usize * c[2])];
+                        if r != NONE {
+                            mask |= 1 << oct;
+                            key[n] = r;
+                            n += 1;
+                        }
+                    }
+                    key[0] = mask;
+                    key
+                })
+                .collect();
+            let mut words = Vec::new();
+            let mut ids: HashMap<NodeKey, u32> = HashMap::new();
+            refs = keys
+                .iter()
+                .map(|key| match key[0] {
+                    0 => NONE,
+                    mask => *ids.entry(*key).or_insert_with(|| {
+                        let at = words.len() as u32;
+                        words.extend_from_slice(&key[..1 + mask.count_ones() as usize]);
+                        at
+                    }),
+                })
+                .collect();
+            levels.push(words);
+            dims = up;
+        }
+        levels.reverse();
+        Ok(Svdag {
+            size,
+            depth,
+            levels,
+            leaves,
+        })
+    }
+
+    /// Bytes by the paper's count: 8 per unique leaf, 4·(1 + children) per unique inner
+    /// node.
+    pub fn bytes(&self) -> u64 {
+        8 * self.leaves.len() as u64 + 4 * self.levels.iter().map(|l| l.len() as u64).sum::<u64>()
+    }
+
+    /// Unique leaves and unique inner nodes per level (root first).
+    pub fn node_counts(&self) -> (usize, Vec<usize>) {
+        let nodes = self
+            .levels
+            .iter()
+            .map(|words| {
+                let mut n = 0;
+                let mut at = 0;
+                while at < words.len() {
+                    at += 1 + words[at].count_ones() as usize;
+                    n += 1;
+                }
+                n
+            })
+            .collect();
+        (self.leaves.len(), nodes)
+    }
+
+    /// The first solid voxel along `ray` (material 0: the DAG holds geometry only), with
+    /// the voxel, face and `t` that `naadf` gives. The traversal keeps the path from the
+    /// root to the current cell and, after each step, climbs only as far as the cell it
+    /// entered leaves that path.
+    pub fn trace(&self, ray: &Ray) -> Option<Hit> {
+        let entry = ray.entry(self.size)?;
+        let (mut cell, mut t, mut axis) = (entry.cell, entry.t, entry.axis);
+        let neg = ray.dir().map(|d| d <= 0.0);
+        let inner = self.levels.len();
+        // path[l]: the word offset of the level-l node holding `cell`, valid for l < valid.
+        let mut path = [0u32; 32];
+        let mut valid = 1;
+        let mut steps = 0u32;
+        loop {
+            steps += 1;
+            if steps > MAX_STEPS {
+                return None;
+            }
+            // Descend until an empty octant (skip it) or a leaf voxel.
+            let mut l = valid - 1;
+            let skip_side = loop {
+                let node = &self.levels[l][path[l] as usize..];
+                let shift = self.depth - 1 - l as u32;
+                let oct = (0..3).fold(0, |o, a| o | (((cell[a] >> shift) & 1) as u32) << a);
+                if node[0] >> oct & 1 == 0 {
+                    break 1i64 << shift;
+                }
+                let child = node[1 + (node[0] & ((1 << oct) - 1)).count_ones() as usize];
+                if l + 1 < inner {
+                    l += 1;
+                    path[l] = child;
+                    continue;
+                }
+                let bit = (cell[0] & 3) + 4 * (cell[1] & 3) + 16 * (cell[2] & 3);
+                if self.leaves[child as usize] >> bit & 1 == 1 {
+                    return Some(ray.hit(cell, t, axis, 0, steps));
+                }
+                break 1;
+            };
+            valid = l + 1;
+            let skip = std::array::from_fn(|a| {
+                let inside = cell[a] & (skip_side - 1);
+                if neg[a] { inside } else { skip_side - 1 - inside }
+            });
+            let (nt, na, next) = ray.exit(cell, skip);
+            if !(0..3).all(|a| next[a] >= 0 && next[a] < i64::from(self.size[a])) {
+                return None;
+            }
+            // The levels whose node still holds the new cell: those above the highest bit
+            // in which the cells differ.
+            let differ = (0..3).fold(0, |d, a| d | (cell[a] ^ next[a]));
+            let common = (self.depth as usize).saturating_sub(64 - differ.leading_zeros() as usize);
+            valid = valid.min(common.max(1));
+            (cell, t, axis) = (next, nt, Some(na));
+        }
+    }
+}
+
+/// No child: an empty cell of the grid being built.
+const NONE: u32 = u32::MAX;

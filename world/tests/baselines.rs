@@ -1,0 +1,153 @@
+//! The paper's baseline structures (`naadf_world::baselines`) against brute force: every
+//! first hit equals the dense grid's and `naadf`'s (voxel, face, `t`) on random and
+//! adversarial worlds and rays; byte counts equal a second, simple count made from the
+//! dense grid; a repeated pattern deduplicates; bad input is an error.
+
+mod common;
+
+use common::{Raw, Rng, adversarial, random_world, rays, size_for};
+use naadf_world::baselines::Svdag;
+use naadf_world::traverse::{DenseGrid, Hit, Ray, trace_naadf};
+use naadf_world::{World, WorldSize};
+use std::collections::HashMap;
+
+/// The voxel, face and `t` of a hit (the baselines hold no materials).
+fn geometry(h: &Option<Hit>) -> Option<([u32; 3], [i32; 3], f64)> {
+    h.map(|h| (h.voxel, h.normal, h.t))
+}
+
+fn assert_same_hits(w: &World, dag: &Svdag, rays: &[Ray], what: &str) {
+    let grid = DenseGrid::from_world(w).unwrap();
+    for r in rays {
+        let expected = geometry(&grid.trace(r));
+        assert_eq!(
+            geometry(&trace_naadf(w, r)),
+            expected,
+            "{what}: naadf against the grid, {r:?}"
+        );
+        assert_eq!(geometry(&dag.trace(r)), expected, "{what}: svdag, {r:?}");
+    }
+}
+
+/// The SVDAG's bytes counted again, straight from the dense grid: a recursive walk over
+/// the cube that numbers each level's distinct subtrees.
+fn recount_svdag(grid: &DenseGrid, size: [u32; 3]) -> u64 {
+    let side = size.iter().max().unwrap().next_power_of_two().max(8);
+    let solid = |p: [u32; 3]| (0..3).all(|a| p[a] < size[a]) && grid.get(p) != 0;
+    // Per node side: distinct subtrees → their number.
+    let mut seen: HashMap<u32, HashMap<Vec<u64>, u64>> = HashMap::new();
+    let mut bytes = 0;
+    // The subtree at `o` of side `s`: None when empty, else its number at that side.
+    fn walk(
+        o: [u32; 3],
+        s: u32,
+        solid: &dyn Fn([u32; 3]) -> bool,
+        seen: &mut HashMap<u32, HashMap<Vec<u64>, u64>>,
+        bytes: &mut u64,
+    ) -> Option<u64> {
+        let content: Vec<u64> = if s == 4 {
+            let mut m = 0u64;
+            for i in 0..64u32 {
+                if solid([o[0] + i % 4, o[1] + i / 4 % 4, o[2] + i / 16]) {
+                    m |= 1 << i;
+                }
+            }
+            if m == 0 {
+                return None;
+            }
+            vec![m]
+        } else {
+            let h = s / 2;
+            let kids: Vec<u64> = (0..8u32)
+                .map(|oct| {
+                    let c = [0, 1, 2].map(|a| o[a] + h * (oct >> a & 1));
+                    walk(c, h, solid, seen, bytes).map_or(u64::MAX, |id| id)
+                })
+                .collect();
+            if kids.iter().all(|&k| k == u64::MAX) {
+                return None;
+            }
+            kids
+        };
+        let level = seen.entry(s).or_default();
+        let next = level.len() as u64;
+        let id = *level.entry(content.clone()).or_insert_with(|| {
+            *bytes += if s == 4 {
+                8
+            } else {
+                4 * (1 + content.iter().filter(|&&k| k != u64::MAX).count() as u64)
+            };
+            next
+        });
+        Some(id)
+    }
+    walk([0; 3], side, &solid, &mut seen, &mut bytes);
+    bytes
+}
+
+#[test]
+fn svdag_hits_equal_the_dense_grid_and_naadf_on_random_worlds() {
+    for seed in 0..4u64 {
+        let size = size_for(seed, &[[64, 64, 64], [128, 64, 64], [64, 128, 192]]);
+        let raw = random_world(size, seed);
+        let w = raw.build();
+        let dag = Svdag::build(&w).unwrap();
+        let mut rng = Rng(seed + 1);
+        assert_same_hits(&w, &dag, &rays(size.voxels(), &mut rng, 1500), &format!("seed {seed}"));
+        let grid = DenseGrid::from_world(&w).unwrap();
+        assert_eq!(dag.bytes(), recount_svdag(&grid, size.voxels()), "seed {seed}: bytes");
+    }
+}
+
+#[test]
+fn svdag_hits_equal_the_dense_grid_on_adversarial_worlds() {
+    let size = WorldSize::new(64, 64, 128).unwrap();
+    for (name, raw) in adversarial(size) {
+        let w = raw.build();
+        if name == "empty" {
+            let e = Svdag::build(&w).unwrap_err();
+            assert!(e.to_string().contains("no solid voxel"), "{e}");
+            continue;
+        }
+        let dag = Svdag::build(&w).unwrap();
+        let mut rng = Rng(7);
+        assert_same_hits(&w, &dag, &rays(size.voxels(), &mut rng, 800), name);
+        let grid = DenseGrid::from_world(&w).unwrap();
+        assert_eq!(dag.bytes(), recount_svdag(&grid, size.voxels()), "{name}: bytes");
+    }
+}
+
+#[test]
+fn a_repeated_pattern_is_stored_once_per_level() {
+    let size = WorldSize::new(128, 64, 128).unwrap();
+    let mut tiled = Raw::empty(size, 2);
+    let mut one = Raw::empty(size, 2);
+    // The same 16³ pattern in every tile, or in one tile only.
+    let pattern = |p: [u32; 3]| {
+        let q = p.map(|v| v % 16);
+        (q[0] * 3 + q[1] * 5 + q[2] * 7) % 11 < 3 || q[1] == 0
+    };
+    for p in tiled.coords().collect::<Vec<_>>() {
+        if pattern(p) {
+            tiled.set(p, 1);
+            if p.iter().all(|&v| v < 16) {
+                one.set(p, 1);
+            }
+        }
+    }
+    let (tiled, one) = (
+        Svdag::build(&tiled.build()).unwrap(),
+        Svdag::build(&one.build()).unwrap(),
+    );
+    // The 256 tiles share their subtrees: the same unique nodes at every level as one
+    // tile, and only the pointers of the shared children's parents on top.
+    assert_eq!(tiled.node_counts(), one.node_counts());
+    let (leaves, nodes) = tiled.node_counts();
+    assert!(leaves > 4 && nodes[..3] == [1, 1, 1], "{leaves} leaves, {nodes:?}");
+    assert!(
+        tiled.bytes() < one.bytes() + 128,
+        "{} against {}",
+        tiled.bytes(),
+        one.bytes()
+    );
+}
