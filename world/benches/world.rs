@@ -3,6 +3,7 @@
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use naadf_world::aadf::{cell_aadf4, grid_aadf};
+use naadf_world::baselines::Svdag;
 use naadf_world::build::group_words;
 use naadf_world::hash::block_hash;
 use naadf_world::preset::Preset;
@@ -43,6 +44,13 @@ fn build_and_trace(c: &mut Criterion) {
             b.iter(|| rays.iter().filter(|r| t.trace(r).is_some()).count())
         });
     }
+    // The paper's SVDAG baseline on the same rays (docs/BASELINES.md).
+    let dag = Svdag::build(&world).unwrap();
+    g.bench_function("primary rays svdag", |b| {
+        b.iter(|| rays.iter().filter(|r| dag.trace(r).is_some()).count())
+    });
+    g.throughput(Throughput::Elements(size.voxel_count()));
+    g.bench_function("svdag build", |b| b.iter(|| Svdag::build(&world).unwrap()));
     g.finish();
 }
 

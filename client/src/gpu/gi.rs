@@ -6,8 +6,10 @@
 //! one secondary path per queued pixel into the sample ring, the projection of the ring's
 //! samples into this frame's 8×8 regions and their refinement, spatial resampling with a
 //! visibility ray and the sun, the bilateral denoiser, and the TAA merge. A history (the
-//! TAA, the ring, the cameras of earlier frames) is kept per (size, light, seed); the
-//! camera may move and the world may change within it.
+//! TAA, the ring, the cameras of earlier frames) is kept per (size, light, seed, world
+//! size); the camera may move and the world may change within it: the chunks a change
+//! touched ([`GpuWorld::changes_since`]) drop or shorten the history of the light on and
+//! near them. The two large arrays are split across bindings where one is too small.
 
 use super::context::{Gpu, GpuError};
 use super::pipeline::PassPipelines;
@@ -268,7 +270,7 @@ impl GiHistory {
     }
 }
 
-/// The GI renderer: a history per (size, light, seed).
+/// The GI renderer: a history per (size, light, seed, world size).
 pub struct Gi {
     /// The passes' pipelines, per split of the history's arrays.
     pipes: HashMap<GiSplit, Vec<PassPipelines>>,
@@ -424,10 +426,10 @@ impl Gi {
 }
 
 impl Temporal for Gi {
-    /// Renders the next frame of `camera`'s view of `world`. A new size, light or seed
-    /// starts a new history; a camera move or a world change does not: the history is
-    /// reprojected, and light from before a world change fades out within
-    /// [`EDIT_HISTORY_FRAMES`].
+    /// Renders the next frame of `camera`'s view of `world`. A new size, light, seed or
+    /// world size starts a new history; a camera move or a world change does not: the
+    /// history is reprojected, light on a changed chunk restarts, and light from before a
+    /// change near it fades out within [`EDIT_HISTORY_FRAMES`].
     fn frame(
         &mut self,
         gpu: &Gpu,
