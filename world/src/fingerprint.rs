@@ -78,14 +78,7 @@ impl ChunkPrints {
             *self = ChunkPrints::new(world);
             return ChunkChanges::Everything;
         }
-        let [
-            chunk_pages,
-            entity_pages,
-            block_pages,
-            voxel_pages,
-            type_pages,
-            record_pages,
-        ] = [
+        let stale_in = [
             BufferId::Chunks,
             BufferId::ChunkEntities,
             BufferId::Blocks,
@@ -94,19 +87,17 @@ impl ChunkPrints {
             BufferId::EntityInstances,
         ]
         .map(pages);
-        if [
+        if stale_in.iter().all(|p| p.is_empty()) {
+            return ChunkChanges::Chunks(Vec::new());
+        }
+        let [
             chunk_pages,
             entity_pages,
             block_pages,
             voxel_pages,
             type_pages,
             record_pages,
-        ]
-        .iter()
-        .all(|p| p.is_empty())
-        {
-            return ChunkChanges::Chunks(Vec::new());
-        }
+        ] = stale_in;
         let types = type_prints(world);
         let (chunks, blocks, entities) = (world.chunks(), world.blocks(), world.chunk_entities());
         let candidate = |i: usize| {

@@ -16,16 +16,6 @@ use naadf_world::ops::{Batch, Limits, Op};
 use naadf_world::{World, WorldSize};
 use std::ops::Range;
 
-const DIGESTED: [BufferId; 7] = [
-    BufferId::Chunks,
-    BufferId::ChunkEntities,
-    BufferId::Blocks,
-    BufferId::Voxels,
-    BufferId::Materials,
-    BufferId::EntityTypes,
-    BufferId::EntityInstances,
-];
-
 /// What each chunk shows: its decoded materials, and its entity records each followed by
 /// its type's solid voxels.
 fn shown(w: &World) -> Vec<(Vec<u16>, Vec<u32>)> {
@@ -164,8 +154,8 @@ fn check_updates(exact: bool) {
         let (mut local, mut everything) = (0, 0);
         for step in 0..40 {
             let before = shown(&w);
-            let hashes: Vec<Vec<u64>> = DIGESTED.iter().map(|&id| w.page_hashes(id).to_vec()).collect();
-            let bytes: Vec<Vec<u8>> = DIGESTED.iter().map(|&id| w.buffer_bytes(id).to_vec()).collect();
+            let hashes: Vec<Vec<u64>> = BufferId::WORLD.iter().map(|&id| w.page_hashes(id).to_vec()).collect();
+            let bytes: Vec<Vec<u8>> = BufferId::WORLD.iter().map(|&id| w.buffer_bytes(id).to_vec()).collect();
             // One to three batches between updates, as when a mirror syncs after several.
             let mut recolours = false;
             for _ in 0..1 + rng.below(3) {
@@ -173,7 +163,7 @@ fn check_updates(exact: bool) {
                 recolours |= ops.iter().any(|o| matches!(o, Op::DefineMaterial { .. }));
                 w.apply(&Batch { ops }, &Limits::default()).unwrap();
             }
-            let stale: Vec<(BufferId, Vec<Range<usize>>)> = DIGESTED
+            let stale: Vec<(BufferId, Vec<Range<usize>>)> = BufferId::WORLD
                 .iter()
                 .enumerate()
                 .map(|(k, &id)| match exact {

@@ -381,6 +381,13 @@ impl Gi {
     /// How many earlier frames' samples the TAA merged into each pixel of the last frame
     /// (row by row): how converged the pixel is.
     pub fn history_lengths(&self, gpu: &Gpu) -> Result<Vec<u32>, GpuError> {
+        let (_, info) = self.read_pixels(gpu, TAA_INFO, 2)?;
+        Ok(info.iter().step_by(2).map(|v| v[3] as u32).collect())
+    }
+
+    /// The image size and the per-pixel array `array` of [`Layout::offsets`] (`vec4s`
+    /// vec4 words per pixel) of the current history; an error before the first frame.
+    fn read_pixels(&self, gpu: &Gpu, array: usize, vec4s: u64) -> Result<((u32, u32), Vec<[f32; 4]>), GpuError> {
         let h = self
             .history
             .as_ref()
@@ -389,11 +396,10 @@ impl Gi {
         let bytes = gpu.read_parts(
             &h.mem,
             1 << h.split.part_bytes_shift,
-            u64::from(h.layout.offsets[TAA_INFO]) * 16,
-            u64::from(w) * u64::from(ht) * 32,
+            u64::from(h.layout.offsets[array]) * 16,
+            u64::from(w) * u64::from(ht) * vec4s * 16,
         )?;
-        let info: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&bytes);
-        Ok(info.iter().step_by(2).map(|v| v[3] as u32).collect())
+        Ok(((w, ht), bytemuck::pod_collect_to_vec(&bytes)))
     }
 
     /// The bytes of each array of the current history (docs/RENDERING.md §3c), largest
@@ -667,18 +673,7 @@ impl Temporal for Gi {
 
     /// The newest result as linear radiance; an error before the first frame.
     fn radiance(&self, gpu: &Gpu) -> Result<Radiance, GpuError> {
-        let h = self
-            .history
-            .as_ref()
-            .ok_or_else(|| GpuError::Readback("no gi frame was rendered".into()))?;
-        let (w, ht) = h.subject.size;
-        let bytes = gpu.read_parts(
-            &h.mem,
-            1 << h.split.part_bytes_shift,
-            u64::from(h.layout.offsets[RESULT]) * 16,
-            u64::from(w) * u64::from(ht) * 16,
-        )?;
-        let px: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&bytes);
+        let ((w, ht), px) = self.read_pixels(gpu, RESULT, 1)?;
         Ok(Radiance {
             width: w,
             height: ht,
