@@ -254,6 +254,41 @@ fn bench_traverse_reports_the_contract() {
 }
 
 #[test]
+fn bench_paper_reports_every_structure_on_the_same_rays() {
+    let dir = tempfile::tempdir().unwrap();
+    let world = p(dir.path(), "t.naadf");
+    ok(&["generate", "--preset", "test", "-o", &world], None);
+    let out = ok(
+        &[
+            "bench", "paper", &world, "--json", "--width", "32", "--height", "18", "--rounds", "2",
+        ],
+        None,
+    );
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    for s in ["naadf", "svo", "svdag", "grid"] {
+        let f = &v["structures"][s];
+        assert!(f["bytes"].as_u64().unwrap() > 0, "{s}: {v}");
+        assert!(
+            f["primary"].as_f64().unwrap() > 0.0 && f["secondary"].as_f64().unwrap() > 0.0,
+            "{s}: {v}"
+        );
+    }
+    // The counts of docs/BASELINES.md: the grid is 2 bytes a voxel, naadf what `info` says.
+    let info: serde_json::Value = serde_json::from_str(&ok(&["info", &world, "--json"], None)).unwrap();
+    assert_eq!(v["structures"]["naadf"]["bytes"], info["bytes"]["total"]);
+    let size = info["size"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|d| d.as_u64().unwrap())
+        .product::<u64>();
+    assert_eq!(v["structures"]["grid"]["bytes"].as_u64().unwrap(), 2 * size);
+    assert!(v["rays"].as_u64().unwrap() > 4 * 32 * 18, "primary and secondary: {v}");
+    assert!(v["hybrid"].is_object());
+    fails(&["bench", "paper", &p(dir.path(), "missing.naadf")], None, "error:");
+}
+
+#[test]
 fn apply_edits_offline_against_a_dense_oracle() {
     let dir = tempfile::tempdir().unwrap();
     let world = p(dir.path(), "t.naadf");

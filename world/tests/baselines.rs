@@ -1,12 +1,13 @@
-//! The paper's baseline structures (`naadf_world::baselines`) against brute force: every
-//! first hit equals the dense grid's and `naadf`'s (voxel, face, `t`) on random and
-//! adversarial worlds and rays; byte counts equal a second, simple count made from the
-//! dense grid; a repeated pattern deduplicates; bad input is an error.
+//! The paper's baseline structures (`naadf_world::baselines`: SVDAG, SVO) against brute
+//! force: every first hit equals the dense grid's and `naadf`'s (voxel, face, `t`) on
+//! random and adversarial worlds and rays; byte counts equal a second, simple count made
+//! from the dense grid; a repeated pattern deduplicates in the DAG; an empty world is an
+//! error.
 
 mod common;
 
 use common::{Raw, Rng, adversarial, random_world, rays, size_for};
-use naadf_world::baselines::Svdag;
+use naadf_world::baselines::{Svdag, Svo};
 use naadf_world::traverse::{DenseGrid, Hit, Ray, trace_naadf};
 use naadf_world::{World, WorldSize};
 use std::collections::HashMap;
@@ -16,7 +17,7 @@ fn geometry(h: &Option<Hit>) -> Option<([u32; 3], [i32; 3], f64)> {
     h.map(|h| (h.voxel, h.normal, h.t))
 }
 
-fn assert_same_hits(w: &World, dag: &Svdag, rays: &[Ray], what: &str) {
+fn assert_same_hits(w: &World, dag: &Svdag, svo: &Svo, rays: &[Ray], what: &str) {
     let grid = DenseGrid::from_world(w).unwrap();
     for r in rays {
         let expected = geometry(&grid.trace(r));
@@ -26,7 +27,29 @@ fn assert_same_hits(w: &World, dag: &Svdag, rays: &[Ray], what: &str) {
             "{what}: naadf against the grid, {r:?}"
         );
         assert_eq!(geometry(&dag.trace(r)), expected, "{what}: svdag, {r:?}");
+        assert_eq!(geometry(&svo.trace(r)), expected, "{what}: svo, {r:?}");
     }
+}
+
+/// The SVO's bytes counted again from the dense grid: 4 per non-empty cube of side 2 and
+/// up, cube by cube.
+fn recount_svo(grid: &DenseGrid, size: [u32; 3]) -> u64 {
+    let side = size.iter().max().unwrap().next_power_of_two().max(8);
+    let solid = |p: [u32; 3]| (0..3).all(|a| p[a] < size[a]) && grid.get(p) != 0;
+    let mut nodes = 0;
+    let mut s = 2;
+    while s <= side {
+        for z in (0..side).step_by(s as usize) {
+            for y in (0..side).step_by(s as usize) {
+                for x in (0..side).step_by(s as usize) {
+                    let any = (0..s * s * s).any(|i| solid([x + i % s, y + i / s % s, z + i / (s * s)]));
+                    nodes += u64::from(any);
+                }
+            }
+        }
+        s *= 2;
+    }
+    4 * nodes
 }
 
 /// The SVDAG's bytes counted again, straight from the dense grid: a recursive walk over
@@ -91,11 +114,22 @@ fn svdag_hits_equal_the_dense_grid_and_naadf_on_random_worlds() {
         let size = size_for(seed, &[[64, 64, 64], [128, 64, 64], [64, 128, 192]]);
         let raw = random_world(size, seed);
         let w = raw.build();
-        let dag = Svdag::build(&w).unwrap();
+        let (dag, svo) = (Svdag::build(&w).unwrap(), Svo::build(&w).unwrap());
         let mut rng = Rng(seed + 1);
-        assert_same_hits(&w, &dag, &rays(size.voxels(), &mut rng, 1500), &format!("seed {seed}"));
+        assert_same_hits(
+            &w,
+            &dag,
+            &svo,
+            &rays(size.voxels(), &mut rng, 1500),
+            &format!("seed {seed}"),
+        );
         let grid = DenseGrid::from_world(&w).unwrap();
-        assert_eq!(dag.bytes(), recount_svdag(&grid, size.voxels()), "seed {seed}: bytes");
+        assert_eq!(
+            dag.bytes(),
+            recount_svdag(&grid, size.voxels()),
+            "seed {seed}: svdag bytes"
+        );
+        assert_eq!(svo.bytes(), recount_svo(&grid, size.voxels()), "seed {seed}: svo bytes");
     }
 }
 
@@ -105,15 +139,17 @@ fn svdag_hits_equal_the_dense_grid_on_adversarial_worlds() {
     for (name, raw) in adversarial(size) {
         let w = raw.build();
         if name == "empty" {
-            let e = Svdag::build(&w).unwrap_err();
-            assert!(e.to_string().contains("no solid voxel"), "{e}");
+            for e in [Svdag::build(&w).unwrap_err(), Svo::build(&w).unwrap_err()] {
+                assert!(e.to_string().contains("no solid voxel"), "{e}");
+            }
             continue;
         }
-        let dag = Svdag::build(&w).unwrap();
+        let (dag, svo) = (Svdag::build(&w).unwrap(), Svo::build(&w).unwrap());
         let mut rng = Rng(7);
-        assert_same_hits(&w, &dag, &rays(size.voxels(), &mut rng, 800), name);
+        assert_same_hits(&w, &dag, &svo, &rays(size.voxels(), &mut rng, 800), name);
         let grid = DenseGrid::from_world(&w).unwrap();
-        assert_eq!(dag.bytes(), recount_svdag(&grid, size.voxels()), "{name}: bytes");
+        assert_eq!(dag.bytes(), recount_svdag(&grid, size.voxels()), "{name}: svdag bytes");
+        assert_eq!(svo.bytes(), recount_svo(&grid, size.voxels()), "{name}: svo bytes");
     }
 }
 

@@ -381,13 +381,13 @@ impl Gi {
     /// How many earlier frames' samples the TAA merged into each pixel of the last frame
     /// (row by row): how converged the pixel is.
     pub fn history_lengths(&self, gpu: &Gpu) -> Result<Vec<u32>, GpuError> {
-        let (_, info) = self.read_pixels(gpu, TAA_INFO, 2)?;
+        let info = self.read_pixels(gpu, TAA_INFO, 2)?;
         Ok(info.iter().step_by(2).map(|v| v[3] as u32).collect())
     }
 
-    /// The image size and the per-pixel array `array` of [`Layout::offsets`] (`vec4s`
-    /// vec4 words per pixel) of the current history; an error before the first frame.
-    fn read_pixels(&self, gpu: &Gpu, array: usize, vec4s: u64) -> Result<((u32, u32), Vec<[f32; 4]>), GpuError> {
+    /// The per-pixel array `array` of [`Layout::offsets`] (`vec4s` vec4 words per pixel)
+    /// of the current history; an error before the first frame.
+    fn read_pixels(&self, gpu: &Gpu, array: usize, vec4s: u64) -> Result<Vec<[f32; 4]>, GpuError> {
         let h = self
             .history
             .as_ref()
@@ -399,7 +399,7 @@ impl Gi {
             u64::from(h.layout.offsets[array]) * 16,
             u64::from(w) * u64::from(ht) * vec4s * 16,
         )?;
-        Ok(((w, ht), bytemuck::pod_collect_to_vec(&bytes)))
+        Ok(bytemuck::pod_collect_to_vec(&bytes))
     }
 
     /// The bytes of each array of the current history (docs/RENDERING.md §3c), largest
@@ -673,7 +673,8 @@ impl Temporal for Gi {
 
     /// The newest result as linear radiance; an error before the first frame.
     fn radiance(&self, gpu: &Gpu) -> Result<Radiance, GpuError> {
-        let ((w, ht), px) = self.read_pixels(gpu, RESULT, 1)?;
+        let px = self.read_pixels(gpu, RESULT, 1)?;
+        let (w, ht) = self.history.as_ref().map_or((0, 0), |h| h.subject.size);
         Ok(Radiance {
             width: w,
             height: ht,

@@ -8,6 +8,7 @@ mod edit;
 mod frames;
 mod gi;
 mod gpu;
+mod paper;
 mod stream;
 mod traverse;
 
@@ -34,6 +35,8 @@ pub enum Bench {
     Frames(frames::FramesArgs),
     /// Image quality of the lit modes against a path-traced reference, and the noise floor.
     Gi(gi::GiArgs),
+    /// The paper's comparison: bytes, build time and Mrays/s of naadf, an SVO, an SVDAG and the grid.
+    Paper(paper::PaperArgs),
 }
 
 /// Runs a benchmark.
@@ -46,6 +49,7 @@ pub fn run(b: Bench) -> Result<()> {
         Bench::Gpu(a) => gpu::run(a),
         Bench::Frames(a) => frames::run(a),
         Bench::Gi(a) => gi::run(a),
+        Bench::Paper(a) => paper::run(a),
     }
 }
 

@@ -10,15 +10,12 @@
 //! Bytes (docs/BASELINES.md): 8 per unique leaf plus 4·(1 + children) per unique inner
 //! node.
 
-use super::{block_masks, cube_depth};
+use super::{Step, Tree, block_masks, cube_depth, octant, trace_tree};
 use crate::WorldError;
 use crate::traverse::{Hit, Ray};
 use crate::world::World;
 use rayon::prelude::*;
 use std::collections::HashMap;
-
-/// The most cells a trace visits: far more than any ray crosses, a guard against loops.
-const MAX_STEPS: u32 = 1 << 24;
 
 /// A sparse voxel DAG of a world's static geometry.
 #[derive(Clone, Debug)]
@@ -147,60 +144,38 @@ impl Svdag {
     }
 
     /// The first solid voxel along `ray` (material 0: the DAG holds geometry only), with
-    /// the voxel, face and `t` that `naadf` gives. The traversal keeps the path from the
-    /// root to the current cell and, after each step, climbs only as far as the cell it
-    /// entered leaves that path.
+    /// the voxel, face and `t` that `naadf` gives.
     pub fn trace(&self, ray: &Ray) -> Option<Hit> {
-        let entry = ray.entry(self.size)?;
-        let (mut cell, mut t, mut axis) = (entry.cell, entry.t, entry.axis);
-        let neg = ray.dir().map(|d| d <= 0.0);
-        let inner = self.levels.len();
-        // path[l]: the word offset of the level-l node holding `cell`, valid for l < valid.
-        let mut path = [0u32; 32];
-        let mut valid = 1;
-        let mut steps = 0u32;
-        loop {
-            steps += 1;
-            if steps > MAX_STEPS {
-                return None;
-            }
-            // Descend until an empty octant (skip it) or a leaf voxel.
-            let mut l = valid - 1;
-            let skip_side = loop {
-                let node = &self.levels[l][path[l] as usize..];
-                let shift = self.depth - 1 - l as u32;
-                let oct = (0..3).fold(0, |o, a| o | (((cell[a] >> shift) & 1) as u32) << a);
-                if node[0] >> oct & 1 == 0 {
-                    break 1i64 << shift;
-                }
-                let child = node[1 + (node[0] & ((1 << oct) - 1)).count_ones() as usize];
-                if l + 1 < inner {
-                    l += 1;
-                    path[l] = child;
-                    continue;
-                }
-                let bit = (cell[0] & 3) + 4 * (cell[1] & 3) + 16 * (cell[2] & 3);
-                if self.leaves[child as usize] >> bit & 1 == 1 {
-                    return Some(ray.hit(cell, t, axis, 0, steps));
-                }
-                break 1;
+        trace_tree(self, ray)
+    }
+}
+
+impl Tree for Svdag {
+    fn depth(&self) -> u32 {
+        self.depth
+    }
+
+    fn size(&self) -> [u32; 3] {
+        self.size
+    }
+
+    /// Inner levels hold word offsets (leaf indices below side 8); the level below them
+    /// holds the leaves.
+    fn step(&self, level: usize, node: u32, cell: [i64; 3]) -> Step {
+        if level == self.levels.len() {
+            let bit = (cell[0] & 3) + 4 * (cell[1] & 3) + 16 * (cell[2] & 3);
+            return match self.leaves[node as usize] >> bit & 1 {
+                1 => Step::Solid,
+                _ => Step::Empty(0),
             };
-            valid = l + 1;
-            let skip = std::array::from_fn(|a| {
-                let inside = cell[a] & (skip_side - 1);
-                if neg[a] { inside } else { skip_side - 1 - inside }
-            });
-            let (nt, na, next) = ray.exit(cell, skip);
-            if !(0..3).all(|a| next[a] >= 0 && next[a] < i64::from(self.size[a])) {
-                return None;
-            }
-            // The levels whose node still holds the new cell: those above the highest bit
-            // in which the cells differ.
-            let differ = (0..3).fold(0, |d, a| d | (cell[a] ^ next[a]));
-            let common = (self.depth as usize).saturating_sub(64 - differ.leading_zeros() as usize);
-            valid = valid.min(common.max(1));
-            (cell, t, axis) = (next, nt, Some(na));
         }
+        let words = &self.levels[level][node as usize..];
+        let k = self.depth - 1 - level as u32;
+        let oct = octant(cell, k);
+        if words[0] >> oct & 1 == 0 {
+            return Step::Empty(k);
+        }
+        Step::Node(words[1 + (words[0] & ((1 << oct) - 1)).count_ones() as usize])
     }
 }
 

@@ -1,0 +1,276 @@
+//! `naadf bench paper WORLD`: the paper's comparison (its Tables 1–3) on one world: bytes,
+//! build time and primary and secondary Mrays/s of `naadf`, the SVO, the SVDAG and the
+//! dense grid, on the same rays in one run (docs/BASELINES.md).
+
+use super::percentile;
+use crate::commands::{load_world, print_json};
+use anyhow::{Result, bail};
+use naadf_world::World;
+use naadf_world::baselines::{Svdag, Svo};
+use naadf_world::ops::{Batch, Limits, Op};
+use naadf_world::raysets::{fixed_cameras, primary_rays, secondary_rays};
+use naadf_world::stats::{Bytes, WorldStats};
+use naadf_world::traverse::{DenseGrid, Hit, Ray, trace_naadf};
+use rayon::prelude::*;
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// Arguments of `bench paper`.
+#[derive(clap::Args)]
+pub struct PaperArgs {
+    /// World file.
+    world: PathBuf,
+    /// Image width per camera.
+    #[arg(long, default_value_t = 480)]
+    width: u32,
+    /// Image height per camera.
+    #[arg(long, default_value_t = 270)]
+    height: u32,
+    /// Timed rounds; each traces both ray sets with every structure, the order rotating.
+    #[arg(long, default_value_t = 5)]
+    rounds: u32,
+    /// Seed of the secondary-ray directions.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Print one JSON object.
+    #[arg(long)]
+    json: bool,
+}
+
+/// One structure's figures.
+#[derive(Serialize)]
+struct Figures {
+    /// Bytes by the structure's own count (docs/BASELINES.md).
+    bytes: u64,
+    /// Median Mrays/s over the rounds, primary and secondary rays (null when skipped).
+    primary: Option<f64>,
+    secondary: Option<f64>,
+    /// Lowest and highest round.
+    primary_range: Option<[f64; 2]>,
+    secondary_range: Option<[f64; 2]>,
+    /// Build time from the world's voxels, in milliseconds (null for the grid).
+    build_ms: Option<f64>,
+    /// Why the structure was not measured.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    skipped: Option<String>,
+}
+
+#[derive(Serialize)]
+struct Report {
+    structures: BTreeMap<&'static str, Figures>,
+    /// The hybrid formats (not built yet: empty).
+    hybrid: BTreeMap<&'static str, Figures>,
+    /// Primary plus secondary rays.
+    rays: usize,
+    threads: usize,
+    rounds: u32,
+    /// NAADF's bytes layer by layer.
+    naadf_layers: Bytes,
+    /// Per baseline, the median over rounds of NAADF's speed-up on primary and secondary
+    /// rays.
+    naadf_speedup: BTreeMap<&'static str, [f64; 2]>,
+}
+
+/// How a structure traces a ray.
+type TraceFn<'a> = Box<dyn Fn(&Ray) -> Option<Hit> + Sync + 'a>;
+
+/// A structure under test: its name and how it traces a ray.
+struct Tracer<'a> {
+    name: &'static str,
+    trace: TraceFn<'a>,
+}
+
+/// Runs `bench paper`.
+pub fn run(a: PaperArgs) -> Result<()> {
+    let loaded = load_world(&a.world)?;
+    let world = static_only(loaded)?;
+    let stats = WorldStats::of(&world);
+    let (_, naadf_ms) = timed(|| World::build(&world, &|_| {}))?;
+    let (svo, svo_ms) = timed(|| Svo::build(&world))?;
+    let (svdag, svdag_ms) = timed(|| Svdag::build(&world))?;
+    let grid = DenseGrid::from_world(&world);
+
+    let mut tracers = vec![
+        Tracer {
+            name: "naadf",
+            trace: Box::new(|r| trace_naadf(&world, r)),
+        },
+        Tracer {
+            name: "svo",
+            trace: Box::new(|r| svo.trace(r)),
+        },
+        Tracer {
+            name: "svdag",
+            trace: Box::new(|r| svdag.trace(r)),
+        },
+    ];
+    if let Ok(g) = &grid {
+        tracers.push(Tracer {
+            name: "grid",
+            trace: Box::new(|r| g.trace(r)),
+        });
+    }
+    let primary = primary_rays(&fixed_cameras(world.size()), a.width, a.height);
+    let hits: Vec<Option<Hit>> = primary.par_iter().map(|r| trace_naadf(&world, r)).collect();
+    let secondary = secondary_rays(&primary, &hits, a.seed);
+    check_agreement(&tracers, &primary, &secondary)?;
+
+    // rates[structure][set]: Mrays/s per round.
+    let rounds = a.rounds.max(1);
+    let mut rates = vec![[Vec::new(), Vec::new()]; tracers.len()];
+    for round in 0..rounds as usize {
+        for k in 0..tracers.len() {
+            let s = (k + round) % tracers.len();
+            for (set, rays) in [&primary, &secondary].into_iter().enumerate() {
+                let t0 = Instant::now();
+                let found = rays.par_iter().filter(|r| (tracers[s].trace)(r).is_some()).count();
+                std::hint::black_box(found);
+                rates[s][set].push(rays.len() as f64 / t0.elapsed().as_secs_f64() / 1e6);
+            }
+        }
+    }
+    let median = |v: &[f64]| {
+        let mut v = v.to_vec();
+        v.sort_by(f64::total_cmp);
+        (percentile(&v, 0.5), [v[0], v[v.len() - 1]])
+    };
+    let mut structures = BTreeMap::new();
+    let mut naadf_speedup = BTreeMap::new();
+    for (k, t) in tracers.iter().enumerate() {
+        let (p, pr) = median(&rates[k][0]);
+        let (s, sr) = median(&rates[k][1]);
+        let (bytes, build_ms) = match t.name {
+            "naadf" => (stats.bytes.total, Some(naadf_ms)),
+            "svo" => (svo.bytes(), Some(svo_ms)),
+            "svdag" => (svdag.bytes(), Some(svdag_ms)),
+            _ => (world.size().voxel_count() * 2, None),
+        };
+        structures.insert(
+            t.name,
+            Figures {
+                bytes,
+                primary: Some(p),
+                secondary: Some(s),
+                primary_range: Some(pr),
+                secondary_range: Some(sr),
+                build_ms,
+                skipped: None,
+            },
+        );
+        if k > 0 {
+            // Per round, so that both sides of each ratio saw the same machine.
+            let ratio = |set: usize| {
+                let r: Vec<f64> = (0..rounds as usize)
+                    .map(|i| rates[0][set][i] / rates[k][set][i])
+                    .collect();
+                median(&r).0
+            };
+            naadf_speedup.insert(t.name, [ratio(0), ratio(1)]);
+        }
+    }
+    if let Err(e) = &grid {
+        structures.insert(
+            "grid",
+            Figures {
+                bytes: world.size().voxel_count() * 2,
+                primary: None,
+                secondary: None,
+                primary_range: None,
+                secondary_range: None,
+                build_ms: None,
+                skipped: Some(e.to_string()),
+            },
+        );
+    }
+    let report = Report {
+        structures,
+        hybrid: BTreeMap::new(),
+        rays: primary.len() + secondary.len(),
+        threads: rayon::current_num_threads(),
+        rounds,
+        naadf_layers: stats.bytes,
+        naadf_speedup,
+    };
+    if a.json {
+        print_json(&report)?;
+    } else {
+        print_table(&report);
+    }
+    Ok(())
+}
+
+/// `f`'s result and the milliseconds it took.
+fn timed<T, E>(f: impl FnOnce() -> Result<T, E>) -> Result<(T, f64), E> {
+    let t0 = Instant::now();
+    let out = f()?;
+    Ok((out, t0.elapsed().as_secs_f64() * 1e3))
+}
+
+/// The world without its entities: the baselines hold static geometry only.
+fn static_only(mut world: World) -> Result<World> {
+    let ids: Vec<u32> = world.entity_table().instances.keys().copied().collect();
+    if !ids.is_empty() {
+        let ops = ids.iter().map(|&id| Op::DespawnEntity { id }).collect::<Vec<_>>();
+        let limits = Limits {
+            max_ops: ops.len(),
+            ..Limits::default()
+        };
+        world.apply(&Batch { ops }, &limits)?;
+        world.grow_until_quiescent();
+    }
+    Ok(world)
+}
+
+/// Fails unless every structure (after `naadf`, the first) finds `naadf`'s voxel, face and `t` on every ray.
+fn check_agreement(tracers: &[Tracer], primary: &[Ray], secondary: &[Ray]) -> Result<()> {
+    let geometry = |h: Option<Hit>| h.map(|h| (h.voxel, h.normal, h.t));
+    for rays in [primary, secondary] {
+        for t in &tracers[1..] {
+            let differ = rays
+                .par_iter()
+                .filter(|r| geometry((tracers[0].trace)(r)) != geometry((t.trace)(r)))
+                .count();
+            if differ > 0 {
+                bail!("{differ} of {} rays differ between naadf and {}", rays.len(), t.name);
+            }
+        }
+    }
+    Ok(())
+}
+
+fn print_table(r: &Report) {
+    println!(
+        "{:<8} {:>12} {:>10} {:>18} {:>18}",
+        "", "bytes", "build ms", "primary Mrays/s", "secondary Mrays/s"
+    );
+    for (name, f) in &r.structures {
+        let rate = |v: Option<f64>, range: Option<[f64; 2]>| match (v, range) {
+            (Some(v), Some([lo, hi])) => format!("{v:.2} ({lo:.2}–{hi:.2})"),
+            _ => "skipped".to_string(),
+        };
+        println!(
+            "{name:<8} {:>12} {:>10} {:>18} {:>18}",
+            f.bytes,
+            f.build_ms.map_or("—".into(), |m| format!("{m:.0}")),
+            rate(f.primary, f.primary_range),
+            rate(f.secondary, f.secondary_range)
+        );
+        if let Some(why) = &f.skipped {
+            println!("         ({why})");
+        }
+    }
+    for (name, [p, s]) in &r.naadf_speedup {
+        println!(
+            "naadf / {name}: primary ×{p:.2}, secondary ×{s:.2} (median of {} rounds)",
+            r.rounds
+        );
+    }
+    let l = &r.naadf_layers;
+    println!(
+        "naadf layers: chunks {} B, blocks {} B, voxels {} B, materials {} B",
+        l.chunks, l.blocks, l.voxels, l.materials
+    );
+    println!("{} rays, {} threads", r.rays, r.threads);
+}
