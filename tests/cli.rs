@@ -284,7 +284,9 @@ fn bench_paper_reports_every_structure_on_the_same_rays() {
         .product::<u64>();
     assert_eq!(v["structures"]["grid"]["bytes"].as_u64().unwrap(), 2 * size);
     assert!(v["rays"].as_u64().unwrap() > 4 * 32 * 18, "primary and secondary: {v}");
-    assert!(v["hybrid"].is_object());
+    for h in ["R(4³)G(7)", "R(3³)G(8)"] {
+        assert!(v["hybrid"][h]["bytes"].as_u64().unwrap() > 4 << 9, "{h}: {v}");
+    }
     fails(&["bench", "paper", &p(dir.path(), "missing.naadf")], None, "error:");
 }
 

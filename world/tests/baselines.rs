@@ -108,6 +108,75 @@ fn recount_svdag(grid: &DenseGrid, size: [u32; 3]) -> u64 {
     bytes
 }
 
+/// The bytes of the hybrid format R(top³) G(dag) counted again from the dense grid: a raw
+/// grid of 4-byte cells over DAGs down to single voxels, one dedup map per node side.
+fn recount_hybrid(grid: &DenseGrid, size: [u32; 3], top: u32, dag: u32) -> u64 {
+    let solid = |p: [u32; 3]| (0..3).all(|a| p[a] < size[a]) && grid.get(p) != 0;
+    fn walk(
+        o: [u32; 3],
+        s: u32,
+        solid: &dyn Fn([u32; 3]) -> bool,
+        seen: &mut HashMap<u32, HashMap<Vec<u64>, u64>>,
+        bytes: &mut u64,
+    ) -> Option<u64> {
+        let content: Vec<u64> = if s == 1 {
+            if !solid(o) {
+                return None;
+            }
+            Vec::new()
+        } else {
+            let h = s / 2;
+            let kids: Vec<u64> = (0..8u32)
+                .map(|oct| {
+                    walk([0, 1, 2].map(|a| o[a] + h * (oct >> a & 1)), h, solid, seen, bytes).map_or(u64::MAX, |id| id)
+                })
+                .collect();
+            if kids.iter().all(|&k| k == u64::MAX) {
+                return None;
+            }
+            kids
+        };
+        let level = seen.entry(s).or_default();
+        let next = level.len() as u64;
+        Some(*level.entry(content.clone()).or_insert_with(|| {
+            // A voxel is one terminating word; a node its mask and a pointer per child.
+            *bytes += 4 * (1 + content.iter().filter(|&&k| k != u64::MAX).count() as u64);
+            next
+        }))
+    }
+    let (cells, side) = (1u32 << top, 1u32 << dag);
+    let mut seen = HashMap::new();
+    let mut bytes = 4 * u64::from(cells).pow(3);
+    for z in 0..cells {
+        for y in 0..cells {
+            for x in 0..cells {
+                walk([x * side, y * side, z * side], side, &solid, &mut seen, &mut bytes);
+            }
+        }
+    }
+    bytes
+}
+
+#[test]
+fn hybrid_formats_count_like_a_walk_of_the_dense_grid() {
+    let size = WorldSize::new(64, 64, 64).unwrap();
+    for seed in 0..2u64 {
+        let w = random_world(size, seed).build();
+        let dag = Svdag::build(&w).unwrap();
+        let grid = DenseGrid::from_world(&w).unwrap();
+        // The format larger than the world, as large, and split at several levels.
+        for (top, depth) in [(1, 6), (0, 7), (3, 3), (2, 4), (1, 5)] {
+            assert_eq!(
+                dag.hybrid_bytes(top, depth).unwrap(),
+                recount_hybrid(&grid, size.voxels(), top, depth),
+                "seed {seed}: R({top}³) G({depth})"
+            );
+        }
+        let e = dag.hybrid_bytes(1, 4).unwrap_err();
+        assert!(e.to_string().contains("less than the world's cube"), "{e}");
+    }
+}
+
 #[test]
 fn svdag_hits_equal_the_dense_grid_and_naadf_on_random_worlds() {
     for seed in 0..4u64 {

@@ -125,6 +125,54 @@ impl Svdag {
         8 * self.leaves.len() as u64 + 4 * self.levels.iter().map(|l| l.len() as u64).sum::<u64>()
     }
 
+    /// Bytes of the hybrid format `R(top³) G(dag)` of the hybrid-formats paper for the same
+    /// geometry (docs/BASELINES.md): a raw grid of `2^(3·top)` 32-bit cells over SVDAGs of
+    /// depth `dag` that go down to single voxels, deduplicated over the whole level. Fails
+    /// when the world's cube is larger than the format's `2^(top + dag)` side.
+    pub fn hybrid_bytes(&self, top: u32, dag: u32) -> Result<u64, WorldError> {
+        if self.depth > top + dag || dag < 3 {
+            return Err(WorldError::Capacity(format!(
+                "R({top}³) G({dag}) spans {} voxels a side, less than the world's cube of {}",
+                1u64 << (top + dag),
+                1u64 << self.depth
+            )));
+        }
+        let raw = 4u64 << (3 * top);
+        // The nodes of side 8 up to 2^dag, as in this DAG (the levels above are the raw
+        // grid's); a sub-volume larger than this DAG's root adds one single-child node per
+        // level for the one cell that holds the world.
+        let kept = self.levels.len().min(dag as usize - 2);
+        let inner: u64 = self.levels[self.levels.len() - kept..]
+            .iter()
+            .map(|l| 4 * l.len() as u64)
+            .sum();
+        let above = 8 * u64::from(dag.saturating_sub(self.depth));
+        // A 4³ leaf here is a side-4 node over side-2 nodes over voxels: one node per
+        // distinct leaf, one per distinct 2³ octant mask, and one voxel (geometry only).
+        let octants = |m: u64| {
+            (0..8).map(move |o| {
+                let q = [o & 1, o >> 1 & 1, o >> 2 & 1].map(|b| 2 * b);
+                (0..8).fold(0u8, |x, v| {
+                    let bit = (q[0] + (v & 1)) + 4 * (q[1] + (v >> 1 & 1)) + 16 * (q[2] + (v >> 2 & 1));
+                    x | ((m >> bit & 1) as u8) << v
+                })
+            })
+        };
+        let side4: u64 = self
+            .leaves
+            .iter()
+            .map(|&m| 4 * (1 + octants(m).filter(|&x| x != 0).count() as u64))
+            .sum();
+        let distinct: std::collections::HashSet<u8> = self
+            .leaves
+            .iter()
+            .flat_map(|&m| octants(m))
+            .filter(|&x| x != 0)
+            .collect();
+        let side2: u64 = distinct.iter().map(|&x| 4 * (1 + u64::from(x.count_ones()))).sum();
+        Ok(raw + inner + above + side4 + side2 + 4)
+    }
+
     /// Unique leaves and unique inner nodes per level (root first).
     pub fn node_counts(&self) -> (usize, Vec<usize>) {
         let nodes = self
