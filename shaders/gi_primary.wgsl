@@ -22,14 +22,23 @@ fn taa_write(slot: u32, pixel: u32, v: vec2<u32>) {
     taa_set(i, v);
 }
 
-// One channel on the log scale, rounded up or down at random (`u` uniform in [0, 1)) so
-// that the scale adds no bias in the log domain.
+// One channel on the log scale, rounded to the level below or above at random (`u`
+// uniform in [0, 1)) with the odds that make the decoded value's mean exactly `x`: the
+// TAA's mean is then unbiased in linear light (rounding by the fraction of the log-scale
+// position is unbiased in the log domain only, and the decoding's convexity makes that
+// brighter on average).
 fn taa_channel(x: f32, u: f32) -> u32 {
     if x <= 0.0 {
         return 0u;
     }
-    let c = 12.0 * log2(x / TAA_MAX + TAA_LOG_FLOOR) + 255.0;
-    return u32(clamp(floor(c + u), 0.0, 255.0));
+    let c = clamp(12.0 * log2(x / TAA_MAX + TAA_LOG_FLOOR) + 255.0, 0.0, 255.0);
+    let lo = u32(floor(c));
+    if lo >= 255u {
+        return 255u;
+    }
+    let below = taa_decode_channel(lo);
+    let above = taa_decode_channel(lo + 1u);
+    return select(lo, lo + 1u, u * (above - below) < x - below);
 }
 
 fn taa_decode_channel(c: u32) -> f32 {
@@ -68,7 +77,9 @@ fn gi_first_hit(@builtin(global_invocation_id) gid: vec3<u32>) {
     var p = vec3<f32>(0.0);
     // A ray that ran out of steps brings no light, as in the path tracer.
     if c.end == CHAIN_SKY && !c.h.exhausted {
-        emit = c.throughput * sky_radiance(dn, true);
+        // Evaluated directly, not from the table: a camera ray's sky is seen as it is,
+        // and the table's interpolation error would show across every sky pixel.
+        emit = c.throughput * (sky_direct(dn) + sun_disc(dn));
     } else if c.end == CHAIN_SURFACE {
         let m = material(c.h.material);
         kind = m.kind;

@@ -117,10 +117,18 @@ fn sky_direct(d: vec3<f32>) -> vec3<f32> {
 // pass's choice: `sky_direct` (the path tracer) or the atmosphere table (`gi`).
 fn sky_radiance(d: vec3<f32>, disc: bool) -> vec3<f32> {
     var l = sky_base(d);
-    if disc && light.sun_on != 0u && 1.0 - dot(d, light.sun_dir) <= light.sun_omc {
-        l += vec3<f32>(light.sun_disc);
+    if disc {
+        l += sun_disc(d);
     }
     return l;
+}
+
+// The sun's disc along unit `d` (0 off the disc, or with the sun off).
+fn sun_disc(d: vec3<f32>) -> vec3<f32> {
+    if light.sun_on != 0u && 1.0 - dot(d, light.sun_dir) <= light.sun_omc {
+        return vec3<f32>(light.sun_disc);
+    }
+    return vec3<f32>(0.0);
 }
 
 // ---- Scattering (scatter.rs) ----

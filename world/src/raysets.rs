@@ -1,9 +1,59 @@
 //! Fixed, reproducible ray sets for benchmarks: primary rays from fixed cameras placed
 //! relative to the world size, and cosine-distributed secondary rays from primary hits.
 
+use crate::World;
 use crate::camera::Camera;
+use crate::cell;
 use crate::size::WorldSize;
 use crate::traverse::{Hit, Ray};
+
+/// A camera that frames the world's solid content (the box of its non-empty chunks),
+/// looking down at it at 20° from the front left with a 60° field of view, so that the sky
+/// above the horizon is behind it; `None` for an empty world. Small models in a large padded world are out of the fixed cameras' view.
+///
+/// ```
+/// use naadf_world::{World, preset::Preset, raysets::content_camera};
+/// let src = Preset::Test.source(None, 1).unwrap();
+/// let world = World::build(&*src, &|_| {}).unwrap();
+/// assert!(content_camera(&world).is_some());
+/// ```
+pub fn content_camera(world: &World) -> Option<Camera> {
+    let c = world.size().chunks();
+    let (mut lo, mut hi) = ([u32::MAX; 3], [0u32; 3]);
+    for z in 0..c[2] {
+        for y in 0..c[1] {
+            for x in 0..c[0] {
+                if world.chunks()[world.size().chunk_index([x, y, z])] >> cell::STATE_SHIFT != cell::STATE_EMPTY {
+                    for (a, v) in [x, y, z].into_iter().enumerate() {
+                        (lo[a], hi[a]) = (lo[a].min(v), hi[a].max(v + 1));
+                    }
+                }
+            }
+        }
+    }
+    if hi[0] == 0 {
+        return None;
+    }
+    let centre: [f64; 3] = std::array::from_fn(|a| 8.0 * f64::from(lo[a] + hi[a]));
+    let radius = (0..3)
+        .map(|a| (8.0 * f64::from(hi[a] - lo[a])).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    let (yaw, pitch, fov_y) = (45.0f64, -20.0f64, 60.0f64);
+    let forward = [
+        yaw.to_radians().sin() * pitch.to_radians().cos(),
+        pitch.to_radians().sin(),
+        yaw.to_radians().cos() * pitch.to_radians().cos(),
+    ];
+    // Far enough back that the box's bounding sphere fits the narrower (vertical) view.
+    let distance = radius / (fov_y / 2.0).to_radians().sin();
+    Some(Camera {
+        pos: std::array::from_fn(|a| centre[a] - forward[a] * distance),
+        yaw,
+        pitch,
+        fov_y,
+    })
+}
 
 /// Four fixed cameras: above the world's middle height, looking across and down at it from
 /// different sides.

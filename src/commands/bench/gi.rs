@@ -24,7 +24,7 @@ use naadf_client::light::{DEFAULT_LIT_BOUNCES, Light};
 use naadf_world::World;
 use naadf_world::camera::Camera;
 use naadf_world::ops::{Batch, Limits};
-use naadf_world::raysets::fixed_cameras;
+use naadf_world::raysets::content_camera;
 use naadf_world::traverse::{Ray, trace_naadf};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -36,7 +36,7 @@ use std::time::Instant;
 pub struct GiArgs {
     /// World file.
     world: PathBuf,
-    /// Camera JSON (default: the world's first benchmark camera).
+    /// Camera JSON (default: one that frames the world's solid content from above the front left).
     #[arg(long)]
     camera: Option<String>,
     /// Image size.
@@ -166,9 +166,7 @@ pub fn run(a: GiArgs) -> Result<()> {
     let world = load_world(&a.world)?;
     let camera = match &a.camera {
         Some(c) => read_camera(c)?,
-        None => *fixed_cameras(world.size())
-            .first()
-            .context("the world has no benchmark camera")?,
+        None => content_camera(&world).context("the world is empty: there is nothing to light")?,
     };
     let options = a.light.options()?;
     let light = options.light(DEFAULT_LIT_BOUNCES).map_err(anyhow::Error::msg)?;
