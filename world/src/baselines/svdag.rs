@@ -107,6 +107,13 @@ impl Svdag {
                     }),
                 })
                 .collect();
+            // Offsets (and NONE) must fit the 32-bit references.
+            if words.len() >= NONE as usize {
+                return Err(WorldError::Capacity(format!(
+                    "an SVDAG level of {} words is beyond 32-bit references",
+                    words.len()
+                )));
+            }
             levels.push(words);
             dims = up;
         }
