@@ -52,109 +52,86 @@ fn recount_svo(grid: &DenseGrid, size: [u32; 3]) -> u64 {
     4 * nodes
 }
 
-/// The SVDAG's bytes counted again, straight from the dense grid: a recursive walk over
-/// the cube that numbers each level's distinct subtrees.
-fn recount_svdag(grid: &DenseGrid, size: [u32; 3]) -> u64 {
-    let side = size.iter().max().unwrap().next_power_of_two().max(8);
-    let solid = |p: [u32; 3]| (0..3).all(|a| p[a] < size[a]) && grid.get(p) != 0;
-    // Per node side: distinct subtrees → their number.
-    let mut seen: HashMap<u32, HashMap<Vec<u64>, u64>> = HashMap::new();
-    let mut bytes = 0;
-    // The subtree at `o` of side `s`: None when empty, else its number at that side.
-    fn walk(
-        o: [u32; 3],
-        s: u32,
-        solid: &dyn Fn([u32; 3]) -> bool,
-        seen: &mut HashMap<u32, HashMap<Vec<u64>, u64>>,
-        bytes: &mut u64,
-    ) -> Option<u64> {
-        let content: Vec<u64> = if s == 4 {
+/// A DAG counted straight from the dense grid: a recursive walk over the cube at `o` of
+/// side `s` that numbers each side's distinct subtrees (in `seen`) and adds their bytes:
+/// a leaf of side `leaf` is a 64-bit mask (side 4, 8 bytes) or a voxel (side 1, one 4-byte
+/// word); an inner node is a mask word and a word per child. `None` when the cube is empty.
+struct DagCount<'a> {
+    solid: &'a dyn Fn([u32; 3]) -> bool,
+    leaf: u32,
+    seen: HashMap<u32, HashMap<Vec<u64>, u64>>,
+    bytes: u64,
+}
+
+impl DagCount<'_> {
+    fn walk(&mut self, o: [u32; 3], s: u32) -> Option<u64> {
+        let (content, cost) = if s == self.leaf {
             let mut m = 0u64;
-            for i in 0..64u32 {
-                if solid([o[0] + i % 4, o[1] + i / 4 % 4, o[2] + i / 16]) {
+            for i in 0..s * s * s {
+                if (self.solid)([o[0] + i % s, o[1] + i / s % s, o[2] + i / (s * s)]) {
                     m |= 1 << i;
                 }
             }
             if m == 0 {
                 return None;
             }
-            vec![m]
+            (vec![m], if s == 4 { 8 } else { 4 })
         } else {
             let h = s / 2;
             let kids: Vec<u64> = (0..8u32)
                 .map(|oct| {
-                    let c = [0, 1, 2].map(|a| o[a] + h * (oct >> a & 1));
-                    walk(c, h, solid, seen, bytes).map_or(u64::MAX, |id| id)
+                    self.walk([0, 1, 2].map(|a| o[a] + h * (oct >> a & 1)), h)
+                        .unwrap_or(u64::MAX)
                 })
                 .collect();
-            if kids.iter().all(|&k| k == u64::MAX) {
+            let children = kids.iter().filter(|&&k| k != u64::MAX).count() as u64;
+            if children == 0 {
                 return None;
             }
-            kids
+            (kids, 4 * (1 + children))
         };
-        let level = seen.entry(s).or_default();
+        let level = self.seen.entry(s).or_default();
         let next = level.len() as u64;
-        let id = *level.entry(content.clone()).or_insert_with(|| {
-            *bytes += if s == 4 {
-                8
-            } else {
-                4 * (1 + content.iter().filter(|&&k| k != u64::MAX).count() as u64)
-            };
+        let bytes = &mut self.bytes;
+        Some(*level.entry(content).or_insert_with(|| {
+            *bytes += cost;
             next
-        });
-        Some(id)
+        }))
     }
-    walk([0; 3], side, &solid, &mut seen, &mut bytes);
-    bytes
+}
+
+/// The SVDAG's bytes counted again from the dense grid.
+fn recount_svdag(grid: &DenseGrid, size: [u32; 3]) -> u64 {
+    let solid = |p: [u32; 3]| (0..3).all(|a| p[a] < size[a]) && grid.get(p) != 0;
+    let mut count = DagCount {
+        solid: &solid,
+        leaf: 4,
+        seen: HashMap::new(),
+        bytes: 0,
+    };
+    count.walk([0; 3], size.iter().max().unwrap().next_power_of_two().max(8));
+    count.bytes
 }
 
 /// The bytes of the hybrid format R(top³) G(dag) counted again from the dense grid: a raw
 /// grid of 4-byte cells over DAGs down to single voxels, one dedup map per node side.
 fn recount_hybrid(grid: &DenseGrid, size: [u32; 3], top: u32, dag: u32) -> u64 {
     let solid = |p: [u32; 3]| (0..3).all(|a| p[a] < size[a]) && grid.get(p) != 0;
-    fn walk(
-        o: [u32; 3],
-        s: u32,
-        solid: &dyn Fn([u32; 3]) -> bool,
-        seen: &mut HashMap<u32, HashMap<Vec<u64>, u64>>,
-        bytes: &mut u64,
-    ) -> Option<u64> {
-        let content: Vec<u64> = if s == 1 {
-            if !solid(o) {
-                return None;
-            }
-            Vec::new()
-        } else {
-            let h = s / 2;
-            let kids: Vec<u64> = (0..8u32)
-                .map(|oct| {
-                    walk([0, 1, 2].map(|a| o[a] + h * (oct >> a & 1)), h, solid, seen, bytes).map_or(u64::MAX, |id| id)
-                })
-                .collect();
-            if kids.iter().all(|&k| k == u64::MAX) {
-                return None;
-            }
-            kids
-        };
-        let level = seen.entry(s).or_default();
-        let next = level.len() as u64;
-        Some(*level.entry(content.clone()).or_insert_with(|| {
-            // A voxel is one terminating word; a node its mask and a pointer per child.
-            *bytes += 4 * (1 + content.iter().filter(|&&k| k != u64::MAX).count() as u64);
-            next
-        }))
-    }
+    let mut count = DagCount {
+        solid: &solid,
+        leaf: 1,
+        seen: HashMap::new(),
+        bytes: 0,
+    };
     let (cells, side) = (1u32 << top, 1u32 << dag);
-    let mut seen = HashMap::new();
-    let mut bytes = 4 * u64::from(cells).pow(3);
     for z in 0..cells {
         for y in 0..cells {
             for x in 0..cells {
-                walk([x * side, y * side, z * side], side, &solid, &mut seen, &mut bytes);
+                count.walk([x * side, y * side, z * side], side);
             }
         }
     }
-    bytes
+    4 * u64::from(cells).pow(3) + count.bytes
 }
 
 #[test]
