@@ -288,6 +288,11 @@ fn bench_paper_reports_every_structure_on_the_same_rays() {
         assert!(v["hybrid"][h]["bytes"].as_u64().unwrap() > 4 << 9, "{h}: {v}");
     }
     fails(&["bench", "paper", &p(dir.path(), "missing.naadf")], None, "error:");
+    fails(
+        &["bench", "paper", &world, "--width", "0"],
+        None,
+        "--width and --height",
+    );
 }
 
 #[test]

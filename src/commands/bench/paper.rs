@@ -17,6 +17,9 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::time::Instant;
 
+/// The largest image edge per camera: four cameras of 4096 × 4096 are 67M primary rays.
+const MAX_EDGE: u32 = 4096;
+
 /// Arguments of `bench paper`.
 #[derive(clap::Args)]
 pub struct PaperArgs {
@@ -84,6 +87,9 @@ struct Tracer<'a> {
 
 /// Runs `bench paper`.
 pub fn run(a: PaperArgs) -> Result<()> {
+    if !(1..=MAX_EDGE).contains(&a.width) || !(1..=MAX_EDGE).contains(&a.height) {
+        bail!("--width and --height must be 1..={MAX_EDGE}");
+    }
     let loaded = load_world(&a.world)?;
     let world = static_only(loaded)?;
     let stats = WorldStats::of(&world);
