@@ -17,7 +17,7 @@ use super::render::{CameraRays, check_frame_size};
 use super::shaders::{GiSplit, Loop, Pass};
 use super::temporal::Temporal;
 use super::uniform::{FrameInfo, GiInfo, LightInfo};
-use super::world::GpuWorld;
+use super::world::{GpuWorld, new_part};
 use crate::light::Light;
 use crate::light::hdr::Radiance;
 use naadf_world::camera::Camera;
@@ -61,7 +61,7 @@ pub const CONTROL_PROJECT_ARGS: u32 = 4;
 pub const CONTROL_WORDS: u32 = 16 + CAMERA_HISTORY;
 /// vec4 words per camera in `mem`.
 const CAM_VEC4: usize = 5;
-/// Bytes per pixel of the TAA binding.
+/// Bytes per pixel of the TAA.
 const TAA_PIXEL_BYTES: u64 = TAA_SLOTS as u64 * 8;
 /// Ring samples per pixel.
 const RING_PER_PIXEL: u64 = 2;
@@ -472,7 +472,9 @@ impl Temporal for Gi {
         }
         let pipes = self.pipes.entry(split).or_insert_with(|| {
             // The frame, light and GI state, and the change marks, are read-only.
-            let storage: Vec<bool> = (0..split.bindings()).map(|b| b < 3 || b == 5).collect();
+            let storage: Vec<bool> = (0..split.bindings())
+                .map(|b| b < 3 || b == GiSplit::CHANGES_BINDING)
+                .collect();
             GiPass::ALL
                 .iter()
                 .map(|&p| PassPipelines::new(gpu, Pass::Gi(p, split), 0, &storage))
@@ -490,14 +492,7 @@ impl Temporal for Gi {
             chunks,
         };
         let chunk_count = chunks.iter().map(|&c| c as usize).product::<usize>();
-        let storage_buffer = |label: &str, bytes: u64| {
-            gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: bytes,
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
-                mapped_at_creation: false,
-            })
-        };
+        let storage_buffer = |label: &str, bytes: u64| new_part(&gpu.device, label, bytes);
         let parts = |label: &str, bytes: u64| -> Vec<wgpu::Buffer> {
             (0..bytes.div_ceil(part))
                 .map(|p| storage_buffer(label, (bytes - p * part).min(part)))

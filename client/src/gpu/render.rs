@@ -165,7 +165,8 @@ pub fn write_gbuffer(out: &mut dyn Write, width: u32, height: u32, words: &[[u32
 }
 
 /// Checks a frame size against [`MAX_EDGE`] and against one storage binding of
-/// `bytes_per_pixel` per pixel; returns the pixel count.
+/// `bytes_per_pixel` per pixel (0 for a caller that splits its arrays across bindings and
+/// checks them itself); returns the pixel count.
 pub(crate) fn check_frame_size(gpu: &Gpu, (width, height): (u32, u32), bytes_per_pixel: u64) -> Result<u64, GpuError> {
     let pixels = u64::from(width) * u64::from(height);
     if width == 0

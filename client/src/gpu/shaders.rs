@@ -151,9 +151,12 @@ impl GiSplit {
         taa_parts: 1,
     };
 
+    /// The group-1 binding of the per-chunk change marks (`changes`, read-only).
+    pub const CHANGES_BINDING: u32 = 5;
+
     /// Group-1 bindings before `mem`'s: the frame, light and GI state, `words`, `buckets`
     /// and `changes`.
-    pub const FIRST_PART_BINDING: u32 = 6;
+    pub const FIRST_PART_BINDING: u32 = Self::CHANGES_BINDING + 1;
 
     /// Storage bindings of group 1 in all.
     pub fn bindings(&self) -> u32 {

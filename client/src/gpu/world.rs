@@ -458,7 +458,9 @@ fn make_bind_group(
     })
 }
 
-fn new_part(device: &wgpu::Device, name: &str, size: u64) -> wgpu::Buffer {
+/// A storage buffer that can be written and read back: one part of a logical buffer (the
+/// world's, or a GI history's).
+pub(crate) fn new_part(device: &wgpu::Device, name: &str, size: u64) -> wgpu::Buffer {
     device.create_buffer(&wgpu::BufferDescriptor {
         label: Some(name),
         size,

@@ -60,6 +60,21 @@ struct Figures {
     skipped: Option<String>,
 }
 
+impl Figures {
+    /// A structure counted but not traced, and why.
+    fn unmeasured(bytes: u64, why: String) -> Self {
+        Figures {
+            bytes,
+            primary: None,
+            secondary: None,
+            primary_range: None,
+            secondary_range: None,
+            build_ms: None,
+            skipped: Some(why),
+        }
+    }
+}
+
 #[derive(Serialize)]
 struct Report {
     structures: BTreeMap<&'static str, Figures>,
@@ -179,15 +194,7 @@ pub fn run(a: PaperArgs) -> Result<()> {
     if let Err(e) = &grid {
         structures.insert(
             "grid",
-            Figures {
-                bytes: world.size().voxel_count() * 2,
-                primary: None,
-                secondary: None,
-                primary_range: None,
-                secondary_range: None,
-                build_ms: None,
-                skipped: Some(e.to_string()),
-            },
+            Figures::unmeasured(world.size().voxel_count() * 2, e.to_string()),
         );
     }
     // The hybrid-formats paper's two recommended formats, counted (not traversed).
@@ -197,18 +204,7 @@ pub fn run(a: PaperArgs) -> Result<()> {
             Ok(b) => (b, "counted only: the hybrid formats are not traversed".to_string()),
             Err(e) => (0, e.to_string()),
         };
-        hybrid.insert(
-            name,
-            Figures {
-                bytes,
-                primary: None,
-                secondary: None,
-                primary_range: None,
-                secondary_range: None,
-                build_ms: None,
-                skipped: Some(skipped),
-            },
-        );
+        hybrid.insert(name, Figures::unmeasured(bytes, skipped));
     }
     let report = Report {
         structures,
