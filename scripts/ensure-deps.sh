@@ -10,10 +10,12 @@
 #   opens a real window on a virtual display and clicks in it.
 # - Chromium: the render-node test loads the server's status page in a headless browser.
 # - g++: the FLIP image metric (the nv-flip crate) compiles NVIDIA's C++ implementation.
+# - fonts-dejavu-core: `naadf bench`'s scatter plot draws its text with DejaVu Sans (or the
+#   TTF named by NAADF_PLOT_FONT).
 # - LP_NUM_THREADS=8: llvmpipe balances uneven compute work badly with one thread per core.
 # - XDG_RUNTIME_DIR: silences Vulkan loader warnings on headless machines.
 
-pkgs="mesa-vulkan-drivers libvulkan1 libegl1 libegl-mesa0 libgl1-mesa-dri python3-venv xvfb xauth libx11-xcb1 libxcursor1 libxrandr2 libxi6 libxkbcommon-x11-0 xdotool chromium g++"
+pkgs="mesa-vulkan-drivers libvulkan1 libegl1 libegl-mesa0 libgl1-mesa-dri python3-venv xvfb xauth libx11-xcb1 libxcursor1 libxrandr2 libxi6 libxkbcommon-x11-0 xdotool chromium g++ fonts-dejavu-core"
 if command -v dpkg-query >/dev/null 2>&1; then
     missing=""
     for p in $pkgs; do

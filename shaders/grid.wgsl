@@ -1,11 +1,11 @@
 // The world loop over a dense grid (the `grid` method, Amanatides–Woo one voxel at a
-// time): the GPU twin of world/src/traverse/grid.rs. `grid_word(i)` holds voxels 2i and
+// time): the GPU twin of world/src/traverse/grid.rs. `structure_word(i)` holds voxels 2i and
 // 2i + 1 (x fastest, then y, then z) as 16-bit material ids, low half first.
 
 
 fn grid_material(p: vec3<u32>) -> u32 {
     let i = p.x + world_info.size.x * (p.y + world_info.size.y * p.z);
-    return (grid_word(i / 2u) >> (16u * (i & 1u))) & 0xFFFFu;
+    return (structure_word(i / 2u) >> (16u * (i & 1u))) & 0xFFFFu;
 }
 
 fn world_loop(r: Ray) -> WorldTrace {

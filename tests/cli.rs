@@ -293,6 +293,43 @@ fn bench_paper_reports_every_structure_on_the_same_rays() {
         None,
         "--width and --height",
     );
+    if !have_gpu(&world, dir.path()) {
+        return;
+    }
+    // --gpu: the same structures on the GPU, checked against the CPU; --plot: the scatter.
+    let png = p(dir.path(), "scatter.png");
+    let out = ok(
+        &[
+            "bench", "paper", &world, "--json", "--width", "32", "--height", "18", "--rounds", "1", "--gpu", "--plot",
+            &png,
+        ],
+        None,
+    );
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    for s in ["naadf", "svo", "svdag", "grid"] {
+        let f = &v["gpu"]["structures"][s];
+        assert!(f["primary"].as_f64().unwrap() > 0.0, "{s}: {v}");
+        assert!(v["gpu"]["mismatches"][s].as_u64().unwrap() <= 1, "{s}: {v}");
+    }
+    let img = image::open(&png).expect("the scatter is a PNG").to_rgb8();
+    assert!(img.width() >= 600 && img.height() >= 400);
+    fails(
+        &[
+            "bench",
+            "paper",
+            &world,
+            "--width",
+            "8",
+            "--height",
+            "8",
+            "--rounds",
+            "1",
+            "--plot",
+            &p(dir.path(), "no/such/dir/x.png"),
+        ],
+        None,
+        "error:",
+    );
 }
 
 #[test]
@@ -774,8 +811,9 @@ fn bench_gpu_measures_every_variant_against_the_cpu() {
         None,
     );
     let v = bench_report(&out);
-    for m in ["naadf", "nodf", "grid"] {
+    for m in ["naadf", "nodf", "grid", "svo", "svdag"] {
         assert!(v["mismatches"][m].as_u64().unwrap() <= 1, "{m}: {v}");
+        assert!(v["primary"][m].as_f64().unwrap() > 0.0, "{m}: {v}");
     }
 }
 

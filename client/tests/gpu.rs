@@ -2,7 +2,8 @@
 //!
 //! - GPU hits for thousands of awkward rays equal the CPU's, with every traversal
 //!   variant, on several generated worlds (edges, corners, thin walls, entities at odd
-//!   rotations). A ray may differ only if it lies within [`TIE_EPS`] of a tie, as shown
+//!   rotations), and the SVO and SVDAG walks equal the CPU's walks of the same trees. A
+//!   ray may differ only if it lies within [`TIE_EPS`] of a tie, as shown
 //!   by a CPU trace of a nudged copy giving the GPU's answer, and at most 1 ray in 10,000.
 //! - The `material` image and the first-hit buffer match the CPU raycast of every pixel.
 //! - GpuWorld buffers read back equal the world's after edits, also when split across
@@ -12,12 +13,14 @@
 mod common;
 
 use common::{Rng, adversarial, random_world, rays};
-use naadf_client::gpu::{Gpu, GpuRay, GpuWorld, Mode, RayTracer, Renderer};
+use naadf_client::gpu::{Gpu, GpuRay, GpuWorld, Mode, RayTracer, Renderer, Traversal};
+use naadf_world::baselines::{Svdag, Svo};
 use naadf_world::camera::Camera;
 use naadf_world::fingerprint::ChunkChanges;
 use naadf_world::material::MaterialKind;
 use naadf_world::ops::{Batch, Limits, Op};
 use naadf_world::preset::Preset;
+use naadf_world::stats::WorldStats;
 use naadf_world::traverse::{Hit, Method, Ray, same_result, trace_naadf};
 use naadf_world::{World, WorldSize};
 use std::sync::OnceLock;
@@ -61,47 +64,77 @@ fn exact_f32(i: usize, r: &Ray) -> (Ray, GpuRay) {
 }
 
 /// Whether moving the origin of `ray` by at most TIE_EPS along some axis makes the CPU
-/// give the answer `accept` accepts: the ray is within TIE_EPS of a tie.
-fn near_tie(world: &World, ray: &Ray, accept: impl Fn(&Option<Hit>) -> bool) -> bool {
+/// trace `cpu` give the answer `accept` accepts: the ray is within TIE_EPS of a tie.
+fn near_tie(cpu: &impl Fn(&Ray) -> Option<Hit>, ray: &Ray, accept: impl Fn(&Option<Hit>) -> bool) -> bool {
     let o = ray.origin();
     (0..3).any(|a| {
         [-TIE_EPS, -TIE_EPS / 10.0, TIE_EPS / 10.0, TIE_EPS].iter().any(|&e| {
             let mut p = o;
             p[a] += e;
-            accept(&trace_naadf(world, &Ray::new(p, ray.dir()).unwrap()))
+            accept(&cpu(&Ray::new(p, ray.dir()).unwrap()))
         })
     })
 }
 
-/// Traces `rays` on the GPU with every method and compares with the CPU; returns
-/// (ray traces compared, traces that differed).
+/// A CPU trace: the oracle of one GPU traversal.
+type CpuTrace<'a> = dyn Fn(&Ray) -> Option<Hit> + 'a;
+
+/// Traces `rays` on the GPU with every traversal and compares with the CPU: the world's
+/// methods with `trace_naadf`, the SVO and the SVDAG with the CPU walk of the same tree
+/// (geometry only); returns (ray traces compared, traces that differed).
 fn compare(gpu: &Gpu, world: &World, what: &str, rays: &[Ray]) -> (usize, usize) {
     let (cpu_rays, gpu_rays): (Vec<Ray>, Vec<GpuRay>) = rays.iter().enumerate().map(|(i, r)| exact_f32(i, r)).unzip();
-    let expected: Vec<Option<Hit>> = cpu_rays.iter().map(|r| trace_naadf(world, r)).collect();
     let mut gw = GpuWorld::new(gpu, world).expect("upload");
-    gw.upload_grid(world).expect("grid");
     let mut tracer = RayTracer::new(gpu);
+    // A world without solid voxels has no trees (the builds refuse it).
+    let trees = Svo::build(world).ok().zip(Svdag::build(world).ok());
+    let mut compared = 0;
     let mut differed = 0;
-    for method in Method::ALL {
-        let got = tracer.trace(gpu, &gw, &gpu_rays, method).expect("trace");
+    for traversal in Traversal::ALL {
+        let cpu: Box<CpuTrace> = match (traversal, &trees) {
+            (Traversal::Method(Method::Grid), _) => {
+                gw.upload_grid(world).expect("grid");
+                Box::new(|r| trace_naadf(world, r))
+            }
+            (Traversal::Method(_), _) => Box::new(|r| trace_naadf(world, r)),
+            (Traversal::Svo, Some((svo, _))) => {
+                gw.upload_svo(svo).expect("svo upload");
+                Box::new(|r| svo.trace(r))
+            }
+            (Traversal::Svdag, Some((_, dag))) => {
+                gw.upload_svdag(dag).expect("svdag upload");
+                Box::new(|r| dag.trace(r))
+            }
+            (_, None) => {
+                assert_eq!(
+                    WorldStats::of(world).solid_voxels,
+                    0,
+                    "{what}: the trees failed to build"
+                );
+                continue;
+            }
+        };
+        compared += rays.len();
+        let got = tracer.trace(gpu, &gw, &gpu_rays, traversal).expect("trace");
         for (i, g) in got.iter().enumerate() {
-            assert!(!g.exhausted, "{what}/{}: ray {i} ran out of steps", method.name());
-            if same_result(&expected[i], &g.hit) {
+            assert!(!g.exhausted, "{what}/{}: ray {i} ran out of steps", traversal.name());
+            let expected = cpu(&cpu_rays[i]);
+            if same_result(&expected, &g.hit) {
                 continue;
             }
             assert!(
-                near_tie(world, &cpu_rays[i], |h| same_result(h, &g.hit)),
+                near_tie(&cpu, &cpu_rays[i], |h| same_result(h, &g.hit)),
                 "{what}/{}: ray {:?} dir {:?}: CPU {:?}, GPU {:?}, and no nudge within {TIE_EPS} explains it",
-                method.name(),
+                traversal.name(),
                 cpu_rays[i].origin(),
                 cpu_rays[i].dir(),
-                expected[i],
+                expected,
                 g.hit
             );
             differed += 1;
         }
     }
-    (rays.len() * Method::ALL.len(), differed)
+    (compared, differed)
 }
 
 fn size(x: u32, y: u32, z: u32) -> WorldSize {
@@ -248,7 +281,7 @@ fn material_frames_match_the_cpu_raycast_of_every_pixel() {
                 }
                 // Only a pixel whose ray lies within a hair of a tie may differ.
                 assert!(
-                    near_tie(&world, &ray, matches),
+                    near_tie(&|r: &Ray| trace_naadf(&world, r), &ray, matches),
                     "{cam} pixel ({px},{py}): GPU {got:?}, CPU {:?}",
                     expected_pixel(&world, &cpu)
                 );

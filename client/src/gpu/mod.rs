@@ -41,7 +41,7 @@ pub use context::{Gpu, GpuError};
 pub use gi::{CHANGE_REACH, Gi, GiHistory, GiPass};
 pub use headless::Headless;
 pub use pathtrace::PathTracer;
-pub use rays::{GpuHit, GpuRay, RayBatch, RayTracer};
+pub use rays::{GpuHit, GpuRay, RayBatch, RayTracer, Traversal};
 pub use render::{DEFAULT_SUN, Frame, GBUFFER_MAGIC, Mode, Renderer, STEPS_FULL_SCALE, write_gbuffer};
 pub use temporal::Temporal;
 pub use uniform::{FrameInfo, GiInfo, LightInfo, Member, WgslStruct, WgslType, WorldInfo};

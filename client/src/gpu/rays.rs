@@ -56,6 +56,56 @@ pub struct GpuHit {
     pub steps: u32,
 }
 
+/// What a ray-list trace walks: one of the world's traversal methods, or a tree of the
+/// paper's comparison (uploaded with [`GpuWorld::upload_svo`] or
+/// [`GpuWorld::upload_svdag`]; geometry only, so its hits report material 0).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Traversal {
+    /// A method of the world's own (the grid needs [`GpuWorld::upload_grid`]).
+    Method(Method),
+    /// The SVO.
+    Svo,
+    /// The SVDAG.
+    Svdag,
+}
+
+impl Traversal {
+    /// Every traversal, in the order benchmarks report them.
+    pub const ALL: [Traversal; 5] = [
+        Traversal::Method(Method::Naadf),
+        Traversal::Method(Method::Nodf),
+        Traversal::Method(Method::Grid),
+        Traversal::Svo,
+        Traversal::Svdag,
+    ];
+
+    /// Its name in reports (a method's CLI name, `svo`, `svdag`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Traversal::Method(m) => m.name(),
+            Traversal::Svo => "svo",
+            Traversal::Svdag => "svdag",
+        }
+    }
+
+    /// The world loop, and whether it uses AADFs.
+    fn world_loop(self) -> (Loop, bool) {
+        match self {
+            Traversal::Method(Method::Naadf) => (Loop::Hierarchy, true),
+            Traversal::Method(Method::Nodf) => (Loop::Hierarchy, false),
+            Traversal::Method(Method::Grid) => (Loop::Grid, false),
+            Traversal::Svo => (Loop::Svo, false),
+            Traversal::Svdag => (Loop::Svdag, false),
+        }
+    }
+}
+
+impl From<Method> for Traversal {
+    fn from(m: Method) -> Self {
+        Traversal::Method(m)
+    }
+}
+
 /// Rays uploaded once, traced any number of times (benchmarks time [`RayTracer::run`]).
 pub struct RayBatch {
     count: u32,
@@ -128,14 +178,24 @@ impl RayTracer {
         })
     }
 
-    /// Traces every ray of `batch` with `method` and waits for the device to finish.
-    /// The grid method needs [`GpuWorld::upload_grid`] first.
-    pub fn run(&mut self, gpu: &Gpu, world: &GpuWorld, batch: &RayBatch, method: Method) -> Result<(), GpuError> {
-        let (lp, aadf) = match method {
-            Method::Naadf => (Loop::Hierarchy, true),
-            Method::Nodf => (Loop::Hierarchy, false),
-            Method::Grid => (Loop::Grid, false),
-        };
+    /// Traces every ray of `batch` with `traversal` and waits for the device to finish.
+    /// The grid, the SVO and the SVDAG must have been uploaded to `world` last (see
+    /// [`Traversal`]); otherwise this fails.
+    pub fn run(
+        &mut self,
+        gpu: &Gpu,
+        world: &GpuWorld,
+        batch: &RayBatch,
+        traversal: impl Into<Traversal>,
+    ) -> Result<(), GpuError> {
+        let traversal = traversal.into();
+        let (lp, aadf) = traversal.world_loop();
+        if lp != Loop::Hierarchy && world.structure() != Some(lp) {
+            return Err(GpuError::Unsupported(format!(
+                "the {} traversal needs its structure uploaded to the GPU world first",
+                traversal.name()
+            )));
+        }
         let pipeline = self.pipes.get(gpu, world, lp, aadf)?;
         gpu.checked(|| {
             let mut enc = gpu.device.create_command_encoder(&Default::default());
@@ -169,10 +229,10 @@ impl RayTracer {
         gpu: &Gpu,
         world: &GpuWorld,
         rays: &[GpuRay],
-        method: Method,
+        traversal: impl Into<Traversal>,
     ) -> Result<Vec<GpuHit>, GpuError> {
         let batch = self.upload(gpu, rays)?;
-        self.run(gpu, world, &batch, method)?;
+        self.run(gpu, world, &batch, traversal)?;
         self.results(gpu, &batch)
     }
 }

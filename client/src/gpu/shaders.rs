@@ -32,6 +32,12 @@ pub const TRACE: &str = include_str!("../../../shaders/trace.wgsl");
 pub const TRAVERSE: &str = include_str!("../../../shaders/traverse.wgsl");
 /// `shaders/grid.wgsl`: the dense-grid world loop (`grid`).
 pub const GRID: &str = include_str!("../../../shaders/grid.wgsl");
+/// `shaders/tree.wgsl`: the world loop over a tree of the paper's comparison (SVO, SVDAG).
+pub const TREE: &str = include_str!("../../../shaders/tree.wgsl");
+/// `shaders/svo.wgsl`: what an SVO node holds at a cell (`tree_step`).
+pub const SVO: &str = include_str!("../../../shaders/svo.wgsl");
+/// `shaders/svdag.wgsl`: what an SVDAG node holds at a cell (`tree_step`).
+pub const SVDAG: &str = include_str!("../../../shaders/svdag.wgsl");
 /// `shaders/rays.wgsl`: the ray-list pass.
 pub const RAYS: &str = include_str!("../../../shaders/rays.wgsl");
 /// `shaders/render.wgsl`: the frame pass.
@@ -64,7 +70,9 @@ pub const BUFFERS: [(&str, &str); 8] = [
     ("materials", "material_word"),
     ("entity_types", "entity_type_word"),
     ("entity_instances", "instance_word"),
-    ("grid", "grid_word"),
+    // The structure a comparison traversal walks instead of the world's hierarchy: the
+    // dense grid, an SVO or an SVDAG (whichever was uploaded last).
+    ("structure", "structure_word"),
 ];
 
 /// The entity id the shaders report for a hit on the world: one past the largest id an
@@ -171,6 +179,25 @@ pub enum Loop {
     Hierarchy,
     /// The dense grid.
     Grid,
+    /// The SVO of the paper's comparison.
+    Svo,
+    /// The SVDAG of the paper's comparison.
+    Svdag,
+}
+
+impl Loop {
+    /// Every world loop.
+    pub const ALL: [Loop; 4] = [Loop::Hierarchy, Loop::Grid, Loop::Svo, Loop::Svdag];
+
+    /// Its files, in order.
+    fn files(self) -> &'static [&'static str] {
+        match self {
+            Loop::Hierarchy => &[TRAVERSE],
+            Loop::Grid => &[GRID],
+            Loop::Svo => &[TREE, SVO],
+            Loop::Svdag => &[TREE, SVDAG],
+        }
+    }
 }
 
 /// A pass's own file.
@@ -362,12 +389,9 @@ fn gi_parts(split: &GiSplit) -> String {
 
 /// The full WGSL of `pass` with world loop `world_loop` over buffers split as `split`.
 pub fn source(pass: Pass, world_loop: Loop, split: &Split) -> String {
-    let world_loop = match world_loop {
-        Loop::Hierarchy => TRAVERSE,
-        Loop::Grid => GRID,
-    };
     let prelude = prelude(split);
-    let mut files = vec![prelude.as_str(), WORLD, RAY, TRACE, world_loop];
+    let mut files = vec![prelude.as_str(), WORLD, RAY, TRACE];
+    files.extend(world_loop.files());
     files.extend(pass.files());
     let gi = match pass {
         Pass::Gi(_, gi_split) => gi_parts(&gi_split),
@@ -417,7 +441,7 @@ mod tests {
         let split_gi = GiPass::ALL.map(|p| Pass::Gi(p, gi_split));
         for s in [whole(), split] {
             for pass in Pass::ALL.into_iter().chain(split_gi) {
-                for lp in [Loop::Hierarchy, Loop::Grid] {
+                for lp in Loop::ALL {
                     if let Err(e) = validate(&source(pass, lp, &s)) {
                         panic!("{pass:?} with {lp:?} over {s:?}:\n{e}");
                     }

@@ -14,15 +14,17 @@
 //! ([`GpuWorld::changes_since`]).
 
 use super::context::{Gpu, GpuError, checked_on};
-use super::shaders::{BUFFERS, Split};
+use super::shaders::{BUFFERS, Loop, Split};
 use super::uniform::WorldInfo;
+use naadf_world::baselines::{Svdag, Svo};
 use naadf_world::digest::{BufferId, Digest, PAGE_BYTES, digest_of};
 use naadf_world::fingerprint::{ChunkChanges, ChunkPrints, stale_words};
 use naadf_world::{World, WorldError};
 use std::collections::VecDeque;
 
 /// The digested buffers that live on the GPU, in the binding order of [`BUFFERS`] (the
-/// model table is not a GPU buffer; the eighth binding, the dense grid, is not digested).
+/// model table is not a GPU buffer; the eighth binding, the comparison structure, is not
+/// digested).
 pub const GPU_BUFFERS: [BufferId; 7] = [
     BufferId::Chunks,
     BufferId::ChunkEntities,
@@ -32,7 +34,8 @@ pub const GPU_BUFFERS: [BufferId; 7] = [
     BufferId::EntityTypes,
     BufferId::EntityInstances,
 ];
-const GRID: usize = 7;
+/// The logical buffer of the comparison structure (dense grid, SVO or SVDAG).
+const STRUCTURE: usize = 7;
 /// Smallest part (and page) size in words: parts never split a 64 KiB page.
 const MIN_PART_WORDS: u64 = (PAGE_BYTES / 4) as u64;
 /// Storage buffers a pass binds besides the world's (rays and hits; pixels and first hits).
@@ -89,6 +92,8 @@ pub struct GpuWorld {
     changes: VecDeque<(u64, ChunkChanges)>,
     /// The generation the log starts after: changes since an older one are unknown.
     changes_from: u64,
+    /// The world loop the comparison-structure binding holds data for, if any.
+    structure: Option<Loop>,
 }
 
 impl std::fmt::Debug for GpuWorld {
@@ -156,6 +161,7 @@ impl GpuWorld {
             prints: None,
             changes: VecDeque::new(),
             changes_from: 0,
+            structure: None,
         };
         w.check_bindings(&split)?;
         w.sync(world)?;
@@ -281,32 +287,68 @@ impl GpuWorld {
     }
 
     /// Uploads a dense decode of `world` (16-bit material ids, x fastest) for the `grid`
-    /// traversal variant. It is a snapshot: later syncs do not update it.
+    /// traversal variant. It is a snapshot: later syncs do not update it. It replaces any
+    /// other comparison structure.
     pub fn upload_grid(&mut self, world: &World) -> Result<(), GpuError> {
         let n = world.size().voxel_count();
-        let bytes = n * 2;
+        self.check_structure_bytes(n * 2, &format!("a dense grid of {n} voxels"))?;
+        let mut raw = Vec::with_capacity(n as usize * 2);
+        world
+            .export_raw(&mut raw)
+            .map_err(|e| GpuError::Unsupported(format!("dense decode failed: {e}")))?;
+        self.upload_structure(Loop::Grid, &raw)
+    }
+
+    /// Uploads `svo` in its GPU layout ([`Svo::gpu_words`]) for [`Loop::Svo`], replacing
+    /// any other comparison structure.
+    pub fn upload_svo(&mut self, svo: &Svo) -> Result<(), GpuError> {
+        let words = svo.gpu_words().map_err(|e| GpuError::Unsupported(e.to_string()))?;
+        self.check_structure_bytes(4 * words.len() as u64, "the SVO")?;
+        self.upload_structure(Loop::Svo, bytemuck::cast_slice(&words))
+    }
+
+    /// Uploads `dag` in its GPU layout ([`Svdag::gpu_words`]) for [`Loop::Svdag`],
+    /// replacing any other comparison structure.
+    pub fn upload_svdag(&mut self, dag: &Svdag) -> Result<(), GpuError> {
+        let words = dag.gpu_words().map_err(|e| GpuError::Unsupported(e.to_string()))?;
+        self.check_structure_bytes(4 * words.len() as u64, "the SVDAG")?;
+        self.upload_structure(Loop::Svdag, bytemuck::cast_slice(&words))
+    }
+
+    /// The world loop whose comparison structure is on the device (the last uploaded).
+    pub fn structure(&self) -> Option<Loop> {
+        self.structure
+    }
+
+    /// Fails when `bytes` of a comparison structure exceed the 64 bindings it may take.
+    fn check_structure_bytes(&self, bytes: u64, what: &str) -> Result<(), GpuError> {
         let max_bytes = self.part_words * 4 * 64;
         if bytes > max_bytes {
             return Err(GpuError::Unsupported(format!(
-                "a dense grid of {n} voxels ({} MiB) exceeds what the grid variant binds ({} MiB)",
+                "{what} ({} MiB) exceeds what the comparison binding holds ({} MiB)",
                 bytes >> 20,
                 max_bytes >> 20
             )));
         }
-        let mut raw = Vec::with_capacity(bytes as usize);
-        world
-            .export_raw(&mut raw)
-            .map_err(|e| GpuError::Unsupported(format!("dense decode failed: {e}")))?;
-        if self.reserve(GRID, bytes)? {
+        Ok(())
+    }
+
+    /// Writes `bytes` to the comparison-structure buffer, page by page, as the data of
+    /// world loop `lp`.
+    fn upload_structure(&mut self, lp: Loop, bytes: &[u8]) -> Result<(), GpuError> {
+        let len = bytes.len() as u64;
+        self.structure = None;
+        if self.reserve(STRUCTURE, len)? {
             self.rebind();
         }
-        for (i, chunk) in raw.chunks(PAGE_BYTES).enumerate() {
-            // The grid is u16 pairs: pad an odd tail to a whole word.
+        for (i, chunk) in bytes.chunks(PAGE_BYTES).enumerate() {
+            // A dense grid is u16 pairs: pad an odd tail to a whole word.
             let mut page = chunk.to_vec();
             page.resize(page.len().next_multiple_of(4), 0);
-            self.write(GRID, (i * PAGE_BYTES) as u64, &page);
+            self.write(STRUCTURE, (i * PAGE_BYTES) as u64, &page);
         }
-        self.buffers[GRID].len = bytes;
+        self.buffers[STRUCTURE].len = len;
+        self.structure = Some(lp);
         Ok(())
     }
 

@@ -1,13 +1,18 @@
-//! `naadf bench gpu WORLD`: ray throughput of the GPU traversal variants (`naadf`, `nodf`
-//! and `grid`) on the fixed cameras of `bench traverse`, primary and secondary rays, all
-//! measured in one run so that their ratios mean something on a shared machine. Every
-//! GPU result is also checked against the CPU `naadf` traversal.
+//! `naadf bench gpu WORLD`: ray throughput of the GPU traversals (`naadf`, `nodf`, `grid`,
+//! and the paper's `svo` and `svdag`) on the fixed cameras of `bench traverse`, primary and
+//! secondary rays, all measured in one run (rounds in rotating order) so that their ratios
+//! mean something on a shared machine. Every GPU result is also checked against the CPU:
+//! the world's methods against the `naadf` traversal, the trees against their own CPU walk.
+//! `bench paper --gpu` measures with the same code ([`measure_gpu`]).
 
+use super::{median_range, print_ratios};
 use crate::commands::{load_world, print_json};
 use anyhow::{Result, bail};
-use naadf_client::gpu::{Gpu, GpuHit, GpuRay, GpuWorld, RayBatch, RayTracer};
+use naadf_client::gpu::{Gpu, GpuHit, GpuRay, GpuWorld, RayBatch, RayTracer, Traversal};
+use naadf_world::World;
+use naadf_world::baselines::{Svdag, Svo};
 use naadf_world::raysets::{fixed_cameras, primary_rays, secondary_rays};
-use naadf_world::traverse::{Hit, Method, Ray, Tracer, same_result};
+use naadf_world::traverse::{Hit, Method, Ray, same_result, trace_naadf};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -28,7 +33,8 @@ pub struct GpuArgs {
     /// Only the first N fixed cameras (all by default).
     #[arg(long)]
     cameras: Option<usize>,
-    /// Timed runs per variant and ray set; the fastest counts.
+    /// Timed rounds; each traces both ray sets with every variant, the order rotating. The
+    /// median counts.
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
     repeat: u32,
     /// Seed of the secondary-ray directions.
@@ -44,9 +50,9 @@ pub struct GpuArgs {
 struct GpuReport {
     /// The adapter (name, backend, device type).
     adapter: String,
-    /// Mrays/s per variant on primary rays.
+    /// Median Mrays/s per variant on primary rays.
     primary: BTreeMap<&'static str, f64>,
-    /// Mrays/s per variant on secondary rays.
+    /// Median Mrays/s per variant on secondary rays.
     secondary: BTreeMap<&'static str, f64>,
     /// Primary rays per run.
     rays: usize,
@@ -55,26 +61,63 @@ struct GpuReport {
     /// Dispatches per run of the primary rays (a ray list larger than one storage binding
     /// is split).
     batches: usize,
+    /// Timed rounds.
+    rounds: u32,
     /// Mean cells visited per ray, per variant (primary, secondary).
     steps: BTreeMap<&'static str, [f64; 2]>,
-    /// Rays whose GPU result differs from the CPU `naadf` trace of the same `f64` ray,
-    /// per variant (primary and secondary together). Only rays within a rounding error
-    /// of a tie may differ: the GPU receives the ray rounded to `f32`.
+    /// Rays whose GPU result differs from the CPU's answer for the same `f64` ray, per
+    /// variant (primary and secondary together). Only rays within a rounding error of a
+    /// tie may differ: the GPU receives the ray rounded to `f32`.
     mismatches: BTreeMap<&'static str, usize>,
     /// Variants not measured, and why.
     skipped: BTreeMap<&'static str, String>,
 }
 
-/// A ray set uploaded once, in as many batches as the binding limit needs, with the CPU's
-/// answers.
+/// One traversal's GPU figures.
+pub(super) struct GpuFigures {
+    /// Mrays/s per round, primary and secondary rays.
+    pub rates: [Vec<f64>; 2],
+    /// Mean cells visited per ray (primary, secondary).
+    pub steps: [f64; 2],
+    /// Rays (both sets) whose GPU result differs from the CPU's.
+    pub mismatches: usize,
+}
+
+/// What [`measure_gpu`] measured.
+pub(super) struct GpuMeasurement {
+    /// The adapter (name, backend, device type).
+    pub adapter: String,
+    /// Dispatches per run of the primary rays.
+    pub batches: usize,
+    /// Per traversal measured, by name.
+    pub figures: BTreeMap<&'static str, GpuFigures>,
+    /// Traversals not measured, and why.
+    pub skipped: BTreeMap<&'static str, String>,
+}
+
+impl GpuMeasurement {
+    /// Fails when a traversal differs from the CPU on more rays than the tie allowance: 1
+    /// in 10,000 of `rays`, plus one.
+    pub fn check_mismatches(&self, rays: usize) -> Result<()> {
+        let allowance = rays / 10_000 + 1;
+        if let Some((m, f)) = self.figures.iter().find(|(_, f)| f.mismatches > allowance) {
+            bail!(
+                "{} {m} results differ from the CPU: more than the 1 in 10,000 tie allowance ({allowance})",
+                f.mismatches
+            );
+        }
+        Ok(())
+    }
+}
+
+/// A ray set uploaded once, in as many batches as the binding limit needs.
 struct RaySet {
     batches: Vec<RayBatch>,
     len: usize,
-    cpu: Vec<Option<Hit>>,
 }
 
 impl RaySet {
-    fn new(gpu: &Gpu, tracer: &RayTracer, rays: &[Ray], cpu: Vec<Option<Hit>>) -> Result<Self> {
+    fn new(gpu: &Gpu, tracer: &RayTracer, rays: &[Ray]) -> Result<Self> {
         let gpu_rays: Vec<GpuRay> = rays.iter().map(GpuRay::from).collect();
         let batches = gpu_rays
             .chunks(RayTracer::max_batch(gpu).max(1))
@@ -83,33 +126,20 @@ impl RaySet {
         Ok(RaySet {
             batches,
             len: rays.len(),
-            cpu,
         })
     }
 
-    /// Traces the set once untimed (pipeline build, caches), then `repeat` times; returns
-    /// the best Mrays/s, the mean steps and the number of rays differing from the CPU.
-    fn measure(
-        &self,
-        gpu: &Gpu,
-        tracer: &mut RayTracer,
-        world: &GpuWorld,
-        method: Method,
-        repeat: u32,
-    ) -> Result<(f64, f64, usize)> {
-        let run_all = |tracer: &mut RayTracer| -> Result<()> {
-            for b in &self.batches {
-                tracer.run(gpu, world, b, method)?;
-            }
-            Ok(())
-        };
-        run_all(tracer)?;
-        let mut best = f64::INFINITY;
-        for _ in 0..repeat {
-            let t0 = Instant::now();
-            run_all(tracer)?;
-            best = best.min(t0.elapsed().as_secs_f64());
+    /// Traces the set once with `traversal` and returns the seconds it took.
+    fn time(&self, gpu: &Gpu, tracer: &mut RayTracer, world: &GpuWorld, traversal: Traversal) -> Result<f64> {
+        let t0 = Instant::now();
+        for b in &self.batches {
+            tracer.run(gpu, world, b, traversal)?;
         }
+        Ok(t0.elapsed().as_secs_f64())
+    }
+
+    /// The results of the last run: mean steps, and the rays differing from `cpu`.
+    fn check(&self, gpu: &Gpu, tracer: &RayTracer, cpu: &[Option<Hit>]) -> Result<(f64, usize)> {
         let mut results: Vec<GpuHit> = Vec::with_capacity(self.len);
         for b in &self.batches {
             results.extend(tracer.results(gpu, b)?);
@@ -117,11 +147,142 @@ impl RaySet {
         let steps = results.iter().map(|r| f64::from(r.steps)).sum::<f64>() / self.len.max(1) as f64;
         let mismatches = results
             .iter()
-            .zip(&self.cpu)
+            .zip(cpu)
             .filter(|(g, c)| g.exhausted || !same_result(&g.hit, c))
             .count();
-        Ok((self.len as f64 / best / 1e6, steps, mismatches))
+        Ok((steps, mismatches))
     }
+}
+
+/// Measures `traversals` on the GPU on the `primary` and `secondary` rays of `world`, in
+/// `rounds` timed rounds whose order rotates (after one untimed run each, which also
+/// checks every result against the CPU). Each traversal that needs a comparison structure
+/// gets a device copy of the world of its own, so that no round waits for an upload. The
+/// trees, when given, must be built from `world`.
+pub(super) fn measure_gpu(
+    world: &World,
+    trees: Option<(&Svo, &Svdag)>,
+    traversals: &[Traversal],
+    primary: &[Ray],
+    secondary: &[Ray],
+    rounds: u32,
+) -> Result<GpuMeasurement> {
+    let gpu = Gpu::new()?;
+    let mut tracer = RayTracer::new(&gpu);
+    let sets = [
+        RaySet::new(&gpu, &tracer, primary)?,
+        RaySet::new(&gpu, &tracer, secondary)?,
+    ];
+    let mut out = GpuMeasurement {
+        adapter: gpu.describe(),
+        batches: sets[0].batches.len(),
+        figures: BTreeMap::new(),
+        skipped: BTreeMap::new(),
+    };
+    let base = GpuWorld::new(&gpu, world)?;
+    let naadf_answers: Vec<Vec<Option<Hit>>> = [primary, secondary]
+        .iter()
+        .map(|rays| rays.par_iter().map(|r| trace_naadf(world, r)).collect())
+        .collect();
+    let mut ready: Vec<Prepared> = Vec::new();
+    for &t in traversals {
+        let prepared = match (t, trees) {
+            (Traversal::Method(Method::Grid), _) => GpuWorld::new(&gpu, world).and_then(|mut w| {
+                w.upload_grid(world)?;
+                Ok(Some(w))
+            }),
+            (Traversal::Method(_), _) => Ok(None),
+            (Traversal::Svo | Traversal::Svdag, None) => {
+                out.skipped
+                    .insert(t.name(), "the world has no trees (no solid voxel)".into());
+                continue;
+            }
+            (Traversal::Svo, Some((svo, _))) => GpuWorld::new(&gpu, world).and_then(|mut w| {
+                w.upload_svo(svo)?;
+                Ok(Some(w))
+            }),
+            (Traversal::Svdag, Some((_, dag))) => GpuWorld::new(&gpu, world).and_then(|mut w| {
+                w.upload_svdag(dag)?;
+                Ok(Some(w))
+            }),
+        };
+        let device = match prepared {
+            Ok(d) => d,
+            Err(e) => {
+                tracing::warn!("skipping {}: {e}", t.name());
+                out.skipped.insert(t.name(), e.to_string());
+                continue;
+            }
+        };
+        let answers = match (t, trees) {
+            (Traversal::Svo, Some((svo, _))) => tree_answers(|r| svo.trace(r), primary, secondary),
+            (Traversal::Svdag, Some((_, dag))) => tree_answers(|r| dag.trace(r), primary, secondary),
+            _ => naadf_answers.clone(),
+        };
+        ready.push(Prepared {
+            traversal: t,
+            device,
+            answers,
+        });
+    }
+    // One untimed run each (pipeline build, caches), checked against the CPU.
+    for Prepared {
+        traversal: t,
+        device,
+        answers,
+    } in &ready
+    {
+        tracing::info!("checking {}", t.name());
+        let w = device.as_ref().unwrap_or(&base);
+        let mut steps = [0.0; 2];
+        let mut mismatches = 0;
+        for (k, set) in sets.iter().enumerate() {
+            set.time(&gpu, &mut tracer, w, *t)?;
+            let (s, m) = set.check(&gpu, &tracer, &answers[k])?;
+            steps[k] = s;
+            mismatches += m;
+        }
+        out.figures.insert(
+            t.name(),
+            GpuFigures {
+                rates: [Vec::new(), Vec::new()],
+                steps,
+                mismatches,
+            },
+        );
+    }
+    for round in 0..rounds as usize {
+        for k in 0..ready.len() {
+            let p = &ready[(k + round) % ready.len()];
+            let (t, w) = (&p.traversal, p.device.as_ref().unwrap_or(&base));
+            for (s, set) in sets.iter().enumerate() {
+                let secs = set.time(&gpu, &mut tracer, w, *t)?;
+                let figures = out.figures.get_mut(t.name()).expect("checked above");
+                figures.rates[s].push(set.len as f64 / secs / 1e6);
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// A traversal ready to time: its device world (`None`: the shared one) and the CPU's
+/// answers on the primary and secondary rays.
+struct Prepared {
+    traversal: Traversal,
+    device: Option<GpuWorld>,
+    answers: Vec<Vec<Option<Hit>>>,
+}
+
+/// A tree's CPU answers on both ray sets.
+fn tree_answers(
+    trace: impl Fn(&Ray) -> Option<Hit> + Sync,
+    primary: &[Ray],
+    secondary: &[Ray],
+) -> Vec<Vec<Option<Hit>>> {
+    [primary, secondary]
+        .iter()
+        .map(|rays| rays.par_iter().map(&trace).collect())
+        .collect()
 }
 
 /// Runs `bench gpu`.
@@ -130,57 +291,37 @@ pub fn run(a: GpuArgs) -> Result<()> {
     let mut cameras = fixed_cameras(world.size());
     cameras.truncate(a.cameras.unwrap_or(usize::MAX).max(1));
     let primary = primary_rays(&cameras, a.width, a.height);
-    // The CPU oracle, and the secondary rays (cosine bounces off its primary hits).
-    let cpu = Tracer::new(&world, Method::Naadf)?;
-    let primary_cpu: Vec<Option<Hit>> = primary.par_iter().map(|r| cpu.trace(r)).collect();
-    let secondary = secondary_rays(&primary, &primary_cpu, a.seed);
-    let secondary_cpu: Vec<Option<Hit>> = secondary.par_iter().map(|r| cpu.trace(r)).collect();
-
-    let gpu = Gpu::new()?;
-    let mut gpu_world = GpuWorld::new(&gpu, &world)?;
+    // The secondary rays: cosine bounces off the CPU's primary hits.
+    let hits: Vec<Option<Hit>> = primary.par_iter().map(|r| trace_naadf(&world, r)).collect();
+    let secondary = secondary_rays(&primary, &hits, a.seed);
+    let svo = Svo::build(&world);
+    let dag = Svdag::build(&world);
+    let trees = svo.as_ref().ok().zip(dag.as_ref().ok());
+    let m = measure_gpu(&world, trees, &Traversal::ALL, &primary, &secondary, a.repeat)?;
     let mut report = GpuReport {
-        adapter: gpu.describe(),
+        adapter: m.adapter.clone(),
         primary: BTreeMap::new(),
         secondary: BTreeMap::new(),
         rays: primary.len(),
         secondary_rays: secondary.len(),
-        batches: 0,
+        batches: m.batches,
+        rounds: a.repeat,
         steps: BTreeMap::new(),
         mismatches: BTreeMap::new(),
-        skipped: BTreeMap::new(),
+        skipped: m.skipped.clone(),
     };
-    if let Err(e) = gpu_world.upload_grid(&world) {
-        report.skipped.insert(Method::Grid.name(), e.to_string());
-    }
-    let mut tracer = RayTracer::new(&gpu);
-    let sets = [
-        RaySet::new(&gpu, &tracer, &primary, primary_cpu)?,
-        RaySet::new(&gpu, &tracer, &secondary, secondary_cpu)?,
-    ];
-    report.batches = sets[0].batches.len();
-    for method in Method::ALL {
-        if report.skipped.contains_key(method.name()) {
-            tracing::warn!("skipping {}: {}", method.name(), report.skipped[method.name()]);
-            continue;
-        }
-        tracing::info!("measuring {}", method.name());
-        let (p_rate, p_steps, p_bad) = sets[0].measure(&gpu, &mut tracer, &gpu_world, method, a.repeat)?;
-        let (s_rate, s_steps, s_bad) = sets[1].measure(&gpu, &mut tracer, &gpu_world, method, a.repeat)?;
-        report.primary.insert(method.name(), p_rate);
-        report.secondary.insert(method.name(), s_rate);
-        report.steps.insert(method.name(), [p_steps, s_steps]);
-        report.mismatches.insert(method.name(), p_bad + s_bad);
+    for (&name, f) in &m.figures {
+        report.primary.insert(name, median_range(&f.rates[0]).0);
+        report.secondary.insert(name, median_range(&f.rates[1]).0);
+        report.steps.insert(name, f.steps);
+        report.mismatches.insert(name, f.mismatches);
     }
     if a.json {
         print_json(&report)?;
     } else {
         print_report(&report);
     }
-    let allowance = (report.rays + report.secondary_rays) / 10_000 + 1;
-    if let Some((m, n)) = report.mismatches.iter().find(|(_, n)| **n > allowance) {
-        bail!("{n} {m} results differ from the CPU: more than the 1 in 10,000 tie allowance ({allowance})");
-    }
-    Ok(())
+    m.check_mismatches(primary.len() + secondary.len())
 }
 
 fn print_report(r: &GpuReport) {
@@ -196,8 +337,8 @@ fn print_report(r: &GpuReport) {
         println!("{m:>6}: skipped ({why})");
     }
     println!(
-        "{} primary + {} secondary rays, {} batch(es)",
-        r.rays, r.secondary_rays, r.batches
+        "{} primary + {} secondary rays, {} batch(es), median of {} rounds",
+        r.rays, r.secondary_rays, r.batches, r.rounds
     );
-    super::print_ratios("", &r.primary, &r.secondary);
+    print_ratios("", &r.primary, &r.secondary);
 }

@@ -9,6 +9,7 @@ mod frames;
 mod gi;
 mod gpu;
 mod paper;
+mod plot;
 mod stream;
 mod traverse;
 
@@ -29,7 +30,7 @@ pub enum Bench {
     Edit(edit::EditArgs),
     /// The server under load: join, rejoin, edit latency with many mirrors, wire bytes.
     Stream(stream::StreamArgs),
-    /// GPU ray throughput of the traversal variants (naadf, nodf, grid), checked against the CPU.
+    /// GPU ray throughput of the traversal variants (naadf, nodf, grid, svo, svdag), checked against the CPU.
     Gpu(gpu::GpuArgs),
     /// Frames through a server's render nodes: frames per second, latency, routing overhead.
     Frames(frames::FramesArgs),
@@ -68,10 +69,22 @@ pub fn percentile(sorted: &[f64], q: f64) -> f64 {
         .unwrap_or(f64::NAN)
 }
 
-/// Prints `naadf`'s speed-up over `grid` and `nodf`, from Mrays/s per method.
+/// The median of `values` (nearest rank) and their lowest and highest; NaN when empty.
+pub fn median_range(values: &[f64]) -> (f64, [f64; 2]) {
+    let mut v = values.to_vec();
+    v.sort_by(f64::total_cmp);
+    let (lo, hi) = (v.first().copied(), v.last().copied());
+    (percentile(&v, 0.5), [lo.unwrap_or(f64::NAN), hi.unwrap_or(f64::NAN)])
+}
+
+/// Prints `naadf`'s speed-up over the other methods measured (`grid`, `nodf`, `svo`,
+/// `svdag`), from Mrays/s per method.
 pub fn print_ratios(prefix: &str, primary: &BTreeMap<&str, f64>, secondary: &BTreeMap<&str, f64>) {
     let ratio = |set: &BTreeMap<&str, f64>, other: &str| set.get(other).map_or(f64::NAN, |o| set["naadf"] / o);
-    for other in ["grid", "nodf"] {
+    for other in ["grid", "nodf", "svo", "svdag"]
+        .into_iter()
+        .filter(|m| primary.contains_key(m))
+    {
         println!(
             "{prefix}naadf/{other}: primary {:.1}×, secondary {:.1}×",
             ratio(primary, other),

@@ -2,15 +2,17 @@
 //! build time and primary and secondary Mrays/s of `naadf`, the SVO, the SVDAG and the
 //! dense grid, on the same rays in one run (docs/BASELINES.md).
 
-use super::percentile;
+use super::gpu::measure_gpu;
+use super::{median_range, plot};
 use crate::commands::{load_world, print_json};
 use anyhow::{Result, bail};
+use naadf_client::gpu::Traversal;
 use naadf_world::World;
 use naadf_world::baselines::{Svdag, Svo};
 use naadf_world::ops::{Batch, Limits, Op};
 use naadf_world::raysets::{fixed_cameras, primary_rays, secondary_rays};
 use naadf_world::stats::{Bytes, WorldStats};
-use naadf_world::traverse::{DenseGrid, Hit, Ray, trace_naadf};
+use naadf_world::traverse::{DenseGrid, Hit, Method, Ray, trace_naadf};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -37,6 +39,13 @@ pub struct PaperArgs {
     /// Seed of the secondary-ray directions.
     #[arg(long, default_value_t = 1)]
     seed: u64,
+    /// Also measure the GPU traversals (naadf, SVO, SVDAG, grid) on the same rays.
+    #[arg(long)]
+    gpu: bool,
+    /// Draw the storage-versus-speed scatter (bytes against Mrays/s, one point per
+    /// structure and ray kind; the GPU's too with `--gpu`) as a PNG here.
+    #[arg(long, value_name = "OUT.png")]
+    plot: Option<PathBuf>,
     /// Print one JSON object.
     #[arg(long)]
     json: bool,
@@ -89,6 +98,24 @@ struct Report {
     /// Per baseline, the median over rounds of NAADF's speed-up on primary and secondary
     /// rays.
     naadf_speedup: BTreeMap<&'static str, [f64; 2]>,
+    /// The GPU figures (`--gpu`), or null.
+    gpu: Option<GpuSection>,
+}
+
+/// The GPU traversals on the same rays (`--gpu`).
+#[derive(Serialize)]
+struct GpuSection {
+    /// The adapter (name, backend, device type).
+    adapter: String,
+    /// Per structure: median Mrays/s and range over the rounds (bytes and build time are
+    /// the CPU section's).
+    structures: BTreeMap<&'static str, Figures>,
+    /// Per baseline, the median over rounds of NAADF's speed-up on primary and secondary
+    /// rays.
+    naadf_speedup: BTreeMap<&'static str, [f64; 2]>,
+    /// Rays whose GPU result differs from the CPU's, per structure (only rays within a
+    /// rounding error of a tie may: the GPU receives them rounded to `f32`).
+    mismatches: BTreeMap<&'static str, usize>,
 }
 
 /// How a structure traces a ray.
@@ -152,45 +179,13 @@ pub fn run(a: PaperArgs) -> Result<()> {
             }
         }
     }
-    let median = |v: &[f64]| {
-        let mut v = v.to_vec();
-        v.sort_by(f64::total_cmp);
-        (percentile(&v, 0.5), [v[0], v[v.len() - 1]])
-    };
-    let mut structures = BTreeMap::new();
-    let mut naadf_speedup = BTreeMap::new();
-    for (k, t) in tracers.iter().enumerate() {
-        let (p, pr) = median(&rates[k][0]);
-        let (s, sr) = median(&rates[k][1]);
-        let (bytes, build_ms) = match t.name {
-            "naadf" => (stats.bytes.total, Some(naadf_ms)),
-            "svo" => (svo.bytes(), Some(svo_ms)),
-            "svdag" => (svdag.bytes(), Some(svdag_ms)),
-            _ => (world.size().voxel_count() * 2, None),
-        };
-        structures.insert(
-            t.name,
-            Figures {
-                bytes,
-                primary: Some(p),
-                secondary: Some(s),
-                primary_range: Some(pr),
-                secondary_range: Some(sr),
-                build_ms,
-                skipped: None,
-            },
-        );
-        if k > 0 {
-            // Per round, so that both sides of each ratio saw the same machine.
-            let ratio = |set: usize| {
-                let r: Vec<f64> = (0..rounds as usize)
-                    .map(|i| rates[0][set][i] / rates[k][set][i])
-                    .collect();
-                median(&r).0
-            };
-            naadf_speedup.insert(t.name, [ratio(0), ratio(1)]);
-        }
-    }
+    let names: Vec<&'static str> = tracers.iter().map(|t| t.name).collect();
+    let (mut structures, naadf_speedup) = figures_of(&names, &rates, |name| match name {
+        "naadf" => (stats.bytes.total, Some(naadf_ms)),
+        "svo" => (svo.bytes(), Some(svo_ms)),
+        "svdag" => (svdag.bytes(), Some(svdag_ms)),
+        _ => (world.size().voxel_count() * 2, None),
+    });
     if let Err(e) = &grid {
         structures.insert(
             "grid",
@@ -206,6 +201,35 @@ pub fn run(a: PaperArgs) -> Result<()> {
         };
         hybrid.insert(name, Figures::unmeasured(bytes, skipped));
     }
+    let gpu = if a.gpu {
+        let traversals = [
+            Traversal::Method(Method::Naadf),
+            Traversal::Svo,
+            Traversal::Svdag,
+            Traversal::Method(Method::Grid),
+        ];
+        let m = measure_gpu(&world, Some((&svo, &svdag)), &traversals, &primary, &secondary, rounds)?;
+        m.check_mismatches(primary.len() + secondary.len())?;
+        let names: Vec<&'static str> = m.figures.keys().copied().collect();
+        // "naadf" first: the speed-ups are taken against it.
+        let names: Vec<&'static str> = ["naadf"]
+            .into_iter()
+            .chain(names.into_iter().filter(|&n| n != "naadf"))
+            .collect();
+        let rates: Vec<[Vec<f64>; 2]> = names.iter().map(|n| m.figures[n].rates.clone()).collect();
+        let (mut gpu_structures, gpu_speedup) = figures_of(&names, &rates, |name| (structures[name].bytes, None));
+        for (name, why) in m.skipped {
+            gpu_structures.insert(name, Figures::unmeasured(structures[name].bytes, why));
+        }
+        Some(GpuSection {
+            adapter: m.adapter,
+            structures: gpu_structures,
+            naadf_speedup: gpu_speedup,
+            mismatches: m.figures.iter().map(|(&n, f)| (n, f.mismatches)).collect(),
+        })
+    } else {
+        None
+    };
     let report = Report {
         structures,
         hybrid,
@@ -214,13 +238,87 @@ pub fn run(a: PaperArgs) -> Result<()> {
         rounds,
         naadf_layers: stats.bytes,
         naadf_speedup,
+        gpu,
     };
     if a.json {
         print_json(&report)?;
     } else {
         print_table(&report);
     }
+    if let Some(out) = &a.plot {
+        let name = a
+            .world
+            .file_stem()
+            .map_or("world".into(), |s| s.to_string_lossy().into_owned());
+        plot::draw_scatter(&name, &plot_points(&report), out)?;
+        tracing::info!("scatter written to {}", out.display());
+    }
     Ok(())
+}
+
+/// The scatter's points: every structure on the CPU, the hybrid formats (bytes only), and
+/// the GPU's structures when measured.
+fn plot_points(r: &Report) -> Vec<plot::Point> {
+    let point = |name: String, f: &Figures| plot::Point {
+        name,
+        bytes: f.bytes,
+        primary: f.primary,
+        secondary: f.secondary,
+    };
+    let mut points: Vec<plot::Point> = r
+        .structures
+        .iter()
+        .chain(&r.hybrid)
+        .filter(|(_, f)| f.bytes > 0)
+        .map(|(n, f)| point(n.to_string(), f))
+        .collect();
+    if let Some(g) = &r.gpu {
+        points.extend(
+            g.structures
+                .iter()
+                .filter(|(_, f)| f.primary.is_some())
+                .map(|(n, f)| point(format!("{n} (GPU)"), f)),
+        );
+    }
+    points
+}
+
+/// Each structure's figures from its Mrays/s per round (`rates[k]`, primary and secondary,
+/// for `names[k]`; `naadf` first), with its bytes and build time from `counts`; and NAADF's
+/// speed-up over each other structure, the median of the per-round ratios (both sides of
+/// each ratio saw the same machine state).
+fn figures_of(
+    names: &[&'static str],
+    rates: &[[Vec<f64>; 2]],
+    counts: impl Fn(&str) -> (u64, Option<f64>),
+) -> (BTreeMap<&'static str, Figures>, BTreeMap<&'static str, [f64; 2]>) {
+    let mut structures = BTreeMap::new();
+    let mut speedup = BTreeMap::new();
+    for (k, &name) in names.iter().enumerate() {
+        let (p, pr) = median_range(&rates[k][0]);
+        let (s, sr) = median_range(&rates[k][1]);
+        let (bytes, build_ms) = counts(name);
+        structures.insert(
+            name,
+            Figures {
+                bytes,
+                primary: Some(p),
+                secondary: Some(s),
+                primary_range: Some(pr),
+                secondary_range: Some(sr),
+                build_ms,
+                skipped: None,
+            },
+        );
+        if k > 0 {
+            let ratio = |set: usize| {
+                let r: Vec<f64> = rates[0][set].iter().zip(&rates[k][set]).map(|(a, b)| a / b).collect();
+                median_range(&r).0
+            };
+            speedup.insert(name, [ratio(0), ratio(1)]);
+        }
+    }
+    (structures, speedup)
 }
 
 /// `f`'s result and the milliseconds it took.
@@ -295,6 +393,21 @@ fn print_table(r: &Report) {
             "naadf / {name}: primary ×{p:.2}, secondary ×{s:.2} (median of {} rounds)",
             r.rounds
         );
+    }
+    if let Some(g) = &r.gpu {
+        println!("GPU ({}):", g.adapter);
+        for (name, f) in &g.structures {
+            match (f.primary, f.secondary) {
+                (Some(p), Some(s)) => println!(
+                    "{name:<8} primary {p:.2} Mrays/s, secondary {s:.2} Mrays/s, {} differ from the CPU",
+                    g.mismatches.get(name).copied().unwrap_or(0)
+                ),
+                _ => println!("{name:<8} skipped ({})", f.skipped.as_deref().unwrap_or("")),
+            }
+        }
+        for (name, [p, s]) in &g.naadf_speedup {
+            println!("GPU naadf / {name}: primary ×{p:.2}, secondary ×{s:.2}");
+        }
     }
     let l = &r.naadf_layers;
     println!(

@@ -25,6 +25,36 @@ use rayon::prelude::*;
 /// The most cells a trace visits: far more than any ray crosses, a guard against loops.
 const MAX_STEPS: u32 = 1 << 24;
 
+/// Words before the first node in a tree's GPU layout ([`Svdag::gpu_words`],
+/// [`Svo::gpu_words`]): the cube's depth, the level of the DAG's leaves (0 for the SVO),
+/// and two reserved words. The root node starts right after them.
+pub const GPU_HEADER_WORDS: usize = 4;
+
+/// The most words a 32-bit reference (an offset, an index, or a count of them) may
+/// address: `u32::MAX` itself marks "no child" while a DAG is built.
+pub(crate) const MAX_REFS: u64 = u32::MAX as u64;
+
+/// Checks that `count` words (or nodes, or leaves) stay within `limit` references, and
+/// names `what` in the error.
+pub(crate) fn check_refs(count: u64, limit: u64, what: &str) -> Result<(), WorldError> {
+    if count >= limit {
+        return Err(WorldError::Capacity(format!(
+            "{what}: {count} entries are beyond the 32-bit references of the structure (fewer than {limit})"
+        )));
+    }
+    Ok(())
+}
+
+/// The header of a tree's GPU layout, with room for `body` more words; fails when the
+/// layout would exceed `limit` words (its offsets are 32-bit).
+fn gpu_header(depth: u32, leaf_level: u32, body: usize, limit: u64) -> Result<Vec<u32>, WorldError> {
+    let total = (GPU_HEADER_WORDS + body) as u64;
+    check_refs(total, limit, "a GPU layout's words")?;
+    let mut words = Vec::with_capacity(total as usize);
+    words.extend([depth, leaf_level, 0, 0]);
+    Ok(words)
+}
+
 /// What a tree holds at a cell, one level down from a node.
 pub(crate) enum Step {
     /// The child node (an index or offset the tree understands) at the next level.
@@ -156,4 +186,104 @@ pub(crate) fn cube_depth(dims: [u32; 3]) -> u32 {
         .map(|d| d.next_power_of_two().trailing_zeros())
         .max()
         .unwrap_or(0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::preset::Preset;
+
+    fn world() -> World {
+        World::build(&*Preset::Test.source(None, 1).unwrap(), &|_| {}).unwrap()
+    }
+
+    /// The 32-bit reference limits, reached with a small world by lowering them: one entry
+    /// short of what the structure needs fails with a clear error, the exact need builds.
+    #[test]
+    fn structures_beyond_their_reference_limits_are_refused() {
+        let w = world();
+        let dag = Svdag::build(&w).unwrap();
+        let (leaves, nodes) = dag.node_counts();
+        let widest = dag.levels.iter().map(Vec::len).max().unwrap().max(leaves) as u64;
+        let err = Svdag::build_within(&w, widest).unwrap_err().to_string();
+        assert!(err.contains("32-bit references"), "{err}");
+        assert!(Svdag::build_within(&w, widest + 1).is_ok());
+        assert!(nodes.iter().all(|&n| n > 0));
+
+        let words = dag.gpu_words().unwrap();
+        let need = words.len() as u64;
+        assert!(
+            dag.gpu_words_within(need)
+                .unwrap_err()
+                .to_string()
+                .contains("GPU layout")
+        );
+        assert_eq!(dag.gpu_words_within(need + 1).unwrap(), words);
+
+        let svo = Svo::build(&w).unwrap();
+        let widest = *svo.node_counts().iter().max().unwrap() as u64;
+        assert!(
+            Svo::build_within(&w, widest)
+                .unwrap_err()
+                .to_string()
+                .contains("octree")
+        );
+        assert!(Svo::build_within(&w, widest + 1).is_ok());
+        let words = svo.gpu_words().unwrap();
+        assert_eq!(
+            words.len(),
+            GPU_HEADER_WORDS + 2 * svo.node_counts().iter().sum::<usize>()
+        );
+        assert!(svo.gpu_words_within(words.len() as u64).is_err());
+    }
+
+    /// The GPU layouts walk to the same answers as the trees: a CPU walk of the flat words,
+    /// written the way the shaders read them, agrees with [`trace_tree`] at every voxel.
+    #[test]
+    fn gpu_layouts_hold_the_trees() {
+        let w = world();
+        let size = w.size().voxels();
+        let dag = Svdag::build(&w).unwrap();
+        let svo = Svo::build(&w).unwrap();
+        let (dw, sw) = (dag.gpu_words().unwrap(), svo.gpu_words().unwrap());
+        // Descends from the root to the voxel: solid or not, as the shaders do.
+        let solid = |words: &[u32], dag: bool, p: [i64; 3]| -> bool {
+            let (depth, leaf_level) = (words[0], words[1] as usize);
+            let mut node = GPU_HEADER_WORDS as u32;
+            for level in 0.. {
+                if dag && level == leaf_level {
+                    let bit = (p[0] & 3) + 4 * (p[1] & 3) + 16 * (p[2] & 3);
+                    let leaf = u64::from(words[node as usize]) | u64::from(words[node as usize + 1]) << 32;
+                    return leaf >> bit & 1 == 1;
+                }
+                let k = depth - 1 - level as u32;
+                let (mask, oct) = (words[node as usize], octant(p, k));
+                if mask >> oct & 1 == 0 {
+                    return false;
+                }
+                let rank = (mask & ((1 << oct) - 1)).count_ones();
+                if !dag && k == 0 {
+                    return true;
+                }
+                node = if dag {
+                    words[(node + 1 + rank) as usize]
+                } else {
+                    words[node as usize + 1] + 2 * rank
+                };
+            }
+            unreachable!()
+        };
+        let mut solids = 0;
+        for z in 0..i64::from(size[2]) {
+            for y in 0..i64::from(size[1]) {
+                for x in 0..i64::from(size[0]) {
+                    let want = w.material_at([x as u32, y as u32, z as u32]) != 0;
+                    solids += usize::from(want);
+                    assert_eq!(solid(&dw, true, [x, y, z]), want, "svdag at {x},{y},{z}");
+                    assert_eq!(solid(&sw, false, [x, y, z]), want, "svo at {x},{y},{z}");
+                }
+            }
+        }
+        assert!(solids > 0);
+    }
 }

@@ -10,7 +10,7 @@
 //! Bytes (docs/BASELINES.md): 8 per unique leaf plus 4·(1 + children) per unique inner
 //! node.
 
-use super::{Step, Tree, block_masks, cube_depth, octant, trace_tree};
+use super::{MAX_REFS, Step, Tree, block_masks, check_refs, cube_depth, gpu_header, octant, trace_tree};
 use crate::WorldError;
 use crate::traverse::{Hit, Ray};
 use crate::world::World;
@@ -25,7 +25,7 @@ pub struct Svdag {
     /// log2 of the cube's side (at least 3: the root is an inner node).
     depth: u32,
     /// Inner node words per level, from the root (side `2^depth`) down to side 8.
-    levels: Vec<Vec<u32>>,
+    pub(super) levels: Vec<Vec<u32>>,
     /// The unique leaf masks.
     leaves: Vec<u64>,
 }
@@ -44,6 +44,12 @@ impl Svdag {
     /// assert!(dag.bytes() > 0);
     /// ```
     pub fn build(world: &World) -> Result<Self, WorldError> {
+        Self::build_within(world, MAX_REFS)
+    }
+
+    /// [`Svdag::build`] with references limited to fewer than `limit` entries (tests
+    /// reach the limit with small worlds).
+    pub(crate) fn build_within(world: &World, limit: u64) -> Result<Self, WorldError> {
         let size = world.size().voxels();
         let depth = cube_depth(size).max(3);
         let masks = block_masks(world)?;
@@ -61,6 +67,7 @@ impl Svdag {
                 }),
             })
             .collect();
+        check_refs(leaves.len() as u64, limit, "the SVDAG's leaves")?;
         let mut dims = size.map(|v| v / 4);
         let mut levels = Vec::new();
         for _ in 3..=depth {
@@ -108,12 +115,7 @@ impl Svdag {
                 })
                 .collect();
             // Offsets (and NONE) must fit the 32-bit references.
-            if words.len() >= NONE as usize {
-                return Err(WorldError::Capacity(format!(
-                    "an SVDAG level of {} words is beyond 32-bit references",
-                    words.len()
-                )));
-            }
+            check_refs(words.len() as u64, limit, "an SVDAG level's words")?;
             levels.push(words);
             dims = up;
         }
@@ -178,6 +180,49 @@ impl Svdag {
             .collect();
         let side2: u64 = distinct.iter().map(|&x| 4 * (1 + u64::from(x.count_ones()))).sum();
         Ok(raw + inner + above + side4 + side2 + 4)
+    }
+
+    /// The DAG as one array of words for the GPU traversal (docs/BASELINES.md): the
+    /// [header](super::GPU_HEADER_WORDS) (depth, the level of the leaves), then the inner
+    /// levels from the root down, then the leaves (two words each, low half first). A
+    /// reference is rewritten to the absolute word of its node or leaf. Fails when that
+    /// exceeds 32-bit offsets.
+    pub fn gpu_words(&self) -> Result<Vec<u32>, WorldError> {
+        self.gpu_words_within(MAX_REFS)
+    }
+
+    /// [`Svdag::gpu_words`] with at most `limit` words.
+    pub(crate) fn gpu_words_within(&self, limit: u64) -> Result<Vec<u32>, WorldError> {
+        let inner: usize = self.levels.iter().map(Vec::len).sum();
+        let mut words = gpu_header(
+            self.depth,
+            self.levels.len() as u32,
+            inner + 2 * self.leaves.len(),
+            limit,
+        )?;
+        // Where each level, and the leaves, start.
+        let mut base = Vec::with_capacity(self.levels.len() + 1);
+        let mut at = words.len() as u32;
+        for level in &self.levels {
+            base.push(at);
+            at += level.len() as u32;
+        }
+        base.push(at);
+        for (l, level) in self.levels.iter().enumerate() {
+            let stride = if l + 1 == self.levels.len() { 2 } else { 1 };
+            let mut i = 0;
+            while i < level.len() {
+                let mask = level[i];
+                words.push(mask);
+                let children = mask.count_ones() as usize;
+                words.extend(level[i + 1..i + 1 + children].iter().map(|&r| base[l + 1] + stride * r));
+                i += 1 + children;
+            }
+        }
+        for &leaf in &self.leaves {
+            words.extend([leaf as u32, (leaf >> 32) as u32]);
+        }
+        Ok(words)
     }
 
     /// Unique leaves and unique inner nodes per level (root first).

@@ -12,7 +12,7 @@
 //! which is no slower to follow. The byte count is the paper's: 4 per descriptor
 //! (docs/BASELINES.md).
 
-use super::{Step, Tree, block_masks, cube_depth, octant, trace_tree};
+use super::{MAX_REFS, Step, Tree, block_masks, check_refs, cube_depth, gpu_header, octant, trace_tree};
 use crate::WorldError;
 use crate::traverse::{Hit, Ray};
 use crate::world::World;
@@ -54,6 +54,12 @@ impl Svo {
     /// assert_eq!(svo.bytes() % 4, 0);
     /// ```
     pub fn build(world: &World) -> Result<Self, WorldError> {
+        Self::build_within(world, MAX_REFS)
+    }
+
+    /// [`Svo::build`] with fewer than `limit` nodes per level (tests reach the limit with
+    /// small worlds).
+    pub(crate) fn build_within(world: &World, limit: u64) -> Result<Self, WorldError> {
         let size = world.size().voxels();
         let depth = cube_depth(size).max(3);
         let blocks = block_masks(world)?;
@@ -103,6 +109,9 @@ impl Svo {
         };
         svo.masks[0].push(0);
         svo.add_children(0, [0; 3], &grids, &block)?;
+        for (level, masks) in svo.masks.iter().enumerate() {
+            check_refs(masks.len() as u64, limit, &format!("the octree's level {level}"))?;
+        }
         Ok(svo)
     }
 
@@ -147,9 +156,12 @@ impl Svo {
             return Ok(());
         }
         let start = self.masks[level + 1].len();
-        let start = u32::try_from(start)
-            .map_err(|_| WorldError::Capacity(format!("the octree has more than 2^32 nodes of side {}", 1u64 << k)))?;
-        self.first[level].push(start);
+        check_refs(
+            start as u64,
+            MAX_REFS,
+            &format!("the octree's nodes of side {}", 1u64 << k),
+        )?;
+        self.first[level].push(start as u32);
         // Only deeper levels grow while a child is filled in, so siblings stay contiguous.
         for o in (0..8).filter(|&o| mask >> o & 1 == 1) {
             self.masks[level + 1].push(0);
@@ -162,6 +174,30 @@ impl Svo {
     /// up.
     pub fn bytes(&self) -> u64 {
         4 * self.masks.iter().map(|m| m.len() as u64).sum::<u64>()
+    }
+
+    /// The octree as one array of words for the GPU traversal (docs/BASELINES.md): the
+    /// [header](super::GPU_HEADER_WORDS) (depth; the leaf level is 0, unused), then every
+    /// node as two words, level by level from the root: its valid mask, and the absolute
+    /// word of its first child (0 for nodes of side 2). Fails when that exceeds 32-bit
+    /// offsets.
+    pub fn gpu_words(&self) -> Result<Vec<u32>, WorldError> {
+        self.gpu_words_within(MAX_REFS)
+    }
+
+    /// [`Svo::gpu_words`] with at most `limit` words.
+    pub(crate) fn gpu_words_within(&self, limit: u64) -> Result<Vec<u32>, WorldError> {
+        let nodes: usize = self.masks.iter().map(Vec::len).sum();
+        let mut words = gpu_header(self.depth, 0, 2 * nodes, limit)?;
+        let mut next = (words.len() + 2 * self.masks[0].len()) as u32;
+        for (level, masks) in self.masks.iter().enumerate() {
+            let first = self.first.get(level);
+            for (i, &mask) in masks.iter().enumerate() {
+                words.extend([u32::from(mask), first.map_or(0, |f| next + 2 * f[i])]);
+            }
+            next += 2 * self.masks.get(level + 1).map_or(0, Vec::len) as u32;
+        }
+        Ok(words)
     }
 
     /// Nodes per level, from the root (side `2^depth`) down to side 2.
