@@ -117,6 +117,13 @@ fn cam(age: u32) -> Cam {
     return Cam(a.xyz, vec2<f32>(a.w, f.w), f.xyz, bitcast<vec4<f32>>(mem_get(b + 2u)).xyz, bitcast<vec4<f32>>(mem_get(b + 3u)).xyz, bitcast<vec4<f32>>(mem_get(b + 4u)).xyz);
 }
 
+// Whether two cameras see exactly the same view (position, orientation and field of view;
+// their jitters may differ).
+fn same_view(a: Cam, b: Cam) -> bool {
+    return all(a.pos == b.pos) && all(a.origin == b.origin) && all(a.forward == b.forward)
+        && all(a.right == b.right) && all(a.up == b.up);
+}
+
 // Where `v` (relative to the camera) falls on camera `c`'s image, in pixels from its
 // top-left corner; `z` ≤ 0 when behind it.
 struct Projection {

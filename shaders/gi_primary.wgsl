@@ -182,18 +182,31 @@ fn gi_taa(@builtin(global_invocation_id) gid: vec3<u32>) {
             break;
         }
         let c = cam(age);
-        var v = point;
-        if !sky {
-            v = point - c.pos;
+        // From the same view, with nothing changed since, the pixel's own sample shows
+        // its footprint at that frame's jitter: it counts as it is. A pixel that spans
+        // several voxels (a small model, a far wall) needs every one of its 32 jitters:
+        // the tests below would keep only those near the surface this frame's jitter hit.
+        let still = same_view(c, here) && (edit == 0u || taken >= edit);
+        var qp = gid.xy;
+        if !still {
+            var v = point;
+            if !sky {
+                v = point - c.pos;
+            }
+            let pr = project(c, v);
+            let q = pr.px - c.jitter + 0.5;
+            if pr.z <= 0.0 || !on_image(q) {
+                continue;
+            }
+            qp = vec2<u32>(q);
         }
-        let pr = project(c, v);
-        let q = pr.px - c.jitter + 0.5;
-        if pr.z <= 0.0 || !on_image(q) {
-            continue;
-        }
-        let qp = vec2<u32>(q);
         let s = taa_read((gi.taa_slot + TAA_SLOTS - age) % TAA_SLOTS, qp.x + qp.y * frame.width);
         if s.y == 0u && s.x == 0u {
+            continue;
+        }
+        if still {
+            sum += taa_colour(s.y);
+            count += 1.0;
             continue;
         }
         let sd = taa_distance(s.x);

@@ -296,22 +296,30 @@ struct Timer {
 /// Timestamps per frame: two per pass.
 const TIMESTAMPS: u32 = 2 * GiPass::ALL.len() as u32;
 
-/// Element `index` (from 1) of the Halton sequence in `base`, in [0, 1).
-fn halton(mut index: u32, base: u32) -> f32 {
-    let mut f = 1.0;
-    let mut r = 0.0;
-    while index > 0 {
-        f /= base as f32;
-        r += f * (index % base) as f32;
-        index /= base;
-    }
-    r
-}
-
-/// The jitter of frame `frame` in the pixel: Halton (3, 7) over 32 frames.
+/// The jitter of frame `frame` in the pixel: point `frame mod 32` of a 32-point (0, 5, 2)-net
+/// (the van der Corput sequence in x, the second Sobol dimension in y: Halton's base 2 and
+/// its base-2 partner, digitally shifted by ½), each point moved to the centre of its 1/32
+/// stratum. Every axis is
+/// then stratified exactly and the mean jitter is the pixel's centre. The reference's
+/// Halton (3, 7) over 32 frames is not: its mean y is 0.459, which shifted every edge by
+/// 0.04 pixel and brightened the row below a bright horizon (docs/RENDERING.md §3c).
 fn jitter(frame: u32) -> [f32; 2] {
-    let i = frame % TAA_SLOTS + 1;
-    [halton(i, 3), halton(i, 7)]
+    let i = frame % TAA_SLOTS;
+    // Both dimensions as 32-bit fractions: x reverses the bits of i; y XORs the Sobol
+    // direction numbers of the set bits of i (v₁ = 2⁻¹, v_{k+1} = v_k ⊕ v_k / 2).
+    let x = i.reverse_bits();
+    let (mut y, mut v, mut rest) = (0u32, 1u32 << 31, i);
+    while rest > 0 {
+        if rest & 1 == 1 {
+            y ^= v;
+        }
+        rest >>= 1;
+        v ^= v >> 1;
+    }
+    // A digital shift by ½ (XOR of the top bit) keeps the net and puts the first point,
+    // the only one of a single frame, at the pixel's centre.
+    let half_stratum = 0.5 / TAA_SLOTS as f32;
+    [x, y].map(|b| ((b ^ 1 << 31) as f64 / 4_294_967_296.0) as f32 + half_stratum)
 }
 
 impl Gi {
@@ -682,17 +690,26 @@ impl Temporal for Gi {
 mod tests {
     use super::*;
 
+    /// The 32 jitters are a (0, 5, 2)-net centred in its strata: every elementary box of
+    /// area 1/32 (1/32 × 1, 1/16 × 1/2, …, 1 × 1/32) holds exactly one, and the mean is the
+    /// pixel's centre; the sequence restarts with the TAA's slots.
     #[test]
-    fn halton_jitter_is_the_3_7_sequence_in_the_pixel() {
-        let close = |a: [f32; 2], b: [f32; 2]| a.iter().zip(&b).all(|(x, y)| (x - y).abs() < 1e-6);
-        assert!(close(jitter(0), [1.0 / 3.0, 1.0 / 7.0]));
-        assert!(close(jitter(1), [2.0 / 3.0, 2.0 / 7.0]));
-        assert!(close(jitter(2), [1.0 / 9.0, 3.0 / 7.0]));
-        assert!(close(jitter(3), [4.0 / 9.0, 4.0 / 7.0]));
-        // The sequence restarts with the TAA's slots.
-        assert_eq!(jitter(TAA_SLOTS), jitter(0));
-        for f in 0..TAA_SLOTS {
-            assert!(jitter(f).iter().all(|&j| (0.0..1.0).contains(&j)));
+    fn the_jitters_stratify_the_pixel() {
+        let points: Vec<[f32; 2]> = (0..TAA_SLOTS).map(jitter).collect();
+        for a in 0..=5u32 {
+            let (nx, ny) = (1u32 << a, 1u32 << (5 - a));
+            let mut boxes = vec![0u32; 32];
+            for p in &points {
+                assert!(p.iter().all(|j| (0.0..1.0).contains(j)), "{p:?}");
+                boxes[(p[0] * nx as f32) as usize + nx as usize * (p[1] * ny as f32) as usize] += 1;
+            }
+            assert!(boxes.iter().all(|&n| n == 1), "{nx} × {ny} boxes: {boxes:?}");
         }
+        for axis in 0..2 {
+            let mean = points.iter().map(|p| f64::from(p[axis])).sum::<f64>() / 32.0;
+            assert!((mean - 0.5).abs() < 1e-6, "axis {axis}: mean {mean}");
+        }
+        assert_eq!(jitter(TAA_SLOTS), jitter(0));
+        assert_eq!(jitter(0), [0.5 + 1.0 / 64.0, 0.5 + 1.0 / 64.0]);
     }
 }

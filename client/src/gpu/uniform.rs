@@ -180,9 +180,9 @@ wgsl_struct! {
         pub taa_valid: u32,
         /// The first frame rendered after the newest world change (0: none).
         pub edit_frame: u32,
-        /// This frame's Halton (3, 7) jitter in the pixel, x.
+        /// This frame's jitter in the pixel, x (a point of a 32-point (0, 5, 2)-net).
         pub jitter_x: f32,
-        /// This frame's Halton (3, 7) jitter in the pixel, y.
+        /// This frame's jitter in the pixel, y.
         pub jitter_y: f32,
         /// 8×8 regions across.
         pub regions_x: u32,
