@@ -5,4 +5,5 @@ cd "$(dirname "$0")/.."
 . scripts/ensure-deps.sh
 cargo fmt --all -- --check
 cargo clippy --workspace --all-targets -- -D warnings
+bash scripts/validate-deploy.sh
 cargo test --workspace
