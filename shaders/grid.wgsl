@@ -35,7 +35,5 @@ fn world_loop(r: Ray) -> WorldTrace {
             return WorldTrace(no_hit(steps), END_LEFT, entry.t, s.t);
         }
     }
-    var h = no_hit(world_info.max_steps);
-    h.exhausted = true;
-    return WorldTrace(h, END_EXHAUSTED, entry.t, s.t);
+    return ran_out(entry.t, s.t);
 }

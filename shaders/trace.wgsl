@@ -22,6 +22,13 @@ struct WorldTrace {
     t_end: f32,
 }
 
+// The end of a world loop whose step budget ran out at time `t` (entered at `t_entry`).
+fn ran_out(t_entry: f32, t: f32) -> WorldTrace {
+    var h = no_hit(world_info.max_steps);
+    h.exhausted = true;
+    return WorldTrace(h, END_EXHAUSTED, t_entry, t);
+}
+
 const MAX_FIELDS: u32 = 16u;
 
 var<private> fields: array<u32, MAX_FIELDS>;

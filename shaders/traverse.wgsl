@@ -83,7 +83,5 @@ fn world_loop(r: Ray) -> WorldTrace {
         t = ex.t;
         axis = ex.axis;
     }
-    var h = no_hit(world_info.max_steps);
-    h.exhausted = true;
-    return WorldTrace(h, END_EXHAUSTED, entry.t, t);
+    return ran_out(entry.t, t);
 }
