@@ -8,7 +8,7 @@
 use super::{median_range, print_ratios};
 use crate::commands::{load_world, print_json};
 use anyhow::{Result, bail};
-use naadf_client::gpu::{Gpu, GpuHit, GpuRay, GpuWorld, RayBatch, RayTracer, Traversal};
+use naadf_client::gpu::{Gpu, GpuError, GpuHit, GpuRay, GpuWorld, RayBatch, RayTracer, Traversal};
 use naadf_world::World;
 use naadf_world::baselines::{Svdag, Svo};
 use naadf_world::raysets::{fixed_cameras, primary_rays, secondary_rays};
@@ -180,44 +180,36 @@ pub(super) fn measure_gpu(
         skipped: BTreeMap::new(),
     };
     let base = GpuWorld::new(&gpu, world)?;
-    let naadf_answers: Vec<Vec<Option<Hit>>> = [primary, secondary]
+    let naadf_answers: Answers = [primary, secondary]
         .iter()
         .map(|rays| rays.par_iter().map(|r| trace_naadf(world, r)).collect())
         .collect();
     let mut ready: Vec<Prepared> = Vec::new();
     for &t in traversals {
+        // Its own device world for a comparison structure, and a tree's CPU answers
+        // (the world's methods share the first device world and `naadf`'s answers).
         let prepared = match (t, trees) {
-            (Traversal::Method(Method::Grid), _) => GpuWorld::new(&gpu, world).and_then(|mut w| {
-                w.upload_grid(world)?;
-                Ok(Some(w))
-            }),
-            (Traversal::Method(_), _) => Ok(None),
+            (Traversal::Method(Method::Grid), _) => {
+                own_world(&gpu, world, |w| w.upload_grid(world)).map(|w| (Some(w), None))
+            }
+            (Traversal::Method(_), _) => Ok((None, None)),
             (Traversal::Svo | Traversal::Svdag, None) => {
                 out.skipped
                     .insert(t.name(), "the world has no trees (no solid voxel)".into());
                 continue;
             }
-            (Traversal::Svo, Some((svo, _))) => GpuWorld::new(&gpu, world).and_then(|mut w| {
-                w.upload_svo(svo)?;
-                Ok(Some(w))
-            }),
-            (Traversal::Svdag, Some((_, dag))) => GpuWorld::new(&gpu, world).and_then(|mut w| {
-                w.upload_svdag(dag)?;
-                Ok(Some(w))
-            }),
+            (Traversal::Svo, Some((svo, _))) => own_world(&gpu, world, |w| w.upload_svo(svo))
+                .map(|w| (Some(w), Some(tree_answers(|r| svo.trace(r), primary, secondary)))),
+            (Traversal::Svdag, Some((_, dag))) => own_world(&gpu, world, |w| w.upload_svdag(dag))
+                .map(|w| (Some(w), Some(tree_answers(|r| dag.trace(r), primary, secondary)))),
         };
-        let device = match prepared {
-            Ok(d) => d,
+        let (device, answers) = match prepared {
+            Ok(p) => p,
             Err(e) => {
                 tracing::warn!("skipping {}: {e}", t.name());
                 out.skipped.insert(t.name(), e.to_string());
                 continue;
             }
-        };
-        let answers = match (t, trees) {
-            (Traversal::Svo, Some((svo, _))) => tree_answers(|r| svo.trace(r), primary, secondary),
-            (Traversal::Svdag, Some((_, dag))) => tree_answers(|r| dag.trace(r), primary, secondary),
-            _ => naadf_answers.clone(),
         };
         ready.push(Prepared {
             traversal: t,
@@ -232,6 +224,7 @@ pub(super) fn measure_gpu(
         answers,
     } in &ready
     {
+        let answers = answers.as_ref().unwrap_or(&naadf_answers);
         tracing::info!("checking {}", t.name());
         let w = device.as_ref().unwrap_or(&base);
         let mut steps = [0.0; 2];
@@ -265,20 +258,30 @@ pub(super) fn measure_gpu(
     Ok(out)
 }
 
+/// The CPU's answers on the primary and on the secondary rays.
+type Answers = Vec<Vec<Option<Hit>>>;
+
 /// A traversal ready to time: its device world (`None`: the shared one) and the CPU's
-/// answers on the primary and secondary rays.
+/// answers (`None`: `naadf`'s).
 struct Prepared {
     traversal: Traversal,
     device: Option<GpuWorld>,
-    answers: Vec<Vec<Option<Hit>>>,
+    answers: Option<Answers>,
+}
+
+/// A device copy of `world` of its own, with a comparison structure uploaded by `upload`.
+fn own_world(
+    gpu: &Gpu,
+    world: &World,
+    upload: impl FnOnce(&mut GpuWorld) -> Result<(), GpuError>,
+) -> Result<GpuWorld, GpuError> {
+    let mut w = GpuWorld::new(gpu, world)?;
+    upload(&mut w)?;
+    Ok(w)
 }
 
 /// A tree's CPU answers on both ray sets.
-fn tree_answers(
-    trace: impl Fn(&Ray) -> Option<Hit> + Sync,
-    primary: &[Ray],
-    secondary: &[Ray],
-) -> Vec<Vec<Option<Hit>>> {
+fn tree_answers(trace: impl Fn(&Ray) -> Option<Hit> + Sync, primary: &[Ray], secondary: &[Ray]) -> Answers {
     [primary, secondary]
         .iter()
         .map(|rays| rays.par_iter().map(&trace).collect())
