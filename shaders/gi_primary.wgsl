@@ -115,7 +115,12 @@ fn gi_first_hit(@builtin(global_invocation_id) gid: vec3<u32>) {
         pack2x16float(thr.rg),
         (pack2x16float(vec2<f32>(thr.b, 0.0)) & 0xFFFFu) | (wo << 16u),
     ));
-    mem_set(gi.off_emitted + i, bitcast<vec4<u32>>(vec4<f32>(emit, 0.0)));
+    // The entity the pixel sees directly (not in a mirror), whose poses the TAA follows.
+    var seen = NO_ENTITY;
+    if c.end == CHAIN_SURFACE && c.planes[1] == HIT_UNDEFINED {
+        seen = entity;
+    }
+    mem_set(gi.off_emitted + i, bitcast<vec4<u32>>(vec4<f32>(emit, f32(seen))));
 }
 
 // ---- Pass gi_taa: the long-term TAA's gather ----
@@ -153,13 +158,23 @@ fn gi_taa(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     mem_set(gi.off_taa_info + 2u * i + 1u, bitcast<vec4<u32>>(vec4<f32>(lo, hi, 0.0, 0.0)));
     let sky = d >= SKY_DIST;
-    // The point the pixel sees along its unjittered ray (the sky: its direction).
+    // The point the pixel sees along its unjittered ray, relative to this frame's integer
+    // camera position like the cameras (the sky: its direction).
     let dir = normalize(camera_dir(frame, gid.xy, vec2<f32>(0.5)));
     let here = cam(0u);
-    var point = dir * d;
+    var point = here.pos + dir * d;
     if sky {
         point = dir;
     }
+    // An entity seen directly: its samples of earlier frames are found where its pose of
+    // that frame put the point.
+    let seen = u32(bitcast<vec4<f32>>(mem_get(gi.off_emitted + i)).w);
+    let follow = seen != NO_ENTITY && !sky;
+    var pose_now = Pose(vec3<f32>(0.0), vec4<f32>(0.0, 0.0, 0.0, 1.0));
+    if follow {
+        pose_now = pose_of(pose_words(gi.taa_slot, seen));
+    }
+    let poses_changed = words[CONTROL_POSES_CHANGED];
     // How recently the pixel's surface changed, or light near it (none for the sky).
     var marks = vec2<u32>(0u);
     if !sky {
@@ -170,8 +185,9 @@ fn gi_taa(@builtin(global_invocation_id) gid: vec3<u32>) {
     var count = 0.0;
     for (var age = 1u; age <= gi.taa_valid; age++) {
         let taken = gi.frame - age;
-        // A sample from before the surface's own chunk changed shows what is gone.
-        if taken < marks.x {
+        // A sample from before the surface's own chunk changed shows what is gone (an
+        // entity's own moves change its chunks: its history follows its poses instead).
+        if taken < marks.x && !follow {
             break;
         }
         // Light from before a world change near the surface (or a change of the
@@ -182,16 +198,29 @@ fn gi_taa(@builtin(global_invocation_id) gid: vec3<u32>) {
             break;
         }
         let c = cam(age);
-        // From the same view, with nothing changed since, the pixel's own sample shows
-        // its footprint at that frame's jitter: it counts as it is. A pixel that spans
-        // several voxels (a small model, a far wall) needs every one of its 32 jitters:
-        // the tests below would keep only those near the surface this frame's jitter hit.
-        let still = same_view(c, here) && (edit == 0u || taken >= edit);
+        // Where the point was then: an entity's moves carry it.
+        var then = point;
+        var pose_then = pose_now;
+        if follow {
+            let w = pose_words((gi.taa_slot + TAA_SLOTS - age) % TAA_SLOTS, seen);
+            // The entity did not exist then.
+            if all(w == vec4<u32>(0u)) {
+                break;
+            }
+            pose_then = pose_of(w);
+            then = carry(point, pose_now, pose_then);
+        }
+        // From the same view, with nothing changed since (no world change near the
+        // surface, no entity moved anywhere), the pixel's own sample shows its footprint
+        // at that frame's jitter: it counts as it is. A pixel that spans several voxels (a
+        // small model, a far wall) needs every one of its 32 jitters: the tests below would
+        // keep only those near the surface this frame's jitter hit.
+        let still = same_view(c, here) && (edit == 0u || taken >= edit) && taken >= poses_changed;
         var qp = gid.xy;
         if !still {
-            var v = point;
+            var v = then;
             if !sky {
-                v = point - c.pos;
+                v = then - c.pos;
             }
             let pr = project(c, v);
             let q = pr.px - c.jitter + 0.5;
@@ -236,12 +265,15 @@ fn gi_taa(@builtin(global_invocation_id) gid: vec3<u32>) {
             }
             back = project(here, old_dir);
         } else {
-            let old = c.pos + old_dir * sd;
-            let dist = length(old);
+            var old = c.pos + old_dir * sd;
+            if follow {
+                old = carry(old, pose_then, pose_now);
+            }
+            let dist = length(old - here.pos);
             if dist < lo * (1022.0 / 1024.0) || dist > hi * (1026.0 / 1024.0) || sd > 2.0 * hi {
                 continue;
             }
-            back = project(here, old);
+            back = project(here, old - here.pos);
         }
         let off = back.px - (vec2<f32>(gid.xy) + vec2<f32>(gi.jitter_x, gi.jitter_y));
         if back.z <= 0.0 || dot(off, off) > TAA_RADIUS * TAA_RADIUS {

@@ -87,6 +87,11 @@ fn conjugate(q: vec4<f32>) -> vec4<f32> {
     return vec4<f32>(-q.xyz, q.w);
 }
 
+// An instance record's position in 1/128 voxel (record words 0 and 1).
+fn record_position(dx: u32, dy: u32) -> vec3<u32> {
+    return vec3<u32>(dx & 0x1FFFFFu, (dx >> 21u) | (((dy >> 21u) & 0xFFu) << 11u), dy & 0x1FFFFFu);
+}
+
 // Tests one chunk-instance record against the ray; keeps the nearest entity hit.
 fn test_instance(r: Ray, at: u32, t_lo: f32) {
     let dx = instance_word(at);
@@ -96,7 +101,7 @@ fn test_instance(r: Ray, at: u32, t_lo: f32) {
     let e = instance_word(at + 4u);
     let id = e & 0x3FFFu;
     let size = vec3<u32>((e >> 14u) & 0x7Fu, (e >> 21u) & 0x7Fu, ((e >> 28u) & 0xFu) | (((dy >> 29u) & 7u) << 4u));
-    let pos = vec3<u32>(dx & 0x1FFFFFu, (dx >> 21u) | (((dy >> 21u) & 0xFFu) << 11u), dy & 0x1FFFFFu);
+    let pos = record_position(dx, dy);
     var limit = T_INF;
     var equal_ok = false;
     if best_entity.hit {

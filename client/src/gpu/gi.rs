@@ -12,9 +12,9 @@
 //! near them. The two large arrays are split across bindings where one is too small.
 
 use super::context::{Gpu, GpuError};
-use super::pipeline::PassPipelines;
+use super::pipeline::{PassPipelines, dispatch_2d};
 use super::render::{CameraRays, check_frame_size};
-use super::shaders::{GiSplit, Loop, Pass};
+use super::shaders::{GiSplit, Loop, NO_ENTITY, Pass};
 use super::temporal::Temporal;
 use super::uniform::{FrameInfo, GiInfo, LightInfo};
 use super::world::{GpuWorld, new_part};
@@ -65,6 +65,9 @@ const CAM_VEC4: usize = 5;
 const TAA_PIXEL_BYTES: u64 = TAA_SLOTS as u64 * 8;
 /// Ring samples per pixel.
 const RING_PER_PIXEL: u64 = 2;
+/// Words of the entity pose table at the end of `words`: per TAA slot, four record words
+/// per entity id (shaders/gi_entities.wgsl).
+const POSE_TABLE_WORDS: u64 = TAA_SLOTS as u64 * NO_ENTITY as u64 * 4;
 /// The smallest part of a split array: the cameras (written from the CPU) fit in the first.
 const MIN_PART_BYTES: u64 = 1 << 16;
 
@@ -75,6 +78,12 @@ pub enum GiPass {
     Atmosphere,
     /// The jittered first hit and its mirror chain.
     FirstHit,
+    /// This frame's slot of the entity pose table starts empty.
+    PosesClear,
+    /// The entities' poses into this frame's slot, from the chunks' instance records.
+    Poses,
+    /// Whether any pose differs from the frame before.
+    PosesCompare,
     /// The long-term TAA's gather of earlier frames' samples.
     Taa,
     /// Which pixels trace a secondary ray, compacted per region.
@@ -101,9 +110,12 @@ pub enum GiPass {
 
 impl GiPass {
     /// Every pass, in frame order.
-    pub const ALL: [GiPass; 13] = [
+    pub const ALL: [GiPass; 16] = [
         GiPass::Atmosphere,
         GiPass::FirstHit,
+        GiPass::PosesClear,
+        GiPass::Poses,
+        GiPass::PosesCompare,
         GiPass::Taa,
         GiPass::Queue,
         GiPass::QueueScan,
@@ -122,6 +134,9 @@ impl GiPass {
         match self {
             GiPass::Atmosphere => "gi_atmosphere",
             GiPass::FirstHit => "gi_first_hit",
+            GiPass::PosesClear => "gi_poses_clear",
+            GiPass::Poses => "gi_poses",
+            GiPass::PosesCompare => "gi_poses_compare",
             GiPass::Taa => "gi_taa",
             GiPass::Queue => "gi_queue",
             GiPass::QueueScan => "gi_queue_scan",
@@ -175,7 +190,7 @@ impl Layout {
         Layout {
             offsets,
             ring_start: at,
-            words: queue + 64 * r,
+            words: queue + 64 * r + POSE_TABLE_WORDS,
         }
     }
 }
@@ -430,7 +445,8 @@ impl Gi {
             ("region statistics", vec4s(9)),
             ("own samples", vec4s(10)),
             ("sample ring", u64::from(h.ring_capacity) * u64::from(RING_VEC4) * 16),
-            ("queue and control", h.layout.words * 4),
+            ("queue and control", (h.layout.words - POSE_TABLE_WORDS) * 4),
+            ("entity poses", POSE_TABLE_WORDS * 4),
             ("region buckets", h.buckets.size()),
             ("TAA samples", h.taa.iter().map(wgpu::Buffer::size).sum()),
         ];
@@ -661,6 +677,11 @@ impl Temporal for Gi {
                         cp.dispatch_workgroups_indirect(args, u64::from(CONTROL_PROJECT_ARGS) * 4)
                     }
                     GiPass::Refine => cp.dispatch_workgroups(regions.div_ceil(64) as u32, 1, 1),
+                    GiPass::PosesClear | GiPass::PosesCompare => cp.dispatch_workgroups(NO_ENTITY.div_ceil(64), 1, 1),
+                    GiPass::Poses => {
+                        let (x, y) = dispatch_2d(chunk_count.div_ceil(64) as u32);
+                        cp.dispatch_workgroups(x, y, 1)
+                    }
                     _ => cp.dispatch_workgroups(pixel_groups.0, pixel_groups.1, 1),
                 }
             }

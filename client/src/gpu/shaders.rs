@@ -56,6 +56,8 @@ pub const FIRST_HIT: &str = include_str!("../../../shaders/first_hit.wgsl");
 pub const GI_COMMON: &str = include_str!("../../../shaders/gi_common.wgsl");
 /// `shaders/gi_primary.wgsl`: the GI first hit, TAA gather and TAA merge.
 pub const GI_PRIMARY: &str = include_str!("../../../shaders/gi_primary.wgsl");
+/// `shaders/gi_entities.wgsl`: the entities' poses per TAA slot.
+pub const GI_ENTITIES: &str = include_str!("../../../shaders/gi_entities.wgsl");
 /// `shaders/gi_samples.wgsl`: the ray queue, secondary rays, projection and refinement.
 pub const GI_SAMPLES: &str = include_str!("../../../shaders/gi_samples.wgsl");
 /// `shaders/gi_resample.wgsl`: spatial resampling and the denoiser.
@@ -221,7 +223,7 @@ pub enum Pass {
 
 impl Pass {
     /// Every pass.
-    pub const ALL: [Pass; 18] = [
+    pub const ALL: [Pass; 21] = [
         Pass::Rays,
         Pass::Render,
         Pass::PathTrace,
@@ -240,6 +242,9 @@ impl Pass {
         Pass::Gi(GiPass::ALL[10], GiSplit::WHOLE),
         Pass::Gi(GiPass::ALL[11], GiSplit::WHOLE),
         Pass::Gi(GiPass::ALL[12], GiSplit::WHOLE),
+        Pass::Gi(GiPass::ALL[13], GiSplit::WHOLE),
+        Pass::Gi(GiPass::ALL[14], GiSplit::WHOLE),
+        Pass::Gi(GiPass::ALL[15], GiSplit::WHOLE),
     ];
 
     /// The entry point.
@@ -261,7 +266,7 @@ impl Pass {
             Pass::Render => &[FIRST_HIT, RENDER],
             Pass::PathTrace | Pass::PathSample => &[SAMPLE, LIGHT, PATHTRACE],
             Pass::Taa => &[SAMPLE, TAA],
-            Pass::Gi(..) => &[SAMPLE, LIGHT, FIRST_HIT, GI_COMMON, GI_PRIMARY, GI_SAMPLES, GI_RESAMPLE],
+            Pass::Gi(..) => &[SAMPLE, LIGHT, FIRST_HIT, GI_COMMON, GI_ENTITIES, GI_PRIMARY, GI_SAMPLES, GI_RESAMPLE],
         }
     }
 }

@@ -1,0 +1,100 @@
+// The entities' poses per frame, so that the long-term TAA follows a moving entity
+// (docs/RENDERING.md §3c, "Entities in the history").
+//
+// `words` holds, after the queued pixels, TAA_SLOTS tables of ENTITY_IDS entries: entry
+// `id` of slot `s` is words 0–3 of entity `id`'s instance record (position, rotation and
+// type; world/src/entity/pack.rs) as of the frame that wrote slot `s`, or zero where the
+// entity did not exist (no record is all zero: its rotation word would not be a unit
+// quaternion). Three passes per frame fill this frame's slot and note whether anything
+// differs from the frame before.
+
+const ENTITY_IDS: u32 = NO_ENTITY;
+// Control word: the newest frame whose poses differ from those of the frame before (0:
+// none). A TAA sample taken before it may show an entity where none is now.
+const CONTROL_POSES_CHANGED: u32 = 12u;
+
+fn pose_word(slot: u32, id: u32) -> u32 {
+    return gi.off_queue_list + 64u * region_count() + 4u * (slot * ENTITY_IDS + id);
+}
+
+// Entity `id`'s record words 0–3 in TAA slot `slot` (zero: it did not exist).
+fn pose_words(slot: u32, id: u32) -> vec4<u32> {
+    let at = pose_word(slot, id);
+    return vec4<u32>(words[at], words[at + 1u], words[at + 2u], words[at + 3u]);
+}
+
+// An entity's placement: its local origin (relative to this frame's integer camera
+// position) and the rotation from world to entity axes.
+struct Pose {
+    origin: vec3<f32>,
+    to_local: vec4<f32>,
+}
+
+fn pose_of(w: vec4<u32>) -> Pose {
+    let pos = record_position(w.x, w.y);
+    let origin = vec3<f32>(vec3<i32>(pos >> vec3<u32>(7u)) - frame.cam_int) + vec3<f32>(pos & vec3<u32>(127u)) / 128.0;
+    return Pose(origin, decode_quat(w.z, w.w & 0xFFFu));
+}
+
+// Point `p` (relative to this frame's integer camera position) of an entity placed at
+// `was`, where it lies when the entity is placed at `now`.
+fn carry(p: vec3<f32>, was: Pose, now: Pose) -> vec3<f32> {
+    return now.origin + rotate(conjugate(now.to_local), rotate(was.to_local, p - was.origin));
+}
+
+// The thread's index in a dispatch of 64-wide groups laid out as x + y · (groups across).
+fn flat_index(wg: vec3<u32>, groups: vec3<u32>, li: u32) -> u32 {
+    return (wg.x + wg.y * groups.x) * 64u + li;
+}
+
+// ---- Pass gi_poses_clear: this frame's slot starts empty ----
+
+@compute @workgroup_size(64)
+fn gi_poses_clear(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    let id = flat_index(wg, groups, li);
+    if id >= ENTITY_IDS {
+        return;
+    }
+    let at = pose_word(gi.taa_slot, id);
+    for (var k = 0u; k < 4u; k++) {
+        words[at + k] = 0u;
+    }
+}
+
+// ---- Pass gi_poses: one thread per chunk copies the poses of the records it lists ----
+//
+// An entity over several chunks has a record in each, all alike: the threads that write
+// its entry write the same words.
+
+@compute @workgroup_size(64)
+fn gi_poses(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    let ci = flat_index(wg, groups, li);
+    let c = world_info.chunks;
+    if world_info.has_entities == 0u || ci >= c.x * c.y * c.z {
+        return;
+    }
+    let field = chunk_entity_word(ci);
+    let first = field >> 8u;
+    for (var j = 0u; j < (field & 0xFFu); j++) {
+        let r = (first + j) * RECORD_WORDS;
+        let at = pose_word(gi.taa_slot, instance_word(r + 4u) & 0x3FFFu);
+        for (var k = 0u; k < 4u; k++) {
+            words[at + k] = instance_word(r + k);
+        }
+    }
+}
+
+// ---- Pass gi_poses_compare: whether any pose differs from the frame before ----
+
+@compute @workgroup_size(64)
+fn gi_poses_compare(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    let id = flat_index(wg, groups, li);
+    if id >= ENTITY_IDS || gi.frame == 0u {
+        return;
+    }
+    let before = (gi.taa_slot + TAA_SLOTS - 1u) % TAA_SLOTS;
+    // Every thread that finds a difference writes the same value.
+    if any(pose_words(gi.taa_slot, id) != pose_words(before, id)) {
+        words[CONTROL_POSES_CHANGED] = gi.frame;
+    }
+}
