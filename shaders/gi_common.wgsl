@@ -110,6 +110,11 @@ struct Cam {
     origin: vec3<f32>,
 }
 
+// Earlier frames whose cameras `cams` holds: every one, up to CAMERA_HISTORY − 1.
+fn cams_valid() -> u32 {
+    return min(gi.frame, CAMERA_HISTORY - 1u);
+}
+
 fn cam(age: u32) -> Cam {
     let b = min(age, CAMERA_HISTORY - 1u) * CAM_WORDS;
     let a = bitcast<vec4<f32>>(mem_get(b));

@@ -5,13 +5,9 @@
 // `id` of slot `s` is words 0–3 of entity `id`'s instance record (position, rotation and
 // type; world/src/entity/pack.rs) as of the frame that wrote slot `s`, or zero where the
 // entity did not exist (no record is all zero: its rotation word would not be a unit
-// quaternion). Three passes per frame fill this frame's slot and note whether anything
-// differs from the frame before.
+// quaternion). Two passes per frame fill this frame's slot.
 
 const ENTITY_IDS: u32 = NO_ENTITY;
-// Control word: the newest frame whose poses differ from those of the frame before (0:
-// none). A TAA sample taken before it may show an entity where none is now.
-const CONTROL_POSES_CHANGED: u32 = 12u;
 
 fn pose_word(slot: u32, id: u32) -> u32 {
     return gi.off_queue_list + 64u * region_count() + 4u * (slot * ENTITY_IDS + id);
@@ -81,20 +77,5 @@ fn gi_poses(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) group
         for (var k = 0u; k < 4u; k++) {
             words[at + k] = instance_word(r + k);
         }
-    }
-}
-
-// ---- Pass gi_poses_compare: whether any pose differs from the frame before ----
-
-@compute @workgroup_size(64)
-fn gi_poses_compare(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) li: u32) {
-    let id = flat_index(wg, groups, li);
-    if id >= ENTITY_IDS || gi.frame == 0u {
-        return;
-    }
-    let before = (gi.taa_slot + TAA_SLOTS - 1u) % TAA_SLOTS;
-    // Every thread that finds a difference writes the same value.
-    if any(pose_words(gi.taa_slot, id) != pose_words(before, id)) {
-        words[CONTROL_POSES_CHANGED] = gi.frame;
     }
 }

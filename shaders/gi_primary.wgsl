@@ -174,7 +174,6 @@ fn gi_taa(@builtin(global_invocation_id) gid: vec3<u32>) {
     if follow {
         pose_now = pose_of(pose_words(gi.taa_slot, seen));
     }
-    let poses_changed = words[CONTROL_POSES_CHANGED];
     // How recently the pixel's surface changed, or light near it (none for the sky).
     var marks = vec2<u32>(0u);
     if !sky {
@@ -210,12 +209,14 @@ fn gi_taa(@builtin(global_invocation_id) gid: vec3<u32>) {
             pose_then = pose_of(w);
             then = carry(point, pose_now, pose_then);
         }
-        // From the same view, with nothing changed since (no world change near the
-        // surface, no entity moved anywhere), the pixel's own sample shows its footprint
-        // at that frame's jitter: it counts as it is. A pixel that spans several voxels (a
-        // small model, a far wall) needs every one of its 32 jitters: the tests below would
-        // keep only those near the surface this frame's jitter hit.
-        let still = same_view(c, here) && (edit == 0u || taken >= edit) && taken >= poses_changed;
+        // From the same view, with nothing in the world changed since, the pixel's own
+        // sample shows its footprint at that frame's jitter: it counts as it is. A pixel
+        // that spans several voxels (a small model, a far wall) needs every one of its 32
+        // jitters: the tests below would keep only those near the surface this frame's
+        // jitter hit. A change anywhere ends this: a block removed in front of a far wall,
+        // or an entity moved away from a floor, changes no chunk near the surface that
+        // the pixel sees now, and yet its earlier samples show what was there.
+        let still = same_view(c, here) && taken >= gi.change_frame;
         var qp = gid.xy;
         if !still {
             var v = then;

@@ -122,7 +122,7 @@ fn gi_queue_scan(@builtin(local_invocation_index) li: u32) {
     words[CONTROL_FRAMES + gi.frame % CAMERA_HISTORY] = stored;
     // The newest frames whose samples all fit in the ring (and are still valid).
     var valid = 0u;
-    for (var age = 0u; age <= gi.cams_valid; age++) {
+    for (var age = 0u; age <= cams_valid(); age++) {
         if gi.frame - age < gi.edit_frame && age > EDIT_HISTORY_FRAMES {
             break;
         }
@@ -219,7 +219,7 @@ fn project_sample(t: u32) -> Projected {
     let e0 = mem_get(gi.off_ring + RING_VEC4 * idx);
     let e1 = mem_get(gi.off_ring + RING_VEC4 * idx + 1u);
     let age = gi.frame - e0.w;
-    if age > gi.cams_valid {
+    if age > cams_valid() {
         return none;
     }
     let here = cam(0u);

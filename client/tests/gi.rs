@@ -224,9 +224,15 @@ impl MovedEntity {
         );
         let [w, _, d] = self.size;
         let floor = format!(r#"{{"op":"box","min":[0,0,0],"max":[{w},8,{d}],"material":1}}"#);
-        let spawn = format!(r#"{{"op":"spawn_entity","id":1,"model":"crate","pos":{:?},"rot":[0,0,0,1]}}"#, self.from);
+        let spawn = format!(
+            r#"{{"op":"spawn_entity","id":1,"model":"crate","pos":{:?},"rot":[0,0,0,1]}}"#,
+            self.from
+        );
         let moved = format!(r#"{{"op":"move_entity","id":1,"pos":{:?},"rot":[0,0,0,1]}}"#, self.to);
-        let cam = camera(&format!(r#"{{"pos":{:?},"yaw":0,"pitch":-89.9,"fov_y":60}}"#, self.cam_pos));
+        let cam = camera(&format!(
+            r#"{{"pos":{:?},"yaw":0,"pitch":-89.9,"fov_y":60}}"#,
+            self.cam_pos
+        ));
         let light = Light::new(Sky::parse("uniform:1").unwrap(), None, 3).unwrap();
         let size = self.image;
         let mut world = world_of(self.size, &[GREY, red, &floor, &model, &spawn]);
@@ -250,8 +256,14 @@ impl MovedEntity {
             16,
         );
         let (was, now) = (red_pixels(&before), red_pixels(&settled));
-        assert!(was.iter().filter(|&&r| r).count() >= 10, "the entity shows before the move");
-        assert!(now.iter().filter(|&&r| r).count() >= 10, "the entity shows after the move");
+        assert!(
+            was.iter().filter(|&&r| r).count() >= 10,
+            "the entity shows before the move"
+        );
+        assert!(
+            now.iter().filter(|&&r| r).count() >= 10,
+            "the entity shows after the move"
+        );
         let is = red_pixels(&after);
         // Where it stood, nothing red remains; where it went, no grey floor shows through
         // (a red surface has little green, the floor about 0.45). A pixel on the entity's
@@ -324,6 +336,33 @@ fn an_entity_moved_far_above_the_floor_leaves_no_ghost() {
     }
 }
 
+/// A block removed far above a floor changes no chunk near the floor it hid: from the
+/// same view, the floor's pixels must still not keep the samples that showed the block.
+#[test]
+fn a_block_removed_far_above_the_floor_leaves_no_ghost() {
+    let Some(gpu) = gpu() else { return };
+    let red = r#"{"op":"define_material","id":2,"kind":"diffuse","albedo":[0.8,0.1,0.1]}"#;
+    let floor = r#"{"op":"box","min":[0,0,0],"max":[64,8,64],"material":1}"#;
+    let block = r#"{"op":"box","min":[24,56,24],"max":[40,60,40],"material":2}"#;
+    let remove = r#"{"op":"box","min":[24,56,24],"max":[40,60,40],"material":0}"#;
+    let cam = camera(r#"{"pos":[32,80,32],"yaw":0,"pitch":-89.9,"fov_y":60}"#);
+    let light = Light::new(Sky::parse("uniform:1").unwrap(), None, 3).unwrap();
+    let mut world = world_of([64, 128, 64], &[GREY, red, floor, block]);
+    let (mut slot, mut gi) = (None, Gi::new(gpu));
+    let mut step = |world: &World, frames| {
+        let gw = GpuWorld::follow(&mut slot, gpu, world).unwrap();
+        run(&mut gi, gpu, gw, &cam, (48, 36), &light, frames)
+    };
+    let before = red_pixels(&step(&world, 32));
+    assert!(before.iter().filter(|&&r| r).count() >= 50, "the block shows before");
+    // The floor it hid lies more than CHANGE_REACH chunks below it.
+    const { assert!(56 / 16 - 8 / 16 > CHANGE_REACH) };
+    apply(&mut world, &[remove]);
+    let after = red_pixels(&step(&world, 1));
+    let ghosts = after.iter().filter(|&&r| r).count();
+    assert_eq!(ghosts, 0, "{ghosts} pixels still show the removed block");
+}
+
 /// A camera at a fractional position that strafes keeps its history: the TAA reprojects
 /// each pixel's point from the same origin as the cameras of earlier frames.
 #[test]
@@ -336,7 +375,9 @@ fn a_strafing_camera_at_a_fractional_position_keeps_its_history() {
     let mut gi = Gi::new(gpu);
     for f in 0..24 {
         let x = 32.45 + 0.1 * f64::from(f);
-        let cam = camera(&format!(r#"{{"pos":[{x},12.3,32.55],"yaw":0,"pitch":-89.9,"fov_y":60}}"#));
+        let cam = camera(&format!(
+            r#"{{"pos":[{x},12.3,32.55],"yaw":0,"pitch":-89.9,"fov_y":60}}"#
+        ));
         gi.frame(gpu, &gw, &cam, size, &light, 0).unwrap();
     }
     let mut lengths = gi.history_lengths(gpu).unwrap();
@@ -430,7 +471,7 @@ fn a_change_drops_the_history_of_its_chunk_shortens_it_nearby_and_keeps_it_elsew
     // voxel from the chunk's sides so that no jitter crosses them.
     let changed = [1i64, 0, 1];
     let basis = cam.basis();
-    let (mut own, mut near, mut far) = (0, 0, 0);
+    let (mut own, mut near, mut far, mut far_kept) = (0, 0, 0, [0u64; 2]);
     for y in 0..size.1 {
         for x in 0..size.0 {
             let ray = cam.ray(&basis, x, y, size.0, size.1).unwrap();
@@ -448,12 +489,22 @@ fn a_change_drops_the_history_of_its_chunk_shortens_it_nearby_and_keeps_it_elsew
                 assert!(now[i] <= 8, "pixel ({x}, {y}) near the change keeps {} samples", now[i]);
                 near += 1;
             } else {
-                assert_eq!(now[i], kept[i], "pixel ({x}, {y}) far from the change");
-                // A history longer than the edit rule allows: a global rule would cut it.
-                far += usize::from(kept[i] > 8);
+                // From the same view, a change anywhere ends the still path (a far surface
+                // may have been hidden by what changed), so the history is kept by the
+                // reprojection's tests, which on a plain floor keep most of it (they test a
+                // sample against the 3×3 neighbourhood this frame's jitter saw; pixels on the
+                // image's border lose more). More than the edit rule's 8 frames: a global
+                // rule would cut it.
+                far += usize::from(now[i] > 8);
+                far_kept[0] += u64::from(now[i]);
+                far_kept[1] += u64::from(kept[i]);
             }
         }
     }
-    eprintln!("pixels on the changed chunk {own}, near it {near}, far from it {far}");
+    eprintln!("pixels on the changed chunk {own}, near it {near}, far from it {far}, which keep {far_kept:?} samples");
     assert!(own > 10 && near > 100 && far > 200, "{own} / {near} / {far}");
+    assert!(
+        far_kept[0] * 4 >= far_kept[1] * 3,
+        "far from the change: {far_kept:?} samples"
+    );
 }

@@ -82,8 +82,6 @@ pub enum GiPass {
     PosesClear,
     /// The entities' poses into this frame's slot, from the chunks' instance records.
     Poses,
-    /// Whether any pose differs from the frame before.
-    PosesCompare,
     /// The long-term TAA's gather of earlier frames' samples.
     Taa,
     /// Which pixels trace a secondary ray, compacted per region.
@@ -110,12 +108,11 @@ pub enum GiPass {
 
 impl GiPass {
     /// Every pass, in frame order.
-    pub const ALL: [GiPass; 16] = [
+    pub const ALL: [GiPass; 15] = [
         GiPass::Atmosphere,
         GiPass::FirstHit,
         GiPass::PosesClear,
         GiPass::Poses,
-        GiPass::PosesCompare,
         GiPass::Taa,
         GiPass::Queue,
         GiPass::QueueScan,
@@ -136,7 +133,6 @@ impl GiPass {
             GiPass::FirstHit => "gi_first_hit",
             GiPass::PosesClear => "gi_poses_clear",
             GiPass::Poses => "gi_poses",
-            GiPass::PosesCompare => "gi_poses_compare",
             GiPass::Taa => "gi_taa",
             GiPass::Queue => "gi_queue",
             GiPass::QueueScan => "gi_queue_scan",
@@ -245,8 +241,12 @@ pub struct GiHistory {
     cameras: VecDeque<Past>,
     /// The world generation of the last frame.
     generation: u64,
-    /// The first frame after the newest world change (0: none).
+    /// The first frame after the newest change of the materials or of more chunks than
+    /// are marked one by one (0: none).
     edit_frame: u32,
+    /// The first frame after the newest change of any chunk, entity moves included (0:
+    /// none).
+    change_frame: u32,
 }
 
 impl GiHistory {
@@ -545,13 +545,18 @@ impl Temporal for Gi {
                 cameras: VecDeque::new(),
                 generation: world.generation(),
                 edit_frame: 0,
+                change_frame: 0,
             },
         };
         let h = self.history.insert(h);
         if h.generation != world.generation() {
             match world.changes_since(h.generation) {
-                ChunkChanges::Chunks(list) if list.len() <= MAX_LOCAL_CHANGES => h.mark(gpu, &list),
-                _ => h.edit_frame = h.frames,
+                ChunkChanges::Chunks(list) if list.is_empty() => {}
+                ChunkChanges::Chunks(list) if list.len() <= MAX_LOCAL_CHANGES => {
+                    h.mark(gpu, &list);
+                    h.change_frame = h.frames;
+                }
+                _ => (h.edit_frame, h.change_frame) = (h.frames, h.frames),
             }
             h.generation = world.generation();
         }
@@ -586,12 +591,12 @@ impl Temporal for Gi {
             taa_slot: h.frames % TAA_SLOTS,
             taa_valid: h.frames.min(TAA_SLOTS - 1),
             edit_frame: h.edit_frame,
+            change_frame: h.change_frame,
             jitter_x: jit[0],
             jitter_y: jit[1],
             regions_x: rx,
             regions_y: ry,
             ring_capacity: h.ring_capacity,
-            cams_valid: h.cameras.len() as u32 - 1,
             denoise: u32::from(self.denoise),
             off_own: h.layout.offsets[10],
             off_lut: h.layout.offsets[0],
@@ -677,7 +682,7 @@ impl Temporal for Gi {
                         cp.dispatch_workgroups_indirect(args, u64::from(CONTROL_PROJECT_ARGS) * 4)
                     }
                     GiPass::Refine => cp.dispatch_workgroups(regions.div_ceil(64) as u32, 1, 1),
-                    GiPass::PosesClear | GiPass::PosesCompare => cp.dispatch_workgroups(NO_ENTITY.div_ceil(64), 1, 1),
+                    GiPass::PosesClear => cp.dispatch_workgroups(NO_ENTITY.div_ceil(64), 1, 1),
                     GiPass::Poses => {
                         let (x, y) = dispatch_2d(chunk_count.div_ceil(64) as u32);
                         cp.dispatch_workgroups(x, y, 1)

@@ -223,7 +223,7 @@ pub enum Pass {
 
 impl Pass {
     /// Every pass.
-    pub const ALL: [Pass; 21] = [
+    pub const ALL: [Pass; 20] = [
         Pass::Rays,
         Pass::Render,
         Pass::PathTrace,
@@ -244,7 +244,6 @@ impl Pass {
         Pass::Gi(GiPass::ALL[12], GiSplit::WHOLE),
         Pass::Gi(GiPass::ALL[13], GiSplit::WHOLE),
         Pass::Gi(GiPass::ALL[14], GiSplit::WHOLE),
-        Pass::Gi(GiPass::ALL[15], GiSplit::WHOLE),
     ];
 
     /// The entry point.
@@ -266,7 +265,16 @@ impl Pass {
             Pass::Render => &[FIRST_HIT, RENDER],
             Pass::PathTrace | Pass::PathSample => &[SAMPLE, LIGHT, PATHTRACE],
             Pass::Taa => &[SAMPLE, TAA],
-            Pass::Gi(..) => &[SAMPLE, LIGHT, FIRST_HIT, GI_COMMON, GI_ENTITIES, GI_PRIMARY, GI_SAMPLES, GI_RESAMPLE],
+            Pass::Gi(..) => &[
+                SAMPLE,
+                LIGHT,
+                FIRST_HIT,
+                GI_COMMON,
+                GI_ENTITIES,
+                GI_PRIMARY,
+                GI_SAMPLES,
+                GI_RESAMPLE,
+            ],
         }
     }
 }

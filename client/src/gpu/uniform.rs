@@ -178,8 +178,12 @@ wgsl_struct! {
         pub taa_slot: u32,
         /// Earlier frames the TAA may read (at most `TAA_SLOTS − 1`).
         pub taa_valid: u32,
-        /// The first frame rendered after the newest world change (0: none).
+        /// The first frame rendered after the newest change of the materials, or of more
+        /// chunks than are marked one by one (0: none): the near-change rule everywhere.
         pub edit_frame: u32,
+        /// The first frame rendered after the newest change of any chunk, entity moves
+        /// included (0: none): the still path keeps no sample from before it.
+        pub change_frame: u32,
         /// This frame's jitter in the pixel, x (a point of a 32-point (0, 5, 2)-net).
         pub jitter_x: f32,
         /// This frame's jitter in the pixel, y.
@@ -190,8 +194,6 @@ wgsl_struct! {
         pub regions_y: u32,
         /// Samples the sample ring holds.
         pub ring_capacity: u32,
-        /// Earlier frames whose cameras `cams` holds (at most `CAMERA_HISTORY − 1`).
-        pub cams_valid: u32,
         /// 1 when the bilateral denoiser runs.
         pub denoise: u32,
         /// Where each pixel's own secondary sample starts in `mem` (tagged with the
