@@ -110,6 +110,12 @@ struct Cam {
     origin: vec3<f32>,
 }
 
+// The thread's index in a dispatch of 64-wide groups laid out as x + y · (groups across)
+// (`dispatch_2d` on the host, or the queue scan's indirect arguments).
+fn flat_id(wid: vec3<u32>, groups: vec3<u32>, li: u32) -> u32 {
+    return (wid.x + wid.y * groups.x) * 64u + li;
+}
+
 // Earlier frames whose cameras `cams` holds: every one, up to CAMERA_HISTORY − 1.
 fn cams_valid() -> u32 {
     return min(gi.frame, CAMERA_HISTORY - 1u);

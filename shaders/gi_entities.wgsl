@@ -38,16 +38,11 @@ fn carry(p: vec3<f32>, was: Pose, now: Pose) -> vec3<f32> {
     return now.origin + rotate(conjugate(now.to_local), rotate(was.to_local, p - was.origin));
 }
 
-// The thread's index in a dispatch of 64-wide groups laid out as x + y · (groups across).
-fn flat_index(wg: vec3<u32>, groups: vec3<u32>, li: u32) -> u32 {
-    return (wg.x + wg.y * groups.x) * 64u + li;
-}
-
 // ---- Pass gi_poses_clear: this frame's slot starts empty ----
 
 @compute @workgroup_size(64)
 fn gi_poses_clear(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) li: u32) {
-    let id = flat_index(wg, groups, li);
+    let id = flat_id(wg, groups, li);
     if id >= ENTITY_IDS {
         return;
     }
@@ -64,7 +59,7 @@ fn gi_poses_clear(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups)
 
 @compute @workgroup_size(64)
 fn gi_poses(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) li: u32) {
-    let ci = flat_index(wg, groups, li);
+    let ci = flat_id(wg, groups, li);
     let c = world_info.chunks;
     if world_info.has_entities == 0u || ci >= c.x * c.y * c.z {
         return;
@@ -73,7 +68,7 @@ fn gi_poses(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) group
     let first = field >> 8u;
     for (var j = 0u; j < (field & 0xFFu); j++) {
         let r = (first + j) * RECORD_WORDS;
-        let at = pose_word(gi.taa_slot, instance_word(r + 4u) & 0x3FFFu);
+        let at = pose_word(gi.taa_slot, record_id(instance_word(r + 4u)));
         for (var k = 0u; k < 4u; k++) {
             words[at + k] = instance_word(r + k);
         }

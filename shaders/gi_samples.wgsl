@@ -137,10 +137,6 @@ fn gi_queue_scan(@builtin(local_invocation_index) li: u32) {
     write_args(CONTROL_PROJECT_ARGS, (valid + 63u) / 64u);
 }
 
-fn flat_id(wid: vec3<u32>, groups: vec3<u32>, li: u32) -> u32 {
-    return (wid.x + wid.y * groups.x) * 64u + li;
-}
-
 // ---- Pass gi_trace: one secondary path per queued pixel ----
 @compute @workgroup_size(64)
 fn gi_trace(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,

@@ -92,6 +92,11 @@ fn record_position(dx: u32, dy: u32) -> vec3<u32> {
     return vec3<u32>(dx & 0x1FFFFFu, (dx >> 21u) | (((dy >> 21u) & 0xFFu) << 11u), dy & 0x1FFFFFu);
 }
 
+// An instance record's entity id (record word 4).
+fn record_id(e: u32) -> u32 {
+    return e & 0x3FFFu;
+}
+
 // Tests one chunk-instance record against the ray; keeps the nearest entity hit.
 fn test_instance(r: Ray, at: u32, t_lo: f32) {
     let dx = instance_word(at);
@@ -99,7 +104,7 @@ fn test_instance(r: Ray, at: u32, t_lo: f32) {
     let dz = instance_word(at + 2u);
     let dw = instance_word(at + 3u);
     let e = instance_word(at + 4u);
-    let id = e & 0x3FFFu;
+    let id = record_id(e);
     let size = vec3<u32>((e >> 14u) & 0x7Fu, (e >> 21u) & 0x7Fu, ((e >> 28u) & 0xFu) | (((dy >> 29u) & 7u) << 4u));
     let pos = record_position(dx, dy);
     var limit = T_INF;

@@ -204,10 +204,10 @@ struct MovedEntity {
 
 impl MovedEntity {
     /// Renders 32 frames, moves the entity, renders one more frame, and checks that no
-    /// ghost remains where it stood nor shows through where it went; returns how many
-    /// samples each pixel wholly on the moved entity held in that frame.
-    fn check(&self) -> Option<Vec<u32>> {
-        let gpu = gpu()?;
+    /// ghost remains where it stood nor shows through where it went, and that the pixels
+    /// wholly on the moved entity kept their history (skips without an adapter).
+    fn check(&self) {
+        let Some(gpu) = gpu() else { return };
         let red = r#"{"op":"define_material","id":2,"kind":"diffuse","albedo":[0.8,0.1,0.1]}"#;
         let [sx, sy, sz] = self.dims;
         let mut voxels = Vec::new();
@@ -288,20 +288,18 @@ impl MovedEntity {
         let shows_through = on_entity.iter().filter(|&&i| after.rgb[i][1] > 0.25).count();
         assert_eq!(left_behind, 0, "pixels still red where the entity stood");
         assert_eq!(shows_through, 0, "pixels where the entity went still show the floor");
-        Some(on_entity.iter().map(|&i| lengths[i]).collect())
+        // The entity's own samples move with it: one frame after the move, the pixels
+        // wholly on it hold the samples its change rule allows (EDIT_HISTORY_FRAMES: the
+        // move changed the light around it), found where its earlier poses put each
+        // pixel's point. A few see a side that the camera did not see before the move, and
+        // start afresh.
+        let on_entity: Vec<u32> = on_entity.iter().map(|&i| lengths[i]).collect();
+        let kept = on_entity.iter().filter(|&&n| n >= 6).count();
+        assert!(
+            4 * kept >= 3 * on_entity.len(),
+            "pixels on the moved entity lost their history: {on_entity:?}"
+        );
     }
-}
-
-/// The entity's own samples move with it: one frame after the move, the pixels wholly on
-/// it hold the samples its change rule allows (EDIT_HISTORY_FRAMES: the move changed the
-/// light around it), found where its earlier poses put each pixel's point. A few see a side
-/// that the camera did not see before the move, and start afresh.
-fn assert_history_followed(lengths: &[u32]) {
-    let kept = lengths.iter().filter(|&&n| n >= 6).count();
-    assert!(
-        4 * kept >= 3 * lengths.len(),
-        "pixels on the moved entity lost their history: {lengths:?}"
-    );
 }
 
 #[test]
@@ -314,9 +312,7 @@ fn a_moved_entity_leaves_no_ghost_and_takes_its_history_along() {
         cam_pos: [32.0, 40.0, 32.0],
         image: (32, 24),
     };
-    if let Some(lengths) = moved.check() {
-        assert_history_followed(&lengths);
-    }
+    moved.check();
 }
 
 /// Far above the floor, the move changes no chunk near the floor where the entity stood:
@@ -331,9 +327,7 @@ fn an_entity_moved_far_above_the_floor_leaves_no_ghost() {
         cam_pos: [32.0, 80.0, 32.0],
         image: (48, 36),
     };
-    if let Some(lengths) = moved.check() {
-        assert_history_followed(&lengths);
-    }
+    moved.check();
 }
 
 /// A block removed far above a floor changes no chunk near the floor it hid: from the
