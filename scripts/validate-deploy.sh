@@ -116,16 +116,19 @@ srv.shutdown()
 assert (up, down) == (0, 1) or (up == 0 and down != 0), (up, down)
 print(f"   ok: HEALTHCHECK passes on 200 and fails on 503 ({' '.join(cmd[:2])} ...)")
 PY
-# The compose file's server health check is the image's, on the default port.
+# The compose file's server and relay health checks are the image's, on their HTTP ports.
 "$PY" - <<'PY' || fail "compose health check differs from the image's"
 import json, re, yaml
 d = yaml.safe_load(open("deploy/compose.yaml"))
-test = d["services"]["naadf"]["healthcheck"]["test"]
 text = open("deploy/Dockerfile").read().replace("\\\n", " ")
 img = json.loads(re.search(r"^HEALTHCHECK .*?CMD (\[.*\])\s*$", text, re.M).group(1))
-img = [s.replace("${NAADF_HEALTH_PORT:-8080}", "8080") for s in img]
-assert test == ["CMD"] + img, (test, img)
-print("   ok: compose's server health check is the image's")
+for service, port in (("naadf", "8080"), ("relay", "8081")):
+    test = d["services"][service]["healthcheck"]["test"]
+    want = [s.replace("${NAADF_HEALTH_PORT:-8080}", port) for s in img]
+    assert test == ["CMD"] + want, (service, test, want)
+    cmd = d["services"][service]["command"]
+    assert cmd[cmd.index("--http") + 1].endswith(":" + port), (service, cmd)
+print("   ok: compose's server and relay health checks are the image's, on their --http ports")
 PY
 # The render node's check: connected to the server's port, or not.
 "$PY" - "$ROOT/deploy/render-node-healthcheck.sh" <<'PY' || fail "render node health check"
@@ -165,7 +168,7 @@ import yaml
 from compose_spec import PyCompose
 base = open("deploy/compose.yaml").read()
 c = PyCompose.from_yaml(base)
-assert sorted(c.service_names()) == ["naadf", "render-node"], c.service_names()
+assert sorted(c.service_names()) == ["naadf", "relay", "render-node"], c.service_names()
 # The GPU override merged the way compose merges it (maps deep, this file wins).
 def merge(a, b):
     if isinstance(a, dict) and isinstance(b, dict):
@@ -183,7 +186,21 @@ else:
 svc = merged["services"]
 assert svc["render-node"]["depends_on"]["naadf"]["condition"] == "service_healthy"
 assert "naadf-data:/data" in svc["naadf"]["volumes"]
-print("   ok: compose.yaml and compose.yaml + compose.gpu.yaml parse strictly")
+# The relay: the server's image, mirroring the server, its own token, no volume.
+relay = svc["relay"]
+assert relay["image"] == svc["naadf"]["image"], relay["image"]
+cmd = relay["command"]
+assert cmd[0] == "relay" and cmd[cmd.index("--upstream") + 1] == "http://naadf:50051", cmd
+assert cmd[cmd.index("--grpc") + 1] == "0.0.0.0:50061" and cmd[cmd.index("--http") + 1] == "0.0.0.0:8081", cmd
+assert set(relay["ports"]) == {"127.0.0.1:50061:50061", "127.0.0.1:8081:8081"}, relay["ports"]
+assert relay["environment"]["NAADF_TOKEN"].startswith("${NAADF_RELAY_TOKEN:?"), relay["environment"]
+assert relay["depends_on"]["naadf"]["condition"] == "service_healthy"
+assert relay["read_only"] is True and relay["restart"] and "volumes" not in relay
+# The example env file supplies the relay's token, and the server knows it.
+env = dict(l.split("=", 1) for l in open("deploy/naadf.env.example").read().splitlines() if l and not l.startswith("#"))
+assert env["NAADF_RELAY_TOKEN"] in {t.split("=", 1)[0] for t in env["NAADF_TOKENS"].split(",")}, env
+assert env["NAADF_NODE_TOKEN"] in {t.split("=", 1)[0] for t in env["NAADF_TOKENS"].split(",")}, env
+print("   ok: compose.yaml and compose.yaml + compose.gpu.yaml parse strictly; the relay service")
 PY
 
 # ---------------------------------------------------------------------------------------
@@ -214,6 +231,9 @@ render("full", helm.values_from_yaml(open(full).read()))
 for name, values, want in [
     ("no token Secret", {"tokens": {"existingSecret": ""}}, "tokens.existingSecret"),
     ("created Secret without tokens", {"tokens": {"create": True}}, "tokens.entries"),
+    ("created Secret without the relays' token",
+     {"tokens": {"create": True, "entries": [{"token": "a", "user": "u", "role": "admin"}], "nodeToken": "a"}},
+     "tokens.relayToken"),
     ("Certificate without issuer", {"tls": {"enabled": True, "certificate": {"create": True}}}, "issuerRef"),
 ]:
     try:
@@ -227,6 +247,17 @@ for name, values, want in [
     else:
         print(f"   FAIL: {name}: rendered", file=sys.stderr)
     bad += 1
+# Without relays (and render nodes): no relay objects, and no relay token needed.
+values = {"relay": {"enabled": False}, "renderNode": {"enabled": False},
+          "tokens": {"create": True, "entries": [{"token": "a", "user": "u", "role": "admin"}]}}
+with helm.Chart.load(chart) as c:
+    manifests = c.render(values, name="naadf", namespace="naadf")
+relay = [k for k, v in manifests.items() if v.strip() and "relay" in k and not k.endswith("NOTES.txt")]
+if relay or "relay-token" in "".join(manifests.values()):
+    print(f"   FAIL: relay.enabled=false still renders relay objects: {relay}", file=sys.stderr)
+    bad += 1
+else:
+    print("   ok: relay.enabled=false renders no relay and needs no relay token")
 sys.exit(1 if bad else 0)
 PY
 
@@ -274,13 +305,16 @@ out = sys.argv[1]
 def load(name):
     docs = [d for d in yaml.safe_load_all(open(os.path.join(out, f"{name}.yaml"))) if d]
     return {(d["kind"], d["metadata"]["name"]): d for d in docs}
-def one(objs, kind):
-    found = [d for (k, _), d in objs.items() if k == kind]
-    assert len(found) == 1, f"{kind}: {len(found)} objects"
+def all_of(objs, kind, component=None):
+    return [d for (k, _), d in objs.items() if k == kind
+            and (component is None or d["metadata"]["labels"].get("app.kubernetes.io/component") == component)]
+def one(objs, kind, component=None):
+    found = all_of(objs, kind, component)
+    assert len(found) == 1, f"{kind} {component or ''}: {len(found)} objects"
     return found[0]
 for name in ("default", "full"):
     o = load(name)
-    sts = one(o, "StatefulSet")
+    sts = one(o, "StatefulSet", "server")
     assert sts["spec"]["replicas"] == 1
     pod = sts["spec"]["template"]["spec"]
     c = pod["containers"][0]
@@ -290,39 +324,92 @@ for name in ("default", "full"):
     assert pod["terminationGracePeriodSeconds"] >= 60
     assert sts["spec"]["volumeClaimTemplates"][0]["metadata"]["name"] == "data"
     assert any(m["mountPath"] == "/data" for m in c["volumeMounts"])
-    assert one(o, "PodDisruptionBudget")
+    assert one(o, "PodDisruptionBudget", "server")
     svc = o[("Service", sts["metadata"]["name"])]
     assert {p["name"] for p in svc["spec"]["ports"]} == {"grpc", "http"}
-    node = one(o, "Deployment")["spec"]["template"]["spec"]
+    assert sorted(d["metadata"]["labels"]["app.kubernetes.io/component"] for d in all_of(o, "Deployment")) == ["relay", "render-node"]
+    node_dep = one(o, "Deployment", "render-node")
+    node = node_dep["spec"]["template"]["spec"]
     nc = node["containers"][0]
     assert nc["readinessProbe"]["exec"]["command"] == ["/usr/local/bin/naadf-node-healthcheck"]
     assert "livenessProbe" not in nc
     env = {e["name"]: e for e in nc["env"]}
     assert "secretKeyRef" in env["NAADF_TOKEN"]["valueFrom"]
     gpu = (nc.get("resources") or {}).get("limits", {}).get("nvidia.com/gpu")
+    # The relays: the server's image mirroring the server Service, /health probes on their
+    # HTTP port, their own token from the Secret, non-root on a read-only root, no volume
+    # but TLS material, and a Service with grpc and http.
+    relay_dep = one(o, "Deployment", "relay")
+    relay = relay_dep["spec"]["template"]["spec"]
+    rc = relay["containers"][0]
+    assert rc["args"][0] == "relay", rc["args"]
+    a = rc["args"]
+    server_url = env["NAADF_SERVER"]["value"]
+    assert a[a.index("--upstream") + 1] == server_url, (a, server_url)
+    ports = {p["name"]: p["containerPort"] for p in rc["ports"]}
+    assert set(ports) == {"grpc", "http"}, ports
+    assert a[a.index("--grpc") + 1] == f"0.0.0.0:{ports['grpc']}" and a[a.index("--http") + 1] == f"0.0.0.0:{ports['http']}", a
+    for probe in ("startupProbe", "livenessProbe", "readinessProbe"):
+        assert rc[probe]["httpGet"] == {"path": "/health", "port": "http"}, (probe, rc[probe])
+    renv = {e["name"]: e for e in rc["env"]}
+    ref = renv["NAADF_TOKEN"]["valueFrom"]["secretKeyRef"]
+    assert ref["key"] == "relay-token" and ref["name"] == env["NAADF_TOKEN"]["valueFrom"]["secretKeyRef"]["name"], ref
+    assert rc["securityContext"]["readOnlyRootFilesystem"] and not rc["securityContext"]["allowPrivilegeEscalation"]
+    assert relay["securityContext"]["runAsNonRoot"]
+    assert not any(v for v in relay.get("volumes", []) if "secret" not in v), relay.get("volumes")
+    ann = relay_dep["spec"]["template"]["metadata"]["annotations"]
+    assert ann["prometheus.io/scrape"] == "true" and ann["prometheus.io/port"] == str(ports["http"]) and ann["prometheus.io/path"] == "/metrics"
+    assert rc["image"].split(":")[0] == (c["image"].split(":")[0] if name == "default" else "registry.example.com/naadf-relay"), rc["image"]
+    rsvc = one(o, "Service", "relay")
+    assert {p["name"]: p["targetPort"] for p in rsvc["spec"]["ports"]} == {"grpc": "grpc", "http": "http"}
+    assert rsvc["spec"]["selector"] == relay_dep["spec"]["selector"]["matchLabels"]
     kinds = {k for k, _ in o}
     if name == "default":
         assert gpu is None and "HorizontalPodAutoscaler" not in kinds and "ServiceMonitor" not in kinds
         assert "Certificate" not in kinds and "Secret" not in kinds
         assert env["NAADF_SERVER"]["value"].startswith("http://")
+        assert relay_dep["spec"]["replicas"] == 2
+        assert "--ca" not in a and "--tls-cert" not in a and "volumes" not in relay
     else:
         assert gpu == 1, gpu
-        hpa = one(o, "HorizontalPodAutoscaler")
+        assert len(all_of(o, "HorizontalPodAutoscaler")) == 2
+        hpa = one(o, "HorizontalPodAutoscaler", "render-node")
+        assert hpa["spec"]["scaleTargetRef"]["name"] == node_dep["metadata"]["name"]
         m = hpa["spec"]["metrics"][0]
         assert m["type"] == "Object" and m["object"]["metric"]["name"] == "naadf_frames_in_flight"
         assert m["object"]["target"]["type"] == "AverageValue"
-        assert "replicas" not in one(o, "Deployment")["spec"]
-        sm = one(o, "ServiceMonitor")
+        assert "replicas" not in node_dep["spec"]
+        # The relay HPA: clients joined per relay pod.
+        rhpa = one(o, "HorizontalPodAutoscaler", "relay")
+        assert rhpa["spec"]["scaleTargetRef"] == {"apiVersion": "apps/v1", "kind": "Deployment", "name": relay_dep["metadata"]["name"]}
+        (m,) = rhpa["spec"]["metrics"]
+        assert m["type"] == "Pods" and m["pods"]["metric"]["name"] == "naadf_clients", m
+        assert m["pods"]["target"] == {"type": "AverageValue", "averageValue": "300"}, m
+        assert "replicas" not in relay_dep["spec"]
+        sm = one(o, "ServiceMonitor", "server")
         assert sm["apiVersion"] == "monitoring.coreos.com/v1"
         ep = sm["spec"]["endpoints"][0]
         assert ep["port"] == "http" and ep["path"] == "/metrics" and ep["authorization"]["credentials"]["key"]
+        rsm = one(o, "ServiceMonitor", "relay")
+        (rep,) = rsm["spec"]["endpoints"]
+        assert rep["port"] == "http" and rep["path"] == "/metrics" and "authorization" not in rep
+        sel = rsm["spec"]["selector"]["matchLabels"]
+        assert rsvc["metadata"]["labels"] | sel == rsvc["metadata"]["labels"], (sel, rsvc["metadata"]["labels"])
         cert = one(o, "Certificate")
         assert cert["apiVersion"] == "cert-manager.io/v1" and cert["spec"]["issuerRef"]["name"]
         assert cert["spec"]["secretName"] == next(v for v in pod["volumes"] if v["name"] == "tls")["secret"]["secretName"]
         assert {"--tls-cert", "--tls-key"} <= set(c["args"])
         assert env["NAADF_SERVER"]["value"].startswith("https://")
+        # Relays: the server over TLS with the private CA, their own gRPC on the server's
+        # certificate, which names the relay Service too.
+        assert a[a.index("--ca") + 1] == "/ca/ca.crt" and {"--tls-cert", "--tls-key"} <= set(a), a
+        rvols = {v["name"]: v["secret"]["secretName"] for v in relay["volumes"]}
+        assert rvols == {"ca": "naadf-ca", "tls": cert["spec"]["secretName"]}, rvols
+        assert rsvc["metadata"]["name"] in cert["spec"]["dnsNames"], cert["spec"]["dnsNames"]
         sec = one(o, "Secret")
-        assert sec["stringData"]["NAADF_TOKENS"].count("=") == 3
+        assert sec["stringData"]["NAADF_TOKENS"].count("=") == 4
+        assert sec["stringData"]["relay-token"] in {t.split("=")[0] for t in sec["stringData"]["NAADF_TOKENS"].split(",")}
+        assert "checksum/tokens" in ann
     print(f"   ok: {name}")
 PY
 

@@ -32,6 +32,9 @@ enum Command {
     Raycast(commands::raycast::Args),
     /// Serve a world: gRPC streaming and edits, durable in a data directory.
     Serve(commands::serve::Args),
+    /// Mirror a server (or another relay) and serve its world to clients of your own,
+    /// forwarding their edits upstream.
+    Relay(commands::relay::Args),
     /// Join a server and mirror its world, checking every digest.
     Mirror(commands::mirror::Args),
     /// Send ops (JSON lines) to a server; prints the acknowledged versions.
@@ -67,7 +70,10 @@ const GROUPS: &[(&str, &[&str])] = &[
         "World files",
         &["import", "generate", "info", "export", "apply", "raycast"],
     ),
-    ("Service", &["serve", "mirror", "edit", "status", "export-log", "data"]),
+    (
+        "Service",
+        &["serve", "relay", "mirror", "edit", "status", "export-log", "data"],
+    ),
     ("Rendering", &["render", "render-node", "frame", "view"]),
     ("Replay", &["replay", "record"]),
     ("Benchmarks", &["bench"]),
@@ -120,7 +126,7 @@ fn main() -> ExitCode {
     let _runtime_dir = cli.command.uses_gpu().then(commands::quiet_headless_gpu).flatten();
     // Long-running network commands report what they do; one-shot tools stay quiet.
     commands::init_logging(match cli.command {
-        Command::Serve(_) | Command::Mirror(_) => "info",
+        Command::Serve(_) | Command::Relay(_) | Command::Mirror(_) => "info",
         _ => "warn",
     });
     let result = match cli.command {
@@ -131,6 +137,7 @@ fn main() -> ExitCode {
         Command::Raycast(a) => commands::raycast::run(a),
         Command::Apply(a) => commands::apply::run(a),
         Command::Serve(a) => commands::serve::run(a),
+        Command::Relay(a) => commands::relay::run(a),
         Command::Mirror(a) => commands::mirror::run(a),
         Command::Edit(a) => commands::edit::run(a),
         Command::Status(a) => commands::status::run(a),

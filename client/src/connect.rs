@@ -3,13 +3,14 @@
 //! builds on this; nothing here knows the service's calls.
 
 use crate::error::ConnectError;
+use naadf_proto::endpoint::EndpointError;
 use naadf_proto::v1::world_service_client::WorldServiceClient;
 use std::path::Path;
 use tonic::codec::CompressionEncoding;
 use tonic::metadata::AsciiMetadataValue;
 use tonic::service::Interceptor;
 use tonic::service::interceptor::InterceptedService;
-use tonic::transport::{Certificate, Channel, ClientTlsConfig, Endpoint};
+use tonic::transport::Channel;
 
 /// Adds the bearer token to every request.
 #[derive(Clone, Debug)]
@@ -32,17 +33,15 @@ pub(crate) type RawClient = WorldServiceClient<InterceptedService<Channel, Token
 /// sending `token` with every call. The channel reconnects by itself after the connection
 /// breaks, so one stays usable across server restarts.
 pub(crate) async fn connect(url: &str, token: Option<&str>, ca: Option<&Path>) -> Result<RawClient, ConnectError> {
-    let mut ep = Endpoint::from_shared(url.to_owned()).map_err(|e| ConnectError::Url(url.into(), e.to_string()))?;
-    if url.starts_with("https://") {
-        let mut tls = ClientTlsConfig::new().with_native_roots();
-        if let Some(ca) = ca {
-            let pem = std::fs::read(ca).map_err(|e| ConnectError::Ca(ca.display().to_string(), e))?;
-            tls = tls.ca_certificate(Certificate::from_pem(pem));
-        }
-        ep = ep.tls_config(tls).map_err(|e| ConnectError::Transport(url.into(), e))?;
-    }
-    let channel = ep
-        .tcp_nodelay(true)
+    let ca = match ca {
+        Some(ca) => Some(std::fs::read(ca).map_err(|e| ConnectError::Ca(ca.display().to_string(), e))?),
+        None => None,
+    };
+    let channel = naadf_proto::endpoint::endpoint(url, ca)
+        .map_err(|e| match e {
+            EndpointError::Url(url, why) => ConnectError::Url(url, why),
+            EndpointError::Tls(url, e) => ConnectError::Transport(url, e),
+        })?
         .connect()
         .await
         .map_err(|e| ConnectError::Transport(url.into(), e))?;

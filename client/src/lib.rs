@@ -26,7 +26,8 @@
 //! - [`session`]: [`Session`], a joined world stream applied to a mirror that it keeps
 //!   current, and [`WorldStream`], the stream alone;
 //! - [`mirror`]: the CPU mirror, which applies the stream's messages to local buffers and
-//!   checks every digest (no I/O of its own); the basis of the GPU client and of relays;
+//!   checks every digest (no I/O of its own); the basis of the GPU client, and defined in
+//!   `naadf-proto` so that relays hold the same one;
 //! - [`cache`]: [`PageCache`], the mirrored world on disk, so that rejoining after a restart
 //!   costs only what changed;
 //! - [`node`]: [`node::RenderNode`], which keeps a render node registered and serving the
@@ -46,7 +47,9 @@ pub mod connect;
 pub mod error;
 pub mod gpu;
 pub mod light;
-pub mod mirror;
+pub use naadf_proto::mirror;
+/// The stream's messages, as [`Client::stream`] yields them raw.
+pub use naadf_proto::v1::{WorldMessage, world_message};
 pub mod node;
 pub mod session;
 pub mod viewer;

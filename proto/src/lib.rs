@@ -7,13 +7,18 @@
 //!
 //! - [`snapshot`]: snapshot pages (64 KiB pages of the transferred buffers, zstd) and the
 //!   assembly of a world from a header, cached buffers and received pages;
-//! - [`requests`]: entity RPCs to and from edit batches.
+//! - [`requests`]: entity RPCs to and from edit batches;
+//! - [`mirror`]: a world kept byte-identical to a server's by applying its stream (what
+//!   clients and relays hold);
+//! - [`endpoint`]: the channel settings every caller of the service uses (TLS, no delay).
 //!
 //! The stream itself is specified in the `.proto` file: a `Header`, the pages the client
 //! lacks, then one `Delta` per change, each carrying the digest after it.
 
 #![warn(missing_docs)]
 
+pub mod endpoint;
+pub mod mirror;
 pub mod requests;
 pub mod snapshot;
 

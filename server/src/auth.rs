@@ -44,7 +44,8 @@ impl Role {
         }
     }
 
-    fn parse(s: &str) -> Option<Role> {
+    /// The role named `s` (as configured and as `Status` reports it), if there is one.
+    pub fn parse(s: &str) -> Option<Role> {
         [Role::Viewer, Role::Editor, Role::Admin, Role::RenderNode]
             .into_iter()
             .find(|r| r.name() == s)
@@ -211,6 +212,26 @@ impl Auth {
             .get(token)
             .cloned()
             .ok_or_else(|| Status::unauthenticated("unknown token"))
+    }
+}
+
+/// Who decides a caller's role: this process's tokens (a server), or the upstream (a
+/// relay, which holds no tokens of its own).
+#[derive(Clone, Debug)]
+pub enum Gate {
+    /// The tokens configured here.
+    Local(Auth),
+    /// The upstream's answer.
+    Upstream(std::sync::Arc<crate::relay::gate::UpstreamAuth>),
+}
+
+impl Gate {
+    /// The caller of a request with these metadata.
+    pub async fn caller(&self, md: &MetadataMap) -> Result<Caller, Status> {
+        match self {
+            Gate::Local(auth) => auth.caller(md),
+            Gate::Upstream(up) => up.caller(md).await,
+        }
     }
 }
 

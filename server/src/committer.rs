@@ -10,62 +10,18 @@
 //! A log that cannot be written stops the process: the actor has already applied the
 //! batches in memory, and continuing would publish versions that a restart would lose.
 
-use crate::messages::{Event, Outgoing, Subscription};
+use crate::messages::Outgoing;
 use crate::metrics::Metrics;
-use crate::pages::SnapshotView;
+use crate::publisher::Publisher;
 use crate::store::DataDir;
 use crate::wal::Wal;
 use naadf_proto::v1::EditReply;
 use std::sync::Arc;
 use std::time::Instant;
-use tokio::sync::{broadcast, mpsc, watch};
+use tokio::sync::mpsc;
 
 /// Most queued items committed as one group.
 const MAX_GROUP: usize = 1024;
-
-/// Most recent deltas kept for resuming clients.
-const HISTORY_EVENTS: usize = 8192;
-/// Most bytes of recent deltas kept for resuming clients.
-const HISTORY_BYTES: usize = 32 << 20;
-
-/// The recent deltas, for resuming clients.
-#[derive(Debug)]
-struct History {
-    /// The state before the oldest kept delta: `(version, digest)`.
-    base: (u64, u64),
-    events: std::collections::VecDeque<Arc<Event>>,
-    bytes: usize,
-}
-
-impl History {
-    fn push(&mut self, e: &Arc<Event>) {
-        self.bytes += e.size();
-        self.events.push_back(e.clone());
-        while self.events.len() > HISTORY_EVENTS || self.bytes > HISTORY_BYTES {
-            let old = self.events.pop_front().expect("non-empty");
-            self.bytes -= old.size();
-            self.base = (old.version, old.digest);
-        }
-    }
-
-    /// The deltas after the state `(version, digest)`, if that state is `view` itself or
-    /// still in the history.
-    fn after(&self, (version, digest): (u64, u64), view: &SnapshotView) -> Option<Vec<Arc<Event>>> {
-        if view.version == version && view.digest.0 == digest {
-            return Some(Vec::new());
-        }
-        let from = match self
-            .events
-            .iter()
-            .rposition(|e| e.version == version && e.digest == digest)
-        {
-            Some(at) => at + 1,
-            None if self.base == (version, digest) => 0,
-            None => return None,
-        };
-        Some(self.events.range(from..).cloned().collect())
-    }
-}
 
 /// The durability point between the actor and everyone else: the only writer of the log and
 /// of snapshots, and the only publisher of deltas and edit answers (see the module docs).
@@ -76,11 +32,9 @@ pub struct Committer {
     /// The data directory (snapshots).
     pub data: Arc<DataDir>,
     /// Where deltas are published.
-    pub events: broadcast::Sender<Arc<Event>>,
+    pub publisher: Publisher,
     /// Where fsync latencies and written snapshots are counted.
     pub metrics: Arc<Metrics>,
-    /// The state the server starts from: `(version, digest)`.
-    pub initial: (u64, u64),
 }
 
 fn fatal(what: &str, e: impl std::fmt::Display) -> ! {
@@ -92,13 +46,6 @@ impl Committer {
     /// Runs until the actor is gone, then waits for a snapshot still being written.
     pub fn run(mut self, mut rx: mpsc::Receiver<Outgoing>) {
         let mut writer: Option<std::thread::JoinHandle<()>> = None;
-        let mut history = History {
-            base: self.initial,
-            events: Default::default(),
-            bytes: 0,
-        };
-        // Bytes published so far: join tasks measure their backlog against it.
-        let (head, _) = watch::channel(0u64);
         while let Some(first) = rx.blocking_recv() {
             let mut group = vec![first];
             while group.len() < MAX_GROUP {
@@ -134,31 +81,18 @@ impl Committer {
                 match o {
                     Outgoing::Batch { event, reply, .. } => {
                         let version = event.version;
-                        history.push(&event);
-                        head.send_modify(|h| *h += event.size() as u64);
-                        let _ = self.events.send(event);
+                        self.publisher.publish(event);
                         let _ = reply.send(Ok(EditReply {
                             version,
                             duplicate: false,
                         }));
                     }
-                    Outgoing::Growth { event } => {
-                        history.push(&event);
-                        head.send_modify(|h| *h += event.size() as u64);
-                        let _ = self.events.send(event);
-                    }
+                    Outgoing::Growth { event } => self.publisher.publish(event),
                     Outgoing::Ack { reply, result } => {
                         let _ = reply.send(result);
                     }
                     Outgoing::Join { view, resume, reply } => {
-                        let catch_up = resume.and_then(|r| history.after(r, &view));
-                        let _ = reply.send(Subscription {
-                            events: self.events.subscribe(),
-                            catch_up,
-                            view,
-                            start: *head.borrow(),
-                            head: head.subscribe(),
-                        });
+                        let _ = reply.send(self.publisher.subscribe(view, resume));
                     }
                     Outgoing::Checkpoint { parts, state, reply } => {
                         // One snapshot at a time; the log keeps going meanwhile.

@@ -2,14 +2,14 @@
 //! (a frame from the render nodes) and a small HTML status page with the world, the joined
 //! clients, the render nodes, a live frame and the recent edits.
 //!
-//! With tokens configured, everything but `/health` wants one (any role), from
-//! `Authorization: Bearer` or `?token=` (browsers cannot send headers for a page or an
-//! `<img>`): the page names users and shows their edits, and the metrics describe the
-//! load. `/health` says only whether the server is up and at which version.
+//! With tokens configured, everything but `/health` and `/metrics` wants one (any role),
+//! from `Authorization: Bearer` or `?token=` (browsers cannot send headers for a page or an
+//! `<img>`): the page names users and shows their edits. `/health` says only whether the
+//! server is up and at which version; `/metrics` holds aggregates only.
 
 use crate::Shared;
 use crate::actor::Request;
-use crate::auth::Caller;
+use crate::auth::{Caller, Gate};
 use axum::Router;
 use axum::extract::rejection::QueryRejection;
 use axum::extract::{ConnectInfo, Query, State};
@@ -28,16 +28,17 @@ use tonic::Status;
 struct App {
     shared: Arc<Shared>,
     actor: mpsc::Sender<Request>,
+    gate: Gate,
 }
 
-/// The HTTP routes.
-pub fn router(shared: Arc<Shared>, actor: mpsc::Sender<Request>) -> Router {
+/// The HTTP routes; `actor` answers status requests, `gate` decides who callers are.
+pub fn router(shared: Arc<Shared>, actor: mpsc::Sender<Request>, gate: Gate) -> Router {
     Router::new()
         .route("/health", get(health))
         .route("/metrics", get(metrics))
         .route("/frame.png", get(frame_png))
         .route("/", get(status_page))
-        .with_state(App { shared, actor })
+        .with_state(App { shared, actor, gate })
 }
 
 async fn health(State(app): State<App>) -> impl IntoResponse {
@@ -51,17 +52,17 @@ async fn health(State(app): State<App>) -> impl IntoResponse {
                 "digest": s.digest.to_string(),
             })),
         ),
+        // Shutting down, or a relay that has no world from its upstream yet.
         None => (
             StatusCode::SERVICE_UNAVAILABLE,
-            Json(serde_json::json!({"status": "shutting down"})),
+            Json(serde_json::json!({"status": "unavailable"})),
         ),
     }
 }
 
-async fn metrics(State(app): State<App>, headers: HeaderMap, token: TokenQuery) -> Response {
-    if let Err(s) = authorize(&app, credentials(headers, token)) {
-        return http_error(&s);
-    }
+/// `GET /metrics`: aggregates only (no user names, no edit contents), so it needs no
+/// token, like `/health`: scrapers should not need a credential.
+async fn metrics(State(app): State<App>) -> Response {
     (
         [(
             header::CONTENT_TYPE,
@@ -98,8 +99,8 @@ fn credentials(headers: HeaderMap, token: TokenQuery) -> Result<tonic::metadata:
 }
 
 /// The caller of a request with these credentials (any role will do).
-fn authorize(app: &App, md: Result<tonic::metadata::MetadataMap, Status>) -> Result<Caller, Status> {
-    md.and_then(|md| app.shared.auth.caller(&md))
+async fn authorize(app: &App, md: Result<tonic::metadata::MetadataMap, Status>) -> Result<Caller, Status> {
+    app.gate.caller(&md?).await
 }
 
 /// The query of `/frame.png` (its token is read apart, see [`TokenQuery`]).
@@ -161,7 +162,7 @@ async fn frame_png(
         }
         Ok(md)
     });
-    if let Err(s) = authorize(&app, md) {
+    if let Err(s) = authorize(&app, md).await {
         return http_error(&s);
     }
     let q = match q {
@@ -237,7 +238,7 @@ fn url_escape(s: &str) -> String {
 /// The status page; its `?token=` (on servers with tokens) is passed on to its live frame.
 async fn status_page(State(app): State<App>, headers: HeaderMap, token: TokenQuery) -> Response {
     let page_token = token.as_ref().ok().and_then(|Query(t)| t.token.clone());
-    if let Err(s) = authorize(&app, credentials(headers, token)) {
+    if let Err(s) = authorize(&app, credentials(headers, token)).await {
         return http_error(&s);
     }
     let Some(s) = crate::status(&app.actor).await else {

@@ -14,13 +14,14 @@ use crate::messages::{Event, Subscription};
 use crate::pages::{SnapshotView, StoredPage};
 use naadf_proto::PROTOCOL_VERSION;
 use naadf_proto::snapshot::{buffer_lengths, group_pages};
-use naadf_proto::v1::{CachedBuffer, Header, Page, WorldMessage, world_message};
+use naadf_proto::v1::{CachedBuffer, Header, JoinRequest, Page, WorldMessage, world_message};
 use naadf_world::digest::PAGE_BYTES;
 use naadf_world::file::TRANSFERRED;
 use prost::Message;
 use std::collections::VecDeque;
 use std::sync::Arc;
 use tokio::sync::{broadcast, mpsc, oneshot, watch};
+use tokio_stream::wrappers::ReceiverStream;
 use tonic::Status;
 
 /// Most page hashes a join request may announce (far more than the largest world has).
@@ -72,6 +73,37 @@ impl SlowClientLimits {
     fn exceeded(&self, mine: u64, total: u64) -> bool {
         mine > self.client_bytes || (total > self.total_bytes && mine > self.client_bytes / 16)
     }
+}
+
+/// Messages buffered per client stream before the join task waits for the client.
+const STREAM_BUFFER: usize = 64;
+
+/// Starts streaming the world to `user`, who sent `req`: checks the protocol version and
+/// the announced cache, then spawns the task that runs [`run`] (counted in the metrics and
+/// on the status page) and returns the stream it feeds.
+pub fn start(
+    shared: Arc<Shared>,
+    actor: mpsc::Sender<Request>,
+    user: String,
+    req: JoinRequest,
+) -> Result<ReceiverStream<Result<WorldMessage, Status>>, Status> {
+    if req.protocol_version != PROTOCOL_VERSION {
+        return Err(Status::failed_precondition(format!(
+            "client speaks protocol {}, this server speaks {PROTOCOL_VERSION}; upgrade the client",
+            req.protocol_version
+        )));
+    }
+    let held = client_pages(&req.cached)?;
+    let resume = req.resume.map(|r| (r.version, r.digest));
+    let (tx, rx) = mpsc::channel(STREAM_BUFFER);
+    tokio::spawn(async move {
+        let id = shared.activity.joined(&user);
+        shared.metrics.clients.inc();
+        run(shared.clone(), actor, held, resume, tx).await;
+        shared.metrics.clients.dec();
+        shared.activity.left(id);
+    });
+    Ok(ReceiverStream::new(rx))
 }
 
 /// Streams the world to one client until it leaves or the server shuts down. `resume` is
@@ -130,7 +162,10 @@ pub async fn run(
                     tracing::info!(missed, "client fell behind; re-sending a snapshot");
                     out.detach();
                 }
-                Err(broadcast::error::RecvError::Closed) => return,
+                // The publisher started over at a state that does not follow from what
+                // was published (a relay whose upstream could not resume it), or is gone
+                // (then the next subscription finds no actor and the stream ends).
+                Err(broadcast::error::RecvError::Closed) => out.detach(),
             }
         }
         resync = true;

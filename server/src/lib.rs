@@ -29,8 +29,10 @@ pub mod layout;
 pub mod messages;
 pub mod metrics;
 pub mod pages;
+pub mod publisher;
+pub mod relay;
 pub mod render_router;
-mod serve;
+pub(crate) mod serve;
 pub mod service;
 pub mod store;
 pub mod wal;
@@ -68,8 +70,17 @@ pub struct Shared {
 impl Shared {
     /// Shared state with a per-user limit of `rate` edits per second (bursts of `rate`).
     pub fn new(auth: auth::Auth, rate: u32, shutdown: watch::Receiver<bool>) -> Self {
+        Self::with_metrics(auth, rate, shutdown, Arc::default())
+    }
+
+    /// Shared state as [`Shared::new`] makes it, exporting `metrics`.
+    pub fn with_metrics(
+        auth: auth::Auth,
+        rate: u32,
+        shutdown: watch::Receiver<bool>,
+        metrics: Arc<metrics::Metrics>,
+    ) -> Self {
         let rate = rate.max(1);
-        let metrics: Arc<metrics::Metrics> = Arc::default();
         Self {
             router: render_router::Router::new(render_router::DEFAULT_QUEUE, metrics.clone()),
             metrics,

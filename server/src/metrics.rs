@@ -59,6 +59,8 @@ pub struct Metrics {
     pub frames_in_flight: Family<NodeLabel, Gauge>,
     /// The joined clients' backlogs (what the stream gauges below report).
     pub backlogs: Backlogs,
+    /// Relays only: what following the upstream costs ([`Metrics::for_relay`]).
+    pub upstream: UpstreamMetrics,
     /// The sum of the clients' backlogs, bytes (set when rendered).
     backlog_bytes: Gauge,
     /// The largest client backlog, bytes (set when rendered).
@@ -160,6 +162,7 @@ impl Default for Metrics {
             frame_seconds: LatencyFamily::new_with_constructor(latency_histogram),
             frames_in_flight: Family::default(),
             backlogs: Backlogs::default(),
+            upstream: UpstreamMetrics::default(),
             backlog_bytes: Gauge::default(),
             backlog_max_client_bytes: Gauge::default(),
             registry: Registry::default(),
@@ -214,7 +217,53 @@ impl Default for Metrics {
     }
 }
 
+/// A relay's view of its upstream: how far behind it is and how often it had to re-join.
+#[derive(Debug, Default)]
+pub struct UpstreamMetrics {
+    /// Whether the upstream stream is live now (1) or being re-joined (0).
+    pub connected: Gauge,
+    /// The upstream's version minus the relay's, as last polled.
+    pub lag_versions: Gauge,
+    /// How long the relay has been behind the upstream's last polled version, ms (0 when
+    /// it has caught up).
+    pub lag_ms: Gauge,
+    /// Upstream streams joined (the first one included).
+    pub joins: Counter,
+    /// Upstream streams given up because a message did not apply or its digest did not
+    /// match: nothing of them was passed on.
+    pub rejected: Counter,
+}
+
 impl Metrics {
+    /// The metrics of a relay: the server's, plus the `upstream_*` family.
+    pub fn for_relay() -> Self {
+        let mut m = Self::default();
+        let u = &m.upstream;
+        let r = &mut m.registry;
+        r.register(
+            "upstream_connected",
+            "Whether the upstream stream is live",
+            u.connected.clone(),
+        );
+        r.register(
+            "upstream_lag_versions",
+            "The upstream's version minus this relay's, as last polled",
+            u.lag_versions.clone(),
+        );
+        r.register(
+            "upstream_lag_ms",
+            "How long this relay has been behind the upstream's last polled version, ms",
+            u.lag_ms.clone(),
+        );
+        r.register("upstream_joins", "Upstream streams joined", u.joins.clone());
+        r.register(
+            "upstream_rejected",
+            "Upstream streams dropped on a bad message or digest mismatch (nothing passed on)",
+            u.rejected.clone(),
+        );
+        m
+    }
+
     /// The Prometheus text exposition of every metric.
     pub fn render(&self) -> String {
         let (total, max) = self.backlogs.totals();

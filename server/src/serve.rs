@@ -2,25 +2,26 @@
 //! listeners, periodic checkpoints and graceful shutdown.
 
 use crate::actor::{Actor, Request};
-use crate::auth::Auth;
+use crate::auth::{Auth, Gate};
 use crate::committer::Committer;
 use crate::conn::{Acceptor, ConnLimits};
 use crate::fsck::Verdict;
 use crate::join::SlowClientLimits;
+use crate::publisher::Publisher;
 use crate::service::WorldServer;
 use crate::store::{DataDir, ServerState, StoreError};
 use crate::wal::{Entry, Wal};
 use crate::{Shared, http};
 use anyhow::{Context, Result, bail};
 use naadf_proto::FILE_DESCRIPTOR_SET;
-use naadf_proto::v1::world_service_server::WorldServiceServer;
+use naadf_proto::v1::world_service_server::{WorldService, WorldServiceServer};
 use naadf_world::World;
 use naadf_world::ops::Limits;
 use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Duration;
-use tokio::sync::{broadcast, mpsc, oneshot, watch};
+use tokio::sync::{mpsc, oneshot, watch};
 use tonic::codec::CompressionEncoding;
 use tonic::transport::{Identity, Server, ServerTlsConfig};
 
@@ -234,7 +235,6 @@ pub async fn serve(
     });
 
     let (out_tx, out_rx) = mpsc::channel(4096);
-    let (events, _) = broadcast::channel(config.slow_client_events.max(16));
     let mut actor = Actor::new(
         world,
         state,
@@ -256,10 +256,9 @@ pub async fn serve(
 
     let initial = (actor.world().version(), actor.world().digest().0);
     let committer = Committer {
-        initial,
         wal,
         data: data.clone(),
-        events,
+        publisher: Publisher::new(initial, config.slow_client_events),
         metrics: shared.metrics.clone(),
     };
     let committer = std::thread::Builder::new()
@@ -282,58 +281,16 @@ pub async fn serve(
         req_tx.send(Request::Checkpoint { reply: None }).await?;
     }
 
-    let grpc_listener = tokio::net::TcpListener::bind(config.grpc)
-        .await
-        .with_context(|| format!("cannot listen on {}", config.grpc))?;
-    let http_listener = tokio::net::TcpListener::bind(config.http)
-        .await
-        .with_context(|| format!("cannot listen on {}", config.http))?;
-    let bound = Bound {
-        grpc: grpc_listener.local_addr()?,
-        http: http_listener.local_addr()?,
+    let svc = WorldServiceServer::new(WorldServer::new(shared.clone(), req_tx.clone()));
+    let routes = http::router(shared.clone(), req_tx.clone(), Gate::Local(config.auth.clone()));
+    let listeners = Listeners {
+        grpc: config.grpc,
+        http: config.http,
+        connections: config.connections,
+        tls: config.tls.clone(),
+        max_message_bytes: config.max_message_bytes,
     };
-    tracing::info!(grpc = %bound.grpc, http = %bound.http, "serving");
-
-    let reflection_v1 = tonic_reflection::server::Builder::configure()
-        .register_encoded_file_descriptor_set(FILE_DESCRIPTOR_SET)
-        .build_v1()?;
-    let reflection_v1alpha = tonic_reflection::server::Builder::configure()
-        .register_encoded_file_descriptor_set(FILE_DESCRIPTOR_SET)
-        .build_v1alpha()?;
-    let svc = WorldServiceServer::new(WorldServer::new(shared.clone(), req_tx.clone()))
-        .max_decoding_message_size(config.max_message_bytes)
-        .max_encoding_message_size(usize::MAX)
-        .accept_compressed(CompressionEncoding::Zstd);
-    let keepalive = crate::conn::keepalive(config.connections.idle_timeout);
-    let mut builder = Server::builder()
-        .http2_keepalive_interval(Some(keepalive))
-        .http2_keepalive_timeout(Some(keepalive));
-    if let Some((cert, key)) = &config.tls {
-        let cert = std::fs::read(cert).with_context(|| format!("cannot read {}", cert.display()))?;
-        let key = std::fs::read(key).with_context(|| format!("cannot read {}", key.display()))?;
-        builder = builder
-            .tls_config(ServerTlsConfig::new().identity(Identity::from_pem(cert, key)))
-            .context("bad TLS certificate or key")?;
-    }
-    let mut stop = shutdown_tx.subscribe();
-    let grpc = builder
-        .add_service(svc)
-        .add_service(reflection_v1)
-        .add_service(reflection_v1alpha)
-        .serve_with_incoming_shutdown(grpc_incoming(grpc_listener, config.connections), async move {
-            let _ = stop.wait_for(|s| *s).await;
-        });
-    let mut stop = shutdown_tx.subscribe();
-    let http = axum::serve(
-        // `tap_io` only so that axum hands the peer address to the handlers.
-        axum::serve::ListenerExt::tap_io(Acceptor::new(http_listener, config.connections, false), |_| {}),
-        http::router(shared.clone(), req_tx.clone()).into_make_service_with_connect_info::<std::net::SocketAddr>(),
-    )
-    .with_graceful_shutdown(async move {
-        let _ = stop.wait_for(|s| *s).await;
-    });
-    let grpc = tokio::spawn(grpc);
-    let http = tokio::spawn(http.into_future());
+    let (bound, grpc, http) = listeners.start(svc, routes, &shutdown_tx).await?;
     let ticker = {
         let actor = req_tx.clone();
         let every = config.checkpoint_interval;
@@ -372,6 +329,88 @@ pub async fn serve(
     })
     .await?;
     Ok(())
+}
+
+/// The listening side a server and a relay share: gRPC (with reflection, keepalive,
+/// connection limits, optional TLS) and HTTP.
+pub(crate) struct Listeners {
+    /// gRPC listen address.
+    pub grpc: SocketAddr,
+    /// HTTP listen address.
+    pub http: SocketAddr,
+    /// Open connections per listener and their idle timeout.
+    pub connections: ConnLimits,
+    /// TLS certificate and key (PEM), if any.
+    pub tls: Option<(PathBuf, PathBuf)>,
+    /// Largest gRPC message accepted, in bytes.
+    pub max_message_bytes: usize,
+}
+
+/// A spawned listener's task.
+type Listening = tokio::task::JoinHandle<Result<(), Box<dyn std::error::Error + Send + Sync>>>;
+
+impl Listeners {
+    /// Binds both listeners and serves `svc` and `routes` until `shutdown` turns true.
+    pub(crate) async fn start<S: WorldService>(
+        &self,
+        svc: WorldServiceServer<S>,
+        routes: axum::Router,
+        shutdown: &watch::Sender<bool>,
+    ) -> Result<(Bound, Listening, Listening)> {
+        let grpc_listener = tokio::net::TcpListener::bind(self.grpc)
+            .await
+            .with_context(|| format!("cannot listen on {}", self.grpc))?;
+        let http_listener = tokio::net::TcpListener::bind(self.http)
+            .await
+            .with_context(|| format!("cannot listen on {}", self.http))?;
+        let bound = Bound {
+            grpc: grpc_listener.local_addr()?,
+            http: http_listener.local_addr()?,
+        };
+        tracing::info!(grpc = %bound.grpc, http = %bound.http, "serving");
+
+        let reflection_v1 = tonic_reflection::server::Builder::configure()
+            .register_encoded_file_descriptor_set(FILE_DESCRIPTOR_SET)
+            .build_v1()?;
+        let reflection_v1alpha = tonic_reflection::server::Builder::configure()
+            .register_encoded_file_descriptor_set(FILE_DESCRIPTOR_SET)
+            .build_v1alpha()?;
+        let svc = svc
+            .max_decoding_message_size(self.max_message_bytes)
+            .max_encoding_message_size(usize::MAX)
+            .accept_compressed(CompressionEncoding::Zstd);
+        let keepalive = crate::conn::keepalive(self.connections.idle_timeout);
+        let mut builder = Server::builder()
+            .http2_keepalive_interval(Some(keepalive))
+            .http2_keepalive_timeout(Some(keepalive));
+        if let Some((cert, key)) = &self.tls {
+            let cert = std::fs::read(cert).with_context(|| format!("cannot read {}", cert.display()))?;
+            let key = std::fs::read(key).with_context(|| format!("cannot read {}", key.display()))?;
+            builder = builder
+                .tls_config(ServerTlsConfig::new().identity(Identity::from_pem(cert, key)))
+                .context("bad TLS certificate or key")?;
+        }
+        let mut stop = shutdown.subscribe();
+        let grpc = builder
+            .add_service(svc)
+            .add_service(reflection_v1)
+            .add_service(reflection_v1alpha)
+            .serve_with_incoming_shutdown(grpc_incoming(grpc_listener, self.connections), async move {
+                let _ = stop.wait_for(|s| *s).await;
+            });
+        let mut stop = shutdown.subscribe();
+        let http = axum::serve(
+            // `tap_io` only so that axum hands the peer address to the handlers.
+            axum::serve::ListenerExt::tap_io(Acceptor::new(http_listener, self.connections, false), |_| {}),
+            routes.into_make_service_with_connect_info::<SocketAddr>(),
+        )
+        .with_graceful_shutdown(async move {
+            let _ = stop.wait_for(|s| *s).await;
+        });
+        let grpc = tokio::spawn(async move { grpc.await.map_err(Into::into) });
+        let http = tokio::spawn(async move { http.await.map_err(Into::into) });
+        Ok((bound, grpc, http))
+    }
 }
 
 /// The gRPC connections accepted on `listener`, with `TCP_NODELAY` set (tonic applies its

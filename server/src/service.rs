@@ -21,7 +21,7 @@ use tokio_stream::Stream;
 use tokio_stream::wrappers::ReceiverStream;
 use tonic::{Request as Req, Response, Status};
 
-/// Messages buffered per client stream before the join task waits for the client.
+/// Messages buffered per render node's job stream.
 const STREAM_BUFFER: usize = 64;
 
 /// Longest status message the service sends, in bytes. The message travels in a response
@@ -31,7 +31,7 @@ pub const MAX_STATUS_MESSAGE: usize = 1024;
 
 /// `s` with its message cut to [`MAX_STATUS_MESSAGE`] bytes (at a character boundary,
 /// with an ellipsis); its code and metadata are kept.
-fn bounded(s: Status) -> Status {
+pub fn bounded(s: Status) -> Status {
     if s.message().len() <= MAX_STATUS_MESSAGE {
         return s;
     }
@@ -162,7 +162,8 @@ fn bad(e: impl std::fmt::Display) -> Status {
     Status::invalid_argument(e.to_string())
 }
 
-type WorldStream = Pin<Box<dyn Stream<Item = Result<WorldMessage, Status>> + Send>>;
+/// A client's world stream, as the service returns it.
+pub type WorldStream = Pin<Box<dyn Stream<Item = Result<WorldMessage, Status>> + Send>>;
 type JobStream = Pin<Box<dyn Stream<Item = Result<FrameJob, Status>> + Send>>;
 
 #[tonic::async_trait]
@@ -290,29 +291,10 @@ impl WorldServer {
         Ok(Response::new(Box::pin(ReceiverStream::new(rx))))
     }
 
-    /// A client's join: checks, then the task that streams the world to it.
     async fn join_inner(&self, r: Req<JoinRequest>) -> Result<Response<WorldStream>, Status> {
         let caller = self.caller(&r)?;
-        let req = r.into_inner();
-        if req.protocol_version != PROTOCOL_VERSION {
-            return Err(Status::failed_precondition(format!(
-                "client speaks protocol {}, this server speaks {PROTOCOL_VERSION}; upgrade the client",
-                req.protocol_version
-            )));
-        }
-        let held = join::client_pages(&req.cached)?;
-        let resume = req.resume.map(|r| (r.version, r.digest));
-        let (tx, rx) = mpsc::channel(STREAM_BUFFER);
-        let shared = self.shared.clone();
-        let actor = self.actor.clone();
-        tokio::spawn(async move {
-            let id = shared.activity.joined(&caller.user);
-            shared.metrics.clients.inc();
-            join::run(shared.clone(), actor, held, resume, tx).await;
-            shared.metrics.clients.dec();
-            shared.activity.left(id);
-        });
-        Ok(Response::new(Box::pin(ReceiverStream::new(rx))))
+        let stream = join::start(self.shared.clone(), self.actor.clone(), caller.user, r.into_inner())?;
+        Ok(Response::new(Box::pin(stream)))
     }
 
     async fn status_inner(&self, r: Req<StatusRequest>) -> Result<Response<StatusReply>, Status> {

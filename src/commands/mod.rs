@@ -14,6 +14,7 @@ pub mod info;
 pub mod mirror;
 pub mod raycast;
 pub mod record;
+pub mod relay;
 pub mod remote;
 pub mod render;
 pub mod render_node;

@@ -42,12 +42,6 @@ pub struct Args {
     /// NAADF_TOKENS environment variable (`TOKEN=user:role,...`) are added.
     #[arg(long)]
     auth: Option<PathBuf>,
-    /// TLS certificate chain (PEM); needs --tls-key.
-    #[arg(long, requires = "tls_key")]
-    tls_cert: Option<PathBuf>,
-    /// TLS private key (PEM); needs --tls-cert.
-    #[arg(long, requires = "tls_cert")]
-    tls_key: Option<PathBuf>,
     /// Accept that bearer tokens travel in cleartext: serve gRPC without TLS, or HTTP, on a
     /// non-loopback address without the startup warning.
     #[arg(long)]
@@ -57,39 +51,76 @@ pub struct Args {
     rate: u32,
     #[command(flatten)]
     limits: super::EditLimitArgs,
-    /// Largest request message, in bytes.
-    #[arg(long, default_value_t = ServerConfig::default().max_message_bytes)]
-    max_message_bytes: usize,
     /// Write a snapshot after this many edits.
     #[arg(long, default_value_t = ServerConfig::default().checkpoint_every)]
     checkpoint_every: u64,
     /// And at least this often (seconds) while edits arrive.
     #[arg(long, default_value_t = ServerConfig::default().checkpoint_interval.as_secs())]
     checkpoint_secs: u64,
-    /// Deltas a client may fall behind before it is re-sent a snapshot.
-    #[arg(long, default_value_t = ServerConfig::default().slow_client_events)]
-    slow_client_events: usize,
-    /// Bytes a client may fall behind (deltas it has not read) before it is re-sent a
-    /// snapshot.
-    #[arg(long, default_value_t = ServerConfig::default().slow_clients.client_bytes)]
-    slow_client_bytes: u64,
-    /// Bytes the subscribed clients together may fall behind; over it, every one that is
-    /// not reading and is more than a sixteenth of --slow-client-bytes behind is re-sent a
-    /// snapshot.
-    #[arg(long, default_value_t = ServerConfig::default().slow_clients.total_bytes)]
-    slow_clients_total_bytes: u64,
-    /// Most connections open at a time on each listener (gRPC and HTTP); more wait until
-    /// one closes. Keep twice this under the process's file descriptor limit.
-    #[arg(long, default_value_t = ServerConfig::default().connections.max_connections)]
-    max_connections: usize,
-    /// Close a connection whose peer sent nothing for this many seconds (unfinished
-    /// handshakes and requests, dead peers); gRPC connections are pinged at a third of it,
-    /// so live ones stay open.
-    #[arg(long, default_value_t = ServerConfig::default().connections.idle_timeout.as_secs_f64())]
-    idle_timeout: f64,
+    #[command(flatten)]
+    listening: ListenArgs,
     /// Print the bound addresses as one JSON line on stdout once serving.
     #[arg(long)]
     json: bool,
+}
+
+/// How a server or a relay listens and how far its clients may fall behind: the options
+/// `serve` and `relay` share.
+#[derive(clap::Args)]
+pub struct ListenArgs {
+    /// TLS certificate chain (PEM); needs --tls-key.
+    #[arg(long, requires = "tls_key")]
+    pub tls_cert: Option<PathBuf>,
+    /// TLS private key (PEM); needs --tls-cert.
+    #[arg(long, requires = "tls_cert")]
+    pub tls_key: Option<PathBuf>,
+    /// Largest request message, in bytes.
+    #[arg(long, default_value_t = naadf_server::ServerConfig::default().max_message_bytes)]
+    pub max_message_bytes: usize,
+    /// Deltas a client may fall behind before it is re-sent a snapshot.
+    #[arg(long, default_value_t = naadf_server::ServerConfig::default().slow_client_events)]
+    pub slow_client_events: usize,
+    /// Bytes a client may fall behind (deltas it has not read) before it is re-sent a
+    /// snapshot.
+    #[arg(long, default_value_t = naadf_server::ServerConfig::default().slow_clients.client_bytes)]
+    pub slow_client_bytes: u64,
+    /// Bytes the subscribed clients together may fall behind; over it, every one that is
+    /// not reading and is more than a sixteenth of --slow-client-bytes behind is re-sent a
+    /// snapshot.
+    #[arg(long, default_value_t = naadf_server::ServerConfig::default().slow_clients.total_bytes)]
+    pub slow_clients_total_bytes: u64,
+    /// Most connections open at a time on each listener (gRPC and HTTP); more wait until
+    /// one closes. Keep twice this under the process's file descriptor limit.
+    #[arg(long, default_value_t = naadf_server::ServerConfig::default().connections.max_connections)]
+    pub max_connections: usize,
+    /// Close a connection whose peer sent nothing for this many seconds (unfinished
+    /// handshakes and requests, dead peers); gRPC connections are pinged at a third of it,
+    /// so live ones stay open.
+    #[arg(long, default_value_t = naadf_server::ServerConfig::default().connections.idle_timeout.as_secs_f64())]
+    pub idle_timeout: f64,
+}
+
+impl ListenArgs {
+    /// The slow-client limits.
+    pub fn slow_clients(&self) -> naadf_server::join::SlowClientLimits {
+        naadf_server::join::SlowClientLimits {
+            client_bytes: self.slow_client_bytes,
+            total_bytes: self.slow_clients_total_bytes,
+        }
+    }
+
+    /// The connection limits.
+    pub fn connections(&self) -> Result<naadf_server::conn::ConnLimits> {
+        Ok(naadf_server::conn::ConnLimits {
+            max_connections: self.max_connections.max(1),
+            idle_timeout: super::seconds(self.idle_timeout, "--idle-timeout")?.max(Duration::from_millis(100)),
+        })
+    }
+
+    /// The TLS certificate and key, if given.
+    pub fn tls(&self) -> Option<(PathBuf, PathBuf)> {
+        self.tls_cert.clone().zip(self.tls_key.clone())
+    }
 }
 
 /// Runs the server until Ctrl-C or SIGTERM.
@@ -108,19 +139,14 @@ pub fn run(a: Args) -> Result<()> {
     config.auth = auth;
     config.rate = a.rate;
     config.limits = a.limits.limits();
-    config.max_message_bytes = a.max_message_bytes;
     config.checkpoint_every = a.checkpoint_every.max(1);
     config.checkpoint_interval = Duration::from_secs(a.checkpoint_secs.max(1));
-    config.slow_client_events = a.slow_client_events;
-    config.slow_clients = naadf_server::join::SlowClientLimits {
-        client_bytes: a.slow_client_bytes,
-        total_bytes: a.slow_clients_total_bytes,
-    };
-    config.connections = naadf_server::conn::ConnLimits {
-        max_connections: a.max_connections.max(1),
-        idle_timeout: super::seconds(a.idle_timeout, "--idle-timeout")?.max(Duration::from_millis(100)),
-    };
-    config.tls = a.tls_cert.clone().zip(a.tls_key.clone());
+    let l = &a.listening;
+    config.max_message_bytes = l.max_message_bytes;
+    config.slow_client_events = l.slow_client_events;
+    config.slow_clients = l.slow_clients();
+    config.connections = l.connections()?;
+    config.tls = l.tls();
     config.insecure = a.insecure;
     if let Some(w) = config.cleartext_warning() {
         eprintln!("WARNING: {w}");
@@ -159,7 +185,7 @@ pub fn run(a: Args) -> Result<()> {
 /// A future that resolves on Ctrl-C or SIGTERM. The handlers are installed now, before the
 /// server announces its addresses: a signal sent right after the announcement must stop
 /// the server cleanly, not find the default action (death by the signal) still in place.
-fn shutdown_signal() -> std::io::Result<impl std::future::Future<Output = ()>> {
+pub fn shutdown_signal() -> std::io::Result<impl std::future::Future<Output = ()>> {
     #[cfg(unix)]
     {
         use tokio::signal::unix::{SignalKind, signal};

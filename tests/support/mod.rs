@@ -49,7 +49,7 @@ pub fn p(dir: &Path, name: &str) -> String {
     dir.join(name).to_str().unwrap().to_string()
 }
 
-/// A `naadf serve` process on ephemeral loopback ports.
+/// A `naadf serve` (or `naadf relay`) process on ephemeral loopback ports.
 pub struct Server {
     child: Child,
     /// gRPC URL (`http://127.0.0.1:PORT`).
@@ -65,9 +65,21 @@ impl Server {
     /// name `--grpc` or `--http`) and waits until it serves; `log` receives its stderr
     /// (appended, so restarts keep the history).
     pub fn start(args: &[&str], log: &Path, envs: &[(&str, &str)]) -> Server {
+        Self::launch("serve", args, log, envs)
+    }
+
+    /// Starts `naadf relay --upstream UPSTREAM ARGS` the same way.
+    pub fn relay(upstream: &str, args: &[&str], log: &Path) -> Server {
+        let mut all = vec!["--upstream", upstream];
+        all.extend_from_slice(args);
+        Self::launch("relay", &all, log, &[])
+    }
+
+    /// Starts `naadf COMMAND --json ARGS` as [`Server::start`] describes.
+    fn launch(command_name: &str, args: &[&str], log: &Path, envs: &[(&str, &str)]) -> Server {
         let err = std::fs::OpenOptions::new().create(true).append(true).open(log).unwrap();
         let mut command = Command::new(env!("CARGO_BIN_EXE_naadf"));
-        command.arg("serve").arg("--json");
+        command.arg(command_name).arg("--json");
         for flag in ["--grpc", "--http"] {
             if !args.contains(&flag) {
                 command.args([flag, "127.0.0.1:0"]);
@@ -81,7 +93,7 @@ impl Server {
             .stdout(Stdio::piped())
             .stderr(Stdio::from(err))
             .spawn()
-            .expect("spawn naadf serve");
+            .expect("spawn naadf");
         let stdout = child.stdout.take().unwrap();
         let (tx, rx) = std::sync::mpsc::channel();
         std::thread::spawn(move || {

@@ -50,7 +50,13 @@ fn group_of(name: &str) -> &'static str {
 
 /// The process's user plus system time in nanoseconds, exited threads included.
 fn process_ns() -> Option<u64> {
-    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    process_ns_of("self")
+}
+
+/// The user plus system time of process `pid` (`self` for this one) in nanoseconds, its
+/// exited threads included; `None` where `/proc` is not available.
+pub fn process_ns_of(pid: &str) -> Option<u64> {
+    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
     // The command name may hold spaces and parentheses: fields restart after the last ')'.
     let rest = &stat[stat.rfind(')')? + 2..];
     let f: Vec<&str> = rest.split_whitespace().collect();

@@ -5,6 +5,7 @@
 mod build;
 mod cpu;
 mod edit;
+mod fanout;
 mod frames;
 mod gi;
 mod gpu;
@@ -30,6 +31,12 @@ pub enum Bench {
     Edit(edit::EditArgs),
     /// The server under load: join, rejoin, edit latency with many mirrors, wire bytes.
     Stream(stream::StreamArgs),
+    /// Fan-out through relays: edit→received latency and the server's cost per client, with
+    /// every client, relay and the server a process of its own.
+    Fanout(fanout::FanoutArgs),
+    /// One receive-only client of `bench fanout` (started by it).
+    #[command(hide = true)]
+    FanoutClient(fanout::FanoutClientArgs),
     /// GPU ray throughput of the traversal variants (naadf, nodf, grid, svo, svdag), checked against the CPU.
     Gpu(gpu::GpuArgs),
     /// Frames through a server's render nodes: frames per second, latency, routing overhead.
@@ -47,6 +54,8 @@ pub fn run(b: Bench) -> Result<()> {
         Bench::Build(a) => build::run(a),
         Bench::Edit(a) => edit::run(a),
         Bench::Stream(a) => stream::run(a),
+        Bench::Fanout(a) => fanout::run(a),
+        Bench::FanoutClient(a) => fanout::client(a),
         Bench::Gpu(a) => gpu::run(a),
         Bench::Frames(a) => frames::run(a),
         Bench::Gi(a) => gi::run(a),

@@ -246,7 +246,7 @@ async fn counting_proxy(target: SocketAddr, count: Arc<AtomicU64>) -> Result<Soc
 }
 
 /// Surface points to edit at.
-fn points(world: &World, n: usize, seed: u64) -> Vec<[u32; 3]> {
+pub(super) fn points(world: &World, n: usize, seed: u64) -> Vec<[u32; 3]> {
     let size = world.size().voxels();
     let mut rng = SplitMix64(seed);
     let mut out = Vec::new();
@@ -258,7 +258,7 @@ fn points(world: &World, n: usize, seed: u64) -> Vec<[u32; 3]> {
     out
 }
 
-fn voxel_op(p: [u32; 3], k: usize) -> String {
+pub(super) fn voxel_op(p: [u32; 3], k: usize) -> String {
     format!(
         r#"{{"op":"set","voxels":[[{},{},{},{}]]}}"#,
         p[0],
@@ -275,14 +275,14 @@ async fn edit(c: &Client, ops: String) -> Result<u64> {
 /// The editing client, on a tokio runtime of its own (one thread, `editor`), as the server
 /// is: on the mirrors' runtime its requests and acknowledgements would queue behind their
 /// work on every delta, which a remote editor never does.
-struct Editor {
+pub(super) struct Editor {
     client: Client,
     /// Taken by `Drop`, which must not block inside the benchmark's runtime.
     rt: Option<tokio::runtime::Runtime>,
 }
 
 impl Editor {
-    async fn connect(url: &str) -> Result<Self> {
+    pub(super) async fn connect(url: &str) -> Result<Self> {
         let rt = tokio::runtime::Builder::new_multi_thread()
             .worker_threads(1)
             .thread_name("editor")
@@ -297,7 +297,7 @@ impl Editor {
     }
 
     /// Runs `f` with the client on the editor's thread.
-    fn spawn<T, F>(&self, f: impl FnOnce(Client) -> F) -> tokio::task::JoinHandle<T>
+    pub(super) fn spawn<T, F>(&self, f: impl FnOnce(Client) -> F) -> tokio::task::JoinHandle<T>
     where
         T: Send + 'static,
         F: std::future::Future<Output = T> + Send + 'static,
@@ -311,7 +311,7 @@ impl Editor {
         self.spawn(|c| async move { edit(&c, ops).await }).await?
     }
 
-    async fn quiescent(&self) -> Result<bool> {
+    pub(super) async fn quiescent(&self) -> Result<bool> {
         Ok(self.spawn(|c| async move { c.status().await }).await??.quiescent)
     }
 }

@@ -38,6 +38,7 @@ app.kubernetes.io/instance: {{ .Release.Name }}
 {{/* Names of the parts. */}}
 {{- define "naadf.serverName" -}}{{ include "naadf.fullname" . }}{{- end -}}
 {{- define "naadf.renderNodeName" -}}{{ printf "%s-render-node" (include "naadf.fullname" .) | trunc 63 | trimSuffix "-" }}{{- end -}}
+{{- define "naadf.relayName" -}}{{ printf "%s-relay" (include "naadf.fullname" .) | trunc 63 | trimSuffix "-" }}{{- end -}}
 
 {{/* The Secret with the tokens. */}}
 {{- define "naadf.tokensSecret" -}}
@@ -56,6 +57,23 @@ app.kubernetes.io/instance: {{ .Release.Name }}
 {{/* The URL render nodes dial: the server Service. */}}
 {{- define "naadf.serverUrl" -}}
 {{- printf "%s://%s:%v" (ternary "https" "http" .Values.tls.enabled) (include "naadf.serverName" .) .Values.server.service.grpcPort -}}
+{{- end -}}
+
+{{/* The URL relays mirror: relay.upstream, or the server Service. */}}
+{{- define "naadf.relayUpstream" -}}
+{{- default (include "naadf.serverUrl" .) .Values.relay.upstream -}}
+{{- end -}}
+
+{{/* The relays' TLS Secret: relay.tls.secretName, or the server's. */}}
+{{- define "naadf.relayTlsSecret" -}}
+{{- default (include "naadf.tlsSecret" .) .Values.relay.tls.secretName -}}
+{{- end -}}
+
+{{/* The relays' image: relay.image, each empty field taken from server.image. */}}
+{{- define "naadf.relayImage" -}}
+{{- $s := .Values.server.image -}}
+{{- $r := .Values.relay.image -}}
+{{- dict "repository" (default $s.repository $r.repository) "tag" (default $s.tag $r.tag) "pullPolicy" (default $s.pullPolicy $r.pullPolicy) | toJson -}}
 {{- end -}}
 
 {{/* An image reference: repository:tag, the tag defaulting to the appVersion. */}}

@@ -6,14 +6,14 @@
 //! [`World::apply_record`], the same code the server ran, and its digest must match. A
 //! mismatch is an error: the mirror never silently diverges.
 //!
-//! The mirror does no I/O: a [`Session`](crate::Session) reads the stream and feeds it, or
-//! a program that reads the stream itself ([`Client::stream`](crate::Client::stream))
-//! calls [`Mirror::handle`].
+//! The mirror does no I/O: a client's session reads the stream and feeds it, and so does a
+//! relay, which republishes what its mirror accepted; a program that reads the stream
+//! itself calls [`Mirror::handle`].
 
-pub use naadf_proto::snapshot::DEFAULT_MAX_WORLD_BYTES;
-use naadf_proto::snapshot::{Assembly, buffers_of, cache_of};
-use naadf_proto::v1::{JoinRequest, ResumePoint, WorldMessage, world_message};
-use naadf_proto::{PROTOCOL_VERSION, WireError};
+pub use crate::snapshot::DEFAULT_MAX_WORLD_BYTES;
+use crate::snapshot::{Assembly, buffers_of, cache_of};
+use crate::v1::{JoinRequest, ResumePoint, WorldMessage, world_message};
+use crate::{PROTOCOL_VERSION, WireError};
 use naadf_world::World;
 use naadf_world::digest::Digest;
 use naadf_world::edit::Record;

@@ -1,0 +1,182 @@
+//! `naadf relay`: a mirror of a server (or of another relay) that serves the read side of
+//! the same gRPC API to its own clients, so that the server pays for one stream per relay
+//! instead of one per viewer.
+//!
+//! ```text
+//! upstream Join stream ──▶ upstream::follow ──▶ hub (mirror: apply, check digest) ──▶ Publisher
+//!                                                   ▲ Join / Status                   │
+//! clients ──▶ RelayService ── join::start ──────────┘              join tasks ◀────────┘
+//!             └── Edit, Undo, Redo, entities, RenderFrame ──▶ forwarded upstream as they came
+//! ```
+//!
+//! - [`hub`] owns the mirror and publishes exactly the messages it accepted; the server's
+//!   own [`join`](crate::join) tasks serve them, resume included.
+//! - [`upstream`] follows the upstream stream and re-joins with backoff; it also forwards
+//!   callers' requests with their own metadata.
+//! - [`gate`] asks the upstream who a caller is: a relay holds no tokens.
+//! - [`service`] is the gRPC service.
+
+pub mod gate;
+pub mod hub;
+pub mod service;
+pub mod upstream;
+
+use crate::auth::{Auth, Gate};
+use crate::conn::ConnLimits;
+use crate::join::SlowClientLimits;
+use crate::serve::{Bound, Listeners};
+use crate::{Shared, http};
+use anyhow::{Context, Result};
+use naadf_proto::v1::world_service_server::WorldServiceServer;
+use std::net::SocketAddr;
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::Duration;
+use tokio::sync::{Notify, mpsc, watch};
+
+/// Everything `naadf relay` can configure.
+#[derive(Clone, Debug)]
+pub struct RelayConfig {
+    /// The upstream's gRPC URL (`http://` or `https://`).
+    pub upstream: String,
+    /// A CA certificate (PEM file) to trust for an `https://` upstream.
+    pub ca: Option<PathBuf>,
+    /// The relay's own token for its upstream join (any role that may join).
+    pub token: Option<String>,
+    /// gRPC listen address.
+    pub grpc: SocketAddr,
+    /// HTTP listen address.
+    pub http: SocketAddr,
+    /// Largest gRPC message accepted, in bytes.
+    pub max_message_bytes: usize,
+    /// The largest world, in bytes of buffers, to accept from the upstream.
+    pub max_world_bytes: u64,
+    /// Deltas a client may fall behind before it is re-sent a snapshot.
+    pub slow_client_events: usize,
+    /// Bytes a client, and all clients together, may fall behind.
+    pub slow_clients: SlowClientLimits,
+    /// Open connections per listener and their idle timeout.
+    pub connections: ConnLimits,
+    /// TLS certificate and key (PEM) for the relay's own gRPC listener, if any.
+    pub tls: Option<(PathBuf, PathBuf)>,
+}
+
+/// The default gRPC listen address of a relay.
+pub const DEFAULT_RELAY_GRPC: &str = "127.0.0.1:50061";
+/// The default HTTP listen address of a relay.
+pub const DEFAULT_RELAY_HTTP: &str = "127.0.0.1:8081";
+
+impl RelayConfig {
+    /// The documented defaults, following `upstream`.
+    pub fn new(upstream: &str) -> Self {
+        let server = crate::ServerConfig::default();
+        Self {
+            upstream: upstream.to_owned(),
+            ca: None,
+            token: None,
+            grpc: DEFAULT_RELAY_GRPC.parse().expect("address"),
+            http: DEFAULT_RELAY_HTTP.parse().expect("address"),
+            max_message_bytes: server.max_message_bytes,
+            max_world_bytes: naadf_proto::snapshot::DEFAULT_MAX_WORLD_BYTES,
+            slow_client_events: server.slow_client_events,
+            slow_clients: server.slow_clients,
+            connections: server.connections,
+            tls: None,
+        }
+    }
+}
+
+/// Runs a relay until `shutdown` resolves. `ready` is told the bound addresses as soon as
+/// the relay listens, before its upstream answers: clients that join meanwhile wait for
+/// the first snapshot.
+pub async fn relay(
+    config: RelayConfig,
+    ready: impl FnOnce(Bound),
+    shutdown: impl std::future::Future<Output = ()>,
+) -> Result<()> {
+    let ca = match &config.ca {
+        Some(p) => Some(std::fs::read(p).with_context(|| format!("cannot read {}", p.display()))?),
+        None => None,
+    };
+    let upstream =
+        upstream::Upstream::new(&config.upstream, ca, config.token.as_deref()).map_err(anyhow::Error::msg)?;
+    let (shutdown_tx, shutdown_rx) = watch::channel(false);
+    let metrics = Arc::new(crate::metrics::Metrics::for_relay());
+    // Tokens are the upstream's business; the relay's own token set stays empty and is
+    // never consulted (the service and the pages ask the upstream through the gate).
+    let shared = Arc::new(Shared {
+        slow_clients: config.slow_clients,
+        ..Shared::with_metrics(Auth::open(), 1, shutdown_rx.clone(), metrics.clone())
+    });
+
+    let rejoin = Arc::new(Notify::new());
+    let (hub_tx, hub_rx) = mpsc::channel(1024);
+    let hub = hub::Hub::new(
+        config.max_world_bytes,
+        config.slow_client_events,
+        rejoin.clone(),
+        metrics.clone(),
+    );
+    let hub = std::thread::Builder::new()
+        .name("naadf-relay-hub".into())
+        .spawn(move || hub.run(hub_rx))?;
+    // Join tasks and the pages speak to the hub as they would to the server's actor.
+    let (req_tx, mut req_rx) = mpsc::channel(1024);
+    {
+        let hub_tx = hub_tx.clone();
+        tokio::spawn(async move {
+            while let Some(r) = req_rx.recv().await {
+                if hub_tx.send(hub::Input::Request(r)).await.is_err() {
+                    return;
+                }
+            }
+        });
+    }
+    let follower = tokio::spawn(upstream::follow(
+        upstream.clone(),
+        hub_tx,
+        rejoin,
+        metrics.clone(),
+        shutdown_rx.clone(),
+    ));
+    let poller = tokio::spawn(upstream::poll_lag(
+        upstream.clone(),
+        req_tx.clone(),
+        metrics.clone(),
+        shutdown_rx.clone(),
+    ));
+
+    let auth = Arc::new(gate::UpstreamAuth::new(upstream.clone()));
+    let svc = WorldServiceServer::new(service::RelayService::new(
+        shared.clone(),
+        req_tx.clone(),
+        upstream.clone(),
+        auth.clone(),
+    ));
+    let routes = http::router(shared.clone(), req_tx.clone(), Gate::Upstream(auth));
+    let listeners = Listeners {
+        grpc: config.grpc,
+        http: config.http,
+        connections: config.connections,
+        tls: config.tls.clone(),
+        max_message_bytes: config.max_message_bytes,
+    };
+    let (bound, grpc, http) = listeners.start(svc, routes, &shutdown_tx).await?;
+    tracing::info!(upstream = %config.upstream, "relaying");
+    ready(bound);
+
+    shutdown.await;
+    tracing::info!("shutting down");
+    let _ = shutdown_tx.send(true);
+    let _ = tokio::time::timeout(Duration::from_secs(10), grpc).await;
+    let _ = tokio::time::timeout(Duration::from_secs(5), http).await;
+    let _ = follower.await;
+    let _ = poller.await;
+    drop(req_tx);
+    drop(shared);
+    tokio::task::spawn_blocking(move || {
+        let _ = hub.join();
+    })
+    .await?;
+    Ok(())
+}

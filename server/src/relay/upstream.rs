@@ -1,0 +1,208 @@
+//! The relay's link to its upstream (a server or another relay): one lazily connected
+//! channel, the relay's own calls on it (its join, the lag poll), callers' calls forwarded
+//! with their own metadata, and the loop that follows the upstream stream and re-joins
+//! with backoff whenever it breaks.
+
+use super::hub::Input;
+use crate::actor::Request;
+use crate::metrics::Metrics;
+use naadf_proto::v1::StatusRequest;
+use naadf_proto::v1::world_service_client::WorldServiceClient;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+use tokio::sync::{Notify, mpsc, oneshot, watch};
+use tonic::codec::CompressionEncoding;
+use tonic::metadata::{AsciiMetadataValue, MetadataMap};
+use tonic::transport::Channel;
+
+/// The first wait before re-joining a broken upstream.
+const MIN_BACKOFF: Duration = Duration::from_millis(100);
+/// The longest wait between attempts.
+const MAX_BACKOFF: Duration = Duration::from_secs(5);
+/// How often the relay asks the upstream for its version (the lag metrics).
+const LAG_POLL: Duration = Duration::from_secs(1);
+
+/// Metadata keys that belong to one hop's transport, not to the caller: the relay decodes
+/// a request and encodes it anew, so they are not forwarded.
+const HOP_KEYS: [&str; 3] = ["grpc-encoding", "grpc-accept-encoding", "content-length"];
+
+/// The upstream: where it is and how the relay calls it.
+#[derive(Clone, Debug)]
+pub struct Upstream {
+    /// Its URL.
+    pub url: String,
+    client: WorldServiceClient<Channel>,
+    /// The relay's own `authorization` value, if it has a token.
+    token: Option<AsciiMetadataValue>,
+}
+
+impl Upstream {
+    /// The upstream at `url` (trusting `ca`, PEM bytes, for TLS), called with the relay's
+    /// `token`. Nothing connects yet: the channel connects on first use and again after it
+    /// breaks.
+    pub fn new(url: &str, ca: Option<Vec<u8>>, token: Option<&str>) -> Result<Self, String> {
+        let channel = naadf_proto::endpoint::endpoint(url, ca)
+            .map_err(|e| e.to_string())?
+            .connect_lazy();
+        let token = token
+            .map(|t| format!("Bearer {t}").parse::<AsciiMetadataValue>())
+            .transpose()
+            .map_err(|_| "the upstream token must be visible ASCII".to_owned())?;
+        Ok(Self {
+            url: url.to_owned(),
+            client: WorldServiceClient::new(channel)
+                .max_decoding_message_size(usize::MAX)
+                .accept_compressed(CompressionEncoding::Zstd),
+            token,
+        })
+    }
+
+    /// A client for calls on the upstream.
+    pub fn client(&self) -> WorldServiceClient<Channel> {
+        self.client.clone()
+    }
+
+    /// `message` as the relay's own request (with its token).
+    pub fn own<T>(&self, message: T) -> tonic::Request<T> {
+        let mut r = tonic::Request::new(message);
+        if let Some(t) = &self.token {
+            r.metadata_mut().insert("authorization", t.clone());
+        }
+        r
+    }
+
+    /// A caller's request, to send upstream with the caller's metadata (its token, its
+    /// deadline) and without this hop's transport keys.
+    pub fn forwarded<T>(r: tonic::Request<T>) -> tonic::Request<T> {
+        let (mut metadata, _, message) = r.into_parts();
+        for key in HOP_KEYS {
+            metadata.remove(key);
+        }
+        tonic::Request::from_parts(metadata, Default::default(), message)
+    }
+
+    /// `message` with only the `authorization` of `caller` (for checking a caller's token).
+    pub fn as_caller<T>(caller: &MetadataMap, message: T) -> tonic::Request<T> {
+        let mut r = tonic::Request::new(message);
+        if let Some(v) = caller.get("authorization") {
+            r.metadata_mut().insert("authorization", v.clone());
+        }
+        r
+    }
+}
+
+/// A failed upstream call as the relay's caller sees it: a status the upstream sent,
+/// unchanged; a failure tonic made here from the transport (the upstream is down, or the
+/// connection broke), UNAVAILABLE, which callers retry (with the same `client_seq`, so an
+/// edit the upstream applied before the break is not applied twice).
+pub fn upstream_error(s: tonic::Status) -> tonic::Status {
+    match std::error::Error::source(&s) {
+        Some(cause) => tonic::Status::unavailable(format!(
+            "the relay's upstream is out of reach: {}: {cause}",
+            s.message()
+        )),
+        None => s,
+    }
+}
+
+/// Follows the upstream stream until `shutdown`: asks the hub for a join request, joins,
+/// and hands every message to the hub; when the stream breaks, ends, or the hub refuses
+/// it (`rejoin`), joins again after a backoff that doubles up to [`MAX_BACKOFF`] and
+/// starts over once a message arrives.
+pub async fn follow(
+    upstream: Upstream,
+    hub: mpsc::Sender<Input>,
+    rejoin: Arc<Notify>,
+    metrics: Arc<Metrics>,
+    mut shutdown: watch::Receiver<bool>,
+) {
+    let mut backoff = MIN_BACKOFF;
+    let mut failures = 0u32;
+    loop {
+        let (reply, rx) = oneshot::channel();
+        if hub.send(Input::Rejoin(reply)).await.is_err() {
+            return;
+        }
+        let Ok((request, generation)) = rx.await else { return };
+        let why = match upstream.client().join(upstream.own(request)).await {
+            Ok(stream) => {
+                tracing::info!(upstream = %upstream.url, "joined upstream");
+                metrics.upstream.joins.inc();
+                let mut stream = stream.into_inner();
+                loop {
+                    tokio::select! {
+                        m = stream.message() => match m {
+                            Ok(Some(m)) => {
+                                backoff = MIN_BACKOFF;
+                                failures = 0;
+                                if hub.send(Input::Message(generation, m)).await.is_err() {
+                                    return;
+                                }
+                            }
+                            Ok(None) => break "the upstream ended the stream".to_owned(),
+                            Err(s) => break format!("the upstream stream broke: {}", s.message()),
+                        },
+                        _ = rejoin.notified() => break "the stream was refused".to_owned(),
+                        _ = shutdown.changed() => return,
+                    }
+                }
+            }
+            Err(s) => format!("cannot join upstream: {} ({:?})", s.message(), s.code()),
+        };
+        metrics.upstream.connected.set(0);
+        failures += 1;
+        // The first failures are expected (a restart, a short cut) and logged as
+        // warnings; a link that stays down is an error every attempt.
+        if failures <= 3 {
+            tracing::warn!(upstream = %upstream.url, retry_in = ?backoff, "{why}; re-joining");
+        } else {
+            tracing::error!(upstream = %upstream.url, retry_in = ?backoff, failures, "{why}; re-joining");
+        }
+        tokio::select! {
+            _ = tokio::time::sleep(jittered(backoff)) => {}
+            _ = shutdown.changed() => return,
+        }
+        backoff = (backoff * 2).min(MAX_BACKOFF);
+    }
+}
+
+/// `d` plus up to a quarter more, so that relays cut off together do not all return at
+/// the same instant.
+fn jittered(d: Duration) -> Duration {
+    let nanos = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |t| t.subsec_nanos());
+    d + d.mul_f64(f64::from(nanos % 1000) / 4000.0)
+}
+
+/// Keeps the lag metrics current until `shutdown`: every [`LAG_POLL`], the upstream's
+/// version against the hub's.
+pub async fn poll_lag(
+    upstream: Upstream,
+    hub: mpsc::Sender<Request>,
+    metrics: Arc<Metrics>,
+    mut shutdown: watch::Receiver<bool>,
+) {
+    let mut behind_since: Option<Instant> = None;
+    loop {
+        tokio::select! {
+            _ = tokio::time::sleep(LAG_POLL) => {}
+            _ = shutdown.changed() => return,
+        }
+        let Ok(up) = upstream.client().status(upstream.own(StatusRequest {})).await else {
+            continue;
+        };
+        let mine = crate::status(&hub).await.map_or(0, |s| s.version);
+        let lag = up.into_inner().version.saturating_sub(mine);
+        behind_since = if lag > 0 {
+            behind_since.or(Some(Instant::now()))
+        } else {
+            None
+        };
+        metrics.upstream.lag_versions.set(lag as i64);
+        metrics
+            .upstream
+            .lag_ms
+            .set(behind_since.map_or(0, |t| t.elapsed().as_millis() as i64));
+    }
+}

@@ -1,0 +1,72 @@
+//! `naadf relay --upstream URL [--grpc ADDR] [--http ADDR] [--token T]`
+
+use super::print_json;
+use super::remote::block_on;
+use super::serve::{ListenArgs, shutdown_signal};
+use anyhow::{Context, Result};
+use naadf_server::relay::{DEFAULT_RELAY_GRPC, DEFAULT_RELAY_HTTP, RelayConfig, relay};
+use std::net::SocketAddr;
+use std::path::PathBuf;
+
+/// Arguments of `relay`.
+#[derive(clap::Args)]
+pub struct Args {
+    /// The upstream to mirror: a server's or another relay's gRPC URL (`http://HOST:PORT`,
+    /// or `https://` with TLS).
+    #[arg(long, env = "NAADF_UPSTREAM")]
+    upstream: String,
+    /// The relay's own token for joining the upstream (a viewer's will do). Callers' tokens
+    /// are checked by the upstream, never here.
+    #[arg(long, env = "NAADF_TOKEN", hide_env_values = true)]
+    token: Option<String>,
+    /// CA certificate (PEM) to trust for an `https://` upstream, besides the system roots.
+    #[arg(long)]
+    ca: Option<PathBuf>,
+    /// gRPC listen address.
+    #[arg(long, default_value = DEFAULT_RELAY_GRPC)]
+    grpc: SocketAddr,
+    /// HTTP listen address (/health, /metrics, status page).
+    #[arg(long, default_value = DEFAULT_RELAY_HTTP)]
+    http: SocketAddr,
+    /// The largest world, in bytes of buffers, to accept from the upstream.
+    #[arg(long, value_name = "BYTES", default_value_t = naadf_client::DEFAULT_MAX_WORLD_BYTES)]
+    max_world_bytes: u64,
+    #[command(flatten)]
+    listening: ListenArgs,
+    /// Print the bound addresses as one JSON line on stdout once listening.
+    #[arg(long)]
+    json: bool,
+}
+
+/// Runs the relay until Ctrl-C or SIGTERM.
+pub fn run(a: Args) -> Result<()> {
+    let mut config = RelayConfig::new(&a.upstream);
+    config.token = a.token.clone();
+    config.ca = a.ca.clone();
+    config.grpc = a.grpc;
+    config.http = a.http;
+    config.max_world_bytes = a.max_world_bytes;
+    let l = &a.listening;
+    config.max_message_bytes = l.max_message_bytes;
+    config.slow_client_events = l.slow_client_events;
+    config.slow_clients = l.slow_clients();
+    config.connections = l.connections()?;
+    config.tls = l.tls();
+    let json = a.json;
+    block_on(async move {
+        relay(
+            config,
+            move |b| {
+                if json {
+                    let _ = print_json(&serde_json::json!({
+                        "grpc": b.grpc.to_string(),
+                        "http": b.http.to_string(),
+                    }));
+                }
+            },
+            shutdown_signal().context("cannot install the signal handlers")?,
+        )
+        .await
+        .context("relay failed")
+    })
+}
