@@ -245,6 +245,18 @@ fn frames_from_render_nodes_equal_local_renders() {
 
     status_page_in_a_browser(&server.http, &adapter, dir.path());
 
+    // Through a relay, frame requests go upstream with the caller's token, over gRPC and
+    // over the relay's HTTP: the same frame, the same refusal without a token.
+    let relay = support::Server::relay(&server.url, &["--token", "vw"], &dir.path().join("relay.log"));
+    let (done, _, err) = frame(&relay.url, &out, "material", 0);
+    assert!(done, "through the relay: {err}");
+    assert!(std::fs::read(&out).unwrap() == std::fs::read(p(dir.path(), "local-material.png")).unwrap());
+    assert_eq!(http_get_bytes(&relay.http, &query("")).0, 401, "no token at the relay");
+    let (code, png) = http_get_bytes(&relay.http, &query("&token=vw"));
+    assert_eq!(code, 200);
+    assert!(png == std::fs::read(p(dir.path(), "local-material.png")).unwrap());
+    relay.stop();
+
     // Freshness: a frame asked for at the edit's version shows the edit.
     let edit = r#"{"op":"sphere","center":[40,40,40],"radius":14,"material":4}"#;
     let ops = p(dir.path(), "edit.jsonl");

@@ -215,26 +215,6 @@ impl Auth {
     }
 }
 
-/// Who decides a caller's role: this process's tokens (a server), or the upstream (a
-/// relay, which holds no tokens of its own).
-#[derive(Clone, Debug)]
-pub enum Gate {
-    /// The tokens configured here.
-    Local(Auth),
-    /// The upstream's answer.
-    Upstream(std::sync::Arc<crate::relay::gate::UpstreamAuth>),
-}
-
-impl Gate {
-    /// The caller of a request with these metadata.
-    pub async fn caller(&self, md: &MetadataMap) -> Result<Caller, Status> {
-        match self {
-            Gate::Local(auth) => auth.caller(md),
-            Gate::Upstream(up) => up.caller(md).await,
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -9,7 +9,9 @@
 
 use crate::Shared;
 use crate::actor::Request;
-use crate::auth::{Caller, Gate};
+use crate::auth::{Auth, Caller};
+use crate::relay::gate::UpstreamAuth;
+use crate::relay::upstream::{Upstream, upstream_error};
 use axum::Router;
 use axum::extract::rejection::QueryRejection;
 use axum::extract::{ConnectInfo, Query, State};
@@ -28,17 +30,62 @@ use tonic::Status;
 struct App {
     shared: Arc<Shared>,
     actor: mpsc::Sender<Request>,
-    gate: Gate,
+    backend: Backend,
 }
 
-/// The HTTP routes; `actor` answers status requests, `gate` decides who callers are.
-pub fn router(shared: Arc<Shared>, actor: mpsc::Sender<Request>, gate: Gate) -> Router {
+/// Who decides callers' roles and who renders `/frame.png`: a server's own tokens and
+/// render nodes, or a relay's upstream (a relay holds no tokens and takes no nodes).
+#[derive(Clone, Debug)]
+pub enum Backend {
+    /// A server: the tokens configured here, frames from the render router.
+    Server(Auth),
+    /// A relay: callers as the upstream sees them, frames asked of the upstream with the
+    /// caller's token.
+    Relay {
+        /// The upstream's answers about tokens.
+        auth: Arc<UpstreamAuth>,
+        /// Where frame requests go.
+        upstream: Upstream,
+    },
+}
+
+impl Backend {
+    /// The caller of a request with these metadata.
+    async fn caller(&self, md: &tonic::metadata::MetadataMap) -> Result<Caller, Status> {
+        match self {
+            Backend::Server(auth) => auth.caller(md),
+            Backend::Relay { auth, .. } => auth.caller(md).await,
+        }
+    }
+
+    /// A frame for a caller with these credentials.
+    async fn render(
+        &self,
+        shared: &Shared,
+        md: &tonic::metadata::MetadataMap,
+        req: FrameRequest,
+    ) -> Result<naadf_proto::v1::FrameReply, Status> {
+        match self {
+            Backend::Server(_) => shared.router.render(req).await,
+            Backend::Relay { upstream, .. } => {
+                // Only the caller's token travels: the rest are this HTTP request's headers.
+                let request = Upstream::as_caller(md, req);
+                let reply = upstream.client().render_frame(request).await;
+                reply.map(tonic::Response::into_inner).map_err(upstream_error)
+            }
+        }
+    }
+}
+
+/// The HTTP routes; `actor` answers status requests, `backend` decides who callers are
+/// and renders frames.
+pub fn router(shared: Arc<Shared>, actor: mpsc::Sender<Request>, backend: Backend) -> Router {
     Router::new()
         .route("/health", get(health))
         .route("/metrics", get(metrics))
         .route("/frame.png", get(frame_png))
         .route("/", get(status_page))
-        .with_state(App { shared, actor, gate })
+        .with_state(App { shared, actor, backend })
 }
 
 async fn health(State(app): State<App>) -> impl IntoResponse {
@@ -100,7 +147,7 @@ fn credentials(headers: HeaderMap, token: TokenQuery) -> Result<tonic::metadata:
 
 /// The caller of a request with these credentials (any role will do).
 async fn authorize(app: &App, md: Result<tonic::metadata::MetadataMap, Status>) -> Result<Caller, Status> {
-    app.gate.caller(&md?).await
+    app.backend.caller(&md?).await
 }
 
 /// The query of `/frame.png` (its token is read apart, see [`TokenQuery`]).
@@ -162,7 +209,11 @@ async fn frame_png(
         }
         Ok(md)
     });
-    if let Err(s) = authorize(&app, md).await {
+    let md = match md {
+        Ok(md) => md,
+        Err(s) => return http_error(&s),
+    };
+    if let Err(s) = app.backend.caller(&md).await {
         return http_error(&s);
     }
     let q = match q {
@@ -199,7 +250,7 @@ async fn frame_png(
     if let Err(s) = crate::service::check_frame(&req) {
         return http_error(&s);
     }
-    match app.shared.router.render(req).await {
+    match app.backend.render(&app.shared, &md, req).await {
         Ok(r) => (
             [
                 (header::CONTENT_TYPE, "image/png".to_owned()),

@@ -2,10 +2,11 @@
 //! listeners, periodic checkpoints and graceful shutdown.
 
 use crate::actor::{Actor, Request};
-use crate::auth::{Auth, Gate};
+use crate::auth::Auth;
 use crate::committer::Committer;
 use crate::conn::{Acceptor, ConnLimits};
 use crate::fsck::Verdict;
+use crate::http::Backend;
 use crate::join::SlowClientLimits;
 use crate::publisher::Publisher;
 use crate::service::WorldServer;
@@ -282,7 +283,7 @@ pub async fn serve(
     }
 
     let svc = WorldServiceServer::new(WorldServer::new(shared.clone(), req_tx.clone()));
-    let routes = http::router(shared.clone(), req_tx.clone(), Gate::Local(config.auth.clone()));
+    let routes = http::router(shared.clone(), req_tx.clone(), Backend::Server(config.auth.clone()));
     let listeners = Listeners {
         grpc: config.grpc,
         http: config.http,

@@ -21,8 +21,9 @@ pub mod hub;
 pub mod service;
 pub mod upstream;
 
-use crate::auth::{Auth, Gate};
+use crate::auth::Auth;
 use crate::conn::ConnLimits;
+use crate::http::Backend;
 use crate::join::SlowClientLimits;
 use crate::serve::{Bound, Listeners};
 use crate::{Shared, http};
@@ -86,6 +87,37 @@ impl RelayConfig {
     }
 }
 
+impl RelayConfig {
+    /// Why callers' bearer tokens would cross a network in cleartext through this relay:
+    /// its gRPC listens on a non-loopback address without TLS, its HTTP (never TLS) does,
+    /// or its upstream is a non-loopback `http://` URL (forwarded requests carry the
+    /// callers' tokens). `None` when none of these holds.
+    pub fn cleartext_warning(&self) -> Option<String> {
+        let mut exposed: Vec<String> = [("gRPC", self.grpc, self.tls.is_none()), ("HTTP", self.http, true)]
+            .into_iter()
+            .filter(|(_, addr, plain)| *plain && !addr.ip().is_loopback())
+            .map(|(what, addr, _)| format!("{what} on {addr} without TLS"))
+            .collect();
+        let uri = self.upstream.parse::<tonic::transport::Uri>().ok();
+        let loopback = |host: &str| {
+            let ip = host.trim_start_matches('[').trim_end_matches(']');
+            host == "localhost" || ip.parse::<std::net::IpAddr>().is_ok_and(|ip| ip.is_loopback())
+        };
+        if let Some(uri) = uri.filter(|u| u.scheme_str() == Some("http"))
+            && !uri.host().is_some_and(loopback)
+        {
+            exposed.push(format!("the upstream {} over plain HTTP/2", self.upstream));
+        }
+        (!exposed.is_empty()).then(|| {
+            format!(
+                "bearer tokens may travel in cleartext: {}; anyone on the network path can read them \
+                 (use TLS: --tls-cert/--tls-key here, an https:// upstream)",
+                exposed.join(", ")
+            )
+        })
+    }
+}
+
 /// Runs a relay until `shutdown` resolves. `ready` is told the bound addresses as soon as
 /// the relay listens, before its upstream answers: clients that join meanwhile wait for
 /// the first snapshot.
@@ -94,6 +126,9 @@ pub async fn relay(
     ready: impl FnOnce(Bound),
     shutdown: impl std::future::Future<Output = ()>,
 ) -> Result<()> {
+    if let Some(w) = config.cleartext_warning() {
+        tracing::warn!("{w}");
+    }
     let ca = match &config.ca {
         Some(p) => Some(std::fs::read(p).with_context(|| format!("cannot read {}", p.display()))?),
         None => None,
@@ -153,7 +188,14 @@ pub async fn relay(
         upstream.clone(),
         auth.clone(),
     ));
-    let routes = http::router(shared.clone(), req_tx.clone(), Gate::Upstream(auth));
+    let routes = http::router(
+        shared.clone(),
+        req_tx.clone(),
+        Backend::Relay {
+            auth,
+            upstream: upstream.clone(),
+        },
+    );
     let listeners = Listeners {
         grpc: config.grpc,
         http: config.http,
@@ -179,4 +221,31 @@ pub async fn relay(
     })
     .await?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cleartext_is_named_only_off_loopback() {
+        let mut c = RelayConfig::new("http://127.0.0.1:50051");
+        assert_eq!(c.cleartext_warning(), None);
+        c.upstream = "http://[::1]:50051".into();
+        assert_eq!(c.cleartext_warning(), None);
+        c.upstream = "https://world.example:443".into();
+        assert_eq!(c.cleartext_warning(), None);
+        c.upstream = "http://world.example:50051".into();
+        assert!(
+            c.cleartext_warning()
+                .unwrap()
+                .contains("the upstream http://world.example:50051")
+        );
+        c.upstream = "http://localhost:50051".into();
+        c.grpc = "0.0.0.0:50061".parse().unwrap();
+        let w = c.cleartext_warning().unwrap();
+        assert!(w.contains("gRPC on 0.0.0.0:50061") && !w.contains("upstream"), "{w}");
+        c.tls = Some(("c".into(), "k".into()));
+        assert_eq!(c.cleartext_warning(), None);
+    }
 }

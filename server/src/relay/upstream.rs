@@ -81,7 +81,8 @@ impl Upstream {
         tonic::Request::from_parts(metadata, Default::default(), message)
     }
 
-    /// `message` with only the `authorization` of `caller` (for checking a caller's token).
+    /// `message` with only the `authorization` of `caller`: for checking a caller's token,
+    /// and for requests made over HTTP, whose other headers are no gRPC metadata.
     pub fn as_caller<T>(caller: &MetadataMap, message: T) -> tonic::Request<T> {
         let mut r = tonic::Request::new(message);
         if let Some(v) = caller.get("authorization") {
