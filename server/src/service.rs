@@ -302,17 +302,23 @@ impl WorldServer {
         let s = crate::status(&self.actor)
             .await
             .ok_or_else(|| Status::unavailable("the server is shutting down"))?;
-        Ok(Response::new(StatusReply {
-            protocol_version: PROTOCOL_VERSION,
-            size: s.size.to_vec(),
-            version: s.version,
-            growth_seq: s.growth_seq,
-            quiescent: s.quiescent,
-            digest: s.digest.to_string(),
-            clients: self.shared.metrics.clients.get().max(0) as u32,
-            user: caller.user,
-            role: caller.role.name().to_owned(),
-        }))
+        Ok(Response::new(status_reply(&s, &self.shared, caller)))
+    }
+}
+
+/// The `Status` answer for `caller` about the world state `s`, with the clients joined to
+/// this process (a server or a relay).
+pub fn status_reply(s: &crate::actor::StatusInfo, shared: &Shared, caller: Caller) -> StatusReply {
+    StatusReply {
+        protocol_version: PROTOCOL_VERSION,
+        size: s.size.to_vec(),
+        version: s.version,
+        growth_seq: s.growth_seq,
+        quiescent: s.quiescent,
+        digest: s.digest.to_string(),
+        clients: shared.metrics.clients.get().max(0) as u32,
+        user: caller.user,
+        role: caller.role.name().to_owned(),
     }
 }
 

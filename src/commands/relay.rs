@@ -1,8 +1,7 @@
 //! `naadf relay --upstream URL [--grpc ADDR] [--http ADDR] [--token T]`
 
-use super::print_json;
 use super::remote::block_on;
-use super::serve::{ListenArgs, shutdown_signal};
+use super::serve::{ListenArgs, announce, shutdown_signal};
 use anyhow::{Context, Result};
 use naadf_server::relay::{DEFAULT_RELAY_GRPC, DEFAULT_RELAY_HTTP, RelayConfig, relay};
 use std::net::SocketAddr;
@@ -56,14 +55,7 @@ pub fn run(a: Args) -> Result<()> {
     block_on(async move {
         relay(
             config,
-            move |b| {
-                if json {
-                    let _ = print_json(&serde_json::json!({
-                        "grpc": b.grpc.to_string(),
-                        "http": b.http.to_string(),
-                    }));
-                }
-            },
+            announce(json),
             shutdown_signal().context("cannot install the signal handlers")?,
         )
         .await

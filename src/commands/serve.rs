@@ -167,19 +167,25 @@ pub fn run(a: Args) -> Result<()> {
         naadf_server::serve(
             config,
             initial,
-            move |b: Bound| {
-                if json {
-                    let _ = print_json(&serde_json::json!({
-                        "grpc": b.grpc.to_string(),
-                        "http": b.http.to_string(),
-                    }));
-                }
-            },
+            announce(json),
             shutdown_signal().context("cannot install the signal handlers")?,
         )
         .await
         .context("server failed")
     })
+}
+
+/// What a server or relay does once it listens: with `json`, print its bound addresses as
+/// one JSON line (`{"grpc": ADDR, "http": ADDR}`), which scripts and tests wait for.
+pub fn announce(json: bool) -> impl FnOnce(Bound) {
+    move |b: Bound| {
+        if json {
+            let _ = print_json(&serde_json::json!({
+                "grpc": b.grpc.to_string(),
+                "http": b.http.to_string(),
+            }));
+        }
+    }
 }
 
 /// A future that resolves on Ctrl-C or SIGTERM. The handlers are installed now, before the

@@ -244,7 +244,10 @@ mod tests {
         c.upstream = "http://localhost:50051".into();
         c.grpc = "0.0.0.0:50061".parse().unwrap();
         let w = c.cleartext_warning().unwrap();
-        assert!(w.contains("gRPC on 0.0.0.0:50061") && !w.contains("the upstream"), "{w}");
+        assert!(
+            w.contains("gRPC on 0.0.0.0:50061") && !w.contains("the upstream"),
+            "{w}"
+        );
         c.tls = Some(("c".into(), "k".into()));
         assert_eq!(c.cleartext_warning(), None);
     }

@@ -7,8 +7,7 @@ use super::upstream::{Upstream, upstream_error};
 use crate::Shared;
 use crate::actor::Request;
 use crate::join;
-use crate::service::{WorldStream, bounded};
-use naadf_proto::PROTOCOL_VERSION;
+use crate::service::{WorldStream, bounded, status_reply};
 use naadf_proto::v1::world_service_server::WorldService;
 use naadf_proto::v1::{
     DespawnEntitiesRequest, EditReply, EditRequest, FrameJob, FrameReply, FrameRequest, HistoryRequest, JoinRequest,
@@ -60,17 +59,7 @@ impl RelayService {
         let s = crate::status(&self.hub)
             .await
             .ok_or_else(|| Status::unavailable("the relay has no world from its upstream yet"))?;
-        Ok(Response::new(StatusReply {
-            protocol_version: PROTOCOL_VERSION,
-            size: s.size.to_vec(),
-            version: s.version,
-            growth_seq: s.growth_seq,
-            quiescent: s.quiescent,
-            digest: s.digest.to_string(),
-            clients: self.shared.metrics.clients.get().max(0) as u32,
-            user: caller.user,
-            role: caller.role.name().to_owned(),
-        }))
+        Ok(Response::new(status_reply(&s, &self.shared, caller)))
     }
 }
 
