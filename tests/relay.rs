@@ -10,7 +10,9 @@ use naadf_client::{Client, WorldStream};
 use naadf_proto::v1::{WorldMessage, world_message};
 use naadf_server::actor::Request;
 use naadf_server::metrics::Metrics;
+use naadf_server::relay::gate::UpstreamAuth;
 use naadf_server::relay::hub::{Hub, Input};
+use naadf_server::relay::upstream::Upstream;
 use prost::Message;
 use std::sync::Arc;
 use std::time::Duration;
@@ -212,6 +214,91 @@ async fn a_relay_widens_no_role_and_forwards_the_callers_token() {
     let mut session = viewer.join(None).await.unwrap();
     let w = session.until_quiescent(first.version, SETTLE).await.unwrap();
     assert_eq!(w.version(), first.version);
+    // A server with tokens refuses anonymous callers, so a relay in front of it admits
+    // callers from other machines, and the upstream still decides who they are.
+    let gate = UpstreamAuth::new(Upstream::new(&server.url, None, None).unwrap());
+    let remote = Some("192.0.2.7:40000".parse().unwrap());
+    gate.admit(remote).await.unwrap();
+    let anonymous = gate.caller(&tonic::metadata::MetadataMap::new(), remote).await;
+    assert_eq!(anonymous.unwrap_err().code(), tonic::Code::Unauthenticated);
+    let mut md = tonic::metadata::MetadataMap::new();
+    md.insert("authorization", "Bearer vt".parse().unwrap());
+    assert_eq!(gate.caller(&md, remote).await.unwrap().user, "vera");
+    relay.stop();
+    server.stop();
+}
+
+/// A local address of this machine that is not loopback, if it has a route anywhere (no
+/// packet is sent: connecting a UDP socket only picks the source address).
+fn non_loopback_ip() -> Option<std::net::IpAddr> {
+    let s = std::net::UdpSocket::bind("0.0.0.0:0").ok()?;
+    s.connect("192.0.2.1:9").ok()?;
+    Some(s.local_addr().ok()?.ip()).filter(|ip| !ip.is_loopback() && !ip.is_unspecified())
+}
+
+/// An open server (no tokens) makes every caller an admin and therefore serves loopback
+/// only; a relay in front of it must not hand those rights to the network, so it refuses
+/// every caller that is not on its own machine, token or not, on gRPC and HTTP alike.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_relay_in_front_of_an_open_server_admits_only_its_own_machine() {
+    let dir = tempfile::tempdir().unwrap();
+    let world = start_world(dir.path());
+    let server = serve_world(dir.path(), &world, &[], &[]);
+    let gate = UpstreamAuth::new(Upstream::new(&server.url, None, None).unwrap());
+    let denied = tonic::Code::PermissionDenied;
+    gate.admit(Some("127.0.0.1:40000".parse().unwrap())).await.unwrap();
+    gate.admit(Some("[::1]:40000".parse().unwrap())).await.unwrap();
+    for peer in [Some("192.0.2.7:40000".parse().unwrap()), None] {
+        assert_eq!(gate.admit(peer).await.unwrap_err().code(), denied);
+        let mut md = tonic::metadata::MetadataMap::new();
+        md.insert("authorization", "Bearer any".parse().unwrap());
+        assert_eq!(gate.caller(&md, peer).await.unwrap_err().code(), denied);
+    }
+
+    let relay = Server::relay(
+        &server.url,
+        &["--grpc", "0.0.0.0:0", "--http", "0.0.0.0:0"],
+        &dir.path().join("relay.log"),
+    );
+    live(&relay);
+    let port = |addr: &str| addr.rsplit(':').next().unwrap().to_owned();
+    let (grpc_port, http_port) = (port(&relay.url), port(&relay.http));
+    let local = Client::connect(&format!("http://127.0.0.1:{grpc_port}"), None, None)
+        .await
+        .unwrap();
+    assert_eq!(
+        local.status().await.unwrap().role,
+        "admin",
+        "loopback callers are served"
+    );
+    assert_eq!(http_get(&format!("127.0.0.1:{http_port}"), "/").0, 200);
+    let Some(ip) = non_loopback_ip() else {
+        eprintln!("SKIPPED (part): this machine has no non-loopback address to call the relay from");
+        relay.stop();
+        server.stop();
+        return;
+    };
+    let host = match ip {
+        std::net::IpAddr::V4(v4) => v4.to_string(),
+        std::net::IpAddr::V6(v6) => format!("[{v6}]"),
+    };
+    let remote = Client::connect(&format!("http://{host}:{grpc_port}"), Some("any"), None)
+        .await
+        .unwrap();
+    let before = local.status().await.unwrap().version;
+    let op = r#"{"op":"set","voxels":[[3,4,5,1]]}"#;
+    for e in [
+        remote.status().await.unwrap_err(),
+        remote.join(None).await.expect_err("a join from another machine fails"),
+        remote.edit(op, 1).await.unwrap_err(),
+        remote.undo(1).await.unwrap_err(),
+    ] {
+        assert_eq!(e.code(), Some(naadf_client::error::Code::PermissionDenied), "{e}");
+    }
+    assert_eq!(http_get(&format!("{host}:{http_port}"), "/?token=any").0, 403);
+    assert_eq!(http_get(&format!("{host}:{http_port}"), "/frame.png?token=any").0, 403);
+    let after = local.status().await.unwrap().version;
+    assert_eq!(after, before, "nothing from the network reached the server");
     relay.stop();
     server.stop();
 }

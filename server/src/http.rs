@@ -50,11 +50,11 @@ pub enum Backend {
 }
 
 impl Backend {
-    /// The caller of a request with these metadata.
-    async fn caller(&self, md: &tonic::metadata::MetadataMap) -> Result<Caller, Status> {
+    /// The caller of a request from `peer` with these metadata.
+    async fn caller(&self, md: &tonic::metadata::MetadataMap, peer: SocketAddr) -> Result<Caller, Status> {
         match self {
             Backend::Server(auth) => auth.caller(md),
-            Backend::Relay { auth, .. } => auth.caller(md).await,
+            Backend::Relay { auth, .. } => auth.caller(md, Some(peer)).await,
         }
     }
 
@@ -146,8 +146,12 @@ fn credentials(headers: HeaderMap, token: TokenQuery) -> Result<tonic::metadata:
 }
 
 /// The caller of a request with these credentials (any role will do).
-async fn authorize(app: &App, md: Result<tonic::metadata::MetadataMap, Status>) -> Result<Caller, Status> {
-    app.backend.caller(&md?).await
+async fn authorize(
+    app: &App,
+    md: Result<tonic::metadata::MetadataMap, Status>,
+    peer: SocketAddr,
+) -> Result<Caller, Status> {
+    app.backend.caller(&md?, peer).await
 }
 
 /// The query of `/frame.png` (its token is read apart, see [`TokenQuery`]).
@@ -213,7 +217,7 @@ async fn frame_png(
         Ok(md) => md,
         Err(s) => return http_error(&s),
     };
-    if let Err(s) = app.backend.caller(&md).await {
+    if let Err(s) = app.backend.caller(&md, peer).await {
         return http_error(&s);
     }
     let q = match q {
@@ -287,9 +291,14 @@ fn url_escape(s: &str) -> String {
 }
 
 /// The status page; its `?token=` (on servers with tokens) is passed on to its live frame.
-async fn status_page(State(app): State<App>, headers: HeaderMap, token: TokenQuery) -> Response {
+async fn status_page(
+    State(app): State<App>,
+    ConnectInfo(peer): ConnectInfo<SocketAddr>,
+    headers: HeaderMap,
+    token: TokenQuery,
+) -> Response {
     let page_token = token.as_ref().ok().and_then(|Query(t)| t.token.clone());
-    if let Err(s) = authorize(&app, credentials(headers, token)).await {
+    if let Err(s) = authorize(&app, credentials(headers, token), peer).await {
         return http_error(&s);
     }
     let Some(s) = crate::status(&app.actor).await else {

@@ -2,11 +2,16 @@
 //! call with the caller's `authorization`) and keeps the answer for a few seconds. A
 //! relay therefore never widens a role: the upstream decides, and edits are decided there
 //! again when they are forwarded.
+//!
+//! An open upstream (a server without tokens) makes every caller an admin, which a server
+//! allows on loopback only. A relay in front of one would hand those rights to the
+//! network, so it then admits callers from its own machine only ([`UpstreamAuth::admit`]).
 
 use super::upstream::Upstream;
 use crate::auth::{Caller, Role};
 use naadf_proto::v1::StatusRequest;
 use std::collections::HashMap;
+use std::net::SocketAddr;
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 use tonic::metadata::MetadataMap;
@@ -37,9 +42,34 @@ impl UpstreamAuth {
         }
     }
 
-    /// The caller with these request `metadata`, as the upstream sees it. An unreachable
-    /// upstream gives UNAVAILABLE (and is asked again next time).
-    pub async fn caller(&self, metadata: &MetadataMap) -> Result<Caller, Status> {
+    /// The caller with these request `metadata`, arriving from `peer`, as the upstream
+    /// sees it, once [`admit`](Self::admit) lets `peer` in. An unreachable upstream gives
+    /// UNAVAILABLE (and is asked again next time).
+    pub async fn caller(&self, metadata: &MetadataMap, peer: Option<SocketAddr>) -> Result<Caller, Status> {
+        self.admit(peer).await?;
+        self.answer(metadata).await
+    }
+
+    /// Whether a caller from `peer` (unknown: `None`) may use this relay at all: always
+    /// from loopback; from elsewhere only while the upstream refuses callers without a
+    /// token. An open upstream takes any caller, token or not, as an admin, and would take
+    /// this one the same way, through the relay, from the network.
+    pub async fn admit(&self, peer: Option<SocketAddr>) -> Result<(), Status> {
+        if peer.is_some_and(|p| p.ip().is_loopback()) {
+            return Ok(());
+        }
+        match self.answer(&MetadataMap::new()).await {
+            Ok(_) => Err(Status::permission_denied(
+                "this relay's upstream serves without tokens (every caller is an admin there), so the relay \
+                 admits callers from its own machine only; configure tokens on the server",
+            )),
+            Err(s) if s.code() == Code::Unauthenticated => Ok(()),
+            Err(s) => Err(s),
+        }
+    }
+
+    /// The upstream's answer about the token in `metadata` (none: an anonymous caller).
+    async fn answer(&self, metadata: &MetadataMap) -> Result<Caller, Status> {
         let key = metadata.get("authorization").map(|v| v.as_bytes().to_vec());
         if let Some((at, answer)) = self.answers.lock().expect("token answers").get(&key)
             && at.elapsed() < TTL

@@ -49,13 +49,13 @@ impl RelayService {
     }
 
     async fn join_inner(&self, r: Req<JoinRequest>) -> Result<Response<WorldStream>, Status> {
-        let caller = self.auth.caller(r.metadata()).await?;
+        let caller = self.auth.caller(r.metadata(), r.remote_addr()).await?;
         let stream = join::start(self.shared.clone(), self.hub.clone(), caller.user, r.into_inner())?;
         Ok(Response::new(Box::pin(stream)))
     }
 
     async fn status_inner(&self, r: Req<StatusRequest>) -> Result<Response<StatusReply>, Status> {
-        let caller = self.auth.caller(r.metadata()).await?;
+        let caller = self.auth.caller(r.metadata(), r.remote_addr()).await?;
         let s = crate::status(&self.hub)
             .await
             .ok_or_else(|| Status::unavailable("the relay has no world from its upstream yet"))?;
@@ -69,6 +69,7 @@ type JobStream = Pin<Box<dyn Stream<Item = Result<FrameJob, Status>> + Send>>;
 /// (or refusal) as it went.
 macro_rules! forward {
     ($self:ident, $r:ident, $rpc:ident) => {{
+        $self.auth.admit($r.remote_addr()).await?;
         let answer = $self.upstream.client().$rpc(Upstream::forwarded($r)).await;
         $self.count(answer.map_err(upstream_error))
     }};
@@ -112,6 +113,7 @@ impl WorldService for RelayService {
     }
 
     async fn render_frame(&self, r: Req<FrameRequest>) -> Result<Response<FrameReply>, Status> {
+        self.auth.admit(r.remote_addr()).await?;
         let answer = self.upstream.client().render_frame(Upstream::forwarded(r)).await;
         answer.map_err(upstream_error)
     }
