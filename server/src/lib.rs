@@ -21,6 +21,7 @@ pub mod actor;
 pub mod auth;
 pub mod committer;
 pub mod conn;
+pub mod frontend;
 pub mod fsck;
 pub mod growth;
 pub mod http;

@@ -4,18 +4,16 @@
 use crate::actor::{Actor, Request};
 use crate::auth::Auth;
 use crate::committer::Committer;
-use crate::conn::{Acceptor, ConnLimits};
+use crate::frontend::Frontend;
 use crate::fsck::Verdict;
 use crate::http::Backend;
-use crate::join::SlowClientLimits;
 use crate::publisher::Publisher;
 use crate::service::WorldServer;
 use crate::store::{DataDir, ServerState, StoreError};
 use crate::wal::{Entry, Wal};
 use crate::{Shared, http};
 use anyhow::{Context, Result, bail};
-use naadf_proto::FILE_DESCRIPTOR_SET;
-use naadf_proto::v1::world_service_server::{WorldService, WorldServiceServer};
+use naadf_proto::v1::world_service_server::WorldServiceServer;
 use naadf_world::World;
 use naadf_world::ops::Limits;
 use std::net::SocketAddr;
@@ -23,39 +21,24 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Duration;
 use tokio::sync::{mpsc, oneshot, watch};
-use tonic::codec::CompressionEncoding;
-use tonic::transport::{Identity, Server, ServerTlsConfig};
 
 /// Everything `naadf serve` can configure.
 #[derive(Clone, Debug)]
 pub struct ServerConfig {
-    /// gRPC listen address.
-    pub grpc: SocketAddr,
-    /// HTTP listen address.
-    pub http: SocketAddr,
+    /// Where it listens, and its clients' limits.
+    pub frontend: Frontend,
     /// Data directory (snapshots and write-ahead log).
     pub data: PathBuf,
     /// Tokens and roles (empty: open, loopback only).
     pub auth: Auth,
     /// Per-request edit limits.
     pub limits: Limits,
-    /// Largest gRPC message accepted, in bytes.
-    pub max_message_bytes: usize,
     /// Edits per second per user.
     pub rate: u32,
     /// Write a snapshot after this many edits.
     pub checkpoint_every: u64,
     /// And at least this often while edits arrive.
     pub checkpoint_interval: Duration,
-    /// Deltas a client may fall behind before it is re-sent a snapshot.
-    pub slow_client_events: usize,
-    /// Bytes a client, and all clients together, may fall behind before they are re-sent
-    /// a snapshot.
-    pub slow_clients: SlowClientLimits,
-    /// Open connections per listener and their idle timeout.
-    pub connections: ConnLimits,
-    /// TLS certificate and key (PEM), if any.
-    pub tls: Option<(PathBuf, PathBuf)>,
     /// Whether bearer tokens may travel in cleartext (a non-loopback bind without TLS, or
     /// HTTP on a non-loopback address) without a warning at startup
     /// ([`ServerConfig::cleartext_warning`]).
@@ -74,19 +57,13 @@ impl Default for ServerConfig {
     /// [`DEFAULT_HTTP`], data in [`DEFAULT_DATA`], open (no tokens).
     fn default() -> Self {
         Self {
-            grpc: DEFAULT_GRPC.parse().expect("address"),
-            http: DEFAULT_HTTP.parse().expect("address"),
+            frontend: Frontend::default(),
             data: PathBuf::from(DEFAULT_DATA),
             auth: Auth::open(),
             limits: Limits::default(),
-            max_message_bytes: 16 << 20,
             rate: 1000,
             checkpoint_every: 10_000,
             checkpoint_interval: Duration::from_secs(300),
-            slow_client_events: 4096,
-            slow_clients: SlowClientLimits::default(),
-            connections: ConnLimits::default(),
-            tls: None,
             insecure: false,
         }
     }
@@ -100,16 +77,12 @@ impl ServerConfig {
         if self.auth.is_open() || self.insecure {
             return None;
         }
-        let exposed: Vec<String> = [("gRPC", self.grpc, self.tls.is_none()), ("HTTP", self.http, true)]
-            .into_iter()
-            .filter(|(_, addr, plain)| *plain && !addr.ip().is_loopback())
-            .map(|(what, addr, _)| format!("{what} on {addr}"))
-            .collect();
+        let exposed = self.frontend.cleartext_listeners();
         (!exposed.is_empty()).then(|| {
             format!(
-                "bearer tokens travel in cleartext: {} without TLS; anyone on the network path can \
-                 read them. Serve behind TLS (--tls-cert/--tls-key for gRPC, a TLS proxy for HTTP), \
-                 bind loopback, or pass --insecure to accept this",
+                "bearer tokens travel in cleartext: {}; anyone on the network path can read them. \
+                 Serve behind TLS (--tls-cert/--tls-key for gRPC, a TLS proxy for HTTP), bind \
+                 loopback, or pass --insecure to accept this",
                 exposed.join(" and ")
             )
         })
@@ -208,12 +181,13 @@ pub async fn serve(
         tracing::warn!("{w}");
     }
     if config.auth.is_open() {
-        if !config.grpc.ip().is_loopback() || !config.http.ip().is_loopback() {
+        let f = &config.frontend;
+        if !f.grpc.ip().is_loopback() || !f.http.ip().is_loopback() {
             bail!(
                 "refusing to serve on a non-loopback address ({} / {}) without tokens: \
                  configure --auth FILE or NAADF_TOKENS",
-                config.grpc,
-                config.http
+                f.grpc,
+                f.http
             );
         }
         tracing::warn!("no tokens configured: serving open (every caller is an admin) on loopback only");
@@ -231,7 +205,7 @@ pub async fn serve(
     let data = Arc::new(data);
     let (shutdown_tx, shutdown_rx) = watch::channel(false);
     let shared = Arc::new(Shared {
-        slow_clients: config.slow_clients,
+        slow_clients: config.frontend.slow_clients,
         ..Shared::new(config.auth.clone(), config.rate, shutdown_rx)
     });
 
@@ -259,7 +233,7 @@ pub async fn serve(
     let committer = Committer {
         wal,
         data: data.clone(),
-        publisher: Publisher::new(initial, config.slow_client_events),
+        publisher: Publisher::new(initial, config.frontend.slow_client_events),
         metrics: shared.metrics.clone(),
     };
     let committer = std::thread::Builder::new()
@@ -284,14 +258,7 @@ pub async fn serve(
 
     let svc = WorldServiceServer::new(WorldServer::new(shared.clone(), req_tx.clone()));
     let routes = http::router(shared.clone(), req_tx.clone(), Backend::Server(config.auth.clone()));
-    let listeners = Listeners {
-        grpc: config.grpc,
-        http: config.http,
-        connections: config.connections,
-        tls: config.tls.clone(),
-        max_message_bytes: config.max_message_bytes,
-    };
-    let (bound, grpc, http) = listeners.start(svc, routes, &shutdown_tx).await?;
+    let (bound, grpc, http) = config.frontend.start(svc, routes, &shutdown_tx).await?;
     let ticker = {
         let actor = req_tx.clone();
         let every = config.checkpoint_interval;
@@ -330,113 +297,4 @@ pub async fn serve(
     })
     .await?;
     Ok(())
-}
-
-/// The listening side a server and a relay share: gRPC (with reflection, keepalive,
-/// connection limits, optional TLS) and HTTP.
-pub(crate) struct Listeners {
-    /// gRPC listen address.
-    pub grpc: SocketAddr,
-    /// HTTP listen address.
-    pub http: SocketAddr,
-    /// Open connections per listener and their idle timeout.
-    pub connections: ConnLimits,
-    /// TLS certificate and key (PEM), if any.
-    pub tls: Option<(PathBuf, PathBuf)>,
-    /// Largest gRPC message accepted, in bytes.
-    pub max_message_bytes: usize,
-}
-
-/// A spawned listener's task.
-type Listening = tokio::task::JoinHandle<Result<(), Box<dyn std::error::Error + Send + Sync>>>;
-
-impl Listeners {
-    /// Binds both listeners and serves `svc` and `routes` until `shutdown` turns true.
-    pub(crate) async fn start<S: WorldService>(
-        &self,
-        svc: WorldServiceServer<S>,
-        routes: axum::Router,
-        shutdown: &watch::Sender<bool>,
-    ) -> Result<(Bound, Listening, Listening)> {
-        let grpc_listener = tokio::net::TcpListener::bind(self.grpc)
-            .await
-            .with_context(|| format!("cannot listen on {}", self.grpc))?;
-        let http_listener = tokio::net::TcpListener::bind(self.http)
-            .await
-            .with_context(|| format!("cannot listen on {}", self.http))?;
-        let bound = Bound {
-            grpc: grpc_listener.local_addr()?,
-            http: http_listener.local_addr()?,
-        };
-        tracing::info!(grpc = %bound.grpc, http = %bound.http, "serving");
-
-        let reflection_v1 = tonic_reflection::server::Builder::configure()
-            .register_encoded_file_descriptor_set(FILE_DESCRIPTOR_SET)
-            .build_v1()?;
-        let reflection_v1alpha = tonic_reflection::server::Builder::configure()
-            .register_encoded_file_descriptor_set(FILE_DESCRIPTOR_SET)
-            .build_v1alpha()?;
-        let svc = svc
-            .max_decoding_message_size(self.max_message_bytes)
-            .max_encoding_message_size(usize::MAX)
-            .accept_compressed(CompressionEncoding::Zstd);
-        let keepalive = crate::conn::keepalive(self.connections.idle_timeout);
-        let mut builder = Server::builder()
-            .http2_keepalive_interval(Some(keepalive))
-            .http2_keepalive_timeout(Some(keepalive));
-        if let Some((cert, key)) = &self.tls {
-            let cert = std::fs::read(cert).with_context(|| format!("cannot read {}", cert.display()))?;
-            let key = std::fs::read(key).with_context(|| format!("cannot read {}", key.display()))?;
-            builder = builder
-                .tls_config(ServerTlsConfig::new().identity(Identity::from_pem(cert, key)))
-                .context("bad TLS certificate or key")?;
-        }
-        let mut stop = shutdown.subscribe();
-        let grpc = builder
-            .add_service(svc)
-            .add_service(reflection_v1)
-            .add_service(reflection_v1alpha)
-            .serve_with_incoming_shutdown(grpc_incoming(grpc_listener, self.connections), async move {
-                let _ = stop.wait_for(|s| *s).await;
-            });
-        let mut stop = shutdown.subscribe();
-        let http = axum::serve(
-            // `tap_io` only so that axum hands the peer address to the handlers.
-            axum::serve::ListenerExt::tap_io(Acceptor::new(http_listener, self.connections, false), |_| {}),
-            routes.into_make_service_with_connect_info::<SocketAddr>(),
-        )
-        .with_graceful_shutdown(async move {
-            let _ = stop.wait_for(|s| *s).await;
-        });
-        let grpc = tokio::spawn(async move { grpc.await.map_err(Into::into) });
-        let http = tokio::spawn(async move { http.await.map_err(Into::into) });
-        Ok((bound, grpc, http))
-    }
-}
-
-/// The gRPC connections accepted on `listener`, with `TCP_NODELAY` set (tonic applies its
-/// own `tcp_nodelay` only to listeners it binds itself). Deltas are small writes right
-/// behind bigger ones; without it, Nagle's algorithm holds them until the client's delayed
-/// ACK, up to 40 ms on Linux, for every client at once. They are held to `limits` like
-/// the HTTP side's.
-fn grpc_incoming(
-    listener: tokio::net::TcpListener,
-    limits: ConnLimits,
-) -> tokio_stream::wrappers::ReceiverStream<std::io::Result<crate::conn::Conn>> {
-    crate::conn::incoming(Acceptor::new(listener, limits, true))
-}
-
-#[cfg(test)]
-mod tests {
-    use tokio_stream::StreamExt;
-
-    #[tokio::test]
-    async fn accepted_grpc_connections_send_without_delay() {
-        let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
-        let addr = listener.local_addr().unwrap();
-        let mut incoming = super::grpc_incoming(listener, Default::default());
-        let _client = tokio::net::TcpStream::connect(addr).await.unwrap();
-        let accepted = incoming.next().await.unwrap().unwrap();
-        assert!(accepted.get_ref().nodelay().unwrap());
-    }
 }

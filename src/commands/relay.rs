@@ -42,15 +42,8 @@ pub fn run(a: Args) -> Result<()> {
     let mut config = RelayConfig::new(&a.upstream);
     config.token = a.token.clone();
     config.ca = a.ca.clone();
-    config.grpc = a.grpc;
-    config.http = a.http;
+    config.frontend = a.listening.frontend(a.grpc, a.http)?;
     config.max_world_bytes = a.max_world_bytes;
-    let l = &a.listening;
-    config.max_message_bytes = l.max_message_bytes;
-    config.slow_client_events = l.slow_client_events;
-    config.slow_clients = l.slow_clients();
-    config.connections = l.connections()?;
-    config.tls = l.tls();
     let json = a.json;
     block_on(async move {
         relay(

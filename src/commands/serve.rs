@@ -5,6 +5,7 @@ use super::remote::block_on;
 use super::{BuildLimit, load_world, print_json};
 use anyhow::{Context, Result};
 use naadf_server::auth::Auth;
+use naadf_server::frontend::Frontend;
 use naadf_server::{Bound, ServerConfig};
 use naadf_world::WorldSize;
 use std::net::SocketAddr;
@@ -75,51 +76,49 @@ pub struct ListenArgs {
     #[arg(long, requires = "tls_cert")]
     pub tls_key: Option<PathBuf>,
     /// Largest request message, in bytes.
-    #[arg(long, default_value_t = naadf_server::ServerConfig::default().max_message_bytes)]
+    #[arg(long, default_value_t = Frontend::default().max_message_bytes)]
     pub max_message_bytes: usize,
     /// Deltas a client may fall behind before it is re-sent a snapshot.
-    #[arg(long, default_value_t = naadf_server::ServerConfig::default().slow_client_events)]
+    #[arg(long, default_value_t = Frontend::default().slow_client_events)]
     pub slow_client_events: usize,
     /// Bytes a client may fall behind (deltas it has not read) before it is re-sent a
     /// snapshot.
-    #[arg(long, default_value_t = naadf_server::ServerConfig::default().slow_clients.client_bytes)]
+    #[arg(long, default_value_t = Frontend::default().slow_clients.client_bytes)]
     pub slow_client_bytes: u64,
     /// Bytes the subscribed clients together may fall behind; over it, every one that is
     /// not reading and is more than a sixteenth of --slow-client-bytes behind is re-sent a
     /// snapshot.
-    #[arg(long, default_value_t = naadf_server::ServerConfig::default().slow_clients.total_bytes)]
+    #[arg(long, default_value_t = Frontend::default().slow_clients.total_bytes)]
     pub slow_clients_total_bytes: u64,
     /// Most connections open at a time on each listener (gRPC and HTTP); more wait until
     /// one closes. Keep twice this under the process's file descriptor limit.
-    #[arg(long, default_value_t = naadf_server::ServerConfig::default().connections.max_connections)]
+    #[arg(long, default_value_t = Frontend::default().connections.max_connections)]
     pub max_connections: usize,
     /// Close a connection whose peer sent nothing for this many seconds (unfinished
     /// handshakes and requests, dead peers); gRPC connections are pinged at a third of it,
     /// so live ones stay open.
-    #[arg(long, default_value_t = naadf_server::ServerConfig::default().connections.idle_timeout.as_secs_f64())]
+    #[arg(long, default_value_t = Frontend::default().connections.idle_timeout.as_secs_f64())]
     pub idle_timeout: f64,
 }
 
 impl ListenArgs {
-    /// The slow-client limits.
-    pub fn slow_clients(&self) -> naadf_server::join::SlowClientLimits {
-        naadf_server::join::SlowClientLimits {
-            client_bytes: self.slow_client_bytes,
-            total_bytes: self.slow_clients_total_bytes,
-        }
-    }
-
-    /// The connection limits.
-    pub fn connections(&self) -> Result<naadf_server::conn::ConnLimits> {
-        Ok(naadf_server::conn::ConnLimits {
-            max_connections: self.max_connections.max(1),
-            idle_timeout: super::seconds(self.idle_timeout, "--idle-timeout")?.max(Duration::from_millis(100)),
+    /// The client-facing settings, listening on `grpc` and `http`.
+    pub fn frontend(&self, grpc: SocketAddr, http: SocketAddr) -> Result<Frontend> {
+        Ok(Frontend {
+            grpc,
+            http,
+            tls: self.tls_cert.clone().zip(self.tls_key.clone()),
+            max_message_bytes: self.max_message_bytes,
+            connections: naadf_server::conn::ConnLimits {
+                max_connections: self.max_connections.max(1),
+                idle_timeout: super::seconds(self.idle_timeout, "--idle-timeout")?.max(Duration::from_millis(100)),
+            },
+            slow_client_events: self.slow_client_events,
+            slow_clients: naadf_server::join::SlowClientLimits {
+                client_bytes: self.slow_client_bytes,
+                total_bytes: self.slow_clients_total_bytes,
+            },
         })
-    }
-
-    /// The TLS certificate and key, if given.
-    pub fn tls(&self) -> Option<(PathBuf, PathBuf)> {
-        self.tls_cert.clone().zip(self.tls_key.clone())
     }
 }
 
@@ -134,19 +133,12 @@ pub fn run(a: Args) -> Result<()> {
             .map_err(anyhow::Error::msg)?;
     }
     let mut config = ServerConfig::new(a.data.clone());
-    config.grpc = a.grpc;
-    config.http = a.http;
+    config.frontend = a.listening.frontend(a.grpc, a.http)?;
     config.auth = auth;
     config.rate = a.rate;
     config.limits = a.limits.limits();
     config.checkpoint_every = a.checkpoint_every.max(1);
     config.checkpoint_interval = Duration::from_secs(a.checkpoint_secs.max(1));
-    let l = &a.listening;
-    config.max_message_bytes = l.max_message_bytes;
-    config.slow_client_events = l.slow_client_events;
-    config.slow_clients = l.slow_clients();
-    config.connections = l.connections()?;
-    config.tls = l.tls();
     config.insecure = a.insecure;
     if let Some(w) = config.cleartext_warning() {
         eprintln!("WARNING: {w}");

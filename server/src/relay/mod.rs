@@ -22,14 +22,12 @@ pub mod service;
 pub mod upstream;
 
 use crate::auth::Auth;
-use crate::conn::ConnLimits;
+use crate::frontend::Frontend;
 use crate::http::Backend;
-use crate::join::SlowClientLimits;
-use crate::serve::{Bound, Listeners};
+use crate::serve::Bound;
 use crate::{Shared, http};
 use anyhow::{Context, Result};
 use naadf_proto::v1::world_service_server::WorldServiceServer;
-use std::net::SocketAddr;
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Duration;
@@ -44,22 +42,10 @@ pub struct RelayConfig {
     pub ca: Option<PathBuf>,
     /// The relay's own token for its upstream join (any role that may join).
     pub token: Option<String>,
-    /// gRPC listen address.
-    pub grpc: SocketAddr,
-    /// HTTP listen address.
-    pub http: SocketAddr,
-    /// Largest gRPC message accepted, in bytes.
-    pub max_message_bytes: usize,
+    /// Where it listens, and its clients' limits.
+    pub frontend: Frontend,
     /// The largest world, in bytes of buffers, to accept from the upstream.
     pub max_world_bytes: u64,
-    /// Deltas a client may fall behind before it is re-sent a snapshot.
-    pub slow_client_events: usize,
-    /// Bytes a client, and all clients together, may fall behind.
-    pub slow_clients: SlowClientLimits,
-    /// Open connections per listener and their idle timeout.
-    pub connections: ConnLimits,
-    /// TLS certificate and key (PEM) for the relay's own gRPC listener, if any.
-    pub tls: Option<(PathBuf, PathBuf)>,
 }
 
 /// The default gRPC listen address of a relay.
@@ -70,19 +56,16 @@ pub const DEFAULT_RELAY_HTTP: &str = "127.0.0.1:8081";
 impl RelayConfig {
     /// The documented defaults, following `upstream`.
     pub fn new(upstream: &str) -> Self {
-        let server = crate::ServerConfig::default();
         Self {
             upstream: upstream.to_owned(),
             ca: None,
             token: None,
-            grpc: DEFAULT_RELAY_GRPC.parse().expect("address"),
-            http: DEFAULT_RELAY_HTTP.parse().expect("address"),
-            max_message_bytes: server.max_message_bytes,
+            frontend: Frontend {
+                grpc: DEFAULT_RELAY_GRPC.parse().expect("address"),
+                http: DEFAULT_RELAY_HTTP.parse().expect("address"),
+                ..Frontend::default()
+            },
             max_world_bytes: naadf_proto::snapshot::DEFAULT_MAX_WORLD_BYTES,
-            slow_client_events: server.slow_client_events,
-            slow_clients: server.slow_clients,
-            connections: server.connections,
-            tls: None,
         }
     }
 }
@@ -93,11 +76,7 @@ impl RelayConfig {
     /// or its upstream is a non-loopback `http://` URL (forwarded requests carry the
     /// callers' tokens). `None` when none of these holds.
     pub fn cleartext_warning(&self) -> Option<String> {
-        let mut exposed: Vec<String> = [("gRPC", self.grpc, self.tls.is_none()), ("HTTP", self.http, true)]
-            .into_iter()
-            .filter(|(_, addr, plain)| *plain && !addr.ip().is_loopback())
-            .map(|(what, addr, _)| format!("{what} on {addr} without TLS"))
-            .collect();
+        let mut exposed = self.frontend.cleartext_listeners();
         let uri = self.upstream.parse::<tonic::transport::Uri>().ok();
         let loopback = |host: &str| {
             let ip = host.trim_start_matches('[').trim_end_matches(']');
@@ -140,7 +119,7 @@ pub async fn relay(
     // Tokens are the upstream's business; the relay's own token set stays empty and is
     // never consulted (the service and the pages ask the upstream through the gate).
     let shared = Arc::new(Shared {
-        slow_clients: config.slow_clients,
+        slow_clients: config.frontend.slow_clients,
         ..Shared::with_metrics(Auth::open(), 1, shutdown_rx.clone(), metrics.clone())
     });
 
@@ -148,7 +127,7 @@ pub async fn relay(
     let (hub_tx, hub_rx) = mpsc::channel(1024);
     let hub = hub::Hub::new(
         config.max_world_bytes,
-        config.slow_client_events,
+        config.frontend.slow_client_events,
         rejoin.clone(),
         metrics.clone(),
     );
@@ -196,14 +175,7 @@ pub async fn relay(
             upstream: upstream.clone(),
         },
     );
-    let listeners = Listeners {
-        grpc: config.grpc,
-        http: config.http,
-        connections: config.connections,
-        tls: config.tls.clone(),
-        max_message_bytes: config.max_message_bytes,
-    };
-    let (bound, grpc, http) = listeners.start(svc, routes, &shutdown_tx).await?;
+    let (bound, grpc, http) = config.frontend.start(svc, routes, &shutdown_tx).await?;
     tracing::info!(upstream = %config.upstream, "relaying");
     ready(bound);
 
@@ -242,13 +214,13 @@ mod tests {
                 .contains("the upstream http://world.example:50051")
         );
         c.upstream = "http://localhost:50051".into();
-        c.grpc = "0.0.0.0:50061".parse().unwrap();
+        c.frontend.grpc = "0.0.0.0:50061".parse().unwrap();
         let w = c.cleartext_warning().unwrap();
         assert!(
             w.contains("gRPC on 0.0.0.0:50061") && !w.contains("the upstream"),
             "{w}"
         );
-        c.tls = Some(("c".into(), "k".into()));
+        c.frontend.tls = Some(("c".into(), "k".into()));
         assert_eq!(c.cleartext_warning(), None);
     }
 }

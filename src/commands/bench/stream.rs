@@ -100,11 +100,11 @@ impl LocalServer {
     async fn start(world: World) -> Result<Self> {
         let data = tempfile::tempdir()?;
         let mut config = ServerConfig::new(data.path().join("data"));
-        config.grpc = "127.0.0.1:0".parse()?;
-        config.http = "127.0.0.1:0".parse()?;
+        config.frontend.grpc = "127.0.0.1:0".parse()?;
+        config.frontend.http = "127.0.0.1:0".parse()?;
         config.rate = 1_000_000;
         config.checkpoint_every = u64::MAX;
-        config.slow_client_events = 1 << 16;
+        config.frontend.slow_client_events = 1 << 16;
         let (stop, stopped) = oneshot::channel::<()>();
         let (ready_tx, ready_rx) = oneshot::channel();
         let thread = std::thread::spawn(move || {

@@ -1,0 +1,156 @@
+//! How a server or a relay faces its clients: where it listens (gRPC with reflection,
+//! keepalive, connection limits and optional TLS; HTTP), the message and connection
+//! limits, and how far its clients may fall behind. `naadf serve` and `naadf relay` share
+//! all of it.
+
+use crate::conn::{Acceptor, ConnLimits};
+use crate::join::SlowClientLimits;
+use crate::serve::{Bound, DEFAULT_GRPC, DEFAULT_HTTP};
+use anyhow::{Context, Result};
+use naadf_proto::FILE_DESCRIPTOR_SET;
+use naadf_proto::v1::world_service_server::{WorldService, WorldServiceServer};
+use std::net::SocketAddr;
+use std::path::PathBuf;
+use tokio::sync::watch;
+use tonic::codec::CompressionEncoding;
+use tonic::transport::{Identity, Server, ServerTlsConfig};
+
+/// The client-facing settings a server and a relay share.
+#[derive(Clone, Debug)]
+pub struct Frontend {
+    /// gRPC listen address.
+    pub grpc: SocketAddr,
+    /// HTTP listen address.
+    pub http: SocketAddr,
+    /// TLS certificate and key (PEM) for gRPC, if any. HTTP never has TLS of its own.
+    pub tls: Option<(PathBuf, PathBuf)>,
+    /// Largest gRPC message accepted, in bytes.
+    pub max_message_bytes: usize,
+    /// Open connections per listener and their idle timeout.
+    pub connections: ConnLimits,
+    /// Deltas a client may fall behind before it is re-sent a snapshot.
+    pub slow_client_events: usize,
+    /// Bytes a client, and all clients together, may fall behind before they are re-sent
+    /// a snapshot.
+    pub slow_clients: SlowClientLimits,
+}
+
+impl Default for Frontend {
+    /// A server's documented defaults (docs/PROTOCOL.md): gRPC on [`DEFAULT_GRPC`], HTTP
+    /// on [`DEFAULT_HTTP`], no TLS, 16 MiB messages.
+    fn default() -> Self {
+        Self {
+            grpc: DEFAULT_GRPC.parse().expect("address"),
+            http: DEFAULT_HTTP.parse().expect("address"),
+            tls: None,
+            max_message_bytes: 16 << 20,
+            connections: ConnLimits::default(),
+            slow_client_events: 4096,
+            slow_clients: SlowClientLimits::default(),
+        }
+    }
+}
+
+/// A spawned listener's task.
+pub(crate) type Listening = tokio::task::JoinHandle<Result<(), Box<dyn std::error::Error + Send + Sync>>>;
+
+impl Frontend {
+    /// The listeners on which bearer tokens would cross a network in cleartext: gRPC on a
+    /// non-loopback address without TLS, and HTTP on one (it has no TLS).
+    pub fn cleartext_listeners(&self) -> Vec<String> {
+        [("gRPC", self.grpc, self.tls.is_none()), ("HTTP", self.http, true)]
+            .into_iter()
+            .filter(|(_, addr, plain)| *plain && !addr.ip().is_loopback())
+            .map(|(what, addr, _)| format!("{what} on {addr} without TLS"))
+            .collect()
+    }
+
+    /// Binds both listeners and serves `svc` and `routes` until `shutdown` turns true.
+    pub(crate) async fn start<S: WorldService>(
+        &self,
+        svc: WorldServiceServer<S>,
+        routes: axum::Router,
+        shutdown: &watch::Sender<bool>,
+    ) -> Result<(Bound, Listening, Listening)> {
+        let grpc_listener = tokio::net::TcpListener::bind(self.grpc)
+            .await
+            .with_context(|| format!("cannot listen on {}", self.grpc))?;
+        let http_listener = tokio::net::TcpListener::bind(self.http)
+            .await
+            .with_context(|| format!("cannot listen on {}", self.http))?;
+        let bound = Bound {
+            grpc: grpc_listener.local_addr()?,
+            http: http_listener.local_addr()?,
+        };
+        tracing::info!(grpc = %bound.grpc, http = %bound.http, "serving");
+
+        let reflection_v1 = tonic_reflection::server::Builder::configure()
+            .register_encoded_file_descriptor_set(FILE_DESCRIPTOR_SET)
+            .build_v1()?;
+        let reflection_v1alpha = tonic_reflection::server::Builder::configure()
+            .register_encoded_file_descriptor_set(FILE_DESCRIPTOR_SET)
+            .build_v1alpha()?;
+        let svc = svc
+            .max_decoding_message_size(self.max_message_bytes)
+            .max_encoding_message_size(usize::MAX)
+            .accept_compressed(CompressionEncoding::Zstd);
+        let keepalive = crate::conn::keepalive(self.connections.idle_timeout);
+        let mut builder = Server::builder()
+            .http2_keepalive_interval(Some(keepalive))
+            .http2_keepalive_timeout(Some(keepalive));
+        if let Some((cert, key)) = &self.tls {
+            let cert = std::fs::read(cert).with_context(|| format!("cannot read {}", cert.display()))?;
+            let key = std::fs::read(key).with_context(|| format!("cannot read {}", key.display()))?;
+            builder = builder
+                .tls_config(ServerTlsConfig::new().identity(Identity::from_pem(cert, key)))
+                .context("bad TLS certificate or key")?;
+        }
+        let mut stop = shutdown.subscribe();
+        let grpc = builder
+            .add_service(svc)
+            .add_service(reflection_v1)
+            .add_service(reflection_v1alpha)
+            .serve_with_incoming_shutdown(grpc_incoming(grpc_listener, self.connections), async move {
+                let _ = stop.wait_for(|s| *s).await;
+            });
+        let mut stop = shutdown.subscribe();
+        let http = axum::serve(
+            // `tap_io` only so that axum hands the peer address to the handlers.
+            axum::serve::ListenerExt::tap_io(Acceptor::new(http_listener, self.connections, false), |_| {}),
+            routes.into_make_service_with_connect_info::<SocketAddr>(),
+        )
+        .with_graceful_shutdown(async move {
+            let _ = stop.wait_for(|s| *s).await;
+        });
+        let grpc = tokio::spawn(async move { grpc.await.map_err(Into::into) });
+        let http = tokio::spawn(async move { http.await.map_err(Into::into) });
+        Ok((bound, grpc, http))
+    }
+}
+
+/// The gRPC connections accepted on `listener`, with `TCP_NODELAY` set (tonic applies its
+/// own `tcp_nodelay` only to listeners it binds itself). Deltas are small writes right
+/// behind bigger ones; without it, Nagle's algorithm holds them until the client's delayed
+/// ACK, up to 40 ms on Linux, for every client at once. They are held to `limits` like
+/// the HTTP side's.
+fn grpc_incoming(
+    listener: tokio::net::TcpListener,
+    limits: ConnLimits,
+) -> tokio_stream::wrappers::ReceiverStream<std::io::Result<crate::conn::Conn>> {
+    crate::conn::incoming(Acceptor::new(listener, limits, true))
+}
+
+#[cfg(test)]
+mod tests {
+    use tokio_stream::StreamExt;
+
+    #[tokio::test]
+    async fn accepted_grpc_connections_send_without_delay() {
+        let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+        let addr = listener.local_addr().unwrap();
+        let mut incoming = super::grpc_incoming(listener, Default::default());
+        let _client = tokio::net::TcpStream::connect(addr).await.unwrap();
+        let accepted = incoming.next().await.unwrap().unwrap();
+        assert!(accepted.get_ref().nodelay().unwrap());
+    }
+}
