@@ -57,6 +57,16 @@ pub(crate) type Listening = tokio::task::JoinHandle<Result<(), Box<dyn std::erro
 impl Frontend {
     /// The listeners on which bearer tokens would cross a network in cleartext: gRPC on a
     /// non-loopback address without TLS, and HTTP on one (it has no TLS).
+    ///
+    /// ```
+    /// use naadf_server::frontend::Frontend;
+    /// let mut f = Frontend::default();
+    /// assert!(f.cleartext_listeners().is_empty(), "loopback by default");
+    /// f.grpc = "0.0.0.0:50051".parse().unwrap();
+    /// assert_eq!(f.cleartext_listeners(), ["gRPC on 0.0.0.0:50051 without TLS"]);
+    /// f.tls = Some(("cert.pem".into(), "key.pem".into()));
+    /// assert!(f.cleartext_listeners().is_empty());
+    /// ```
     pub fn cleartext_listeners(&self) -> Vec<String> {
         [("gRPC", self.grpc, self.tls.is_none()), ("HTTP", self.http, true)]
             .into_iter()
