@@ -1,6 +1,6 @@
 //! `naadf relay --upstream URL [--grpc ADDR] [--http ADDR] [--token T]`
 
-use super::remote::block_on;
+use super::remote::block_on_threads;
 use super::serve::{ListenArgs, announce, shutdown_signal};
 use anyhow::{Context, Result};
 use naadf_server::relay::{DEFAULT_RELAY_GRPC, DEFAULT_RELAY_HTTP, RelayConfig, relay};
@@ -30,6 +30,13 @@ pub struct Args {
     /// The largest world, in bytes of buffers, to accept from the upstream.
     #[arg(long, value_name = "BYTES", default_value_t = naadf_client::DEFAULT_MAX_WORLD_BYTES)]
     max_world_bytes: u64,
+    /// Threads serving its clients (their streams and forwarded calls): 1 runs them all on
+    /// one thread, which spends the least on handing work between threads, so a relay
+    /// delivers its many small sends soonest on a busy machine; 0 takes one per CPU. Grow a
+    /// deployment with more relays rather than more threads. Applying the upstream's
+    /// stream has a thread of its own either way.
+    #[arg(long, default_value_t = 1)]
+    threads: usize,
     #[command(flatten)]
     listening: ListenArgs,
     /// Print the bound addresses as one JSON line on stdout once listening.
@@ -45,7 +52,7 @@ pub fn run(a: Args) -> Result<()> {
     config.frontend = a.listening.frontend(a.grpc, a.http)?;
     config.max_world_bytes = a.max_world_bytes;
     let json = a.json;
-    block_on(async move {
+    block_on_threads(a.threads, async move {
         relay(
             config,
             announce(json),

@@ -40,12 +40,22 @@ impl ServerArgs {
     }
 }
 
-/// Runs `f` on a multi-threaded tokio runtime.
+/// Runs `f` on a multi-threaded tokio runtime (a worker per CPU).
 pub fn block_on<T>(f: impl std::future::Future<Output = Result<T>>) -> Result<T> {
-    tokio::runtime::Builder::new_multi_thread()
-        .enable_all()
-        .build()?
-        .block_on(f)
+    block_on_threads(0, f)
+}
+
+/// Runs `f` on a tokio runtime of `threads` workers: 1 runs every task on this thread (a
+/// current-thread runtime), 0 takes a worker per CPU.
+pub fn block_on_threads<T>(threads: usize, f: impl std::future::Future<Output = Result<T>>) -> Result<T> {
+    let mut builder = match threads {
+        1 => tokio::runtime::Builder::new_current_thread(),
+        _ => tokio::runtime::Builder::new_multi_thread(),
+    };
+    if threads > 1 {
+        builder.worker_threads(threads);
+    }
+    builder.enable_all().build()?.block_on(f)
 }
 
 /// Joins `server` (announcing `cache`, so that only changed pages come) and returns its

@@ -43,6 +43,9 @@ pub struct FanoutArgs {
     /// Seconds of edits per run.
     #[arg(long, default_value_t = 5.0)]
     seconds: f64,
+    /// Each relay's client threads (`naadf relay --threads`).
+    #[arg(long, default_value_t = 1)]
+    relay_threads: usize,
     /// Full mirrors riding along (digests checked), besides the receive-only clients.
     #[arg(long, default_value_t = 2)]
     mirrors: usize,
@@ -88,6 +91,7 @@ struct RunReport {
 struct Report {
     rate: u32,
     seconds: f64,
+    relay_threads: usize,
     runs: Vec<RunReport>,
 }
 
@@ -250,6 +254,7 @@ pub fn run(a: FanoutArgs) -> Result<()> {
     let report = Report {
         rate: a.rate,
         seconds: a.seconds,
+        relay_threads: a.relay_threads,
         runs,
     };
     if a.json {
@@ -330,6 +335,8 @@ fn one_run(
             "127.0.0.1:0",
             "--max-connections",
             "4096",
+            "--threads",
+            &a.relay_threads.to_string(),
         ])?;
         let (url, http) = p.addresses()?;
         let t = Instant::now();
