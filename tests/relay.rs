@@ -261,7 +261,7 @@ async fn a_relay_in_front_of_an_open_server_admits_only_its_own_machine() {
         &dir.path().join("relay.log"),
     );
     live(&relay);
-    let port = |addr: &str| addr.rsplit(':').next().unwrap().to_owned();
+    let port = |addr: &str| addr.rsplit(':').next().unwrap().parse::<u16>().unwrap();
     let (grpc_port, http_port) = (port(&relay.url), port(&relay.http));
     let local = Client::connect(&format!("http://127.0.0.1:{grpc_port}"), None, None)
         .await
@@ -278,11 +278,8 @@ async fn a_relay_in_front_of_an_open_server_admits_only_its_own_machine() {
         server.stop();
         return;
     };
-    let host = match ip {
-        std::net::IpAddr::V4(v4) => v4.to_string(),
-        std::net::IpAddr::V6(v6) => format!("[{v6}]"),
-    };
-    let remote = Client::connect(&format!("http://{host}:{grpc_port}"), Some("any"), None)
+    let at = |port| std::net::SocketAddr::new(ip, port).to_string();
+    let remote = Client::connect(&format!("http://{}", at(grpc_port)), Some("any"), None)
         .await
         .unwrap();
     let before = local.status().await.unwrap().version;
@@ -295,8 +292,8 @@ async fn a_relay_in_front_of_an_open_server_admits_only_its_own_machine() {
     ] {
         assert_eq!(e.code(), Some(naadf_client::error::Code::PermissionDenied), "{e}");
     }
-    assert_eq!(http_get(&format!("{host}:{http_port}"), "/?token=any").0, 403);
-    assert_eq!(http_get(&format!("{host}:{http_port}"), "/frame.png?token=any").0, 403);
+    assert_eq!(http_get(&at(http_port), "/?token=any").0, 403);
+    assert_eq!(http_get(&at(http_port), "/frame.png?token=any").0, 403);
     let after = local.status().await.unwrap().version;
     assert_eq!(after, before, "nothing from the network reached the server");
     relay.stop();

@@ -145,15 +145,6 @@ fn credentials(headers: HeaderMap, token: TokenQuery) -> Result<tonic::metadata:
     Ok(md)
 }
 
-/// The caller of a request with these credentials (any role will do).
-async fn authorize(
-    app: &App,
-    md: Result<tonic::metadata::MetadataMap, Status>,
-    peer: SocketAddr,
-) -> Result<Caller, Status> {
-    app.backend.caller(&md?, peer).await
-}
-
 /// The query of `/frame.png` (its token is read apart, see [`TokenQuery`]).
 #[derive(serde::Deserialize)]
 struct FrameQuery {
@@ -298,7 +289,12 @@ async fn status_page(
     token: TokenQuery,
 ) -> Response {
     let page_token = token.as_ref().ok().and_then(|Query(t)| t.token.clone());
-    if let Err(s) = authorize(&app, credentials(headers, token), peer).await {
+    // Any role will do.
+    let caller = match credentials(headers, token) {
+        Ok(md) => app.backend.caller(&md, peer).await,
+        Err(s) => Err(s),
+    };
+    if let Err(s) = caller {
         return http_error(&s);
     }
     let Some(s) = crate::status(&app.actor).await else {

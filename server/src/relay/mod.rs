@@ -68,9 +68,7 @@ impl RelayConfig {
             max_world_bytes: naadf_proto::snapshot::DEFAULT_MAX_WORLD_BYTES,
         }
     }
-}
 
-impl RelayConfig {
     /// Why callers' bearer tokens would cross a network in cleartext through this relay:
     /// its gRPC listens on a non-loopback address without TLS, its HTTP (never TLS) does,
     /// or its upstream is a non-loopback `http://` URL (forwarded requests carry the
