@@ -1,16 +1,19 @@
 //! The service across hosts, with faults: a server and two relays, each in a network
-//! namespace of its own joined by veth links (with 20 ms delay and 1 % loss where the
-//! kernel has netem), mirrors behind each relay. Clients edit through both relays; one
-//! relay's upstream link is cut for a few seconds; the server is killed with SIGKILL and
-//! restarted. Afterwards every acknowledged edit is in the world and every mirror is on the
-//! server's quiescent digest.
+//! namespace of its own, joined by links with 20 ms delay and 1 % loss each way (carried
+//! through this process, see `netns`), mirrors behind each relay. Clients edit through
+//! both relays; one relay's upstream link is cut (its packets vanish) until the relay has
+//! noticed by itself and then mended; the server is killed with SIGKILL and restarted.
+//! Afterwards every acknowledged edit is in the world and every mirror is on the server's
+//! quiescent digest, on the stream it first joined.
 //!
-//! It needs root and `ip` (iproute2); where namespaces cannot be made it says so and
-//! passes without running. It makes only its own namespaces (named after this process) and
-//! removes them, and every process it started, when it ends.
+//! It needs root, `ip` (iproute2) and `/dev/net/tun`; where namespaces cannot be made it
+//! says so and passes without running. It makes only its own namespaces and devices (named
+//! after this process) and removes them, and every process it started, when it ends.
 
+mod netns;
 mod support;
 
+use netns::ip;
 use std::io::{BufRead, BufReader};
 use std::process::{Child, Command, Stdio};
 use std::sync::mpsc;
@@ -18,28 +21,33 @@ use std::time::{Duration, Instant};
 
 const NAADF: &str = env!("CARGO_BIN_EXE_naadf");
 const TOKENS: &str = "rt=relay:viewer,vt=vera:viewer,et=edwin:editor";
+/// Each relay's HTTP address, inside its namespace.
+const RELAY_HTTP: &str = "127.0.0.1:8081";
+/// How long a relay's upstream may stay silent before it re-joins (short, so that the
+/// cut below is noticed within it).
+const UPSTREAM_TIMEOUT_S: &str = "2";
 
-/// Runs `ip ARGS`; its error output when it fails.
-fn ip(args: &[&str]) -> Result<(), String> {
-    let out = Command::new("ip").args(args).output().map_err(|e| e.to_string())?;
-    if out.status.success() {
-        Ok(())
-    } else {
-        Err(String::from_utf8_lossy(&out.stderr).trim().to_owned())
-    }
-}
+/// The links' character: 20 ms each way and 1 % of packets lost.
+const SHAPE: netns::Shape = netns::Shape {
+    delay: Duration::from_millis(20),
+    loss_one_in: 100,
+};
 
-/// The namespaces and links of one run; removed on drop (a namespace takes its veth ends
-/// with it).
+/// The namespaces and links of one run; removed on drop.
 struct Net {
     names: Vec<String>,
+    /// Link k - 1 joins the server's namespace to relay k's.
+    wires: Vec<netns::Wire>,
 }
 
 impl Net {
     /// `server`, `relay1` and `relay2` namespaces; `10.77.k.1` (server side) ↔ `10.77.k.2`
-    /// (relay k) on veth pair k.
+    /// (relay k) on link k, shaped by [`SHAPE`].
     fn make(tag: &str) -> Result<Self, String> {
-        let mut net = Self { names: Vec::new() };
+        let mut net = Self {
+            names: Vec::new(),
+            wires: Vec::new(),
+        };
         for role in ["s", "r1", "r2"] {
             let ns = format!("naadf-{tag}-{role}");
             ip(&["netns", "add", &ns])?;
@@ -48,70 +56,55 @@ impl Net {
         }
         for k in 1..=2 {
             let (a, b) = (format!("nf{tag}s{k}"), format!("nf{tag}r{k}"));
-            ip(&["link", "add", &a, "type", "veth", "peer", "name", &b])?;
-            ip(&["link", "set", &a, "netns", &net.names[0]])?;
-            ip(&["link", "set", &b, "netns", &net.names[k]])?;
-            ip(&[
-                "-n",
-                &net.names[0],
-                "addr",
-                "add",
-                &format!("10.77.{k}.1/24"),
-                "dev",
-                &a,
-            ])?;
-            ip(&[
-                "-n",
-                &net.names[k],
-                "addr",
-                "add",
-                &format!("10.77.{k}.2/24"),
-                "dev",
-                &b,
-            ])?;
-            ip(&["-n", &net.names[0], "link", "set", &a, "up"])?;
-            ip(&["-n", &net.names[k], "link", "set", &b, "up"])?;
+            let (addr_a, addr_b) = (format!("10.77.{k}.1"), format!("10.77.{k}.2"));
+            let server_end = netns::End {
+                dev: &a,
+                ns: &net.names[0],
+                addr: &addr_a,
+            };
+            let relay_end = netns::End {
+                dev: &b,
+                ns: &net.names[k],
+                addr: &addr_b,
+            };
+            net.wires
+                .push(netns::Wire::new(server_end, relay_end, SHAPE, k as u64)?);
         }
         Ok(net)
-    }
-
-    /// Adds 20 ms delay and 1 % loss to both ends of both links; false where the kernel
-    /// has no netem.
-    fn shape(&self, tag: &str) -> bool {
-        (1..=2).all(|k| {
-            [(0, format!("nf{tag}s{k}")), (k, format!("nf{tag}r{k}"))]
-                .iter()
-                .all(|(n, dev)| {
-                    Command::new("ip")
-                        .args(["netns", "exec", &self.names[*n], "tc", "qdisc", "add", "dev", dev])
-                        .args(["root", "netem", "delay", "20ms", "loss", "1%"])
-                        .stderr(Stdio::null())
-                        .status()
-                        .is_ok_and(|s| s.success())
-                })
-        })
-    }
-
-    /// Takes relay `k`'s end of its link down or up.
-    fn link(&self, tag: &str, k: usize, up: bool) {
-        let dev = format!("nf{tag}r{k}");
-        ip(&[
-            "-n",
-            &self.names[k],
-            "link",
-            "set",
-            &dev,
-            if up { "up" } else { "down" },
-        ])
-        .unwrap();
     }
 }
 
 impl Drop for Net {
     fn drop(&mut self) {
+        // The wires first: their devices go with them, then the empty namespaces.
+        self.wires.clear();
         for ns in &self.names {
             let _ = ip(&["netns", "del", ns]);
         }
+    }
+}
+
+/// Relay `k`'s `naadf_upstream_connected` and `naadf_upstream_joins_total`, from its
+/// `/metrics` inside its namespace.
+fn upstream_metrics(net: &Net, k: usize) -> Option<(u64, u64)> {
+    let metrics = netns::http_get(&net.names[k], RELAY_HTTP, "/metrics").ok()?;
+    let value = |name: &str| {
+        metrics
+            .lines()
+            .find_map(|l| l.strip_prefix(name)?.strip_prefix(' ')?.trim().parse().ok())
+    };
+    Some((value("naadf_upstream_connected")?, value("naadf_upstream_joins_total")?))
+}
+
+/// Waits up to `limit` for relay `k`'s upstream metrics to satisfy `ok`; the last seen.
+fn wait_upstream(net: &Net, k: usize, limit: Duration, ok: impl Fn((u64, u64)) -> bool) -> Option<(u64, u64)> {
+    let t = Instant::now();
+    loop {
+        let m = upstream_metrics(net, k);
+        if m.is_some_and(&ok) || t.elapsed() > limit {
+            return m;
+        }
+        std::thread::sleep(Duration::from_millis(200));
     }
 }
 
@@ -208,13 +201,12 @@ fn relays_survive_a_cut_link_and_a_killed_server_across_namespaces() {
     let net = match Net::make(&tag) {
         Ok(n) => n,
         Err(why) => {
-            eprintln!("SKIPPED: cannot make network namespaces and veth links here ({why}); needs root and iproute2");
+            eprintln!(
+                "SKIPPED: cannot make network namespaces and TUN links here ({why}); needs root, iproute2 and /dev/net/tun"
+            );
             return;
         }
     };
-    if !net.shape(&tag) {
-        eprintln!("note: no netem in this kernel; the links run without the 20 ms delay and 1 % loss");
-    }
     let dir = tempfile::tempdir().unwrap();
     let world = support::start_world(dir.path());
     let data = dir.path().join("data");
@@ -234,6 +226,9 @@ fn relays_survive_a_cut_link_and_a_killed_server_across_namespaces() {
     let server_log = dir.path().join("server.log");
     let server = Proc::start(&net.names[0], &serve_args, &server_log);
     server.json(Duration::from_secs(300));
+    // The links are shaped: a connect takes a round trip, two delays.
+    let rtt = netns::connect_time(&net.names[1], "10.77.1.1:50051").unwrap();
+    assert!(rtt >= 2 * SHAPE.delay, "a connect across link 1 took {rtt:?}");
 
     let mut relays = Vec::new();
     let mut mirrors = Vec::new();
@@ -248,6 +243,10 @@ fn relays_survive_a_cut_link_and_a_killed_server_across_namespaces() {
             "rt",
             "--grpc",
             "127.0.0.1:50061",
+            "--http",
+            RELAY_HTTP,
+            "--upstream-timeout",
+            UPSTREAM_TIMEOUT_S,
         ];
         let relay = Proc::start(&net.names[k], &args, &dir.path().join(format!("relay{k}.log")));
         relay.json(Duration::from_secs(60));
@@ -274,11 +273,21 @@ fn relays_survive_a_cut_link_and_a_killed_server_across_namespaces() {
     acked.extend(edit_through(&net.names[1], url, &ops(10), dir.path(), "a.jsonl"));
     acked.extend(edit_through(&net.names[2], url, &ops(10), dir.path(), "b.jsonl"));
 
-    // Relay 1 loses its upstream for a few seconds while edits go through relay 2.
-    net.link(&tag, 1, false);
+    // Relay 1's link is cut (every packet dropped, no error anywhere) while edits go
+    // through relay 2. The relay notices the silence by itself, within its upstream
+    // timeout, and re-joins once the link is back.
+    let (_, joins_before) =
+        wait_upstream(&net, 1, Duration::from_secs(30), |(c, _)| c == 1).expect("relay 1's metrics");
+    net.wires[0].set_cut(true);
     acked.extend(edit_through(&net.names[2], url, &ops(10), dir.path(), "c.jsonl"));
-    std::thread::sleep(Duration::from_secs(3));
-    net.link(&tag, 1, true);
+    let noticed = wait_upstream(&net, 1, Duration::from_secs(30), |(c, _)| c == 0);
+    assert_eq!(noticed.map(|m| m.0), Some(0), "relay 1 saw its upstream go silent");
+    net.wires[0].set_cut(false);
+    let back = wait_upstream(&net, 1, Duration::from_secs(60), |(c, j)| c == 1 && j > joins_before);
+    assert!(
+        back.is_some_and(|(c, j)| c == 1 && j > joins_before),
+        "relay 1 re-joined after the cut: {back:?}, {joins_before} joins before"
+    );
 
     // The server dies without a goodbye and comes back on the same data directory; the
     // editors retry through the relays until it is back.

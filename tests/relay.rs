@@ -216,7 +216,7 @@ async fn a_relay_widens_no_role_and_forwards_the_callers_token() {
     assert_eq!(w.version(), first.version);
     // A server with tokens refuses anonymous callers, so a relay in front of it admits
     // callers from other machines, and the upstream still decides who they are.
-    let gate = UpstreamAuth::new(Upstream::new(&server.url, None, None).unwrap());
+    let gate = UpstreamAuth::new(Upstream::new(&server.url, None, None, Duration::from_secs(20)).unwrap());
     let remote = Some("192.0.2.7:40000".parse().unwrap());
     gate.admit(remote).await.unwrap();
     let anonymous = gate.caller(&tonic::metadata::MetadataMap::new(), remote).await;
@@ -244,7 +244,7 @@ async fn a_relay_in_front_of_an_open_server_admits_only_its_own_machine() {
     let dir = tempfile::tempdir().unwrap();
     let world = start_world(dir.path());
     let server = serve_world(dir.path(), &world, &[], &[]);
-    let gate = UpstreamAuth::new(Upstream::new(&server.url, None, None).unwrap());
+    let gate = UpstreamAuth::new(Upstream::new(&server.url, None, None, Duration::from_secs(20)).unwrap());
     let denied = tonic::Code::PermissionDenied;
     gate.admit(Some("127.0.0.1:40000".parse().unwrap())).await.unwrap();
     gate.admit(Some("[::1]:40000".parse().unwrap())).await.unwrap();

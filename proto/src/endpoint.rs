@@ -1,9 +1,17 @@
 //! The channel every caller of the service opens: `http://` or `https://` URLs, an optional
-//! extra CA certificate for TLS, and `TCP_NODELAY` (deltas are small writes behind bigger
-//! ones; Nagle's algorithm would hold them for the peer's delayed ACK). Clients and relays
-//! both connect through [`endpoint`].
+//! extra CA certificate for TLS, `TCP_NODELAY` (deltas are small writes behind bigger
+//! ones; Nagle's algorithm would hold them for the peer's delayed ACK), and HTTP/2
+//! keepalive pings while a call is open, so that a stream over a dead link (a cut cable, a
+//! peer's machine gone) fails within [`DEFAULT_SILENCE_LIMIT`] instead of hanging until TCP
+//! gives up, minutes later. Clients and relays both connect through [`endpoint`].
 
+use std::time::Duration;
 use tonic::transport::{Certificate, ClientTlsConfig, Endpoint};
+
+/// How long a connection with an open call may go without hearing from its peer before
+/// it is given up: after half of it with nothing received a ping goes out, and the peer
+/// has the other half to answer.
+pub const DEFAULT_SILENCE_LIMIT: Duration = Duration::from_secs(20);
 
 /// Why no endpoint could be made from a URL.
 #[derive(Debug, thiserror::Error)]
@@ -16,8 +24,10 @@ pub enum EndpointError {
     Tls(String, tonic::transport::Error),
 }
 
-/// The endpoint for `url`, trusting `ca` (PEM bytes) for TLS besides the system roots.
-/// Nothing connects yet: [`Endpoint::connect`] or [`Endpoint::connect_lazy`] does.
+/// The endpoint for `url`, trusting `ca` (PEM bytes) for TLS besides the system roots,
+/// giving up a connection that stays silent for [`DEFAULT_SILENCE_LIMIT`] while a call is
+/// open ([`with_silence_limit`] changes that). Nothing connects yet: [`Endpoint::connect`]
+/// or [`Endpoint::connect_lazy`] does.
 ///
 /// ```
 /// let ep = naadf_proto::endpoint::endpoint("http://127.0.0.1:50051", None).unwrap();
@@ -33,5 +43,22 @@ pub fn endpoint(url: &str, ca: Option<Vec<u8>>) -> Result<Endpoint, EndpointErro
         }
         ep = ep.tls_config(tls).map_err(|e| EndpointError::Tls(url.into(), e))?;
     }
-    Ok(ep.tcp_nodelay(true))
+    Ok(with_silence_limit(ep.tcp_nodelay(true), DEFAULT_SILENCE_LIMIT))
+}
+
+/// `ep`, giving up a connection whose peer stays silent for `limit` while a call is open:
+/// a keepalive ping after `limit / 2` without a frame received, and `limit / 2` for its
+/// answer. Idle connections are not pinged (servers close those on their own terms).
+///
+/// ```
+/// use std::time::Duration;
+/// let ep = naadf_proto::endpoint::endpoint("http://127.0.0.1:50051", None).unwrap();
+/// let ep = naadf_proto::endpoint::with_silence_limit(ep, Duration::from_secs(4));
+/// assert_eq!(ep.uri().host(), Some("127.0.0.1"));
+/// ```
+pub fn with_silence_limit(ep: Endpoint, limit: Duration) -> Endpoint {
+    let half = (limit / 2).max(Duration::from_millis(10));
+    ep.http2_keep_alive_interval(half)
+        .keep_alive_timeout(half)
+        .keep_alive_while_idle(false)
 }

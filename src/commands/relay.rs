@@ -6,6 +6,7 @@ use anyhow::{Context, Result};
 use naadf_server::relay::{DEFAULT_RELAY_GRPC, DEFAULT_RELAY_HTTP, RelayConfig, relay};
 use std::net::SocketAddr;
 use std::path::PathBuf;
+use std::time::Duration;
 
 /// Arguments of `relay`.
 #[derive(clap::Args)]
@@ -37,6 +38,10 @@ pub struct Args {
     /// stream has a thread of its own either way.
     #[arg(long, default_value_t = 1)]
     threads: usize,
+    /// Give up the upstream connection, and re-join, when it stays silent this many
+    /// seconds (keepalive pings go out after half of it): how soon a cut link is noticed.
+    #[arg(long, value_name = "SECS", default_value_t = RelayConfig::new("").upstream_timeout.as_secs_f64())]
+    upstream_timeout: f64,
     #[command(flatten)]
     listening: ListenArgs,
     /// Print the bound addresses as one JSON line on stdout once listening.
@@ -51,6 +56,7 @@ pub fn run(a: Args) -> Result<()> {
     config.ca = a.ca.clone();
     config.frontend = a.listening.frontend(a.grpc, a.http)?;
     config.max_world_bytes = a.max_world_bytes;
+    config.upstream_timeout = super::seconds(a.upstream_timeout, "--upstream-timeout")?.max(Duration::from_millis(100));
     let json = a.json;
     block_on_threads(a.threads, async move {
         relay(

@@ -46,6 +46,10 @@ pub struct RelayConfig {
     pub frontend: Frontend,
     /// The largest world, in bytes of buffers, to accept from the upstream.
     pub max_world_bytes: u64,
+    /// How long the upstream connection may stay silent before the relay gives it up and
+    /// re-joins (keepalive pings go out after half of it): a cut link is noticed in this
+    /// time, and `upstream_connected` drops to 0 meanwhile.
+    pub upstream_timeout: Duration,
 }
 
 /// The default gRPC listen address of a relay.
@@ -66,6 +70,7 @@ impl RelayConfig {
                 ..Frontend::default()
             },
             max_world_bytes: naadf_proto::snapshot::DEFAULT_MAX_WORLD_BYTES,
+            upstream_timeout: naadf_proto::endpoint::DEFAULT_SILENCE_LIMIT,
         }
     }
 
@@ -110,8 +115,8 @@ pub async fn relay(
         Some(p) => Some(std::fs::read(p).with_context(|| format!("cannot read {}", p.display()))?),
         None => None,
     };
-    let upstream =
-        upstream::Upstream::new(&config.upstream, ca, config.token.as_deref()).map_err(anyhow::Error::msg)?;
+    let upstream = upstream::Upstream::new(&config.upstream, ca, config.token.as_deref(), config.upstream_timeout)
+        .map_err(anyhow::Error::msg)?;
     let (shutdown_tx, shutdown_rx) = watch::channel(false);
     let metrics = Arc::new(crate::metrics::Metrics::for_relay());
     // Tokens are the upstream's business; the relay's own token set stays empty and is

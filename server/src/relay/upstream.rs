@@ -38,12 +38,11 @@ pub struct Upstream {
 
 impl Upstream {
     /// The upstream at `url` (trusting `ca`, PEM bytes, for TLS), called with the relay's
-    /// `token`. Nothing connects yet: the channel connects on first use and again after it
-    /// breaks.
-    pub fn new(url: &str, ca: Option<Vec<u8>>, token: Option<&str>) -> Result<Self, String> {
-        let channel = naadf_proto::endpoint::endpoint(url, ca)
-            .map_err(|e| e.to_string())?
-            .connect_lazy();
+    /// `token`; a connection silent for `timeout` is given up. Nothing connects yet: the
+    /// channel connects on first use and again after it breaks.
+    pub fn new(url: &str, ca: Option<Vec<u8>>, token: Option<&str>, timeout: Duration) -> Result<Self, String> {
+        let endpoint = naadf_proto::endpoint::endpoint(url, ca).map_err(|e| e.to_string())?;
+        let channel = naadf_proto::endpoint::with_silence_limit(endpoint, timeout).connect_lazy();
         let token = token
             .map(|t| format!("Bearer {t}").parse::<AsciiMetadataValue>())
             .transpose()
