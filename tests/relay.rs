@@ -1,7 +1,7 @@
 //! `naadf relay` against real `naadf serve` processes: a relay (and a relay of a relay)
 //! passes on the server's stream byte for byte, forwards writes with the caller's token,
-//! waits for an upstream that is not up yet, rides out an upstream crash, and never passes
-//! on a delta whose digest does not match.
+//! waits for an upstream that is not up yet, rides out an upstream crash, gives up an
+//! upstream link that went silent, and never passes on a delta whose digest does not match.
 
 mod support;
 
@@ -369,6 +369,115 @@ async fn a_relay_waits_for_its_upstream_and_rides_out_a_crash() {
         .and_then(|v| v.parse().ok())
         .expect("the joins counter");
     assert!(joins >= 2, "joined before and after the crash: {joins}");
+    relay.stop();
+    server.stop();
+}
+
+/// A loopback TCP proxy to `target` that can be frozen: while `frozen` holds true it
+/// neither reads nor writes on any connection (new ones included), as a link that drops
+/// every packet would look to both ends, without either seeing an error.
+async fn freezable_proxy(target: String, frozen: tokio::sync::watch::Receiver<bool>) -> String {
+    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let addr = listener.local_addr().unwrap();
+    tokio::spawn(async move {
+        while let Ok((inbound, _)) = listener.accept().await {
+            let Ok(outbound) = tokio::net::TcpStream::connect(&target).await else {
+                continue;
+            };
+            let (ri, wi) = inbound.into_split();
+            let (ro, wo) = outbound.into_split();
+            tokio::spawn(pipe(ri, wo, frozen.clone()));
+            tokio::spawn(pipe(ro, wi, frozen.clone()));
+        }
+    });
+    format!("http://{addr}")
+}
+
+/// Copies `from` to `to` while not `frozen`, until either side closes.
+async fn pipe(
+    mut from: tokio::net::tcp::OwnedReadHalf,
+    mut to: tokio::net::tcp::OwnedWriteHalf,
+    mut frozen: tokio::sync::watch::Receiver<bool>,
+) {
+    use tokio::io::{AsyncReadExt, AsyncWriteExt};
+    let mut buf = vec![0u8; 1 << 16];
+    loop {
+        if frozen.wait_for(|f| !f).await.is_err() {
+            return;
+        }
+        let n = match from.read(&mut buf).await {
+            Ok(0) | Err(_) => return,
+            Ok(n) => n,
+        };
+        // What was read as the link froze waits for it to thaw.
+        if frozen.wait_for(|f| !f).await.is_err() || to.write_all(&buf[..n]).await.is_err() {
+            return;
+        }
+    }
+}
+
+/// The relay's `naadf_upstream_connected` and `naadf_upstream_joins_total`.
+fn upstream_metrics(relay: &Server) -> (u64, u64) {
+    let (_, metrics) = http_get(&relay.http, "/metrics");
+    let value = |name: &str| -> u64 {
+        metrics
+            .lines()
+            .find_map(|l| l.strip_prefix(name)?.strip_prefix(' ')?.trim().parse().ok())
+            .unwrap_or_else(|| panic!("no {name} in {metrics}"))
+    };
+    (value("naadf_upstream_connected"), value("naadf_upstream_joins_total"))
+}
+
+/// Waits up to 30 s for the relay's upstream metrics to satisfy `ok`; the last seen.
+async fn wait_upstream(relay: &Server, ok: impl Fn((u64, u64)) -> bool) -> (u64, u64) {
+    for _ in 0..300 {
+        let m = upstream_metrics(relay);
+        if ok(m) {
+            return m;
+        }
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    }
+    upstream_metrics(relay)
+}
+
+/// A link that goes silent without an error (every packet dropped) is noticed by the
+/// relay within its `--upstream-timeout`: it gives the connection up, reports itself
+/// disconnected, and re-joins once the link carries packets again; its client keeps its
+/// stream and ends on the server's state, edits made meanwhile included.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_relay_gives_up_a_silent_upstream_and_rejoins() {
+    let dir = tempfile::tempdir().unwrap();
+    let world = start_world(dir.path());
+    let server = serve_world(dir.path(), &world, &[], &[]);
+    let (freeze, frozen) = tokio::sync::watch::channel(false);
+    let target = server.url.trim_start_matches("http://").to_owned();
+    let proxy = freezable_proxy(target, frozen).await;
+    let relay = Server::relay(&proxy, &["--upstream-timeout", "1"], &dir.path().join("relay.log"));
+    live(&relay);
+    let c = Client::connect(&relay.url, None, None).await.unwrap();
+    let mut session = c.join(None).await.unwrap();
+    session.until_quiescent(0, SETTLE).await.unwrap();
+    let (connected, joins) = wait_upstream(&relay, |(c, _)| c == 1).await;
+    assert_eq!(connected, 1);
+
+    freeze.send(true).unwrap();
+    let direct = Client::connect(&server.url, None, None).await.unwrap();
+    let mut rng = 9;
+    for seq in 1..=3 {
+        direct.edit(random_op(&mut rng), seq).await.unwrap();
+    }
+    let (connected, _) = wait_upstream(&relay, |(c, _)| c == 0).await;
+    assert_eq!(connected, 0, "the relay noticed its upstream went silent");
+
+    freeze.send(false).unwrap();
+    let back = wait_upstream(&relay, |(c, j)| c == 1 && j > joins).await;
+    assert!(
+        back.0 == 1 && back.1 > joins,
+        "re-joined after the link came back: {back:?}, {joins} joins before"
+    );
+    let status = quiescent(&server.url).await;
+    let w = session.until_quiescent(status.version, SETTLE).await.unwrap();
+    assert_eq!((w.version(), w.digest()), (status.version, status.digest));
     relay.stop();
     server.stop();
 }

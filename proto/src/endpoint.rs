@@ -46,9 +46,11 @@ pub fn endpoint(url: &str, ca: Option<Vec<u8>>) -> Result<Endpoint, EndpointErro
     Ok(with_silence_limit(ep.tcp_nodelay(true), DEFAULT_SILENCE_LIMIT))
 }
 
-/// `ep`, giving up a connection whose peer stays silent for `limit` while a call is open:
-/// a keepalive ping after `limit / 2` without a frame received, and `limit / 2` for its
-/// answer. Idle connections are not pinged (servers close those on their own terms).
+/// `ep`, giving up a connection whose peer stays silent for `limit` while a call is open
+/// (a keepalive ping after `limit / 2` without a frame received, and `limit / 2` for its
+/// answer), and a connection attempt that has not connected within `limit` (over a dead
+/// link the SYN's own retries would stretch over minutes). Idle connections are not
+/// pinged: servers close those on their own terms.
 ///
 /// ```
 /// use std::time::Duration;
@@ -58,7 +60,8 @@ pub fn endpoint(url: &str, ca: Option<Vec<u8>>) -> Result<Endpoint, EndpointErro
 /// ```
 pub fn with_silence_limit(ep: Endpoint, limit: Duration) -> Endpoint {
     let half = (limit / 2).max(Duration::from_millis(10));
-    ep.http2_keep_alive_interval(half)
+    ep.connect_timeout(limit)
+        .http2_keep_alive_interval(half)
         .keep_alive_timeout(half)
         .keep_alive_while_idle(false)
 }
