@@ -16,7 +16,7 @@ use naadf_server::relay::upstream::Upstream;
 use prost::Message;
 use std::sync::Arc;
 use std::time::Duration;
-use support::{Server, http_get, random_op, serve_world, start_world};
+use support::{Server, free_port, http_get, quiescent, random_op, serve_world, start_world};
 use tokio::sync::{Notify, broadcast, oneshot};
 
 /// Long enough for a join and the distance fields to settle on a slow machine.
@@ -56,19 +56,6 @@ impl Follower {
         };
         tokio::time::timeout(SETTLE, wait).await.expect("settles in time")
     }
-}
-
-/// The server's state once it is quiescent.
-async fn quiescent(url: &str) -> naadf_client::ServerStatus {
-    let c = Client::connect(url, None, None).await.unwrap();
-    for _ in 0..1200 {
-        let s = c.status().await.unwrap();
-        if s.quiescent {
-            return s;
-        }
-        tokio::time::sleep(Duration::from_millis(100)).await;
-    }
-    panic!("the server did not settle");
 }
 
 /// Waits until the relay's `/health` says it holds its upstream's world.
@@ -298,15 +285,6 @@ async fn a_relay_in_front_of_an_open_server_admits_only_its_own_machine() {
     assert_eq!(after, before, "nothing from the network reached the server");
     relay.stop();
     server.stop();
-}
-
-/// A free loopback port (bound, then released).
-fn free_port() -> u16 {
-    std::net::TcpListener::bind("127.0.0.1:0")
-        .unwrap()
-        .local_addr()
-        .unwrap()
-        .port()
 }
 
 /// A relay whose upstream is not up yet says so in its log, reports itself unavailable,

@@ -11,7 +11,7 @@ use naadf_world::{World, file};
 use std::ops::ControlFlow;
 use std::path::Path;
 use std::time::Duration;
-use support::{Server, ok, p, random_op, serve_world, start_world};
+use support::{Server, free_port, ok, p, random_op, serve_world, start_world};
 use tokio::sync::watch;
 use tokio::task::JoinHandle;
 
@@ -539,5 +539,82 @@ async fn an_incompatible_protocol_version_is_refused() {
         panic!("expected a refusal: {err}");
     };
     assert!(message.contains("protocol 99"), "{message}");
+    server.stop();
+}
+
+/// `naadf mirror` (following, without --once) outlives its server: killed with -9 and
+/// started again on the same address and data, the server is joined again by the mirror,
+/// which then follows the edits made after the restart to the server's quiescent state
+/// without being sent a page again, and exits cleanly when interrupted.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_following_mirror_joins_again_after_the_server_restarts() {
+    use std::io::BufRead;
+    let dir = tempfile::tempdir().unwrap();
+    let world = start_world(dir.path());
+    let grpc = format!("127.0.0.1:{}", free_port());
+    let server = serve_world(dir.path(), &world, &["--grpc", &grpc], &[]);
+    let url = server.url.clone();
+    let log = dir.path().join("mirror.log");
+    let mut mirror = std::process::Command::new(env!("CARGO_BIN_EXE_naadf"))
+        .args(["mirror", "--server", &url, "--json", "--no-cache"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::fs::File::create(&log).unwrap())
+        .spawn()
+        .expect("spawn naadf mirror");
+    // The quiescent points the mirror prints, read on a thread of their own.
+    let (tx, points) = std::sync::mpsc::channel::<serde_json::Value>();
+    let stdout = mirror.stdout.take().unwrap();
+    std::thread::spawn(move || {
+        for line in std::io::BufReader::new(stdout).lines().map_while(Result::ok) {
+            if tx.send(serde_json::from_str(&line).expect("JSON lines")).is_err() {
+                return;
+            }
+        }
+    });
+    let reaches = |s: &naadf_client::ServerStatus| loop {
+        let v = points.recv_timeout(Duration::from_secs(120)).unwrap_or_else(|_| {
+            panic!(
+                "the mirror did not reach version {}: {}",
+                s.version,
+                std::fs::read_to_string(&log).unwrap_or_default()
+            )
+        });
+        if v["version"] == s.version && v["digest"] == s.digest.to_string() {
+            return v;
+        }
+    };
+    let mut rng = 17;
+    let edits = |from: u64, rng: &mut u64| {
+        let ops: Vec<String> = (0..5).map(|_| random_op(rng)).collect();
+        let url = url.clone();
+        async move {
+            let c = Client::connect(&url, None, None).await.unwrap();
+            for (k, op) in ops.into_iter().enumerate() {
+                c.edit(op, from + k as u64).await.expect("edit acknowledged");
+            }
+        }
+    };
+    edits(1, &mut rng).await;
+    let first = reaches(&support::quiescent(&url).await);
+    server.kill9();
+    // Long enough for the mirror to see the loss and fail a re-join or two.
+    tokio::time::sleep(Duration::from_millis(500)).await;
+    let server = serve_world(dir.path(), &world, &["--grpc", &grpc], &[]);
+    edits(6, &mut rng).await;
+    let after = support::quiescent(&url).await;
+    assert_eq!(after.version, 10, "the restart kept the five acknowledged edits");
+    let last = reaches(&after);
+    // The restarted server resumes the mirror from the state it recovered (the same as the
+    // mirror's), so the re-join costs no page.
+    assert_eq!(last["pages"], first["pages"], "pages sent again: {first} then {last}");
+    assert_eq!(last["snapshots"], 1, "the re-join was a resume: {last}");
+    let said = std::fs::read_to_string(&log).unwrap();
+    assert!(said.contains("joining again"), "the mirror logs its re-join: {said}");
+    std::process::Command::new("kill")
+        .args(["-INT", &mirror.id().to_string()])
+        .status()
+        .unwrap();
+    let status = mirror.wait().unwrap();
+    assert!(status.success(), "the interrupted mirror exits cleanly: {status}");
     server.stop();
 }

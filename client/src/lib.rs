@@ -61,4 +61,6 @@ pub use client::{
 };
 pub use error::{ConnectError, Error};
 pub use mirror::{DEFAULT_MAX_WORLD_BYTES, Mirror, MirrorError, Progress, StreamedEdit};
+/// The pauses between attempts to reach a server that is out of reach.
+pub use naadf_proto::backoff::Backoff;
 pub use session::{Ended, Session, WorldStream};

@@ -10,13 +10,15 @@
 //! - [`requests`]: entity RPCs to and from edit batches;
 //! - [`mirror`]: a world kept byte-identical to a server's by applying its stream (what
 //!   clients and relays hold);
-//! - [`endpoint`]: the channel settings every caller of the service uses (TLS, no delay).
+//! - [`endpoint`]: the channel settings every caller of the service uses (TLS, no delay);
+//! - [`backoff`]: the doubling pauses between attempts to reach a peer that is out of reach.
 //!
 //! The stream itself is specified in the `.proto` file: a `Header`, the pages the client
 //! lacks, then one `Delta` per change, each carrying the digest after it.
 
 #![warn(missing_docs)]
 
+pub mod backoff;
 pub mod endpoint;
 pub mod mirror;
 pub mod requests;

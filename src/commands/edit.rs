@@ -4,6 +4,7 @@
 use super::print_json;
 use super::remote::{ServerArgs, block_on};
 use anyhow::{Context, Result};
+use naadf_client::Backoff;
 use std::io::BufRead;
 use std::path::PathBuf;
 use std::time::Duration;
@@ -40,10 +41,8 @@ fn parse_seconds(s: &str) -> Result<Duration, String> {
         .ok_or_else(|| format!("'{s}' is not a number of seconds ≥ 0"))
 }
 
-/// The first pause before a retry; each later one doubles, up to [`MAX_BACKOFF`].
-const FIRST_BACKOFF: Duration = Duration::from_millis(50);
-/// The longest pause between two tries of one line.
-const MAX_BACKOFF: Duration = Duration::from_secs(2);
+/// The pauses between tries of one line: 50 ms, doubling up to 2 s.
+const RETRY_BACKOFF: Backoff = Backoff::new(Duration::from_millis(50), Duration::from_secs(2));
 
 #[derive(serde::Serialize)]
 struct Ack {
@@ -80,11 +79,12 @@ pub fn run(a: Args) -> Result<()> {
         let client = a.server.connect().await?;
         for (i, (n, line)) in lines.iter().filter(|(_, l)| !l.trim().is_empty()).enumerate() {
             let client_seq = first + i as u64;
-            let (mut waited, mut pause) = (Duration::ZERO, FIRST_BACKOFF);
+            let (mut waited, mut backoff) = (Duration::ZERO, RETRY_BACKOFF);
             let reply = loop {
                 match client.edit(line.as_str(), client_seq).await {
                     Ok(r) => break r,
-                    Err(e) if retryable(&e) && waited + pause <= retry_for => {
+                    Err(e) if retryable(&e) && waited + backoff.upcoming() <= retry_for => {
+                        let pause = backoff.pause();
                         if e.is_unavailable() {
                             tracing::warn!("{e}; retrying line {n} in {} ms", pause.as_millis());
                         } else {
@@ -92,7 +92,6 @@ pub fn run(a: Args) -> Result<()> {
                         }
                         tokio::time::sleep(pause).await;
                         waited += pause;
-                        pause = (pause * 2).min(MAX_BACKOFF);
                     }
                     Err(e) if retryable(&e) && !waited.is_zero() => {
                         let why = format!(

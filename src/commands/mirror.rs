@@ -3,7 +3,7 @@
 use super::remote::{ServerArgs, block_on};
 use super::{print_json, save_world};
 use anyhow::{Result, bail};
-use naadf_client::{Ended, Mirror, PageCache, Session};
+use naadf_client::{Backoff, Ended, Mirror, PageCache, Session};
 use naadf_world::World;
 use std::ops::ControlFlow;
 use std::path::PathBuf;
@@ -22,6 +22,8 @@ pub struct Args {
     #[arg(long)]
     json: bool,
     /// Exit once the mirror is live and the server quiescent, writing the world (-o).
+    /// Without it the mirror follows until interrupted, and joins again by itself when the
+    /// stream breaks or ends (a restarted server, a lost connection).
     #[arg(long, requires = "output")]
     once: bool,
     /// World file to write with --once.
@@ -76,7 +78,8 @@ fn verify(w: &World) -> Result<()> {
     Ok(())
 }
 
-/// Joins and mirrors until the stream ends (or, with --once, until quiescent).
+/// Joins and mirrors until interrupted, joining again whenever the stream breaks (or, with
+/// --once, until quiescent).
 pub fn run(a: Args) -> Result<()> {
     let cache = if a.no_cache {
         None
@@ -114,8 +117,22 @@ enum Stop {
     Interrupted,
 }
 
-/// Follows the session until the stream ends, a stop, or with --once the first quiescent
-/// point.
+/// The pauses before a following mirror joins again: 100 ms, doubling up to 5 s, jittered
+/// so that the mirrors of a restarted server do not all come back at the same instant.
+const REJOIN_BACKOFF: Backoff = Backoff::new(Duration::from_millis(100), Duration::from_secs(5)).jittered();
+
+/// Whether a following mirror may go on after `e` by joining again: the connection was
+/// lost or the server is going away, or the stream broke the protocol or the digests (the
+/// re-join announces the mirror's pages, and the server sends again those that differ).
+/// A refusal (a revoked token, say) and a failed `--verify` end it.
+fn rejoinable(e: &anyhow::Error) -> bool {
+    e.downcast_ref::<naadf_client::Error>()
+        .is_some_and(|e| e.is_unavailable() || matches!(e, naadf_client::Error::Mirror(_)))
+}
+
+/// Follows the session until a stop, with --once until the first quiescent point. Without
+/// --once a broken or ended stream is joined again, after a pause of [`REJOIN_BACKOFF`]
+/// that starts over once a message arrives; with --once it is an error.
 async fn follow(a: &Args, session: &mut Session) -> Result<()> {
     let deadline = a
         .timeout
@@ -131,38 +148,70 @@ async fn follow(a: &Args, session: &mut Session) -> Result<()> {
             _ = tokio::signal::ctrl_c() => Stop::Interrupted,
         }
     };
-    let mut last_reported = None;
-    let ended = session
-        .follow(stop, |mirror| -> Result<ControlFlow<()>> {
-            if !mirror.is_quiescent() {
-                return Ok(ControlFlow::Continue(()));
-            }
-            let w = mirror.world().expect("live");
-            let point = (w.version(), mirror.growth_seq());
-            if last_reported == Some(point) {
-                return Ok(ControlFlow::Continue(()));
-            }
-            last_reported = Some(point);
-            if a.verify {
-                verify(w)?;
-            }
-            if a.once {
-                return Ok(ControlFlow::Break(()));
-            }
-            if a.json {
-                print_json(&state(mirror))?;
-            } else {
-                println!("version {} digest {} (quiescent)", w.version(), w.digest());
-            }
-            Ok(ControlFlow::Continue(()))
-        })
-        .await?;
-    match ended {
-        Ended::Stopped(Stop::Timeout) => bail!(
+    tokio::pin!(stop);
+    let stopped = |why: Stop| match why {
+        Stop::Timeout => bail!(
             "timed out after {} s before the server was quiescent",
             a.timeout.unwrap_or_default()
         ),
-        Ended::Stream if a.once => bail!("the server ended the stream before it was quiescent"),
-        _ => Ok(()),
+        Stop::Interrupted => Ok(()),
+    };
+    let mut last_reported = None;
+    let mut backoff = REJOIN_BACKOFF;
+    loop {
+        let ended = session
+            .follow(stop.as_mut(), |mirror| -> Result<ControlFlow<()>> {
+                backoff.reset();
+                report(a, mirror, &mut last_reported)
+            })
+            .await;
+        let mut why = match ended {
+            Ok(Ended::Stopped(why)) => return stopped(why),
+            Ok(Ended::Done) => return Ok(()),
+            Ok(Ended::Stream) if a.once => bail!("the server ended the stream before it was quiescent"),
+            Ok(Ended::Stream) => "the server ended the stream".to_owned(),
+            Err(e) if !a.once && rejoinable(&e) => format!("{e:#}"),
+            Err(e) => return Err(e),
+        };
+        // Join again until a join is answered; the mirror keeps its world meanwhile.
+        loop {
+            let pause = backoff.pause();
+            tracing::warn!(retry_in = ?pause, "{why}; joining again");
+            tokio::select! {
+                () = tokio::time::sleep(pause) => {}
+                v = stop.as_mut() => return stopped(v),
+            }
+            match session.rejoin().await {
+                Ok(()) => break,
+                Err(e) if e.is_unavailable() => why = e.to_string(),
+                Err(e) => return Err(e.into()),
+            }
+        }
     }
+}
+
+/// What follows every message: at each new quiescent point, the --verify checks and the
+/// state printed (or, with --once, the end).
+fn report(a: &Args, mirror: &Mirror, last_reported: &mut Option<(u64, u32)>) -> Result<ControlFlow<()>> {
+    if !mirror.is_quiescent() {
+        return Ok(ControlFlow::Continue(()));
+    }
+    let w = mirror.world().expect("live");
+    let point = (w.version(), mirror.growth_seq());
+    if *last_reported == Some(point) {
+        return Ok(ControlFlow::Continue(()));
+    }
+    *last_reported = Some(point);
+    if a.verify {
+        verify(w)?;
+    }
+    if a.once {
+        return Ok(ControlFlow::Break(()));
+    }
+    if a.json {
+        print_json(&state(mirror))?;
+    } else {
+        println!("version {} digest {} (quiescent)", w.version(), w.digest());
+    }
+    Ok(ControlFlow::Continue(()))
 }

@@ -180,6 +180,28 @@ pub fn http_get_bytes(addr: &str, path: &str) -> (u16, Vec<u8>) {
     (code, buf.get(split + 4..).unwrap_or_default().to_vec())
 }
 
+/// A free loopback port (bound, then released).
+pub fn free_port() -> u16 {
+    std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port()
+}
+
+/// The server's state once it is quiescent.
+pub async fn quiescent(url: &str) -> naadf_client::ServerStatus {
+    let c = naadf_client::Client::connect(url, None, None).await.unwrap();
+    for _ in 0..1200 {
+        let s = c.status().await.unwrap();
+        if s.quiescent {
+            return s;
+        }
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    }
+    panic!("the server did not settle");
+}
+
 /// A 128×64×128 terrain world file in `dir`.
 pub fn start_world(dir: &Path) -> String {
     let w = p(dir, "start.naadf");

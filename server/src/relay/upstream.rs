@@ -6,6 +6,7 @@
 use super::hub::Input;
 use crate::actor::Request;
 use crate::metrics::Metrics;
+use naadf_proto::backoff::Backoff;
 use naadf_proto::v1::StatusRequest;
 use naadf_proto::v1::world_service_client::WorldServiceClient;
 use std::sync::Arc;
@@ -15,10 +16,9 @@ use tonic::codec::CompressionEncoding;
 use tonic::metadata::{AsciiMetadataValue, MetadataMap};
 use tonic::transport::Channel;
 
-/// The first wait before re-joining a broken upstream.
-const MIN_BACKOFF: Duration = Duration::from_millis(100);
-/// The longest wait between attempts.
-const MAX_BACKOFF: Duration = Duration::from_secs(5);
+/// The waits before re-joining a broken upstream: 100 ms, doubling up to 5 s, jittered so
+/// that relays cut off together do not all return at the same instant.
+const REJOIN_BACKOFF: Backoff = Backoff::new(Duration::from_millis(100), Duration::from_secs(5)).jittered();
 /// How often the relay asks the upstream for its version (the lag metrics).
 const LAG_POLL: Duration = Duration::from_secs(1);
 
@@ -107,8 +107,8 @@ pub fn upstream_error(s: tonic::Status) -> tonic::Status {
 
 /// Follows the upstream stream until `shutdown`: asks the hub for a join request, joins,
 /// and hands every message to the hub; when the stream breaks, ends, or the hub refuses
-/// it (`rejoin`), joins again after a backoff that doubles up to [`MAX_BACKOFF`] and
-/// starts over once a message arrives.
+/// it (`rejoin`), joins again after a pause of [`REJOIN_BACKOFF`], which starts over once
+/// a message arrives.
 pub async fn follow(
     upstream: Upstream,
     hub: mpsc::Sender<Input>,
@@ -116,7 +116,7 @@ pub async fn follow(
     metrics: Arc<Metrics>,
     mut shutdown: watch::Receiver<bool>,
 ) {
-    let mut backoff = MIN_BACKOFF;
+    let mut backoff = REJOIN_BACKOFF;
     let mut failures = 0u32;
     loop {
         let (reply, rx) = oneshot::channel();
@@ -133,7 +133,7 @@ pub async fn follow(
                     tokio::select! {
                         m = stream.message() => match m {
                             Ok(Some(m)) => {
-                                backoff = MIN_BACKOFF;
+                                backoff.reset();
                                 failures = 0;
                                 if hub.send(Input::Message(generation, m)).await.is_err() {
                                     return;
@@ -153,26 +153,17 @@ pub async fn follow(
         failures += 1;
         // The first failures are expected (a restart, a short cut) and logged as
         // warnings; a link that stays down is an error every attempt.
+        let pause = backoff.pause();
         if failures <= 3 {
-            tracing::warn!(upstream = %upstream.url, retry_in = ?backoff, "{why}; re-joining");
+            tracing::warn!(upstream = %upstream.url, retry_in = ?pause, "{why}; re-joining");
         } else {
-            tracing::error!(upstream = %upstream.url, retry_in = ?backoff, failures, "{why}; re-joining");
+            tracing::error!(upstream = %upstream.url, retry_in = ?pause, failures, "{why}; re-joining");
         }
         tokio::select! {
-            _ = tokio::time::sleep(jittered(backoff)) => {}
+            _ = tokio::time::sleep(pause) => {}
             _ = shutdown.changed() => return,
         }
-        backoff = (backoff * 2).min(MAX_BACKOFF);
     }
-}
-
-/// `d` plus up to a quarter more, so that relays cut off together do not all return at
-/// the same instant.
-fn jittered(d: Duration) -> Duration {
-    let nanos = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map_or(0, |t| t.subsec_nanos());
-    d + d.mul_f64(f64::from(nanos % 1000) / 4000.0)
 }
 
 /// Keeps the lag metrics current until `shutdown`: every [`LAG_POLL`], the upstream's
