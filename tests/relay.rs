@@ -340,12 +340,7 @@ async fn a_relay_waits_for_its_upstream_and_rides_out_a_crash() {
     );
     let w = session.until_quiescent(status.version, SETTLE).await.unwrap();
     assert_eq!((w.version(), w.digest()), (status.version, status.digest));
-    let (_, metrics) = http_get(&relay.http, "/metrics");
-    let joins: u64 = metrics
-        .lines()
-        .find_map(|l| l.strip_prefix("naadf_upstream_joins_total "))
-        .and_then(|v| v.parse().ok())
-        .expect("the joins counter");
+    let joins = metric(&relay, "naadf_upstream_joins_total");
     assert!(joins >= 2, "joined before and after the crash: {joins}");
     relay.stop();
     server.stop();
@@ -396,32 +391,43 @@ async fn pipe(
 
 /// The relay's `naadf_upstream_connected` and `naadf_upstream_joins_total`.
 fn upstream_metrics(relay: &Server) -> (u64, u64) {
-    let (_, metrics) = http_get(&relay.http, "/metrics");
-    let value = |name: &str| -> u64 {
-        metrics
-            .lines()
-            .find_map(|l| l.strip_prefix(name)?.strip_prefix(' ')?.trim().parse().ok())
-            .unwrap_or_else(|| panic!("no {name} in {metrics}"))
-    };
-    (value("naadf_upstream_connected"), value("naadf_upstream_joins_total"))
+    (
+        metric(relay, "naadf_upstream_connected"),
+        metric(relay, "naadf_upstream_joins_total"),
+    )
 }
 
-/// Waits up to 30 s for the relay's upstream metrics to satisfy `ok`; the last seen.
-async fn wait_upstream(relay: &Server, ok: impl Fn((u64, u64)) -> bool) -> (u64, u64) {
+/// One of the relay's metrics, a whole number.
+fn metric(relay: &Server, name: &str) -> u64 {
+    let (_, metrics) = http_get(&relay.http, "/metrics");
+    metrics
+        .lines()
+        .find_map(|l| l.strip_prefix(name)?.strip_prefix(' ')?.trim().parse().ok())
+        .unwrap_or_else(|| panic!("no {name} in {metrics}"))
+}
+
+/// Waits up to 30 s for what `read` reads to satisfy `ok`; the last read.
+async fn wait_for<T: Copy>(read: impl Fn() -> T, ok: impl Fn(T) -> bool) -> T {
     for _ in 0..300 {
-        let m = upstream_metrics(relay);
+        let m = read();
         if ok(m) {
             return m;
         }
         tokio::time::sleep(Duration::from_millis(100)).await;
     }
-    upstream_metrics(relay)
+    read()
+}
+
+/// Waits up to 30 s for the relay's upstream metrics to satisfy `ok`; the last seen.
+async fn wait_upstream(relay: &Server, ok: impl Fn((u64, u64)) -> bool) -> (u64, u64) {
+    wait_for(|| upstream_metrics(relay), ok).await
 }
 
 /// A link that goes silent without an error (every packet dropped) is noticed by the
 /// relay within its `--upstream-timeout`: it gives the connection up, reports itself
-/// disconnected, and re-joins once the link carries packets again; its client keeps its
-/// stream and ends on the server's state, edits made meanwhile included.
+/// disconnected, shows its state ageing meanwhile, and re-joins once the link carries
+/// packets again; its client keeps its stream and ends on the server's state, edits made
+/// meanwhile included, and the relay shows itself current again.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_relay_gives_up_a_silent_upstream_and_rejoins() {
     let dir = tempfile::tempdir().unwrap();
@@ -446,6 +452,10 @@ async fn a_relay_gives_up_a_silent_upstream_and_rejoins() {
     }
     let (connected, _) = wait_upstream(&relay, |(c, _)| c == 0).await;
     assert_eq!(connected, 0, "the relay noticed its upstream went silent");
+    // Cut off, the relay does not pass for current: the age of its state keeps growing.
+    let lag_ms = || metric(&relay, "naadf_upstream_lag_ms");
+    let aged = wait_for(lag_ms, |ms| ms >= 2000).await;
+    assert!(aged >= 2000, "the relay's state aged while cut off: {aged} ms");
 
     freeze.send(false).unwrap();
     let back = wait_upstream(&relay, |(c, j)| c == 1 && j > joins).await;
@@ -456,6 +466,7 @@ async fn a_relay_gives_up_a_silent_upstream_and_rejoins() {
     let status = quiescent(&server.url).await;
     let w = session.until_quiescent(status.version, SETTLE).await.unwrap();
     assert_eq!((w.version(), w.digest()), (status.version, status.digest));
+    assert_eq!(wait_for(lag_ms, |ms| ms == 0).await, 0, "current again");
     relay.stop();
     server.stop();
 }

@@ -224,8 +224,9 @@ pub struct UpstreamMetrics {
     pub connected: Gauge,
     /// The upstream's version minus the relay's, as last polled.
     pub lag_versions: Gauge,
-    /// How long the relay has been behind the upstream's last polled version, ms (0 when
-    /// it has caught up).
+    /// The age of the relay's state, ms: the time since the last poll of the upstream
+    /// whose version the relay holds (0 when it holds the upstream's current version;
+    /// growing while the upstream cannot be asked).
     pub lag_ms: Gauge,
     /// Upstream streams joined (the first one included).
     pub joins: Counter,
@@ -252,7 +253,7 @@ impl Metrics {
         );
         r.register(
             "upstream_lag_ms",
-            "How long this relay has been behind the upstream's last polled version, ms",
+            "Time since the last poll of the upstream whose version this relay holds, ms",
             u.lag_ms.clone(),
         );
         r.register("upstream_joins", "Upstream streams joined", u.joins.clone());

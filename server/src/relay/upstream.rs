@@ -166,34 +166,52 @@ pub async fn follow(
     }
 }
 
-/// Keeps the lag metrics current until `shutdown`: every [`LAG_POLL`], the upstream's
-/// version against the hub's.
+/// Keeps the lag metrics current until `shutdown`: every [`LAG_POLL`] the upstream's
+/// version against the hub's. The lag in ms is the age of the relay's state: the time
+/// since the last poll whose upstream version the relay holds now (0 while it holds the
+/// upstream's current version). It grows while the upstream cannot be asked, whose lag in
+/// versions then keeps its last value: a relay cut off from its upstream shows as ever
+/// further behind rather than as current.
 pub async fn poll_lag(
     upstream: Upstream,
     hub: mpsc::Sender<Request>,
     metrics: Arc<Metrics>,
     mut shutdown: watch::Receiver<bool>,
 ) {
-    let mut behind_since: Option<Instant> = None;
+    // When the relay was last known to hold the upstream's version of the time, and the
+    // polls since, oldest first: (when, the upstream's version then).
+    let mut current_at = Instant::now();
+    let mut polls: std::collections::VecDeque<(Instant, u64)> = std::collections::VecDeque::new();
     loop {
         tokio::select! {
             _ = tokio::time::sleep(LAG_POLL) => {}
             _ = shutdown.changed() => return,
         }
-        let Ok(up) = upstream.client().status(upstream.own(StatusRequest {})).await else {
-            continue;
-        };
-        let mine = crate::status(&hub).await.map_or(0, |s| s.version);
-        let lag = up.into_inner().version.saturating_sub(mine);
-        behind_since = if lag > 0 {
-            behind_since.or(Some(Instant::now()))
+        let asked = Instant::now();
+        // A call that hangs on a dead link counts as no answer.
+        let mut client = upstream.client();
+        let call = client.status(upstream.own(StatusRequest {}));
+        let mut caught_up = false;
+        if let Ok(Ok(up)) = tokio::time::timeout(LAG_POLL, call).await {
+            let theirs = up.into_inner().version;
+            let mine = crate::status(&hub).await.map_or(0, |s| s.version);
+            polls.push_back((asked, theirs));
+            while let Some(&(when, _)) = polls.front().filter(|&&(_, v)| v <= mine) {
+                current_at = current_at.max(when);
+                polls.pop_front();
+            }
+            // Far behind, only the newest polls matter for the age to come.
+            while polls.len() > 64 {
+                polls.pop_front();
+            }
+            metrics.upstream.lag_versions.set(theirs.saturating_sub(mine) as i64);
+            caught_up = polls.is_empty();
+        }
+        let age = if caught_up {
+            Duration::ZERO
         } else {
-            None
+            current_at.elapsed()
         };
-        metrics.upstream.lag_versions.set(lag as i64);
-        metrics
-            .upstream
-            .lag_ms
-            .set(behind_since.map_or(0, |t| t.elapsed().as_millis() as i64));
+        metrics.upstream.lag_ms.set(age.as_millis() as i64);
     }
 }
