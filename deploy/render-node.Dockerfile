@@ -24,7 +24,6 @@ RUN apt-get update \
 RUN groupadd --system --gid 10001 naadf \
     && useradd --system --uid 10001 --gid naadf --home-dir /home/naadf --create-home --shell /usr/sbin/nologin naadf
 COPY --from=build /naadf /usr/local/bin/naadf
-COPY deploy/render-node-healthcheck.sh /usr/local/bin/naadf-node-healthcheck
 # NVIDIA container toolkit: every GPU the runtime grants, with Vulkan (graphics) as well
 # as compute. LP_NUM_THREADS: lavapipe's threads; llvmpipe balances uneven compute work
 # badly with one thread per core. XDG_RUNTIME_DIR quiets the Vulkan loader.
@@ -35,11 +34,15 @@ ENV NVIDIA_VISIBLE_DEVICES=all \
     NAADF_SERVER=http://naadf:50051
 USER 10001:10001
 WORKDIR /home/naadf
-# No ports: a render node connects out to the server (NAADF_SERVER, token in NAADF_TOKEN).
+# A render node connects out to the server (NAADF_SERVER, token in NAADF_TOKEN); its only
+# port is 8082, GET /health (200 while registered with the server, 503 while it
+# reconnects; no token), for this HEALTHCHECK and Kubernetes probes.
+EXPOSE 8082
 # It stops on Ctrl-C (SIGINT), not on SIGTERM, so that is its stop signal.
 STOPSIGNAL SIGINT
-# No health endpoint either: healthy while connected to the server's gRPC port.
+# No curl in the image: bash's /dev/tcp sends the request. NAADF_HEALTH_PORT follows a
+# changed --http port.
 HEALTHCHECK --interval=15s --timeout=5s --start-period=30s --retries=3 \
-    CMD ["/usr/local/bin/naadf-node-healthcheck"]
+    CMD ["bash", "-c", "exec 3<>/dev/tcp/127.0.0.1/${NAADF_HEALTH_PORT:-8082} && printf 'GET /health HTTP/1.0\\r\\nHost: localhost\\r\\n\\r\\n' >&3 && head -n 1 <&3 | grep -q ' 200 '"]
 ENTRYPOINT ["naadf"]
-CMD ["render-node"]
+CMD ["render-node", "--http", "0.0.0.0:8082"]

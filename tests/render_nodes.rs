@@ -19,10 +19,16 @@ struct Node(Child);
 
 impl Node {
     fn start(url: &str, log: &std::path::Path) -> Node {
+        Self::start_with(url, log, &[])
+    }
+
+    /// [`Node::start`] with `extra` arguments.
+    fn start_with(url: &str, log: &std::path::Path, extra: &[&str]) -> Node {
         let err = std::fs::File::create(log).unwrap();
         Node(
             Command::new(env!("CARGO_BIN_EXE_naadf"))
                 .args(["render-node", "--server", url, "--token", "nd", "--retry", "0.2"])
+                .args(extra)
                 .env("RUST_LOG", "info")
                 .stdout(Stdio::null())
                 .stderr(err)
@@ -482,7 +488,9 @@ fn frames_at_min_version_show_the_edits_with_two_nodes() {
     server.stop();
 }
 
-/// A node re-registers by itself when its server restarts (on the same address).
+/// A node re-registers by itself when its server restarts (on the same address), and its
+/// `/health` says whether it is registered: 200 while it serves, 503 while the server is
+/// away.
 #[test]
 fn a_node_reconnects_after_a_server_restart() {
     let dir = tempfile::tempdir().unwrap();
@@ -491,7 +499,8 @@ fn a_node_reconnects_after_a_server_restart() {
     };
     let url = server.url.clone();
     let grpc = url.trim_start_matches("http://").to_owned();
-    let _node = Node::start(&url, &dir.path().join("node.log"));
+    let health = format!("127.0.0.1:{}", support::free_port());
+    let _node = Node::start_with(&url, &dir.path().join("node.log"), &["--http", &health]);
     let out = p(dir.path(), "f.png");
     let served = |what: &str| {
         let deadline = Instant::now() + Duration::from_secs(120);
@@ -504,10 +513,27 @@ fn a_node_reconnects_after_a_server_restart() {
             std::thread::sleep(Duration::from_millis(200));
         }
     };
+    let health_is = |code: u16| {
+        let deadline = Instant::now() + Duration::from_secs(60);
+        loop {
+            let (got, body) = http_get(&health, "/health");
+            if got == code {
+                return serde_json::from_str::<serde_json::Value>(&body).expect("JSON health");
+            }
+            assert!(Instant::now() < deadline, "health stayed {got} ({body}), not {code}");
+            std::thread::sleep(Duration::from_millis(100));
+        }
+    };
     served("before the restart");
+    let before = health_is(200);
+    assert_eq!(before["registered"], true, "{before}");
+    assert!(before["frames"].as_u64() >= Some(1), "the frame is counted: {before}");
     server.stop();
+    let away = health_is(503);
+    assert_eq!(away["status"], "unavailable", "{away}");
     let again = serve_world(dir.path(), &world, &["--grpc", &grpc], &[("NAADF_TOKENS", TOKENS)]);
     served("after the restart");
+    assert_eq!(health_is(200)["registered"], true);
     again.stop();
 }
 

@@ -10,7 +10,41 @@ use crate::session::Session;
 use naadf_world::World;
 use std::fmt::Display;
 use std::future::Future;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::{Duration, Instant};
+
+/// What a render node says of itself (for a health endpoint): kept current as it serves,
+/// shared with whoever reports it ([`RenderNode::health`]).
+#[derive(Debug, Default)]
+pub struct NodeHealth {
+    registered: AtomicBool,
+    version: AtomicU64,
+    frames: AtomicU64,
+    failed: AtomicU64,
+}
+
+impl NodeHealth {
+    /// Whether the node is registered with its server now (it is not while it reconnects).
+    pub fn registered(&self) -> bool {
+        self.registered.load(Ordering::Relaxed)
+    }
+
+    /// The version of the newest quiescent world the node's mirror held.
+    pub fn version(&self) -> u64 {
+        self.version.load(Ordering::Relaxed)
+    }
+
+    /// Frames rendered and sent back.
+    pub fn frames(&self) -> u64 {
+        self.frames.load(Ordering::Relaxed)
+    }
+
+    /// Jobs answered with an error (the renderer failed or the spec was bad).
+    pub fn failed(&self) -> u64 {
+        self.failed.load(Ordering::Relaxed)
+    }
+}
 
 /// A render node that keeps itself registered with a server, rendering with `render`.
 ///
@@ -37,6 +71,7 @@ pub struct RenderNode<R> {
     client: Option<Client>,
     /// Kept across reconnections, so that a rejoin announces the mirrored world.
     session: Option<Session>,
+    health: Arc<NodeHealth>,
 }
 
 impl<R, E> RenderNode<R>
@@ -55,7 +90,13 @@ where
             render,
             client: None,
             session: None,
+            health: Arc::default(),
         }
+    }
+
+    /// The node's health, kept current while it runs.
+    pub fn health(&self) -> Arc<NodeHealth> {
+        self.health.clone()
     }
 
     /// Serves until `stop` resolves, reconnecting whenever a connection ends.
@@ -69,6 +110,7 @@ where
                 },
                 () = &mut stop => return,
             }
+            self.health.registered.store(false, Ordering::Relaxed);
             tokio::select! {
                 () = tokio::time::sleep(self.retry) => {}
                 () = &mut stop => return,
@@ -90,6 +132,7 @@ where
         let session = self.session.as_mut().expect("joined above");
         let mut registration = client.register_node(&self.info).await?;
         tracing::info!(adapter = %self.info.adapter, "registered as a render node");
+        self.health.registered.store(true, Ordering::Relaxed);
         // Jobs waiting for the mirror to reach their version, with when they came.
         let mut waiting: Vec<(Instant, Job)> = Vec::new();
         loop {
@@ -111,6 +154,7 @@ where
             let Some(world) = mirror.world().filter(|_| mirror.is_quiescent()) else {
                 continue;
             };
+            self.health.version.store(world.version(), Ordering::Relaxed);
             let (ready, later): (Vec<_>, Vec<_>) =
                 waiting.drain(..).partition(|(_, j)| j.min_version() <= world.version());
             waiting = later;
@@ -118,7 +162,13 @@ where
                 let frame = job
                     .spec()
                     .and_then(|spec| (self.render)(world, &spec).map_err(|e| format!("{e:#}")));
+                let counter = if frame.is_ok() {
+                    &self.health.frames
+                } else {
+                    &self.health.failed
+                };
                 registration.answer(&job, world.version(), frame).await?;
+                counter.fetch_add(1, Ordering::Relaxed);
             }
         }
     }
