@@ -88,11 +88,7 @@ impl Drop for Net {
 /// `/metrics` inside its namespace.
 fn upstream_metrics(net: &Net, k: usize) -> Option<(u64, u64)> {
     let metrics = netns::http_get(&net.names[k], RELAY_HTTP, "/metrics").ok()?;
-    let value = |name: &str| {
-        metrics
-            .lines()
-            .find_map(|l| l.strip_prefix(name)?.strip_prefix(' ')?.trim().parse().ok())
-    };
+    let value = |name| support::metric_value(&metrics, name);
     Some((value("naadf_upstream_connected")?, value("naadf_upstream_joins_total")?))
 }
 

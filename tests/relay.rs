@@ -400,10 +400,7 @@ fn upstream_metrics(relay: &Server) -> (u64, u64) {
 /// One of the relay's metrics, a whole number.
 fn metric(relay: &Server, name: &str) -> u64 {
     let (_, metrics) = http_get(&relay.http, "/metrics");
-    metrics
-        .lines()
-        .find_map(|l| l.strip_prefix(name)?.strip_prefix(' ')?.trim().parse().ok())
-        .unwrap_or_else(|| panic!("no {name} in {metrics}"))
+    support::metric_value(&metrics, name).unwrap_or_else(|| panic!("no {name} in {metrics}"))
 }
 
 /// Waits up to 30 s for what `read` reads to satisfy `ok`; the last read.

@@ -13,6 +13,10 @@ use tonic::transport::{Certificate, ClientTlsConfig, Endpoint};
 /// has the other half to answer.
 pub const DEFAULT_SILENCE_LIMIT: Duration = Duration::from_secs(20);
 
+/// The shortest silence limit [`with_silence_limit`] applies: a connection needs a round
+/// trip or two to be made at all.
+pub const MIN_SILENCE_LIMIT: Duration = Duration::from_millis(100);
+
 /// Why no endpoint could be made from a URL.
 #[derive(Debug, thiserror::Error)]
 pub enum EndpointError {
@@ -50,7 +54,8 @@ pub fn endpoint(url: &str, ca: Option<Vec<u8>>) -> Result<Endpoint, EndpointErro
 /// (a keepalive ping after `limit / 2` without a frame received, and `limit / 2` for its
 /// answer), and a connection attempt that has not connected within `limit` (over a dead
 /// link the SYN's own retries would stretch over minutes). Idle connections are not
-/// pinged: servers close those on their own terms.
+/// pinged: servers close those on their own terms. A `limit` under
+/// [`MIN_SILENCE_LIMIT`] counts as that: no connection could be made at all.
 ///
 /// ```
 /// use std::time::Duration;
@@ -59,7 +64,8 @@ pub fn endpoint(url: &str, ca: Option<Vec<u8>>) -> Result<Endpoint, EndpointErro
 /// assert_eq!(ep.uri().host(), Some("127.0.0.1"));
 /// ```
 pub fn with_silence_limit(ep: Endpoint, limit: Duration) -> Endpoint {
-    let half = (limit / 2).max(Duration::from_millis(10));
+    let limit = limit.max(MIN_SILENCE_LIMIT);
+    let half = limit / 2;
     ep.connect_timeout(limit)
         .http2_keep_alive_interval(half)
         .keep_alive_timeout(half)

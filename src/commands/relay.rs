@@ -3,10 +3,9 @@
 use super::remote::block_on_threads;
 use super::serve::{ListenArgs, announce, shutdown_signal};
 use anyhow::{Context, Result};
-use naadf_server::relay::{DEFAULT_RELAY_GRPC, DEFAULT_RELAY_HTTP, RelayConfig, relay};
+use naadf_server::relay::{DEFAULT_RELAY_GRPC, DEFAULT_RELAY_HTTP, DEFAULT_UPSTREAM_TIMEOUT, RelayConfig, relay};
 use std::net::SocketAddr;
 use std::path::PathBuf;
-use std::time::Duration;
 
 /// Arguments of `relay`.
 #[derive(clap::Args)]
@@ -40,7 +39,7 @@ pub struct Args {
     threads: usize,
     /// Give up the upstream connection, and re-join, when it stays silent this many
     /// seconds (keepalive pings go out after half of it): how soon a cut link is noticed.
-    #[arg(long, value_name = "SECS", default_value_t = RelayConfig::new("").upstream_timeout.as_secs_f64())]
+    #[arg(long, value_name = "SECS", default_value_t = DEFAULT_UPSTREAM_TIMEOUT.as_secs_f64())]
     upstream_timeout: f64,
     #[command(flatten)]
     listening: ListenArgs,
@@ -56,7 +55,7 @@ pub fn run(a: Args) -> Result<()> {
     config.ca = a.ca.clone();
     config.frontend = a.listening.frontend(a.grpc, a.http)?;
     config.max_world_bytes = a.max_world_bytes;
-    config.upstream_timeout = super::seconds(a.upstream_timeout, "--upstream-timeout")?.max(Duration::from_millis(100));
+    config.upstream_timeout = super::seconds(a.upstream_timeout, "--upstream-timeout")?;
     let json = a.json;
     block_on_threads(a.threads, async move {
         relay(

@@ -180,6 +180,12 @@ pub fn http_get_bytes(addr: &str, path: &str) -> (u16, Vec<u8>) {
     (code, buf.get(split + 4..).unwrap_or_default().to_vec())
 }
 
+/// The value of metric `name` (a whole number) in a Prometheus text page, if it is there.
+pub fn metric_value(page: &str, name: &str) -> Option<u64> {
+    page.lines()
+        .find_map(|l| l.strip_prefix(name)?.strip_prefix(' ')?.trim().parse().ok())
+}
+
 /// A free loopback port (bound, then released).
 pub fn free_port() -> u16 {
     std::net::TcpListener::bind("127.0.0.1:0")

@@ -56,6 +56,9 @@ pub struct RelayConfig {
 pub const DEFAULT_RELAY_GRPC: &str = "127.0.0.1:50061";
 /// The default HTTP listen address of a relay.
 pub const DEFAULT_RELAY_HTTP: &str = "127.0.0.1:8081";
+/// How long a relay's upstream connection may stay silent by default: the limit every
+/// client channel has.
+pub const DEFAULT_UPSTREAM_TIMEOUT: Duration = naadf_proto::endpoint::DEFAULT_SILENCE_LIMIT;
 
 impl RelayConfig {
     /// The documented defaults, following `upstream`.
@@ -70,7 +73,7 @@ impl RelayConfig {
                 ..Frontend::default()
             },
             max_world_bytes: naadf_proto::snapshot::DEFAULT_MAX_WORLD_BYTES,
-            upstream_timeout: naadf_proto::endpoint::DEFAULT_SILENCE_LIMIT,
+            upstream_timeout: DEFAULT_UPSTREAM_TIMEOUT,
         }
     }
 

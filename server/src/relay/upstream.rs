@@ -179,7 +179,8 @@ pub async fn poll_lag(
     mut shutdown: watch::Receiver<bool>,
 ) {
     // When the relay was last known to hold the upstream's version of the time, and the
-    // polls since, oldest first: (when, the upstream's version then).
+    // polls it has not caught up with yet, oldest first: (when, the upstream's version
+    // then).
     let mut current_at = Instant::now();
     let mut polls: std::collections::VecDeque<(Instant, u64)> = std::collections::VecDeque::new();
     loop {
@@ -197,10 +198,11 @@ pub async fn poll_lag(
             let mine = crate::status(&hub).await.map_or(0, |s| s.version);
             polls.push_back((asked, theirs));
             while let Some(&(when, _)) = polls.front().filter(|&&(_, v)| v <= mine) {
-                current_at = current_at.max(when);
+                current_at = when;
                 polls.pop_front();
             }
-            // Far behind, only the newest polls matter for the age to come.
+            // Far behind, keep only the newest polls (dropping older ones can only make
+            // the age read longer, never shorter).
             while polls.len() > 64 {
                 polls.pop_front();
             }
