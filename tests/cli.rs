@@ -284,8 +284,15 @@ fn bench_paper_reports_every_structure_on_the_same_rays() {
         .product::<u64>();
     assert_eq!(v["structures"]["grid"]["bytes"].as_u64().unwrap(), 2 * size);
     assert!(v["rays"].as_u64().unwrap() > 4 * 32 * 18, "primary and secondary: {v}");
+    // The hybrid formats: a raw grid of at least 8³ words, traced on the same rays.
     for h in ["R(4³)G(7)", "R(3³)G(8)"] {
-        assert!(v["hybrid"][h]["bytes"].as_u64().unwrap() > 4 << 9, "{h}: {v}");
+        let f = &v["hybrid"][h];
+        assert!(f["bytes"].as_u64().unwrap() > 4 << 9, "{h}: {v}");
+        assert!(
+            f["primary"].as_f64().unwrap() > 0.0 && f["build_ms"].as_f64().is_some(),
+            "{h}: {v}"
+        );
+        assert!(v["naadf_speedup"][h][1].as_f64().unwrap() > 0.0, "{h}: {v}");
     }
     fails(&["bench", "paper", &p(dir.path(), "missing.naadf")], None, "error:");
     fails(

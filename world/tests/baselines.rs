@@ -1,13 +1,13 @@
-//! The paper's baseline structures (`naadf_world::baselines`: SVDAG, SVO) against brute
-//! force: every first hit equals the dense grid's and `naadf`'s (voxel, face, `t`) on
-//! random and adversarial worlds and rays; byte counts equal a second, simple count made
-//! from the dense grid; a repeated pattern deduplicates in the DAG; an empty world is an
-//! error.
+//! The paper's baseline structures (`naadf_world::baselines`: SVDAG, SVO and the hybrid
+//! formats) against brute force: every first hit equals the dense grid's and `naadf`'s
+//! (voxel, face, `t`) on random and adversarial worlds and rays; byte counts equal a
+//! second, simple count made from the dense grid; a repeated pattern deduplicates in the
+//! DAG; an empty world is an error.
 
 mod common;
 
 use common::{Raw, Rng, adversarial, random_world, rays, size_for};
-use naadf_world::baselines::{Svdag, Svo};
+use naadf_world::baselines::{Hybrid, Svdag, Svo};
 use naadf_world::traverse::{DenseGrid, Hit, Ray, trace_naadf};
 use naadf_world::{World, WorldSize};
 use std::collections::HashMap;
@@ -19,6 +19,10 @@ fn geometry(h: &Option<Hit>) -> Option<([u32; 3], [i32; 3], f64)> {
 
 fn assert_same_hits(w: &World, dag: &Svdag, svo: &Svo, rays: &[Ray], what: &str) {
     let grid = DenseGrid::from_world(w).unwrap();
+    let hybrids: Vec<Hybrid> = hybrid_splits(w.size().voxels())
+        .into_iter()
+        .map(|(top, depth)| Hybrid::build(dag, top, depth).unwrap())
+        .collect();
     for r in rays {
         let expected = geometry(&grid.trace(r));
         assert_eq!(
@@ -28,7 +32,22 @@ fn assert_same_hits(w: &World, dag: &Svdag, svo: &Svo, rays: &[Ray], what: &str)
         );
         assert_eq!(geometry(&dag.trace(r)), expected, "{what}: svdag, {r:?}");
         assert_eq!(geometry(&svo.trace(r)), expected, "{what}: svo, {r:?}");
+        for h in &hybrids {
+            assert_eq!(geometry(&h.trace(r)), expected, "{what}: {}, {r:?}", h.name());
+        }
     }
+}
+
+/// The hybrid formats that split `size`'s cube in every way these tests need: a DAG deeper
+/// than the cube (single-child nodes above the world), one as deep, a raw grid of 2³ cells,
+/// and the shallowest DAG under the finest raw grid.
+fn hybrid_splits(size: [u32; 3]) -> [(u32, u32); 4] {
+    let depth = size
+        .iter()
+        .map(|v| v.next_power_of_two().trailing_zeros())
+        .max()
+        .unwrap();
+    [(0, depth + 1), (0, depth), (1, depth - 1), (depth - 3, 3)]
 }
 
 /// The SVO's bytes counted again from the dense grid: 4 per non-empty cube of side 2 and
@@ -144,13 +163,15 @@ fn hybrid_formats_count_like_a_walk_of_the_dense_grid() {
         // The format larger than the world, as large, and split at several levels.
         for (top, depth) in [(1, 6), (0, 7), (3, 3), (2, 4), (1, 5)] {
             assert_eq!(
-                dag.hybrid_bytes(top, depth).unwrap(),
+                Hybrid::build(&dag, top, depth).unwrap().bytes(),
                 recount_hybrid(&grid, size.voxels(), top, depth),
                 "seed {seed}: R({top}³) G({depth})"
             );
         }
-        let e = dag.hybrid_bytes(1, 4).unwrap_err();
+        let e = Hybrid::build(&dag, 1, 4).unwrap_err();
         assert!(e.to_string().contains("less than the world's cube"), "{e}");
+        let e = Hybrid::build(&dag, 5, 2).unwrap_err();
+        assert!(e.to_string().contains("depth of 3 or more"), "{e}");
     }
 }
 

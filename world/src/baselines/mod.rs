@@ -6,13 +6,17 @@
 //!   leaves and 2³ inner nodes, identical subtrees stored once per level.
 //! - [`Svo`]: a sparse voxel octree of ESVO-style child descriptors (no contours), one per
 //!   non-empty node of side 2 and up, nothing shared.
+//! - [`Hybrid`]: a hybrid format `R(W³) G(L)` of the hybrid-voxel-formats paper: a raw
+//!   grid over SVDAGs that go down to single voxels, derived from an [`Svdag`].
 //!
 //! Each traverses with the event model every method shares (`traverse/ray.rs`): it skips
 //! only empty nodes, so its first hit (voxel, face, `t`) is the one `naadf` finds.
 
+mod hybrid;
 mod svdag;
 mod svo;
 
+pub use hybrid::Hybrid;
 pub use svdag::Svdag;
 pub use svo::Svo;
 
@@ -65,11 +69,11 @@ pub(crate) enum Step {
     Solid,
 }
 
-/// A tree over the cube of side `2^depth`: the root is node 0 of level 0, and a level-`l`
-/// node has side `2^(depth − l)`.
+/// A tree over a cube: the root is node 0 of level 0, and every node of a level has the
+/// same side, a power of two that shrinks level by level.
 pub(crate) trait Tree {
-    /// log2 of the cube's side.
-    fn depth(&self) -> u32;
+    /// log2 of the side of a `level` node.
+    fn side_log(&self, level: usize) -> u32;
     /// The world's size in voxels: rays enter and leave its box, not the cube's.
     fn size(&self) -> [u32; 3];
     /// What `node` of `level` holds at `cell` (inside it).
@@ -82,7 +86,6 @@ pub(crate) trait Tree {
 /// cube (left whole, with the event model every method shares) or a solid voxel.
 pub(crate) fn trace_tree(tree: &impl Tree, ray: &Ray) -> Option<Hit> {
     let size = tree.size();
-    let depth = tree.depth();
     let entry = ray.entry(size)?;
     let (mut cell, mut t, mut axis) = (entry.cell, entry.t, entry.axis);
     let neg = ray.dir().map(|d| d <= 0.0);
@@ -116,11 +119,13 @@ pub(crate) fn trace_tree(tree: &impl Tree, ray: &Ray) -> Option<Hit> {
         if !(0..3).all(|a| next[a] >= 0 && next[a] < i64::from(size[a])) {
             return None;
         }
-        // The levels whose node still holds the new cell: those of a side above the
-        // highest bit in which the two cells differ.
+        // The levels whose node still holds the new cell: those whose side reaches past
+        // the highest bit in which the two cells differ (the root always does).
         let differ = (0..3).fold(0, |d, a| d | (cell[a] ^ next[a]));
-        let common = (depth as usize).saturating_sub(64 - differ.leading_zeros() as usize);
-        valid = valid.min(common.max(1));
+        let bits = 64 - differ.leading_zeros();
+        while valid > 1 && tree.side_log(valid - 1) < bits {
+            valid -= 1;
+        }
         (cell, t, axis) = (next, nt, Some(na));
     }
 }
@@ -235,6 +240,15 @@ mod tests {
             GPU_HEADER_WORDS + 2 * svo.node_counts().iter().sum::<usize>()
         );
         assert!(svo.gpu_words_within(words.len() as u64).is_err());
+
+        let hybrid = Hybrid::build(&dag, 2, 5).unwrap();
+        let need = hybrid.bytes() / 4;
+        let err = Hybrid::build_within(&dag, 2, 5, need).unwrap_err().to_string();
+        assert!(err.contains("hybrid format's words"), "{err}");
+        assert_eq!(
+            Hybrid::build_within(&dag, 2, 5, need + 1).unwrap().bytes(),
+            hybrid.bytes()
+        );
     }
 
     /// The GPU layouts walk to the same answers as the trees: a CPU walk of the flat words,

@@ -21,13 +21,13 @@ use std::collections::HashMap;
 #[derive(Clone, Debug)]
 pub struct Svdag {
     /// The world's size in voxels (rays enter and leave its box, not the cube's).
-    size: [u32; 3],
+    pub(super) size: [u32; 3],
     /// log2 of the cube's side (at least 3: the root is an inner node).
-    depth: u32,
+    pub(super) depth: u32,
     /// Inner node words per level, from the root (side `2^depth`) down to side 8.
     pub(super) levels: Vec<Vec<u32>>,
     /// The unique leaf masks.
-    leaves: Vec<u64>,
+    pub(super) leaves: Vec<u64>,
 }
 
 /// An inner node while building: its mask and up to 8 child references.
@@ -134,54 +134,6 @@ impl Svdag {
         8 * self.leaves.len() as u64 + 4 * self.levels.iter().map(|l| l.len() as u64).sum::<u64>()
     }
 
-    /// Bytes of the hybrid format `R(top³) G(dag)` of the hybrid-formats paper for the same
-    /// geometry (docs/BASELINES.md): a raw grid of `2^(3·top)` 32-bit cells over SVDAGs of
-    /// depth `dag` that go down to single voxels, deduplicated over the whole level. Fails
-    /// when the world's cube is larger than the format's `2^(top + dag)` side.
-    pub fn hybrid_bytes(&self, top: u32, dag: u32) -> Result<u64, WorldError> {
-        if self.depth > top + dag || dag < 3 {
-            return Err(WorldError::Capacity(format!(
-                "R({top}³) G({dag}) spans {} voxels a side, less than the world's cube of {}",
-                1u64 << (top + dag),
-                1u64 << self.depth
-            )));
-        }
-        let raw = 4u64 << (3 * top);
-        // The nodes of side 8 up to 2^dag, as in this DAG (the levels above are the raw
-        // grid's); a sub-volume larger than this DAG's root adds one single-child node per
-        // level for the one cell that holds the world.
-        let kept = self.levels.len().min(dag as usize - 2);
-        let inner: u64 = self.levels[self.levels.len() - kept..]
-            .iter()
-            .map(|l| 4 * l.len() as u64)
-            .sum();
-        let above = 8 * u64::from(dag.saturating_sub(self.depth));
-        // A 4³ leaf here is a side-4 node over side-2 nodes over voxels: one node per
-        // distinct leaf, one per distinct 2³ octant mask, and one voxel (geometry only).
-        let octants = |m: u64| {
-            (0..8).map(move |o| {
-                let q = [o & 1, o >> 1 & 1, o >> 2 & 1].map(|b| 2 * b);
-                (0..8).fold(0u8, |x, v| {
-                    let bit = (q[0] + (v & 1)) + 4 * (q[1] + (v >> 1 & 1)) + 16 * (q[2] + (v >> 2 & 1));
-                    x | ((m >> bit & 1) as u8) << v
-                })
-            })
-        };
-        let side4: u64 = self
-            .leaves
-            .iter()
-            .map(|&m| 4 * (1 + octants(m).filter(|&x| x != 0).count() as u64))
-            .sum();
-        let distinct: std::collections::HashSet<u8> = self
-            .leaves
-            .iter()
-            .flat_map(|&m| octants(m))
-            .filter(|&x| x != 0)
-            .collect();
-        let side2: u64 = distinct.iter().map(|&x| 4 * (1 + u64::from(x.count_ones()))).sum();
-        Ok(raw + inner + above + side4 + side2 + 4)
-    }
-
     /// The DAG as one array of words for the GPU traversal (docs/BASELINES.md): the
     /// [header](super::GPU_HEADER_WORDS) (depth, the level of the leaves), then the inner
     /// levels from the root down, then the leaves (two words each, low half first). A
@@ -251,8 +203,8 @@ impl Svdag {
 }
 
 impl Tree for Svdag {
-    fn depth(&self) -> u32 {
-        self.depth
+    fn side_log(&self, level: usize) -> u32 {
+        self.depth - level as u32
     }
 
     fn size(&self) -> [u32; 3] {

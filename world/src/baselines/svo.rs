@@ -213,8 +213,8 @@ impl Svo {
 }
 
 impl Tree for Svo {
-    fn depth(&self) -> u32 {
-        self.depth
+    fn side_log(&self, level: usize) -> u32 {
+        self.depth - level as u32
     }
 
     fn size(&self) -> [u32; 3] {
