@@ -2,6 +2,10 @@
 // word of each non-empty child in octant order (children may be shared); a node at
 // `leaf_level` is a 4³ occupancy leaf of two words, low half first.
 
+fn tree_side_log(depth: u32, leaf_level: u32, level: u32) -> u32 {
+    return depth - level;
+}
+
 fn tree_step(depth: u32, leaf_level: u32, level: u32, node: u32, cell: vec3<i32>) -> TreeStep {
     if level == leaf_level {
         let p = vec3<u32>(cell) & vec3<u32>(3u);

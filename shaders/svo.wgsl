@@ -2,7 +2,11 @@
 // the word of its first child; children are contiguous in octant order, two words each.
 // A set bit at a node of side 2 is a solid voxel.
 
-fn tree_step(depth: u32, leaf_level: u32, level: u32, node: u32, cell: vec3<i32>) -> TreeStep {
+fn tree_side_log(depth: u32, shape: u32, level: u32) -> u32 {
+    return depth - level;
+}
+
+fn tree_step(depth: u32, shape: u32, level: u32, node: u32, cell: vec3<i32>) -> TreeStep {
     let k = depth - 1u - level;
     let oct = tree_octant(cell, k);
     let mask = structure_word(node);

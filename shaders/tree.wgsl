@@ -1,9 +1,9 @@
-// The world loop over a tree of the paper's comparison (an SVO or an SVDAG, docs/BASELINES.md):
-// the GPU twin of `trace_tree` in world/src/baselines/mod.rs. The tree lies in the
-// comparison-structure binding (`structure_word`) in its GPU layout: a header (the cube's
-// depth, the level of the DAG's leaves) and then the nodes, root first. The file that
-// follows this one (svo.wgsl or svdag.wgsl) defines `tree_step`, what a node holds at a
-// cell. The walk keeps the path from the root to the current cell; after each step it
+// The world loop over a tree of the paper's comparison (an SVO, an SVDAG or a hybrid format,
+// docs/BASELINES.md): the GPU twin of `trace_tree` in world/src/baselines/mod.rs. The tree
+// lies in the comparison-structure binding (`structure_word`) in its GPU layout: a header
+// (log2 of the cube's side, the structure's shape word) and then the nodes, root first. The
+// file that follows this one (svo.wgsl, svdag.wgsl or hybrid.wgsl) defines `tree_step`, what
+// a node holds at a cell, and `tree_side_log`, log2 of the side of a level's nodes. The walk keeps the path from the root to the current cell; after each step it
 // climbs only as far as the cell it entered leaves that path, then descends to an empty
 // cube (left whole, with the event model every method shares) or a solid voxel. The trees
 // hold geometry only: a hit reports material 0, and entities are not traced.
@@ -41,7 +41,7 @@ fn world_loop(r: Ray) -> WorldTrace {
         return WorldTrace(no_hit(0u), END_MISSED, 0.0, 0.0);
     }
     let depth = structure_word(0u);
-    let leaf_level = structure_word(1u);
+    let shape = structure_word(1u);
     var cell = entry.cell;
     var t = entry.t;
     var axis = entry.axis;
@@ -54,7 +54,7 @@ fn world_loop(r: Ray) -> WorldTrace {
         var l = valid - 1u;
         var empty = 0u;
         loop {
-            let s = tree_step(depth, leaf_level, l, path[l], cell);
+            let s = tree_step(depth, shape, l, path[l], cell);
             if s.kind == STEP_SOLID {
                 return WorldTrace(make_hit(r, cell, t, axis, 0u, steps), END_HIT, entry.t, t);
             }
@@ -72,12 +72,13 @@ fn world_loop(r: Ray) -> WorldTrace {
         if any(ex.next < vec3<i32>(0)) || any(ex.next >= dims) {
             return WorldTrace(no_hit(steps), END_LEFT, entry.t, ex.t);
         }
-        // The levels whose node still holds the new cell: those of a side above the
-        // highest bit in which the two cells differ.
+        // The levels whose node still holds the new cell: those whose side reaches past
+        // the highest bit in which the two cells differ (the root always does).
         let d = vec3<u32>(cell ^ ex.next);
-        let differ = d.x | d.y | d.z;
-        let kept = max(i32(depth) - i32(32u - countLeadingZeros(differ)), 1);
-        valid = min(valid, u32(kept));
+        let bits = 32u - countLeadingZeros(d.x | d.y | d.z);
+        while valid > 1u && tree_side_log(depth, shape, valid - 1u) < bits {
+            valid -= 1u;
+        }
         cell = ex.next;
         t = ex.t;
         axis = ex.axis;

@@ -12,9 +12,9 @@
 #[path = "../../world/tests/common/mod.rs"]
 mod common;
 
-use common::{Rng, adversarial, random_world, rays};
+use common::{Raw, Rng, adversarial, random_world, rays};
 use naadf_client::gpu::{Gpu, GpuRay, GpuWorld, Mode, RayTracer, Renderer, Traversal};
-use naadf_world::baselines::{Svdag, Svo};
+use naadf_world::baselines::{Hybrid, HybridFormat, Svdag, Svo};
 use naadf_world::camera::Camera;
 use naadf_world::fingerprint::ChunkChanges;
 use naadf_world::material::MaterialKind;
@@ -80,14 +80,18 @@ fn near_tie(cpu: &impl Fn(&Ray) -> Option<Hit>, ray: &Ray, accept: impl Fn(&Opti
 type CpuTrace<'a> = dyn Fn(&Ray) -> Option<Hit> + 'a;
 
 /// Traces `rays` on the GPU with every traversal and compares with the CPU: the world's
-/// methods with `trace_naadf`, the SVO and the SVDAG with the CPU walk of the same tree
-/// (geometry only); returns (ray traces compared, traces that differed).
+/// methods with `trace_naadf`, the SVO, the SVDAG and the hybrid formats with the CPU walk
+/// of the same structure (geometry only); returns (ray traces compared, traces that differed).
 fn compare(gpu: &Gpu, world: &World, what: &str, rays: &[Ray]) -> (usize, usize) {
     let (cpu_rays, gpu_rays): (Vec<Ray>, Vec<GpuRay>) = rays.iter().enumerate().map(|(i, r)| exact_f32(i, r)).unzip();
     let mut gw = GpuWorld::new(gpu, world).expect("upload");
     let mut tracer = RayTracer::new(gpu);
     // A world without solid voxels has no trees (the builds refuse it).
     let trees = Svo::build(world).ok().zip(Svdag::build(world).ok());
+    let hybrids: Vec<Hybrid> = trees
+        .iter()
+        .flat_map(|(_, dag)| HybridFormat::ALL.map(|f| Hybrid::of(dag, f).expect("the test worlds fit in 2048³")))
+        .collect();
     let mut compared = 0;
     let mut differed = 0;
     for traversal in Traversal::ALL {
@@ -104,6 +108,21 @@ fn compare(gpu: &Gpu, world: &World, what: &str, rays: &[Ray]) -> (usize, usize)
             (Traversal::Svdag, Some((_, dag))) => {
                 gw.upload_svdag(dag).expect("svdag upload");
                 Box::new(|r| dag.trace(r))
+            }
+            (Traversal::Hybrid(f), Some(_)) => {
+                let h = hybrids
+                    .iter()
+                    .find(|h| h.format() == Some(f))
+                    .expect("both formats built");
+                gw.upload_hybrid(h).expect("hybrid upload");
+                // Each format's traversal walks its own upload only.
+                let other = HybridFormat::ALL.into_iter().find(|&o| o != f).unwrap();
+                assert!(
+                    tracer
+                        .trace(gpu, &gw, &gpu_rays[..1], Traversal::Hybrid(other))
+                        .is_err()
+                );
+                Box::new(|r| h.trace(r))
             }
             (_, None) => {
                 assert_eq!(
@@ -187,6 +206,16 @@ fn gpu_hits_equal_the_cpu_for_every_method() {
     for seed in 0..2 {
         worlds.push((format!("entities {seed}"), entity_world(seed)));
     }
+    // Long enough for several raw cells of R(4³)G(7) (128 voxels a side), the middle two
+    // empty: the hybrid walks skip whole raw cells and enter the next one's DAG.
+    let mut long = Raw::empty(size(512, 64, 64), 3);
+    for p in long.coords().collect::<Vec<_>>() {
+        let tip = p[0] < 40 || p[0] >= 400;
+        if tip && (p[0] * 7 + p[1] * 5 + p[2] * 3) % 13 < 2 {
+            long.set(p, 1 + (p[1] % 3) as u16);
+        }
+    }
+    worlds.push(("long".to_owned(), long.build()));
     let mut rng = Rng(7);
     let (mut total, mut differed) = (0, 0);
     for (name, world) in &worlds {

@@ -79,7 +79,7 @@ impl PassPipelines {
                 });
                 let constants: &[(&str, f64)] = match lp {
                     Loop::Hierarchy => &[("USE_AADF", if aadf { 1.0 } else { 0.0 })],
-                    Loop::Grid | Loop::Svo | Loop::Svdag => &[],
+                    Loop::Grid | Loop::Svo | Loop::Svdag | Loop::Hybrid => &[],
                 };
                 gpu.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                     label: Some(self.pass.entry()),

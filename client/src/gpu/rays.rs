@@ -5,6 +5,7 @@ use super::context::{Gpu, GpuError};
 use super::pipeline::{PassPipelines, dispatch_2d};
 use super::shaders::{Loop, NO_ENTITY, Pass};
 use super::world::GpuWorld;
+use naadf_world::baselines::HybridFormat;
 use naadf_world::traverse::{Hit, Method, Ray};
 use wgpu::util::DeviceExt;
 
@@ -56,9 +57,10 @@ pub struct GpuHit {
     pub steps: u32,
 }
 
-/// What a ray-list trace walks: one of the world's traversal methods, or a tree of the
-/// paper's comparison (uploaded with [`GpuWorld::upload_svo`] or
-/// [`GpuWorld::upload_svdag`]; geometry only, so its hits report material 0).
+/// What a ray-list trace walks: one of the world's traversal methods, or a structure of
+/// the paper's comparison (uploaded with [`GpuWorld::upload_svo`],
+/// [`GpuWorld::upload_svdag`] or [`GpuWorld::upload_hybrid`]; geometry only, so its hits
+/// report material 0).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Traversal {
     /// A method of the world's own (the grid needs [`GpuWorld::upload_grid`]).
@@ -67,24 +69,29 @@ pub enum Traversal {
     Svo,
     /// The SVDAG.
     Svdag,
+    /// A hybrid format.
+    Hybrid(HybridFormat),
 }
 
 impl Traversal {
     /// Every traversal, in the order benchmarks report them.
-    pub const ALL: [Traversal; 5] = [
+    pub const ALL: [Traversal; 7] = [
         Traversal::Method(Method::Naadf),
         Traversal::Method(Method::Nodf),
         Traversal::Method(Method::Grid),
         Traversal::Svo,
         Traversal::Svdag,
+        Traversal::Hybrid(HybridFormat::R4G7),
+        Traversal::Hybrid(HybridFormat::R3G8),
     ];
 
-    /// Its name in reports (a method's CLI name, `svo`, `svdag`).
+    /// Its name in reports (a method's CLI name, `svo`, `svdag`, a hybrid format's name).
     pub fn name(self) -> &'static str {
         match self {
             Traversal::Method(m) => m.name(),
             Traversal::Svo => "svo",
             Traversal::Svdag => "svdag",
+            Traversal::Hybrid(f) => f.name(),
         }
     }
 
@@ -96,6 +103,7 @@ impl Traversal {
             Traversal::Method(Method::Grid) => (Loop::Grid, false),
             Traversal::Svo => (Loop::Svo, false),
             Traversal::Svdag => (Loop::Svdag, false),
+            Traversal::Hybrid(_) => (Loop::Hybrid, false),
         }
     }
 }
@@ -190,7 +198,7 @@ impl RayTracer {
     ) -> Result<(), GpuError> {
         let traversal = traversal.into();
         let (lp, aadf) = traversal.world_loop();
-        if lp != Loop::Hierarchy && world.structure() != Some(lp) {
+        if lp != Loop::Hierarchy && world.structure() != Some(traversal) {
             return Err(GpuError::Unsupported(format!(
                 "the {} traversal needs its structure uploaded to the GPU world first",
                 traversal.name()

@@ -32,12 +32,15 @@ pub const TRACE: &str = include_str!("../../../shaders/trace.wgsl");
 pub const TRAVERSE: &str = include_str!("../../../shaders/traverse.wgsl");
 /// `shaders/grid.wgsl`: the dense-grid world loop (`grid`).
 pub const GRID: &str = include_str!("../../../shaders/grid.wgsl");
-/// `shaders/tree.wgsl`: the world loop over a tree of the paper's comparison (SVO, SVDAG).
+/// `shaders/tree.wgsl`: the world loop over a tree of the paper's comparison (SVO, SVDAG,
+/// hybrid format).
 pub const TREE: &str = include_str!("../../../shaders/tree.wgsl");
 /// `shaders/svo.wgsl`: what an SVO node holds at a cell (`tree_step`).
 pub const SVO: &str = include_str!("../../../shaders/svo.wgsl");
 /// `shaders/svdag.wgsl`: what an SVDAG node holds at a cell (`tree_step`).
 pub const SVDAG: &str = include_str!("../../../shaders/svdag.wgsl");
+/// `shaders/hybrid.wgsl`: what a hybrid format's raw grid and DAG nodes hold at a cell.
+pub const HYBRID: &str = include_str!("../../../shaders/hybrid.wgsl");
 /// `shaders/rays.wgsl`: the ray-list pass.
 pub const RAYS: &str = include_str!("../../../shaders/rays.wgsl");
 /// `shaders/render.wgsl`: the frame pass.
@@ -73,7 +76,7 @@ pub const BUFFERS: [(&str, &str); 8] = [
     ("entity_types", "entity_type_word"),
     ("entity_instances", "instance_word"),
     // The structure a comparison traversal walks instead of the world's hierarchy: the
-    // dense grid, an SVO or an SVDAG (whichever was uploaded last).
+    // dense grid, an SVO, an SVDAG or a hybrid format (whichever was uploaded last).
     ("structure", "structure_word"),
 ];
 
@@ -185,11 +188,13 @@ pub enum Loop {
     Svo,
     /// The SVDAG of the paper's comparison.
     Svdag,
+    /// A hybrid format of the paper's comparison.
+    Hybrid,
 }
 
 impl Loop {
     /// Every world loop.
-    pub const ALL: [Loop; 4] = [Loop::Hierarchy, Loop::Grid, Loop::Svo, Loop::Svdag];
+    pub const ALL: [Loop; 5] = [Loop::Hierarchy, Loop::Grid, Loop::Svo, Loop::Svdag, Loop::Hybrid];
 
     /// Its files, in order.
     fn files(self) -> &'static [&'static str] {
@@ -198,6 +203,7 @@ impl Loop {
             Loop::Grid => &[GRID],
             Loop::Svo => &[TREE, SVO],
             Loop::Svdag => &[TREE, SVDAG],
+            Loop::Hybrid => &[TREE, HYBRID],
         }
     }
 }

@@ -14,11 +14,13 @@
 //! ([`GpuWorld::changes_since`]).
 
 use super::context::{Gpu, GpuError, checked_on};
-use super::shaders::{BUFFERS, Loop, Split};
+use super::rays::Traversal;
+use super::shaders::{BUFFERS, Split};
 use super::uniform::WorldInfo;
-use naadf_world::baselines::{Svdag, Svo};
+use naadf_world::baselines::{Hybrid, Svdag, Svo};
 use naadf_world::digest::{BufferId, Digest, PAGE_BYTES, digest_of};
 use naadf_world::fingerprint::{ChunkChanges, ChunkPrints, stale_words};
+use naadf_world::traverse::Method;
 use naadf_world::{World, WorldError};
 use std::collections::VecDeque;
 
@@ -34,7 +36,8 @@ pub const GPU_BUFFERS: [BufferId; 7] = [
     BufferId::EntityTypes,
     BufferId::EntityInstances,
 ];
-/// The logical buffer of the comparison structure (dense grid, SVO or SVDAG).
+/// The logical buffer of the comparison structure (dense grid, SVO, SVDAG or hybrid
+/// format).
 const STRUCTURE: usize = 7;
 /// Smallest part (and page) size in words: parts never split a 64 KiB page.
 const MIN_PART_WORDS: u64 = (PAGE_BYTES / 4) as u64;
@@ -92,8 +95,8 @@ pub struct GpuWorld {
     changes: VecDeque<(u64, ChunkChanges)>,
     /// The generation the log starts after: changes since an older one are unknown.
     changes_from: u64,
-    /// The world loop the comparison-structure binding holds data for, if any.
-    structure: Option<Loop>,
+    /// The traversal the comparison-structure binding holds data for, if any.
+    structure: Option<Traversal>,
 }
 
 impl std::fmt::Debug for GpuWorld {
@@ -296,27 +299,43 @@ impl GpuWorld {
         world
             .export_raw(&mut raw)
             .map_err(|e| GpuError::Unsupported(format!("dense decode failed: {e}")))?;
-        self.upload_structure(Loop::Grid, &raw)
+        self.upload_structure(Traversal::Method(Method::Grid), &raw)
     }
 
-    /// Uploads `svo` in its GPU layout ([`Svo::gpu_words`]) for [`Loop::Svo`], replacing
+    /// Uploads `svo` in its GPU layout ([`Svo::gpu_words`]) for [`Traversal::Svo`], replacing
     /// any other comparison structure.
     pub fn upload_svo(&mut self, svo: &Svo) -> Result<(), GpuError> {
         let words = svo.gpu_words().map_err(|e| GpuError::Unsupported(e.to_string()))?;
         self.check_structure_bytes(4 * words.len() as u64, "the SVO")?;
-        self.upload_structure(Loop::Svo, bytemuck::cast_slice(&words))
+        self.upload_structure(Traversal::Svo, bytemuck::cast_slice(&words))
     }
 
-    /// Uploads `dag` in its GPU layout ([`Svdag::gpu_words`]) for [`Loop::Svdag`],
+    /// Uploads `dag` in its GPU layout ([`Svdag::gpu_words`]) for [`Traversal::Svdag`],
     /// replacing any other comparison structure.
     pub fn upload_svdag(&mut self, dag: &Svdag) -> Result<(), GpuError> {
         let words = dag.gpu_words().map_err(|e| GpuError::Unsupported(e.to_string()))?;
         self.check_structure_bytes(4 * words.len() as u64, "the SVDAG")?;
-        self.upload_structure(Loop::Svdag, bytemuck::cast_slice(&words))
+        self.upload_structure(Traversal::Svdag, bytemuck::cast_slice(&words))
     }
 
-    /// The world loop whose comparison structure is on the device (the last uploaded).
-    pub fn structure(&self) -> Option<Loop> {
+    /// Uploads `hybrid` in its GPU layout ([`Hybrid::gpu_words`]) for
+    /// [`Traversal::Hybrid`] of its format, replacing any other comparison structure. Only
+    /// the paper's two formats ([`HybridFormat`](naadf_world::baselines::HybridFormat))
+    /// have a traversal to name them.
+    pub fn upload_hybrid(&mut self, hybrid: &Hybrid) -> Result<(), GpuError> {
+        let format = hybrid.format().ok_or_else(|| {
+            GpuError::Unsupported(format!(
+                "{} is not one of the paper's two hybrid formats",
+                hybrid.name()
+            ))
+        })?;
+        let words = hybrid.gpu_words();
+        self.check_structure_bytes(4 * words.len() as u64, format.name())?;
+        self.upload_structure(Traversal::Hybrid(format), bytemuck::cast_slice(words))
+    }
+
+    /// The traversal whose comparison structure is on the device (the last uploaded).
+    pub fn structure(&self) -> Option<Traversal> {
         self.structure
     }
 
@@ -334,8 +353,8 @@ impl GpuWorld {
     }
 
     /// Writes `bytes` to the comparison-structure buffer, page by page, as the data of
-    /// world loop `lp`.
-    fn upload_structure(&mut self, lp: Loop, bytes: &[u8]) -> Result<(), GpuError> {
+    /// `traversal`.
+    fn upload_structure(&mut self, traversal: Traversal, bytes: &[u8]) -> Result<(), GpuError> {
         let len = bytes.len() as u64;
         self.structure = None;
         if self.reserve(STRUCTURE, len)? {
@@ -348,7 +367,7 @@ impl GpuWorld {
             self.write(STRUCTURE, (i * PAGE_BYTES) as u64, &page);
         }
         self.buffers[STRUCTURE].len = len;
-        self.structure = Some(lp);
+        self.structure = Some(traversal);
         Ok(())
     }
 

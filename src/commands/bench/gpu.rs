@@ -1,5 +1,5 @@
 //! `naadf bench gpu WORLD`: ray throughput of the GPU traversals (`naadf`, `nodf`, `grid`,
-//! and the paper's `svo` and `svdag`) on the fixed cameras of `bench traverse`, primary and
+//! and the paper's `svo`, `svdag` and two hybrid formats) on the fixed cameras of `bench traverse`, primary and
 //! secondary rays, all measured in one run (rounds in rotating order) so that their ratios
 //! mean something on a shared machine. Every GPU result is also checked against the CPU:
 //! the world's methods against the `naadf` traversal, the trees against their own CPU walk.
@@ -10,7 +10,7 @@ use crate::commands::{load_world, print_json};
 use anyhow::{Result, bail};
 use naadf_client::gpu::{Gpu, GpuError, GpuHit, GpuRay, GpuWorld, RayBatch, RayTracer, Traversal};
 use naadf_world::World;
-use naadf_world::baselines::{Svdag, Svo};
+use naadf_world::baselines::{Hybrid, HybridFormat, Svdag, Svo};
 use naadf_world::raysets::{fixed_cameras, primary_rays, secondary_rays};
 use naadf_world::traverse::{Hit, Method, Ray, same_result, trace_naadf};
 use rayon::prelude::*;
@@ -154,6 +154,27 @@ impl RaySet {
     }
 }
 
+/// The paper's comparison structures of one world, for the traversals that walk them.
+pub(super) struct Trees {
+    pub svo: Svo,
+    pub svdag: Svdag,
+    /// The hybrid formats that could be built (a world's cube may be too large for one).
+    pub hybrids: Vec<Hybrid>,
+}
+
+impl Trees {
+    /// Every structure of `world`, or `None` for a world with no solid voxel (which no
+    /// structure holds).
+    pub fn build(world: &World) -> Option<Trees> {
+        let (svo, svdag) = (Svo::build(world).ok()?, Svdag::build(world).ok()?);
+        let hybrids = HybridFormat::ALL
+            .into_iter()
+            .filter_map(|f| Hybrid::of(&svdag, f).ok())
+            .collect();
+        Some(Trees { svo, svdag, hybrids })
+    }
+}
+
 /// Measures `traversals` on the GPU on the `primary` and `secondary` rays of `world`, in
 /// `rounds` timed rounds whose order rotates (after one untimed run each, which also
 /// checks every result against the CPU). Each traversal that needs a comparison structure
@@ -161,7 +182,7 @@ impl RaySet {
 /// trees, when given, must be built from `world`.
 pub(super) fn measure_gpu(
     world: &World,
-    trees: Option<(&Svo, &Svdag)>,
+    trees: Option<&Trees>,
     traversals: &[Traversal],
     primary: &[Ray],
     secondary: &[Ray],
@@ -193,15 +214,24 @@ pub(super) fn measure_gpu(
                 own_world(&gpu, world, |w| w.upload_grid(world)).map(|w| (Some(w), None))
             }
             (Traversal::Method(_), _) => Ok((None, None)),
-            (Traversal::Svo | Traversal::Svdag, None) => {
+            (_, None) => {
                 out.skipped
                     .insert(t.name(), "the world has no trees (no solid voxel)".into());
                 continue;
             }
-            (Traversal::Svo, Some((svo, _))) => own_world(&gpu, world, |w| w.upload_svo(svo))
+            (Traversal::Svo, Some(Trees { svo, .. })) => own_world(&gpu, world, |w| w.upload_svo(svo))
                 .map(|w| (Some(w), Some(tree_answers(|r| svo.trace(r), primary, secondary)))),
-            (Traversal::Svdag, Some((_, dag))) => own_world(&gpu, world, |w| w.upload_svdag(dag))
-                .map(|w| (Some(w), Some(tree_answers(|r| dag.trace(r), primary, secondary)))),
+            (Traversal::Svdag, Some(Trees { svdag, .. })) => own_world(&gpu, world, |w| w.upload_svdag(svdag))
+                .map(|w| (Some(w), Some(tree_answers(|r| svdag.trace(r), primary, secondary)))),
+            (Traversal::Hybrid(f), Some(trees)) => match trees.hybrids.iter().find(|h| h.format() == Some(f)) {
+                Some(h) => own_world(&gpu, world, |w| w.upload_hybrid(h))
+                    .map(|w| (Some(w), Some(tree_answers(|r| h.trace(r), primary, secondary)))),
+                None => {
+                    out.skipped
+                        .insert(t.name(), format!("the world's cube is too large for {}", f.name()));
+                    continue;
+                }
+            },
         };
         let (device, answers) = match prepared {
             Ok(p) => p,
@@ -297,10 +327,8 @@ pub fn run(a: GpuArgs) -> Result<()> {
     // The secondary rays: cosine bounces off the CPU's primary hits.
     let hits: Vec<Option<Hit>> = primary.par_iter().map(|r| trace_naadf(&world, r)).collect();
     let secondary = secondary_rays(&primary, &hits, a.seed);
-    let svo = Svo::build(&world);
-    let dag = Svdag::build(&world);
-    let trees = svo.as_ref().ok().zip(dag.as_ref().ok());
-    let m = measure_gpu(&world, trees, &Traversal::ALL, &primary, &secondary, a.repeat)?;
+    let trees = Trees::build(&world);
+    let m = measure_gpu(&world, trees.as_ref(), &Traversal::ALL, &primary, &secondary, a.repeat)?;
     let mut report = GpuReport {
         adapter: m.adapter.clone(),
         primary: BTreeMap::new(),

@@ -3,13 +3,13 @@
 //! grid and the hybrid formats R(4³)G(7) and R(3³)G(8), on the same rays in one run
 //! (docs/BASELINES.md).
 
-use super::gpu::measure_gpu;
+use super::gpu::{Trees, measure_gpu};
 use super::{median_range, plot};
 use crate::commands::{load_world, print_json};
 use anyhow::{Result, bail};
 use naadf_client::gpu::Traversal;
 use naadf_world::World;
-use naadf_world::baselines::{Hybrid, Svdag, Svo};
+use naadf_world::baselines::{Hybrid, HybridFormat, Svdag, Svo};
 use naadf_world::ops::{Batch, Limits, Op};
 use naadf_world::raysets::{fixed_cameras, primary_rays, secondary_rays};
 use naadf_world::stats::{Bytes, WorldStats};
@@ -22,10 +22,6 @@ use std::time::Instant;
 
 /// The largest image edge per camera: four cameras of 4096 × 4096 are 67M primary rays.
 const MAX_EDGE: u32 = 4096;
-
-/// The hybrid formats measured, `(name, W, L)` of `R(W³) G(L)`: the two the hybrid-formats
-/// paper found Pareto-optimal on every model at 2048³.
-const HYBRIDS: [(&str, u32, u32); 2] = [("R(4³)G(7)", 4, 7), ("R(3³)G(8)", 3, 8)];
 
 /// Arguments of `bench paper`.
 #[derive(clap::Args)]
@@ -92,8 +88,8 @@ impl Figures {
 #[derive(Serialize)]
 struct Report {
     structures: BTreeMap<&'static str, Figures>,
-    /// The hybrid formats R(4³)G(7) and R(3³)G(8) (CPU only; their build time includes
-    /// the SVDAG's, which they are made from).
+    /// The hybrid formats R(4³)G(7) and R(3³)G(8) (their build time includes the SVDAG's,
+    /// which they are made from).
     hybrid: BTreeMap<&'static str, Figures>,
     /// Primary plus secondary rays.
     rays: usize,
@@ -147,15 +143,21 @@ pub fn run(a: PaperArgs) -> Result<()> {
     let grid = DenseGrid::from_world(&world);
     // The hybrid-formats paper's two recommended formats, made from the SVDAG.
     let mut hybrids = Vec::new();
+    let mut hybrid_ms = BTreeMap::new();
     let mut unbuilt = BTreeMap::new();
-    for (name, top, dag) in HYBRIDS {
-        match timed(|| Hybrid::build(&svdag, top, dag)) {
-            Ok((h, ms)) => hybrids.push((name, h, svdag_ms + ms)),
+    for f in HybridFormat::ALL {
+        match timed(|| Hybrid::of(&svdag, f)) {
+            Ok((h, ms)) => {
+                hybrids.push(h);
+                hybrid_ms.insert(f.name(), svdag_ms + ms);
+            }
             Err(e) => {
-                unbuilt.insert(name, Figures::unmeasured(0, e.to_string()));
+                unbuilt.insert(f.name(), Figures::unmeasured(0, e.to_string()));
             }
         }
     }
+    let trees = Trees { svo, svdag, hybrids };
+    let Trees { svo, svdag, hybrids } = &trees;
 
     let mut tracers = vec![
         Tracer {
@@ -177,9 +179,9 @@ pub fn run(a: PaperArgs) -> Result<()> {
             trace: Box::new(|r| g.trace(r)),
         });
     }
-    for (name, h, _) in &hybrids {
+    for h in hybrids {
         tracers.push(Tracer {
-            name,
+            name: format_name(h),
             trace: Box::new(|r| h.trace(r)),
         });
     }
@@ -210,8 +212,8 @@ pub fn run(a: PaperArgs) -> Result<()> {
         "grid" => (world.size().voxel_count() * 2, None),
         hybrid => hybrids
             .iter()
-            .find(|(n, ..)| *n == hybrid)
-            .map(|(_, h, ms)| (h.bytes(), Some(*ms)))
+            .find(|&h| format_name(h) == hybrid)
+            .map(|h| (h.bytes(), hybrid_ms.get(hybrid).copied()))
             .expect("every tracer is a structure"),
     });
     if let Err(e) = &grid {
@@ -221,17 +223,18 @@ pub fn run(a: PaperArgs) -> Result<()> {
         );
     }
     let mut hybrid = unbuilt;
-    for (name, ..) in &hybrids {
-        hybrid.extend(structures.remove_entry(name));
+    for h in hybrids {
+        hybrid.extend(structures.remove_entry(format_name(h)));
     }
     let gpu = if a.gpu {
-        let traversals = [
+        let mut traversals = vec![
             Traversal::Method(Method::Naadf),
             Traversal::Svo,
             Traversal::Svdag,
             Traversal::Method(Method::Grid),
         ];
-        let m = measure_gpu(&world, Some((&svo, &svdag)), &traversals, &primary, &secondary, rounds)?;
+        traversals.extend(hybrids.iter().filter_map(|h| h.format().map(Traversal::Hybrid)));
+        let m = measure_gpu(&world, Some(&trees), &traversals, &primary, &secondary, rounds)?;
         m.check_mismatches(primary.len() + secondary.len())?;
         let names: Vec<&'static str> = m.figures.keys().copied().collect();
         // "naadf" first: the speed-ups are taken against it.
@@ -240,9 +243,10 @@ pub fn run(a: PaperArgs) -> Result<()> {
             .chain(names.into_iter().filter(|&n| n != "naadf"))
             .collect();
         let rates: Vec<[Vec<f64>; 2]> = names.iter().map(|n| m.figures[n].rates.clone()).collect();
-        let (mut gpu_structures, gpu_speedup) = figures_of(&names, &rates, |name| (structures[name].bytes, None));
+        let bytes = |name: &str| structures.get(name).or(hybrid.get(name)).map_or(0, |f| f.bytes);
+        let (mut gpu_structures, gpu_speedup) = figures_of(&names, &rates, |name| (bytes(name), None));
         for (name, why) in m.skipped {
-            gpu_structures.insert(name, Figures::unmeasured(structures[name].bytes, why));
+            gpu_structures.insert(name, Figures::unmeasured(bytes(name), why));
         }
         Some(GpuSection {
             adapter: m.adapter,
@@ -342,6 +346,11 @@ fn figures_of(
         }
     }
     (structures, speedup)
+}
+
+/// The name of one of the paper's hybrid formats (`bench paper` builds only those).
+fn format_name(h: &Hybrid) -> &'static str {
+    h.format().expect("bench paper builds the paper's formats").name()
 }
 
 /// `f`'s result and the milliseconds it took.

@@ -5,8 +5,8 @@
 //! a structure that is twice as fast sits the same distance higher wherever it is. The
 //! point of the plot is the trade-off the paper argues about: lower-left is small but
 //! slow, upper-left is what everyone wants. Structures that are only counted, not
-//! traversed (the hybrid formats), have bytes but no speed; they are drawn as labelled
-//! ticks on the x axis so their size can still be compared.
+//! traversed (the dense grid of a world too large to decode), have bytes but no speed;
+//! they are drawn as labelled ticks on the x axis so their size can still be compared.
 //!
 //! Drawn with plotters' bitmap backend into a buffer that `image` encodes as PNG. Text
 //! uses ab_glyph with a TrueType font read at run time (see [`draw_scatter`] for where it

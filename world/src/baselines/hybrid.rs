@@ -18,7 +18,7 @@
 //! distinct 2³ octant mask.
 
 use super::svdag::Svdag;
-use super::{MAX_REFS, Step, Tree, check_refs, octant, trace_tree};
+use super::{GPU_HEADER_WORDS, MAX_REFS, Step, Tree, check_refs, octant, trace_tree};
 use crate::WorldError;
 use crate::traverse::{Hit, Ray};
 
@@ -31,9 +31,43 @@ pub struct Hybrid {
     top: u32,
     /// Depth of the DAGs under the raw cells (`L`): a raw cell spans `2^L` voxels a side.
     dag: u32,
-    /// The buffer: the raw grid (cell `x + n·(y + n·z)`, `n = 2^top`), then the DAG nodes
-    /// level by level from side `2^dag` down to side 2, then the voxel word.
+    /// The GPU layout: the [header](GPU_HEADER_WORDS) (`top + dag`, `dag`, two reserved
+    /// words), then the format's buffer, its offsets counted from the header's first word:
+    /// the raw grid (cell `x + n·(y + n·z)`, `n = 2^top`), the DAG nodes level by level
+    /// from side `2^dag` down to side 2, and the voxel word. The CPU walk reads the same
+    /// words.
     words: Vec<u32>,
+}
+
+/// The hybrid formats the hybrid-formats paper found Pareto-optimal on every model at
+/// 2048³, the two `naadf bench paper` measures.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum HybridFormat {
+    /// `R(4³) G(7)`: 16³ raw cells over DAGs of depth 7.
+    R4G7,
+    /// `R(3³) G(8)`: 8³ raw cells over DAGs of depth 8.
+    R3G8,
+}
+
+impl HybridFormat {
+    /// Both formats.
+    pub const ALL: [HybridFormat; 2] = [HybridFormat::R4G7, HybridFormat::R3G8];
+
+    /// Its name in the paper's notation.
+    pub fn name(self) -> &'static str {
+        match self {
+            HybridFormat::R4G7 => "R(4³)G(7)",
+            HybridFormat::R3G8 => "R(3³)G(8)",
+        }
+    }
+
+    /// `(W, L)`: log2 of the raw cells a side, and the DAGs' depth.
+    pub fn split(self) -> (u32, u32) {
+        match self {
+            HybridFormat::R4G7 => (4, 7),
+            HybridFormat::R3G8 => (3, 8),
+        }
+    }
 }
 
 /// The terminating word of a solid voxel (opaque white RGBA8: the structure holds
@@ -57,6 +91,12 @@ impl Hybrid {
         Self::build_within(svdag, top, dag, MAX_REFS)
     }
 
+    /// Builds one of the paper's recommended formats (see [`Hybrid::build`]).
+    pub fn of(svdag: &Svdag, format: HybridFormat) -> Result<Self, WorldError> {
+        let (top, dag) = format.split();
+        Self::build(svdag, top, dag)
+    }
+
     /// [`Hybrid::build`] with at most `limit` words (tests reach the limit with small
     /// worlds).
     pub(crate) fn build_within(svdag: &Svdag, top: u32, dag: u32, limit: u64) -> Result<Self, WorldError> {
@@ -77,11 +117,11 @@ impl Hybrid {
         // above, and a DAG deeper than the world's cube starts with single-child nodes.
         let levels = &svdag.levels[svdag.levels.len() - svdag.levels.len().min(dag as usize - 2)..];
         let chain = dag.saturating_sub(depth) as usize;
-        let raw = 1usize << (3 * top);
+        let (head, raw) = (GPU_HEADER_WORDS, 1usize << (3 * top));
 
         // Where everything goes: raw cells, chain nodes, the kept levels, the side-4 nodes
         // (one per SVDAG leaf), the side-2 nodes (one per distinct octant mask), the voxel.
-        let mut at = raw + 2 * chain;
+        let mut at = head + raw + 2 * chain;
         let mut level_base = Vec::with_capacity(levels.len());
         for level in levels {
             level_base.push(at as u64);
@@ -116,17 +156,18 @@ impl Hybrid {
         check_refs(voxel_at + 1, limit, "a hybrid format's words")?;
         let (voxel_at, side2_base) = (voxel_at as u32, side2_base as u32);
 
-        let mut words = vec![0u32; raw];
+        let mut words = vec![0u32; head + raw];
+        words[..2].copy_from_slice(&[top + dag, dag]);
         // The raw cells: each the root of its sub-volume, found by descending the SVDAG from
         // its root; or the chain above the SVDAG's root in cell 0.
         let first = level_base[0] as u32;
         if chain > 0 {
-            words[0] = raw as u32;
+            words[head] = (head + raw) as u32;
             for c in 0..chain {
                 let next = if c + 1 == chain {
                     first
                 } else {
-                    (raw + 2 * (c + 1)) as u32
+                    (head + raw + 2 * (c + 1)) as u32
                 };
                 words.extend([1, next]);
             }
@@ -147,7 +188,7 @@ impl Hybrid {
                         }
                         let n = 1usize << top;
                         let cell = x as usize + n * (y as usize + n * z as usize);
-                        words[cell] = node.map_or(0, |o| first + o);
+                        words[head + cell] = node.map_or(0, |o| first + o);
                     }
                 }
             }
@@ -193,14 +234,27 @@ impl Hybrid {
         })
     }
 
+    /// The paper's named format this is, if it is one.
+    pub fn format(&self) -> Option<HybridFormat> {
+        HybridFormat::ALL
+            .into_iter()
+            .find(|f| f.split() == (self.top, self.dag))
+    }
+
     /// The format's name in the paper's notation, e.g. `R(4³)G(7)`.
     pub fn name(&self) -> String {
         format!("R({}³)G({})", self.top, self.dag)
     }
 
-    /// Bytes by the paper's count: the whole buffer.
+    /// Bytes by the paper's count: the whole buffer (the GPU header is not counted).
     pub fn bytes(&self) -> u64 {
-        4 * self.words.len() as u64
+        4 * (self.words.len() - GPU_HEADER_WORDS) as u64
+    }
+
+    /// The format as one array of words for the GPU traversal (`shaders/hybrid.wgsl`):
+    /// the header, then the buffer, offsets counted from the header's first word.
+    pub fn gpu_words(&self) -> &[u32] {
+        &self.words
     }
 
     /// The first solid voxel along `ray` (material 0: geometry only), with the voxel, face
@@ -228,7 +282,7 @@ impl Tree for Hybrid {
         if level == 0 {
             let n = 1usize << self.top;
             let c = cell.map(|v| (v >> self.dag) as usize);
-            return match self.words[c[0] + n * (c[1] + n * c[2])] {
+            return match self.words[GPU_HEADER_WORDS + c[0] + n * (c[1] + n * c[2])] {
                 0 => Step::Empty(self.dag),
                 root => Step::Node(root),
             };

@@ -16,7 +16,7 @@ mod hybrid;
 mod svdag;
 mod svo;
 
-pub use hybrid::Hybrid;
+pub use hybrid::{Hybrid, HybridFormat};
 pub use svdag::Svdag;
 pub use svo::Svo;
 
@@ -30,8 +30,9 @@ use rayon::prelude::*;
 const MAX_STEPS: u32 = 1 << 24;
 
 /// Words before the first node in a tree's GPU layout ([`Svdag::gpu_words`],
-/// [`Svo::gpu_words`]): the cube's depth, the level of the DAG's leaves (0 for the SVO),
-/// and two reserved words. The root node starts right after them.
+/// [`Svo::gpu_words`], [`Hybrid::gpu_words`]): log2 of the cube's side, the structure's
+/// shape word (the level of the SVDAG's leaves, 0 for the SVO, the depth `L` of a hybrid
+/// format's DAGs), and two reserved words. The root node starts right after them.
 pub const GPU_HEADER_WORDS: usize = 4;
 
 /// The most words a 32-bit reference (an offset, an index, or a count of them) may
@@ -242,7 +243,8 @@ mod tests {
         assert!(svo.gpu_words_within(words.len() as u64).is_err());
 
         let hybrid = Hybrid::build(&dag, 2, 5).unwrap();
-        let need = hybrid.bytes() / 4;
+        let need = hybrid.gpu_words().len() as u64;
+        assert_eq!(need, hybrid.bytes() / 4 + GPU_HEADER_WORDS as u64);
         let err = Hybrid::build_within(&dag, 2, 5, need).unwrap_err().to_string();
         assert!(err.contains("hybrid format's words"), "{err}");
         assert_eq!(
