@@ -142,14 +142,15 @@ pub fn run(a: PaperArgs) -> Result<()> {
     let (svdag, svdag_ms) = timed(|| Svdag::build(&world))?;
     let grid = DenseGrid::from_world(&world);
     // The hybrid-formats paper's two recommended formats, made from the SVDAG.
+    // `built[i]`: the format of `hybrids[i]` and its build time (the SVDAG's included).
     let mut hybrids = Vec::new();
-    let mut hybrid_ms = BTreeMap::new();
+    let mut built = Vec::new();
     let mut unbuilt = BTreeMap::new();
     for f in HybridFormat::ALL {
         match timed(|| Hybrid::of(&svdag, f)) {
             Ok((h, ms)) => {
                 hybrids.push(h);
-                hybrid_ms.insert(f.name(), svdag_ms + ms);
+                built.push((f.name(), svdag_ms + ms));
             }
             Err(e) => {
                 unbuilt.insert(f.name(), Figures::unmeasured(0, e.to_string()));
@@ -179,9 +180,9 @@ pub fn run(a: PaperArgs) -> Result<()> {
             trace: Box::new(|r| g.trace(r)),
         });
     }
-    for h in hybrids {
+    for (h, &(name, _)) in hybrids.iter().zip(&built) {
         tracers.push(Tracer {
-            name: format_name(h),
+            name,
             trace: Box::new(|r| h.trace(r)),
         });
     }
@@ -212,9 +213,9 @@ pub fn run(a: PaperArgs) -> Result<()> {
         "grid" => (world.size().voxel_count() * 2, None),
         hybrid => hybrids
             .iter()
-            .find(|&h| format_name(h) == hybrid)
-            .map(|h| (h.bytes(), hybrid_ms.get(hybrid).copied()))
-            .expect("every tracer is a structure"),
+            .zip(&built)
+            .find(|(_, (name, _))| *name == hybrid)
+            .map_or((0, None), |(h, &(_, ms))| (h.bytes(), Some(ms))),
     });
     if let Err(e) = &grid {
         structures.insert(
@@ -223,8 +224,8 @@ pub fn run(a: PaperArgs) -> Result<()> {
         );
     }
     let mut hybrid = unbuilt;
-    for h in hybrids {
-        hybrid.extend(structures.remove_entry(format_name(h)));
+    for (name, _) in &built {
+        hybrid.extend(structures.remove_entry(name));
     }
     let gpu = if a.gpu {
         let mut traversals = vec![
@@ -346,11 +347,6 @@ fn figures_of(
         }
     }
     (structures, speedup)
-}
-
-/// The name of one of the paper's hybrid formats (`bench paper` builds only those).
-fn format_name(h: &Hybrid) -> &'static str {
-    h.format().expect("bench paper builds the paper's formats").name()
 }
 
 /// `f`'s result and the milliseconds it took.
