@@ -18,14 +18,9 @@ fn tree_step(depth: u32, dag: u32, level: u32, node: u32, cell: vec3<i32>) -> Tr
         }
         return TreeStep(STEP_NODE, root);
     }
-    let k = dag - level;
-    let oct = tree_octant(cell, k);
-    let mask = structure_word(node);
-    if ((mask >> oct) & 1u) == 0u {
-        return TreeStep(STEP_EMPTY, k);
+    var s = tree_mask_step(node, cell, dag - level);
+    if s.kind == STEP_NODE {
+        s.value = structure_word(node + 1u + s.value);
     }
-    if k == 0u {
-        return TreeStep(STEP_SOLID, 0u);
-    }
-    return TreeStep(STEP_NODE, structure_word(node + 1u + tree_rank(mask, oct)));
+    return s;
 }

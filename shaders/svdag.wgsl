@@ -13,11 +13,10 @@ fn tree_step(depth: u32, leaf_level: u32, level: u32, node: u32, cell: vec3<i32>
         let half = structure_word(node + bit / 32u);
         return TreeStep(select(STEP_EMPTY, STEP_SOLID, ((half >> (bit & 31u)) & 1u) != 0u), 0u);
     }
-    let k = depth - 1u - level;
-    let oct = tree_octant(cell, k);
-    let mask = structure_word(node);
-    if ((mask >> oct) & 1u) == 0u {
-        return TreeStep(STEP_EMPTY, k);
+    // Inner nodes have children of side 8 or more: never a voxel.
+    var s = tree_mask_step(node, cell, depth - 1u - level);
+    if s.kind == STEP_NODE {
+        s.value = structure_word(node + 1u + s.value);
     }
-    return TreeStep(STEP_NODE, structure_word(node + 1u + tree_rank(mask, oct)));
+    return s;
 }

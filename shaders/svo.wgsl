@@ -7,14 +7,9 @@ fn tree_side_log(depth: u32, shape: u32, level: u32) -> u32 {
 }
 
 fn tree_step(depth: u32, shape: u32, level: u32, node: u32, cell: vec3<i32>) -> TreeStep {
-    let k = depth - 1u - level;
-    let oct = tree_octant(cell, k);
-    let mask = structure_word(node);
-    if ((mask >> oct) & 1u) == 0u {
-        return TreeStep(STEP_EMPTY, k);
+    var s = tree_mask_step(node, cell, depth - 1u - level);
+    if s.kind == STEP_NODE {
+        s.value = structure_word(node + 1u) + 2u * s.value;
     }
-    if k == 0u {
-        return TreeStep(STEP_SOLID, 0u);
-    }
-    return TreeStep(STEP_NODE, structure_word(node + 1u) + 2u * tree_rank(mask, oct));
+    return s;
 }

@@ -34,6 +34,21 @@ fn tree_rank(mask: u32, oct: u32) -> u32 {
     return countOneBits(mask & ((1u << oct) - 1u));
 }
 
+// What a node whose first word is its child mask holds at `cell`, its children of side 2^k:
+// an empty cube, a solid voxel (k = 0), or a child, as its rank (the caller turns the rank
+// into the child's word, which each layout stores its own way).
+fn tree_mask_step(node: u32, cell: vec3<i32>, k: u32) -> TreeStep {
+    let oct = tree_octant(cell, k);
+    let mask = structure_word(node);
+    if ((mask >> oct) & 1u) == 0u {
+        return TreeStep(STEP_EMPTY, k);
+    }
+    if k == 0u {
+        return TreeStep(STEP_SOLID, 0u);
+    }
+    return TreeStep(STEP_NODE, tree_rank(mask, oct));
+}
+
 fn world_loop(r: Ray) -> WorldTrace {
     let dims = vec3<i32>(world_info.size);
     let entry = ray_entry(r, dims);

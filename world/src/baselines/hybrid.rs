@@ -18,7 +18,7 @@
 //! distinct 2³ octant mask.
 
 use super::svdag::Svdag;
-use super::{GPU_HEADER_WORDS, MAX_REFS, Step, Tree, check_refs, octant, trace_tree};
+use super::{GPU_HEADER_WORDS, MAX_REFS, Step, Tree, check_refs, mask_step, octant, trace_tree};
 use crate::WorldError;
 use crate::traverse::{Hit, Ray};
 
@@ -287,16 +287,8 @@ impl Tree for Hybrid {
                 root => Step::Node(root),
             };
         }
-        let k = self.dag - level as u32;
         let words = &self.words[node as usize..];
-        let oct = octant(cell, k);
-        if words[0] >> oct & 1 == 0 {
-            Step::Empty(k)
-        } else if k == 0 {
-            Step::Solid
-        } else {
-            Step::Node(words[1 + (words[0] & ((1 << oct) - 1)).count_ones() as usize])
-        }
+        mask_step(words[0], cell, self.dag - level as u32, |rank| words[1 + rank as usize])
     }
 }
 

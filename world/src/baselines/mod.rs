@@ -131,6 +131,21 @@ pub(crate) fn trace_tree(tree: &impl Tree, ray: &Ray) -> Option<Hit> {
     }
 }
 
+/// What a node with child mask `mask` holds at `cell`, its children of side `2^k`: an empty
+/// cube, a solid voxel (`k` = 0), or a child, which `child` finds from its rank among the
+/// set bits (each layout stores its children its own way).
+#[inline(always)]
+pub(crate) fn mask_step(mask: u32, cell: [i64; 3], k: u32, child: impl FnOnce(u32) -> u32) -> Step {
+    let oct = octant(cell, k);
+    if mask >> oct & 1 == 0 {
+        Step::Empty(k)
+    } else if k == 0 {
+        Step::Solid
+    } else {
+        Step::Node(child((mask & ((1 << oct) - 1)).count_ones()))
+    }
+}
+
 /// The octant (bit `x + 2y + 4z`) of `cell` in a node whose children have side `2^k`.
 #[inline(always)]
 pub(crate) fn octant(cell: [i64; 3], k: u32) -> u32 {

@@ -10,7 +10,7 @@
 //! Bytes (docs/BASELINES.md): 8 per unique leaf plus 4·(1 + children) per unique inner
 //! node.
 
-use super::{MAX_REFS, Step, Tree, block_masks, check_refs, cube_depth, gpu_header, octant, trace_tree};
+use super::{MAX_REFS, Step, Tree, block_masks, check_refs, cube_depth, gpu_header, mask_step, trace_tree};
 use crate::WorldError;
 use crate::traverse::{Hit, Ray};
 use crate::world::World;
@@ -221,13 +221,11 @@ impl Tree for Svdag {
                 _ => Step::Empty(0),
             };
         }
+        // Inner nodes have children of side 8 or more: never a voxel.
         let words = &self.levels[level][node as usize..];
-        let k = self.depth - 1 - level as u32;
-        let oct = octant(cell, k);
-        if words[0] >> oct & 1 == 0 {
-            return Step::Empty(k);
-        }
-        Step::Node(words[1 + (words[0] & ((1 << oct) - 1)).count_ones() as usize])
+        mask_step(words[0], cell, self.depth - 1 - level as u32, |rank| {
+            words[1 + rank as usize]
+        })
     }
 }
 

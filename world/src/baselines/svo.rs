@@ -12,7 +12,7 @@
 //! which is no slower to follow. The byte count is the paper's: 4 per descriptor
 //! (docs/BASELINES.md).
 
-use super::{MAX_REFS, Step, Tree, block_masks, check_refs, cube_depth, gpu_header, octant, trace_tree};
+use super::{MAX_REFS, Step, Tree, block_masks, check_refs, cube_depth, gpu_header, mask_step, trace_tree};
 use crate::WorldError;
 use crate::traverse::{Hit, Ray};
 use crate::world::World;
@@ -222,15 +222,9 @@ impl Tree for Svo {
     }
 
     fn step(&self, level: usize, node: u32, cell: [i64; 3]) -> Step {
-        let k = self.depth - 1 - level as u32;
-        let oct = octant(cell, k);
         let mask = u32::from(self.masks[level][node as usize]);
-        if mask >> oct & 1 == 0 {
-            Step::Empty(k)
-        } else if k == 0 {
-            Step::Solid
-        } else {
-            Step::Node(self.first[level][node as usize] + (mask & ((1 << oct) - 1)).count_ones())
-        }
+        mask_step(mask, cell, self.depth - 1 - level as u32, |rank| {
+            self.first[level][node as usize] + rank
+        })
     }
 }
