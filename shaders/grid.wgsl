@@ -15,16 +15,16 @@ fn world_loop(r: Ray) -> WorldTrace {
         return WorldTrace(no_hit(0u), END_MISSED, 0.0, 0.0);
     }
     var s = dda_start(r, entry);
-    let with_entities = world_info.has_entities != 0u;
+    // The chunks' entity fields, not `world_info.has_entities`, say where entities are
+    // (see traverse.wgsl: a branch on a uniform value costs a re-optimisation per dispatch
+    // on lavapipe).
     var last_chunk = 0xFFFFFFFFu;
     for (var steps = 1u; steps <= world_info.max_steps; steps++) {
         let p = vec3<u32>(s.cell);
-        if with_entities {
-            let ci = chunk_index(p >> vec3<u32>(4u));
-            if ci != last_chunk {
-                last_chunk = ci;
-                record_field(r, chunk_entity_word(ci), entry.t);
-            }
+        let ci = chunk_index(p >> vec3<u32>(4u));
+        if ci != last_chunk {
+            last_chunk = ci;
+            record_field(r, chunk_entity_word(ci), entry.t);
         }
         let m = grid_material(p);
         if m != 0u {

@@ -23,21 +23,20 @@ fn world_loop(r: Ray) -> WorldTrace {
     let neg = r.d <= vec3<f32>(0.0);
     // The AADF field facing the ray on each axis: −a for negative directions, +a otherwise.
     let facing = vec3<u32>(0u, 2u, 4u) + select(vec3<u32>(0u), vec3<u32>(1u), r.d > vec3<f32>(0.0));
-    let with_entities = world_info.has_entities != 0u;
+    // Each chunk's entity field says whether entities are there; the loop does not branch
+    // on `world_info.has_entities`: Mesa's lavapipe re-optimises a shader at every dispatch
+    // when a branch depends on a uniform value it could inline, about 10 ms for this one.
     var last_chunk = 0xFFFFFFFFu;
     var last_field = 0u;
     for (var steps = 1u; steps <= world_info.max_steps; steps++) {
         let p = vec3<u32>(cell);
         let ci = chunk_index(p >> vec3<u32>(4u));
-        var entities_here = false;
-        if with_entities {
-            if ci != last_chunk {
-                last_chunk = ci;
-                last_field = chunk_entity_word(ci);
-                record_field(r, last_field, entry.t);
-            }
-            entities_here = last_field != 0u;
+        if ci != last_chunk {
+            last_chunk = ci;
+            last_field = chunk_entity_word(ci);
+            record_field(r, last_field, entry.t);
         }
+        let entities_here = last_field != 0u;
         let chunk = chunk_word(ci);
         var skip = vec3<i32>(0);
         let cs = cell_state(chunk);

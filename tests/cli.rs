@@ -294,6 +294,32 @@ fn bench_paper_reports_every_structure_on_the_same_rays() {
         );
         assert!(v["naadf_speedup"][h][1].as_f64().unwrap() > 0.0, "{h}: {v}");
     }
+    // A world longer than the formats' 2048 voxels: they are skipped, saying why; the
+    // others still run.
+    let long = p(dir.path(), "long.naadf");
+    ok(
+        &["generate", "--preset", "test", "--size", "4096,64,64", "-o", &long],
+        None,
+    );
+    let out = ok(
+        &[
+            "bench", "paper", &long, "--json", "--width", "16", "--height", "9", "--rounds", "1",
+        ],
+        None,
+    );
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    for h in ["R(4³)G(7)", "R(3³)G(8)"] {
+        let f = &v["hybrid"][h];
+        assert!(f["primary"].is_null(), "{h}: {v}");
+        assert!(
+            f["skipped"]
+                .as_str()
+                .unwrap()
+                .contains("less than the world's cube of 4096"),
+            "{h}: {v}"
+        );
+    }
+    assert!(v["structures"]["svdag"]["primary"].as_f64().unwrap() > 0.0, "{v}");
     fails(&["bench", "paper", &p(dir.path(), "missing.naadf")], None, "error:");
     fails(
         &["bench", "paper", &world, "--width", "0"],

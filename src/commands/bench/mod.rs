@@ -37,13 +37,13 @@ pub enum Bench {
     /// One receive-only client of `bench fanout` (started by it).
     #[command(hide = true)]
     FanoutClient(fanout::FanoutClientArgs),
-    /// GPU ray throughput of the traversal variants (naadf, nodf, grid, svo, svdag), checked against the CPU.
+    /// GPU ray throughput of the traversal variants (naadf, nodf, grid, svo, svdag, the hybrid formats), checked against the CPU.
     Gpu(gpu::GpuArgs),
     /// Frames through a server's render nodes: frames per second, latency, routing overhead.
     Frames(frames::FramesArgs),
     /// Image quality of the lit modes against a path-traced reference, and the noise floor.
     Gi(gi::GiArgs),
-    /// The paper's comparison: bytes, build time and Mrays/s of naadf, an SVO, an SVDAG and the grid.
+    /// The paper's comparison: bytes, build time and Mrays/s of naadf, an SVO, an SVDAG, two hybrid formats and the grid.
     Paper(paper::PaperArgs),
 }
 
@@ -86,14 +86,10 @@ pub fn median_range(values: &[f64]) -> (f64, [f64; 2]) {
     (percentile(&v, 0.5), [lo.unwrap_or(f64::NAN), hi.unwrap_or(f64::NAN)])
 }
 
-/// Prints `naadf`'s speed-up over the other methods measured (`grid`, `nodf`, `svo`,
-/// `svdag`), from Mrays/s per method.
+/// Prints `naadf`'s speed-up over every other method measured, from Mrays/s per method.
 pub fn print_ratios(prefix: &str, primary: &BTreeMap<&str, f64>, secondary: &BTreeMap<&str, f64>) {
     let ratio = |set: &BTreeMap<&str, f64>, other: &str| set.get(other).map_or(f64::NAN, |o| set["naadf"] / o);
-    for other in ["grid", "nodf", "svo", "svdag"]
-        .into_iter()
-        .filter(|m| primary.contains_key(m))
-    {
+    for &other in primary.keys().filter(|&&m| m != "naadf") {
         println!(
             "{prefix}naadf/{other}: primary {:.1}×, secondary {:.1}×",
             ratio(primary, other),
