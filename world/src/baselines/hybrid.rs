@@ -18,9 +18,10 @@
 //! distinct 2³ octant mask.
 
 use super::svdag::Svdag;
-use super::{GPU_HEADER_WORDS, MAX_REFS, Step, Tree, check_refs, mask_step, octant, trace_tree};
+use super::{GPU_HEADER_WORDS, MAX_REFS, Step, Tree, check_refs, mask_step, trace_tree};
 use crate::WorldError;
 use crate::traverse::{Hit, Ray};
+use rayon::prelude::*;
 
 /// A hybrid format `R(top³) G(dag)` of a world's static geometry.
 #[derive(Clone, Debug)]
@@ -127,16 +128,18 @@ impl Hybrid {
             level_base.push(at as u64);
             at += level.len();
         }
-        let mut side4 = Vec::with_capacity(svdag.leaves.len());
+        // Each leaf's eight octant masks, once (in parallel: the one costly part).
+        let octants: Vec<[u8; 8]> = svdag.leaves.par_iter().map(|&leaf| octant_masks(leaf)).collect();
+        let mut side4 = Vec::with_capacity(octants.len());
         let mut side2 = [None::<u32>; 256];
         let mut side2_masks = Vec::new();
         let mut words_needed = at as u64;
-        for &leaf in &svdag.leaves {
+        for o in &octants {
             side4.push(words_needed);
-            words_needed += 1 + octant_masks(leaf).filter(|&m| m != 0).count() as u64;
+            words_needed += 1 + o.iter().filter(|&&m| m != 0).count() as u64;
         }
-        for &leaf in &svdag.leaves {
-            for m in octant_masks(leaf).filter(|&m| m != 0) {
+        for o in &octants {
+            for &m in o.iter().filter(|&&m| m != 0) {
                 if side2[usize::from(m)].is_none() {
                     side2[usize::from(m)] = Some(side2_masks.len() as u32);
                     side2_masks.push(m);
@@ -182,8 +185,10 @@ impl Hybrid {
                         for l in 0..above as usize {
                             node = node.and_then(|n| {
                                 let w = &svdag.levels[l][n as usize..];
-                                let oct = octant(p, depth - 1 - l as u32);
-                                (w[0] >> oct & 1 == 1).then(|| w[1 + (w[0] & ((1 << oct) - 1)).count_ones() as usize])
+                                match mask_step(w[0], p, depth - 1 - l as u32, |rank| w[1 + rank as usize]) {
+                                    Step::Node(child) => Some(child),
+                                    _ => None,
+                                }
                             });
                         }
                         let n = 1usize << top;
@@ -208,11 +213,11 @@ impl Hybrid {
                 i += 1 + children;
             }
         }
-        for &leaf in &svdag.leaves {
+        for masks in &octants {
             let mut mask = 0;
             let at = words.len();
             words.push(0);
-            for (o, m) in octant_masks(leaf).enumerate() {
+            for (o, &m) in masks.iter().enumerate() {
                 if m != 0 {
                     mask |= 1 << o;
                     words.push(side2_at[side2[usize::from(m)].unwrap() as usize] as u32);
@@ -294,8 +299,8 @@ impl Tree for Hybrid {
 
 /// The eight 2³ octant masks of a 4³ leaf mask (bit `x + 4y + 16z`), in octant order (bit
 /// `x + 2y + 4z` of the octant); bit `v` of a mask is voxel `x + 2y + 4z` of the octant.
-fn octant_masks(leaf: u64) -> impl Iterator<Item = u8> {
-    (0..8).map(move |o| {
+fn octant_masks(leaf: u64) -> [u8; 8] {
+    std::array::from_fn(|o| {
         let q = [o & 1, o >> 1 & 1, o >> 2 & 1].map(|b| 2 * b);
         (0..8).fold(0u8, |x, v| {
             let bit = (q[0] + (v & 1)) + 4 * (q[1] + (v >> 1 & 1)) + 16 * (q[2] + (v >> 2 & 1));
