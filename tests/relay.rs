@@ -16,7 +16,7 @@ use naadf_server::relay::upstream::Upstream;
 use prost::Message;
 use std::sync::Arc;
 use std::time::Duration;
-use support::{Server, free_port, http_get, quiescent, random_op, serve_world, start_world};
+use support::{Server, free_addr, http_get, quiescent, random_op, serve_world, start_world};
 use tokio::sync::{Notify, broadcast, oneshot};
 
 /// Long enough for a join and the distance fields to settle on a slow machine.
@@ -295,7 +295,7 @@ async fn a_relay_in_front_of_an_open_server_admits_only_its_own_machine() {
 async fn a_relay_waits_for_its_upstream_and_rides_out_a_crash() {
     let dir = tempfile::tempdir().unwrap();
     let world = start_world(dir.path());
-    let grpc = format!("127.0.0.1:{}", free_port());
+    let grpc = free_addr();
     let url = format!("http://{grpc}");
     let log = dir.path().join("relay.log");
     let relay = Server::relay(&url, &[], &log);
@@ -561,7 +561,7 @@ async fn a_digest_mismatch_is_not_passed_on_and_leads_to_a_rejoin() {
 async fn an_upstream_that_cannot_resume_the_relay_resyncs_its_clients_in_stream() {
     let dir = tempfile::tempdir().unwrap();
     let world = start_world(dir.path());
-    let grpc = format!("127.0.0.1:{}", free_port());
+    let grpc = free_addr();
     let server = serve_world(dir.path(), &world, &["--grpc", &grpc], &[]);
     let relay = Server::relay(&format!("http://{grpc}"), &[], &dir.path().join("relay.log"));
     let c = Client::connect(&relay.url, Some("ed"), None).await.unwrap();

@@ -499,7 +499,7 @@ fn a_node_reconnects_after_a_server_restart() {
     };
     let url = server.url.clone();
     let grpc = url.trim_start_matches("http://").to_owned();
-    let health = format!("127.0.0.1:{}", support::free_port());
+    let health = support::free_addr();
     let _node = Node::start_with(&url, &dir.path().join("node.log"), &["--http", &health]);
     let out = p(dir.path(), "f.png");
     let served = |what: &str| {

@@ -11,7 +11,7 @@ use naadf_world::{World, file};
 use std::ops::ControlFlow;
 use std::path::Path;
 use std::time::Duration;
-use support::{Server, free_port, ok, p, random_op, serve_world, start_world};
+use support::{Server, free_addr, ok, p, random_op, serve_world, start_world};
 use tokio::sync::watch;
 use tokio::task::JoinHandle;
 
@@ -551,7 +551,7 @@ async fn a_following_mirror_joins_again_after_the_server_restarts() {
     use std::io::BufRead;
     let dir = tempfile::tempdir().unwrap();
     let world = start_world(dir.path());
-    let grpc = format!("127.0.0.1:{}", free_port());
+    let grpc = free_addr();
     let server = serve_world(dir.path(), &world, &["--grpc", &grpc], &[]);
     let url = server.url.clone();
     let log = dir.path().join("mirror.log");

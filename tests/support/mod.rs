@@ -186,13 +186,15 @@ pub fn metric_value(page: &str, name: &str) -> Option<u64> {
         .find_map(|l| l.strip_prefix(name)?.strip_prefix(' ')?.trim().parse().ok())
 }
 
-/// A free loopback port (bound, then released).
-pub fn free_port() -> u16 {
-    std::net::TcpListener::bind("127.0.0.1:0")
+/// A free loopback address, `127.0.0.1:PORT` (bound, then released): for a server that
+/// must come back on the same address, or a listener a command is told to open.
+pub fn free_addr() -> String {
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
         .unwrap()
         .local_addr()
         .unwrap()
-        .port()
+        .port();
+    format!("127.0.0.1:{port}")
 }
 
 /// The server's state once it is quiescent.

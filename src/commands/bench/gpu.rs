@@ -158,7 +158,8 @@ impl RaySet {
 pub(super) struct Trees {
     pub svo: Svo,
     pub svdag: Svdag,
-    /// The hybrid formats that could be built (a world's cube may be too large for one).
+    /// The hybrid formats that could be built (a world's cube may be too large for one, or
+    /// its buffer beyond 32-bit offsets).
     pub hybrids: Vec<Hybrid>,
 }
 
@@ -228,7 +229,7 @@ pub(super) fn measure_gpu(
                     .map(|w| (Some(w), Some(tree_answers(|r| h.trace(r), primary, secondary)))),
                 None => {
                     out.skipped
-                        .insert(t.name(), format!("the world's cube is too large for {}", f.name()));
+                        .insert(t.name(), format!("no {} could be built for this world", f.name()));
                     continue;
                 }
             },
