@@ -15,9 +15,7 @@ fn world_loop(r: Ray) -> WorldTrace {
         return WorldTrace(no_hit(0u), END_MISSED, 0.0, 0.0);
     }
     var s = dda_start(r, entry);
-    // The chunks' entity fields, not `world_info.has_entities`, say where entities are
-    // (see traverse.wgsl: a branch on a uniform value costs a re-optimisation per dispatch
-    // on lavapipe).
+    // The chunks' entity fields say where entities are (as in traverse.wgsl).
     var last_chunk = 0xFFFFFFFFu;
     for (var steps = 1u; steps <= world_info.max_steps; steps++) {
         let p = vec3<u32>(s.cell);

@@ -12,8 +12,8 @@
 //
 // `FrameInfo` and `LightInfo` are generated in the prelude from their Rust twins.
 
-@group(1) @binding(0) var<uniform> frame: FrameInfo;
-@group(1) @binding(1) var<uniform> light: LightInfo;
+@group(1) @binding(0) var<storage, read> frame: FrameInfo;
+@group(1) @binding(1) var<storage, read> light: LightInfo;
 // `path_trace`: running sums (RGB, count). `path_sample`: this frame's sample (RGB, and
 // the distance to the first surface, −1 for the sky).
 @group(1) @binding(2) var<storage, read_write> radiance: array<vec4<f32>>;

@@ -21,7 +21,7 @@ struct RayCount {
     row: u32,
 }
 
-@group(1) @binding(0) var<uniform> ray_count: RayCount;
+@group(1) @binding(0) var<storage, read> ray_count: RayCount;
 @group(1) @binding(1) var<storage, read> rays_in: array<RayIn>;
 @group(1) @binding(2) var<storage, read_write> hits_out: array<u32>;
 

@@ -24,7 +24,7 @@ struct View {
     _pad: u32,
 }
 
-@group(1) @binding(0) var<uniform> view: View;
+@group(1) @binding(0) var<storage, read> view: View;
 @group(1) @binding(1) var<storage, read_write> pixels: array<u32>;
 @group(1) @binding(2) var<storage, read_write> gbuffer: array<vec4<u32>>;
 

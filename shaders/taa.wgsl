@@ -8,8 +8,8 @@
 // previous camera with its position relative to the current camera's, so that nothing
 // here subtracts two large coordinates.
 
-@group(1) @binding(0) var<uniform> frame: FrameInfo;
-@group(1) @binding(1) var<uniform> prev: FrameInfo;
+@group(1) @binding(0) var<storage, read> frame: FrameInfo;
+@group(1) @binding(1) var<storage, read> prev: FrameInfo;
 // This frame's samples: RGB and the distance to the first surface (−1: sky).
 @group(1) @binding(2) var<storage, read> current: array<vec4<f32>>;
 // The previous result (RGB).

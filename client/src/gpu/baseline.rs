@@ -4,11 +4,11 @@
 //! 3×3 neighbourhood of the new samples in YCoCg.
 
 use super::context::{Gpu, GpuError};
+use super::params::{FrameInfo, LightInfo};
 use super::pipeline::PassPipelines;
 use super::render::{CameraRays, check_frame_size};
 use super::shaders::{Loop, Pass};
 use super::temporal::Temporal;
-use super::uniform::{FrameInfo, LightInfo};
 use super::world::GpuWorld;
 use crate::light::Light;
 use crate::light::hdr::Radiance;
@@ -46,7 +46,7 @@ pub struct Baseline {
     history: Option<History>,
 }
 
-/// The uniform of `camera` for a `size` frame, with its position taken relative to
+/// The frame parameters of `camera` for a `size` frame, with its position taken relative to
 /// `origin` and the given sample number and history flag.
 fn frame_info(
     camera: &Camera,
@@ -138,9 +138,9 @@ impl Temporal for Baseline {
         // current camera's directions, and the previous camera relative to it.
         let now = frame_info(camera, [0.0; 3], size, seed, h.frames, false)?;
         let before = frame_info(&h.camera, camera.pos, size, seed, h.frames, h.frames > 0)?;
-        let now = gpu.uniform("frame", bytemuck::bytes_of(&now));
-        let before = gpu.uniform("previous frame", bytemuck::bytes_of(&before));
-        let light = gpu.uniform("light", bytemuck::bytes_of(&LightInfo::new(light)));
+        let now = gpu.params("frame", bytemuck::bytes_of(&now));
+        let before = gpu.params("previous frame", bytemuck::bytes_of(&before));
+        let light = gpu.params("light", bytemuck::bytes_of(&LightInfo::new(light)));
         let (old, new) = (&h.results[h.latest], &h.results[1 - h.latest]);
         let groups = (size.0.div_ceil(8), size.1.div_ceil(8));
         gpu.checked(|| {

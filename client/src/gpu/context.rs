@@ -135,13 +135,20 @@ impl Gpu {
         checked_on(&self.device, f)
     }
 
-    /// A uniform buffer holding `contents`.
-    pub(crate) fn uniform(&self, label: &str, contents: &[u8]) -> wgpu::Buffer {
+    /// A parameter buffer holding `contents`, for a read-only storage binding.
+    ///
+    /// Parameters are never bound as uniform buffers: Mesa's lavapipe inlines the values of
+    /// a uniform buffer that a shader branches or loops on and re-optimises the shader with
+    /// them at every dispatch (tens of milliseconds for the render, path-tracing and TAA
+    /// passes, whatever the frame size), and crashes doing so on some GI passes. It never
+    /// inlines storage buffers, and on a real GPU a small read-only storage buffer costs
+    /// the same.
+    pub(crate) fn params(&self, label: &str, contents: &[u8]) -> wgpu::Buffer {
         use wgpu::util::DeviceExt;
         self.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some(label),
             contents,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::STORAGE,
+            usage: wgpu::BufferUsages::STORAGE,
         })
     }
 

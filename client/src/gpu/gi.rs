@@ -12,11 +12,11 @@
 //! near them. The two large arrays are split across bindings where one is too small.
 
 use super::context::{Gpu, GpuError};
+use super::params::{FrameInfo, GiInfo, LightInfo};
 use super::pipeline::{PassPipelines, dispatch_2d};
 use super::render::{CameraRays, check_frame_size};
 use super::shaders::{GiSplit, Loop, NO_ENTITY, Pass};
 use super::temporal::Temporal;
-use super::uniform::{FrameInfo, GiInfo, LightInfo};
 use super::world::{GpuWorld, new_part};
 use crate::light::Light;
 use crate::light::hdr::Radiance;
@@ -483,7 +483,7 @@ impl Temporal for Gi {
             mem_parts: mem_bytes.div_ceil(part) as u32,
             taa_parts: taa_bytes.div_ceil(part) as u32,
         };
-        let bindings = world.split().bindings() + split.bindings();
+        let bindings = world.split().storage_bindings() + split.bindings();
         let allowed = gpu.limits.max_storage_buffers_per_shader_stage;
         if bindings > allowed || mem_bytes / 16 > u64::from(u32::MAX) {
             return Err(GpuError::Unsupported(format!(
@@ -613,12 +613,12 @@ impl Temporal for Gi {
             off_queue_list: h.layout.offsets[12],
         };
         let frame = FrameInfo::new(&now_rays, size, seed, h.frames, h.frames > 0);
-        let uniforms = [
-            gpu.uniform("frame", bytemuck::bytes_of(&frame)),
-            gpu.uniform("light", bytemuck::bytes_of(&LightInfo::new(light))),
-            gpu.uniform("gi", bytemuck::bytes_of(&info)),
+        let params = [
+            gpu.params("frame", bytemuck::bytes_of(&frame)),
+            gpu.params("light", bytemuck::bytes_of(&LightInfo::new(light))),
+            gpu.params("gi", bytemuck::bytes_of(&info)),
         ];
-        let buffers: Vec<&wgpu::Buffer> = uniforms
+        let buffers: Vec<&wgpu::Buffer> = params
             .iter()
             .chain([&h.words, &h.buckets, &h.changes])
             .chain(&h.mem)

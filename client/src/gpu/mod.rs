@@ -7,10 +7,11 @@
 //! - [`GpuWorld`]: the world buffers, byte for byte, kept in step with a [`World`] by
 //!   uploading the 64 KiB pages whose digest hash changed;
 //! - [`shaders`]: the WGSL of `shaders/`, assembled per pass after a generated prelude:
-//!   the bindings the world's current buffer split needs, the [`WorldInfo`] uniform and
+//!   the bindings the world's current buffer split needs, the [`WorldInfo`] parameters and
 //!   the constants the shaders share with the Rust code;
-//! - [`WorldInfo`], [`FrameInfo`], [`LightInfo`]: the uniforms, one definition for Rust
-//!   and WGSL each ([`WgslStruct`]);
+//! - [`WorldInfo`], [`FrameInfo`], [`LightInfo`], [`GiInfo`]: the passes' parameter
+//!   structs, one definition for Rust and WGSL each ([`WgslStruct`]), bound as read-only
+//!   storage buffers (never uniform buffers: see [`Gpu::params`]);
 //! - [`RayTracer`]: traces lists of rays with any traversal method (tests against the
 //!   CPU, benchmarks);
 //! - [`Renderer`]: renders camera frames in the modes of [`Mode`];
@@ -27,22 +28,22 @@ mod baseline;
 mod context;
 mod gi;
 mod headless;
+mod params;
 mod pathtrace;
 mod pipeline;
 mod rays;
 mod render;
 pub mod shaders;
 mod temporal;
-mod uniform;
 mod world;
 
 pub use baseline::Baseline;
 pub use context::{Gpu, GpuError};
 pub use gi::{CHANGE_REACH, Gi, GiHistory, GiPass};
 pub use headless::Headless;
+pub use params::{FrameInfo, GiInfo, LightInfo, Member, WgslStruct, WgslType, WorldInfo};
 pub use pathtrace::PathTracer;
 pub use rays::{GpuHit, GpuRay, RayBatch, RayTracer, Traversal};
 pub use render::{DEFAULT_SUN, Frame, GBUFFER_MAGIC, Mode, Renderer, STEPS_FULL_SCALE, write_gbuffer};
 pub use temporal::Temporal;
-pub use uniform::{FrameInfo, GiInfo, LightInfo, Member, WgslStruct, WgslType, WorldInfo};
 pub use world::{DEFAULT_MAX_STEPS, GPU_BUFFERS, GpuWorld, Upload};

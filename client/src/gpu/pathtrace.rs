@@ -7,10 +7,10 @@
 //! worlds into one image.
 
 use super::context::{Gpu, GpuError};
+use super::params::{FrameInfo, LightInfo};
 use super::pipeline::PassPipelines;
 use super::render::{CameraRays, check_frame_size};
 use super::shaders::{Loop, Pass};
-use super::uniform::{FrameInfo, LightInfo};
 use super::world::GpuWorld;
 use crate::light::hdr::Radiance;
 use crate::light::{Light, Sky, Sun};
@@ -24,7 +24,7 @@ const SUBMIT_PIXEL_SAMPLES: u64 = 1 << 19;
 const SUM_BYTES: u64 = 16;
 
 impl LightInfo {
-    /// The uniform of `light`.
+    /// The parameters of `light`.
     pub fn new(light: &Light) -> Self {
         let sky_sun = light.sky_sun();
         let (sky, sky_physical) = match light.sky {
@@ -46,7 +46,7 @@ impl LightInfo {
 }
 
 impl FrameInfo {
-    /// The uniform of a lit pass: `rays` at `size`, sample number `sample` of `seed`, and
+    /// The frame parameters of a lit pass: `rays` at `size`, sample number `sample` of `seed`, and
     /// whether a temporal pass has a history.
     pub(crate) fn new(rays: &CameraRays, size: (u32, u32), seed: u32, sample: u32, history: bool) -> Self {
         FrameInfo {
@@ -177,20 +177,20 @@ impl PathTracer {
             },
         };
         let acc = self.acc.insert(acc);
-        let light_uniform = gpu.uniform("light", bytemuck::bytes_of(&LightInfo::new(light)));
+        let light_params = gpu.params("light", bytemuck::bytes_of(&LightInfo::new(light)));
         let per_submit = (SUBMIT_PIXEL_SAMPLES / pixels).clamp(1, 256) as u32;
         while acc.samples < spp {
             let batch = per_submit.min(spp - acc.samples);
             let frames: Vec<wgpu::Buffer> = (acc.samples..acc.samples + batch)
                 .map(|sample| {
                     let frame = FrameInfo::new(&rays, size, seed, sample, false);
-                    gpu.uniform("frame", bytemuck::bytes_of(&frame))
+                    gpu.params("frame", bytemuck::bytes_of(&frame))
                 })
                 .collect();
             gpu.checked(|| {
                 let groups: Vec<wgpu::BindGroup> = frames
                     .iter()
-                    .map(|f| self.pipes.group1(gpu, &[f, &light_uniform, &acc.sums]))
+                    .map(|f| self.pipes.group1(gpu, &[f, &light_params, &acc.sums]))
                     .collect();
                 let mut enc = gpu.device.create_command_encoder(&Default::default());
                 {

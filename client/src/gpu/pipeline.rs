@@ -6,7 +6,8 @@ use super::world::GpuWorld;
 use std::collections::HashMap;
 
 /// The pipelines of one pass: group 0 is the world ([`GpuWorld::layout`]), group 1 the
-/// pass's own bindings (uniforms, then storage buffers).
+/// pass's own bindings (parameter buffers, then its other storage buffers). Every binding
+/// is a storage buffer: see [`Gpu::params`] for why none is a uniform buffer.
 pub(crate) struct PassPipelines {
     pass: Pass,
     group1: wgpu::BindGroupLayout,
@@ -14,18 +15,14 @@ pub(crate) struct PassPipelines {
 }
 
 impl PassPipelines {
-    /// Pipelines for `pass`, whose group 1 is `uniforms` uniform buffers followed by
-    /// storage buffers with the given read-only flags.
-    pub fn new(gpu: &Gpu, pass: Pass, uniforms: u32, storage_read_only: &[bool]) -> Self {
-        let mut entries: Vec<_> = (0..uniforms)
-            .map(|i| entry(i, wgpu::BufferBindingType::Uniform))
+    /// Pipelines for `pass`, whose group 1 is `params` parameter buffers (read-only, made
+    /// by [`Gpu::params`]) followed by storage buffers with the given read-only flags.
+    pub fn new(gpu: &Gpu, pass: Pass, params: u32, storage_read_only: &[bool]) -> Self {
+        let read_only = (0..params).map(|_| true).chain(storage_read_only.iter().copied());
+        let entries: Vec<_> = read_only
+            .enumerate()
+            .map(|(i, read_only)| storage_entry(i as u32, read_only))
             .collect();
-        for (i, &read_only) in storage_read_only.iter().enumerate() {
-            entries.push(entry(
-                uniforms + i as u32,
-                wgpu::BufferBindingType::Storage { read_only },
-            ));
-        }
         let group1 = gpu.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some(pass.entry()),
             entries: &entries,
@@ -37,7 +34,7 @@ impl PassPipelines {
         }
     }
 
-    /// A group-1 bind group of the pass's own buffers: its uniforms, then its storage
+    /// A group-1 bind group of the pass's own buffers: its parameters, then its storage
     /// buffers, at bindings 0, 1, 2, … in that order.
     pub fn group1(&self, gpu: &Gpu, buffers: &[&wgpu::Buffer]) -> wgpu::BindGroup {
         let entries: Vec<wgpu::BindGroupEntry> = buffers
@@ -99,12 +96,13 @@ impl PassPipelines {
     }
 }
 
-fn entry(binding: u32, ty: wgpu::BufferBindingType) -> wgpu::BindGroupLayoutEntry {
+/// A compute-stage storage-buffer binding; every binding of every pass is one.
+pub(crate) fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::COMPUTE,
         ty: wgpu::BindingType::Buffer {
-            ty,
+            ty: wgpu::BufferBindingType::Storage { read_only },
             has_dynamic_offset: false,
             min_binding_size: None,
         },

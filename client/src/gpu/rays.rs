@@ -166,7 +166,7 @@ impl RayTracer {
         }
         let groups = count.div_ceil(WORKGROUP);
         let (gx, _) = dispatch_2d(groups);
-        let uniform = gpu.uniform("ray count", bytemuck::cast_slice(&[count, gx * WORKGROUP, 0, 0]));
+        let params = gpu.params("ray count", bytemuck::cast_slice(&[count, gx * WORKGROUP, 0, 0]));
         let rays_buf = gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("rays"),
             contents: bytemuck::cast_slice(&words),
@@ -178,7 +178,7 @@ impl RayTracer {
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
             mapped_at_creation: false,
         });
-        let bind_group = self.pipes.group1(gpu, &[&uniform, &rays_buf, &hits]);
+        let bind_group = self.pipes.group1(gpu, &[&params, &rays_buf, &hits]);
         Ok(RayBatch {
             count,
             hits,

@@ -287,7 +287,7 @@ impl Renderer {
             sun[2],
             0,
         ];
-        let uniform = gpu.uniform("view", bytemuck::cast_slice(&view));
+        let params = gpu.params("view", bytemuck::cast_slice(&view));
         let storage = |label, size: u64| {
             gpu.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
@@ -299,7 +299,7 @@ impl Renderer {
         let colour = storage("pixels", pixels * 4);
         let gbuf = storage("gbuffer", if gbuffer { pixels * 16 } else { 16 });
         gpu.checked(|| {
-            let bind_group = self.pipes.group1(gpu, &[&uniform, &colour, &gbuf]);
+            let bind_group = self.pipes.group1(gpu, &[&params, &colour, &gbuf]);
             let mut enc = gpu.device.create_command_encoder(&Default::default());
             {
                 let mut pass = enc.begin_compute_pass(&Default::default());

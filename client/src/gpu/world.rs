@@ -14,9 +14,10 @@
 //! ([`GpuWorld::changes_since`]).
 
 use super::context::{Gpu, GpuError, checked_on};
+use super::params::WorldInfo;
+use super::pipeline::storage_entry;
 use super::rays::Traversal;
 use super::shaders::{BUFFERS, Split};
-use super::uniform::WorldInfo;
 use naadf_world::baselines::{Hybrid, Svdag, Svo};
 use naadf_world::digest::{BufferId, Digest, PAGE_BYTES, digest_of};
 use naadf_world::fingerprint::{ChunkChanges, ChunkPrints, stale_words};
@@ -41,8 +42,10 @@ pub const GPU_BUFFERS: [BufferId; 7] = [
 const STRUCTURE: usize = 7;
 /// Smallest part (and page) size in words: parts never split a 64 KiB page.
 const MIN_PART_WORDS: u64 = (PAGE_BYTES / 4) as u64;
-/// Storage buffers a pass binds besides the world's (rays and hits; pixels and first hits).
-const PASS_STORAGE_BUFFERS: u32 = 2;
+/// The most storage buffers a pass other than the GI's binds besides the world's: the TAA
+/// pass's parameters of this frame and the last, its two inputs and its output. (The GI
+/// passes check their own, larger count for each frame size.)
+const PASS_STORAGE_BUFFERS: u32 = 5;
 /// Smallest buffer allocated (bindings must not be empty).
 const MIN_BYTES: u64 = 16;
 /// Syncs whose changed chunks are kept in the log; a renderer further behind than that is
@@ -137,7 +140,7 @@ impl GpuWorld {
         let info = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("world info"),
             size: size_of::<WorldInfo>() as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
         let split = Split {
@@ -408,7 +411,7 @@ impl GpuWorld {
         &self.layout
     }
 
-    /// The group-0 bind group (world uniform and buffers).
+    /// The group-0 bind group (world parameters and buffers).
     pub fn bind_group(&self) -> &wgpu::BindGroup {
         &self.bind_group
     }
@@ -479,10 +482,10 @@ impl GpuWorld {
 
     /// Fails when `split` needs more storage bindings than a pass may bind next to its own.
     fn check_bindings(&self, split: &Split) -> Result<(), GpuError> {
-        if split.bindings() + PASS_STORAGE_BUFFERS > self.max_storage_buffers {
+        if split.storage_bindings() + PASS_STORAGE_BUFFERS > self.max_storage_buffers {
             return Err(GpuError::Unsupported(format!(
                 "the world needs {} storage bindings plus {PASS_STORAGE_BUFFERS} per pass; the adapter allows {} per shader stage",
-                split.bindings(),
+                split.storage_bindings(),
                 self.max_storage_buffers
             )));
         }
@@ -531,28 +534,8 @@ pub(crate) fn new_part(device: &wgpu::Device, name: &str, size: u64) -> wgpu::Bu
 }
 
 fn bind_group_layout(device: &wgpu::Device, split: &Split) -> wgpu::BindGroupLayout {
-    let mut entries = vec![wgpu::BindGroupLayoutEntry {
-        binding: 0,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Uniform,
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }];
-    for b in 1..=split.bindings() {
-        entries.push(wgpu::BindGroupLayoutEntry {
-            binding: b,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only: true },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        });
-    }
+    // `world_info` at binding 0, then the buffer parts: all read-only.
+    let entries: Vec<_> = (0..split.storage_bindings()).map(|b| storage_entry(b, true)).collect();
     device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("world"),
         entries: &entries,

@@ -1,4 +1,5 @@
-//! Uniform structs declared once for Rust and WGSL.
+//! Parameter structs (the values a dispatch reads alike in every invocation) declared once
+//! for Rust and WGSL.
 //!
 //! `wgsl_struct!` declares a `#[repr(C)]` [`bytemuck::Pod`] struct and implements
 //! [`WgslStruct`] for it from the same field list: the WGSL declaration the shaders'
@@ -70,7 +71,7 @@ pub trait WgslStruct: bytemuck::Pod {
 
 /// Declares a `#[repr(C)]` Pod struct of documented `pub` fields whose types implement
 /// [`WgslType`], and implements [`WgslStruct`] for it from the same field list. Its size
-/// must be a multiple of 16 bytes, as WGSL's uniform layout rounds structs up to that.
+/// must be a multiple of 16 bytes, as WGSL rounds a struct with `vec3` members up to that.
 macro_rules! wgsl_struct {
     (
         $(#[doc = $doc:literal])*
@@ -85,7 +86,7 @@ macro_rules! wgsl_struct {
             $($(#[doc = $field_doc])+ pub $field: $ty,)+
         }
 
-        const _: () = assert!(size_of::<$name>() % 16 == 0, "uniform structs are multiples of 16 bytes");
+        const _: () = assert!(size_of::<$name>() % 16 == 0, "parameter structs are multiples of 16 bytes");
 
         impl WgslStruct for $name {
             const NAME: &'static str = stringify!($name);
@@ -100,7 +101,7 @@ macro_rules! wgsl_struct {
 }
 
 wgsl_struct! {
-    /// The world uniform, `world_info` (group 0, binding 0 of every pass): what the shaders
+    /// The world's parameters, `world_info` (group 0, binding 0 of every pass): what the shaders
     /// know about the world besides its buffers.
     pub struct WorldInfo {
         /// World size in voxels.
