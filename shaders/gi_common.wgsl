@@ -92,7 +92,7 @@ fn changes_at(p: vec3<f32>, n: vec3<f32>) -> vec2<u32> {
     if any(v < vec3<f32>(0.0)) || any(v >= vec3<f32>(world_info.size)) {
         return vec2<u32>(0u);
     }
-    return changes[chunk_index(vec3<u32>(v) / 16u)];
+    return changes[chunk_index(vec3<u32>(v) / 16u, world_info.chunks)];
 }
 
 fn region_of(x: u32, y: u32) -> u32 {

@@ -27,9 +27,12 @@ fn world_loop(r: Ray) -> WorldTrace {
     // entered, so the loop needs no world-wide flag.
     var last_chunk = 0xFFFFFFFFu;
     var last_field = 0u;
-    for (var steps = 1u; steps <= world_info.max_steps; steps++) {
+    // The world's parameters, read once (see chunk_index in world.wgsl).
+    let chunks = world_info.chunks;
+    let max_steps = world_info.max_steps;
+    for (var steps = 1u; steps <= max_steps; steps++) {
         let p = vec3<u32>(cell);
-        let ci = chunk_index(p >> vec3<u32>(4u));
+        let ci = chunk_index(p >> vec3<u32>(4u), chunks);
         if ci != last_chunk {
             last_chunk = ci;
             last_field = chunk_entity_word(ci);

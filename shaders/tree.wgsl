@@ -65,7 +65,8 @@ fn world_loop(r: Ray) -> WorldTrace {
     var path: array<u32, TREE_MAX_LEVELS>;
     path[0] = TREE_HEADER_WORDS;
     var valid = 1u;
-    for (var steps = 1u; steps <= world_info.max_steps; steps++) {
+    let max_steps = world_info.max_steps; // read once (see chunk_index in world.wgsl)
+    for (var steps = 1u; steps <= max_steps; steps++) {
         var l = valid - 1u;
         var empty = 0u;
         loop {

@@ -24,8 +24,11 @@ fn aadf_field(word: u32, dir: u32, bits: u32) -> u32 {
     return (word >> (bits * dir)) & ((1u << bits) - 1u);
 }
 
-fn chunk_index(c: vec3<u32>) -> u32 {
-    return c.x + world_info.chunks.x * (c.y + world_info.chunks.y * c.z);
+// The index of chunk `c` in a world of `chunks` chunks (`world_info.chunks`). Loops read
+// `world_info` once before they start and pass its fields: it is a storage buffer, and a
+// storage read in every step is a bounds-checked load on lavapipe.
+fn chunk_index(c: vec3<u32>, chunks: vec3<u32>) -> u32 {
+    return c.x + chunks.x * (c.y + chunks.y * c.z);
 }
 
 fn index4(p: vec3<u32>) -> u32 {
