@@ -464,14 +464,44 @@ mod tests {
             mem_parts: 3,
             taa_parts: 2,
         };
-        let split_gi = GiPass::ALL.map(|p| Pass::Gi(p, gi_split));
         for s in [whole(), split] {
-            for pass in Pass::ALL.into_iter().chain(split_gi) {
+            for pass in every_pass(gi_split) {
                 for lp in Loop::ALL {
                     if let Err(e) = validate(&source(pass, lp, &s)) {
                         panic!("{pass:?} with {lp:?} over {s:?}:\n{e}");
                     }
                 }
+            }
+        }
+    }
+
+    /// Every pass: the ones of [`Pass::ALL`], then the GI passes over `gi_split`.
+    fn every_pass(gi_split: GiSplit) -> impl Iterator<Item = Pass> {
+        Pass::ALL.into_iter().chain(GiPass::ALL.map(|p| Pass::Gi(p, gi_split)))
+    }
+
+    /// Lavapipe re-optimises a shader for the values of its uniform buffers at every
+    /// dispatch (see `Gpu::params`), so no pass may declare one.
+    #[test]
+    fn no_pass_declares_a_uniform_buffer() {
+        let gi_split = GiSplit {
+            part_bytes_shift: 27,
+            mem_parts: 1,
+            taa_parts: 1,
+        };
+        for pass in every_pass(gi_split) {
+            for lp in Loop::ALL {
+                let module = parse(&source(pass, lp, &whole()));
+                let uniforms: Vec<_> = module
+                    .global_variables
+                    .iter()
+                    .filter(|(_, v)| v.space == naga::AddressSpace::Uniform)
+                    .map(|(_, v)| v.name.clone().unwrap_or_default())
+                    .collect();
+                assert!(
+                    uniforms.is_empty(),
+                    "{pass:?} with {lp:?} declares uniform buffers {uniforms:?}"
+                );
             }
         }
     }
