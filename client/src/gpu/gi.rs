@@ -70,6 +70,8 @@ const RING_PER_PIXEL: u64 = 2;
 const POSE_TABLE_WORDS: u64 = TAA_SLOTS as u64 * NO_ENTITY as u64 * 4;
 /// The smallest part of a split array: the cameras (written from the CPU) fit in the first.
 const MIN_PART_BYTES: u64 = 1 << 16;
+/// Parameter buffers at the start of the GI passes' group 1: frame, light, GI state.
+const GI_PARAMS: u32 = 3;
 
 /// One pass of the pipeline, in frame order.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -495,13 +497,14 @@ impl Temporal for Gi {
             )));
         }
         let pipes = self.pipes.entry(split).or_insert_with(|| {
-            // The frame, light and GI state, and the change marks, are read-only.
-            let storage: Vec<bool> = (0..split.bindings())
-                .map(|b| b < 3 || b == GiSplit::CHANGES_BINDING)
+            // Three parameter buffers (frame, light, GI state), then the storage buffers,
+            // of which only the change marks are read-only.
+            let storage: Vec<bool> = (GI_PARAMS..split.bindings())
+                .map(|b| b == GiSplit::CHANGES_BINDING)
                 .collect();
             GiPass::ALL
                 .iter()
-                .map(|&p| PassPipelines::new(gpu, Pass::Gi(p, split), 0, &storage))
+                .map(|&p| PassPipelines::new(gpu, Pass::Gi(p, split), GI_PARAMS, &storage))
                 .collect()
         });
         let mut pipelines = Vec::with_capacity(pipes.len());
