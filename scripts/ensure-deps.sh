@@ -15,7 +15,7 @@
 # - LP_NUM_THREADS=8: llvmpipe balances uneven compute work badly with one thread per core.
 # - XDG_RUNTIME_DIR: silences Vulkan loader warnings on headless machines.
 
-pkgs="mesa-vulkan-drivers libvulkan1 libegl1 libegl-mesa0 libgl1-mesa-dri python3-venv xvfb xauth libx11-xcb1 libxcursor1 libxrandr2 libxi6 libxkbcommon-x11-0 xdotool chromium g++ fonts-dejavu-core"
+pkgs="mesa-vulkan-drivers libvulkan1 libegl1 libegl-mesa0 libgl1-mesa-dri python3-venv xvfb libx11-xcb1 libxcursor1 libxrandr2 libxi6 libxkbcommon-x11-0 xdotool chromium g++ fonts-dejavu-core"
 if command -v dpkg-query >/dev/null 2>&1; then
     missing=""
     for p in $pkgs; do

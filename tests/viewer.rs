@@ -4,34 +4,90 @@
 
 mod support;
 
-use std::process::Command;
+use std::io::{BufRead, BufReader};
+use std::process::{Child, Command, Stdio};
 use support::{ok, p, serve_world, start_world};
 
-/// `naadf view` at 320×200 with a JSON summary, on a fresh virtual display, run through
-/// `wrapper` (a script that drives it, or nothing).
-fn viewer(wrapper: &[&str], url: &str, token: &str) -> Command {
-    let mut c = Command::new("xvfb-run");
-    c.args(["-a", "-s", "-screen 0 800x600x24"])
-        .args(wrapper)
-        .arg(env!("CARGO_BIN_EXE_naadf"))
-        .args(["view", "--server", url, "--token", token, "--size", "320x200", "--json"]);
-    c
+/// One Xvfb server for the whole test, stopped (and waited for) when dropped.
+///
+/// The test starts Xvfb itself rather than through `xvfb-run`: `xvfb-run` kills its server
+/// without waiting for it to go, and on a loaded two-core machine the second of two
+/// sessions once found no X server to connect to. `-displayfd`
+/// lets the server pick a free display and say which once it accepts connections, and
+/// `-noreset` keeps it from resetting whenever its last client (an `xdotool` poll)
+/// disconnects while the viewer is connecting.
+struct VirtualDisplay {
+    server: Child,
+    display: String,
+}
+
+impl VirtualDisplay {
+    /// Starts Xvfb with an 800×600 screen, or `None` when Xvfb is not installed.
+    fn start() -> Option<Self> {
+        let mut server = Command::new("Xvfb")
+            .args([
+                "-displayfd",
+                "1",
+                "-screen",
+                "0",
+                "800x600x24",
+                "-noreset",
+                "-nolisten",
+                "tcp",
+            ])
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .ok()?;
+        let mut line = String::new();
+        BufReader::new(server.stdout.take().unwrap())
+            .read_line(&mut line)
+            .expect("read Xvfb's display");
+        let number = line.trim();
+        assert!(!number.is_empty(), "Xvfb exited before it named its display");
+        Some(Self {
+            display: format!(":{number}"),
+            server,
+        })
+    }
+
+    /// `naadf view` at 320×200 with a JSON summary on this display, run through `wrapper`
+    /// (a script that drives it, or nothing).
+    fn viewer(&self, wrapper: &[&str], url: &str, token: &str) -> Command {
+        let mut argv = wrapper.to_vec();
+        argv.push(env!("CARGO_BIN_EXE_naadf"));
+        let mut c = Command::new(argv[0]);
+        c.args(&argv[1..]);
+        c.args(["view", "--server", url, "--token", token, "--size", "320x200", "--json"])
+            .env("DISPLAY", &self.display)
+            .env_remove("XAUTHORITY")
+            .env_remove("WAYLAND_DISPLAY");
+        c
+    }
+}
+
+impl Drop for VirtualDisplay {
+    fn drop(&mut self) {
+        let _ = self.server.kill();
+        let _ = self.server.wait();
+    }
 }
 
 #[test]
 fn the_viewer_renders_a_server_world_in_a_window() {
-    if Command::new("xvfb-run").arg("--help").output().is_err() {
-        eprintln!("skipping the viewer test: xvfb-run is not installed (scripts/ensure-deps.sh installs it)");
+    let Some(display) = VirtualDisplay::start() else {
+        eprintln!("skipping the viewer test: Xvfb is not installed (scripts/ensure-deps.sh installs it)");
         return;
-    }
+    };
     let dir = tempfile::tempdir().unwrap();
     let world = start_world(dir.path());
     let server = serve_world(dir.path(), &world, &[], &[]);
     let shot = p(dir.path(), "shot.png");
-    let out = viewer(&[], &server.url, "viewer")
+    let out = display
+        .viewer(&[], &server.url, "viewer")
         .args(["--frames", "4", "--screenshot", &shot, "--timeout", "120"])
         .output()
-        .expect("run xvfb-run");
+        .expect("run the viewer");
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "the viewer failed: {stderr}");
     let summary: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON summary");
@@ -79,10 +135,11 @@ fn the_viewer_renders_a_server_world_in_a_window() {
         wait $pid
     "#;
     let summary_path = p(dir.path(), "clicks.json");
-    let out = viewer(&["bash", "-c", script, "clicks"], &server.url, "editor")
+    let out = display
+        .viewer(&["bash", "-c", script, "clicks"], &server.url, "editor")
         .env("SUMMARY", &summary_path)
         .output()
-        .expect("run xvfb-run");
+        .expect("run the viewer");
     assert!(
         out.status.success(),
         "the clicking session failed: {}",
