@@ -39,7 +39,12 @@ struct Follower {
 
 impl Follower {
     async fn start(url: &str, token: &str, cache: Option<World>) -> Follower {
-        let mut session = client(url, token).await.join(cache).await.expect("join");
+        Follower::follow(client(url, token).await, cache).await
+    }
+
+    /// Joins through `client` and follows.
+    async fn follow(client: Client, cache: Option<World>) -> Follower {
+        let mut session = client.join(cache).await.expect("join");
         let (tx, state) = watch::channel(None);
         let (stop, mut stopped) = watch::channel(false);
         let task = tokio::spawn(async move {
@@ -443,22 +448,90 @@ async fn entity_requests_reach_the_mirrors() {
 }
 
 /// With a certificate and key the server speaks TLS, and clients trusting the CA connect.
-#[test]
-fn tls_with_a_certificate() {
+/// Rotating the files changes the certificate that new connections see, without a restart
+/// and without breaking open streams: at once on SIGHUP, otherwise at the next poll. A
+/// rotation caught halfway (the new certificate, the old key) is refused, and the old pair
+/// stays in use.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn tls_certificates_rotate_without_a_restart() {
     let dir = tempfile::tempdir().unwrap();
-    let key = rcgen::generate_simple_self_signed(vec!["localhost".to_string()]).unwrap();
-    let (cert, key_file) = (p(dir.path(), "cert.pem"), p(dir.path(), "key.pem"));
-    std::fs::write(&cert, key.cert.pem()).unwrap();
-    std::fs::write(&key_file, key.signing_key.serialize_pem()).unwrap();
-    let (_, server) = serve_fresh(dir.path(), &["--tls-cert", &cert, "--tls-key", &key_file]);
+    let pair = |name: &str| {
+        let k = rcgen::generate_simple_self_signed(vec!["localhost".to_string()]).unwrap();
+        let (cert, key) = (
+            p(dir.path(), &format!("{name}.crt")),
+            p(dir.path(), &format!("{name}.key")),
+        );
+        std::fs::write(&cert, k.cert.pem()).unwrap();
+        std::fs::write(&key, k.signing_key.serialize_pem()).unwrap();
+        (cert, key)
+    };
+    let (a, b) = (pair("a"), pair("b"));
+    let (cert, key) = (p(dir.path(), "cert.pem"), p(dir.path(), "key.pem"));
+    let install = |from: &str, to: &str| std::fs::copy(from, to).map(drop).unwrap();
+    install(&a.0, &cert);
+    install(&a.1, &key);
+    let (_, server) = serve_fresh(dir.path(), &["--tls-cert", &cert, "--tls-key", &key]);
     let port = server.url.rsplit(':').next().unwrap();
     let url = format!("https://localhost:{port}");
-    let out = ok(&["status", "--server", &url, "--ca", &cert, "--json"], None);
-    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
-    assert_eq!(v["version"], 0);
+    let served_by = |ca: &str| {
+        let out = support::naadf(&["status", "--server", &url, "--ca", ca, "--json"], None);
+        out.status.success()
+    };
+    assert!(served_by(&a.0) && !served_by(&b.0));
     // Without trusting the certificate, or without TLS, the call fails cleanly.
     support::fails(&["status", "--server", &url], None, "error");
     support::fails(&["status", "--server", &server.url], None, "error");
+
+    // A mirror and an editor hold their connections through the rotations.
+    let connect = |token: &'static str| Client::connect(&url, Some(token), Some(Path::new(&a.0)));
+    let f = Follower::follow(connect("viewer").await.unwrap(), None).await;
+    let editor = connect("editor").await.unwrap();
+    let mut rng = 5;
+    editor.edit(random_op(&mut rng).as_str(), 1).await.unwrap();
+    assert_eq!(converge(&editor, &[&f]).await.0, 1);
+
+    let metric = |name: &str| support::metric_value(&support::http_get(&server.http, "/metrics").1, name);
+    let hangup = || {
+        let sent = std::process::Command::new("kill")
+            .args(["-HUP", &server.pid().to_string()])
+            .status()
+            .unwrap();
+        assert!(sent.success());
+    };
+    let wait_for = |what: &str, done: &dyn Fn() -> bool| {
+        for _ in 0..400 {
+            if done() {
+                return;
+            }
+            std::thread::sleep(Duration::from_millis(100));
+        }
+        panic!("{what} did not happen within 40 s");
+    };
+    // Halfway: B's certificate, A's key.
+    install(&b.0, &cert);
+    hangup();
+    wait_for("a refused reload", &|| {
+        metric("naadf_tls_reload_failures_total") == Some(1)
+    });
+    assert!(served_by(&a.0) && !served_by(&b.0), "A stays in use");
+    install(&b.1, &key);
+    hangup();
+    wait_for("the reload", &|| metric("naadf_tls_reloads_total") == Some(1));
+    assert!(served_by(&b.0) && !served_by(&a.0), "B is in use");
+    editor.edit(random_op(&mut rng).as_str(), 2).await.unwrap();
+    assert_eq!(converge(&editor, &[&f]).await.0, 2, "open streams go on");
+
+    // No signal: the poll finds A back.
+    install(&a.1, &key);
+    install(&a.0, &cert);
+    wait_for("the polled reload", &|| served_by(&a.0));
+    assert!(!served_by(&b.0));
+    editor.edit(random_op(&mut rng).as_str(), 3).await.unwrap();
+    assert_eq!(converge(&editor, &[&f]).await.0, 3);
+    f.finish().await;
+    let log = std::fs::read_to_string(&server.log).unwrap();
+    assert!(log.contains("TLS certificate reloaded"), "{log}");
+    assert!(log.contains("the previous one stays in use"), "{log}");
     server.stop();
 }
 

@@ -206,19 +206,34 @@ impl tonic::transport::server::Connected for Conn {
     }
 }
 
-/// The connections of `acceptor` as the stream the gRPC server takes.
-pub fn incoming(mut acceptor: Acceptor) -> tokio_stream::wrappers::ReceiverStream<io::Result<Conn>> {
+/// The connections of `acceptor`, each passed through `open` (a TLS handshake, say), as
+/// the stream the gRPC server takes. Each `open` runs in a task of its own, so a slow peer
+/// delays no one else; a connection whose `open` fails is dropped here (logged at debug
+/// level), not handed to the server.
+pub fn incoming<T, F, Fut>(mut acceptor: Acceptor, open: F) -> tokio_stream::wrappers::ReceiverStream<io::Result<T>>
+where
+    T: Send + 'static,
+    F: Fn(Conn) -> Fut + Send + 'static,
+    Fut: Future<Output = io::Result<T>> + Send + 'static,
+{
     let (tx, rx) = tokio::sync::mpsc::channel(1);
     tokio::spawn(async move {
         loop {
-            let conn = tokio::select! {
-                (conn, _) = acceptor.accept() => conn,
+            let (conn, peer) = tokio::select! {
+                accepted = acceptor.accept() => accepted,
                 // The server stopped taking connections.
                 _ = tx.closed() => return,
             };
-            if tx.send(Ok(conn)).await.is_err() {
-                return;
-            }
+            let opening = open(conn);
+            let tx = tx.clone();
+            tokio::spawn(async move {
+                match opening.await {
+                    Ok(io) => {
+                        let _ = tx.send(Ok(io)).await;
+                    }
+                    Err(e) => tracing::debug!(%peer, "connection not opened: {e}"),
+                }
+            });
         }
     });
     tokio_stream::wrappers::ReceiverStream::new(rx)

@@ -3,17 +3,20 @@
 //! limits, and how far its clients may fall behind. `naadf serve` and `naadf relay` share
 //! all of it.
 
-use crate::conn::{Acceptor, ConnLimits};
+use crate::conn::{Acceptor, ConnLimits, incoming};
 use crate::join::SlowClientLimits;
+use crate::metrics::Metrics;
 use crate::serve::{Bound, DEFAULT_GRPC, DEFAULT_HTTP};
+use crate::tls::ReloadingCert;
 use anyhow::{Context, Result};
 use naadf_proto::FILE_DESCRIPTOR_SET;
 use naadf_proto::v1::world_service_server::{WorldService, WorldServiceServer};
 use std::net::SocketAddr;
 use std::path::PathBuf;
+use std::sync::Arc;
 use tokio::sync::watch;
 use tonic::codec::CompressionEncoding;
-use tonic::transport::{Identity, Server, ServerTlsConfig};
+use tonic::transport::Server;
 
 /// The client-facing settings a server and a relay share.
 #[derive(Clone, Debug)]
@@ -22,7 +25,8 @@ pub struct Frontend {
     pub grpc: SocketAddr,
     /// HTTP listen address.
     pub http: SocketAddr,
-    /// TLS certificate and key (PEM) for gRPC, if any. HTTP never has TLS of its own.
+    /// TLS certificate and key (PEM) for gRPC, if any, reloaded when they change (see
+    /// [`crate::tls`]). HTTP never has TLS of its own.
     pub tls: Option<(PathBuf, PathBuf)>,
     /// Largest gRPC message accepted, in bytes.
     pub max_message_bytes: usize,
@@ -75,13 +79,20 @@ impl Frontend {
             .collect()
     }
 
-    /// Binds both listeners and serves `svc` and `routes` until `shutdown` turns true.
+    /// Binds both listeners and serves `svc` and `routes` until `shutdown` turns true; with
+    /// TLS, the certificate is reloaded as [`crate::tls`] describes, counted in `metrics`.
     pub(crate) async fn start<S: WorldService>(
         &self,
         svc: WorldServiceServer<S>,
         routes: axum::Router,
+        metrics: &Arc<Metrics>,
         shutdown: &watch::Sender<bool>,
     ) -> Result<(Bound, Listening, Listening)> {
+        // Read before binding: a bad certificate fails the start, not the first handshake.
+        let tls = match &self.tls {
+            Some((cert, key)) => Some(Arc::new(ReloadingCert::load(cert, key)?)),
+            None => None,
+        };
         let grpc_listener = tokio::net::TcpListener::bind(self.grpc)
             .await
             .with_context(|| format!("cannot listen on {}", self.grpc))?;
@@ -105,24 +116,40 @@ impl Frontend {
             .max_encoding_message_size(usize::MAX)
             .accept_compressed(CompressionEncoding::Zstd);
         let keepalive = crate::conn::keepalive(self.connections.idle_timeout);
-        let mut builder = Server::builder()
+        let router = Server::builder()
             .http2_keepalive_interval(Some(keepalive))
-            .http2_keepalive_timeout(Some(keepalive));
-        if let Some((cert, key)) = &self.tls {
-            let cert = std::fs::read(cert).with_context(|| format!("cannot read {}", cert.display()))?;
-            let key = std::fs::read(key).with_context(|| format!("cannot read {}", key.display()))?;
-            builder = builder
-                .tls_config(ServerTlsConfig::new().identity(Identity::from_pem(cert, key)))
-                .context("bad TLS certificate or key")?;
-        }
-        let mut stop = shutdown.subscribe();
-        let grpc = builder
+            .http2_keepalive_timeout(Some(keepalive))
             .add_service(svc)
             .add_service(reflection_v1)
-            .add_service(reflection_v1alpha)
-            .serve_with_incoming_shutdown(grpc_incoming(grpc_listener, self.connections), async move {
-                let _ = stop.wait_for(|s| *s).await;
-            });
+            .add_service(reflection_v1alpha);
+        let mut stop = shutdown.subscribe();
+        let stopped = async move {
+            let _ = stop.wait_for(|s| *s).await;
+        };
+        let acceptor = grpc_acceptor(grpc_listener, self.connections);
+        let grpc = match tls {
+            Some(cert) => {
+                let tls = cert.acceptor()?;
+                let timeout = self.connections.idle_timeout;
+                cert.watch(metrics.clone(), shutdown.subscribe());
+                let incoming = incoming(acceptor, move |conn| crate::tls::handshake(tls.clone(), conn, timeout));
+                tokio::spawn(async move {
+                    router
+                        .serve_with_incoming_shutdown(incoming, stopped)
+                        .await
+                        .map_err(Into::into)
+                })
+            }
+            None => {
+                let incoming = incoming(acceptor, |conn| std::future::ready(Ok(conn)));
+                tokio::spawn(async move {
+                    router
+                        .serve_with_incoming_shutdown(incoming, stopped)
+                        .await
+                        .map_err(Into::into)
+                })
+            }
+        };
         let mut stop = shutdown.subscribe();
         let http = axum::serve(
             // `tap_io` only so that axum hands the peer address to the handlers.
@@ -132,22 +159,17 @@ impl Frontend {
         .with_graceful_shutdown(async move {
             let _ = stop.wait_for(|s| *s).await;
         });
-        let grpc = tokio::spawn(async move { grpc.await.map_err(Into::into) });
         let http = tokio::spawn(async move { http.await.map_err(Into::into) });
         Ok((bound, grpc, http))
     }
 }
 
-/// The gRPC connections accepted on `listener`, with `TCP_NODELAY` set (tonic applies its
-/// own `tcp_nodelay` only to listeners it binds itself). Deltas are small writes right
-/// behind bigger ones; without it, Nagle's algorithm holds them until the client's delayed
-/// ACK, up to 40 ms on Linux, for every client at once. They are held to `limits` like
-/// the HTTP side's.
-fn grpc_incoming(
-    listener: tokio::net::TcpListener,
-    limits: ConnLimits,
-) -> tokio_stream::wrappers::ReceiverStream<std::io::Result<crate::conn::Conn>> {
-    crate::conn::incoming(Acceptor::new(listener, limits, true))
+/// The gRPC listener's acceptor: connections within `limits`, with `TCP_NODELAY` set
+/// (tonic applies its own `tcp_nodelay` only to listeners it binds itself). Deltas are
+/// small writes right behind bigger ones; without it, Nagle's algorithm holds them until
+/// the client's delayed ACK, up to 40 ms on Linux, for every client at once.
+fn grpc_acceptor(listener: tokio::net::TcpListener, limits: ConnLimits) -> Acceptor {
+    Acceptor::new(listener, limits, true)
 }
 
 #[cfg(test)]
@@ -158,7 +180,8 @@ mod tests {
     async fn accepted_grpc_connections_send_without_delay() {
         let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
         let addr = listener.local_addr().unwrap();
-        let mut incoming = super::grpc_incoming(listener, Default::default());
+        let acceptor = super::grpc_acceptor(listener, Default::default());
+        let mut incoming = crate::conn::incoming(acceptor, |c| std::future::ready(Ok(c)));
         let _client = tokio::net::TcpStream::connect(addr).await.unwrap();
         let accepted = incoming.next().await.unwrap().unwrap();
         assert!(accepted.get_ref().nodelay().unwrap());

@@ -36,6 +36,7 @@ pub mod render_router;
 pub(crate) mod serve;
 pub mod service;
 pub mod store;
+pub mod tls;
 pub mod wal;
 
 pub use serve::{Bound, DEFAULT_DATA, DEFAULT_GRPC, DEFAULT_HTTP, ServerConfig, serve};

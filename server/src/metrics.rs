@@ -51,6 +51,10 @@ pub struct Metrics {
     pub fsync: Histogram,
     /// Snapshots written.
     pub snapshots: Counter,
+    /// TLS certificate reloads that took effect ([`crate::tls`]).
+    pub tls_reloads: Counter,
+    /// TLS certificate reloads that failed (the previous certificate stayed in use).
+    pub tls_reload_failures: Counter,
     /// Frames served, per render node and in total (rate() gives frames per second).
     pub frames: Family<NodeLabel, Counter>,
     /// Frame latency as the requester sees it (routing, waiting and rendering), seconds.
@@ -158,6 +162,8 @@ impl Default for Metrics {
             growth_steps: Counter::default(),
             fsync: Histogram::new(exponential_buckets(0.000_05, 2.0, 16)),
             snapshots: Counter::default(),
+            tls_reloads: Counter::default(),
+            tls_reload_failures: Counter::default(),
             frames: Family::default(),
             frame_seconds: LatencyFamily::new_with_constructor(latency_histogram),
             frames_in_flight: Family::default(),
@@ -192,6 +198,16 @@ impl Default for Metrics {
         );
         registry.register("wal_fsync_seconds", "Write-ahead log fsync latency", m.fsync.clone());
         registry.register("snapshots", "Snapshots written", m.snapshots.clone());
+        registry.register(
+            "tls_reloads",
+            "TLS certificate reloads that took effect",
+            m.tls_reloads.clone(),
+        );
+        registry.register(
+            "tls_reload_failures",
+            "TLS certificate reloads that failed (the previous certificate stays in use)",
+            m.tls_reload_failures.clone(),
+        );
         registry.register("frames", "Frames served by render nodes", m.frames.clone());
         registry.register(
             "frame_seconds",

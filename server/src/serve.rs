@@ -258,7 +258,10 @@ pub async fn serve(
 
     let svc = WorldServiceServer::new(WorldServer::new(shared.clone(), req_tx.clone()));
     let routes = http::router(shared.clone(), req_tx.clone(), Backend::Server(config.auth.clone()));
-    let (bound, grpc, http) = config.frontend.start(svc, routes, &shutdown_tx).await?;
+    let (bound, grpc, http) = config
+        .frontend
+        .start(svc, routes, &shared.metrics, &shutdown_tx)
+        .await?;
     let ticker = {
         let actor = req_tx.clone();
         let every = config.checkpoint_interval;

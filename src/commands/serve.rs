@@ -69,7 +69,8 @@ pub struct Args {
 /// `serve` and `relay` share.
 #[derive(clap::Args)]
 pub struct ListenArgs {
-    /// TLS certificate chain (PEM); needs --tls-key.
+    /// TLS certificate chain (PEM); needs --tls-key. Read again every 10 s and on SIGHUP:
+    /// a changed pair that loads serves the connections opened after it.
     #[arg(long, requires = "tls_key")]
     pub tls_cert: Option<PathBuf>,
     /// TLS private key (PEM); needs --tls-cert.
