@@ -481,6 +481,17 @@ async fn tls_certificates_rotate_without_a_restart() {
     // Without trusting the certificate, or without TLS, the call fails cleanly.
     support::fails(&["status", "--server", &url], None, "error");
     support::fails(&["status", "--server", &server.url], None, "error");
+    // Plain text where a handshake belongs: the server closes that connection, and only it.
+    {
+        use std::io::{Read, Write};
+        let mut raw = std::net::TcpStream::connect(server.url.trim_start_matches("http://")).unwrap();
+        raw.set_read_timeout(Some(Duration::from_secs(30))).unwrap();
+        raw.write_all(b"GET / HTTP/1.1\r\nHost: x\r\n\r\n").unwrap();
+        let mut rest = Vec::new();
+        let _ = raw.read_to_end(&mut rest);
+        assert!(!rest.starts_with(b"HTTP/"), "no plain answer: {rest:?}");
+    }
+    assert!(served_by(&a.0));
 
     // A mirror and an editor hold their connections through the rotations.
     let connect = |token: &'static str| Client::connect(&url, Some(token), Some(Path::new(&a.0)));
