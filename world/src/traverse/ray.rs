@@ -67,6 +67,14 @@ pub const MAX_COORD: f64 = (1u64 << 30) as f64;
 /// Far-away cell bound for unconstrained axes.
 const FAR: i64 = 1 << 40;
 
+/// `floor(p)` without a libm call (x86-64's baseline has no rounding instruction): exact
+/// for the |p| < 2^41 that origins within ±2^30 and in-world times give.
+#[inline(always)]
+fn floor_i64(p: f64) -> i64 {
+    let t = p as i64;
+    if (t as f64) > p { t - 1 } else { t }
+}
+
 impl Ray {
     /// A ray from `origin` along `dir` (normalised here). Fails on a zero or non-finite
     /// direction or a non-finite origin.
@@ -127,10 +135,7 @@ impl Ray {
             return lo;
         }
         let p = self.o[b] + d * t;
-        // floor(p) without a libm call (x86-64's baseline has no rounding instruction);
-        // exact for the |p| < 2^41 that origins within ±2^30 and in-world times give.
-        let t0 = p as i64;
-        let fl = if (t0 as f64) > p { t0 - 1 } else { t0 };
+        let fl = floor_i64(p);
         let k = fl.clamp(lo, hi);
         let f = p - fl as f64;
         // Far from a plane the floor is certain: time errors are ~1e-12, far below 1e-7.
@@ -161,7 +166,7 @@ impl Ray {
     /// `[0, size)`. Rays start at the world box itself (no inset).
     pub(crate) fn entry(&self, size: [u32; 3]) -> Option<Entry> {
         let size = size.map(i64::from);
-        let start = self.o.map(|v| v.floor() as i64);
+        let start = self.o.map(floor_i64);
         if (0..3).all(|a| start[a] >= 0 && start[a] < size[a]) {
             return Some(Entry {
                 cell: start,
