@@ -16,7 +16,7 @@ use naadf_server::relay::upstream::Upstream;
 use prost::Message;
 use std::sync::Arc;
 use std::time::Duration;
-use support::{Server, free_addr, http_get, quiescent, random_op, serve_world, start_world};
+use support::{Server, free_addr, http_get, quiescent, random_op, serve_world, start_world, wait_for};
 use tokio::sync::{Notify, broadcast, oneshot};
 
 /// Long enough for a join and the distance fields to settle on a slow machine.
@@ -401,18 +401,6 @@ fn upstream_metrics(relay: &Server) -> (u64, u64) {
 fn metric(relay: &Server, name: &str) -> u64 {
     let (_, metrics) = http_get(&relay.http, "/metrics");
     support::metric_value(&metrics, name).unwrap_or_else(|| panic!("no {name} in {metrics}"))
-}
-
-/// Waits up to 30 s for what `read` reads to satisfy `ok`; the last read.
-async fn wait_for<T: Copy>(read: impl Fn() -> T, ok: impl Fn(T) -> bool) -> T {
-    for _ in 0..300 {
-        let m = read();
-        if ok(m) {
-            return m;
-        }
-        tokio::time::sleep(Duration::from_millis(100)).await;
-    }
-    read()
 }
 
 /// Waits up to 30 s for the relay's upstream metrics to satisfy `ok`; the last seen.

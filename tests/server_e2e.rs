@@ -11,7 +11,7 @@ use naadf_world::{World, file};
 use std::ops::ControlFlow;
 use std::path::Path;
 use std::time::Duration;
-use support::{Server, free_addr, ok, p, random_op, serve_world, start_world};
+use support::{Server, free_addr, ok, p, random_op, serve_world, start_world, wait_for};
 use tokio::sync::watch;
 use tokio::task::JoinHandle;
 
@@ -502,32 +502,16 @@ async fn tls_certificates_rotate_without_a_restart() {
     assert_eq!(converge(&editor, &[&f]).await.0, 1);
 
     let metric = |name: &str| support::metric_value(&support::http_get(&server.http, "/metrics").1, name);
-    let hangup = || {
-        let sent = std::process::Command::new("kill")
-            .args(["-HUP", &server.pid().to_string()])
-            .status()
-            .unwrap();
-        assert!(sent.success());
-    };
-    let wait_for = |what: &str, done: &dyn Fn() -> bool| {
-        for _ in 0..400 {
-            if done() {
-                return;
-            }
-            std::thread::sleep(Duration::from_millis(100));
-        }
-        panic!("{what} did not happen within 40 s");
-    };
     // Halfway: B's certificate, A's key.
     install(&b.0, &cert);
-    hangup();
-    wait_for("a refused reload", &|| {
-        metric("naadf_tls_reload_failures_total") == Some(1)
-    });
+    server.signal("HUP");
+    let failures = wait_for(|| metric("naadf_tls_reload_failures_total"), |m| m == Some(1)).await;
+    assert_eq!(failures, Some(1), "a refused reload");
     assert!(served_by(&a.0) && !served_by(&b.0), "A stays in use");
     install(&b.1, &key);
-    hangup();
-    wait_for("the reload", &|| metric("naadf_tls_reloads_total") == Some(1));
+    server.signal("HUP");
+    let reloads = wait_for(|| metric("naadf_tls_reloads_total"), |m| m == Some(1)).await;
+    assert_eq!(reloads, Some(1), "the reload");
     assert!(served_by(&b.0) && !served_by(&a.0), "B is in use");
     editor.edit(random_op(&mut rng).as_str(), 2).await.unwrap();
     assert_eq!(converge(&editor, &[&f]).await.0, 2, "open streams go on");
@@ -535,7 +519,7 @@ async fn tls_certificates_rotate_without_a_restart() {
     // No signal: the poll finds A back.
     install(&a.1, &key);
     install(&a.0, &cert);
-    wait_for("the polled reload", &|| served_by(&a.0));
+    assert!(wait_for(|| served_by(&a.0), |served| served).await, "the polled reload");
     assert!(!served_by(&b.0));
     editor.edit(random_op(&mut rng).as_str(), 3).await.unwrap();
     assert_eq!(converge(&editor, &[&f]).await.0, 3);

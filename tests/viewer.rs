@@ -12,10 +12,10 @@ use support::{ok, p, serve_world, start_world};
 ///
 /// The test starts Xvfb itself rather than through `xvfb-run`: `xvfb-run` kills its server
 /// without waiting for it to go, and on a loaded two-core machine the second of two
-/// sessions once found no X server to connect to. `-displayfd`
-/// lets the server pick a free display and say which once it accepts connections, and
-/// `-noreset` keeps it from resetting whenever its last client (an `xdotool` poll)
-/// disconnects while the viewer is connecting.
+/// sessions once found no X server to connect to. `-displayfd` lets the server pick a free
+/// display and say which once it accepts connections, and `-noreset` keeps it from
+/// resetting whenever its last client (an `xdotool` poll) disconnects while the viewer is
+/// connecting.
 struct VirtualDisplay {
     server: Child,
     display: String,

@@ -14,9 +14,12 @@ use naadf_proto::v1::world_service_server::{WorldService, WorldServiceServer};
 use std::net::SocketAddr;
 use std::path::PathBuf;
 use std::sync::Arc;
+use tokio::io::{AsyncRead, AsyncWrite};
 use tokio::sync::watch;
+use tokio_stream::wrappers::ReceiverStream;
 use tonic::codec::CompressionEncoding;
 use tonic::transport::Server;
+use tonic::transport::server::{Connected, Router};
 
 /// The client-facing settings a server and a relay share.
 #[derive(Clone, Debug)]
@@ -133,22 +136,9 @@ impl Frontend {
                 let timeout = self.connections.idle_timeout;
                 cert.watch(metrics.clone(), shutdown.subscribe());
                 let incoming = incoming(acceptor, move |conn| crate::tls::handshake(tls.clone(), conn, timeout));
-                tokio::spawn(async move {
-                    router
-                        .serve_with_incoming_shutdown(incoming, stopped)
-                        .await
-                        .map_err(Into::into)
-                })
+                serve_grpc(router, incoming, stopped)
             }
-            None => {
-                let incoming = incoming(acceptor, |conn| std::future::ready(Ok(conn)));
-                tokio::spawn(async move {
-                    router
-                        .serve_with_incoming_shutdown(incoming, stopped)
-                        .await
-                        .map_err(Into::into)
-                })
-            }
+            None => serve_grpc(router, incoming(acceptor, |conn| std::future::ready(Ok(conn))), stopped),
         };
         let mut stop = shutdown.subscribe();
         let http = axum::serve(
@@ -162,6 +152,25 @@ impl Frontend {
         let http = tokio::spawn(async move { http.await.map_err(Into::into) });
         Ok((bound, grpc, http))
     }
+}
+
+/// Serves `router` on the connections `incoming` hands over until `stopped`, in a task of
+/// its own.
+fn serve_grpc<IO>(
+    router: Router,
+    incoming: ReceiverStream<std::io::Result<IO>>,
+    stopped: impl Future<Output = ()> + Send + 'static,
+) -> Listening
+where
+    IO: AsyncRead + AsyncWrite + Connected + Unpin + Send + 'static,
+    IO::ConnectInfo: Clone + Send + Sync + 'static,
+{
+    tokio::spawn(async move {
+        router
+            .serve_with_incoming_shutdown(incoming, stopped)
+            .await
+            .map_err(Into::into)
+    })
 }
 
 /// The gRPC listener's acceptor: connections within `limits`, with `TCP_NODELAY` set

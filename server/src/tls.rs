@@ -6,8 +6,8 @@
 //! reads the files again every [`POLL`] and on SIGHUP: a changed pair that loads is used
 //! for every handshake after it, while open connections keep the one they began with. A
 //! pair that does not load (a half-written file, a key that does not match the
-//! certificate) is logged and counted once, and the last good pair stays in use, so a bad
-//! rotation never takes the listener down.
+//! certificate) is logged and counted once, a file that cannot be read at every attempt,
+//! and the last good pair stays in use, so a bad rotation never takes the listener down.
 
 use crate::conn::Conn;
 use crate::metrics::Metrics;
@@ -64,9 +64,9 @@ impl ReloadingCert {
     }
 
     /// Reads the files again and, if they changed and load, uses them from now on.
-    /// `Ok(true)` when a new pair took effect, `Ok(false)` when the files did not change
-    /// (or changed back to a pair already reported), an error when the new contents do
-    /// not load; the pair in use is unchanged then.
+    /// `Ok(true)` when a new pair took effect, `Ok(false)` when the files are as they were
+    /// when last read, an error when they cannot be read or their new contents do not load;
+    /// the pair in use is unchanged then.
     pub fn reload(&self) -> Result<bool> {
         let pair = read_pair(&self.cert_path, &self.key_path)?;
         let mut seen = self.seen.lock().expect("seen lock");
@@ -93,11 +93,7 @@ impl ReloadingCert {
     /// Spawns the task that reloads every [`POLL`] and on SIGHUP until `shutdown` turns
     /// true, logging each outcome and counting it in `metrics`. The SIGHUP handler is in
     /// place when this returns, so a SIGHUP sent once the server is up never kills it.
-    pub fn watch(
-        self: Arc<Self>,
-        metrics: Arc<Metrics>,
-        shutdown: watch::Receiver<bool>,
-    ) -> tokio::task::JoinHandle<()> {
+    pub fn watch(self: Arc<Self>, metrics: Arc<Metrics>, shutdown: watch::Receiver<bool>) {
         let hangup = match tokio::signal::unix::signal(tokio::signal::unix::SignalKind::hangup()) {
             Ok(s) => Some(s),
             Err(e) => {
@@ -105,7 +101,7 @@ impl ReloadingCert {
                 None
             }
         };
-        tokio::spawn(self.reload_loop(hangup, metrics, shutdown))
+        tokio::spawn(self.reload_loop(hangup, metrics, shutdown));
     }
 
     async fn reload_loop(
@@ -116,6 +112,7 @@ impl ReloadingCert {
     ) {
         let mut tick = tokio::time::interval(POLL);
         tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+        // The first tick is immediate, and the files were just loaded.
         tick.tick().await;
         loop {
             let hangup = async {

@@ -128,13 +128,18 @@ impl Server {
         self.child.wait().unwrap();
     }
 
-    /// SIGTERM, then waits for a clean exit.
-    pub fn stop(mut self) {
+    /// Sends signal `name` (`TERM`, `HUP`, ...).
+    pub fn signal(&self, name: &str) {
         let st = Command::new("kill")
-            .args(["-TERM", &self.child.id().to_string()])
+            .args([&format!("-{name}"), &self.child.id().to_string()])
             .status()
             .unwrap();
         assert!(st.success());
+    }
+
+    /// SIGTERM, then waits for a clean exit.
+    pub fn stop(mut self) {
+        self.signal("TERM");
         let status = self.child.wait().unwrap();
         assert!(
             status.success(),
@@ -184,6 +189,18 @@ pub fn http_get_bytes(addr: &str, path: &str) -> (u16, Vec<u8>) {
 pub fn metric_value(page: &str, name: &str) -> Option<u64> {
     page.lines()
         .find_map(|l| l.strip_prefix(name)?.strip_prefix(' ')?.trim().parse().ok())
+}
+
+/// Waits up to 30 s for what `read` reads to satisfy `ok`; the last read.
+pub async fn wait_for<T: Copy>(read: impl Fn() -> T, ok: impl Fn(T) -> bool) -> T {
+    for _ in 0..300 {
+        let m = read();
+        if ok(m) {
+            return m;
+        }
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    }
+    read()
 }
 
 /// A free loopback address, `127.0.0.1:PORT` (bound, then released): for a server that
