@@ -8,8 +8,8 @@ const HIT_NOTHING: u32 = 0x1FFFFu;
 const HIT_UNDEFINED: u32 = 0u;
 // Mirror segments a path may follow (the primary segment included).
 const MAX_SEGMENTS: u32 = 4u;
-// Offset of secondary-ray origins along the surface normal (docs/NAADF.md §12).
-const SURFACE_OFFSET: f32 = 0.01;
+// Secondary-ray origins start SURFACE_OFFSET off the surface, along its normal
+// (docs/NAADF.md §12; from the prelude).
 
 // How a chain ended.
 const CHAIN_SURFACE: u32 = 0u;

@@ -1,7 +1,8 @@
 // The GI pipeline (`gi`, docs/RENDERING.md §3c): bindings and helpers shared by its passes
 // (gi_primary.wgsl, gi_samples.wgsl, gi_resample.wgsl). Every pass binds the same group 1;
-// the constants in capitals without a definition here (TAA_SLOTS, CAMERA_HISTORY, …) come
-// from the prelude, generated from client/src/gpu/gi.rs.
+// the constants in capitals without a definition here (TAA_SLOTS, CAMERA_HISTORY, CAM_WORDS,
+// the control words CONTROL_*, …) are generated after the GI files from their Rust
+// definitions in client/src/gpu/gi/memory.rs.
 
 @group(1) @binding(0) var<storage, read> frame: FrameInfo;
 @group(1) @binding(1) var<storage, read> light: LightInfo;
@@ -45,7 +46,6 @@
 // changed chunks.
 @group(1) @binding(5) var<storage, read> changes: array<vec2<u32>>;
 
-const CAM_WORDS: u32 = 5u;
 // The chain length of the sky in the TAA (the largest finite f16).
 const SKY_DIST: f32 = 65504.0;
 // Kinds of final surface (gmat.x bits 4–7).
@@ -55,12 +55,6 @@ const CLASS_NONE: u32 = 2u;
 const NO_NORMAL: u32 = 7u;
 // Normal ids of surfaces (0–5).
 const NORMALS: u32 = 6u;
-// Control words.
-const CONTROL_QUEUED: u32 = 8u;
-const CONTROL_START: u32 = 9u;
-const CONTROL_VALID: u32 = 10u;
-const CONTROL_HEAD: u32 = 11u;
-const CONTROL_FRAMES: u32 = 16u;
 
 fn pixel_count() -> u32 {
     return frame.width * frame.height;

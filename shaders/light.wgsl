@@ -5,28 +5,12 @@
 //
 // The pass binds `light: LightInfo` (generated in the prelude from the Rust `LightInfo`).
 
-const PI: f32 = 3.14159265358979;
-// Offset of scattered and shadow ray origins along the surface normal, in voxels.
-const PATH_OFFSET: f32 = 0.01;
-// The smallest GGX α a metal is traced with (scatter.rs: MIN_ALPHA).
-const MIN_ALPHA: f32 = 1e-3;
+// PI, SURFACE_OFFSET (how far scattered and shadow rays start off the surface),
+// MIN_ALPHA (the smallest GGX α a metal is traced with) and the physical sky's constants
+// (PLANET_RADIUS, VIEW_STEPS, RAYLEIGH, MIE_G, OZONE, …) come from the prelude, generated
+// from their Rust definitions in client/src/light/ (mod.rs, scatter.rs, sky.rs).
 
 // ---- The physical sky (sky.rs) ----
-
-const PLANET_RADIUS: f32 = 6360000.0;
-const ATMOSPHERE_HEIGHT: f32 = 60000.0;
-const EYE_HEIGHT: f32 = 100.0;
-const VIEW_STEPS: u32 = 24u;
-const LIGHT_STEPS: u32 = 6u;
-const RAYLEIGH: vec3<f32> = vec3<f32>(5.802e-6, 13.558e-6, 33.1e-6);
-const RAYLEIGH_SCALE: f32 = 8000.0;
-const MIE_SCATTER: f32 = 3.996e-6;
-const MIE_EXTINCTION: f32 = 4.44e-6;
-const MIE_SCALE: f32 = 1200.0;
-const MIE_G: f32 = 0.8;
-const OZONE: vec3<f32> = vec3<f32>(0.650e-6, 1.881e-6, 0.085e-6);
-const OZONE_CENTRE: f32 = 25000.0;
-const OZONE_HALF_WIDTH: f32 = 15000.0;
 
 // Distance from height `h` along zenith cosine `mu` to the sphere at height `top`; a
 // negative value when it is not reached going forward.
@@ -270,7 +254,7 @@ fn path_step(s: ptr<function, PathState>, scatter: bool, rng: ptr<function, u32>
     if !scatter {
         return distance;
     }
-    let p = ray_local(r, h.t) + n * PATH_OFFSET;
+    let p = ray_local(r, h.t) + n * SURFACE_OFFSET;
     var next: Scattered;
     if m.kind == KIND_MIRROR {
         (*s).sees_disc = true;

@@ -6,20 +6,8 @@
 //   4: material   5: distance to the entry face (f32 bits)   6: cells visited
 //   7: entity id (0x3FFF = none)
 
-struct RayIn {
-    o_int: vec3<i32>,
-    _pad0: u32,
-    o_frac: vec3<f32>,
-    _pad1: u32,
-    d: vec3<f32>,
-    _pad2: u32,
-}
-
-struct RayCount {
-    count: u32,
-    // Invocations per row of the 2D dispatch.
-    row: u32,
-}
+// `RayCount` and `RayIn` are generated after the pass from their Rust definitions
+// (client/src/gpu/params.rs).
 
 @group(1) @binding(0) var<storage, read> ray_count: RayCount;
 @group(1) @binding(1) var<storage, read> rays_in: array<RayIn>;

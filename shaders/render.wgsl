@@ -5,24 +5,11 @@
 // a·W/H and a (a = tan(fov_y/2)), so that dir = forward + sx·right + sy·up with
 // sx = 2(px + 0.5)/W − 1 and sy = 1 − 2(py + 0.5)/H.
 //
-// Modes (MODE_*, generated in the prelude from the client's `Mode`): albedo, material,
+// Modes (MODE_*, generated after the pass from the client's `Mode`): albedo, material,
 // normal, steps. Every pixel becomes one RGBA8 word; with bit 0 of `flags`, the pixel's
 // first-hit record (the reference's `firstHitData`) is written to `gbuffer` as well.
 
-struct View {
-    cam_oi: vec3<i32>,
-    mode: u32,
-    cam_of: vec3<f32>,
-    width: u32,
-    forward: vec3<f32>,
-    height: u32,
-    right: vec3<f32>,
-    flags: u32,
-    up: vec3<f32>,
-    steps_scale: f32,
-    sun: vec3<f32>,
-    _pad: u32,
-}
+// `View` is generated after the pass from its Rust definition (client/src/gpu/params.rs).
 
 @group(1) @binding(0) var<storage, read> view: View;
 @group(1) @binding(1) var<storage, read_write> pixels: array<u32>;

@@ -47,18 +47,23 @@ enum Command {
     #[command(subcommand)]
     Data(commands::data::Data),
     /// Render a frame of a world file or a server's world on the GPU (or lavapipe).
+    #[cfg(feature = "gpu")]
     Render(commands::render::Args),
     /// Serve frames for a server as a headless render node.
+    #[cfg(feature = "gpu")]
     RenderNode(commands::render_node::Args),
     /// Ask a server for a frame from its render nodes.
     Frame(commands::frame::Args),
     /// Open a window on a server's world: fly through it and edit it live.
+    #[cfg(feature = "gpu")]
     View(commands::view::Args),
     /// Run a replay script (or a HashDAG CSV) against a world file or a server.
+    #[cfg(feature = "gpu")]
     Replay(commands::replay::Args),
     /// Record a live server's edit batches, with their users, as a replay script.
     Record(commands::record::Args),
     /// Benchmarks.
+    #[cfg(feature = "gpu")]
     #[command(subcommand)]
     Bench(commands::bench::Bench),
 }
@@ -79,6 +84,7 @@ const GROUPS: &[(&str, &[&str])] = &[
     ("Benchmarks", &["bench"]),
 ];
 
+#[cfg(feature = "gpu")]
 impl Command {
     /// Whether the command may open a GPU device (headless or in a window).
     fn uses_gpu(&self) -> bool {
@@ -102,7 +108,8 @@ fn command_line() -> clap::Command {
     let mut listing = String::new();
     for (heading, names) in GROUPS {
         listing.push_str(&format!("{heading}:\n"));
-        for name in *names {
+        // A command built without the `gpu` feature is left out.
+        for name in names.iter().filter(|n| cmd.find_subcommand(n).is_some()) {
             let about = cmd
                 .find_subcommand(name)
                 .and_then(|c| c.get_about())
@@ -123,6 +130,7 @@ fn main() -> ExitCode {
         Ok(cli) => cli,
         Err(e) => e.exit(),
     };
+    #[cfg(feature = "gpu")]
     let _runtime_dir = cli.command.uses_gpu().then(commands::quiet_headless_gpu).flatten();
     // Long-running network commands report what they do; one-shot tools stay quiet.
     commands::init_logging(match cli.command {
@@ -143,12 +151,17 @@ fn main() -> ExitCode {
         Command::Status(a) => commands::status::run(a),
         Command::ExportLog(a) => commands::export_log::run(a),
         Command::Data(d) => commands::data::run(d),
+        #[cfg(feature = "gpu")]
         Command::Render(a) => commands::render::run(a),
+        #[cfg(feature = "gpu")]
         Command::View(a) => commands::view::run(a),
+        #[cfg(feature = "gpu")]
         Command::RenderNode(a) => commands::render_node::run(a),
         Command::Frame(a) => commands::frame::run(a),
+        #[cfg(feature = "gpu")]
         Command::Replay(a) => commands::replay::run(a),
         Command::Record(a) => commands::record::run(a),
+        #[cfg(feature = "gpu")]
         Command::Bench(b) => commands::bench::run(b),
     };
     commands::finish(result)

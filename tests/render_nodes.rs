@@ -4,8 +4,8 @@
 
 mod support;
 
+use naadf_client::Mode;
 use naadf_client::error::Code;
-use naadf_client::gpu::Mode;
 use naadf_client::{Client, Error, NodeInfo};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};

@@ -16,8 +16,7 @@
 
 use crate::connect::{self, RawClient};
 use crate::error::Error;
-use crate::gpu::Mode;
-use crate::light::{DEFAULT_SPP, LitOptions, Sky, Sun};
+use crate::frame::{FrameSpec, Mode};
 use crate::session::{Session, WorldStream};
 use naadf_proto::DEFAULT_FRAME_DEADLINE;
 use naadf_proto::requests::{entity_pose, entity_spawn};
@@ -26,7 +25,6 @@ use naadf_proto::v1::{
     JoinRequest, MoveEntitiesRequest, NodeHello, NodeMessage, SpawnEntitiesRequest, StatusRequest, node_message,
 };
 use naadf_world::World;
-use naadf_world::camera::Camera;
 use naadf_world::digest::Digest;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
@@ -132,91 +130,6 @@ pub struct Spawn {
     pub model: String,
     /// Its id and pose.
     pub pose: Pose,
-}
-
-/// A frame to render: what [`Client::frame`] asks for and what a render node's job says.
-#[derive(Clone, Debug, PartialEq)]
-pub struct FrameSpec {
-    /// The camera.
-    pub camera: Camera,
-    /// Image size in pixels (width, height).
-    pub size: (u32, u32),
-    /// Render mode.
-    pub mode: Mode,
-    /// The oldest world version the frame may show.
-    pub min_version: u64,
-    /// Raw RGBA8 (rows from the top) instead of PNG.
-    pub raw: bool,
-    /// The deadline, or the server's default ([`naadf_proto::DEFAULT_FRAME_DEADLINE`]).
-    /// Sent in whole milliseconds; one under a millisecond means the default.
-    pub timeout: Option<Duration>,
-    /// The options of the lit modes (ignored by the others).
-    pub lit: LitOptions,
-}
-
-impl FrameSpec {
-    /// A PNG frame of any version, with the server's default deadline.
-    pub fn new(camera: Camera, size: (u32, u32), mode: Mode) -> Self {
-        Self {
-            camera,
-            size,
-            mode,
-            min_version: 0,
-            raw: false,
-            timeout: None,
-            lit: LitOptions::default(),
-        }
-    }
-
-    /// The request on the wire.
-    pub(crate) fn to_wire(&self) -> FrameRequest {
-        FrameRequest {
-            // A camera is numbers only: it always serializes.
-            camera: serde_json::to_string(&self.camera).expect("camera JSON"),
-            width: self.size.0,
-            height: self.size.1,
-            mode: self.mode.name().into(),
-            min_version: self.min_version,
-            raw: self.raw,
-            timeout_ms: self
-                .timeout
-                .map_or(0, |t| t.as_millis().min(u128::from(u32::MAX)) as u32),
-            spp: self.lit.spp,
-            frames: self.lit.frames,
-            seed: self.lit.seed,
-            bounces: self.lit.bounces,
-            sky: self.lit.sky.map(|s| s.to_string()).unwrap_or_default(),
-            sun: match self.lit.sun {
-                None => String::new(),
-                Some(None) => "off".into(),
-                Some(Some(sun)) => sun.to_string(),
-            },
-            exposure: self.lit.exposure,
-            stream: self.lit.stream.clone(),
-        }
-    }
-
-    /// A request from the wire; an error names what this client cannot render.
-    pub(crate) fn from_wire(r: &FrameRequest) -> Result<Self, String> {
-        Ok(Self {
-            camera: Camera::from_json(&r.camera).map_err(|e| e.to_string())?,
-            size: (r.width, r.height),
-            mode: Mode::parse(&r.mode).ok_or_else(|| format!("unknown mode '{}'", r.mode))?,
-            min_version: r.min_version,
-            raw: r.raw,
-            timeout: (r.timeout_ms != 0).then(|| Duration::from_millis(u64::from(r.timeout_ms))),
-            lit: LitOptions {
-                spp: if r.spp == 0 { DEFAULT_SPP } else { r.spp },
-                frames: r.frames.max(1),
-                seed: r.seed,
-                bounces: r.bounces,
-                sky: (!r.sky.is_empty()).then(|| Sky::parse(&r.sky)).transpose()?,
-                sun: (!r.sun.is_empty()).then(|| Sun::parse(&r.sun)).transpose()?,
-                exposure: if r.exposure == 0.0 { 1.0 } else { r.exposure },
-                stream: r.stream.clone(),
-            },
-        })
-    }
 }
 
 /// An encoded frame.
@@ -391,7 +304,7 @@ impl Client {
     ///
     /// ```no_run
     /// # async fn demo(client: naadf_client::Client) -> Result<(), naadf_client::Error> {
-    /// use naadf_client::{FrameSpec, gpu::Mode};
+    /// use naadf_client::{FrameSpec, Mode};
     /// let camera = naadf_world::camera::Camera::from_json(r#"{"pos":[0,80,0],"yaw":45,"pitch":-30}"#).unwrap();
     /// let frame = client.frame(&FrameSpec::new(camera, (640, 480), Mode::Albedo)).await?;
     /// std::fs::write("frame.png", &frame.image.data).unwrap();
@@ -526,49 +439,5 @@ impl Registration {
             })
             .await
             .map_err(|_| Error::ConnectionLost("the server stopped taking results".into()))
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The server refuses modes outside the protocol's list: every mode a node can render
-    /// must be on it.
-    #[test]
-    fn render_modes_are_the_protocols() {
-        assert_eq!(Mode::ALL.map(Mode::name), naadf_proto::FRAME_MODES);
-    }
-
-    #[test]
-    fn frame_specs_cross_the_wire_unchanged() {
-        let camera = Camera::from_json(r#"{"pos":[1.5,2,-3],"yaw":45,"pitch":-30,"fov_y":70}"#).unwrap();
-        let mut spec = FrameSpec::new(camera, (96, 64), Mode::Material);
-        assert_eq!(FrameSpec::from_wire(&spec.to_wire()), Ok(spec.clone()));
-        assert_eq!(spec.to_wire().timeout_ms, 0, "the server's default deadline");
-        spec.min_version = 7;
-        spec.raw = true;
-        spec.timeout = Some(Duration::from_millis(1500));
-        assert_eq!(FrameSpec::from_wire(&spec.to_wire()), Ok(spec.clone()));
-        let mut wire = spec.to_wire();
-        wire.mode = "x-ray".into();
-        assert_eq!(FrameSpec::from_wire(&wire), Err("unknown mode 'x-ray'".into()));
-        spec.mode = Mode::Baseline;
-        spec.lit = LitOptions {
-            spp: 9,
-            frames: 3,
-            seed: 4,
-            bounces: Some(0),
-            sky: Some(Sky::Uniform([0.5, 1.0, 2.0])),
-            sun: Some(Sun::parse("10,20,30").unwrap()),
-            exposure: 0.5,
-            stream: "me".into(),
-        };
-        assert_eq!(FrameSpec::from_wire(&spec.to_wire()), Ok(spec.clone()));
-        spec.lit.sun = Some(None);
-        assert_eq!(FrameSpec::from_wire(&spec.to_wire()), Ok(spec.clone()));
-        let mut wire = spec.to_wire();
-        wire.sky = "cloudy".into();
-        assert!(FrameSpec::from_wire(&wire).unwrap_err().contains("sky 'cloudy'"));
     }
 }

@@ -21,6 +21,8 @@
 //!   status, frames, a render node's [`Registration`] and its jobs);
 //! - [`connect`]: channels (plain or TLS) and the bearer token every call carries, beneath
 //!   [`Client`];
+//! - [`frame`]: what a frame is apart from any renderer: its [`Mode`], the request
+//!   ([`FrameSpec`]) and the pixels ([`Frame`]);
 //! - [`error`]: [`Error`], which tells a lost connection from a refusal, a rate limit and a
 //!   mirror that broke, and [`ConnectError`], why no connection could be made;
 //! - [`session`]: [`Session`], a joined world stream applied to a mirror that it keeps
@@ -32,12 +34,15 @@
 //!   costs only what changed;
 //! - [`node`]: [`node::RenderNode`], which keeps a render node registered and serving the
 //!   server's frame jobs with any renderer;
-//! - [`gpu`]: the GPU mirror ([`gpu::GpuWorld`]), the WGSL traversal, the renderer and the
-//!   path tracer;
+//! - `gpu` (feature `gpu`, on by default): the GPU mirror (`gpu::GpuWorld`), the WGSL
+//!   traversal, the renderer and the path tracer;
 //! - [`light`]: the light model of the lit modes (sky, sun, materials, bounces), its CPU
 //!   path tracer and radiance images;
-//! - [`viewer`]: the interactive window (winit) that flies through a server's world and
-//!   edits it.
+//! - `viewer` (feature `gpu`): the interactive window (winit) that flies through a server's
+//!   world and edits it.
+//!
+//! Without the `gpu` feature the crate compiles no wgpu, winit or nv-flip: programs that
+//! only mirror, edit or relay embed the client without the renderer.
 
 #![warn(missing_docs)]
 
@@ -45,6 +50,8 @@ pub mod cache;
 pub mod client;
 pub mod connect;
 pub mod error;
+pub mod frame;
+#[cfg(feature = "gpu")]
 pub mod gpu;
 pub mod light;
 pub use naadf_proto::mirror;
@@ -52,14 +59,15 @@ pub use naadf_proto::mirror;
 pub use naadf_proto::v1::{WorldMessage, world_message};
 pub mod node;
 pub mod session;
+#[cfg(feature = "gpu")]
 pub mod viewer;
 
 pub use cache::PageCache;
 pub use client::{
-    Ack, Client, FrameImage, FrameSpec, Job, NodeInfo, Pose, Registration, RenderedFrame, ServerAddress, ServerStatus,
-    Spawn,
+    Ack, Client, FrameImage, Job, NodeInfo, Pose, Registration, RenderedFrame, ServerAddress, ServerStatus, Spawn,
 };
 pub use error::{ConnectError, Error};
+pub use frame::{Frame, FrameSpec, Mode};
 pub use mirror::{DEFAULT_MAX_WORLD_BYTES, Mirror, MirrorError, Progress, StreamedEdit};
 /// The pauses between attempts to reach a server that is out of reach.
 pub use naadf_proto::backoff::Backoff;

@@ -4,8 +4,9 @@
 //! away, keeping the mirrored world so that a rejoin sends only what changed. How a frame
 //! is made is the caller's: a closure renders a [`FrameSpec`] of a [`World`].
 
-use crate::client::{Client, FrameImage, FrameSpec, Job, NodeInfo, ServerAddress};
+use crate::client::{Client, FrameImage, Job, NodeInfo, ServerAddress};
 use crate::error::Error;
+use crate::frame::FrameSpec;
 use crate::session::Session;
 use naadf_world::World;
 use std::fmt::Display;
@@ -51,7 +52,7 @@ impl NodeHealth {
 /// ```no_run
 /// # async fn demo() {
 /// use naadf_client::node::RenderNode;
-/// use naadf_client::{FrameImage, NodeInfo, ServerAddress, gpu::Mode};
+/// use naadf_client::{FrameImage, Mode, NodeInfo, ServerAddress};
 /// let address = ServerAddress { token: Some("node".into()), ..ServerAddress::new("http://127.0.0.1:50051") };
 /// let info = NodeInfo { adapter: "a test pattern".into(), modes: vec![Mode::Albedo], max_size: (64, 64) };
 /// let render = |_world: &naadf_world::World, spec: &naadf_client::FrameSpec| -> Result<FrameImage, String> {

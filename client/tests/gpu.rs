@@ -13,7 +13,8 @@
 mod common;
 
 use common::{Raw, Rng, adversarial, random_world, rays};
-use naadf_client::gpu::{Gpu, GpuRay, GpuWorld, Mode, RayTracer, Renderer, Traversal};
+use naadf_client::Mode;
+use naadf_client::gpu::{Gpu, GpuRay, GpuWorld, RayTracer, Renderer, Traversal};
 use naadf_world::baselines::{Hybrid, HybridFormat, Svdag, Svo};
 use naadf_world::camera::Camera;
 use naadf_world::fingerprint::ChunkChanges;

@@ -23,7 +23,7 @@ pub struct Args {
     size: (u32, u32),
     /// What to show: albedo, material, normal, steps, pathtrace, baseline or gi.
     #[arg(long, default_value = "albedo", value_parser = parse_mode)]
-    mode: naadf_client::gpu::Mode,
+    mode: naadf_client::Mode,
     #[command(flatten)]
     light: LightArgs,
     /// Frames of a temporal mode (baseline, gi) the node renders before answering,

@@ -2,6 +2,7 @@
 //! file I/O with context, and error reporting.
 
 pub mod apply;
+#[cfg(feature = "gpu")]
 pub mod bench;
 pub mod data;
 pub mod edit;
@@ -16,11 +17,15 @@ pub mod raycast;
 pub mod record;
 pub mod relay;
 pub mod remote;
+#[cfg(feature = "gpu")]
 pub mod render;
+#[cfg(feature = "gpu")]
 pub mod render_node;
+#[cfg(feature = "gpu")]
 pub mod replay;
 pub mod serve;
 pub mod status;
+#[cfg(feature = "gpu")]
 pub mod view;
 
 use anyhow::{Context, Result};
@@ -176,6 +181,7 @@ pub fn print_json(v: &impl serde::Serialize) -> Result<()> {
 /// no display and says nothing, as on a desktop without Wayland.
 ///
 /// Call it before any thread starts: it sets an environment variable.
+#[cfg(feature = "gpu")]
 pub fn quiet_headless_gpu() -> Option<tempfile::TempDir> {
     if std::env::var_os("XDG_RUNTIME_DIR").is_some_and(|d| Path::new(&d).is_dir()) {
         return None;

@@ -7,9 +7,11 @@
 use super::remote::{ServerArgs, block_on, quiescent_world};
 use super::{load_world, print_json, progress, seconds};
 use anyhow::{Context, Result, bail};
-use naadf_client::gpu::{Frame, Headless, Mode, write_gbuffer};
+use naadf_client::frame::write_gbuffer;
+use naadf_client::gpu::{Headless, Shot};
 use naadf_client::light::hdr::Radiance;
 use naadf_client::light::{DEFAULT_LIT_BOUNCES, DEFAULT_PATHTRACE_BOUNCES, Light, LitOptions, Sky, Sun};
+use naadf_client::{Frame, Mode};
 use naadf_world::World;
 use naadf_world::camera::Camera;
 use std::path::PathBuf;
@@ -307,9 +309,17 @@ fn path_trace(
 ) -> Result<(Frame, Summary)> {
     let bar = progress(u64::from(s.spp), "path tracing", "spp");
     let t0 = Instant::now();
-    let radiance = headless.path_trace(world, camera, a.size, light, s.seed, s.spp, &mut |n| {
-        bar.set_position(u64::from(n))
-    })?;
+    let radiance = headless.path_trace(
+        world,
+        &Shot {
+            camera: *camera,
+            size: a.size,
+            light: *light,
+            seed: s.seed,
+        },
+        s.spp,
+        &mut |n| bar.set_position(u64::from(n)),
+    )?;
     bar.finish_and_clear();
     let secs = t0.elapsed().as_secs_f64();
     let (frame, mut summary) = lit_output(headless, world, a, s, &radiance, 1, secs * 1e3)?;
@@ -333,7 +343,16 @@ fn temporal(
     let t0 = Instant::now();
     for i in 0..frames {
         let camera = &cameras[(i as usize).min(cameras.len() - 1)];
-        headless.temporal_frame(a.mode, world, camera, a.size, light, s.seed)?;
+        headless.temporal_frame(
+            a.mode,
+            world,
+            &Shot {
+                camera: *camera,
+                size: a.size,
+                light: *light,
+                seed: s.seed,
+            },
+        )?;
         bar.set_position(u64::from(i + 1));
     }
     let radiance = headless.temporal_radiance(a.mode)?;

@@ -10,7 +10,8 @@
 use super::remote::{ServerArgs, block_on};
 use super::render::parse_image_size;
 use anyhow::{Context, Result, anyhow};
-use naadf_client::gpu::{Headless, Mode};
+use naadf_client::Mode;
+use naadf_client::gpu::Headless;
 use naadf_client::node::{NodeHealth, RenderNode};
 use naadf_client::{FrameImage, FrameSpec, NodeInfo};
 use naadf_world::World;

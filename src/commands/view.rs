@@ -4,7 +4,7 @@ use super::remote::ServerArgs;
 use super::render::{parse_image_size, parse_mode, read_camera};
 use super::{print_json, seconds};
 use anyhow::Result;
-use naadf_client::gpu::Mode;
+use naadf_client::Mode;
 use naadf_client::viewer::ViewerOptions;
 use std::path::PathBuf;
 

@@ -5,29 +5,26 @@
 
 use super::context::{Gpu, GpuError};
 use super::params::{FrameInfo, LightInfo};
+use super::pathtrace::path_pass;
 use super::pipeline::PassPipelines;
-use super::render::{CameraRays, check_frame_size};
-use super::shaders::{Loop, Pass};
+use super::shaders::{Loop, PassSource, SAMPLE};
+use super::shot::{CameraRays, Shot, check_frame_size};
 use super::temporal::Temporal;
 use super::world::GpuWorld;
-use crate::light::Light;
 use crate::light::hdr::Radiance;
 use naadf_world::camera::Camera;
+
+/// `shaders/taa.wgsl`: the baseline's temporal accumulation.
+const TAA: &str = include_str!("../../../shaders/taa.wgsl");
 
 /// Bytes per pixel of each frame buffer (RGB and the first-hit distance, `f32` each).
 const PIXEL_BYTES: u64 = 16;
 
-/// What a history is of: when any of it changes, the history restarts.
-#[derive(Clone, Debug, PartialEq)]
-struct Subject {
-    size: (u32, u32),
-    light: Light,
-    seed: u32,
-}
-
 /// The buffers of a running history.
 pub struct History {
-    subject: Subject,
+    /// The shot of the newest result: a shot that does not continue it starts a new
+    /// history.
+    shot: Shot,
     /// This frame's samples.
     samples: wgpu::Buffer,
     /// The results of the last two frames; `latest` indexes the newest.
@@ -35,8 +32,6 @@ pub struct History {
     latest: usize,
     /// Frames rendered so far.
     frames: u32,
-    /// The camera of the newest result.
-    camera: Camera,
 }
 
 /// The baseline renderer: a history per (size, light, seed).
@@ -69,12 +64,21 @@ fn frame_info(
     ))
 }
 
+/// The resolve pass's WGSL: the sample streams and [`TAA`].
+pub(crate) fn taa_pass() -> PassSource {
+    PassSource {
+        entry: "taa_resolve",
+        files: &[SAMPLE, TAA],
+        generated: String::new(),
+    }
+}
+
 impl Baseline {
     /// Prepares the passes (pipelines are built on first use).
     pub fn new(gpu: &Gpu) -> Self {
         Baseline {
-            sample: PassPipelines::new(gpu, Pass::PathSample, 2, &[false]),
-            taa: PassPipelines::new(gpu, Pass::Taa, 2, &[true, true, false]),
+            sample: PassPipelines::new(gpu, path_pass("path_sample"), 2, &[false]),
+            taa: PassPipelines::new(gpu, taa_pass(), 2, &[true, true, false]),
             history: None,
         }
     }
@@ -92,28 +96,16 @@ impl Baseline {
 }
 
 impl Temporal for Baseline {
-    /// Renders the next frame of `camera`'s view of `world` (sample number = frames so far).
-    /// A new size, light or seed starts a new history; a new camera or world does not: the
+    /// Renders the next frame of `shot` of `world` (sample number = frames so far). A new
+    /// size, light or seed starts a new history; a new camera or world does not: the
     /// history is reprojected and clamped, as the baseline does.
-    fn frame(
-        &mut self,
-        gpu: &Gpu,
-        world: &GpuWorld,
-        camera: &Camera,
-        size: (u32, u32),
-        light: &Light,
-        seed: u32,
-    ) -> Result<(), GpuError> {
+    fn frame(&mut self, gpu: &Gpu, world: &GpuWorld, shot: &Shot) -> Result<(), GpuError> {
+        let (camera, size, seed) = (&shot.camera, shot.size, shot.seed);
         let pixels = check_frame_size(gpu, size, PIXEL_BYTES)?;
         // Validates the camera before any state changes.
         CameraRays::new(camera, size)?;
         let sample_pipe = self.sample.get(gpu, world, Loop::Hierarchy, true)?;
         let taa_pipe = self.taa.get(gpu, world, Loop::Hierarchy, true)?;
-        let subject = Subject {
-            size,
-            light: *light,
-            seed,
-        };
         let buffer = |label| {
             gpu.device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
@@ -123,24 +115,23 @@ impl Temporal for Baseline {
             })
         };
         let h = match self.history.take() {
-            Some(h) if h.subject == subject => h,
+            Some(h) if shot.continues(&h.shot) => h,
             _ => History {
-                subject,
+                shot: *shot,
                 samples: buffer("baseline samples"),
                 results: [buffer("baseline result 0"), buffer("baseline result 1")],
                 latest: 0,
                 frames: 0,
-                camera: *camera,
             },
         };
         let h = self.history.insert(h);
         // The sample pass needs the camera where it is; the resolve pass reads only the
         // current camera's directions, and the previous camera relative to it.
         let now = frame_info(camera, [0.0; 3], size, seed, h.frames, false)?;
-        let before = frame_info(&h.camera, camera.pos, size, seed, h.frames, h.frames > 0)?;
+        let before = frame_info(&h.shot.camera, camera.pos, size, seed, h.frames, h.frames > 0)?;
         let now = gpu.params("frame", bytemuck::bytes_of(&now));
         let before = gpu.params("previous frame", bytemuck::bytes_of(&before));
-        let light = gpu.params("light", bytemuck::bytes_of(&LightInfo::new(light)));
+        let light = gpu.params("light", bytemuck::bytes_of(&LightInfo::new(&shot.light)));
         let (old, new) = (&h.results[h.latest], &h.results[1 - h.latest]);
         let groups = (size.0.div_ceil(8), size.1.div_ceil(8));
         gpu.checked(|| {
@@ -161,7 +152,7 @@ impl Temporal for Baseline {
         })?;
         h.latest = 1 - h.latest;
         h.frames += 1;
-        h.camera = *camera;
+        h.shot = *shot;
         Ok(())
     }
 
@@ -171,7 +162,7 @@ impl Temporal for Baseline {
             .history
             .as_ref()
             .ok_or_else(|| GpuError::Readback("no baseline frame was rendered".into()))?;
-        let (w, ht) = h.subject.size;
+        let (w, ht) = h.shot.size;
         let bytes = gpu.read_buffer(&h.results[h.latest], u64::from(w) * u64::from(ht) * PIXEL_BYTES)?;
         let px: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&bytes);
         Ok(Radiance {

@@ -1,5 +1,6 @@
 //! Device selection and the errors of the GPU client.
 
+use crate::frame::FrameError;
 use std::sync::Arc;
 use thiserror::Error;
 
@@ -19,6 +20,15 @@ pub enum GpuError {
     /// fit the adapter's limits, …).
     #[error("{0}")]
     Unsupported(String),
+}
+
+impl From<FrameError> for GpuError {
+    fn from(e: FrameError) -> Self {
+        match e {
+            FrameError::Decode(_) => GpuError::Unsupported(e.to_string()),
+            FrameError::Encode(_) => GpuError::Readback(e.to_string()),
+        }
+    }
 }
 
 /// A wgpu device and its queue.

@@ -6,10 +6,11 @@ use super::baseline::{Baseline, History};
 use super::context::{Gpu, GpuError};
 use super::gi::{Gi, GiHistory};
 use super::pathtrace::{Accumulation, PathTracer};
-use super::render::{Frame, Mode, Renderer};
+use super::render::Renderer;
+use super::shot::Shot;
 use super::temporal::Temporal;
 use super::world::GpuWorld;
-use crate::FrameSpec;
+use crate::frame::{Frame, FrameSpec, Mode};
 use crate::light::hdr::Radiance;
 use crate::light::{DEFAULT_LIT_BOUNCES, DEFAULT_PATHTRACE_BOUNCES, Light};
 use naadf_world::World;
@@ -72,43 +73,29 @@ impl Headless {
         self.renderer.render(&self.gpu, gw, camera, size, mode, gbuffer)
     }
 
-    /// Path-traces `world` to `spp` samples per pixel ([`PathTracer::render`]: samples of
-    /// the same view and world add up; a change restarts them).
-    #[allow(clippy::too_many_arguments)]
+    /// Path-traces `shot` of `world` to `spp` samples per pixel ([`PathTracer::render`]:
+    /// samples of the same shot and world add up; a change restarts them).
     pub fn path_trace(
         &mut self,
         world: &World,
-        camera: &Camera,
-        size: (u32, u32),
-        light: &Light,
-        seed: u32,
+        shot: &Shot,
         spp: u32,
         progress: &mut dyn FnMut(u32),
     ) -> Result<Radiance, GpuError> {
         let gw = GpuWorld::follow(&mut self.world, &self.gpu, world)?;
-        self.path_tracer
-            .render(&self.gpu, gw, camera, size, light, seed, spp, progress)
+        self.path_tracer.render(&self.gpu, gw, shot, spp, progress)
     }
 
-    /// Renders the next frame of a temporal mode ([`Mode::is_temporal`]: `baseline` with
-    /// [`Baseline::frame`], `gi` with [`Gi::frame`]) of `world`.
-    #[allow(clippy::too_many_arguments)]
-    pub fn temporal_frame(
-        &mut self,
-        mode: Mode,
-        world: &World,
-        camera: &Camera,
-        size: (u32, u32),
-        light: &Light,
-        seed: u32,
-    ) -> Result<(), GpuError> {
+    /// Renders the next frame of `shot` of `world` in a temporal mode
+    /// ([`Mode::is_temporal`]: `baseline` with [`Baseline`], `gi` with [`Gi`]).
+    pub fn temporal_frame(&mut self, mode: Mode, world: &World, shot: &Shot) -> Result<(), GpuError> {
         let gw = GpuWorld::follow(&mut self.world, &self.gpu, world)?;
         let renderer: &mut dyn Temporal = match mode {
             Mode::Baseline => &mut self.baseline,
             Mode::Gi => &mut self.gi,
             _ => return Err(not_temporal(mode)),
         };
-        renderer.frame(&self.gpu, gw, camera, size, light, seed)
+        renderer.frame(&self.gpu, gw, shot)
     }
 
     /// The newest frame of a temporal mode as linear radiance.
@@ -172,11 +159,17 @@ impl Headless {
     /// The radiance of a lit `spec` with the stream's state swapped in.
     fn render_lit(&mut self, world: &World, spec: &FrameSpec, light: &Light) -> Result<Radiance, GpuError> {
         let lit = &spec.lit;
+        let shot = Shot {
+            camera: spec.camera,
+            size: spec.size,
+            light: *light,
+            seed: lit.seed,
+        };
         if spec.mode == Mode::PathTrace {
-            return self.path_trace(world, &spec.camera, spec.size, light, lit.seed, lit.spp, &mut |_| {});
+            return self.path_trace(world, &shot, lit.spp, &mut |_| {});
         }
         for _ in 0..lit.frames {
-            self.temporal_frame(spec.mode, world, &spec.camera, spec.size, light, lit.seed)?;
+            self.temporal_frame(spec.mode, world, &shot)?;
         }
         self.temporal_radiance(spec.mode)
     }

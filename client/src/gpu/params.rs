@@ -228,3 +228,69 @@ wgsl_struct! {
 }
 
 const _: () = assert!(size_of::<FrameInfo>() == 80 && size_of::<LightInfo>() == 48 && size_of::<GiInfo>() == 96);
+
+wgsl_struct! {
+    /// What a frame of the render pass shows, `view` (group 1, binding 0 of `render`): the
+    /// camera as [`FrameInfo`] holds it, the mode and the sun of the `albedo` sky.
+    pub struct View {
+        /// Camera position, integer part (floor).
+        pub cam_oi: [i32; 3],
+        /// The mode's code (`MODE_*`).
+        pub mode: u32,
+        /// Camera position, fractional part in [0, 1).
+        pub cam_of: [f32; 3],
+        /// Image width in pixels.
+        pub width: u32,
+        /// View direction.
+        pub forward: [f32; 3],
+        /// Image height in pixels.
+        pub height: u32,
+        /// Image right, scaled by a·W/H.
+        pub right: [f32; 3],
+        /// Bit 0: write each pixel's first-hit record.
+        pub flags: u32,
+        /// Image up, scaled by a.
+        pub up: [f32; 3],
+        /// `1 / log2(1 + STEPS_FULL_SCALE)`: the heat map's scale.
+        pub steps_scale: f32,
+        /// Unit vector toward the sun.
+        pub sun: [f32; 3],
+        /// Padding to 16 bytes.
+        pub _pad: u32,
+    }
+}
+
+wgsl_struct! {
+    /// How many rays the ray-list pass traces, `ray_count` (group 1, binding 0 of `rays`).
+    pub struct RayCount {
+        /// Rays in the list.
+        pub count: u32,
+        /// Invocations per row of the 2D dispatch.
+        pub row: u32,
+        /// Padding to 16 bytes.
+        pub _pad0: u32,
+        /// Padding to 16 bytes.
+        pub _pad1: u32,
+    }
+}
+
+wgsl_struct! {
+    /// One ray of the ray-list pass's input, `rays_in` (group 1, binding 1 of `rays`): the
+    /// origin split into floor and fraction, and the direction (any length).
+    pub struct RayIn {
+        /// Origin, integer part (floor).
+        pub o_int: [i32; 3],
+        /// Padding.
+        pub _pad0: u32,
+        /// Origin, fractional part in [0, 1).
+        pub o_frac: [f32; 3],
+        /// Padding.
+        pub _pad1: u32,
+        /// Direction.
+        pub d: [f32; 3],
+        /// Padding.
+        pub _pad2: u32,
+    }
+}
+
+const _: () = assert!(size_of::<View>() == 96 && size_of::<RayCount>() == 16 && size_of::<RayIn>() == 48);

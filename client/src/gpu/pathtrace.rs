@@ -9,13 +9,14 @@
 use super::context::{Gpu, GpuError};
 use super::params::{FrameInfo, LightInfo};
 use super::pipeline::PassPipelines;
-use super::render::{CameraRays, check_frame_size};
-use super::shaders::{Loop, Pass};
+use super::shaders::{LIGHT, Loop, PassSource, SAMPLE};
+use super::shot::{CameraRays, Shot, check_frame_size};
 use super::world::GpuWorld;
 use crate::light::hdr::Radiance;
-use crate::light::{Light, Sky, Sun};
-use naadf_world::camera::Camera;
 use wgpu::util::DeviceExt;
+
+/// `shaders/pathtrace.wgsl`: path-traced samples (progressive sums, or one per frame).
+const PATHTRACE: &str = include_str!("../../../shaders/pathtrace.wgsl");
 
 /// Pixel-samples one submission traces at most (one dispatch per sample): keeps each
 /// submission short (a real GPU's watchdog) and the progress reports frequent.
@@ -23,74 +24,31 @@ const SUBMIT_PIXEL_SAMPLES: u64 = 1 << 19;
 /// Bytes of running sum per pixel (RGB and the sample count, `f32` each).
 const SUM_BYTES: u64 = 16;
 
-impl LightInfo {
-    /// The parameters of `light`.
-    pub fn new(light: &Light) -> Self {
-        let sky_sun = light.sky_sun();
-        let (sky, sky_physical) = match light.sky {
-            Sky::Uniform(rgb) => (rgb, 0),
-            Sky::Physical => ([sky_sun.irradiance as f32; 3], 1),
-        };
-        let sun = light.sun;
-        LightInfo {
-            sky,
-            sky_physical,
-            sun_dir: sky_sun.direction().map(|c| c as f32),
-            sun_on: u32::from(sun.is_some()),
-            sun_disc: sun.map_or(0.0, |s| s.disc_radiance() as f32),
-            sun_weight: sun.map_or(0.0, |s| s.sample_weight() as f32),
-            sun_omc: Sun::one_minus_cos() as f32,
-            bounces: light.bounces,
-        }
-    }
-}
-
-impl FrameInfo {
-    /// The frame parameters of a lit pass: `rays` at `size`, sample number `sample` of `seed`, and
-    /// whether a temporal pass has a history.
-    pub(crate) fn new(rays: &CameraRays, size: (u32, u32), seed: u32, sample: u32, history: bool) -> Self {
-        FrameInfo {
-            cam_int: rays.int,
-            width: size.0,
-            cam_frac: rays.frac,
-            height: size.1,
-            forward: rays.forward,
-            seed,
-            right: rays.right,
-            sample,
-            up: rays.up,
-            history: u32::from(history),
-        }
-    }
-}
-
-/// What the running sums are of: when any of it changes, they restart.
-#[derive(Clone, Debug, PartialEq)]
-struct Subject {
-    camera: Camera,
-    size: (u32, u32),
-    light: Light,
-    seed: u32,
-    generation: u64,
-}
-
-impl Subject {
-    fn new(world: &GpuWorld, camera: &Camera, size: (u32, u32), light: &Light, seed: u32) -> Self {
-        Subject {
-            camera: *camera,
-            size,
-            light: *light,
-            seed,
-            generation: world.generation(),
-        }
+/// A path-tracing pass's WGSL: the sample streams, the light model and [`PATHTRACE`],
+/// with entry point `path_trace` (progressive sums) or `path_sample` (one sample per pixel
+/// and its first-hit distance, for the baseline's TAA).
+pub(crate) fn path_pass(entry: &'static str) -> PassSource {
+    PassSource {
+        entry,
+        files: &[SAMPLE, LIGHT, PATHTRACE],
+        generated: String::new(),
     }
 }
 
 /// The running sums on the device.
 pub struct Accumulation {
-    subject: Subject,
+    /// What the sums are of: when the shot or the world on the device changes, they restart.
+    shot: Shot,
+    generation: u64,
     sums: wgpu::Buffer,
     samples: u32,
+}
+
+impl Accumulation {
+    /// Whether these are sums of `shot` of `world` as the device holds it now.
+    fn sums_of(&self, world: &GpuWorld, shot: &Shot) -> bool {
+        self.shot == *shot && self.generation == world.generation()
+    }
 }
 
 /// The progressive path tracer.
@@ -103,7 +61,7 @@ impl PathTracer {
     /// Prepares the pass (its pipeline is built on first use).
     pub fn new(gpu: &Gpu) -> Self {
         PathTracer {
-            pipes: PassPipelines::new(gpu, Pass::PathTrace, 2, &[false]),
+            pipes: PassPipelines::new(gpu, path_pass("path_trace"), 2, &[false]),
             acc: None,
         }
     }
@@ -116,21 +74,12 @@ impl PathTracer {
     /// Adds one sample per pixel to the sums of this view (the first, if the view, the light,
     /// the seed or the world changed) and returns their mean: progressive rendering, one
     /// sample per frame, in a viewer.
-    pub fn add_sample(
-        &mut self,
-        gpu: &Gpu,
-        world: &GpuWorld,
-        camera: &Camera,
-        size: (u32, u32),
-        light: &Light,
-        seed: u32,
-    ) -> Result<Radiance, GpuError> {
-        let subject = Subject::new(world, camera, size, light, seed);
+    pub fn add_sample(&mut self, gpu: &Gpu, world: &GpuWorld, shot: &Shot) -> Result<Radiance, GpuError> {
         let next = match &self.acc {
-            Some(a) if a.subject == subject => a.samples + 1,
+            Some(a) if a.sums_of(world, shot) => a.samples + 1,
             _ => 1,
         };
-        self.render(gpu, world, camera, size, light, seed, next, &mut |_| {})
+        self.render(gpu, world, shot, next, &mut |_| {})
     }
 
     /// Swaps the running sums with `other`: a caller that renders several views in turn
@@ -139,35 +88,32 @@ impl PathTracer {
         std::mem::swap(&mut self.acc, other);
     }
 
-    /// Brings the sums of `camera`'s view of `world` under `light` with `seed` to `spp`
-    /// samples per pixel and returns their mean. Sums of the same view are kept and added
-    /// to; anything else restarts them, as does asking for fewer samples than they hold.
-    /// `progress` hears the samples per pixel done after each dispatch.
-    #[allow(clippy::too_many_arguments)]
+    /// Brings the sums of `shot` of `world` to `spp` samples per pixel and returns their
+    /// mean. Sums of the same shot and world are kept and added to; anything else restarts
+    /// them, as does asking for fewer samples than they hold. `progress` hears the samples
+    /// per pixel done after each dispatch.
     pub fn render(
         &mut self,
         gpu: &Gpu,
         world: &GpuWorld,
-        camera: &Camera,
-        size: (u32, u32),
-        light: &Light,
-        seed: u32,
+        shot: &Shot,
         spp: u32,
         progress: &mut dyn FnMut(u32),
     ) -> Result<Radiance, GpuError> {
+        let size = shot.size;
         if spp == 0 {
             return Err(GpuError::Unsupported(
                 "a path-traced frame needs at least one sample per pixel".into(),
             ));
         }
         let pixels = check_frame_size(gpu, size, SUM_BYTES)?;
-        let rays = CameraRays::new(camera, size)?;
+        let rays = CameraRays::new(&shot.camera, size)?;
         let pipeline = self.pipes.get(gpu, world, Loop::Hierarchy, true)?;
-        let subject = Subject::new(world, camera, size, light, seed);
         let acc = match self.acc.take() {
-            Some(a) if a.subject == subject && a.samples <= spp => a,
+            Some(a) if a.sums_of(world, shot) && a.samples <= spp => a,
             _ => Accumulation {
-                subject,
+                shot: *shot,
+                generation: world.generation(),
                 sums: gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
                     label: Some("path sums"),
                     contents: &vec![0u8; (pixels * SUM_BYTES) as usize],
@@ -177,13 +123,13 @@ impl PathTracer {
             },
         };
         let acc = self.acc.insert(acc);
-        let light_params = gpu.params("light", bytemuck::bytes_of(&LightInfo::new(light)));
+        let light_params = gpu.params("light", bytemuck::bytes_of(&LightInfo::new(&shot.light)));
         let per_submit = (SUBMIT_PIXEL_SAMPLES / pixels).clamp(1, 256) as u32;
         while acc.samples < spp {
             let batch = per_submit.min(spp - acc.samples);
             let frames: Vec<wgpu::Buffer> = (acc.samples..acc.samples + batch)
                 .map(|sample| {
-                    let frame = FrameInfo::new(&rays, size, seed, sample, false);
+                    let frame = FrameInfo::new(&rays, size, shot.seed, sample, false);
                     gpu.params("frame", bytemuck::bytes_of(&frame))
                 })
                 .collect();

@@ -1,7 +1,8 @@
 //! Compute pipelines of one pass, built on demand for each buffer split and variant.
 
+use super::bindings::{Split, storage_entry};
 use super::context::{Gpu, GpuError};
-use super::shaders::{self, Loop, Pass, Split};
+use super::shaders::{self, Loop, PassSource};
 use super::world::GpuWorld;
 use std::collections::HashMap;
 
@@ -9,7 +10,7 @@ use std::collections::HashMap;
 /// pass's own bindings (parameter buffers, then its other storage buffers). Every binding
 /// is a storage buffer: see [`Gpu::params`] for why none is a uniform buffer.
 pub(crate) struct PassPipelines {
-    pass: Pass,
+    pass: PassSource,
     group1: wgpu::BindGroupLayout,
     cache: HashMap<(Split, Loop, bool), wgpu::ComputePipeline>,
 }
@@ -17,14 +18,14 @@ pub(crate) struct PassPipelines {
 impl PassPipelines {
     /// Pipelines for `pass`, whose group 1 is `params` parameter buffers (read-only, made
     /// by [`Gpu::params`]) followed by storage buffers with the given read-only flags.
-    pub fn new(gpu: &Gpu, pass: Pass, params: u32, storage_read_only: &[bool]) -> Self {
+    pub fn new(gpu: &Gpu, pass: PassSource, params: u32, storage_read_only: &[bool]) -> Self {
         let read_only = (0..params).map(|_| true).chain(storage_read_only.iter().copied());
         let entries: Vec<_> = read_only
             .enumerate()
             .map(|(i, read_only)| storage_entry(i as u32, read_only))
             .collect();
         let group1 = gpu.device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some(pass.entry()),
+            label: Some(pass.entry),
             entries: &entries,
         });
         PassPipelines {
@@ -46,7 +47,7 @@ impl PassPipelines {
             })
             .collect();
         gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some(self.pass.entry()),
+            label: Some(self.pass.entry),
             layout: &self.group1,
             entries: &entries,
         })
@@ -63,14 +64,14 @@ impl PassPipelines {
     ) -> Result<wgpu::ComputePipeline, GpuError> {
         let key = (world.split(), lp, aadf);
         if !self.cache.contains_key(&key) {
-            let src = shaders::source(self.pass, lp, &key.0);
+            let src = shaders::source(&self.pass, lp, &key.0);
             let pipeline = gpu.checked(|| {
                 let module = gpu.device.create_shader_module(wgpu::ShaderModuleDescriptor {
-                    label: Some(self.pass.entry()),
+                    label: Some(self.pass.entry),
                     source: wgpu::ShaderSource::Wgsl(src.into()),
                 });
                 let layout = gpu.device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-                    label: Some(self.pass.entry()),
+                    label: Some(self.pass.entry),
                     bind_group_layouts: &[Some(world.layout()), Some(&self.group1)],
                     immediate_size: 0,
                 });
@@ -79,10 +80,10 @@ impl PassPipelines {
                     Loop::Grid | Loop::Svo | Loop::Svdag | Loop::Hybrid => &[],
                 };
                 gpu.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                    label: Some(self.pass.entry()),
+                    label: Some(self.pass.entry),
                     layout: Some(&layout),
                     module: &module,
-                    entry_point: Some(self.pass.entry()),
+                    entry_point: Some(self.pass.entry),
                     compilation_options: wgpu::PipelineCompilationOptions {
                         constants,
                         ..Default::default()
@@ -93,20 +94,6 @@ impl PassPipelines {
             self.cache.insert(key, pipeline);
         }
         Ok(self.cache[&key].clone())
-    }
-}
-
-/// A compute-stage storage-buffer binding; every binding of every pass is one.
-pub(crate) fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
     }
 }
 

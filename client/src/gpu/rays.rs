@@ -2,21 +2,22 @@
 //! GPU-against-CPU tests and the traversal benchmark.
 
 use super::context::{Gpu, GpuError};
+use super::params::{RayCount, RayIn, WgslStruct};
 use super::pipeline::{PassPipelines, dispatch_2d};
-use super::shaders::{Loop, NO_ENTITY, Pass};
+use super::shaders::{Loop, NO_ENTITY, PassSource};
+use super::shot::split_origin;
+use super::traversal::Traversal;
 use super::world::GpuWorld;
-use naadf_world::baselines::HybridFormat;
-use naadf_world::traverse::{Hit, Method, Ray};
+use naadf_world::traverse::{Hit, Ray};
 use wgpu::util::DeviceExt;
+
+/// `shaders/rays.wgsl`: the ray-list pass.
+const RAYS: &str = include_str!("../../../shaders/rays.wgsl");
 
 /// Workgroup size of the ray pass (`shaders/rays.wgsl`).
 const WORKGROUP: u32 = 64;
-/// Words per uploaded ray.
-const RAY_WORDS: usize = 12;
 /// Words per result.
 const RESULT_WORDS: usize = 8;
-/// The largest f32 below 1: an origin's fraction must stay in [0, 1).
-const BELOW_ONE: f32 = 0.999_999_94;
 
 /// A ray as the GPU receives it: the origin is split into its floor (`i32`) and an `f32`
 /// fraction, the direction is rounded to `f32` and **not** renormalised (renormalising in
@@ -38,13 +39,6 @@ impl From<&Ray> for GpuRay {
     }
 }
 
-/// The origin split as the shaders take it: integer part and `f32` fraction in [0, 1).
-pub(crate) fn split_origin(o: [f64; 3]) -> ([i32; 3], [f32; 3]) {
-    let int = o.map(|v| v.floor());
-    let frac: [f32; 3] = std::array::from_fn(|a| ((o[a] - int[a]) as f32).min(BELOW_ONE));
-    (int.map(|v| v as i32), frac)
-}
-
 /// One GPU result: the hit (as the CPU reports it), and whether the step budget ran out
 /// (which counts as a miss).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -55,63 +49,6 @@ pub struct GpuHit {
     pub exhausted: bool,
     /// Cells visited (also for misses).
     pub steps: u32,
-}
-
-/// What a ray-list trace walks: one of the world's traversal methods, or a structure of
-/// the paper's comparison (uploaded with [`GpuWorld::upload_svo`],
-/// [`GpuWorld::upload_svdag`] or [`GpuWorld::upload_hybrid`]; geometry only, so its hits
-/// report material 0).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Traversal {
-    /// A method of the world's own (the grid needs [`GpuWorld::upload_grid`]).
-    Method(Method),
-    /// The SVO.
-    Svo,
-    /// The SVDAG.
-    Svdag,
-    /// A hybrid format.
-    Hybrid(HybridFormat),
-}
-
-impl Traversal {
-    /// Every traversal, in the order benchmarks report them.
-    pub const ALL: [Traversal; 7] = [
-        Traversal::Method(Method::Naadf),
-        Traversal::Method(Method::Nodf),
-        Traversal::Method(Method::Grid),
-        Traversal::Svo,
-        Traversal::Svdag,
-        Traversal::Hybrid(HybridFormat::R4G7),
-        Traversal::Hybrid(HybridFormat::R3G8),
-    ];
-
-    /// Its name in reports (a method's CLI name, `svo`, `svdag`, a hybrid format's name).
-    pub fn name(self) -> &'static str {
-        match self {
-            Traversal::Method(m) => m.name(),
-            Traversal::Svo => "svo",
-            Traversal::Svdag => "svdag",
-            Traversal::Hybrid(f) => f.name(),
-        }
-    }
-
-    /// The world loop, and whether it uses AADFs.
-    fn world_loop(self) -> (Loop, bool) {
-        match self {
-            Traversal::Method(Method::Naadf) => (Loop::Hierarchy, true),
-            Traversal::Method(Method::Nodf) => (Loop::Hierarchy, false),
-            Traversal::Method(Method::Grid) => (Loop::Grid, false),
-            Traversal::Svo => (Loop::Svo, false),
-            Traversal::Svdag => (Loop::Svdag, false),
-            Traversal::Hybrid(_) => (Loop::Hybrid, false),
-        }
-    }
-}
-
-impl From<Method> for Traversal {
-    fn from(m: Method) -> Self {
-        Traversal::Method(m)
-    }
 }
 
 /// Rays uploaded once, traced any number of times (benchmarks time [`RayTracer::run`]).
@@ -126,11 +63,20 @@ pub struct RayTracer {
     pipes: PassPipelines,
 }
 
+/// The ray-list pass's WGSL: [`RAYS`] and its structs.
+pub(crate) fn rays_pass() -> PassSource {
+    PassSource {
+        entry: "trace_rays",
+        files: &[RAYS],
+        generated: RayCount::wgsl() + &RayIn::wgsl(),
+    }
+}
+
 impl RayTracer {
     /// Prepares the pass (pipelines are built on first use).
     pub fn new(gpu: &Gpu) -> Self {
         RayTracer {
-            pipes: PassPipelines::new(gpu, Pass::Rays, 1, &[true, false]),
+            pipes: PassPipelines::new(gpu, rays_pass(), 1, &[true, false]),
         }
     }
 
@@ -141,7 +87,7 @@ impl RayTracer {
             .limits
             .max_storage_buffer_binding_size
             .min(gpu.limits.max_buffer_size);
-        (bytes / (RAY_WORDS as u64 * 4)).min(u64::from(u32::MAX)) as usize
+        (bytes / size_of::<RayIn>() as u64).min(u64::from(u32::MAX)) as usize
     }
 
     /// Uploads `rays` (at most [`RayTracer::max_batch`]).
@@ -150,26 +96,32 @@ impl RayTracer {
             .ok()
             .filter(|_| rays.len() <= Self::max_batch(gpu))
             .ok_or_else(|| GpuError::Unsupported(format!("{} rays exceed one batch", rays.len())))?;
-        let mut words: Vec<u32> = Vec::with_capacity(rays.len() * RAY_WORDS);
-        for r in rays {
-            let (int, frac) = split_origin(r.origin);
-            let d = r.dir.map(|v| v as f32);
-            words.extend(int.map(|v| v as u32));
-            words.push(0);
-            words.extend(frac.map(f32::to_bits));
-            words.push(0);
-            words.extend(d.map(f32::to_bits));
-            words.push(0);
+        let mut list: Vec<RayIn> = rays
+            .iter()
+            .map(|r| {
+                let (o_int, o_frac) = split_origin(r.origin);
+                RayIn {
+                    o_int,
+                    o_frac,
+                    d: r.dir.map(|v| v as f32),
+                    ..bytemuck::Zeroable::zeroed()
+                }
+            })
+            .collect();
+        if list.is_empty() {
+            // A binding must not be empty.
+            list.push(bytemuck::Zeroable::zeroed());
         }
-        if words.is_empty() {
-            words.resize(RAY_WORDS, 0);
-        }
-        let groups = count.div_ceil(WORKGROUP);
-        let (gx, _) = dispatch_2d(groups);
-        let params = gpu.params("ray count", bytemuck::cast_slice(&[count, gx * WORKGROUP, 0, 0]));
+        let (gx, _) = dispatch_2d(count.div_ceil(WORKGROUP));
+        let ray_count = RayCount {
+            count,
+            row: gx * WORKGROUP,
+            ..bytemuck::Zeroable::zeroed()
+        };
+        let params = gpu.params("ray count", bytemuck::bytes_of(&ray_count));
         let rays_buf = gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("rays"),
-            contents: bytemuck::cast_slice(&words),
+            contents: bytemuck::cast_slice(&list),
             usage: wgpu::BufferUsages::STORAGE,
         });
         let hits = gpu.device.create_buffer(&wgpu::BufferDescriptor {

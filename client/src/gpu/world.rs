@@ -13,15 +13,14 @@
 //! of earlier frames can drop or revalidate just the light those chunks touch
 //! ([`GpuWorld::changes_since`]).
 
+use super::bindings::{BUFFERS, Split, storage_entry};
 use super::context::{Gpu, GpuError, checked_on};
 use super::params::WorldInfo;
-use super::pipeline::storage_entry;
-use super::rays::Traversal;
-use super::shaders::{BUFFERS, Split};
+use super::traversal::Traversal;
 use naadf_world::baselines::{Hybrid, Svdag, Svo};
 use naadf_world::digest::{BufferId, Digest, PAGE_BYTES, digest_of};
 use naadf_world::fingerprint::{ChunkChanges, ChunkPrints, stale_words};
-use naadf_world::traverse::Method;
+use naadf_world::traverse::{DEFAULT_MAX_STEPS, Method};
 use naadf_world::{World, WorldError};
 use std::collections::VecDeque;
 
@@ -53,9 +52,6 @@ const MIN_BYTES: u64 = 16;
 const CHANGE_LOG_SYNCS: usize = 256;
 /// Changed chunks the log keeps over all its syncs, at most.
 const CHANGE_LOG_CHUNKS: usize = 1 << 20;
-/// Step budget of a ray unless set otherwise: far more cells than any ray crosses in
-/// the largest world with AADFs, a guard against runaway loops only.
-pub const DEFAULT_MAX_STEPS: u32 = 1 << 16;
 
 /// What one sync uploaded.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

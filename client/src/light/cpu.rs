@@ -6,13 +6,12 @@
 use super::rng::Rng;
 use super::scatter::{self, MIN_ALPHA};
 use super::{Light, SURFACE_OFFSET, Sky, Sun, sky};
-use crate::gpu::DEFAULT_MAX_STEPS;
 use glam::DVec3;
 use naadf_world::World;
 use naadf_world::camera::Camera;
 use naadf_world::entity::pack::rotate;
 use naadf_world::material::MaterialKind;
-use naadf_world::traverse::{Ray, trace_naadf};
+use naadf_world::traverse::{DEFAULT_MAX_STEPS, Ray, trace_naadf};
 
 /// A Monte Carlo estimate: the mean and the standard error of the mean, per channel.
 #[derive(Clone, Copy, Debug, PartialEq)]

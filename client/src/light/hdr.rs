@@ -1,7 +1,7 @@
 //! Radiance images: the linear output of the lit modes, written as PFM or OpenEXR, and
 //! tone-mapped to the 8-bit frames every other output uses.
 
-use crate::gpu::Frame;
+use crate::frame::Frame;
 use std::io::Write;
 use std::path::Path;
 

@@ -20,6 +20,7 @@
 
 pub mod cpu;
 pub mod hdr;
+#[cfg(feature = "gpu")]
 pub mod quality;
 pub mod rng;
 pub mod scatter;

@@ -24,15 +24,24 @@ pub const VIEW_STEPS: u32 = 24;
 /// Steps from each view sample toward the sun.
 pub const LIGHT_STEPS: u32 = 6;
 
-const RAYLEIGH: [f32; 3] = [5.802e-6, 13.558e-6, 33.1e-6];
-const RAYLEIGH_SCALE: f32 = 8_000.0;
-const MIE_SCATTER: f32 = 3.996e-6;
-const MIE_EXTINCTION: f32 = 4.44e-6;
-const MIE_SCALE: f32 = 1_200.0;
-const MIE_G: f32 = 0.8;
-const OZONE: [f32; 3] = [0.650e-6, 1.881e-6, 0.085e-6];
-const OZONE_CENTRE: f32 = 25_000.0;
-const OZONE_HALF_WIDTH: f32 = 15_000.0;
+/// Rayleigh scattering coefficients at the ground, per metre (red, green, blue).
+pub const RAYLEIGH: [f32; 3] = [5.802e-6, 13.558e-6, 33.1e-6];
+/// Scale height of the Rayleigh scatterers, in metres.
+pub const RAYLEIGH_SCALE: f32 = 8_000.0;
+/// Mie scattering coefficient at the ground, per metre.
+pub const MIE_SCATTER: f32 = 3.996e-6;
+/// Mie extinction coefficient at the ground, per metre.
+pub const MIE_EXTINCTION: f32 = 4.44e-6;
+/// Scale height of the Mie scatterers, in metres.
+pub const MIE_SCALE: f32 = 1_200.0;
+/// Asymmetry of the Mie phase function (Cornette–Shanks `g`).
+pub const MIE_G: f32 = 0.8;
+/// Ozone absorption coefficients at the layer's peak, per metre (red, green, blue).
+pub const OZONE: [f32; 3] = [0.650e-6, 1.881e-6, 0.085e-6];
+/// Height of the ozone layer's peak, in metres.
+pub const OZONE_CENTRE: f32 = 25_000.0;
+/// Half the width of the ozone layer's tent profile, in metres.
+pub const OZONE_HALF_WIDTH: f32 = 15_000.0;
 const PI: f32 = std::f32::consts::PI;
 
 /// Distance from a point at height `h` (above the ground) along a direction whose cosine

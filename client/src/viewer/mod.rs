@@ -26,7 +26,8 @@ pub use pick::{Click, edit_for_click};
 pub use present::Presenter;
 
 use crate::client::ServerAddress;
-use crate::gpu::{Baseline, Frame, Gi, Gpu, GpuError, GpuWorld, Mode, PathTracer, Renderer, Temporal};
+use crate::frame::{Frame, Mode};
+use crate::gpu::{Baseline, Gi, Gpu, GpuError, GpuWorld, PathTracer, Renderer, Shot, Temporal};
 use crate::light::{DEFAULT_LIT_BOUNCES, DEFAULT_PATHTRACE_BOUNCES, LitOptions};
 use crate::mirror::{Mirror, MirrorError};
 use naadf_world::camera::Camera;
@@ -196,12 +197,28 @@ impl Graphics {
         let lit = LitOptions::default();
         let light = |bounces| lit.light(bounces).map_err(GpuError::Unsupported);
         let radiance = match mode {
-            Mode::PathTrace => {
-                path_tracer.add_sample(gpu, gw, camera, size, &light(DEFAULT_PATHTRACE_BOUNCES)?, lit.seed)?
-            }
+            Mode::PathTrace => path_tracer.add_sample(
+                gpu,
+                gw,
+                &Shot {
+                    camera: *camera,
+                    size,
+                    light: light(DEFAULT_PATHTRACE_BOUNCES)?,
+                    seed: lit.seed,
+                },
+            )?,
             Mode::Baseline | Mode::Gi => {
                 let r: &mut dyn Temporal = if mode == Mode::Gi { gi } else { baseline };
-                r.frame(gpu, gw, camera, size, &light(DEFAULT_LIT_BOUNCES)?, lit.seed)?;
+                r.frame(
+                    gpu,
+                    gw,
+                    &Shot {
+                        camera: *camera,
+                        size,
+                        light: light(DEFAULT_LIT_BOUNCES)?,
+                        seed: lit.seed,
+                    },
+                )?;
                 r.radiance(gpu)?
             }
             _ => return renderer.render(gpu, gw, camera, size, mode, false),
@@ -450,7 +467,7 @@ impl App {
         self.frames += 1;
         if self.opts.frames == Some(self.frames) {
             if let Some(path) = &self.opts.screenshot {
-                let png = frame.png()?;
+                let png = frame.png().map_err(GpuError::from)?;
                 std::fs::write(path, png).map_err(|e| ViewerError::Screenshot(path.clone(), e))?;
             }
             el.exit();

@@ -4,7 +4,8 @@
 //! the HUD and screenshots), so presenting is one `write_texture` into the swap-chain
 //! image, with a non-sRGB format so that the bytes are shown as they are.
 
-use crate::gpu::{Frame, Gpu, GpuError};
+use crate::frame::Frame;
+use crate::gpu::{Gpu, GpuError};
 
 /// A configured window surface.
 pub struct Presenter {

@@ -17,7 +17,8 @@ use crate::commands::print_json;
 use crate::commands::progress;
 use crate::commands::render::{LightArgs, parse_image_size, read_camera};
 use anyhow::{Context, Result, bail};
-use naadf_client::gpu::{Baseline, Gi, GiPass, Gpu, GpuWorld, Mode, PathTracer, Renderer, Temporal};
+use naadf_client::Mode;
+use naadf_client::gpu::{Baseline, Gi, GiPass, Gpu, GpuWorld, PathTracer, Renderer, Shot, Temporal};
 use naadf_client::light::hdr::Radiance;
 use naadf_client::light::quality::{Quality, flicker, mean_luminance};
 use naadf_client::light::{DEFAULT_LIT_BOUNCES, Light};
@@ -129,11 +130,31 @@ struct Bench {
 
 impl Bench {
     fn reference(&self, camera: &Camera, seed: u32, spp: u32, done: &mut dyn FnMut(u32)) -> Result<Radiance> {
-        Ok(PathTracer::new(&self.gpu).render(&self.gpu, &self.gw, camera, self.size, &self.light, seed, spp, done)?)
+        Ok(PathTracer::new(&self.gpu).render(
+            &self.gpu,
+            &self.gw,
+            &Shot {
+                camera: *camera,
+                size: self.size,
+                light: self.light,
+                seed,
+            },
+            spp,
+            done,
+        )?)
     }
 
     fn frame(&self, r: &mut dyn Temporal, camera: &Camera) -> Result<()> {
-        Ok(r.frame(&self.gpu, &self.gw, camera, self.size, &self.light, self.seed)?)
+        Ok(r.frame(
+            &self.gpu,
+            &self.gw,
+            &Shot {
+                camera: *camera,
+                size: self.size,
+                light: self.light,
+                seed: self.seed,
+            },
+        )?)
     }
 
     fn measure(&self, img: &Radiance, reference: &Radiance) -> Result<Quality> {

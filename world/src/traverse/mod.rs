@@ -19,7 +19,7 @@ pub mod ray;
 
 pub use grid::DenseGrid;
 pub use hierarchy::{trace_naadf, trace_nodf};
-pub use ray::{Hit, MAX_COORD, Ray, same_result};
+pub use ray::{DEFAULT_MAX_STEPS, Hit, MAX_COORD, Ray, same_result};
 
 use crate::world::World;
 

@@ -64,6 +64,12 @@ pub(crate) struct Entry {
 /// indices and boundary times stay exact in `i64` and `f64`.
 pub const MAX_COORD: f64 = (1u64 << 30) as f64;
 
+/// Step budget of a ray unless set otherwise: far more cells than any ray crosses in the
+/// largest world with AADFs, a guard against runaway loops only. The GPU walk stops there
+/// and reports a miss; the CPU light model counts a longer walk as a miss too, so that both
+/// path tracers see the same world.
+pub const DEFAULT_MAX_STEPS: u32 = 1 << 16;
+
 /// Far-away cell bound for unconstrained axes.
 const FAR: i64 = 1 << 40;
 

@@ -1,0 +1,133 @@
+//! Tests of every pass's WGSL together: each one validates with naga over whole and split
+//! buffers, declares no uniform buffer, and lays its shared structs out as Rust does.
+
+use super::baseline::taa_pass;
+use super::bindings::Split;
+use super::gi::{GiPass, GiSplit, gi_pass};
+use super::params::{FrameInfo, GiInfo, LightInfo, RayCount, RayIn, View, WgslStruct, WorldInfo};
+use super::pathtrace::path_pass;
+use super::rays::rays_pass;
+use super::render::render_pass;
+use super::shaders::{Loop, PassSource, source};
+
+fn validate(src: &str) -> Result<(), String> {
+    let module = naga::front::wgsl::parse_str(src).map_err(|e| e.emit_to_string(src))?;
+    // The capabilities wgpu grants on every backend the client targets.
+    let caps = naga::valid::Capabilities::SHADER_FLOAT16_IN_FLOAT32;
+    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), caps)
+        .validate(&module)
+        .map_err(|e| e.emit_to_string(src))?;
+    Ok(())
+}
+
+fn parse(src: &str) -> naga::Module {
+    naga::front::wgsl::parse_str(src).unwrap_or_else(|e| panic!("{}", e.emit_to_string(src)))
+}
+
+/// Every buffer in one binding.
+fn whole() -> Split {
+    Split {
+        part_shift: 25,
+        parts: [1; 8],
+    }
+}
+
+/// Every pass: the ray list, the frame, the two path-tracing entry points, the TAA
+/// resolve, and the GI passes over `gi_split`.
+fn every_pass(gi_split: GiSplit) -> Vec<PassSource> {
+    let mut passes = vec![
+        rays_pass(),
+        render_pass(),
+        path_pass("path_trace"),
+        path_pass("path_sample"),
+        taa_pass(),
+    ];
+    passes.extend(GiPass::ALL.map(|p| gi_pass(p, gi_split)));
+    passes
+}
+
+#[test]
+fn every_pass_validates_with_naga_for_whole_and_split_buffers() {
+    let split = Split {
+        part_shift: 14,
+        parts: [2, 1, 3, 4, 1, 1, 2, 5],
+    };
+    let gi_whole = GiSplit {
+        part_bytes_shift: 27,
+        mem_parts: 1,
+        taa_parts: 1,
+    };
+    let gi_split = GiSplit {
+        part_bytes_shift: 16,
+        mem_parts: 3,
+        taa_parts: 2,
+    };
+    for (s, g) in [(whole(), gi_whole), (split, gi_split)] {
+        for pass in every_pass(g) {
+            for lp in Loop::ALL {
+                if let Err(e) = validate(&source(&pass, lp, &s)) {
+                    panic!("{} with {lp:?} over {s:?}:\n{e}", pass.entry);
+                }
+            }
+        }
+    }
+}
+
+/// Lavapipe re-optimises a shader for the values of its uniform buffers at every
+/// dispatch (see `Gpu::params`), so no pass may declare one.
+#[test]
+fn no_pass_declares_a_uniform_buffer() {
+    let gi_split = GiSplit {
+        part_bytes_shift: 27,
+        mem_parts: 1,
+        taa_parts: 1,
+    };
+    for pass in every_pass(gi_split) {
+        for lp in Loop::ALL {
+            let module = parse(&source(&pass, lp, &whole()));
+            let uniforms: Vec<_> = module
+                .global_variables
+                .iter()
+                .filter(|(_, v)| v.space == naga::AddressSpace::Uniform)
+                .map(|(_, v)| v.name.clone().unwrap_or_default())
+                .collect();
+            assert!(
+                uniforms.is_empty(),
+                "{} with {lp:?} declares uniform buffers {uniforms:?}",
+                pass.entry
+            );
+        }
+    }
+}
+
+/// Checks that `module` lays `T` out at the Rust offsets and size.
+fn assert_rust_layout<T: WgslStruct>(module: &naga::Module) {
+    let (members, span) = module
+        .types
+        .iter()
+        .find_map(|(_, t)| match &t.inner {
+            naga::TypeInner::Struct { members, span } if t.name.as_deref() == Some(T::NAME) => Some((members, *span)),
+            _ => None,
+        })
+        .unwrap_or_else(|| panic!("the module declares {}", T::NAME));
+    let wgsl: Vec<(&str, usize)> = members
+        .iter()
+        .map(|m| (m.name.as_deref().unwrap_or_default(), m.offset as usize))
+        .collect();
+    let rust: Vec<(&str, usize)> = T::MEMBERS.iter().map(|m| (m.name, m.offset)).collect();
+    assert_eq!(wgsl, rust, "{}", T::NAME);
+    assert_eq!(span as usize, size_of::<T>(), "{}", T::NAME);
+}
+
+#[test]
+fn the_shared_structs_are_laid_out_at_the_rust_offsets() {
+    let prelude = parse(&source(&taa_pass(), Loop::Hierarchy, &whole()));
+    assert_rust_layout::<WorldInfo>(&prelude);
+    assert_rust_layout::<FrameInfo>(&prelude);
+    assert_rust_layout::<LightInfo>(&prelude);
+    assert_rust_layout::<GiInfo>(&prelude);
+    assert_rust_layout::<View>(&parse(&source(&render_pass(), Loop::Hierarchy, &whole())));
+    let rays = parse(&source(&rays_pass(), Loop::Hierarchy, &whole()));
+    assert_rust_layout::<RayCount>(&rays);
+    assert_rust_layout::<RayIn>(&rays);
+}
