@@ -5,11 +5,28 @@
 use std::io::{BufRead, BufReader, Write};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
+use std::sync::OnceLock;
 use std::time::Duration;
+
+/// The binary the helpers run, when a test chose one other than the one Cargo built.
+static BINARY: OnceLock<PathBuf> = OnceLock::new();
+
+/// Makes every helper run `path` instead of the `naadf` Cargo built for the tests (the
+/// build without the `gpu` feature, say). Call it first, once.
+pub fn use_binary(path: PathBuf) {
+    BINARY
+        .set(path)
+        .expect("the binary is chosen once, before anything runs");
+}
+
+/// The `naadf` binary the helpers run.
+pub fn binary() -> &'static Path {
+    BINARY.get_or_init(|| PathBuf::from(env!("CARGO_BIN_EXE_naadf")))
+}
 
 /// Runs `naadf` with `args`, feeding `stdin`.
 pub fn naadf(args: &[&str], stdin: Option<&str>) -> Output {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_naadf"))
+    let mut child = Command::new(binary())
         .args(args)
         .stdin(Stdio::piped())
         .stdout(Stdio::piped())
@@ -78,7 +95,7 @@ impl Server {
     /// Starts `naadf COMMAND --json ARGS` as [`Server::start`] describes.
     fn launch(command_name: &str, args: &[&str], log: &Path, envs: &[(&str, &str)]) -> Server {
         let err = std::fs::OpenOptions::new().create(true).append(true).open(log).unwrap();
-        let mut command = Command::new(env!("CARGO_BIN_EXE_naadf"));
+        let mut command = Command::new(binary());
         command.arg(command_name).arg("--json");
         for flag in ["--grpc", "--http"] {
             if !args.contains(&flag) {
