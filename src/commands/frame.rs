@@ -1,9 +1,9 @@
 //! `naadf frame --server URL --camera JSON [--size WxH] [--mode M] [--min-version N] -o OUT.png`:
 //! asks the server for a frame, which one of its render nodes renders.
 
+use super::args::{LightArgs, parse_image_size, parse_mode, read_camera};
 use super::print_json;
 use super::remote::{ServerArgs, block_on};
-use super::render::{LightArgs, parse_image_size, parse_mode, read_camera};
 use anyhow::{Context, Result};
 use naadf_client::FrameSpec;
 use naadf_client::light::LitOptions;

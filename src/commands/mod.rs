@@ -1,7 +1,9 @@
-//! One module per subcommand, plus the pieces they share: logging, progress bars, world
-//! file I/O with context, and error reporting.
+//! One module per subcommand, plus the pieces they share: the shared arguments (`args`),
+//! logging, progress bars, world file I/O with context, error reporting, and what a server
+//! or relay does once it listens and when it is told to stop.
 
 pub mod apply;
+pub mod args;
 #[cfg(feature = "gpu")]
 pub mod bench;
 pub mod data;
@@ -30,6 +32,7 @@ pub mod view;
 
 use anyhow::{Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
+use naadf_server::Bound;
 use naadf_world::ops::Limits;
 use naadf_world::{ChunkSource, World, file};
 use std::path::Path;
@@ -191,4 +194,39 @@ pub fn quiet_headless_gpu() -> Option<tempfile::TempDir> {
     // environment concurrently.
     unsafe { std::env::set_var("XDG_RUNTIME_DIR", dir.path()) };
     Some(dir)
+}
+
+/// What a server or relay does once it listens: with `json`, print its bound addresses as
+/// one JSON line (`{"grpc": ADDR, "http": ADDR}`), which scripts and tests wait for.
+pub fn announce(json: bool) -> impl FnOnce(Bound) {
+    move |b: Bound| {
+        if json {
+            let _ = print_json(&serde_json::json!({
+                "grpc": b.grpc.to_string(),
+                "http": b.http.to_string(),
+            }));
+        }
+    }
+}
+
+/// A future that resolves on Ctrl-C or SIGTERM. The handlers are installed now, before the
+/// server announces its addresses: a signal sent right after the announcement must stop
+/// the server cleanly, not find the default action (death by the signal) still in place.
+pub fn shutdown_signal() -> std::io::Result<impl std::future::Future<Output = ()>> {
+    #[cfg(unix)]
+    {
+        use tokio::signal::unix::{SignalKind, signal};
+        let mut term = signal(SignalKind::terminate())?;
+        let mut interrupt = signal(SignalKind::interrupt())?;
+        Ok(async move {
+            tokio::select! {
+                _ = term.recv() => {}
+                _ = interrupt.recv() => {}
+            }
+        })
+    }
+    #[cfg(not(unix))]
+    Ok(async {
+        let _ = tokio::signal::ctrl_c().await;
+    })
 }

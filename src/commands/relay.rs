@@ -1,7 +1,8 @@
 //! `naadf relay --upstream URL [--grpc ADDR] [--http ADDR] [--token T]`
 
+use super::args::ListenArgs;
 use super::remote::block_on_threads;
-use super::serve::{ListenArgs, announce, shutdown_signal};
+use super::{announce, shutdown_signal};
 use anyhow::{Context, Result};
 use naadf_server::relay::{DEFAULT_RELAY_GRPC, DEFAULT_RELAY_HTTP, DEFAULT_UPSTREAM_TIMEOUT, RelayConfig, relay};
 use std::net::SocketAddr;

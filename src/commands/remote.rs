@@ -61,6 +61,7 @@ pub fn block_on_threads<T>(threads: usize, f: impl std::future::Future<Output = 
 /// Joins `server` (announcing `cache`, so that only changed pages come) and returns its
 /// world once the mirror is at `min_version` or later and quiescent, failing after
 /// `timeout`.
+#[cfg(feature = "gpu")]
 pub async fn quiescent_world(
     server: &ServerArgs,
     cache: Option<naadf_world::World>,

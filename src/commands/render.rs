@@ -4,13 +4,14 @@
 //! for `--mode baseline` and `--mode gi` the same without `--spp`, with `--frames N` and
 //! `[--camera-path FILE.jsonl]`.
 
+use super::args::{LightArgs, parse_image_size, parse_mode, read_camera};
 use super::remote::{ServerArgs, block_on, quiescent_world};
 use super::{load_world, print_json, progress, seconds};
 use anyhow::{Context, Result, bail};
 use naadf_client::frame::write_gbuffer;
 use naadf_client::gpu::{Headless, Shot};
 use naadf_client::light::hdr::Radiance;
-use naadf_client::light::{DEFAULT_LIT_BOUNCES, DEFAULT_PATHTRACE_BOUNCES, Light, LitOptions, Sky, Sun};
+use naadf_client::light::{DEFAULT_LIT_BOUNCES, DEFAULT_PATHTRACE_BOUNCES, Light, LitOptions};
 use naadf_client::{Frame, Mode};
 use naadf_world::World;
 use naadf_world::camera::Camera;
@@ -64,100 +65,12 @@ pub struct Args {
     json: bool,
 }
 
-/// The options of the lit modes (docs/RENDERING.md §3a–c; `render`, `frame`).
-#[derive(clap::Args)]
-pub struct LightArgs {
-    /// Samples per pixel in total (pathtrace; default 64).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
-    spp: Option<u32>,
-    /// Seed of the random samples: the same seed, device and inputs give the same image.
-    #[arg(long)]
-    seed: Option<u32>,
-    /// Scattered rays after the camera ray (default 8 for pathtrace, 3 for baseline and gi).
-    #[arg(long, value_parser = clap::value_parser!(u32).range(0..=i64::from(naadf_client::light::MAX_BOUNCES)))]
-    bounces: Option<u32>,
-    /// The sky: `physical` (default) or `uniform:L` / `uniform:R,G,B` (linear radiance).
-    #[arg(long, value_parser = Sky::parse)]
-    sky: Option<Sky>,
-    /// The sun: `off` or `AZ,EL,E` (azimuth from +Z toward +X and elevation in degrees,
-    /// irradiance). Default: `300,30,3` under the physical sky, off under a uniform one.
-    #[arg(long, value_parser = parse_sun)]
-    sun: Option<SunArg>,
-    /// Exposure: the PNG holds sRGB(ACES(radiance · exposure)).
-    #[arg(long)]
-    exposure: Option<f32>,
-}
-
-/// A parsed `--sun` (`off` is a value, so it is not an `Option` itself).
-#[derive(Clone, Copy, Debug)]
-pub struct SunArg(Option<Sun>);
-
-fn parse_sun(s: &str) -> Result<SunArg, String> {
-    Sun::parse(s).map(SunArg)
-}
-
 /// What `run` does, decided from the arguments before any work.
 enum Job {
     /// Frames of the render pass.
     Frame(Mode),
     /// A path-traced frame, or frames of a temporal mode: the options and the light.
     Lit(LitOptions, Light),
-}
-
-impl LightArgs {
-    /// The options given, by name (for a mode that takes none).
-    pub fn given(&self) -> Vec<&'static str> {
-        let flags = [
-            ("--spp", self.spp.is_some()),
-            ("--seed", self.seed.is_some()),
-            ("--bounces", self.bounces.is_some()),
-            ("--sky", self.sky.is_some()),
-            ("--sun", self.sun.is_some()),
-            ("--exposure", self.exposure.is_some()),
-        ];
-        flags.iter().filter(|f| f.1).map(|f| f.0).collect()
-    }
-
-    /// The options given, over the defaults of docs/RENDERING.md.
-    pub fn options(&self) -> Result<LitOptions> {
-        let d = LitOptions::default();
-        let options = LitOptions {
-            spp: self.spp.unwrap_or(d.spp),
-            seed: self.seed.unwrap_or(d.seed),
-            bounces: self.bounces,
-            sky: self.sky,
-            sun: self.sun.map(|s| s.0),
-            exposure: self.exposure.unwrap_or(d.exposure),
-            ..d
-        };
-        options.check().map_err(anyhow::Error::msg)?;
-        Ok(options)
-    }
-}
-
-/// Parses `WxH`.
-pub fn parse_image_size(s: &str) -> Result<(u32, u32), String> {
-    let (w, h) = s.split_once(['x', 'X']).ok_or("expected WxH, e.g. 1280x720")?;
-    let p = |v: &str| v.trim().parse::<u32>().map_err(|e| format!("'{v}': {e}"));
-    Ok((p(w)?, p(h)?))
-}
-
-/// Parses a render-pass mode name.
-pub fn parse_mode(s: &str) -> Result<Mode, String> {
-    Mode::parse(s).ok_or_else(|| {
-        let names: Vec<_> = Mode::ALL.iter().map(|m| m.name()).collect();
-        format!("unknown mode '{s}' (one of: {})", names.join(", "))
-    })
-}
-
-/// Reads a camera given inline or as a file.
-pub fn read_camera(arg: &str) -> Result<Camera> {
-    let text = if arg.trim_start().starts_with('{') {
-        arg.to_owned()
-    } else {
-        std::fs::read_to_string(arg).with_context(|| format!("cannot read camera file {arg}"))?
-    };
-    Ok(Camera::from_json(&text)?)
 }
 
 /// Reads a camera path: one camera JSON per non-blank line, at least one.
@@ -255,7 +168,7 @@ pub fn run(a: Args) -> Result<()> {
 fn refuse_for(a: &Args, flags: &[&str]) -> Result<()> {
     let given = |f: &str| match f {
         "--gbuffer" => a.gbuffer.is_some(),
-        "--spp" => a.light.spp.is_some(),
+        "--spp" => a.light.given().contains(&"--spp"),
         _ => a.camera_path.is_some(),
     };
     match flags.iter().find(|f| given(f)) {

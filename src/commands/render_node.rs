@@ -7,8 +7,8 @@
 //! ([`naadf_client::node::RenderNode`]); this command supplies the GPU renderer and, with
 //! `--http`, a `/health` endpoint for container health checks and Kubernetes probes.
 
+use super::args::parse_image_size;
 use super::remote::{ServerArgs, block_on};
-use super::render::parse_image_size;
 use anyhow::{Context, Result, anyhow};
 use naadf_client::Mode;
 use naadf_client::gpu::Headless;

@@ -1,12 +1,11 @@
 //! `naadf serve [--world FILE | --generate PRESET] [--data DIR] [--grpc ADDR] [--http ADDR]`
 
-use super::generate::{PresetArgs, generate, parse_size};
+use super::args::{ListenArgs, PresetArgs, parse_size};
 use super::remote::block_on;
-use super::{BuildLimit, load_world, print_json};
+use super::{BuildLimit, announce, load_world, shutdown_signal};
 use anyhow::{Context, Result};
+use naadf_server::ServerConfig;
 use naadf_server::auth::Auth;
-use naadf_server::frontend::Frontend;
-use naadf_server::{Bound, ServerConfig};
 use naadf_world::WorldSize;
 use std::net::SocketAddr;
 use std::path::PathBuf;
@@ -65,64 +64,6 @@ pub struct Args {
     json: bool,
 }
 
-/// How a server or a relay listens and how far its clients may fall behind: the options
-/// `serve` and `relay` share.
-#[derive(clap::Args)]
-pub struct ListenArgs {
-    /// TLS certificate chain (PEM); needs --tls-key. Read again every 10 s and on SIGHUP:
-    /// a changed pair that loads serves the connections opened after it.
-    #[arg(long, requires = "tls_key")]
-    pub tls_cert: Option<PathBuf>,
-    /// TLS private key (PEM); needs --tls-cert.
-    #[arg(long, requires = "tls_cert")]
-    pub tls_key: Option<PathBuf>,
-    /// Largest request message, in bytes.
-    #[arg(long, default_value_t = Frontend::default().max_message_bytes)]
-    pub max_message_bytes: usize,
-    /// Deltas a client may fall behind before it is re-sent a snapshot.
-    #[arg(long, default_value_t = Frontend::default().slow_client_events)]
-    pub slow_client_events: usize,
-    /// Bytes a client may fall behind (deltas it has not read) before it is re-sent a
-    /// snapshot.
-    #[arg(long, default_value_t = Frontend::default().slow_clients.client_bytes)]
-    pub slow_client_bytes: u64,
-    /// Bytes the subscribed clients together may fall behind; over it, every one that is
-    /// not reading and is more than a sixteenth of --slow-client-bytes behind is re-sent a
-    /// snapshot.
-    #[arg(long, default_value_t = Frontend::default().slow_clients.total_bytes)]
-    pub slow_clients_total_bytes: u64,
-    /// Most connections open at a time on each listener (gRPC and HTTP); more wait until
-    /// one closes. Keep twice this under the process's file descriptor limit.
-    #[arg(long, default_value_t = Frontend::default().connections.max_connections)]
-    pub max_connections: usize,
-    /// Close a connection whose peer sent nothing for this many seconds (unfinished
-    /// handshakes and requests, dead peers); gRPC connections are pinged at a third of it,
-    /// so live ones stay open.
-    #[arg(long, default_value_t = Frontend::default().connections.idle_timeout.as_secs_f64())]
-    pub idle_timeout: f64,
-}
-
-impl ListenArgs {
-    /// The client-facing settings, listening on `grpc` and `http`.
-    pub fn frontend(&self, grpc: SocketAddr, http: SocketAddr) -> Result<Frontend> {
-        Ok(Frontend {
-            grpc,
-            http,
-            tls: self.tls_cert.clone().zip(self.tls_key.clone()),
-            max_message_bytes: self.max_message_bytes,
-            connections: naadf_server::conn::ConnLimits {
-                max_connections: self.max_connections.max(1),
-                idle_timeout: super::seconds(self.idle_timeout, "--idle-timeout")?.max(Duration::from_millis(100)),
-            },
-            slow_client_events: self.slow_client_events,
-            slow_clients: naadf_server::join::SlowClientLimits {
-                client_bytes: self.slow_client_bytes,
-                total_bytes: self.slow_clients_total_bytes,
-            },
-        })
-    }
-}
-
 /// Runs the server until Ctrl-C or SIGTERM.
 pub fn run(a: Args) -> Result<()> {
     let mut auth = match &a.auth {
@@ -148,12 +89,13 @@ pub fn run(a: Args) -> Result<()> {
     let (size, seed, limit) = (a.size, a.seed, a.limit);
     let initial = move || match world {
         Some(p) => load_world(&p),
-        None => generate(&PresetArgs {
+        None => PresetArgs {
             preset: preset.unwrap_or_else(|| "terrain".into()),
             size,
             seed,
             limit,
-        }),
+        }
+        .generate(),
     };
     let json = a.json;
     block_on(async move {
@@ -165,40 +107,5 @@ pub fn run(a: Args) -> Result<()> {
         )
         .await
         .context("server failed")
-    })
-}
-
-/// What a server or relay does once it listens: with `json`, print its bound addresses as
-/// one JSON line (`{"grpc": ADDR, "http": ADDR}`), which scripts and tests wait for.
-pub fn announce(json: bool) -> impl FnOnce(Bound) {
-    move |b: Bound| {
-        if json {
-            let _ = print_json(&serde_json::json!({
-                "grpc": b.grpc.to_string(),
-                "http": b.http.to_string(),
-            }));
-        }
-    }
-}
-
-/// A future that resolves on Ctrl-C or SIGTERM. The handlers are installed now, before the
-/// server announces its addresses: a signal sent right after the announcement must stop
-/// the server cleanly, not find the default action (death by the signal) still in place.
-pub fn shutdown_signal() -> std::io::Result<impl std::future::Future<Output = ()>> {
-    #[cfg(unix)]
-    {
-        use tokio::signal::unix::{SignalKind, signal};
-        let mut term = signal(SignalKind::terminate())?;
-        let mut interrupt = signal(SignalKind::interrupt())?;
-        Ok(async move {
-            tokio::select! {
-                _ = term.recv() => {}
-                _ = interrupt.recv() => {}
-            }
-        })
-    }
-    #[cfg(not(unix))]
-    Ok(async {
-        let _ = tokio::signal::ctrl_c().await;
     })
 }

@@ -1,7 +1,7 @@
 //! `naadf view --server URL [--token T]`: the interactive viewer (docs/RENDERING.md).
 
+use super::args::{parse_image_size, parse_mode, read_camera};
 use super::remote::ServerArgs;
-use super::render::{parse_image_size, parse_mode, read_camera};
 use super::{print_json, seconds};
 use anyhow::Result;
 use naadf_client::Mode;

@@ -1,6 +1,6 @@
 //! `naadf bench build`: generation, construction and chunk-AADF build times of a preset.
 
-use crate::commands::generate::PresetArgs;
+use crate::commands::args::PresetArgs;
 use crate::commands::{chunk_progress, print_json};
 use anyhow::Result;
 use naadf_world::cell::CHUNK_VOXELS;

@@ -2,7 +2,7 @@
 //! edit stream (HashDAG `EditSphere` replays), on a generated world.
 
 use super::{percentile, surface};
-use crate::commands::generate::{PresetArgs, generate};
+use crate::commands::args::PresetArgs;
 use crate::commands::print_json;
 use anyhow::{Context, Result, bail};
 use naadf_world::World;
@@ -99,7 +99,7 @@ fn time_batches(world: &mut World, batches: &[Batch]) -> Result<KindReport> {
 
 /// Runs the edit benchmark.
 pub fn run(a: EditArgs) -> Result<()> {
-    let mut world = generate(&a.preset)?;
+    let mut world = a.preset.generate()?;
     let size = world.size().voxels();
     let mut rng = SplitMix64(a.preset.seed);
     let mut points = Vec::new();

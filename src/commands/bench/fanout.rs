@@ -13,7 +13,7 @@
 use super::cpu::process_ns_of;
 use super::percentile;
 use super::stream::{Editor, points, voxel_op};
-use crate::commands::generate::{PresetArgs, generate};
+use crate::commands::args::PresetArgs;
 use crate::commands::print_json;
 use crate::commands::remote::block_on;
 use anyhow::{Context, Result, bail};
@@ -233,7 +233,7 @@ fn bytes_sent(http: &str) -> Result<u64> {
 
 /// Runs the benchmark.
 pub fn run(a: FanoutArgs) -> Result<()> {
-    let world = generate(&a.preset)?;
+    let world = a.preset.generate()?;
     let pts = points(&world, 4096, a.preset.seed);
     let dir = tempfile::tempdir()?;
     let file = dir.path().join("world.naadf");

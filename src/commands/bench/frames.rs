@@ -4,8 +4,8 @@
 //! node does per job) for the server's added latency.
 
 use super::percentile;
+use crate::commands::args::{parse_image_size, parse_mode, read_camera};
 use crate::commands::remote::{ServerArgs, block_on};
-use crate::commands::render::{parse_image_size, parse_mode, read_camera};
 use crate::commands::{load_world, print_json};
 use anyhow::Result;
 use naadf_client::FrameSpec;

@@ -12,10 +12,10 @@
 //! - **edit response**: an emitter added in front of the camera, then removed; the frames
 //!   until the image mean is within 10 % of the change of its converged value.
 
+use crate::commands::args::{LightArgs, parse_image_size, read_camera};
 use crate::commands::load_world;
 use crate::commands::print_json;
 use crate::commands::progress;
-use crate::commands::render::{LightArgs, parse_image_size, read_camera};
 use anyhow::{Context, Result, bail};
 use naadf_client::Mode;
 use naadf_client::gpu::{Baseline, Gi, GiPass, Gpu, GpuWorld, PathTracer, Renderer, Shot, Temporal};

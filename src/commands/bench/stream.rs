@@ -5,7 +5,7 @@
 
 use super::cpu::{Sample, UnitUsage};
 use super::{percentile, surface};
-use crate::commands::generate::{PresetArgs, generate};
+use crate::commands::args::PresetArgs;
 use crate::commands::print_json;
 use crate::commands::remote::block_on;
 use anyhow::{Context, Result, bail};
@@ -326,7 +326,7 @@ impl Drop for Editor {
 
 /// Runs the benchmark.
 pub fn run(a: StreamArgs) -> Result<()> {
-    let world = generate(&a.preset)?;
+    let world = a.preset.generate()?;
     let file_bytes = {
         let mut counter = CountingWriter(0);
         naadf_world::file::write(&world, &mut counter)?;
