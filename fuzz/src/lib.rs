@@ -137,7 +137,7 @@ fn scratch_file(name: &str) -> PathBuf {
     dir.join(format!("naadf-fuzz-{}-{name}", std::process::id()))
 }
 
-/// The WAL segment magic (see `server/src/wal.rs`).
+/// The WAL segment magic (see `server/src/data/wal.rs`).
 pub const WAL_MAGIC: &[u8; 8] = b"NAADFWAL";
 /// The WAL segment format.
 pub const WAL_FORMAT: u32 = 1;
@@ -149,7 +149,7 @@ pub const WAL_FORMAT: u32 = 1;
 /// the base version. Recovered entries then go through `check_sequence` and their ops
 /// through [`Batch::parse_line`], as recovery does.
 pub fn wal(data: &[u8]) {
-    use naadf_server::wal;
+    use naadf_server::data::wal;
     let Some((m, rest)) = mode(data) else { return };
     let Some((&base, rest)) = rest.split_first() else {
         return;
@@ -280,12 +280,12 @@ pub fn proto(data: &[u8]) {
         }
         4 => {
             if let Ok(r) = JoinRequest::decode(rest) {
-                let _ = naadf_server::join::client_pages(&r.cached);
+                let _ = naadf_server::stream::join::client_pages(&r.cached);
             }
         }
         5 => {
             if let Ok(r) = FrameRequest::decode(rest) {
-                let _ = naadf_server::service::check_frame(&r);
+                let _ = naadf_server::net::service::check_frame(&r);
             }
         }
         _ => snapshot(rest),

@@ -5,9 +5,19 @@
 //! publishes their deltas and acknowledges them; each joined client gets a cache-aware
 //! snapshot and then every delta over gRPC. axum serves health, metrics and a status page.
 //!
-//! Where to start reading: [`serve`] wires everything; [`actor`] is the world's owner;
-//! [`committer`] the durability point; [`join`] one client's stream; [`messages`] what these
-//! three hand each other.
+//! Where to start reading: [`serve`] wires everything. The modules are grouped by what they
+//! serve:
+//! - [`stream`]: the world's total order and its stream — [`stream::actor`], the world's
+//!   owner; [`stream::committer`], the durability point; [`stream::join`], one client's
+//!   stream; [`stream::messages`], what they hand each other;
+//! - [`data`]: the data directory — the write-ahead log, snapshots, the one judgement of a
+//!   directory ([`data::fsck`]) and the snapshot pages;
+//! - [`net`]: how clients reach the server — listeners, connections, TLS, the gRPC service,
+//!   HTTP, tokens and roles;
+//! - [`relay`]: `naadf relay`, which serves a mirror of another server through the same
+//!   stream and network code;
+//! - beside them [`shared`] (what the service, join tasks and HTTP side share),
+//!   [`metrics`] and [`render_router`] (frames routed to render nodes).
 //!
 //! ```text
 //! gRPC Edit ──▶ service (auth, roles, rate) ──▶ actor (apply, undo, growth) ──▶ committer
@@ -17,89 +27,15 @@
 
 #![warn(missing_docs)]
 
-pub mod actor;
-pub mod auth;
-pub mod committer;
-pub mod conn;
-pub mod frontend;
-pub mod fsck;
-pub mod growth;
-pub mod http;
-pub mod join;
-pub mod layout;
-pub mod messages;
+pub mod data;
 pub mod metrics;
-pub mod pages;
-pub mod publisher;
+pub mod net;
 pub mod relay;
 pub mod render_router;
 pub(crate) mod serve;
-pub mod service;
-pub mod store;
-pub mod tls;
-pub mod wal;
+pub mod shared;
+pub mod stream;
 
-pub use serve::{Bound, DEFAULT_DATA, DEFAULT_GRPC, DEFAULT_HTTP, ServerConfig, serve};
-
-use actor::{Request, StatusInfo};
-use governor::{DefaultKeyedRateLimiter, Quota};
-use std::num::NonZeroU32;
-use std::sync::Arc;
-use tokio::sync::{mpsc, oneshot, watch};
-
-/// What the service, the join tasks and the HTTP side share.
-pub struct Shared {
-    /// The Prometheus metrics the HTTP side exports.
-    pub metrics: Arc<metrics::Metrics>,
-    /// Clients and recent edits for the status page.
-    pub activity: Arc<metrics::Activity>,
-    /// Compressed snapshot pages.
-    pub page_cache: pages::PageCache,
-    /// Tokens and roles.
-    pub auth: auth::Auth,
-    /// Per-user edit rate limiter.
-    pub limiter: DefaultKeyedRateLimiter<String>,
-    /// The configured rate (edits per second per user).
-    pub rate: u32,
-    /// Becomes true when the server shuts down (join streams end).
-    pub shutdown: watch::Receiver<bool>,
-    /// Registered render nodes and the frame requests routed to them.
-    pub router: render_router::Router,
-    /// How many bytes clients may fall behind before they are re-sent a snapshot.
-    pub slow_clients: join::SlowClientLimits,
-}
-
-impl Shared {
-    /// Shared state with a per-user limit of `rate` edits per second (bursts of `rate`).
-    pub fn new(auth: auth::Auth, rate: u32, shutdown: watch::Receiver<bool>) -> Self {
-        Self::with_metrics(auth, rate, shutdown, Arc::default())
-    }
-
-    /// Shared state as [`Shared::new`] makes it, exporting `metrics`.
-    pub fn with_metrics(
-        auth: auth::Auth,
-        rate: u32,
-        shutdown: watch::Receiver<bool>,
-        metrics: Arc<metrics::Metrics>,
-    ) -> Self {
-        let rate = rate.max(1);
-        Self {
-            router: render_router::Router::new(render_router::DEFAULT_QUEUE, metrics.clone()),
-            metrics,
-            activity: Arc::default(),
-            page_cache: pages::PageCache::default(),
-            auth,
-            limiter: DefaultKeyedRateLimiter::keyed(Quota::per_second(NonZeroU32::new(rate).expect("rate ≥ 1"))),
-            rate,
-            shutdown,
-            slow_clients: join::SlowClientLimits::default(),
-        }
-    }
-}
-
-/// Asks the actor for its state (`None` when it is gone).
-pub async fn status(actor: &mpsc::Sender<Request>) -> Option<StatusInfo> {
-    let (reply, rx) = oneshot::channel();
-    actor.send(Request::Status { reply }).await.ok()?;
-    rx.await.ok()
-}
+pub use net::addresses::{Bound, DEFAULT_GRPC, DEFAULT_HTTP};
+pub use serve::{DEFAULT_DATA, ServerConfig, serve};
+pub use shared::Shared;

@@ -51,7 +51,7 @@ pub struct Metrics {
     pub fsync: Histogram,
     /// Snapshots written.
     pub snapshots: Counter,
-    /// TLS certificate reloads that took effect ([`crate::tls`]).
+    /// TLS certificate reloads that took effect ([`crate::net::tls`]).
     pub tls_reloads: Counter,
     /// TLS certificate reloads that failed (the previous certificate stayed in use).
     pub tls_reload_failures: Counter,
@@ -72,7 +72,7 @@ pub struct Metrics {
 }
 
 /// Each joined client's backlog: bytes published or queued for it that it has not read
-/// yet (see [`crate::join`]), by a handle from [`Backlogs::register`].
+/// yet (see [`crate::stream::join`]), by a handle from [`Backlogs::register`].
 #[derive(Debug, Default)]
 pub struct Backlogs {
     inner: Mutex<BacklogTable>,

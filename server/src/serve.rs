@@ -1,22 +1,24 @@
 //! Wiring: data directory recovery, the actor and committer threads, the gRPC and HTTP
 //! listeners, periodic checkpoints and graceful shutdown.
 
-use crate::actor::{Actor, Request};
-use crate::auth::Auth;
-use crate::committer::Committer;
-use crate::frontend::Frontend;
-use crate::fsck::Verdict;
-use crate::http::Backend;
-use crate::publisher::Publisher;
-use crate::service::WorldServer;
-use crate::store::{DataDir, ServerState, StoreError};
-use crate::wal::{Entry, Wal};
-use crate::{Shared, http};
+use crate::data::fsck::Verdict;
+use crate::data::store::{DataDir, ServerState, StoreError};
+use crate::data::wal::{Entry, Wal};
+use crate::net::addresses::Bound;
+use crate::net::auth::Auth;
+use crate::net::frontend::Frontend;
+use crate::net::http;
+use crate::net::http::Backend;
+use crate::net::service::WorldServer;
+use crate::shared::Shared;
+use crate::stream::actor::Actor;
+use crate::stream::committer::Committer;
+use crate::stream::messages::Request;
+use crate::stream::publisher::Publisher;
 use anyhow::{Context, Result, bail};
 use naadf_proto::v1::world_service_server::WorldServiceServer;
 use naadf_world::World;
 use naadf_world::ops::Limits;
-use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Duration;
@@ -45,16 +47,12 @@ pub struct ServerConfig {
     pub insecure: bool,
 }
 
-/// The default gRPC listen address.
-pub const DEFAULT_GRPC: &str = "127.0.0.1:50051";
-/// The default HTTP listen address.
-pub const DEFAULT_HTTP: &str = "127.0.0.1:8080";
 /// The default data directory.
 pub const DEFAULT_DATA: &str = "naadf-data";
 
 impl Default for ServerConfig {
-    /// The documented defaults (docs/PROTOCOL.md): gRPC on [`DEFAULT_GRPC`], HTTP on
-    /// [`DEFAULT_HTTP`], data in [`DEFAULT_DATA`], open (no tokens).
+    /// The documented defaults (docs/PROTOCOL.md): gRPC on [`DEFAULT_GRPC`](crate::DEFAULT_GRPC), HTTP on
+    /// [`DEFAULT_HTTP`](crate::DEFAULT_HTTP), data in [`DEFAULT_DATA`], open (no tokens).
     fn default() -> Self {
         Self {
             frontend: Frontend::default(),
@@ -97,15 +95,6 @@ impl ServerConfig {
     }
 }
 
-/// The addresses a running server listens on.
-#[derive(Clone, Copy, Debug)]
-pub struct Bound {
-    /// gRPC.
-    pub grpc: SocketAddr,
-    /// HTTP.
-    pub http: SocketAddr,
-}
-
 /// What recovery hands the server.
 struct Recovered {
     /// The locked data directory.
@@ -120,7 +109,7 @@ struct Recovered {
     entries: Vec<Entry>,
 }
 
-/// Opens the data directory `dir` as [`fsck`](crate::fsck) judges it: the newest complete
+/// Opens the data directory `dir` as [`fsck`](crate::data::fsck) judges it: the newest complete
 /// snapshot and the log after it (orphans removed, a torn tail cut off), or a new directory
 /// started from `initial()`. A directory it refuses is left untouched.
 fn recover(dir: &Path, initial: impl FnOnce() -> Result<World>) -> Result<Recovered> {
@@ -269,7 +258,9 @@ pub async fn serve(
             let mut last = None;
             loop {
                 tokio::time::sleep(every).await;
-                let Some(s) = crate::status(&actor).await else { return };
+                let Some(s) = crate::stream::messages::status(&actor).await else {
+                    return;
+                };
                 if last != Some(s.version) {
                     last = Some(s.version);
                     let _ = actor.send(Request::Checkpoint { reply: None }).await;

@@ -7,7 +7,7 @@ use super::BuildLimit;
 use anyhow::{Context, Result};
 use naadf_client::Mode;
 use naadf_client::light::{LitOptions, Sky, Sun};
-use naadf_server::frontend::Frontend;
+use naadf_server::net::frontend::Frontend;
 use naadf_world::camera::Camera;
 use naadf_world::preset::Preset;
 use naadf_world::{ChunkSource, World, WorldSize};
@@ -94,12 +94,12 @@ impl ListenArgs {
             http,
             tls: self.tls_cert.clone().zip(self.tls_key.clone()),
             max_message_bytes: self.max_message_bytes,
-            connections: naadf_server::conn::ConnLimits {
+            connections: naadf_server::net::conn::ConnLimits {
                 max_connections: self.max_connections.max(1),
                 idle_timeout: super::seconds(self.idle_timeout, "--idle-timeout")?.max(Duration::from_millis(100)),
             },
             slow_client_events: self.slow_client_events,
-            slow_clients: naadf_server::join::SlowClientLimits {
+            slow_clients: naadf_server::shared::SlowClientLimits {
                 client_bytes: self.slow_client_bytes,
                 total_bytes: self.slow_clients_total_bytes,
             },

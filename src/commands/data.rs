@@ -1,12 +1,12 @@
 //! `naadf data check DIR [--json]` and `naadf data repair DIR [--apply]`: what a server's data
 //! directory holds, whether `naadf serve` would start on it, and the repairs that make it
-//! servable and tidy. `naadf_server::fsck` judges, the same way the server's startup does.
+//! servable and tidy. `naadf_server::data::fsck` judges, the same way the server's startup does.
 
 use super::print_json;
 use anyhow::{Context, Result, anyhow, bail};
-use naadf_server::fsck::{self, Inspection, Verdict};
-use naadf_server::layout::{Lock, StoreError};
-use naadf_server::store;
+use naadf_server::data::fsck::{self, Inspection, Verdict};
+use naadf_server::data::layout::{Lock, StoreError};
+use naadf_server::data::store;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 

@@ -4,7 +4,7 @@
 
 use super::save_world;
 use anyhow::{Context, Result, bail};
-use naadf_server::{store, wal};
+use naadf_server::data::{store, wal};
 use naadf_world::ops::Batch;
 use std::io::Write;
 use std::path::PathBuf;

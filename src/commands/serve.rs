@@ -5,7 +5,7 @@ use super::remote::block_on;
 use super::{BuildLimit, announce, load_world, shutdown_signal};
 use anyhow::{Context, Result};
 use naadf_server::ServerConfig;
-use naadf_server::auth::Auth;
+use naadf_server::net::auth::Auth;
 use naadf_world::WorldSize;
 use std::net::SocketAddr;
 use std::path::PathBuf;

@@ -10,7 +10,7 @@ use naadf_proto::v1::{
     DespawnEntitiesRequest, EditRequest, FrameRequest, JoinRequest, MoveEntitiesRequest, Page, SpawnEntitiesRequest,
     WorldMessage, world_message,
 };
-use naadf_server::wal::{Entry, Wal};
+use naadf_server::data::wal::{Entry, Wal};
 use naadf_world::digest::PAGE_BYTES;
 use naadf_world::edit::BatchKind;
 use naadf_world::file::{self, TRANSFERRED};
@@ -211,7 +211,7 @@ fn wal(out: &Out) {
     }
     log.sync().expect("syncs");
     drop(log);
-    let (_, path) = naadf_server::wal::segments(&dir).expect("lists").remove(0);
+    let (_, path) = naadf_server::data::wal::segments(&dir).expect("lists").remove(0);
     let segment = std::fs::read(&path).expect("reads");
     out.put("wal", "segment", &[&[3, 0][..], &segment].concat());
     // The same file with a torn last record.

@@ -8,7 +8,7 @@
 //! network, so it then admits callers from its own machine only ([`UpstreamAuth::admit`]).
 
 use super::upstream::Upstream;
-use crate::auth::{Caller, Role};
+use crate::net::auth::{Caller, Role};
 use naadf_proto::v1::StatusRequest;
 use std::collections::HashMap;
 use std::net::SocketAddr;

@@ -11,11 +11,11 @@
 //! published (the upstream could not resume the relay), every subscription ends and each
 //! client is re-sent, in its own stream, the pages it lacks.
 
-use crate::actor::{Request, StatusInfo};
-use crate::messages::{Event, Subscription};
+use crate::data::pages::{PageStore, SnapshotView};
 use crate::metrics::Metrics;
-use crate::pages::{PageStore, SnapshotView};
-use crate::publisher::Publisher;
+use crate::stream::messages::{Event, Subscription};
+use crate::stream::messages::{Request, StatusInfo};
+use crate::stream::publisher::Publisher;
 use naadf_proto::mirror::{Mirror, Progress};
 use naadf_proto::v1::{JoinRequest, WorldMessage};
 use std::sync::Arc;

@@ -10,7 +10,7 @@
 //! ```
 //!
 //! - [`hub`] owns the mirror and publishes exactly the messages it accepted; the server's
-//!   own [`join`](crate::join) tasks serve them, resume included.
+//!   own [`join`](crate::stream::join) tasks serve them, resume included.
 //! - [`upstream`] follows the upstream stream and re-joins with backoff; it also forwards
 //!   callers' requests with their own metadata.
 //! - [`gate`] asks the upstream who a caller is: a relay holds no tokens.
@@ -21,11 +21,12 @@ pub mod hub;
 pub mod service;
 pub mod upstream;
 
-use crate::auth::Auth;
-use crate::frontend::Frontend;
-use crate::http::Backend;
-use crate::serve::Bound;
-use crate::{Shared, http};
+use crate::net::addresses::Bound;
+use crate::net::auth::Auth;
+use crate::net::frontend::Frontend;
+use crate::net::http;
+use crate::net::http::Backend;
+use crate::shared::Shared;
 use anyhow::{Context, Result};
 use naadf_proto::v1::world_service_server::WorldServiceServer;
 use std::path::PathBuf;

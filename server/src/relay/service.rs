@@ -4,10 +4,10 @@
 
 use super::gate::UpstreamAuth;
 use super::upstream::{Upstream, upstream_error};
-use crate::Shared;
-use crate::actor::Request;
-use crate::join;
-use crate::service::{WorldStream, bounded, status_reply};
+use crate::net::service::{WorldStream, bounded, status_reply};
+use crate::shared::Shared;
+use crate::stream::join;
+use crate::stream::messages::Request;
 use naadf_proto::v1::world_service_server::WorldService;
 use naadf_proto::v1::{
     DespawnEntitiesRequest, EditReply, EditRequest, FrameJob, FrameReply, FrameRequest, HistoryRequest, JoinRequest,
@@ -56,7 +56,7 @@ impl RelayService {
 
     async fn status_inner(&self, r: Req<StatusRequest>) -> Result<Response<StatusReply>, Status> {
         let caller = self.auth.caller(r.metadata(), r.remote_addr()).await?;
-        let s = crate::status(&self.hub)
+        let s = crate::stream::messages::status(&self.hub)
             .await
             .ok_or_else(|| Status::unavailable("the relay has no world from its upstream yet"))?;
         Ok(Response::new(status_reply(&s, &self.shared, caller)))

@@ -4,8 +4,8 @@
 //! with backoff whenever it breaks.
 
 use super::hub::Input;
-use crate::actor::Request;
 use crate::metrics::Metrics;
+use crate::stream::messages::Request;
 use naadf_proto::backoff::Backoff;
 use naadf_proto::v1::StatusRequest;
 use naadf_proto::v1::world_service_client::WorldServiceClient;
@@ -107,7 +107,7 @@ pub fn upstream_error(s: tonic::Status) -> tonic::Status {
 
 /// Follows the upstream stream until `shutdown`: asks the hub for a join request, joins,
 /// and hands every message to the hub; when the stream breaks, ends, or the hub refuses
-/// it (`rejoin`), joins again after a pause of [`REJOIN_BACKOFF`], which starts over once
+/// it (`rejoin`), joins again after a pause of `REJOIN_BACKOFF`, which starts over once
 /// a message arrives.
 pub async fn follow(
     upstream: Upstream,
@@ -166,7 +166,7 @@ pub async fn follow(
     }
 }
 
-/// Keeps the lag metrics current until `shutdown`: every [`LAG_POLL`] the upstream's
+/// Keeps the lag metrics current until `shutdown`: every `LAG_POLL` the upstream's
 /// version against the hub's. The lag in ms is the age of the relay's state: the time
 /// since the last poll whose upstream version the relay holds now (0 while it holds the
 /// upstream's current version). It grows while the upstream cannot be asked, whose lag in
@@ -195,7 +195,7 @@ pub async fn poll_lag(
         let mut caught_up = false;
         if let Ok(Ok(up)) = tokio::time::timeout(LAG_POLL, call).await {
             let theirs = up.into_inner().version;
-            let mine = crate::status(&hub).await.map_or(0, |s| s.version);
+            let mine = crate::stream::messages::status(&hub).await.map_or(0, |s| s.version);
             polls.push_back((asked, theirs));
             while let Some(&(when, _)) = polls.front().filter(|&&(_, v)| v <= mine) {
                 current_at = when;

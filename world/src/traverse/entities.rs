@@ -22,8 +22,7 @@
 //! ends the search: once a box is entered after the best hit, so is every later one.
 //! Neither the box test nor the order changes the result, only the work.
 
-use super::grid::{End, Visit, walk};
-use super::{Hit, Ray};
+use super::ray::{End, Hit, Ray, Visit, walk};
 use crate::entity::bounds::Bounds;
 use crate::entity::pack::{InstanceRecord, RECORD_WORDS, rotate};
 use crate::entity::{ENTITY_SOLID, TYPE_ALIGN};

@@ -275,3 +275,75 @@ impl Ray {
         }
     }
 }
+
+/// What a walk found in a cell.
+pub(crate) enum Visit {
+    /// Nothing: keep going.
+    Empty,
+    /// A solid cell of this material: the walk ends with a hit.
+    Solid(u16),
+    /// Stop here without a hit.
+    Stop,
+}
+
+/// How a walk ended.
+pub(crate) enum End {
+    /// A solid cell.
+    Hit(Hit),
+    /// The ray left the grid at time `t`.
+    Left { t: f64, steps: u32 },
+    /// The visitor stopped it in a cell entered at time `t`.
+    Stopped { t: f64, steps: u32 },
+}
+
+/// A finished walk.
+pub(crate) struct Walk {
+    /// When the ray entered the grid (0 for an origin inside).
+    pub entry_t: f64,
+    /// How it ended.
+    pub end: End,
+}
+
+/// Amanatides–Woo through the grid `[0, size)` in the event order of this module:
+/// `visit(cell, t)` sees every cell the ray passes, with the time it is entered, until it
+/// reports a solid cell or asks to stop, or the ray leaves. `None` if the ray misses the
+/// grid. Serves both the world's dense decode and entity grids.
+pub(crate) fn walk(ray: &Ray, size: [u32; 3], mut visit: impl FnMut([i64; 3], f64) -> Visit) -> Option<Walk> {
+    let entry = ray.entry(size)?;
+    let (mut cell, mut t, mut axis) = (entry.cell, entry.t, entry.axis);
+    let d = ray.dir();
+    let step: [i64; 3] = d.map(|v| if v > 0.0 { 1 } else { -1 });
+    let next_plane = |c: i64, a: usize| if d[a] > 0.0 { c + 1 } else { c };
+    let mut tmax: [f64; 3] = std::array::from_fn(|a| {
+        if d[a] == 0.0 {
+            f64::INFINITY
+        } else {
+            ray.t_at(a, next_plane(cell[a], a))
+        }
+    });
+    let size = size.map(i64::from);
+    let mut steps = 0u32;
+    let end = loop {
+        steps += 1;
+        match visit(cell, t) {
+            Visit::Empty => {}
+            Visit::Solid(m) => break End::Hit(ray.hit(cell, t, axis, m, steps)),
+            Visit::Stop => break End::Stopped { t, steps },
+        }
+        let mut a = 0;
+        if tmax[1] < tmax[a] {
+            a = 1;
+        }
+        if tmax[2] < tmax[a] {
+            a = 2;
+        }
+        t = tmax[a];
+        cell[a] += step[a];
+        axis = Some(a);
+        if cell[a] < 0 || cell[a] >= size[a] {
+            break End::Left { t, steps };
+        }
+        tmax[a] = ray.t_at(a, next_plane(cell[a], a));
+    };
+    Some(Walk { entry_t: entry.t, end })
+}

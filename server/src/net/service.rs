@@ -1,9 +1,9 @@
 //! The gRPC service: authentication, roles, request limits, and the hand-off to the actor.
 
-use crate::Shared;
-use crate::actor::{Action, Request};
-use crate::auth::Caller;
-use crate::join;
+use crate::net::auth::Caller;
+use crate::shared::Shared;
+use crate::stream::join;
+use crate::stream::messages::{Action, Request};
 use governor::clock::Clock;
 use naadf_proto::requests::{despawn_batch, move_batch, spawn_batch};
 use naadf_proto::v1::world_service_server::WorldService;
@@ -299,7 +299,7 @@ impl WorldServer {
 
     async fn status_inner(&self, r: Req<StatusRequest>) -> Result<Response<StatusReply>, Status> {
         let caller = self.caller(&r)?;
-        let s = crate::status(&self.actor)
+        let s = crate::stream::messages::status(&self.actor)
             .await
             .ok_or_else(|| Status::unavailable("the server is shutting down"))?;
         Ok(Response::new(status_reply(&s, &self.shared, caller)))
@@ -308,7 +308,7 @@ impl WorldServer {
 
 /// The `Status` answer for `caller` about the world state `s`, with the clients joined to
 /// this process (a server or a relay).
-pub fn status_reply(s: &crate::actor::StatusInfo, shared: &Shared, caller: Caller) -> StatusReply {
+pub fn status_reply(s: &crate::stream::messages::StatusInfo, shared: &Shared, caller: Caller) -> StatusReply {
     StatusReply {
         protocol_version: PROTOCOL_VERSION,
         size: s.size.to_vec(),

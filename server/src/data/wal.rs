@@ -329,7 +329,7 @@ pub struct Wal {
 impl Wal {
     /// Opens the log in `dir` for appending after the snapshot at `snapshot`, given the
     /// segments recovery needs as read (by the data directory's inspection, see
-    /// [`crate::fsck`]): checks their versions, cuts a torn tail off, and returns the log
+    /// [`crate::data::fsck`]): checks their versions, cuts a torn tail off, and returns the log
     /// and the entries after the snapshot, in order.
     pub fn resume(dir: &Path, segments: Vec<Segment>, snapshot: u64) -> Result<(Wal, Vec<Entry>), WalError> {
         let records = check_sequence(&segments, snapshot)?;

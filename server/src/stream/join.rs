@@ -6,12 +6,12 @@
 //! reading while the bounded broadcast moved on), the task takes a new snapshot and sends
 //! only the pages whose hash differs from what the client holds, so the actor and the other
 //! clients never wait for a slow one. A client falls behind when it is more deltas behind
-//! than the broadcast holds, or more bytes than the [`SlowClientLimits`] allow.
+//! than the broadcast holds, or more bytes than the [`SlowClientLimits`](crate::shared::SlowClientLimits) allow.
 
-use crate::Shared;
-use crate::actor::Request;
-use crate::messages::{Event, Subscription};
-use crate::pages::{SnapshotView, StoredPage};
+use crate::data::pages::{SnapshotView, StoredPage};
+use crate::shared::Shared;
+use crate::stream::messages::Request;
+use crate::stream::messages::{Event, Subscription};
 use naadf_proto::PROTOCOL_VERSION;
 use naadf_proto::snapshot::{buffer_lengths, group_pages};
 use naadf_proto::v1::{CachedBuffer, Header, JoinRequest, Page, WorldMessage, world_message};
@@ -44,35 +44,6 @@ pub fn client_pages(cached: &[CachedBuffer]) -> Result<ClientPages, Status> {
         out[slot] = c.page_hashes.clone();
     }
     Ok(out)
-}
-
-/// How far behind clients may fall, in bytes, before they are cut to a re-snapshot.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct SlowClientLimits {
-    /// Most bytes one client may have pending: published deltas it has not taken yet
-    /// plus messages queued in its stream that its transport has not taken yet.
-    pub client_bytes: u64,
-    /// Most bytes the subscribed clients may have pending together; over it, every one
-    /// that is not reading and has more than a sixteenth of `client_bytes` pending is cut
-    /// too. (A client already cut holds at most about `client_bytes` until it reads.)
-    pub total_bytes: u64,
-}
-
-impl Default for SlowClientLimits {
-    /// 64 MiB per client, 512 MiB in all.
-    fn default() -> Self {
-        Self {
-            client_bytes: 64 << 20,
-            total_bytes: 512 << 20,
-        }
-    }
-}
-
-impl SlowClientLimits {
-    /// Whether a client with `mine` bytes pending, while all clients have `total`, is cut.
-    fn exceeded(&self, mine: u64, total: u64) -> bool {
-        mine > self.client_bytes || (total > self.total_bytes && mine > self.client_bytes / 16)
-    }
 }
 
 /// Messages buffered per client stream before the join task waits for the client.

@@ -1,14 +1,17 @@
-//! What the actor, the committer and the join tasks hand each other. The actor sends
-//! [`Outgoing`] items to the committer in the world's total order; the committer publishes
-//! each change as an [`Event`] to every join task's [`Subscription`], and answers edit
-//! requests with an [`EditResult`] once their batch is durable.
+//! What the actor, the committer, the growth thread and the join tasks hand each other.
+//! Everyone asks the actor through its mailbox ([`Request`]: edits, joins, status, the
+//! growth thread's "done"); the actor sends [`Outgoing`] items to the committer in the
+//! world's total order; the committer publishes each change as an [`Event`] to every join
+//! task's [`Subscription`], and answers edit requests with an [`EditResult`] once their
+//! batch is durable.
 
-use crate::pages::{PageChange, SnapshotView};
-use crate::store::ServerState;
+use crate::data::pages::{PageChange, SnapshotView};
+use crate::data::store::ServerState;
 use naadf_proto::v1::{EditReply, WorldMessage};
 use naadf_world::file::WorldParts;
+use naadf_world::ops::Batch;
 use std::sync::Arc;
-use tokio::sync::{broadcast, oneshot, watch};
+use tokio::sync::{broadcast, mpsc, oneshot, watch};
 use tonic::Status;
 
 /// The answer to an edit request: the version its batch produced (or the earlier answer,
@@ -101,4 +104,74 @@ pub enum Outgoing {
         /// Answered once the snapshot is durable.
         reply: Option<oneshot::Sender<Result<u64, String>>>,
     },
+}
+
+/// What an edit request asks for.
+#[derive(Debug)]
+pub enum Action {
+    /// Apply this batch.
+    Batch(Batch),
+    /// Undo the caller's latest edit.
+    Undo,
+    /// Redo the caller's latest undo.
+    Redo,
+}
+
+/// A request to the actor.
+#[derive(Debug)]
+pub enum Request {
+    /// An edit, entity request, undo or redo.
+    Edit {
+        /// The caller's user name.
+        user: String,
+        /// The request's client sequence number (0: none).
+        client_seq: u64,
+        /// What to do.
+        action: Action,
+        /// Where the answer goes (after the batch is durable).
+        reply: oneshot::Sender<EditResult>,
+    },
+    /// A snapshot and a subscription to the changes after it.
+    Join {
+        /// The state the client holds, if any: `(version, digest)`.
+        resume: Option<(u64, u64)>,
+        /// Where the snapshot and subscription go.
+        reply: oneshot::Sender<Subscription>,
+    },
+    /// The world's current version, growth sub-step and digest (answered at once, without
+    /// waiting for durability).
+    Status {
+        /// Where the answer goes.
+        reply: oneshot::Sender<StatusInfo>,
+    },
+    /// The growth thread finished its task.
+    Grown,
+    /// Converge growth, then write a snapshot and truncate the log behind it.
+    Checkpoint {
+        /// Answered with the snapshot's version once it is durable.
+        reply: Option<oneshot::Sender<Result<u64, String>>>,
+    },
+}
+
+/// The actor's state as `Status` reports it.
+#[derive(Clone, Debug)]
+pub struct StatusInfo {
+    /// World size in voxels.
+    pub size: [u32; 3],
+    /// Edit version: the number of batches applied so far.
+    pub version: u64,
+    /// Growth sub-step: background distance-field steps published since that batch.
+    pub growth_seq: u32,
+    /// No distance-field work queued: the world stays as it is until the next edit.
+    pub quiescent: bool,
+    /// The world digest at `(version, growth_seq)`.
+    pub digest: naadf_world::digest::Digest,
+}
+
+/// Asks the actor (or a relay's hub, which answers the same mailbox) for its state; `None`
+/// when it is gone.
+pub async fn status(actor: &mpsc::Sender<Request>) -> Option<StatusInfo> {
+    let (reply, rx) = oneshot::channel();
+    actor.send(Request::Status { reply }).await.ok()?;
+    rx.await.ok()
 }

@@ -14,10 +14,10 @@
 //! directory they stay as evidence, unless they are all it holds: then they are what a
 //! first start left when it was killed before any edit was logged.
 //!
-//! [`DataDir::open`]: crate::store::DataDir::open
+//! [`DataDir::open`]: crate::data::store::DataDir::open
 
-use crate::layout::{self, Lock, Part, Refusal, StoreError};
-use crate::wal::{self, Segment, WalError};
+use crate::data::layout::{self, Lock, Part, Refusal, StoreError};
+use crate::data::wal::{self, Segment, WalError};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -432,8 +432,8 @@ impl Inspection {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::store::{self, DataDir, ServerState};
-    use crate::wal::{Entry, Wal};
+    use crate::data::store::{self, DataDir, ServerState};
+    use crate::data::wal::{Entry, Wal};
     use naadf_world::edit::BatchKind;
     use naadf_world::preset::Preset;
     use naadf_world::{World, WorldSize};

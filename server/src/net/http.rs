@@ -7,11 +7,11 @@
 //! `<img>`): the page names users and shows their edits. `/health` says only whether the
 //! server is up and at which version; `/metrics` holds aggregates only.
 
-use crate::Shared;
-use crate::actor::Request;
-use crate::auth::{Auth, Caller};
+use crate::net::auth::{Auth, Caller};
 use crate::relay::gate::UpstreamAuth;
 use crate::relay::upstream::{Upstream, upstream_error};
+use crate::shared::Shared;
+use crate::stream::messages::Request;
 use axum::Router;
 use axum::extract::rejection::QueryRejection;
 use axum::extract::{ConnectInfo, Query, State};
@@ -89,7 +89,7 @@ pub fn router(shared: Arc<Shared>, actor: mpsc::Sender<Request>, backend: Backen
 }
 
 async fn health(State(app): State<App>) -> impl IntoResponse {
-    match crate::status(&app.actor).await {
+    match crate::stream::messages::status(&app.actor).await {
         Some(s) => (
             StatusCode::OK,
             Json(serde_json::json!({
@@ -242,7 +242,7 @@ async fn frame_png(
         exposure: q.exposure.unwrap_or(0.0),
         stream: q.stream.unwrap_or_default(),
     };
-    if let Err(s) = crate::service::check_frame(&req) {
+    if let Err(s) = crate::net::service::check_frame(&req) {
         return http_error(&s);
     }
     match app.backend.render(&app.shared, &md, req).await {
@@ -297,7 +297,7 @@ async fn status_page(
     if let Err(s) = caller {
         return http_error(&s);
     }
-    let Some(s) = crate::status(&app.actor).await else {
+    let Some(s) = crate::stream::messages::status(&app.actor).await else {
         return Html("<p>shutting down</p>".to_owned()).into_response();
     };
     let mut clients = String::new();

@@ -3,15 +3,15 @@
 //!
 //! The actor never waits for disk or network. Everything it produces (applied batches with
 //! their log records, growth steps, acknowledgements, join subscriptions, checkpoints) goes
-//! in order to the [committer](crate::committer), which makes batches durable before it
+//! in order to the [committer](crate::stream::committer), which makes batches durable before it
 //! publishes them or answers their senders.
 
-use crate::growth::GrowthWorker;
-use crate::messages::{EditResult, Event, Outgoing, Subscription};
+use crate::data::pages::{PageStore, SnapshotView};
+use crate::data::store::ServerState;
+use crate::data::wal::Entry;
 use crate::metrics::Metrics;
-use crate::pages::{PageStore, SnapshotView};
-use crate::store::ServerState;
-use crate::wal::Entry;
+use crate::stream::growth::GrowthWorker;
+use crate::stream::messages::{Action, EditResult, Event, Outgoing, Request, StatusInfo};
 use naadf_proto::v1::{Delta, EditReply, WorldMessage, world_message};
 use naadf_world::World;
 use naadf_world::edit::{BatchKind, ChangeSet, GrowthTask, Histories};
@@ -19,68 +19,6 @@ use naadf_world::ops::{Batch, EditError, Limits};
 use std::sync::Arc;
 use tokio::sync::{mpsc, oneshot};
 use tonic::Status;
-
-/// What an edit request asks for.
-#[derive(Debug)]
-pub enum Action {
-    /// Apply this batch.
-    Batch(Batch),
-    /// Undo the caller's latest edit.
-    Undo,
-    /// Redo the caller's latest undo.
-    Redo,
-}
-
-/// A request to the actor.
-#[derive(Debug)]
-pub enum Request {
-    /// An edit, entity request, undo or redo.
-    Edit {
-        /// The caller's user name.
-        user: String,
-        /// The request's client sequence number (0: none).
-        client_seq: u64,
-        /// What to do.
-        action: Action,
-        /// Where the answer goes (after the batch is durable).
-        reply: oneshot::Sender<EditResult>,
-    },
-    /// A snapshot and a subscription to the changes after it.
-    Join {
-        /// The state the client holds, if any: `(version, digest)`.
-        resume: Option<(u64, u64)>,
-        /// Where the snapshot and subscription go.
-        reply: oneshot::Sender<Subscription>,
-    },
-    /// The world's current version, growth sub-step and digest (answered at once, without
-    /// waiting for durability).
-    Status {
-        /// Where the answer goes.
-        reply: oneshot::Sender<StatusInfo>,
-    },
-    /// The growth thread finished its task.
-    Grown,
-    /// Converge growth, then write a snapshot and truncate the log behind it.
-    Checkpoint {
-        /// Answered with the snapshot's version once it is durable.
-        reply: Option<oneshot::Sender<Result<u64, String>>>,
-    },
-}
-
-/// The actor's state as `Status` reports it.
-#[derive(Clone, Debug)]
-pub struct StatusInfo {
-    /// World size in voxels.
-    pub size: [u32; 3],
-    /// Edit version: the number of batches applied so far.
-    pub version: u64,
-    /// Growth sub-step: background distance-field steps published since that batch.
-    pub growth_seq: u32,
-    /// No distance-field work queued: the world stays as it is until the next edit.
-    pub quiescent: bool,
-    /// The world digest at `(version, growth_seq)`.
-    pub digest: naadf_world::digest::Digest,
-}
 
 /// The owner of the world: applies edits, undo and redo in one total order, keeps the
 /// snapshot pages and per-user histories current, and runs distance-field growth on a
@@ -115,7 +53,7 @@ impl Actor {
         state: ServerState,
         limits: Limits,
         out: mpsc::Sender<Outgoing>,
-        shared: &crate::Shared,
+        shared: &crate::shared::Shared,
         checkpoint_every: u64,
     ) -> Self {
         let pages = PageStore::new(&world);

@@ -3,11 +3,11 @@
 //! limits, and how far its clients may fall behind. `naadf serve` and `naadf relay` share
 //! all of it.
 
-use crate::conn::{Acceptor, ConnLimits, incoming};
-use crate::join::SlowClientLimits;
 use crate::metrics::Metrics;
-use crate::serve::{Bound, DEFAULT_GRPC, DEFAULT_HTTP};
-use crate::tls::ReloadingCert;
+use crate::net::addresses::{Bound, DEFAULT_GRPC, DEFAULT_HTTP};
+use crate::net::conn::{Acceptor, ConnLimits, incoming};
+use crate::net::tls::ReloadingCert;
+use crate::shared::SlowClientLimits;
 use anyhow::{Context, Result};
 use naadf_proto::FILE_DESCRIPTOR_SET;
 use naadf_proto::v1::world_service_server::{WorldService, WorldServiceServer};
@@ -29,7 +29,7 @@ pub struct Frontend {
     /// HTTP listen address.
     pub http: SocketAddr,
     /// TLS certificate and key (PEM) for gRPC, if any, reloaded when they change (see
-    /// [`crate::tls`]). HTTP never has TLS of its own.
+    /// [`crate::net::tls`]). HTTP never has TLS of its own.
     pub tls: Option<(PathBuf, PathBuf)>,
     /// Largest gRPC message accepted, in bytes.
     pub max_message_bytes: usize,
@@ -83,7 +83,7 @@ impl Frontend {
     }
 
     /// Binds both listeners and serves `svc` and `routes` until `shutdown` turns true; with
-    /// TLS, the certificate is reloaded as [`crate::tls`] describes, counted in `metrics`.
+    /// TLS, the certificate is reloaded as [`crate::net::tls`] describes, counted in `metrics`.
     pub(crate) async fn start<S: WorldService>(
         &self,
         svc: WorldServiceServer<S>,
@@ -118,7 +118,7 @@ impl Frontend {
             .max_decoding_message_size(self.max_message_bytes)
             .max_encoding_message_size(usize::MAX)
             .accept_compressed(CompressionEncoding::Zstd);
-        let keepalive = crate::conn::keepalive(self.connections.idle_timeout);
+        let keepalive = crate::net::conn::keepalive(self.connections.idle_timeout);
         let router = Server::builder()
             .http2_keepalive_interval(Some(keepalive))
             .http2_keepalive_timeout(Some(keepalive))
@@ -135,7 +135,9 @@ impl Frontend {
                 let tls = cert.acceptor()?;
                 let timeout = self.connections.idle_timeout;
                 cert.watch(metrics.clone(), shutdown.subscribe());
-                let incoming = incoming(acceptor, move |conn| crate::tls::handshake(tls.clone(), conn, timeout));
+                let incoming = incoming(acceptor, move |conn| {
+                    crate::net::tls::handshake(tls.clone(), conn, timeout)
+                });
                 serve_grpc(router, incoming, stopped)
             }
             None => serve_grpc(router, incoming(acceptor, |conn| std::future::ready(Ok(conn))), stopped),
@@ -190,7 +192,7 @@ mod tests {
         let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
         let addr = listener.local_addr().unwrap();
         let acceptor = super::grpc_acceptor(listener, Default::default());
-        let mut incoming = crate::conn::incoming(acceptor, |c| std::future::ready(Ok(c)));
+        let mut incoming = crate::net::conn::incoming(acceptor, |c| std::future::ready(Ok(c)));
         let _client = tokio::net::TcpStream::connect(addr).await.unwrap();
         let accepted = incoming.next().await.unwrap().unwrap();
         assert!(accepted.get_ref().nodelay().unwrap());

@@ -14,7 +14,7 @@
 //! make it preempted at once by any waking thread, but can starve it for as long as the
 //! machine is saturated, and the actor with it).
 
-use crate::actor::Request;
+use crate::stream::messages::Request;
 use naadf_world::edit::GrowthTask;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};

@@ -1,13 +1,13 @@
 //! The published change stream: the broadcast every join task follows, the recent deltas
 //! kept for resuming clients, and the byte position join tasks measure their backlog by.
 //!
-//! The server's [committer](crate::committer) publishes each change once it is durable; a
+//! The server's [committer](crate::stream::committer) publishes each change once it is durable; a
 //! [relay](crate::relay) publishes each change its mirror accepted from upstream. Both
 //! answer joins with [`Publisher::subscribe`] at the point of the stream the join's
 //! snapshot shows, so that a snapshot and its subscription line up exactly.
 
-use crate::messages::{Event, Subscription};
-use crate::pages::SnapshotView;
+use crate::data::pages::SnapshotView;
+use crate::stream::messages::{Event, Subscription};
 use std::collections::VecDeque;
 use std::sync::Arc;
 use tokio::sync::{broadcast, watch};

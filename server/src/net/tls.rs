@@ -9,8 +9,8 @@
 //! certificate) is logged and counted once, a file that cannot be read at every attempt,
 //! and the last good pair stays in use, so a bad rotation never takes the listener down.
 
-use crate::conn::Conn;
 use crate::metrics::Metrics;
+use crate::net::conn::Conn;
 use anyhow::{Context, Result, bail};
 use rustls::crypto::CryptoProvider;
 use rustls::pki_types::pem::PemObject;

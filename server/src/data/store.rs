@@ -1,15 +1,15 @@
-//! The data directory: snapshots and the write-ahead log, laid out as [`crate::layout`]
+//! The data directory: snapshots and the write-ahead log, laid out as [`crate::data::layout`]
 //! describes.
 //!
 //! A snapshot is written state first, then world, each atomically (temporary file, fsync,
 //! rename, directory fsync), so a snapshot counts only when both files exist. Older
 //! snapshots and the WAL segments they need are deleted only after a newer one is durable.
 //! What a directory holds, and whether a server may start on it, is judged by
-//! [`crate::fsck`].
+//! [`crate::data::fsck`].
 
-use crate::fsck::{self, Inspection, Verdict};
-use crate::layout::{Lock, Part, SnapshotName, snapshot_name, snapshot_paths};
-use crate::wal;
+use crate::data::fsck::{self, Inspection, Verdict};
+use crate::data::layout::{Lock, Part, SnapshotName, snapshot_name, snapshot_paths};
+use crate::data::wal;
 use naadf_world::World;
 use naadf_world::edit::Histories;
 use naadf_world::file::{self, WorldParts};
@@ -17,7 +17,7 @@ use naadf_world::hash::xxh3_64;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
-pub use crate::layout::StoreError;
+pub use crate::data::layout::StoreError;
 
 /// Magic of a state file.
 const STATE_MAGIC: &[u8; 8] = b"NAADFSTA";
@@ -39,7 +39,7 @@ pub struct DataDir {
 }
 
 impl DataDir {
-    /// Locks the directory and judges what it holds ([`crate::fsck`]): returns the locked
+    /// Locks the directory and judges what it holds ([`crate::data::fsck`]): returns the locked
     /// directory and what was found, to resume or start anew. A directory the judgement
     /// refuses is left exactly as it was: not even its lock file is created.
     pub fn open(path: &Path) -> Result<(Self, Inspection), StoreError> {

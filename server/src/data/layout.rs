@@ -1,16 +1,16 @@
-//! The data directory's layout, which the store ([`crate::store`]) and its judgement
-//! ([`crate::fsck`]) share: the names of its files, its lock, and the errors of working
+//! The data directory's layout, which the store ([`crate::data::store`]) and its judgement
+//! ([`crate::data::fsck`]) share: the names of its files, its lock, and the errors of working
 //! with it.
 //!
 //! ```text
 //! DATA/LOCK                              held (flock) by the one server using DATA
 //! DATA/snapshot-<version>.state          server state at <version>: histories, retries
 //! DATA/snapshot-<version>.naadf          the world at <version> (a world file)
-//! DATA/wal-<base>.log                    batches after <base> (see crate::wal)
+//! DATA/wal-<base>.log                    batches after <base> (see crate::data::wal)
 //! DATA/.snapshot-<version>.<ext>.tmp-…   a snapshot file being written
 //! ```
 
-use crate::wal::WalError;
+use crate::data::wal::WalError;
 use std::fs::File;
 use std::path::{Path, PathBuf};
 

@@ -10,11 +10,11 @@
 //! A log that cannot be written stops the process: the actor has already applied the
 //! batches in memory, and continuing would publish versions that a restart would lose.
 
-use crate::messages::Outgoing;
+use crate::data::store::DataDir;
+use crate::data::wal::Wal;
 use crate::metrics::Metrics;
-use crate::publisher::Publisher;
-use crate::store::DataDir;
-use crate::wal::Wal;
+use crate::stream::messages::Outgoing;
+use crate::stream::publisher::Publisher;
 use naadf_proto::v1::EditReply;
 use std::sync::Arc;
 use std::time::Instant;

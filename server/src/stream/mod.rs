@@ -1,0 +1,16 @@
+//! The world's one total order and the stream that carries it to clients.
+//!
+//! - [`actor`]: the one thread that owns the world and applies every request in order;
+//! - [`growth`]: the thread that grows distance fields in the background for the actor;
+//! - [`committer`]: the durability point — WAL append and fsync, then publish and answer;
+//! - [`publisher`]: the published change stream that join tasks follow (a relay's hub
+//!   publishes through it too);
+//! - [`join`]: one client's stream — snapshot or resume, then every delta;
+//! - [`messages`]: what they hand each other, the actor's mailbox included.
+
+pub mod actor;
+pub mod committer;
+pub mod growth;
+pub mod join;
+pub mod messages;
+pub mod publisher;
