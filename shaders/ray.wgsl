@@ -9,7 +9,9 @@
 // z at equal t"; it departs from the CPU's f64 order only where two crossings are within
 // f32 rounding of each other.
 
-const FAR: i32 = 1073741824;
+// A cell bound beyond any world for unconstrained axes (the CPU walk uses 2^40, which no
+// i32 holds).
+const FAR_CELL: i32 = 1073741824;
 const T_INF: f32 = 3.0e38;
 const NO_AXIS: u32 = 3u;
 
@@ -133,9 +135,9 @@ fn ray_entry(r: Ray, size: vec3<i32>) -> Entry {
         if b == ba {
             cell[b] = select(size[b] - 1, 0, r.d[b] > 0.0);
         } else if r.d[b] > 0.0 {
-            cell[b] = cell_after(r, b, bt, ba, start[b], FAR);
+            cell[b] = cell_after(r, b, bt, ba, start[b], FAR_CELL);
         } else if r.d[b] < 0.0 {
-            cell[b] = cell_after(r, b, bt, ba, -FAR, start[b]);
+            cell[b] = cell_after(r, b, bt, ba, -FAR_CELL, start[b]);
         } else {
             cell[b] = start[b];
         }

@@ -71,4 +71,4 @@ pub use frame::{Frame, FrameSpec, Mode};
 pub use mirror::{DEFAULT_MAX_WORLD_BYTES, Mirror, MirrorError, Progress, StreamedEdit};
 /// The pauses between attempts to reach a server that is out of reach.
 pub use naadf_proto::backoff::Backoff;
-pub use session::{Ended, Session, WorldStream};
+pub use session::{Ended, MessageKind, Session, WorldStream};

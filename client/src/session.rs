@@ -7,8 +7,9 @@
 use crate::connect::RawClient;
 use crate::error::Error;
 use crate::mirror::{Mirror, Progress};
-use naadf_proto::v1::{JoinRequest, WorldMessage};
+use naadf_proto::v1::{JoinRequest, WorldMessage, world_message};
 use naadf_world::World;
+use naadf_world::edit::Record;
 use std::future::Future;
 use std::ops::ControlFlow;
 use std::time::Duration;
@@ -26,6 +27,46 @@ impl WorldStream {
     /// The next message; `None` once the server ended the stream. Cancel-safe.
     pub async fn message(&mut self) -> Result<Option<WorldMessage>, Error> {
         Ok(self.0.message().await?)
+    }
+}
+
+/// What a raw stream message carries, for a receiver that does not apply it (the fan-out
+/// benchmark's receive-only clients), without naming the wire types.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MessageKind {
+    /// A snapshot's header, with the number of pages that follow.
+    Header {
+        /// Pages of the snapshot.
+        pages: u32,
+    },
+    /// One page of a snapshot.
+    Page,
+    /// A change, with the version and growth sub-step it produced.
+    Delta {
+        /// The version.
+        version: u64,
+        /// The growth sub-step within it (0: the edit itself).
+        growth_seq: u32,
+    },
+    /// A message this client does not know (from a newer server).
+    Unknown,
+}
+
+impl MessageKind {
+    /// What `message` carries; an error for a delta whose record does not decode.
+    pub fn of(message: &WorldMessage) -> Result<Self, Error> {
+        Ok(match &message.kind {
+            Some(world_message::Kind::Header(h)) => MessageKind::Header { pages: h.pages },
+            Some(world_message::Kind::Page(_)) => MessageKind::Page,
+            Some(world_message::Kind::Delta(d)) => {
+                let r = Record::decode(&d.change).map_err(|e| Error::Malformed(format!("a delta's record: {e}")))?;
+                MessageKind::Delta {
+                    version: r.version,
+                    growth_seq: r.growth_seq,
+                }
+            }
+            None => MessageKind::Unknown,
+        })
     }
 }
 

@@ -2,7 +2,7 @@
 //! edit replies run on a small tokio runtime and reach the window's thread as [`Event`]s;
 //! the world itself is only touched on that thread.
 
-use super::ViewerError;
+use super::error::ViewerError;
 use crate::client::{Client, ServerAddress};
 use crate::connect::session_client_seq;
 use naadf_proto::v1::{JoinRequest, WorldMessage};

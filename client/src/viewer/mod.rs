@@ -13,12 +13,14 @@
 //! the left button erases and the right button places the selected material, 1–9 or the
 //! wheel select it, M cycles the render mode, Esc releases the mouse (a second Esc quits).
 
+mod error;
 mod fly;
 mod hud;
 mod link;
 mod pick;
 mod present;
 
+pub use error::ViewerError;
 pub use fly::{Fly, Move};
 pub use hud::draw_hud;
 pub use link::{Event, Link};
@@ -29,7 +31,7 @@ use crate::client::ServerAddress;
 use crate::frame::{Frame, Mode};
 use crate::gpu::{Baseline, Gi, Gpu, GpuError, GpuWorld, PathTracer, Renderer, Shot, Temporal};
 use crate::light::{DEFAULT_LIT_BOUNCES, DEFAULT_PATHTRACE_BOUNCES, LitOptions};
-use crate::mirror::{Mirror, MirrorError};
+use crate::mirror::Mirror;
 use naadf_world::camera::Camera;
 use naadf_world::raysets::fixed_cameras;
 use std::path::PathBuf;
@@ -82,35 +84,6 @@ pub struct ViewerSummary {
     pub edits: u32,
     /// The adapter.
     pub adapter: String,
-}
-
-/// Errors of the viewer.
-#[derive(Debug, thiserror::Error)]
-pub enum ViewerError {
-    /// No window could be opened (no display server, …).
-    #[error("cannot open a window: {0}")]
-    Window(String),
-    /// The GPU side failed.
-    #[error(transparent)]
-    Gpu(#[from] GpuError),
-    /// The server could not be reached.
-    #[error(transparent)]
-    Connect(#[from] crate::Error),
-    /// The async runtime of the connection could not start.
-    #[error("cannot start the network runtime: {0}")]
-    Runtime(std::io::Error),
-    /// The stream broke the protocol or the mirror diverged.
-    #[error(transparent)]
-    Mirror(#[from] MirrorError),
-    /// No world arrived in time (with the last connection news).
-    #[error("no world from the server after {0:?} ({1})")]
-    Timeout(Duration, String),
-    /// The server refused the join for good (authentication, protocol).
-    #[error("cannot stream the world: {0}")]
-    Refused(String),
-    /// The screenshot could not be written.
-    #[error("cannot write the screenshot {0}: {1}")]
-    Screenshot(PathBuf, std::io::Error),
 }
 
 /// Opens the window and runs until it is closed (or `frames` are shown).

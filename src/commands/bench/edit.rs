@@ -1,7 +1,7 @@
 //! `naadf bench edit`: edit latency, change-set sizes, background regrowth and a real
 //! edit stream (HashDAG `EditSphere` replays), on a generated world.
 
-use super::{percentile, surface};
+use super::shared::{percentile, surface};
 use crate::commands::args::PresetArgs;
 use crate::commands::print_json;
 use anyhow::{Context, Result, bail};
@@ -217,7 +217,7 @@ fn time_entity_moves(world: &mut World, points: &[[u32; 3]]) -> Result<(f64, usi
             z as f64 + 0.5 * (step % 2) as f64,
         ]
     };
-    let mut ops = vec![super::entity_model_op()];
+    let mut ops = vec![super::shared::entity_model_op()];
     ops.extend((0..1000).map(|k| Op::SpawnEntity {
         id: k as u32,
         model: "bench_box".into(),

@@ -11,14 +11,13 @@
 //! on one machine.
 
 use super::cpu::process_ns_of;
-use super::percentile;
+use super::shared::percentile;
 use super::stream::{Editor, points, voxel_op};
 use crate::commands::args::PresetArgs;
 use crate::commands::print_json;
 use crate::commands::remote::block_on;
 use anyhow::{Context, Result, bail};
-use naadf_client::world_message;
-use naadf_client::{Client, Mirror};
+use naadf_client::{Client, MessageKind, Mirror};
 use serde::Serialize;
 use std::collections::HashMap;
 use std::io::{BufRead, BufReader, Write};
@@ -128,16 +127,15 @@ pub fn client(a: FanoutClientArgs) -> Result<()> {
             if a.mirror {
                 mirror.handle(&m)?;
             }
-            match &m.kind {
-                Some(world_message::Kind::Header(h)) => pages_left = Some(h.pages),
-                Some(world_message::Kind::Page(_)) => pages_left = pages_left.map(|p| p.saturating_sub(1)),
-                Some(world_message::Kind::Delta(d)) => {
-                    let r = naadf_world::edit::Record::decode(&d.change)?;
-                    if r.growth_seq == 0 && times.last().is_none_or(|&(v, _)| v < r.version) {
-                        times.push((r.version, now));
+            match MessageKind::of(&m)? {
+                MessageKind::Header { pages } => pages_left = Some(pages),
+                MessageKind::Page => pages_left = pages_left.map(|p| p.saturating_sub(1)),
+                MessageKind::Delta { version, growth_seq } => {
+                    if growth_seq == 0 && times.last().is_none_or(|&(v, _)| v < version) {
+                        times.push((version, now));
                     }
                 }
-                None => {}
+                MessageKind::Unknown => {}
             }
             if !ready && pages_left == Some(0) {
                 ready = true;

@@ -3,7 +3,7 @@
 //! flight; with `--world`, the same frame rendered in-process (GPU, readback, PNG — what a
 //! node does per job) for the server's added latency.
 
-use super::percentile;
+use super::shared::percentile;
 use crate::commands::args::{parse_image_size, parse_mode, read_camera};
 use crate::commands::remote::{ServerArgs, block_on};
 use crate::commands::{load_world, print_json};

@@ -5,7 +5,7 @@
 //! the world's methods against the `naadf` traversal, the trees against their own CPU walk.
 //! `bench paper --gpu` measures with the same code ([`measure_gpu`]).
 
-use super::{median_range, print_ratios};
+use super::shared::{median_range, print_ratios};
 use crate::commands::{load_world, print_json};
 use anyhow::{Result, bail};
 use naadf_client::gpu::{Gpu, GpuError, GpuHit, GpuRay, GpuWorld, RayBatch, RayTracer, Traversal};

@@ -4,7 +4,8 @@
 //! (docs/BASELINES.md).
 
 use super::gpu::{Trees, measure_gpu};
-use super::{median_range, plot};
+use super::plot;
+use super::shared::median_range;
 use crate::commands::{load_world, print_json};
 use anyhow::{Result, bail};
 use naadf_client::gpu::Traversal;

@@ -4,7 +4,7 @@
 //! the CPU time of an edit in each group of threads ([`super::cpu`]).
 
 use super::cpu::{Sample, UnitUsage};
-use super::{percentile, surface};
+use super::shared::{percentile, surface};
 use crate::commands::args::PresetArgs;
 use crate::commands::print_json;
 use crate::commands::remote::block_on;

@@ -1,7 +1,7 @@
 //! `naadf bench traverse WORLD`: ray throughput of the three traversal methods on fixed
 //! cameras, and the cost of entities from paired rounds.
 
-use super::{entity_model_op, print_ratios};
+use super::shared::{entity_model_op, print_ratios};
 use crate::commands::{load_world, print_json};
 use anyhow::{Result, bail};
 use naadf_world::World;
@@ -184,7 +184,7 @@ impl EntityCost {
             let mut range = [[0.0; 2]; 3];
             for (k, c) in costs.iter_mut().enumerate() {
                 c.sort_by(f64::total_cmp);
-                median[k] = super::percentile(c, 0.5);
+                median[k] = super::shared::percentile(c, 0.5);
                 range[k] = [c[0], c[c.len() - 1]];
             }
             median_percent.insert(method.name(), median);

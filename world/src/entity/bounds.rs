@@ -24,7 +24,7 @@ impl Bounds {
     /// decoded rotation, padded by [`PAD`] for rounding.
     pub fn of(rec: &InstanceRecord) -> Self {
         let (pos, inv) = (rec.position(), rec.inv_rotation());
-        let (lo, hi) = super::world_box(rec.size, pos, conjugate(inv));
+        let (lo, hi) = world_box(rec.size, pos, conjugate(inv));
         let columns = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]].map(|e| rotate(inv, e));
         Bounds {
             lo: lo.map(|v| v - PAD),
@@ -78,6 +78,22 @@ fn slab(o: [f64; 3], inv_d: [f64; 3], lo: [f64; 3], hi: [f64; 3], t_lo: f64, t_h
 /// Padding of [`Bounds`], in voxels: far above the rounding of the rotation, far below a
 /// voxel, so that the boxes only ever let more rays through to the exact test.
 const PAD: f64 = 1.0 / 64.0;
+
+/// The world box `(lo, hi)` of a grid of `size` whose origin corner is at `pos`, turned by
+/// the rotation `rot` (entity → world): the bounds of its eight corners.
+pub(crate) fn world_box(size: [u32; 3], pos: [f64; 3], rot: [f64; 4]) -> ([f64; 3], [f64; 3]) {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for c in 0..8 {
+        let corner = [0, 1, 2].map(|a| if c >> a & 1 == 1 { f64::from(size[a]) } else { 0.0 });
+        let p = rotate(rot, corner);
+        for a in 0..3 {
+            lo[a] = lo[a].min(p[a] + pos[a]);
+            hi[a] = hi[a].max(p[a] + pos[a]);
+        }
+    }
+    (lo, hi)
+}
 
 #[cfg(test)]
 mod tests {

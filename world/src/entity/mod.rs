@@ -34,7 +34,8 @@ use crate::material::MaterialTable;
 use crate::model::{MAX_MODEL_EDGE, Model, ModelTable};
 use crate::ops::{EditError, Op};
 use crate::size::WorldSize;
-use pack::{InstanceRecord, MAX_VOXEL_START, RECORD_WORDS, quantise_pose, rotate};
+use bounds::world_box;
+use pack::{InstanceRecord, MAX_VOXEL_START, RECORD_WORDS, quantise_pose};
 use rustc_hash::FxHashMap;
 use std::collections::BTreeMap;
 
@@ -217,22 +218,6 @@ pub fn chunk_range(world: WorldSize, size: [u32; 3], pos: [f64; 3], rot: [f64; 4
         out.1[a] = a1.min(f64::from(dims[a] - 1)) as u32;
     }
     Some(out)
-}
-
-/// The world box `(lo, hi)` of a grid of `size` whose origin corner is at `pos`, turned by
-/// the rotation `rot` (entity → world): the bounds of its eight corners.
-pub(crate) fn world_box(size: [u32; 3], pos: [f64; 3], rot: [f64; 4]) -> ([f64; 3], [f64; 3]) {
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    for c in 0..8 {
-        let corner = [0, 1, 2].map(|a| if c >> a & 1 == 1 { f64::from(size[a]) } else { 0.0 });
-        let p = rotate(rot, corner);
-        for a in 0..3 {
-            lo[a] = lo[a].min(p[a] + pos[a]);
-            hi[a] = hi[a].max(p[a] + pos[a]);
-        }
-    }
-    (lo, hi)
 }
 
 /// Why a set of entities cannot be laid out.
