@@ -66,7 +66,7 @@ impl Frontend {
     /// non-loopback address without TLS, and HTTP on one (it has no TLS).
     ///
     /// ```
-    /// use naadf_server::frontend::Frontend;
+    /// use naadf_server::net::frontend::Frontend;
     /// let mut f = Frontend::default();
     /// assert!(f.cleartext_listeners().is_empty(), "loopback by default");
     /// f.grpc = "0.0.0.0:50051".parse().unwrap();
