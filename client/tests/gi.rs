@@ -32,17 +32,7 @@ use scenes::{FLOOR, GREY, SHOWCASE_CAMERA, apply, camera, gpu, mse, showcase, wo
 /// Renders `frames` more GI frames and returns the last.
 fn run(gi: &mut Gi, gpu: &Gpu, gw: &GpuWorld, cam: &Camera, size: (u32, u32), light: &Light, frames: u32) -> Radiance {
     for _ in 0..frames {
-        gi.frame(
-            gpu,
-            gw,
-            &Shot {
-                camera: *cam,
-                size,
-                light: *light,
-                seed: 0,
-            },
-        )
-        .expect("gi frame");
+        gi.frame(gpu, gw, &Shot::new(*cam, size, *light, 0)).expect("gi frame");
     }
     gi.radiance(gpu).expect("gi radiance")
 }
@@ -74,33 +64,11 @@ fn gi_is_closer_to_the_path_tracer_than_the_baseline_after_32_frames() {
     let light = Light::new(Sky::Physical, None, 3).unwrap();
     let gw = GpuWorld::new(gpu, &w).unwrap();
     let reference = PathTracer::new(gpu)
-        .render(
-            gpu,
-            &gw,
-            &Shot {
-                camera: cam,
-                size,
-                light,
-                seed: 7,
-            },
-            256,
-            &mut |_| {},
-        )
+        .render(gpu, &gw, &Shot::new(cam, size, light, 7), 256, &mut |_| {})
         .unwrap();
     let mut baseline = Baseline::new(gpu);
     for _ in 0..32 {
-        baseline
-            .frame(
-                gpu,
-                &gw,
-                &Shot {
-                    camera: cam,
-                    size,
-                    light,
-                    seed: 0,
-                },
-            )
-            .unwrap();
+        baseline.frame(gpu, &gw, &Shot::new(cam, size, light, 0)).unwrap();
     }
     let b = mse(&baseline.radiance(gpu).unwrap(), &reference);
     let g = mse(&run(&mut Gi::new(gpu), gpu, &gw, &cam, size, &light, 32), &reference);
@@ -129,47 +97,15 @@ fn gi_beats_the_baseline_on_flip_on_a_shared_scene() {
     let light = Light::new(Sky::Physical, None, 3).unwrap();
     let gw = GpuWorld::new(gpu, &w).unwrap();
     let reference = PathTracer::new(gpu)
-        .render(
-            gpu,
-            &gw,
-            &Shot {
-                camera: cam,
-                size,
-                light,
-                seed: 1000,
-            },
-            256,
-            &mut |_| {},
-        )
+        .render(gpu, &gw, &Shot::new(cam, size, light, 1000), 256, &mut |_| {})
         .unwrap();
     let flip = |img: &Radiance| Quality::measure(img, &reference, 1.0).unwrap().flip;
     let mut baseline = Baseline::new(gpu);
     let mut gi = Gi::new(gpu);
     for frames in [32, 64] {
         for _ in 0..32 {
-            baseline
-                .frame(
-                    gpu,
-                    &gw,
-                    &Shot {
-                        camera: cam,
-                        size,
-                        light,
-                        seed: 0,
-                    },
-                )
-                .unwrap();
-            gi.frame(
-                gpu,
-                &gw,
-                &Shot {
-                    camera: cam,
-                    size,
-                    light,
-                    seed: 0,
-                },
-            )
-            .unwrap();
+            baseline.frame(gpu, &gw, &Shot::new(cam, size, light, 0)).unwrap();
+            gi.frame(gpu, &gw, &Shot::new(cam, size, light, 0)).unwrap();
         }
         let (b, g) = (flip(&baseline.radiance(gpu).unwrap()), flip(&gi.radiance(gpu).unwrap()));
         eprintln!("FLIP after {frames} frames: gi {g}, baseline {b}");
@@ -436,17 +372,7 @@ fn a_strafing_camera_at_a_fractional_position_keeps_its_history() {
         let cam = camera(&format!(
             r#"{{"pos":[{x},12.3,32.55],"yaw":0,"pitch":-89.9,"fov_y":60}}"#
         ));
-        gi.frame(
-            gpu,
-            &gw,
-            &Shot {
-                camera: cam,
-                size,
-                light,
-                seed: 0,
-            },
-        )
-        .unwrap();
+        gi.frame(gpu, &gw, &Shot::new(cam, size, light, 0)).unwrap();
     }
     let mut lengths = gi.history_lengths(gpu).unwrap();
     lengths.sort_unstable();
@@ -464,17 +390,7 @@ fn the_same_seed_gives_the_same_bytes_and_bad_sizes_are_errors() {
     let frames = |seed| {
         let mut gi = Gi::new(gpu);
         for _ in 0..6 {
-            gi.frame(
-                gpu,
-                &gw,
-                &Shot {
-                    camera: cam,
-                    size: (20, 12),
-                    light,
-                    seed,
-                },
-            )
-            .unwrap();
+            gi.frame(gpu, &gw, &Shot::new(cam, (20, 12), light, seed)).unwrap();
         }
         gi.radiance(gpu).unwrap()
     };
@@ -485,18 +401,7 @@ fn the_same_seed_gives_the_same_bytes_and_bad_sizes_are_errors() {
     let mut gi = Gi::new(gpu);
     assert!(gi.radiance(gpu).is_err(), "no frame yet");
     for size in [(0, 8), (20000, 8), (8192, 8192)] {
-        let e = gi
-            .frame(
-                gpu,
-                &gw,
-                &Shot {
-                    camera: cam,
-                    size,
-                    light,
-                    seed: 0,
-                },
-            )
-            .unwrap_err();
+        let e = gi.frame(gpu, &gw, &Shot::new(cam, size, light, 0)).unwrap_err();
         assert!(e.to_string().contains("frame size"), "{size:?}: {e}");
     }
 }
@@ -513,17 +418,7 @@ fn a_history_split_across_bindings_gives_the_same_bytes() {
         for f in 0..10 {
             let mut cam = camera(SHOWCASE_CAMERA);
             cam.pos[0] += 0.3 * f64::from(f);
-            gi.frame(
-                gpu,
-                &gw,
-                &Shot {
-                    camera: cam,
-                    size,
-                    light,
-                    seed: 0,
-                },
-            )
-            .unwrap();
+            gi.frame(gpu, &gw, &Shot::new(cam, size, light, 0)).unwrap();
         }
         gi.radiance(gpu).unwrap()
     };
@@ -554,56 +449,16 @@ fn a_change_drops_the_history_of_its_chunk_shortens_it_nearby_and_keeps_it_elsew
     let mut edited_world = GpuWorld::new(gpu, &w).unwrap();
     let (mut plain, mut edited) = (Gi::new(gpu), Gi::new(gpu));
     for _ in 0..33 {
-        plain
-            .frame(
-                gpu,
-                &plain_world,
-                &Shot {
-                    camera: cam,
-                    size,
-                    light,
-                    seed: 0,
-                },
-            )
-            .unwrap();
+        plain.frame(gpu, &plain_world, &Shot::new(cam, size, light, 0)).unwrap();
         edited
-            .frame(
-                gpu,
-                &edited_world,
-                &Shot {
-                    camera: cam,
-                    size,
-                    light,
-                    seed: 0,
-                },
-            )
+            .frame(gpu, &edited_world, &Shot::new(cam, size, light, 0))
             .unwrap();
     }
     apply(&mut w, &[r#"{"op":"set","voxels":[[24,2,24,2]]}"#]);
     edited_world.sync(&w).unwrap();
-    plain
-        .frame(
-            gpu,
-            &plain_world,
-            &Shot {
-                camera: cam,
-                size,
-                light,
-                seed: 0,
-            },
-        )
-        .unwrap();
+    plain.frame(gpu, &plain_world, &Shot::new(cam, size, light, 0)).unwrap();
     edited
-        .frame(
-            gpu,
-            &edited_world,
-            &Shot {
-                camera: cam,
-                size,
-                light,
-                seed: 0,
-            },
-        )
+        .frame(gpu, &edited_world, &Shot::new(cam, size, light, 0))
         .unwrap();
     let (kept, now) = (
         plain.history_lengths(gpu).unwrap(),

@@ -44,18 +44,7 @@ fn render(world: &World, cam: &Camera, size: (u32, u32), light: Light, spp: u32)
         let gw = GpuWorld::new(gpu, world).expect("upload");
         let mut pt = PathTracer::new(gpu);
         let img = pt
-            .render(
-                gpu,
-                &gw,
-                &Shot {
-                    camera: *cam,
-                    size,
-                    light,
-                    seed: 0,
-                },
-                spp,
-                &mut |_| {},
-            )
+            .render(gpu, &gw, &Shot::new(*cam, size, light, 0), spp, &mut |_| {})
             .expect("path trace");
         out.push(("GPU", img));
     }
@@ -166,18 +155,7 @@ fn gpu_pixels_fall_within_the_cpu_estimate() {
     let spp = 256;
     let gw = GpuWorld::new(gpu, &w).expect("upload");
     let img = PathTracer::new(gpu)
-        .render(
-            gpu,
-            &gw,
-            &Shot {
-                camera: cam,
-                size,
-                light,
-                seed: 0,
-            },
-            spp,
-            &mut |_| {},
-        )
+        .render(gpu, &gw, &Shot::new(cam, size, light, 0), spp, &mut |_| {})
         .expect("path trace");
     let cpu = CpuPathTracer::new(&w, light, 0);
     // One pixel of each thing in view: sky (material 0), floor, metal, emitter, mirror.
@@ -214,18 +192,7 @@ fn the_gpu_path_tracer_is_deterministic_and_progressive() {
     let gw = GpuWorld::new(gpu, &w).expect("upload");
     let once = |seed: u32, spp: u32| {
         PathTracer::new(gpu)
-            .render(
-                gpu,
-                &gw,
-                &Shot {
-                    camera: cam,
-                    size,
-                    light,
-                    seed,
-                },
-                spp,
-                &mut |_| {},
-            )
+            .render(gpu, &gw, &Shot::new(cam, size, light, seed), spp, &mut |_| {})
             .expect("path trace")
     };
     let a = once(0, 16);
@@ -235,33 +202,11 @@ fn the_gpu_path_tracer_is_deterministic_and_progressive() {
     // 8 samples, then 8 more, add up to the same sums as 16 at once.
     let mut pt = PathTracer::new(gpu);
     let mut seen = Vec::new();
-    pt.render(
-        gpu,
-        &gw,
-        &Shot {
-            camera: cam,
-            size,
-            light,
-            seed: 0,
-        },
-        8,
-        &mut |n| seen.push(n),
-    )
-    .unwrap();
+    pt.render(gpu, &gw, &Shot::new(cam, size, light, 0), 8, &mut |n| seen.push(n))
+        .unwrap();
     assert_eq!(seen.last(), Some(&8));
     let b = pt
-        .render(
-            gpu,
-            &gw,
-            &Shot {
-                camera: cam,
-                size,
-                light,
-                seed: 0,
-            },
-            16,
-            &mut |_| {},
-        )
+        .render(gpu, &gw, &Shot::new(cam, size, light, 0), 16, &mut |_| {})
         .unwrap();
     assert_eq!(pt.samples(), 16);
     assert_eq!(a, b, "progressive sums equal one-shot sums");
@@ -278,49 +223,22 @@ fn an_edit_restarts_the_sums() {
     let mut pt = PathTracer::new(gpu);
     let before = {
         let gw = GpuWorld::follow(&mut slot, gpu, &w).unwrap();
-        pt.render(
-            gpu,
-            gw,
-            &Shot {
-                camera: cam,
-                size,
-                light,
-                seed: 0,
-            },
-            8,
-            &mut |_| {},
-        )
-        .unwrap()
+        pt.render(gpu, gw, &Shot::new(cam, size, light, 0), 8, &mut |_| {})
+            .unwrap()
     };
     let edit = r#"{"op":"box","min":[28,8,28],"max":[36,16,30],"material":3}"#;
     w.apply(&Batch::parse_line(edit).unwrap(), &Limits::default()).unwrap();
     let after = {
         let gw = GpuWorld::follow(&mut slot, gpu, &w).unwrap();
-        pt.render(
-            gpu,
-            gw,
-            &Shot {
-                camera: cam,
-                size,
-                light,
-                seed: 0,
-            },
-            8,
-            &mut |_| {},
-        )
-        .unwrap()
+        pt.render(gpu, gw, &Shot::new(cam, size, light, 0), 8, &mut |_| {})
+            .unwrap()
     };
     assert_ne!(before, after, "the edit shows");
     let fresh = PathTracer::new(gpu)
         .render(
             gpu,
             &GpuWorld::new(gpu, &w).unwrap(),
-            &Shot {
-                camera: cam,
-                size,
-                light,
-                seed: 0,
-            },
+            &Shot::new(cam, size, light, 0),
             8,
             &mut |_| {},
         )
@@ -336,20 +254,7 @@ fn bad_requests_are_errors() {
     let light = Light::new(Sky::Physical, None, 3).unwrap();
     let gw = GpuWorld::new(gpu, &w).unwrap();
     let mut pt = PathTracer::new(gpu);
-    let mut run = |size, spp| {
-        pt.render(
-            gpu,
-            &gw,
-            &Shot {
-                camera: cam,
-                size,
-                light,
-                seed: 0,
-            },
-            spp,
-            &mut |_| {},
-        )
-    };
+    let mut run = |size, spp| pt.render(gpu, &gw, &Shot::new(cam, size, light, 0), spp, &mut |_| {});
     assert!(run((8, 8), 0).unwrap_err().to_string().contains("at least one sample"));
     assert!(run((20000, 8), 1).unwrap_err().to_string().contains("frame size"));
     assert!(run((0, 8), 1).is_err());
@@ -370,18 +275,7 @@ fn the_baseline_keeps_an_exact_image_exact_and_converges_toward_the_path_tracer(
             30 + i,
             2 * i
         ));
-        baseline
-            .frame(
-                gpu,
-                &gw,
-                &Shot {
-                    camera: cam,
-                    size: (16, 12),
-                    light,
-                    seed: 0,
-                },
-            )
-            .unwrap();
+        baseline.frame(gpu, &gw, &Shot::new(cam, (16, 12), light, 0)).unwrap();
         let img = baseline.radiance(gpu).unwrap();
         assert!(
             img.rgb.iter().flatten().all(|c| (c - 1.0).abs() < 1e-5),
@@ -399,33 +293,12 @@ fn the_baseline_keeps_an_exact_image_exact_and_converges_toward_the_path_tracer(
     let light = Light::new(Sky::Physical, None, 3).unwrap();
     let gw = GpuWorld::new(gpu, &w).unwrap();
     let reference = PathTracer::new(gpu)
-        .render(
-            gpu,
-            &gw,
-            &Shot {
-                camera: cam,
-                size,
-                light,
-                seed: 7,
-            },
-            256,
-            &mut |_| {},
-        )
+        .render(gpu, &gw, &Shot::new(cam, size, light, 7), 256, &mut |_| {})
         .unwrap();
     let run = |frames: u32| {
         let mut b = Baseline::new(gpu);
         for _ in 0..frames {
-            b.frame(
-                gpu,
-                &gw,
-                &Shot {
-                    camera: cam,
-                    size,
-                    light,
-                    seed: 0,
-                },
-            )
-            .unwrap();
+            b.frame(gpu, &gw, &Shot::new(cam, size, light, 0)).unwrap();
         }
         b.radiance(gpu).unwrap()
     };

@@ -222,17 +222,9 @@ fn path_trace(
 ) -> Result<(Frame, Summary)> {
     let bar = progress(u64::from(s.spp), "path tracing", "spp");
     let t0 = Instant::now();
-    let radiance = headless.path_trace(
-        world,
-        &Shot {
-            camera: *camera,
-            size: a.size,
-            light: *light,
-            seed: s.seed,
-        },
-        s.spp,
-        &mut |n| bar.set_position(u64::from(n)),
-    )?;
+    let radiance = headless.path_trace(world, &Shot::new(*camera, a.size, *light, s.seed), s.spp, &mut |n| {
+        bar.set_position(u64::from(n))
+    })?;
     bar.finish_and_clear();
     let secs = t0.elapsed().as_secs_f64();
     let (frame, mut summary) = lit_output(headless, world, a, s, &radiance, 1, secs * 1e3)?;
@@ -256,16 +248,7 @@ fn temporal(
     let t0 = Instant::now();
     for i in 0..frames {
         let camera = &cameras[(i as usize).min(cameras.len() - 1)];
-        headless.temporal_frame(
-            a.mode,
-            world,
-            &Shot {
-                camera: *camera,
-                size: a.size,
-                light: *light,
-                seed: s.seed,
-            },
-        )?;
+        headless.temporal_frame(a.mode, world, &Shot::new(*camera, a.size, *light, s.seed))?;
         bar.set_position(u64::from(i + 1));
     }
     let radiance = headless.temporal_radiance(a.mode)?;

@@ -159,12 +159,7 @@ impl Headless {
     /// The radiance of a lit `spec` with the stream's state swapped in.
     fn render_lit(&mut self, world: &World, spec: &FrameSpec, light: &Light) -> Result<Radiance, GpuError> {
         let lit = &spec.lit;
-        let shot = Shot {
-            camera: spec.camera,
-            size: spec.size,
-            light: *light,
-            seed: lit.seed,
-        };
+        let shot = Shot::new(spec.camera, spec.size, *light, lit.seed);
         if spec.mode == Mode::PathTrace {
             return self.path_trace(world, &shot, lit.spp, &mut |_| {});
         }

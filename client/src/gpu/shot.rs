@@ -23,7 +23,7 @@ const BELOW_ONE: f32 = 0.999_999_94;
 /// use naadf_world::camera::Camera;
 /// let camera = Camera::from_json(r#"{"pos":[1,2,3],"yaw":0,"pitch":0,"fov_y":60}"#).unwrap();
 /// let light = Light::new(Sky::Physical, None, 3).unwrap();
-/// let shot = Shot { camera, size: (64, 48), light, seed: 7 };
+/// let shot = Shot::new(camera, (64, 48), light, 7);
 /// let moved = Shot { camera: Camera { pos: [5.0, 2.0, 3.0], ..camera }, ..shot };
 /// assert!(moved.continues(&shot));
 /// assert!(!Shot { seed: 8, ..shot }.continues(&shot));
@@ -41,6 +41,16 @@ pub struct Shot {
 }
 
 impl Shot {
+    /// A shot of `camera` at `size` under `light`, with the random streams of `seed`.
+    pub fn new(camera: Camera, size: (u32, u32), light: Light, seed: u32) -> Self {
+        Shot {
+            camera,
+            size,
+            light,
+            seed,
+        }
+    }
+
     /// Whether a temporal history of `earlier` may go on with this shot: the same size,
     /// light and seed (the camera may move; the history is reprojected).
     pub fn continues(&self, earlier: &Shot) -> bool {

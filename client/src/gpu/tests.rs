@@ -1,5 +1,6 @@
-//! Tests of every pass's WGSL together: each one validates with naga over whole and split
-//! buffers, declares no uniform buffer, and lays its shared structs out as Rust does.
+//! Tests of the generated WGSL: every pass validates with naga over whole and split
+//! buffers, declares no uniform buffer and lays its shared structs out as Rust does; the
+//! prelude's constants read back with the Rust bits and its accessors pick the part.
 
 use super::baseline::taa_pass;
 use super::bindings::Split;
@@ -8,7 +9,7 @@ use super::params::{FrameInfo, GiInfo, LightInfo, RayCount, RayIn, View, WgslStr
 use super::pathtrace::path_pass;
 use super::rays::rays_pass;
 use super::render::render_pass;
-use super::shaders::{Loop, PassSource, source};
+use super::shaders::{CONSTANTS, Loop, PassSource, WgslValue, prelude, source};
 
 fn validate(src: &str) -> Result<(), String> {
     let module = naga::front::wgsl::parse_str(src).map_err(|e| e.emit_to_string(src))?;
@@ -130,4 +131,51 @@ fn the_shared_structs_are_laid_out_at_the_rust_offsets() {
     let rays = parse(&source(&rays_pass(), Loop::Hierarchy, &whole()));
     assert_rust_layout::<RayCount>(&rays);
     assert_rust_layout::<RayIn>(&rays);
+}
+
+/// The value naga reads for a constant's initialiser.
+fn value(module: &naga::Module, e: naga::Handle<naga::Expression>) -> WgslValue {
+    let scalar = |e: naga::Handle<naga::Expression>| match module.global_expressions[e] {
+        naga::Expression::Literal(naga::Literal::F32(v)) => v,
+        ref e => panic!("not an f32 literal: {e:?}"),
+    };
+    match module.global_expressions[e] {
+        naga::Expression::Literal(naga::Literal::U32(v)) => WgslValue::U32(v),
+        naga::Expression::Literal(naga::Literal::F32(v)) => WgslValue::F32(v),
+        naga::Expression::Compose { ref components, .. } if components.len() == 3 => {
+            WgslValue::Vec3(scalar(components[0]), scalar(components[1]), scalar(components[2]))
+        }
+        ref e => panic!("not a constant of the prelude's types: {e:?}"),
+    }
+}
+
+/// WGSL reads back every constant bit for bit: the same bits as the Rust item.
+#[test]
+fn the_prelude_constants_have_their_rust_values_bit_for_bit() {
+    let module = parse(&prelude(&whole()));
+    let wgsl: Vec<(&str, WgslValue)> = module
+        .constants
+        .iter()
+        .map(|(_, c)| (c.name.as_deref().unwrap_or_default(), value(&module, c.init)))
+        .collect();
+    let bits = |v: WgslValue| match v {
+        WgslValue::U32(v) => vec![v],
+        WgslValue::F32(v) => vec![v.to_bits()],
+        WgslValue::Vec3(x, y, z) => vec![x.to_bits(), y.to_bits(), z.to_bits()],
+    };
+    let wgsl: Vec<_> = wgsl.into_iter().map(|(n, v)| (n, bits(v))).collect();
+    let rust: Vec<_> = CONSTANTS.iter().map(|&(n, v)| (n, bits(v))).collect();
+    assert_eq!(wgsl, rust);
+}
+
+#[test]
+fn split_accessors_pick_the_part() {
+    let p = prelude(&Split {
+        part_shift: 14,
+        parts: [1, 1, 1, 3, 1, 1, 1, 1],
+    });
+    assert!(p.contains("fn voxel_word(i: u32) -> u32 {\n    let j = i & 16383u;\n    switch i >> 14u {"));
+    assert!(p.contains("case 1u: { return voxels_1[j]; }"));
+    assert!(p.contains("default: { return voxels_2[j]; }"));
+    assert!(p.contains("fn chunk_word(i: u32) -> u32 { return chunks_0[i]; }"));
 }

@@ -173,24 +173,14 @@ impl Graphics {
             Mode::PathTrace => path_tracer.add_sample(
                 gpu,
                 gw,
-                &Shot {
-                    camera: *camera,
-                    size,
-                    light: light(DEFAULT_PATHTRACE_BOUNCES)?,
-                    seed: lit.seed,
-                },
+                &Shot::new(*camera, size, light(DEFAULT_PATHTRACE_BOUNCES)?, lit.seed),
             )?,
             Mode::Baseline | Mode::Gi => {
                 let r: &mut dyn Temporal = if mode == Mode::Gi { gi } else { baseline };
                 r.frame(
                     gpu,
                     gw,
-                    &Shot {
-                        camera: *camera,
-                        size,
-                        light: light(DEFAULT_LIT_BOUNCES)?,
-                        seed: lit.seed,
-                    },
+                    &Shot::new(*camera, size, light(DEFAULT_LIT_BOUNCES)?, lit.seed),
                 )?;
                 r.radiance(gpu)?
             }

@@ -133,12 +133,7 @@ impl Bench {
         Ok(PathTracer::new(&self.gpu).render(
             &self.gpu,
             &self.gw,
-            &Shot {
-                camera: *camera,
-                size: self.size,
-                light: self.light,
-                seed,
-            },
+            &Shot::new(*camera, self.size, self.light, seed),
             spp,
             done,
         )?)
@@ -148,12 +143,7 @@ impl Bench {
         Ok(r.frame(
             &self.gpu,
             &self.gw,
-            &Shot {
-                camera: *camera,
-                size: self.size,
-                light: self.light,
-                seed: self.seed,
-            },
+            &Shot::new(*camera, self.size, self.light, self.seed),
         )?)
     }
 
