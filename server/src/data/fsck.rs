@@ -5,8 +5,9 @@
 //! A directory is new only when it holds no log segment and no file of a snapshot, not
 //! even a temporary one: anything else is history, and starting a new world over it would
 //! serve a state that no history produced. A directory with history resumes from its newest
-//! complete snapshot (both files) and the log after it, or is refused, untouched, with what
-//! was found and what the operator can do.
+//! complete snapshot (both files) and the log after it, starting with the segment that
+//! starts at that snapshot, or is refused, untouched, with what was found and what the
+//! operator can do.
 //!
 //! Orphans are files no recovery reads: temporary files of snapshot writes that never
 //! finished, and the single file of an incomplete snapshot. Startup removes them, as does
@@ -253,6 +254,21 @@ impl Inspection {
         match self.newest_complete() {
             None if self.snapshots.is_empty() && self.temporary.is_empty() && self.segments.is_empty() => Verdict::New,
             None => Verdict::Refuse(self.nothing_to_resume()),
+            // A server creates the segment that starts at a snapshot before it writes the
+            // snapshot: without it, the edits acknowledged after the snapshot are gone, and
+            // resuming would roll the world back to it without a word.
+            Some(snapshot) if !self.segments.iter().any(|s| s.base == snapshot) => Verdict::Refuse(self.refusal(
+                format!(
+                    "cannot be resumed: the log segment {} that starts at its newest complete \
+                     snapshot (version {snapshot}) is missing. A server creates that segment \
+                     before it writes the snapshot, so every edit acknowledged after version \
+                     {snapshot} was logged in it and is lost with it (nothing left here says how \
+                     many); serving would roll the world back to version {snapshot}",
+                    wal::segment_name(snapshot)
+                ),
+                self.seed_remedy(snapshot),
+                false,
+            )),
             Some(snapshot) => match self.replay(snapshot) {
                 Ok(records) => Verdict::Resume { snapshot, records },
                 Err(e) => Verdict::Refuse(self.refusal(
@@ -625,5 +641,32 @@ mod tests {
             r.remedy.contains("--world MOVED/snapshot-00000000000000000000.naadf"),
             "{r}"
         );
+    }
+
+    /// A directory whose newest snapshot lost the log segment that starts at it would
+    /// resume at that snapshot and drop every edit acknowledged after it without a word.
+    #[test]
+    fn a_missing_log_segment_after_the_newest_snapshot_is_refused_untouched() {
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path();
+        served(dir);
+        std::fs::remove_file(dir.join(layout::LOCK)).unwrap();
+        std::fs::remove_file(dir.join(wal::segment_name(0))).unwrap();
+        let before = contents(dir);
+        let r = refusal(dir);
+        assert!(!r.repairable, "{r}");
+        assert!(
+            r.problem.contains("wal-00000000000000000000.log")
+                && r.problem.contains("is missing")
+                && r.problem.contains("roll the world back to version 0"),
+            "{r}"
+        );
+        assert!(
+            r.remedy.contains("--world MOVED/snapshot-00000000000000000000.naadf"),
+            "{r}"
+        );
+        assert!(matches!(DataDir::open(dir), Err(StoreError::Refused(_))));
+        assert_eq!(inspect(dir).unwrap().repair(), Err(r));
+        assert_eq!(contents(dir), before, "the refusal changed the directory");
     }
 }
