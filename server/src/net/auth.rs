@@ -108,9 +108,25 @@ impl Caller {
 }
 
 /// The token table (empty: open mode).
+///
+/// It holds the tokens' SHA-256 digests, never the tokens: a lookup hashes the presented
+/// token and compares digests, so the time a wrong guess takes depends on how its digest
+/// compares, which says nothing about any valid token (hash, then compare), and the table
+/// cannot print or leak a token.
 #[derive(Clone, Debug, Default)]
 pub struct Auth {
-    tokens: HashMap<String, Caller>,
+    tokens: HashMap<TokenDigest, Caller>,
+}
+
+/// The SHA-256 of a bearer token.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+struct TokenDigest([u8; 32]);
+
+impl TokenDigest {
+    fn of(token: &str) -> Self {
+        let d = ring::digest::digest(&ring::digest::SHA256, token.as_bytes());
+        TokenDigest(d.as_ref().try_into().expect("SHA-256 is 32 bytes"))
+    }
 }
 
 #[derive(Deserialize)]
@@ -143,7 +159,11 @@ impl Auth {
         if token.is_empty() || user.is_empty() {
             return Err("tokens and user names must not be empty".into());
         }
-        if self.tokens.insert(token, Caller { user, role }).is_some() {
+        if self
+            .tokens
+            .insert(TokenDigest::of(&token), Caller { user, role })
+            .is_some()
+        {
             return Err("a token is listed twice".into());
         }
         Ok(())
@@ -180,8 +200,10 @@ impl Auth {
 
     /// Adds the tokens of another table (file plus environment).
     pub fn merge(&mut self, other: Auth) -> Result<(), String> {
-        for (t, c) in other.tokens {
-            self.insert(t, c.user, c.role)?;
+        for (digest, caller) in other.tokens {
+            if self.tokens.insert(digest, caller).is_some() {
+                return Err("a token is listed twice".into());
+            }
         }
         Ok(())
     }
@@ -209,7 +231,7 @@ impl Auth {
         let token =
             token.ok_or_else(|| Status::unauthenticated("this server needs 'authorization: Bearer <token>'"))?;
         self.tokens
-            .get(token)
+            .get(&TokenDigest::of(token))
             .cloned()
             .ok_or_else(|| Status::unauthenticated("unknown token"))
     }
@@ -261,5 +283,21 @@ mod tests {
         let open = Auth::open();
         assert_eq!(open.caller(&md(None)).unwrap().user, "anonymous");
         assert_eq!(open.caller(&md(Some("Bearer bob"))).unwrap().user, "bob");
+    }
+
+    /// The table keeps digests only: no token can be read back from it (in a log line of
+    /// its `Debug`, say), and a lookup compares digests, not the secret itself.
+    #[test]
+    fn the_table_holds_no_token_in_the_clear() {
+        let secret = "s3cret-token-abcdefgh";
+        let mut a = Auth::from_env_value(&format!("{secret}=alice:editor")).unwrap();
+        a.merge(Auth::from_env_value("other-token=bob:viewer").unwrap())
+            .unwrap();
+        let shown = format!("{a:?}");
+        assert!(!shown.contains(secret) && !shown.contains("other-token"), "{shown}");
+        assert_eq!(a.caller(&md(Some(&format!("Bearer {secret}")))).unwrap().user, "alice");
+        // A prefix of a valid token is as unknown as any other guess.
+        assert!(a.caller(&md(Some("Bearer s3cret-token"))).is_err());
+        assert!(a.merge(Auth::from_env_value("other-token=eve:admin").unwrap()).is_err());
     }
 }
