@@ -1033,3 +1033,102 @@ fn edit_retries_rate_limited_lines_exactly_once() {
     }
     server.stop();
 }
+
+/// Asks the server at `url` for its services through reflection, with `token` as the
+/// bearer token; the gRPC code of a refusal.
+async fn reflected_services(url: &str, token: Option<&str>) -> Result<Vec<String>, tonic::Code> {
+    use tonic_reflection::pb::v1::ServerReflectionRequest;
+    use tonic_reflection::pb::v1::server_reflection_client::ServerReflectionClient;
+    use tonic_reflection::pb::v1::server_reflection_request::MessageRequest;
+    use tonic_reflection::pb::v1::server_reflection_response::MessageResponse;
+    let channel = tonic::transport::Channel::from_shared(url.to_owned())
+        .unwrap()
+        .connect()
+        .await
+        .expect("connects");
+    let mut client = ServerReflectionClient::new(channel);
+    let ask = ServerReflectionRequest {
+        host: String::new(),
+        message_request: Some(MessageRequest::ListServices(String::new())),
+    };
+    let mut request = tonic::Request::new(tokio_stream::iter([ask]));
+    if let Some(t) = token {
+        request
+            .metadata_mut()
+            .insert("authorization", format!("Bearer {t}").parse().unwrap());
+    }
+    let mut answers = client
+        .server_reflection_info(request)
+        .await
+        .map_err(|s| s.code())?
+        .into_inner();
+    match answers.message().await.map_err(|s| s.code())? {
+        Some(r) => match r.message_response {
+            Some(MessageResponse::ListServicesResponse(l)) => Ok(l.service.into_iter().map(|s| s.name).collect()),
+            other => panic!("not a service list: {other:?}"),
+        },
+        None => panic!("no answer"),
+    }
+}
+
+/// Reflection answers whom `--reflection` lets in: on a server with tokens, by default only
+/// callers with a token; `open` anyone; `off` nobody. An open server's reflection stays open.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn reflection_answers_only_whom_it_may() {
+    use tonic::Code;
+    let dir = tempfile::tempdir().unwrap();
+    let world = make_world(dir.path());
+    let tokens = [("NAADF_TOKENS", "rt=rita:viewer")];
+    let service = vec!["naadf.v1.WorldService".to_owned()];
+    let cases: [(&[&str], &[(&str, &str)], Result<(), Code>, Result<(), Code>); 4] = [
+        (&[], &tokens, Err(Code::Unauthenticated), Ok(())),
+        (&["--reflection", "open"], &tokens, Ok(()), Ok(())),
+        (
+            &["--reflection", "off"],
+            &tokens,
+            Err(Code::Unimplemented),
+            Err(Code::Unimplemented),
+        ),
+        (&[], &[], Ok(()), Ok(())),
+    ];
+    for (k, (flags, envs, anonymous, with_token)) in cases.into_iter().enumerate() {
+        let sub = dir.path().join(format!("case{k}"));
+        std::fs::create_dir(&sub).unwrap();
+        let server = serve_world(&sub, &world, flags, envs);
+        let listed = |r: Result<(), Code>| r.map(|()| service.clone());
+        let mut got = reflected_services(&server.url, None).await;
+        if let Ok(names) = &mut got {
+            names.retain(|n| n.starts_with("naadf"));
+        }
+        assert_eq!(got, listed(anonymous), "{flags:?} with tokens {envs:?}, no token");
+        let mut got = reflected_services(&server.url, Some("rt")).await;
+        if let Ok(names) = &mut got {
+            names.retain(|n| n.starts_with("naadf"));
+        }
+        assert_eq!(got, listed(with_token), "{flags:?} with tokens {envs:?}, a token");
+        server.stop();
+    }
+    // A token mode needs tokens: refused at start, with the reason.
+    let sub = dir.path().join("no-tokens");
+    let out = naadf_env(
+        &[
+            "serve",
+            "--world",
+            &world,
+            "--data",
+            &p(&sub, "data"),
+            "--grpc",
+            "127.0.0.1:0",
+            "--http",
+            "127.0.0.1:0",
+            "--reflection",
+            "token",
+        ],
+        &[],
+    );
+    assert!(!out.status.success());
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("--reflection token needs tokens"),
+        "{out:?}"
+    );
+}

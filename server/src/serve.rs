@@ -249,7 +249,7 @@ pub async fn serve(
     let routes = http::router(shared.clone(), req_tx.clone(), Backend::Server(config.auth.clone()));
     let (bound, grpc, http) = config
         .frontend
-        .start(svc, routes, &shared.metrics, &shutdown_tx)
+        .start(svc, routes, Some(&shared.auth), &shared.metrics, &shutdown_tx)
         .await?;
     let ticker = {
         let actor = req_tx.clone();

@@ -7,7 +7,7 @@ use super::BuildLimit;
 use anyhow::{Context, Result};
 use naadf_client::Mode;
 use naadf_client::light::{LitOptions, Sky, Sun};
-use naadf_server::net::frontend::Frontend;
+use naadf_server::net::frontend::{Frontend, Reflection};
 use naadf_world::camera::Camera;
 use naadf_world::preset::Preset;
 use naadf_world::{ChunkSource, World, WorldSize};
@@ -84,6 +84,11 @@ pub struct ListenArgs {
     /// so live ones stay open.
     #[arg(long, default_value_t = Frontend::default().connections.idle_timeout.as_secs_f64())]
     pub idle_timeout: f64,
+    /// Who may use gRPC server reflection (what generic tools such as grpcurl read): `open`
+    /// (anyone), `token` (callers with a token the server knows; not for a relay, which
+    /// holds none) or `off`. Default: `token` on a server with tokens, `open` otherwise.
+    #[arg(long, value_parser = Reflection::parse)]
+    pub reflection: Option<Reflection>,
 }
 
 impl ListenArgs {
@@ -103,6 +108,7 @@ impl ListenArgs {
                 client_bytes: self.slow_client_bytes,
                 total_bytes: self.slow_clients_total_bytes,
             },
+            reflection: self.reflection,
         })
     }
 }

@@ -1,10 +1,12 @@
-//! How a server or a relay faces its clients: where it listens (gRPC with reflection,
-//! keepalive, connection limits and optional TLS; HTTP), the message and connection
+//! How a server or a relay faces its clients: where it listens (gRPC with reflection for
+//! whom [`Reflection`] says, keepalive, connection limits and optional TLS; HTTP), the
+//! message and connection
 //! limits, and how far its clients may fall behind. `naadf serve` and `naadf relay` share
 //! all of it.
 
 use crate::metrics::Metrics;
 use crate::net::addresses::{Bound, DEFAULT_GRPC, DEFAULT_HTTP};
+use crate::net::auth::Auth;
 use crate::net::conn::{Acceptor, ConnLimits, incoming};
 use crate::net::tls::ReloadingCert;
 use crate::shared::SlowClientLimits;
@@ -18,6 +20,7 @@ use tokio::io::{AsyncRead, AsyncWrite};
 use tokio::sync::watch;
 use tokio_stream::wrappers::ReceiverStream;
 use tonic::codec::CompressionEncoding;
+use tonic::service::interceptor::InterceptedService;
 use tonic::transport::Server;
 use tonic::transport::server::{Connected, Router};
 
@@ -40,6 +43,33 @@ pub struct Frontend {
     /// Bytes a client, and all clients together, may fall behind before they are re-sent
     /// a snapshot.
     pub slow_clients: SlowClientLimits,
+    /// Who may use gRPC server reflection; `None`: [`Reflection::Token`] on a server with
+    /// tokens, [`Reflection::Open`] otherwise.
+    pub reflection: Option<Reflection>,
+}
+
+/// Who may use gRPC server reflection (the service list and the `.proto` descriptors that
+/// generic tools such as grpcurl read).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Reflection {
+    /// Anyone.
+    Open,
+    /// Callers with a token the server knows (any role).
+    Token,
+    /// Nobody: reflection is not served.
+    Off,
+}
+
+impl Reflection {
+    /// Parses `open`, `token` or `off`.
+    pub fn parse(s: &str) -> Result<Reflection, String> {
+        match s {
+            "open" => Ok(Reflection::Open),
+            "token" => Ok(Reflection::Token),
+            "off" => Ok(Reflection::Off),
+            _ => Err(format!("'{s}' is not open, token or off")),
+        }
+    }
 }
 
 impl Default for Frontend {
@@ -54,6 +84,7 @@ impl Default for Frontend {
             connections: ConnLimits::default(),
             slow_client_events: 4096,
             slow_clients: SlowClientLimits::default(),
+            reflection: None,
         }
     }
 }
@@ -82,15 +113,35 @@ impl Frontend {
             .collect()
     }
 
+    /// Who may use reflection on a server whose token table is `auth` (`None`: a relay,
+    /// which holds no tokens).
+    fn reflection_for(&self, auth: Option<&Auth>) -> Result<Reflection> {
+        let has_tokens = auth.is_some_and(|a| !a.is_open());
+        match self.reflection {
+            Some(Reflection::Token) if auth.is_none() => {
+                anyhow::bail!("--reflection token needs the server's tokens; a relay holds none (use open or off)")
+            }
+            Some(Reflection::Token) if !has_tokens => {
+                anyhow::bail!("--reflection token needs tokens (--auth or NAADF_TOKENS); this server has none")
+            }
+            Some(r) => Ok(r),
+            None if has_tokens => Ok(Reflection::Token),
+            None => Ok(Reflection::Open),
+        }
+    }
+
     /// Binds both listeners and serves `svc` and `routes` until `shutdown` turns true; with
     /// TLS, the certificate is reloaded as [`crate::net::tls`] describes, counted in `metrics`.
+    /// `auth` is the server's token table (`None` for a relay), which reflection may ask.
     pub(crate) async fn start<S: WorldService>(
         &self,
         svc: WorldServiceServer<S>,
         routes: axum::Router,
+        auth: Option<&Auth>,
         metrics: &Arc<Metrics>,
         shutdown: &watch::Sender<bool>,
     ) -> Result<(Bound, Listening, Listening)> {
+        let reflection = self.reflection_for(auth)?;
         // Read before binding: a bad certificate fails the start, not the first handshake.
         let tls = match &self.tls {
             Some((cert, key)) => Some(Arc::new(ReloadingCert::load(cert, key)?)),
@@ -122,9 +173,19 @@ impl Frontend {
         let router = Server::builder()
             .http2_keepalive_interval(Some(keepalive))
             .http2_keepalive_timeout(Some(keepalive))
-            .add_service(svc)
-            .add_service(reflection_v1)
-            .add_service(reflection_v1alpha);
+            .add_service(svc);
+        let router = match (reflection, auth) {
+            (Reflection::Open, _) => router.add_service(reflection_v1).add_service(reflection_v1alpha),
+            (Reflection::Token, Some(auth)) => {
+                // Any caller the token table knows; the refusal is the one every call gets.
+                let auth = auth.clone();
+                let check = move |req: tonic::Request<()>| auth.caller(req.metadata()).map(|_| req);
+                router
+                    .add_service(InterceptedService::new(reflection_v1, check.clone()))
+                    .add_service(InterceptedService::new(reflection_v1alpha, check))
+            }
+            (Reflection::Token, None) | (Reflection::Off, _) => router,
+        };
         let mut stop = shutdown.subscribe();
         let stopped = async move {
             let _ = stop.wait_for(|s| *s).await;

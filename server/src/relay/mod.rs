@@ -182,7 +182,7 @@ pub async fn relay(
             upstream: upstream.clone(),
         },
     );
-    let (bound, grpc, http) = config.frontend.start(svc, routes, &metrics, &shutdown_tx).await?;
+    let (bound, grpc, http) = config.frontend.start(svc, routes, None, &metrics, &shutdown_tx).await?;
     tracing::info!(upstream = %config.upstream, "relaying");
     ready(bound);
 
