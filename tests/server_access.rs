@@ -1080,7 +1080,14 @@ async fn reflection_answers_only_whom_it_may() {
     let world = make_world(dir.path());
     let tokens = [("NAADF_TOKENS", "rt=rita:viewer")];
     let service = vec!["naadf.v1.WorldService".to_owned()];
-    let cases: [(&[&str], &[(&str, &str)], Result<(), Code>, Result<(), Code>); 4] = [
+    // Flags, environment, and the answer without a token and with one.
+    type Case<'a> = (
+        &'a [&'a str],
+        &'a [(&'a str, &'a str)],
+        Result<(), Code>,
+        Result<(), Code>,
+    );
+    let cases: [Case; 4] = [
         (&[], &tokens, Err(Code::Unauthenticated), Ok(())),
         (&["--reflection", "open"], &tokens, Ok(()), Ok(())),
         (
