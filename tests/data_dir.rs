@@ -270,3 +270,47 @@ fn checkpoints_count_the_records_replayed_after_a_crash() {
     wait_for_snapshot(&data, 8);
     server.stop();
 }
+
+/// A damaged snapshot (a flipped byte, a truncated file) is judged alike by `data check`
+/// and `data repair`: neither calls it fine, and repair changes nothing.
+#[test]
+fn check_and_repair_judge_a_damaged_snapshot_alike() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    let world = start_world(dir);
+    let data = p(dir, "data");
+    let server = Server::start(&["--world", &world, "--data", &data], &dir.join("server.log"), &[]);
+    edit(&server, 5, 7);
+    server.kill9();
+    let snapshot = |ext: &str| format!("snapshot-{:020}.{ext}", 0);
+    /// Which file of the snapshot, and what happens to its bytes.
+    type Damage = (&'static str, fn(&mut Vec<u8>));
+    let damages: [Damage; 3] = [
+        ("state", |b| *b.last_mut().unwrap() ^= 1),
+        ("naadf", |b| b.truncate(b.len() / 2)),
+        ("naadf", |b| {
+            let at = b.len() - 1;
+            b[at] ^= 0x40;
+        }),
+    ];
+    for (k, (ext, damage)) in damages.into_iter().enumerate() {
+        let copy = p(dir, &format!("copy-{k}"));
+        copy_dir(&data, &copy);
+        let path = Path::new(&copy).join(snapshot(ext));
+        let mut bytes = std::fs::read(&path).unwrap();
+        damage(&mut bytes);
+        std::fs::write(&path, bytes).unwrap();
+        let before = contents(&copy);
+        let out = naadf(&["data", "check", &copy], None);
+        let report = String::from_utf8_lossy(&out.stdout);
+        assert!(!out.status.success(), "{ext} damage {k}: {report}");
+        assert!(report.contains("cannot be loaded"), "{ext} damage {k}: {report}");
+        support::fails(&["data", "repair", &copy], None, "cannot be loaded");
+        support::fails(&["data", "repair", &copy, "--apply"], None, "nothing was changed");
+        assert_eq!(
+            contents(&copy),
+            before,
+            "{ext} damage {k}: repair changed the directory"
+        );
+    }
+}

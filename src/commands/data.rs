@@ -22,7 +22,8 @@ pub enum Data {
     Check(CheckArgs),
     /// Cut a torn write off the log and remove orphan files (a dry run unless --apply).
     ///
-    /// Never removes a file of a complete snapshot or a log record that one needs. A
+    /// Judges the directory as `check` does (loading the snapshot `serve` would resume
+    /// from). Never removes a file of a complete snapshot or a log record that one needs. A
     /// directory that cannot be made servable is left as it is, with what the operator can
     /// do instead.
     Repair(RepairArgs),
@@ -138,28 +139,27 @@ fn serve_words(verdict: &Verdict) -> String {
 }
 
 /// Inspects `dir` and, for a directory that resumes, loads its snapshot as the server
-/// would: the inspection and why the load failed, if it did.
-fn look(dir: &Path) -> Result<(Inspection, Option<String>)> {
-    let inspection = fsck::inspect(dir)?;
-    let failure = match inspection.verdict() {
-        Verdict::Resume { snapshot, .. } => store::load_snapshot(dir, snapshot)
-            .err()
-            .map(|e| format!("serve would fail: snapshot {snapshot} cannot be loaded: {e}")),
-        _ => None,
-    };
-    Ok((inspection, failure))
+/// would, so that a damaged one counts in the verdict (`check` and `repair` alike).
+fn look(dir: &Path) -> Result<Inspection> {
+    Ok(verified(fsck::inspect(dir)?, dir))
+}
+
+/// `inspection` of `dir` with the snapshot it would resume from loaded.
+fn verified(mut inspection: Inspection, dir: &Path) -> Inspection {
+    inspection.verify(|v| store::load_snapshot(dir, v).map(drop).map_err(|e| e.to_string()));
+    inspection
 }
 
 fn report(dir: &Path) -> Result<Report> {
     let in_use = in_use(dir);
-    let (mut inspection, mut failure) = look(dir)?;
+    let mut inspection = look(dir)?;
     // A running server may write a newer snapshot and delete this one between the look and
     // the load: then look again.
     for _ in 0..3 {
-        if !(in_use && failure.is_some()) {
+        if !(in_use && inspection.damaged.is_some()) {
             break;
         }
-        (inspection, failure) = look(dir)?;
+        inspection = look(dir)?;
     }
     let verdict = inspection.verdict();
     let newest = inspection.newest_complete();
@@ -214,11 +214,11 @@ fn report(dir: &Path) -> Result<Report> {
             })
             .collect(),
         serve: ServeReport {
-            starts: kind != "refuse" && failure.is_none(),
+            starts: kind != "refuse",
             verdict: kind,
             snapshot,
             replay,
-            message: failure.unwrap_or_else(|| serve_words(&inspection.verdict())),
+            message: serve_words(&inspection.verdict()),
         },
     })
 }
@@ -297,7 +297,7 @@ fn repair(a: &RepairArgs) -> Result<()> {
     let dir = &a.dir;
     let cannot = |r| anyhow!("cannot make {} servable; nothing was changed. {r}", dir.display());
     if !a.apply {
-        let inspection = fsck::inspect(dir)?;
+        let inspection = look(dir)?;
         let actions = inspection.repair().map_err(cannot)?;
         if actions.is_empty() {
             println!("nothing to repair; {}", serve_words(&inspection.verdict()));
@@ -316,6 +316,7 @@ fn repair(a: &RepairArgs) -> Result<()> {
     // Held until the changes are made: no server may start on the directory meanwhile.
     let (_lock, inspection) = fsck::inspect_locked(dir, |i| i.repair().is_ok_and(|a| !a.is_empty()))
         .with_context(|| format!("cannot repair {}", dir.display()))?;
+    let inspection = verified(inspection, dir);
     let actions = inspection.repair().map_err(cannot)?;
     if actions.is_empty() {
         println!("nothing to repair; {}", serve_words(&inspection.verdict()));

@@ -64,6 +64,9 @@ pub struct Inspection {
     pub segments: Vec<SegmentFile>,
     /// Files that are none of these (left alone).
     pub other: Vec<PathBuf>,
+    /// The newest complete snapshot and why it could not be loaded, once
+    /// [`Inspection::verify`] found it damaged.
+    pub damaged: Option<(u64, String)>,
 }
 
 /// What a server does with a directory.
@@ -160,6 +163,7 @@ pub fn inspect(dir: &Path) -> Result<Inspection, StoreError> {
         temporary: Vec::new(),
         segments: Vec::new(),
         other: Vec::new(),
+        damaged: None,
     };
     let listing = |e| StoreError::Io(format!("cannot list {}", dir.display()), e);
     let list = match std::fs::read_dir(dir) {
@@ -249,8 +253,29 @@ impl Inspection {
         wal::first_needed(self.segments.iter().map(|s| s.base), snapshot)
     }
 
+    /// Loads the snapshot a server would resume from with `load` (the files' checksums
+    /// and contents), so that the verdict, and what `naadf data check` and `data repair`
+    /// say, account for a damaged one. A server loads it itself as it starts.
+    pub fn verify(&mut self, load: impl FnOnce(u64) -> Result<(), String>) {
+        if let Verdict::Resume { snapshot, .. } = self.verdict() {
+            self.damaged = load(snapshot).err().map(|e| (snapshot, e));
+        }
+    }
+
     /// What a server does with the directory.
     pub fn verdict(&self) -> Verdict {
+        if let Some((snapshot, e)) = &self.damaged
+            && self.newest_complete() == Some(*snapshot)
+        {
+            return Verdict::Refuse(self.refusal(
+                format!("cannot be resumed: its newest complete snapshot (version {snapshot}) cannot be loaded: {e}"),
+                format!(
+                    "Restore the directory from a backup; `naadf data check {}` lists what else it holds.",
+                    self.dir.display()
+                ),
+                false,
+            ));
+        }
         match self.newest_complete() {
             None if self.snapshots.is_empty() && self.temporary.is_empty() && self.segments.is_empty() => Verdict::New,
             None => Verdict::Refuse(self.nothing_to_resume()),
