@@ -88,7 +88,7 @@ impl Mode {
     }
 }
 
-/// A frame to render: what [`Client::frame`] asks for and what a render node's job says.
+/// A frame to render: what [`Client::frame`](crate::Client::frame) asks for and what a render node's job says.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FrameSpec {
     /// The camera.

@@ -25,7 +25,7 @@ pub const BUFFERS: [(&str, &str); 8] = [
 pub struct Split {
     /// log2 of the words per binding.
     pub part_shift: u32,
-    /// Bindings per logical buffer, in [`BUFFERS`] order.
+    /// Bindings per logical buffer, in the order of the world's buffers (`BUFFERS`).
     pub parts: [u32; 8],
 }
 

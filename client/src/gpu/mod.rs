@@ -8,7 +8,7 @@
 //! - `params`: the structs the shaders share with Rust ([`WorldInfo`], [`FrameInfo`],
 //!   [`LightInfo`], [`GiInfo`], [`View`], [`RayIn`]), one definition for Rust and WGSL
 //!   each ([`WgslStruct`]), bound as read-only storage buffers (never uniform buffers: see
-//!   [`Gpu::params`]);
+//!   `Gpu::params`);
 //! - `bindings`: the world's bind group ([`Split`]: how its buffers are split across
 //!   bindings);
 //! - [`shaders`]: the WGSL of `shaders/`, assembled per pass after a generated prelude of

@@ -24,9 +24,9 @@ use naadf_world::traverse::{DEFAULT_MAX_STEPS, Method};
 use naadf_world::{World, WorldError};
 use std::collections::VecDeque;
 
-/// The digested buffers that live on the GPU, in the binding order of [`BUFFERS`] (the
-/// model table is not a GPU buffer; the eighth binding, the comparison structure, is not
-/// digested).
+/// The digested buffers that live on the GPU, in the binding order of the world's buffers
+/// (`BUFFERS`; the model table is not a GPU buffer; the eighth binding, the comparison
+/// structure, is not digested).
 pub const GPU_BUFFERS: [BufferId; 7] = [
     BufferId::Chunks,
     BufferId::ChunkEntities,

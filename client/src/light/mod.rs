@@ -1,12 +1,12 @@
 //! The light model of the lit modes (`pathtrace`, `baseline`; docs/RENDERING.md §3a).
 //!
 //! One model, two implementations that must agree: the GPU path tracer
-//! (`shaders/light.wgsl`, driven by [`crate::gpu::PathTracer`]) and the CPU path tracer
+//! (`shaders/light.wgsl`, driven by the GPU client's `PathTracer`) and the CPU path tracer
 //! ([`cpu::CpuPathTracer`]), which walks the CPU traversal and serves as a second method in
 //! the tests. This module holds what both share: the sky and sun settings and their CLI
 //! syntax ([`Sky`], [`Sun`], [`Light`]), the random-number stream ([`rng`]) and the
 //! physical sky ([`sky`]); [`hdr`] writes radiance images and tone-maps them, and
-//! [`quality`] measures an image against a reference.
+//! `quality` (with the `gpu` feature) measures an image against a reference.
 //!
 //! - Materials: `diffuse` is Lambertian; `emissive` adds `albedo · emission` and reflects
 //!   as diffuse; `metal` is GGX with α = roughness and Schlick's Fresnel with F0 = albedo;

@@ -13,7 +13,7 @@ use std::collections::VecDeque;
 
 /// How near a changed chunk (in chunks, along each axis) the light counts as changed: the
 /// TAA and ring samples of surfaces there follow
-/// [`EDIT_HISTORY_FRAMES`](super::memory::EDIT_HISTORY_FRAMES). Samples of the changed
+/// `EDIT_HISTORY_FRAMES`. Samples of the changed
 /// chunks themselves, and ring samples whose light came from them, are dropped at once;
 /// history elsewhere is kept.
 pub const CHANGE_REACH: u32 = 2;

@@ -256,7 +256,7 @@ impl Temporal for Gi {
     /// Renders the next frame of `shot` of `world`. A new size, light, seed or world size
     /// starts a new history; a camera move or a world change does not: the history is
     /// reprojected, light on a changed chunk restarts, and light from before a change near
-    /// it fades out within [`EDIT_HISTORY_FRAMES`](memory::EDIT_HISTORY_FRAMES).
+    /// it fades out within `EDIT_HISTORY_FRAMES`.
     fn frame(&mut self, gpu: &Gpu, world: &GpuWorld, shot: &Shot) -> Result<(), GpuError> {
         check_frame_size(gpu, shot.size, 0)?;
         let now = CameraRays::new(&shot.camera, shot.size)?;

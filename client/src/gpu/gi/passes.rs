@@ -51,7 +51,7 @@ pub enum GiPass {
     Project,
     /// The winning samples stored in their regions' slots.
     ProjectStore,
-    /// At most [`MAX_KEPT`](super::memory::MAX_KEPT) levelled samples per region.
+    /// At most `MAX_KEPT` levelled samples per region.
     Refine,
     /// Spatial resampling, the visibility ray and the sun.
     Resample,
