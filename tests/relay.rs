@@ -593,3 +593,36 @@ async fn an_upstream_that_cannot_resume_the_relay_resyncs_its_clients_in_stream(
     relay.stop();
     server.stop();
 }
+
+/// A relay whose upstream refuses it the same way again and again (here an unknown token)
+/// counts the refusals, stops asking every few seconds, and says why on `/health`, which
+/// stays 200: a restart would not help.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_relay_refused_by_its_upstream_backs_off_and_says_why() {
+    let dir = tempfile::tempdir().unwrap();
+    let world = start_world(dir.path());
+    let server = serve_world(dir.path(), &world, &[], &[("NAADF_TOKENS", "vt=vera:viewer")]);
+    let relay = Server::relay(&server.url, &["--token", "revoked"], &dir.path().join("relay.log"));
+    let mut health = (0, String::new());
+    for _ in 0..300 {
+        health = http_get(&relay.http, "/health");
+        if health.1.contains("refused") {
+            break;
+        }
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    }
+    assert_eq!(health.0, 200, "{health:?}");
+    let v: serde_json::Value = serde_json::from_str(&health.1).unwrap();
+    assert_eq!(v["upstream"], "refused", "{v}");
+    let reason = v["reason"].as_str().unwrap_or_default();
+    assert!(
+        reason.contains("Unauthenticated") && reason.contains("unknown token"),
+        "{v}"
+    );
+    let refusals = metric(&relay, "naadf_upstream_refusals_total");
+    assert!(refusals >= 5, "{refusals} refusals");
+    // It now waits at least 10 s before asking again (it asked every few seconds before).
+    tokio::time::sleep(Duration::from_secs(8)).await;
+    assert_eq!(metric(&relay, "naadf_upstream_refusals_total"), refusals);
+    assert_eq!(http_get(&relay.http, "/health").0, 200);
+}

@@ -76,3 +76,79 @@ impl Backoff {
         self.next = self.first;
     }
 }
+
+/// Consecutive identical refusals after which [`Retries`] stops retrying at the usual pace.
+pub const SAME_REFUSALS: u32 = 5;
+
+/// The pauses of a peer that keeps trying to reach another: the usual [`Backoff`], until
+/// the other side refuses the same way [`SAME_REFUSALS`] times in a row (a revoked token,
+/// a protocol mismatch): then a long backoff, since trying again every few seconds would
+/// change nothing but fill the log.
+///
+/// ```
+/// use naadf_proto::backoff::{Backoff, Retries, SAME_REFUSALS};
+/// use std::time::Duration;
+/// let ms = Duration::from_millis;
+/// let mut r = Retries::new(Backoff::new(ms(10), ms(20)), Backoff::new(ms(1000), ms(4000)));
+/// for _ in 1..SAME_REFUSALS {
+///     assert!(r.after(Some("unknown token")) <= ms(20));
+/// }
+/// assert!(r.refused().is_none());
+/// assert_eq!(r.after(Some("unknown token")), ms(1000));
+/// assert_eq!(r.refused(), Some("unknown token"));
+/// assert_eq!(r.after(Some("unknown token")), ms(2000));
+/// // Another answer, or a success, starts over.
+/// assert_eq!(r.after(None), ms(20));
+/// assert!(r.refused().is_none());
+/// r.reset();
+/// assert_eq!(r.after(Some("unknown token")), ms(10));
+/// ```
+#[derive(Clone, Debug)]
+pub struct Retries {
+    usual: Backoff,
+    refused: Backoff,
+    /// The last refusal and how many times in a row it came.
+    last: Option<(String, u32)>,
+}
+
+impl Retries {
+    /// The `usual` pauses, and the `refused` ones after a repeated refusal.
+    pub const fn new(usual: Backoff, refused: Backoff) -> Self {
+        Self {
+            usual,
+            refused,
+            last: None,
+        }
+    }
+
+    /// The pause after a failed attempt: `refusal` is the other side's answer when it
+    /// refused (its code and message), `None` when it could not be reached.
+    pub fn after(&mut self, refusal: Option<&str>) -> Duration {
+        self.last = match (self.last.take(), refusal) {
+            (Some((last, n)), Some(now)) if last == now => Some((last, n + 1)),
+            (_, Some(now)) => Some((now.to_owned(), 1)),
+            (_, None) => None,
+        };
+        if self.refused().is_some() {
+            return self.refused.pause();
+        }
+        self.refused.reset();
+        self.usual.pause()
+    }
+
+    /// The refusal that came [`SAME_REFUSALS`] times in a row or more, if the last
+    /// attempts met one.
+    pub fn refused(&self) -> Option<&str> {
+        self.last
+            .as_ref()
+            .filter(|(_, n)| *n >= SAME_REFUSALS)
+            .map(|(why, _)| why.as_str())
+    }
+
+    /// Starts over, after an attempt that succeeded.
+    pub fn reset(&mut self) {
+        self.usual.reset();
+        self.refused.reset();
+        self.last = None;
+    }
+}

@@ -249,6 +249,24 @@ pub struct UpstreamMetrics {
     /// Upstream streams given up because a message did not apply or its digest did not
     /// match: nothing of them was passed on.
     pub rejected: Counter,
+    /// Joins the upstream refused (an unknown token, a protocol mismatch, ...).
+    pub refusals: Counter,
+    /// The refusal the upstream answered every recent join with, once it came often enough
+    /// in a row that the relay waits long between attempts; `/health` reports it.
+    refused: std::sync::Mutex<Option<String>>,
+}
+
+impl UpstreamMetrics {
+    /// Records the refusal the upstream keeps answering with (`None`: none, or a join
+    /// succeeded).
+    pub fn set_refused(&self, why: Option<&str>) {
+        *self.refused.lock().unwrap_or_else(|e| e.into_inner()) = why.map(str::to_owned);
+    }
+
+    /// The refusal the upstream keeps answering with, if any.
+    pub fn refused(&self) -> Option<String> {
+        self.refused.lock().unwrap_or_else(|e| e.into_inner()).clone()
+    }
 }
 
 impl Metrics {
@@ -277,6 +295,11 @@ impl Metrics {
             "upstream_rejected",
             "Upstream streams dropped on a bad message or digest mismatch (nothing passed on)",
             u.rejected.clone(),
+        );
+        r.register(
+            "upstream_refusals",
+            "Joins the upstream refused (unknown token, protocol mismatch, ...)",
+            u.refusals.clone(),
         );
         m
     }

@@ -89,22 +89,30 @@ pub fn router(shared: Arc<Shared>, actor: mpsc::Sender<Request>, backend: Backen
 }
 
 async fn health(State(app): State<App>) -> impl IntoResponse {
-    match crate::stream::messages::status(&app.actor).await {
-        Some(s) => (
-            StatusCode::OK,
-            Json(serde_json::json!({
-                "status": "ok",
-                "version": s.version,
-                "quiescent": s.quiescent,
-                "digest": s.digest.to_string(),
-            })),
-        ),
+    // A relay whose upstream keeps refusing it says so, and stays healthy: a restart would
+    // not help (the refusal is the upstream's, about the relay's token or protocol).
+    let refused = app.shared.metrics.upstream.refused();
+    let mut body = match crate::stream::messages::status(&app.actor).await {
+        Some(s) => serde_json::json!({
+            "status": "ok",
+            "version": s.version,
+            "quiescent": s.quiescent,
+            "digest": s.digest.to_string(),
+        }),
+        None if refused.is_some() => serde_json::json!({"status": "waiting for the upstream"}),
         // Shutting down, or a relay that has no world from its upstream yet.
-        None => (
-            StatusCode::SERVICE_UNAVAILABLE,
-            Json(serde_json::json!({"status": "unavailable"})),
-        ),
+        None => {
+            return (
+                StatusCode::SERVICE_UNAVAILABLE,
+                Json(serde_json::json!({"status": "unavailable"})),
+            );
+        }
+    };
+    if let Some(why) = refused {
+        body["upstream"] = "refused".into();
+        body["reason"] = why.into();
     }
+    (StatusCode::OK, Json(body))
 }
 
 /// `GET /metrics`: aggregates only (no user names, no edit contents), so it needs no

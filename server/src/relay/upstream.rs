@@ -6,7 +6,7 @@
 use super::hub::Input;
 use crate::metrics::Metrics;
 use crate::stream::messages::Request;
-use naadf_proto::backoff::Backoff;
+use naadf_proto::backoff::{Backoff, Retries};
 use naadf_proto::v1::StatusRequest;
 use naadf_proto::v1::world_service_client::WorldServiceClient;
 use std::sync::Arc;
@@ -19,6 +19,9 @@ use tonic::transport::Channel;
 /// The waits before re-joining a broken upstream: 100 ms, doubling up to 5 s, jittered so
 /// that relays cut off together do not all return at the same instant.
 const REJOIN_BACKOFF: Backoff = Backoff::new(Duration::from_millis(100), Duration::from_secs(5)).jittered();
+/// The waits once the upstream refuses the relay the same way again and again (a revoked
+/// token, a protocol mismatch): 10 s, doubling up to 5 min. A restart would not help.
+const REFUSED_BACKOFF: Backoff = Backoff::new(Duration::from_secs(10), Duration::from_secs(300)).jittered();
 /// How often the relay asks the upstream for its version (the lag metrics).
 const LAG_POLL: Duration = Duration::from_secs(1);
 
@@ -105,10 +108,27 @@ pub fn upstream_error(s: tonic::Status) -> tonic::Status {
     }
 }
 
+/// The upstream's refusal in `s`, as `CODE: message`: a status the upstream sent that
+/// asking again will not change; `None` for a transport failure or a passing condition.
+fn refusal(s: &tonic::Status) -> Option<String> {
+    use tonic::Code;
+    let lasting = matches!(
+        s.code(),
+        Code::Unauthenticated
+            | Code::PermissionDenied
+            | Code::FailedPrecondition
+            | Code::InvalidArgument
+            | Code::Unimplemented
+    );
+    (lasting && std::error::Error::source(s).is_none()).then(|| format!("{:?}: {}", s.code(), s.message()))
+}
+
 /// Follows the upstream stream until `shutdown`: asks the hub for a join request, joins,
 /// and hands every message to the hub; when the stream breaks, ends, or the hub refuses
 /// it (`rejoin`), joins again after a pause of `REJOIN_BACKOFF`, which starts over once
-/// a message arrives.
+/// a message arrives. When the upstream refuses the same way `SAME_REFUSALS` times in a
+/// row, the pauses are `REFUSED_BACKOFF`'s, and the metrics (and so `/health`) carry the
+/// refusal until a join succeeds.
 pub async fn follow(
     upstream: Upstream,
     hub: mpsc::Sender<Input>,
@@ -116,7 +136,7 @@ pub async fn follow(
     metrics: Arc<Metrics>,
     mut shutdown: watch::Receiver<bool>,
 ) {
-    let mut backoff = REJOIN_BACKOFF;
+    let mut retries = Retries::new(REJOIN_BACKOFF, REFUSED_BACKOFF);
     let mut failures = 0u32;
     loop {
         let (reply, rx) = oneshot::channel();
@@ -124,36 +144,45 @@ pub async fn follow(
             return;
         }
         let Ok((request, generation)) = rx.await else { return };
-        let why = match upstream.client().join(upstream.own(request)).await {
+        let (why, refused) = match upstream.client().join(upstream.own(request)).await {
             Ok(stream) => {
                 tracing::info!(upstream = %upstream.url, "joined upstream");
                 metrics.upstream.joins.inc();
+                metrics.upstream.set_refused(None);
                 let mut stream = stream.into_inner();
                 loop {
                     tokio::select! {
                         m = stream.message() => match m {
                             Ok(Some(m)) => {
-                                backoff.reset();
+                                retries.reset();
                                 failures = 0;
                                 if hub.send(Input::Message(generation, m)).await.is_err() {
                                     return;
                                 }
                             }
-                            Ok(None) => break "the upstream ended the stream".to_owned(),
-                            Err(s) => break format!("the upstream stream broke: {}", s.message()),
+                            Ok(None) => break ("the upstream ended the stream".to_owned(), None),
+                            Err(s) => break (format!("the upstream stream broke: {}", s.message()), refusal(&s)),
                         },
-                        _ = rejoin.notified() => break "the stream was refused".to_owned(),
+                        _ = rejoin.notified() => break ("the stream was refused".to_owned(), None),
                         _ = shutdown.changed() => return,
                     }
                 }
             }
-            Err(s) => format!("cannot join upstream: {} ({:?})", s.message(), s.code()),
+            Err(s) => (
+                format!("cannot join upstream: {} ({:?})", s.message(), s.code()),
+                refusal(&s),
+            ),
         };
         metrics.upstream.connected.set(0);
+        if refused.is_some() {
+            metrics.upstream.refusals.inc();
+        }
         failures += 1;
+        let pause = retries.after(refused.as_deref());
+        metrics.upstream.set_refused(retries.refused());
         // The first failures are expected (a restart, a short cut) and logged as
-        // warnings; a link that stays down is an error every attempt.
-        let pause = backoff.pause();
+        // warnings; a link that stays down is an error every attempt, and one the upstream
+        // keeps refusing is retried (and logged) rarely.
         if failures <= 3 {
             tracing::warn!(upstream = %upstream.url, retry_in = ?pause, "{why}; re-joining");
         } else {
