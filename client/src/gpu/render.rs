@@ -21,8 +21,9 @@ pub const STEPS_FULL_SCALE: f32 = 512.0;
 /// The frame pass's WGSL: the first-hit chain, [`RENDER`], its [`View`] and the codes of
 /// the modes it renders.
 pub(crate) fn render_pass() -> PassSource {
-    let modes: String = [Mode::Albedo, Mode::Material, Mode::Normal, Mode::Steps]
+    let modes: String = Mode::ALL
         .iter()
+        .filter(|m| !m.is_lit())
         .map(|m| WgslValue::U32(m.code()).declare(&format!("MODE_{}", m.name().to_uppercase())))
         .collect();
     PassSource {

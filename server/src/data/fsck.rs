@@ -269,10 +269,7 @@ impl Inspection {
         {
             return Verdict::Refuse(self.refusal(
                 format!("cannot be resumed: its newest complete snapshot (version {snapshot}) cannot be loaded: {e}"),
-                format!(
-                    "Restore the directory from a backup; `naadf data check {}` lists what else it holds.",
-                    self.dir.display()
-                ),
+                "Restore the directory from a backup.".into(),
                 false,
             ));
         }

@@ -60,6 +60,16 @@ pub enum Reflection {
     Off,
 }
 
+/// Who reflection answers on one server, [`Reflection`] resolved against its tokens.
+enum ReflectionGate<'a> {
+    /// Anyone.
+    Anyone,
+    /// The callers this table knows.
+    Tokens(&'a Auth),
+    /// Nobody.
+    Nobody,
+}
+
 impl Reflection {
     /// Parses `open`, `token` or `off`.
     pub fn parse(s: &str) -> Result<Reflection, String> {
@@ -115,18 +125,18 @@ impl Frontend {
 
     /// Who may use reflection on a server whose token table is `auth` (`None`: a relay,
     /// which holds no tokens).
-    fn reflection_for(&self, auth: Option<&Auth>) -> Result<Reflection> {
-        let has_tokens = auth.is_some_and(|a| !a.is_open());
-        match self.reflection {
-            Some(Reflection::Token) if auth.is_none() => {
+    fn reflection_for<'a>(&self, auth: Option<&'a Auth>) -> Result<ReflectionGate<'a>> {
+        let tokens = auth.filter(|a| !a.is_open());
+        match (self.reflection, tokens) {
+            (Some(Reflection::Token), None) if auth.is_none() => {
                 anyhow::bail!("--reflection token needs the server's tokens; a relay holds none (use open or off)")
             }
-            Some(Reflection::Token) if !has_tokens => {
+            (Some(Reflection::Token), None) => {
                 anyhow::bail!("--reflection token needs tokens (--auth or NAADF_TOKENS); this server has none")
             }
-            Some(r) => Ok(r),
-            None if has_tokens => Ok(Reflection::Token),
-            None => Ok(Reflection::Open),
+            (Some(Reflection::Token), Some(t)) | (None, Some(t)) => Ok(ReflectionGate::Tokens(t)),
+            (Some(Reflection::Open), _) | (None, None) => Ok(ReflectionGate::Anyone),
+            (Some(Reflection::Off), _) => Ok(ReflectionGate::Nobody),
         }
     }
 
@@ -174,9 +184,9 @@ impl Frontend {
             .http2_keepalive_interval(Some(keepalive))
             .http2_keepalive_timeout(Some(keepalive))
             .add_service(svc);
-        let router = match (reflection, auth) {
-            (Reflection::Open, _) => router.add_service(reflection_v1).add_service(reflection_v1alpha),
-            (Reflection::Token, Some(auth)) => {
+        let router = match reflection {
+            ReflectionGate::Anyone => router.add_service(reflection_v1).add_service(reflection_v1alpha),
+            ReflectionGate::Tokens(auth) => {
                 // Any caller the token table knows; the refusal is the one every call gets.
                 let auth = auth.clone();
                 let check = move |req: tonic::Request<()>| auth.caller(req.metadata()).map(|_| req);
@@ -184,7 +194,7 @@ impl Frontend {
                     .add_service(InterceptedService::new(reflection_v1, check.clone()))
                     .add_service(InterceptedService::new(reflection_v1alpha, check))
             }
-            (Reflection::Token, None) | (Reflection::Off, _) => router,
+            ReflectionGate::Nobody => router,
         };
         let mut stop = shutdown.subscribe();
         let stopped = async move {

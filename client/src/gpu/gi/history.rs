@@ -12,10 +12,9 @@ use naadf_world::fingerprint::ChunkChanges;
 use std::collections::VecDeque;
 
 /// How near a changed chunk (in chunks, along each axis) the light counts as changed: the
-/// TAA and ring samples of surfaces there follow
-/// `EDIT_HISTORY_FRAMES`. Samples of the changed
-/// chunks themselves, and ring samples whose light came from them, are dropped at once;
-/// history elsewhere is kept.
+/// TAA and ring samples of surfaces there follow `EDIT_HISTORY_FRAMES`. Samples of the
+/// changed chunks themselves, and ring samples whose light came from them, are dropped at
+/// once; history elsewhere is kept.
 pub const CHANGE_REACH: u32 = 2;
 /// Above this many changed chunks in one frame, the change counts as global.
 pub const MAX_LOCAL_CHANGES: usize = 4096;
@@ -103,7 +102,7 @@ impl GiHistory {
     }
 
     /// A new history of `shot` of `world`, laid out as `plan` says.
-    pub(super) fn new(gpu: &Gpu, world: &GpuWorld, shot: &Shot, plan: &Plan) -> Self {
+    fn new(gpu: &Gpu, world: &GpuWorld, shot: &Shot, plan: &Plan) -> Self {
         let chunks = world.chunk_dims();
         let chunk_count = chunks.iter().map(|&c| c as usize).product::<usize>();
         let part = 1 << plan.split.part_bytes_shift;
@@ -139,14 +138,32 @@ impl GiHistory {
         }
     }
 
-    /// Whether this history may go on with `shot` of `world`.
-    pub(super) fn continues(&self, world: &GpuWorld, shot: &Shot) -> bool {
-        shot.continues(&self.shot) && self.chunks == world.chunk_dims()
+    /// The history in `slot` if `shot` of `world` continues it, with the world's changes
+    /// since its last frame taken in; otherwise a new one in its place.
+    pub(super) fn follow<'a>(
+        slot: &'a mut Option<GiHistory>,
+        gpu: &Gpu,
+        world: &GpuWorld,
+        shot: &Shot,
+        plan: &Plan,
+    ) -> &'a mut GiHistory {
+        let h = match slot.take() {
+            Some(h) if shot.continues(&h.shot) && h.chunks == world.chunk_dims() => h,
+            _ => GiHistory::new(gpu, world, shot, plan),
+        };
+        let h = slot.insert(h);
+        h.note_changes(gpu, world);
+        h
+    }
+
+    /// Chunks in the world the history follows (one change mark each).
+    pub(super) fn chunk_count(&self) -> usize {
+        self.marks.len()
     }
 
     /// Takes in what changed in `world` since the last frame: the chunks it names are
     /// marked, and a change too large to mark chunk by chunk counts everywhere.
-    pub(super) fn note_changes(&mut self, gpu: &Gpu, world: &GpuWorld) {
+    fn note_changes(&mut self, gpu: &Gpu, world: &GpuWorld) {
         if self.generation == world.generation() {
             return;
         }
@@ -222,7 +239,7 @@ impl GiHistory {
             off_result: l.result,
             off_refined: l.refined,
             off_region_info: l.region_info,
-            off_ring: l.ring,
+            off_ring: l.ring_start as u32,
             off_queue_list: l.queue_list,
         };
         let frame = FrameInfo::new(now, size, self.shot.seed, self.frames, self.frames > 0);
@@ -247,8 +264,7 @@ impl GiHistory {
 /// The jitter of frame `frame` in the pixel: point `frame mod 32` of a 32-point (0, 5, 2)-net
 /// (the van der Corput sequence in x, the second Sobol dimension in y: Halton's base 2 and
 /// its base-2 partner, digitally shifted by ½), each point moved to the centre of its 1/32
-/// stratum. Every axis is
-/// then stratified exactly and the mean jitter is the pixel's centre. The reference's
+/// stratum. Every axis is then stratified exactly and the mean jitter is the pixel's centre. The reference's
 /// Halton (3, 7) over 32 frames is not: its mean y is 0.459, which shifted every edge by
 /// 0.04 pixel and brightened the row below a bright horizon (docs/RENDERING.md §3c).
 fn jitter(frame: u32) -> [f32; 2] {

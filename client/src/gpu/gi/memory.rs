@@ -100,12 +100,10 @@ pub(super) struct Layout {
     pub region_info: u32,
     /// Each pixel's own secondary sample.
     pub own: u32,
-    /// The sample ring: the last array.
-    pub ring: u32,
+    /// Where the sample ring, the last array, starts: the vec4 words of `mem` before it.
+    pub ring_start: u64,
     /// Where the queued pixels start in `words`.
     pub queue_list: u32,
-    /// vec4 words of `mem` before the ring.
-    pub ring_start: u64,
     /// Words of `words`.
     pub words: u64,
 }
@@ -123,7 +121,7 @@ impl Layout {
         let (lut, gbuf, gmat, emitted) = (next(u64::from(LUT_SIZE * LUT_SIZE)), next(p), next(p), next(p));
         let (taa_info, illum, illum2, result) = (next(2 * p), next(p), next(p), next(p));
         let (refined, region_info, own) = (next(r * u64::from(MAX_KEPT) * 2), next(3 * r), next(p));
-        let ring_start = u64::from(next(0));
+        let ring_start = at;
         let queue = u64::from(CONTROL_WORDS) + 2 * r;
         Layout {
             lut,
@@ -137,9 +135,8 @@ impl Layout {
             refined,
             region_info,
             own,
-            ring: ring_start as u32,
-            queue_list: queue as u32,
             ring_start,
+            queue_list: queue as u32,
             words: queue + 64 * r + POSE_TABLE_WORDS,
         }
     }
@@ -159,7 +156,7 @@ impl Layout {
             ("result", vec4s(self.result, self.refined)),
             ("refined samples", vec4s(self.refined, self.region_info)),
             ("region statistics", vec4s(self.region_info, self.own)),
-            ("own samples", vec4s(self.own, self.ring)),
+            ("own samples", vec4s(self.own, self.ring_start as u32)),
         ]
     }
 }

@@ -7,10 +7,9 @@
 //! samples into this frame's 8×8 regions and their refinement, spatial resampling with a
 //! visibility ray and the sun, the bilateral denoiser, and the TAA merge. A history (the
 //! TAA, the ring, the cameras of earlier frames; [`GiHistory`]) is kept per (size, light,
-//! seed, world size); the camera may move and the world may change within it: the chunks a change
-//! touched ([`GpuWorld::changes_since`]) drop or shorten the history of the light on and
-//! near them. The two large arrays are split across bindings where one is too small.
-
+//! seed, world size); the camera may move and the world may change within it: the chunks
+//! a change touched ([`GpuWorld::changes_since`]) drop or shorten the history of the light
+//! on and near them. The two large arrays are split across bindings where one is too small.
 //!
 //! The modules: `passes` (the passes and their WGSL), `memory` (the arrays' layout and
 //! split, and the constants the WGSL shares), `history` (what a history keeps and how a
@@ -238,18 +237,6 @@ impl Gi {
             .map(|p| p.get(gpu, world, Loop::Hierarchy, true))
             .collect()
     }
-
-    /// The history of `shot` of `world`: the current one if `shot` continues it, with the
-    /// world's changes since its last frame taken in, or a new one.
-    fn history_for(&mut self, gpu: &Gpu, world: &GpuWorld, shot: &Shot, plan: &Plan) -> &mut GiHistory {
-        let h = match self.history.take() {
-            Some(h) if h.continues(world, shot) => h,
-            _ => GiHistory::new(gpu, world, shot, plan),
-        };
-        let h = self.history.insert(h);
-        h.note_changes(gpu, world);
-        h
-    }
 }
 
 impl Temporal for Gi {
@@ -263,7 +250,7 @@ impl Temporal for Gi {
         let plan = self.plan(gpu, world, shot.size)?;
         let pipelines = self.pipelines(gpu, world, plan.split)?;
         let denoise = self.denoise;
-        let h = self.history_for(gpu, world, shot, &plan);
+        let h = GiHistory::follow(&mut self.history, gpu, world, shot, &plan);
         let jitter = h.upload_cameras(gpu, shot, &now)?;
         let params = h.params(gpu, &now, jitter, denoise);
         // The table is filled when a history starts; the denoiser runs when asked for.
@@ -274,10 +261,7 @@ impl Temporal for Gi {
             _ => true,
         });
         let timer = Timer::get(&mut self.timer, gpu, self.profile);
-        let (pipes, h) = (
-            &self.pipes[&plan.split],
-            self.history.as_mut().expect("history_for made one"),
-        );
+        let pipes = &self.pipes[&plan.split];
         encode(
             gpu,
             world,
@@ -330,7 +314,7 @@ fn encode(
     let buffers = h.bindings(params);
     let (width, height) = h.shot.size;
     let pixel_groups = (width.div_ceil(8), height.div_ceil(8));
-    let chunk_count = world.chunk_dims().iter().map(|&c| c as usize).product::<usize>();
+    let chunk_count = h.chunk_count();
     gpu.checked(|| {
         let mut enc = gpu.device.create_command_encoder(&Default::default());
         for (k, &pass) in GiPass::ALL.iter().enumerate() {
