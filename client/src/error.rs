@@ -54,6 +54,11 @@ pub enum Error {
         /// The server's explanation.
         message: String,
     },
+    /// The server ended the world stream with `ABORTED` because this client fell behind
+    /// it (it read too slowly, or not at all). Join again announcing the world held
+    /// ([`crate::Session::rejoin`]): the server resumes it or sends what differs.
+    #[error("the server ended the stream: {0}")]
+    FellBehind(String),
     /// The world stream broke the protocol, or the mirror diverged from the server.
     #[error(transparent)]
     Mirror(#[from] MirrorError),
@@ -89,6 +94,7 @@ impl Error {
         match self {
             Error::Refused { code, .. } => Some(*code),
             Error::RateLimited(_) => Some(Code::ResourceExhausted),
+            Error::FellBehind(_) => Some(Code::Aborted),
             _ => None,
         }
     }
@@ -115,6 +121,7 @@ impl From<tonic::Status> for Error {
             Code::ResourceExhausted if s.metadata().contains_key(naadf_proto::RETRY_AFTER_MS) => {
                 Error::RateLimited(s.message().to_owned())
             }
+            Code::Aborted => Error::FellBehind(s.message().to_owned()),
             code => Error::Refused {
                 code,
                 message: s.message().to_owned(),
@@ -162,6 +169,10 @@ mod tests {
         let e = Error::from(tonic::Status::unavailable("no render node"));
         assert_eq!(e.code(), Some(Code::Unavailable));
         assert!(e.is_unavailable());
+        // ABORTED ends the stream of a client that fell behind: it joins again.
+        let e = Error::from(tonic::Status::aborted("fell behind"));
+        assert!(matches!(e, Error::FellBehind(_)), "{e:?}");
+        assert_eq!(e.code(), Some(Code::Aborted));
     }
 
     #[test]

@@ -29,7 +29,7 @@ pub struct Shared {
     pub shutdown: watch::Receiver<bool>,
     /// Registered render nodes and the frame requests routed to them.
     pub router: render_router::Router,
-    /// How many bytes clients may fall behind before they are re-sent a snapshot.
+    /// How many bytes clients may fall behind before their streams are cut.
     pub slow_clients: SlowClientLimits,
 }
 
@@ -61,15 +61,15 @@ impl Shared {
     }
 }
 
-/// How far behind clients may fall, in bytes, before they are cut to a re-snapshot.
+/// How far behind clients may fall, in bytes, before their streams are cut (see [`crate::stream::join`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SlowClientLimits {
     /// Most bytes one client may have pending: published deltas it has not taken yet
     /// plus messages queued in its stream that its transport has not taken yet.
     pub client_bytes: u64,
     /// Most bytes the subscribed clients may have pending together; over it, every one
-    /// that is not reading and has more than a sixteenth of `client_bytes` pending is cut
-    /// too. (A client already cut holds at most about `client_bytes` until it reads.)
+    /// that is not reading (more than a sixteenth of `client_bytes` queued in its stream
+    /// that its transport has not taken) is cut too. A client cut holds nothing.
     pub total_bytes: u64,
 }
 
@@ -84,8 +84,10 @@ impl Default for SlowClientLimits {
 }
 
 impl SlowClientLimits {
-    /// Whether a client with `mine` bytes pending, while all clients have `total`, is cut.
-    pub(crate) fn exceeded(&self, mine: u64, total: u64) -> bool {
-        mine > self.client_bytes || (total > self.total_bytes && mine > self.client_bytes / 16)
+    /// Whether a client with `mine` bytes pending, `queued` of them in its stream, while
+    /// all clients have `total`, is cut. A client that keeps reading has its stream's
+    /// queue taken as soon as it is filled, so only its newest deltas are pending.
+    pub(crate) fn exceeded(&self, mine: u64, queued: u64, total: u64) -> bool {
+        mine > self.client_bytes || (total > self.total_bytes && queued > self.client_bytes / 16)
     }
 }

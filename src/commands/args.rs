@@ -63,16 +63,15 @@ pub struct ListenArgs {
     /// Largest request message, in bytes.
     #[arg(long, default_value_t = Frontend::default().max_message_bytes)]
     pub max_message_bytes: usize,
-    /// Deltas a client may fall behind before it is re-sent a snapshot.
+    /// Deltas a client may fall behind before its stream is cut (it joins again with its
+    /// cache).
     #[arg(long, default_value_t = Frontend::default().slow_client_events)]
     pub slow_client_events: usize,
-    /// Bytes a client may fall behind (deltas it has not read) before it is re-sent a
-    /// snapshot.
+    /// Bytes a client may fall behind (deltas it has not read) before its stream is cut.
     #[arg(long, default_value_t = Frontend::default().slow_clients.client_bytes)]
     pub slow_client_bytes: u64,
-    /// Bytes the subscribed clients together may fall behind; over it, every one that is
-    /// not reading and is more than a sixteenth of --slow-client-bytes behind is re-sent a
-    /// snapshot.
+    /// Bytes the subscribed clients together may fall behind; over it, the stream of every
+    /// one that is not reading (more than a sixteenth of --slow-client-bytes queued) is cut.
     #[arg(long, default_value_t = Frontend::default().slow_clients.total_bytes)]
     pub slow_clients_total_bytes: u64,
     /// Most connections open at a time on each listener (gRPC and HTTP); more wait until

@@ -122,12 +122,14 @@ enum Stop {
 const REJOIN_BACKOFF: Backoff = Backoff::new(Duration::from_millis(100), Duration::from_secs(5)).jittered();
 
 /// Whether a following mirror may go on after `e` by joining again: the connection was
-/// lost or the server is going away, or the stream broke the protocol or the digests (the
-/// re-join announces the mirror's pages, and the server sends again those that differ).
-/// A refusal (a revoked token, say) and a failed `--verify` end it.
+/// lost or the server is going away, the mirror fell behind, or the stream broke the
+/// protocol or the digests (the re-join announces the mirror's pages, and the server sends
+/// again those that differ). A refusal (a revoked token, say) and a failed `--verify` end
+/// it.
 fn rejoinable(e: &anyhow::Error) -> bool {
+    use naadf_client::Error::{FellBehind, Mirror};
     e.downcast_ref::<naadf_client::Error>()
-        .is_some_and(|e| e.is_unavailable() || matches!(e, naadf_client::Error::Mirror(_)))
+        .is_some_and(|e| e.is_unavailable() || matches!(e, Mirror(_) | FellBehind(_)))
 }
 
 /// Follows the session until a stop, with --once until the first quiescent point. Without

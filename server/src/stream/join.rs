@@ -1,15 +1,20 @@
-//! One client's world stream: the cache-aware snapshot, then every delta in order, and a
-//! fresh cache-aware snapshot in the same stream when the client falls behind.
+//! One client's world stream: the cache-aware snapshot, then every delta in order, until
+//! the client leaves or falls behind.
 //!
 //! The task knows which page hashes the client holds: those of its cache, then those of
-//! every snapshot and delta it was sent. When the subscription lags (the client stopped
-//! reading while the bounded broadcast moved on), the task takes a new snapshot and sends
-//! only the pages whose hash differs from what the client holds, so the actor and the other
-//! clients never wait for a slow one. A client falls behind when it is more deltas behind
-//! than the broadcast holds, or more bytes than the [`SlowClientLimits`](crate::shared::SlowClientLimits) allow.
+//! every snapshot and delta it was sent. A client falls behind when it is more deltas
+//! behind than the broadcast holds, or more bytes than the
+//! [`SlowClientLimits`](crate::shared::SlowClientLimits) allow; its stream is then cut
+//! ([`FELL_BEHIND`]): everything queued for it is dropped at once and the stream ends with
+//! `ABORTED`, so the actor and the other clients never wait for a slow one and a client
+//! that does not read pins nothing. The client joins again announcing what it holds.
+//! When the published stream starts over at a state that does not follow (a relay's
+//! upstream could not resume it), the task instead sends, in the same stream, a fresh
+//! header and the pages whose hash differs from what the client holds.
 
 use crate::data::pages::{SnapshotView, StoredPage};
 use crate::shared::Shared;
+use crate::stream::feed::{Feed, Item, feed};
 use crate::stream::messages::Request;
 use crate::stream::messages::{Event, Subscription};
 use naadf_proto::PROTOCOL_VERSION;
@@ -21,7 +26,6 @@ use prost::Message;
 use std::collections::VecDeque;
 use std::sync::Arc;
 use tokio::sync::{broadcast, mpsc, oneshot, watch};
-use tokio_stream::wrappers::ReceiverStream;
 use tonic::Status;
 
 /// Most page hashes a join request may announce (far more than the largest world has).
@@ -49,6 +53,9 @@ pub fn client_pages(cached: &[CachedBuffer]) -> Result<ClientPages, Status> {
 /// Messages buffered per client stream before the join task waits for the client.
 const STREAM_BUFFER: usize = 64;
 
+/// The message of the `ABORTED` status that ends the stream of a client that fell behind.
+pub const FELL_BEHIND: &str = "this client fell behind the world stream; join again announcing the world it holds";
+
 /// Starts streaming the world to `user`, who sent `req`: checks the protocol version and
 /// the announced cache, then spawns the task that runs [`run`] (counted in the metrics and
 /// on the status page) and returns the stream it feeds.
@@ -57,7 +64,7 @@ pub fn start(
     actor: mpsc::Sender<Request>,
     user: String,
     req: JoinRequest,
-) -> Result<ReceiverStream<Result<WorldMessage, Status>>, Status> {
+) -> Result<Feed, Status> {
     if req.protocol_version != PROTOCOL_VERSION {
         return Err(Status::failed_precondition(format!(
             "client speaks protocol {}, this server speaks {PROTOCOL_VERSION}; upgrade the client",
@@ -66,72 +73,72 @@ pub fn start(
     }
     let held = client_pages(&req.cached)?;
     let resume = req.resume.map(|r| (r.version, r.digest));
-    let (tx, rx) = mpsc::channel(STREAM_BUFFER);
+    let (tx, rx, cut) = feed(STREAM_BUFFER);
     tokio::spawn(async move {
         let id = shared.activity.joined(&user);
         shared.metrics.clients.inc();
-        run(shared.clone(), actor, held, resume, tx).await;
+        let out = Outbox::new(shared.clone(), tx);
+        if let Err(Stop::Behind(behind)) = run(&shared, actor, held, resume, out).await {
+            tracing::info!(behind, "client fell behind; ending its stream");
+            shared.metrics.resyncs.inc();
+            cut.end(Status::aborted(FELL_BEHIND));
+        }
         shared.metrics.clients.dec();
         shared.activity.left(id);
     });
-    Ok(ReceiverStream::new(rx))
+    Ok(rx)
 }
 
-/// Streams the world to one client until it leaves or the server shuts down. `resume` is
-/// the state the client's cache holds, `(version, digest)`.
-pub async fn run(
-    shared: Arc<Shared>,
+/// Streams the world to one client through `out` until it leaves, the server shuts down
+/// (both `Ok`) or the client falls behind. `resume` is the state the client's cache holds,
+/// `(version, digest)`.
+async fn run(
+    shared: &Shared,
     actor: mpsc::Sender<Request>,
     mut held: ClientPages,
     resume: Option<(u64, u64)>,
-    tx: mpsc::Sender<Result<WorldMessage, Status>>,
-) {
+    mut out: Outbox,
+) -> Result<(), Stop> {
     let mut shutdown = shared.shutdown.clone();
-    let mut out = Outbox::new(shared.clone(), tx);
     let mut resync = false;
     loop {
         if resync {
             shared.metrics.resyncs.inc();
-            // A client that stays away costs nothing meanwhile: the new snapshot and
-            // subscription start once it has read everything queued for it.
+            // The new snapshot and subscription start once the client has read everything
+            // queued for it (or, not reading, is cut meanwhile by its bound).
             tokio::select! {
-                room = out.tx.reserve_many(out.tx.max_capacity()) => if room.is_err() { return },
-                _ = shutdown.changed() => return,
+                room = out.tx.reserve_many(out.tx.max_capacity()) => if room.is_err() { return Ok(()) },
+                _ = shutdown.changed() => return Ok(()),
             }
         }
         let from = resume.filter(|_| !resync);
         let Some(sub) = subscribe(&actor, from).await else {
-            return;
+            return Ok(());
         };
         out.attach(sub.events, sub.start, sub.head);
-        let started = match (sub.catch_up, from) {
+        match (sub.catch_up, from) {
             (Some(events), Some((version, digest))) => {
-                send_catch_up(&mut out, &sub.view, version, digest, &events, &mut held).await
+                send_catch_up(&mut out, &sub.view, version, digest, &events, &mut held).await?
             }
-            _ => send_snapshot(&mut out, &sub.view, &mut held, resync).await,
+            _ => send_snapshot(&mut out, &sub.view, &mut held, resync).await?,
         };
-        if started.is_err() {
-            return;
-        }
-        // Forward deltas until the client falls behind (the subscription is dropped).
+        // Forward deltas until the publisher starts over (the subscription is dropped).
         while let Some(rx) = out.events.as_mut() {
             let next = tokio::select! {
                 r = rx.recv() => r,
-                _ = shutdown.changed() => return,
+                _ = shutdown.changed() => return Ok(()),
                 // The client went away while nothing was being sent.
-                _ = out.tx.closed() => return,
+                _ = out.tx.closed() => return Ok(()),
             };
             match next {
                 Ok(ev) => {
                     out.pos += ev.size() as u64;
                     track(&mut held, &ev);
-                    if out.send(ev.message.clone()).await.is_err() {
-                        return;
-                    }
+                    out.send(ev.message.clone()).await?;
                 }
-                Err(broadcast::error::RecvError::Lagged(missed)) => {
-                    tracing::info!(missed, "client fell behind; re-sending a snapshot");
-                    out.detach();
+                // More deltas behind than the broadcast holds.
+                Err(broadcast::error::RecvError::Lagged(_)) => {
+                    return Err(Stop::Behind(out.head.borrow().saturating_sub(out.pos)));
                 }
                 // The publisher started over at a state that does not follow from what
                 // was published (a relay whose upstream could not resume it), or is gone
@@ -143,8 +150,13 @@ pub async fn run(
     }
 }
 
-/// The client went away.
-struct Gone;
+/// Why a client's stream stops early.
+enum Stop {
+    /// The client went away, or the server is shutting down.
+    Gone,
+    /// The client fell behind, this many bytes: its stream is cut.
+    Behind(u64),
+}
 
 /// The sizes of the messages handed to a client's stream, oldest first.
 #[derive(Default)]
@@ -155,7 +167,7 @@ struct Queue {
 
 impl Queue {
     /// Bytes still queued in `tx`: the stream's transport has taken the oldest messages.
-    fn pending(&mut self, tx: &mpsc::Sender<Result<WorldMessage, Status>>) -> u64 {
+    fn pending(&mut self, tx: &mpsc::Sender<Item>) -> u64 {
         let queued = tx.max_capacity() - tx.capacity();
         while self.sizes.len() > queued {
             self.bytes -= self.sizes.pop_front().expect("non-empty");
@@ -168,11 +180,11 @@ impl Queue {
 /// published deltas it has not taken from its subscription (the broadcast keeps each one
 /// until every subscriber has taken it) plus the messages queued in its stream; the
 /// transport beyond holds at most about one more message. Once the backlog is over the
-/// [`SlowClientLimits`], the subscription is dropped, which releases the deltas, and the
-/// client is re-sent a snapshot when it reads again.
+/// [`SlowClientLimits`], sending stops with [`Stop::Behind`] and the stream is cut, which
+/// releases both.
 struct Outbox {
     shared: Arc<Shared>,
-    tx: mpsc::Sender<Result<WorldMessage, Status>>,
+    tx: mpsc::Sender<Item>,
     queue: Queue,
     /// The subscription, while the client keeps up.
     events: Option<broadcast::Receiver<Arc<Event>>>,
@@ -185,7 +197,7 @@ struct Outbox {
 }
 
 impl Outbox {
-    fn new(shared: Arc<Shared>, tx: mpsc::Sender<Result<WorldMessage, Status>>) -> Self {
+    fn new(shared: Arc<Shared>, tx: mpsc::Sender<Item>) -> Self {
         let id = shared.metrics.backlogs.register();
         Self {
             shared,
@@ -211,49 +223,50 @@ impl Outbox {
         self.shared.metrics.backlogs.set(self.id, self.queue.bytes, false);
     }
 
-    /// Queues `m` once the stream has room; drops the subscription if the backlog goes
-    /// over the limits meanwhile (the message itself is still sent, so that a snapshot
-    /// under way stays whole).
-    async fn send(&mut self, m: WorldMessage) -> Result<(), Gone> {
+    /// Queues `m` once the stream has room, or stops with [`Stop::Behind`] if the backlog
+    /// goes over the limits first.
+    async fn send(&mut self, m: WorldMessage) -> Result<(), Stop> {
         let size = m.encoded_len() as u64;
-        self.shared.metrics.bytes_sent.inc_by(size);
-        let permit = loop {
-            let Self {
-                shared,
-                tx,
-                queue,
-                events,
-                pos,
-                head,
-                id,
-            } = self;
-            if events.is_none() {
-                break tx.reserve().await.map_err(|_| Gone)?;
-            }
+        let Self {
+            shared,
+            tx,
+            queue,
+            events,
+            pos,
+            head,
+            id,
+        } = self;
+        let permit = if events.is_none() {
+            tx.reserve().await
+        } else {
             let limits = shared.slow_clients;
             let mut behind = 0;
             // Only whether it came matters: the value borrowed from the watch is not `Send`.
             let over = async {
                 head.wait_for(|&h| {
-                    behind = h.saturating_sub(*pos) + queue.pending(tx) + size;
-                    limits.exceeded(behind, shared.metrics.backlogs.set(*id, behind, true))
+                    let queued = queue.pending(tx);
+                    behind = h.saturating_sub(*pos) + queued + size;
+                    limits.exceeded(behind, queued, shared.metrics.backlogs.set(*id, behind, true))
                 })
                 .await
                 .is_ok()
             };
             // The bound is checked first: a stream with room must not take more than it
             // allows either.
-            tokio::select! {
+            let room = tokio::select! {
                 biased;
-                published = over => if !published {
+                published = over => if published {
+                    None
+                } else {
                     // The committer is gone: nothing more gets published.
-                    break tx.reserve().await.map_err(|_| Gone)?;
+                    Some(tx.reserve().await)
                 },
-                room = tx.reserve() => break room.map_err(|_| Gone)?,
-            }
-            tracing::info!(behind, "client fell behind; re-sending a snapshot when it reads again");
-            self.detach();
-        };
+                room = tx.reserve() => Some(room),
+            };
+            room.ok_or(Stop::Behind(behind))?
+        }
+        .map_err(|_| Stop::Gone)?;
+        self.shared.metrics.bytes_sent.inc_by(size);
         permit.send(Ok(m));
         self.queue.sizes.push_back(size);
         self.queue.bytes += size;
@@ -288,7 +301,7 @@ async fn send_catch_up(
     digest: u64,
     events: &[Arc<Event>],
     held: &mut ClientPages,
-) -> Result<(), Gone> {
+) -> Result<(), Stop> {
     let header = Header {
         protocol_version: PROTOCOL_VERSION,
         size: view.size.to_vec(),
@@ -336,7 +349,7 @@ async fn send_snapshot(
     view: &Arc<SnapshotView>,
     held: &mut ClientPages,
     resync: bool,
-) -> Result<(), Gone> {
+) -> Result<(), Stop> {
     let mut groups = Vec::new();
     for (slot, pages) in view.pages.iter().enumerate() {
         let wanted: Vec<u32> = (0..pages.len())
@@ -373,7 +386,7 @@ async fn send_snapshot(
             part.into_iter().zip(frames).collect::<Vec<_>>()
         })
         .await
-        .map_err(|_| Gone)?;
+        .map_err(|_| Stop::Gone)?;
         for ((slot, indices), frame) in frames {
             let page = Page {
                 buffer: TRANSFERRED[slot] as u32,

@@ -6,10 +6,12 @@
 //! - [`publisher`]: the published change stream that join tasks follow (a relay's hub
 //!   publishes through it too);
 //! - [`join`]: one client's stream — snapshot or resume, then every delta;
+//! - [`feed`]: that stream as the gRPC server reads it, which a fall behind cuts at once;
 //! - [`messages`]: what they hand each other, the actor's mailbox included.
 
 pub mod actor;
 pub mod committer;
+pub mod feed;
 pub mod growth;
 pub mod join;
 pub mod messages;
