@@ -181,7 +181,8 @@ fn closed_within(s: &mut std::net::TcpStream, limit: Duration) -> bool {
 /// Connections that never finish (an HTTP/2 preface and silence on the gRPC port, half an
 /// HTTP request on the HTTP port), more of them than the server has file descriptors, do
 /// not lock everyone out: the connection cap keeps descriptors free, stalled connections
-/// are closed after the idle timeout, and `naadf status` and `/health` are served.
+/// are closed to make room or at the request deadline, and `naadf status` and `/health`
+/// are served.
 #[test]
 fn stalled_connections_are_closed_and_do_not_lock_out_others() {
     let dir = tempfile::tempdir().unwrap();
@@ -230,6 +231,66 @@ fn stalled_connections_are_closed_and_do_not_lock_out_others() {
         warnings <= 10,
         "{warnings} accept warnings: logged per back-off period, not per attempt"
     );
+    server.stop();
+}
+
+/// Connections that never make a request do not hold their slots: at the cap, a newcomer
+/// closes the oldest of them at once (so `/health` and `status` answer with the cap full of
+/// them), and those that stay past the request deadline are closed however busy they keep
+/// their connection: a slowloris trickling a byte at a time, and an HTTP/2 client that
+/// finished the handshake and answers every ping. A client that made a request stays.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn requestless_connections_make_room_and_meet_the_request_deadline() {
+    let dir = tempfile::tempdir().unwrap();
+    let world = start_world(dir.path());
+    let server = serve_world(
+        dir.path(),
+        &world,
+        &["--max-connections", "8", "--request-deadline", "1"],
+        &[],
+    );
+    let grpc = server.url.trim_start_matches("http://").to_owned();
+    let editor = Client::connect(&server.url, Some("ed"), None).await.unwrap();
+    editor.status().await.unwrap();
+    // Both listeners full of connections without a request.
+    let mut stalled = stalled_connections(&grpc, 8, b"PRI * HTTP/2.0\r\n\r\nSM\r\n\r\n");
+    stalled.extend(stalled_connections(&server.http, 8, b"GET /health HTTP/1.1\r\nHost: x\r\n"));
+    let started = Instant::now();
+    let http = server.http.clone();
+    let (code, _) = tokio::task::spawn_blocking(move || support::http_get(&http, "/health"))
+        .await
+        .unwrap();
+    assert_eq!(code, 200);
+    let status = Client::connect(&server.url, None, None).await.unwrap().status().await;
+    assert!(status.is_ok(), "{status:?}");
+    let answered = started.elapsed();
+    assert!(answered < Duration::from_millis(900), "answered after {answered:?}: before the deadline freed anything");
+
+    // A slowloris and a silent HTTP/2 client are closed at the deadline.
+    let mut slowloris = std::net::TcpStream::connect(&server.http).unwrap();
+    let mut trickle = slowloris.try_clone().unwrap();
+    std::thread::spawn(move || {
+        use std::io::Write;
+        let _ = trickle.write_all(b"GET /health HTTP/1.1\r\n");
+        while trickle.write_all(b"x").is_ok() {
+            std::thread::sleep(Duration::from_millis(100));
+        }
+    });
+    let silent = tokio::net::TcpStream::connect(&grpc).await.unwrap();
+    let (send, connection) = h2::client::handshake(silent).await.unwrap();
+    let started = Instant::now();
+    let silent_closed = tokio::time::timeout(Duration::from_secs(5), connection).await;
+    assert!(silent_closed.is_ok(), "the silent HTTP/2 connection was closed");
+    let after = started.elapsed();
+    assert!(after > Duration::from_millis(500), "closed after {after:?}: not before its deadline");
+    drop(send);
+    let slow_closed = tokio::task::spawn_blocking(move || closed_within(&mut slowloris, Duration::from_secs(5)))
+        .await
+        .unwrap();
+    assert!(slow_closed, "the slowloris was closed");
+    // The editor's connection made a request: the deadline does not apply to it.
+    editor.edit(r#"{"op":"set","voxels":[[1,1,1,2]]}"#, 1).await.unwrap();
+    drop(stalled);
     server.stop();
 }
 

@@ -74,15 +74,23 @@ pub struct ListenArgs {
     /// one that is not reading (more than a sixteenth of --slow-client-bytes queued) is cut.
     #[arg(long, default_value_t = Frontend::default().slow_clients.total_bytes)]
     pub slow_clients_total_bytes: u64,
-    /// Most connections open at a time on each listener (gRPC and HTTP); more wait until
-    /// one closes. Keep twice this under the process's file descriptor limit.
-    #[arg(long, default_value_t = Frontend::default().connections.max_connections)]
-    pub max_connections: usize,
+    /// Most connections open at a time on each listener (gRPC and HTTP). At the cap, a
+    /// newcomer closes the oldest connection that has not sent a complete request yet, or
+    /// waits until one closes. Default: from the descriptor limit (its soft limit raised
+    /// to the hard one), less 64 kept back: a quarter for HTTP, the rest for gRPC, at most
+    /// 4096 and 16384. Keep twice this plus 64 under the descriptor limit.
+    #[arg(long)]
+    pub max_connections: Option<usize>,
     /// Close a connection whose peer sent nothing for this many seconds (unfinished
     /// handshakes and requests, dead peers); gRPC connections are pinged at a third of it,
     /// so live ones stay open.
     #[arg(long, default_value_t = Frontend::default().connections.idle_timeout.as_secs_f64())]
     pub idle_timeout: f64,
+    /// Close a connection that has not sent a complete request head this many seconds
+    /// after it was accepted (a TLS handshake, HTTP/2 settings and ping answers do not
+    /// count), and an HTTP/1 connection whose next request head takes longer.
+    #[arg(long, default_value_t = Frontend::default().connections.request_deadline.as_secs_f64())]
+    pub request_deadline: f64,
     /// Who may use gRPC server reflection (what generic tools such as grpcurl read): `open`
     /// (anyone), `token` (callers with a token the server knows; not for a relay, which
     /// holds none) or `off`. Default: `token` on a server with tokens, `open` otherwise.
@@ -99,8 +107,10 @@ impl ListenArgs {
             tls: self.tls_cert.clone().zip(self.tls_key.clone()),
             max_message_bytes: self.max_message_bytes,
             connections: naadf_server::net::conn::ConnLimits {
-                max_connections: self.max_connections.max(1),
+                max_connections: self.max_connections,
                 idle_timeout: super::seconds(self.idle_timeout, "--idle-timeout")?.max(Duration::from_millis(100)),
+                request_deadline: super::seconds(self.request_deadline, "--request-deadline")?
+                    .max(Duration::from_millis(100)),
             },
             slow_client_events: self.slow_client_events,
             slow_clients: naadf_server::shared::SlowClientLimits {

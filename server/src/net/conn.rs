@@ -500,11 +500,14 @@ impl<IO: tonic::transport::server::Connected> tonic::transport::server::Connecte
     }
 }
 
-/// The connections of `acceptor`, each passed through `open` (a TLS handshake, say), as
-/// the stream the gRPC server takes. Each `open` runs in a task of its own, so a slow peer
-/// delays no one else; a connection whose `open` fails is dropped here (logged at debug
-/// level), not handed to the server.
-pub fn incoming<T, F, Fut>(mut acceptor: Acceptor, open: F) -> tokio_stream::wrappers::ReceiverStream<io::Result<T>>
+/// The connections of `acceptor`, each passed through `open` (a TLS handshake, say) and
+/// [`Watched`], as the stream the gRPC server takes. Each `open` runs in a task of its own,
+/// so a slow peer delays no one else; a connection whose `open` fails is dropped here
+/// (logged at debug level), not handed to the server.
+pub fn incoming<T, F, Fut>(
+    mut acceptor: Acceptor,
+    open: F,
+) -> tokio_stream::wrappers::ReceiverStream<io::Result<Watched<T>>>
 where
     T: Send + 'static,
     F: Fn(Conn) -> Fut + Send + 'static,
@@ -518,12 +521,13 @@ where
                 // The server stopped taking connections.
                 _ = tx.closed() => return,
             };
+            let usage = conn.usage();
             let opening = open(conn);
             let tx = tx.clone();
             tokio::spawn(async move {
                 match opening.await {
                     Ok(io) => {
-                        let _ = tx.send(Ok(io)).await;
+                        let _ = tx.send(Ok(Watched::new(io, usage))).await;
                     }
                     Err(e) => tracing::debug!(%peer, "connection not opened: {e}"),
                 }
@@ -531,4 +535,106 @@ where
         }
     });
     tokio_stream::wrappers::ReceiverStream::new(rx)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use tokio::io::{AsyncReadExt, AsyncWriteExt};
+
+    /// An acceptor on a free loopback port, at most `cap` connections, with a request
+    /// deadline of `deadline` and an idle timeout of a minute.
+    async fn acceptor(cap: usize, deadline: Duration) -> Acceptor {
+        let listener = TcpListener::bind("127.0.0.1:0").await.unwrap();
+        let limits = ConnLimits {
+            max_connections: Some(cap),
+            idle_timeout: Duration::from_secs(60),
+            request_deadline: deadline,
+        };
+        Acceptor::new(listener, cap, limits, false)
+    }
+
+    /// A client connection to `acceptor`, sending `first`, and the server's side of it.
+    async fn connect(acceptor: &mut Acceptor, first: &[u8]) -> (TcpStream, Watched<Conn>) {
+        let mut client = TcpStream::connect(acceptor.local_addr().unwrap()).await.unwrap();
+        client.write_all(first).await.unwrap();
+        let (conn, _) = acceptor.accept().await;
+        let usage = conn.usage();
+        (client, Watched::new(conn, usage))
+    }
+
+    /// Reads the server's side until it fails or `limit` passes: the failure's kind.
+    async fn read_fails(server: &mut Watched<Conn>, limit: Duration) -> Option<io::ErrorKind> {
+        let mut buf = [0u8; 256];
+        tokio::time::timeout(limit, async {
+            loop {
+                match server.read(&mut buf).await {
+                    Ok(0) => return io::ErrorKind::UnexpectedEof,
+                    Ok(_) => {}
+                    Err(e) => return e.kind(),
+                }
+            }
+        })
+        .await
+        .ok()
+    }
+
+    #[tokio::test]
+    async fn a_trickled_request_is_closed_at_the_request_deadline() {
+        let mut acceptor = acceptor(4, Duration::from_millis(300)).await;
+        let (mut slow, mut server) = connect(&mut acceptor, b"GET /health HTTP/1.1\r\n").await;
+        // A byte every 50 ms: never idle, never a complete head.
+        let trickle = tokio::spawn(async move {
+            for _ in 0..100 {
+                tokio::time::sleep(Duration::from_millis(50)).await;
+                if slow.write_all(b"x").await.is_err() {
+                    return;
+                }
+            }
+        });
+        let started = Instant::now();
+        assert_eq!(read_fails(&mut server, Duration::from_secs(3)).await, Some(io::ErrorKind::TimedOut));
+        assert!(started.elapsed() < Duration::from_secs(2), "{:?}", started.elapsed());
+        trickle.abort();
+
+        // A complete head in time: the deadline no longer applies, only the idle timeout.
+        let (_client, mut server) = connect(&mut acceptor, b"GET /health HTTP/1.1\r\n\r\n").await;
+        assert_eq!(read_fails(&mut server, Duration::from_secs(1)).await, None, "still open");
+        assert!(server.usage.is_used());
+    }
+
+    #[tokio::test]
+    async fn at_the_cap_the_oldest_connection_without_a_request_makes_room() {
+        let mut acceptor = acceptor(3, Duration::from_secs(60)).await;
+        let (_c1, mut used) = connect(&mut acceptor, b"GET / HTTP/1.1\r\n\r\n").await;
+        let (_c2, mut oldest_waiting) = connect(&mut acceptor, b"PRI * HTTP/2.0\r\n\r\nSM\r\n\r\n").await;
+        let (_c3, mut newer_waiting) = connect(&mut acceptor, b"GET / HTTP/1.1\r\n").await;
+        // The scans have to see the bytes: read what each sent.
+        for conn in [&mut used, &mut oldest_waiting, &mut newer_waiting] {
+            assert_eq!(read_fails(conn, Duration::from_millis(100)).await, None);
+        }
+        // A fourth: the oldest waiting one is closed for it, the others stay.
+        let accepting = tokio::spawn(async move {
+            let got = connect(&mut acceptor, b"").await;
+            (acceptor, got)
+        });
+        assert_eq!(
+            read_fails(&mut oldest_waiting, Duration::from_secs(2)).await,
+            Some(io::ErrorKind::ConnectionAborted)
+        );
+        drop(oldest_waiting);
+        let (mut acceptor, _fourth) = tokio::time::timeout(Duration::from_secs(2), accepting)
+            .await
+            .expect("accepted once room was made")
+            .unwrap();
+        assert_eq!(read_fails(&mut used, Duration::from_millis(100)).await, None);
+        assert_eq!(read_fails(&mut newer_waiting, Duration::from_millis(100)).await, None);
+        // At the cap with only used connections (and the newest waiting ones), the next
+        // eviction takes the next oldest waiting one.
+        assert!(acceptor.evict_oldest_waiting());
+        assert_eq!(
+            read_fails(&mut newer_waiting, Duration::from_secs(1)).await,
+            Some(io::ErrorKind::ConnectionAborted)
+        );
+    }
 }

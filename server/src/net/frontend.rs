@@ -7,7 +7,7 @@
 use crate::metrics::Metrics;
 use crate::net::addresses::{Bound, DEFAULT_GRPC, DEFAULT_HTTP};
 use crate::net::auth::Auth;
-use crate::net::conn::{Acceptor, ConnLimits, incoming};
+use crate::net::conn::{Acceptor, Caps, ConnLimits, incoming};
 use crate::net::tls::ReloadingCert;
 use crate::shared::SlowClientLimits;
 use anyhow::{Context, Result};
@@ -36,7 +36,7 @@ pub struct Frontend {
     pub tls: Option<(PathBuf, PathBuf)>,
     /// Largest gRPC message accepted, in bytes.
     pub max_message_bytes: usize,
-    /// Open connections per listener and their idle timeout.
+    /// Open connections per listener, their request deadline and their idle timeout.
     pub connections: ConnLimits,
     /// Deltas a client may fall behind before it is re-sent a snapshot.
     pub slow_client_events: usize,
@@ -200,11 +200,13 @@ impl Frontend {
         let stopped = async move {
             let _ = stop.wait_for(|s| *s).await;
         };
-        let acceptor = grpc_acceptor(grpc_listener, self.connections);
+        let caps = Caps::resolve(&self.connections);
+        tracing::info!(grpc = caps.grpc, http = caps.http, "connection caps");
+        let acceptor = grpc_acceptor(grpc_listener, caps.grpc, self.connections);
         let grpc = match tls {
             Some(cert) => {
                 let tls = cert.acceptor()?;
-                let timeout = self.connections.idle_timeout;
+                let timeout = self.connections.request_deadline;
                 cert.watch(metrics.clone(), shutdown.subscribe());
                 let incoming = incoming(acceptor, move |conn| {
                     crate::net::tls::handshake(tls.clone(), conn, timeout)
@@ -213,16 +215,12 @@ impl Frontend {
             }
             None => serve_grpc(router, incoming(acceptor, |conn| std::future::ready(Ok(conn))), stopped),
         };
-        let mut stop = shutdown.subscribe();
-        let http = axum::serve(
-            // `tap_io` only so that axum hands the peer address to the handlers.
-            axum::serve::ListenerExt::tap_io(Acceptor::new(http_listener, self.connections, false), |_| {}),
-            routes.into_make_service_with_connect_info::<SocketAddr>(),
-        )
-        .with_graceful_shutdown(async move {
-            let _ = stop.wait_for(|s| *s).await;
-        });
-        let http = tokio::spawn(async move { http.await.map_err(Into::into) });
+        let http = crate::net::http_serve::serve(
+            Acceptor::new(http_listener, caps.http, self.connections, false),
+            routes,
+            self.connections.request_deadline,
+            shutdown.subscribe(),
+        );
         Ok((bound, grpc, http))
     }
 }
@@ -246,12 +244,13 @@ where
     })
 }
 
-/// The gRPC listener's acceptor: connections within `limits`, with `TCP_NODELAY` set
-/// (tonic applies its own `tcp_nodelay` only to listeners it binds itself). Deltas are
-/// small writes right behind bigger ones; without it, Nagle's algorithm holds them until
-/// the client's delayed ACK, up to 40 ms on Linux, for every client at once.
-fn grpc_acceptor(listener: tokio::net::TcpListener, limits: ConnLimits) -> Acceptor {
-    Acceptor::new(listener, limits, true)
+/// The gRPC listener's acceptor: at most `cap` connections within `limits`, with
+/// `TCP_NODELAY` set (tonic applies its own `tcp_nodelay` only to listeners it binds
+/// itself). Deltas are small writes right behind bigger ones; without it, Nagle's
+/// algorithm holds them until the client's delayed ACK, up to 40 ms on Linux, for every
+/// client at once.
+fn grpc_acceptor(listener: tokio::net::TcpListener, cap: usize, limits: ConnLimits) -> Acceptor {
+    Acceptor::new(listener, cap, limits, true)
 }
 
 #[cfg(test)]
@@ -262,10 +261,10 @@ mod tests {
     async fn accepted_grpc_connections_send_without_delay() {
         let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
         let addr = listener.local_addr().unwrap();
-        let acceptor = super::grpc_acceptor(listener, Default::default());
+        let acceptor = super::grpc_acceptor(listener, 4, Default::default());
         let mut incoming = crate::net::conn::incoming(acceptor, |c| std::future::ready(Ok(c)));
         let _client = tokio::net::TcpStream::connect(addr).await.unwrap();
         let accepted = incoming.next().await.unwrap().unwrap();
-        assert!(accepted.get_ref().nodelay().unwrap());
+        assert!(accepted.get_ref().get_ref().nodelay().unwrap());
     }
 }

@@ -10,8 +10,7 @@
 //! round-robin (or on the server with no relay). Latency compares wall clocks of processes
 //! on one machine.
 
-use super::cpu::process_ns_of;
-use super::shared::percentile;
+use super::shared::{Proc, http_get, percentile};
 use super::stream::{Editor, points, voxel_op};
 use crate::commands::args::PresetArgs;
 use crate::commands::print_json;
@@ -20,9 +19,7 @@ use anyhow::{Context, Result, bail};
 use naadf_client::{Client, MessageKind, Mirror};
 use serde::Serialize;
 use std::collections::HashMap;
-use std::io::{BufRead, BufReader, Write};
-use std::process::{Child, ChildStdin, Command, Stdio};
-use std::sync::mpsc;
+use std::io::Write;
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 /// Arguments of `bench fanout`.
@@ -153,70 +150,6 @@ pub fn client(a: FanoutClientArgs) -> Result<()> {
         writeln!(out, "end")?;
         Ok(())
     })
-}
-
-/// A child process and the lines of its standard output.
-struct Proc {
-    child: Child,
-    lines: mpsc::Receiver<String>,
-    stdin: Option<ChildStdin>,
-}
-
-impl Proc {
-    fn spawn(args: &[&str]) -> Result<Self> {
-        let mut child = Command::new(std::env::current_exe()?)
-            .args(args)
-            .stdin(Stdio::piped())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::null())
-            .spawn()
-            .context("cannot start a process")?;
-        let stdout = child.stdout.take().expect("piped");
-        let (tx, lines) = mpsc::channel();
-        std::thread::spawn(move || {
-            for line in BufReader::new(stdout).lines() {
-                let Ok(line) = line else { break };
-                if tx.send(line).is_err() {
-                    break;
-                }
-            }
-        });
-        let stdin = child.stdin.take();
-        Ok(Self { child, lines, stdin })
-    }
-
-    fn line(&self, timeout: Duration) -> Result<String> {
-        self.lines.recv_timeout(timeout).context("a process did not answer")
-    }
-
-    /// The addresses a `serve --json` or `relay --json` prints.
-    fn addresses(&self) -> Result<(String, String)> {
-        let v: serde_json::Value = serde_json::from_str(&self.line(Duration::from_secs(600))?)?;
-        let field = |k: &str| v[k].as_str().map(str::to_owned).context("no address");
-        Ok((format!("http://{}", field("grpc")?), field("http")?))
-    }
-
-    fn cpu_ns(&self) -> u64 {
-        process_ns_of(&self.child.id().to_string()).unwrap_or(0)
-    }
-}
-
-impl Drop for Proc {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
-
-/// An HTTP GET on loopback: the body, if the status is 200.
-fn http_get(addr: &str, path: &str) -> Option<String> {
-    use std::io::Read;
-    let mut s = std::net::TcpStream::connect(addr).ok()?;
-    write!(s, "GET {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\r\n").ok()?;
-    let mut buf = String::new();
-    s.read_to_string(&mut buf).ok()?;
-    let (head, body) = buf.split_once("\r\n\r\n")?;
-    head.contains(" 200 ").then(|| body.to_owned())
 }
 
 /// The server's `naadf_bytes_sent_total`.
@@ -404,7 +337,7 @@ fn one_run(
     let status = block_on(async { Ok(Client::connect(&server_url, None, None).await?.status().await?) })?;
 
     for r in &mut receivers {
-        r.stdin = None;
+        r.close_stdin();
     }
     let mut latencies = Vec::new();
     let mut missing = 0;

@@ -7,6 +7,7 @@ mod build;
 mod cpu;
 mod edit;
 mod fanout;
+mod flood;
 mod frames;
 mod gi;
 mod gpu;
@@ -35,6 +36,10 @@ pub enum Bench {
     /// One receive-only client of `bench fanout` (started by it).
     #[command(hide = true)]
     FanoutClient(fanout::FanoutClientArgs),
+    /// A server under a descriptor limit flooded with connections that never make a
+    /// request: how fast `/health` and `status` answer newcomers, and whether a mirror and
+    /// an editor connected before keep going.
+    Flood(flood::FloodArgs),
     /// GPU ray throughput of the traversal variants (naadf, nodf, grid, svo, svdag, the hybrid formats), checked against the CPU.
     Gpu(gpu::GpuArgs),
     /// Frames through a server's render nodes: frames per second, latency, routing overhead.
@@ -54,6 +59,7 @@ pub fn run(b: Bench) -> Result<()> {
         Bench::Stream(a) => stream::run(a),
         Bench::Fanout(a) => fanout::run(a),
         Bench::FanoutClient(a) => fanout::client(a),
+        Bench::Flood(a) => flood::run(a),
         Bench::Gpu(a) => gpu::run(a),
         Bench::Frames(a) => frames::run(a),
         Bench::Gi(a) => gi::run(a),

@@ -1,10 +1,17 @@
 //! What the benchmarks share: percentiles and medians, the ratio report, the surface of a
-//! world column, and the entity model.
+//! world column, the entity model, and the processes (a server, its clients) a benchmark
+//! starts and asks over HTTP.
 
+use super::cpu::process_ns_of;
+use anyhow::{Context, Result};
 use naadf_world::World;
 use naadf_world::ops::Op;
 use naadf_world::traverse::{Ray, trace_naadf};
 use std::collections::BTreeMap;
+use std::io::{BufRead, BufReader, Write};
+use std::process::{Child, ChildStdin, Command, Stdio};
+use std::sync::mpsc;
+use std::time::Duration;
 
 /// The first solid voxel below the top of the world at column (x, z), if any.
 pub fn surface(world: &World, x: u32, z: u32) -> Option<[u32; 3]> {
@@ -58,4 +65,82 @@ pub fn entity_model_op() -> Op {
         size: [8, 8, 8],
         voxels,
     }
+}
+
+/// A child process and the lines of its standard output.
+pub struct Proc {
+    child: Child,
+    lines: mpsc::Receiver<String>,
+    stdin: Option<ChildStdin>,
+}
+
+impl Proc {
+    /// Starts this program with `args`.
+    pub fn spawn(args: &[&str]) -> Result<Self> {
+        let mut command = Command::new(std::env::current_exe()?);
+        command.args(args);
+        Self::start(command)
+    }
+
+    /// Starts `command`, its output piped (line by line) and its errors dropped.
+    pub fn start(mut command: Command) -> Result<Self> {
+        let mut child = command
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .context("cannot start a process")?;
+        let stdout = child.stdout.take().expect("piped");
+        let (tx, lines) = mpsc::channel();
+        std::thread::spawn(move || {
+            for line in BufReader::new(stdout).lines() {
+                let Ok(line) = line else { break };
+                if tx.send(line).is_err() {
+                    break;
+                }
+            }
+        });
+        let stdin = child.stdin.take();
+        Ok(Self { child, lines, stdin })
+    }
+
+    /// Closes its standard input (which tells a fanout client to stop).
+    pub fn close_stdin(&mut self) {
+        self.stdin = None;
+    }
+
+    /// The next line it printed, waiting at most `timeout`.
+    pub fn line(&self, timeout: Duration) -> Result<String> {
+        self.lines.recv_timeout(timeout).context("a process did not answer")
+    }
+
+    /// The addresses a `serve --json` or `relay --json` prints.
+    pub fn addresses(&self) -> Result<(String, String)> {
+        let v: serde_json::Value = serde_json::from_str(&self.line(Duration::from_secs(600))?)?;
+        let field = |k: &str| v[k].as_str().map(str::to_owned).context("no address");
+        Ok((format!("http://{}", field("grpc")?), field("http")?))
+    }
+
+    /// The CPU time it used so far.
+    pub fn cpu_ns(&self) -> u64 {
+        process_ns_of(&self.child.id().to_string()).unwrap_or(0)
+    }
+}
+
+impl Drop for Proc {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// An HTTP GET on loopback: the body, if the status is 200.
+pub fn http_get(addr: &str, path: &str) -> Option<String> {
+    use std::io::Read;
+    let mut s = std::net::TcpStream::connect(addr).ok()?;
+    write!(s, "GET {path} HTTP/1.1\r\nHost: {addr}\r\nConnection: close\r\n\r\n").ok()?;
+    let mut buf = String::new();
+    s.read_to_string(&mut buf).ok()?;
+    let (head, body) = buf.split_once("\r\n\r\n")?;
+    head.contains(" 200 ").then(|| body.to_owned())
 }
