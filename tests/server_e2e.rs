@@ -5,7 +5,6 @@ mod support;
 
 use naadf_client::error::Code;
 use naadf_client::{Client, Ended, Error, Mirror, Pose, Spawn};
-use naadf_proto::v1::world_message;
 use naadf_world::digest::BufferId;
 use naadf_world::{World, file};
 use std::ops::ControlFlow;
@@ -346,7 +345,10 @@ async fn a_slow_client_is_cut_and_does_not_stall_others() {
         }
     };
     assert_eq!(ending.code(), Code::Aborted, "{ending:?}");
-    assert!(slow_mirror.world().is_none_or(|w| w.version() < 300), "it was cut before the end");
+    assert!(
+        slow_mirror.world().is_none_or(|w| w.version() < 300),
+        "it was cut before the end"
+    );
     // It joins again with what it holds and catches up.
     let slow = Follower::start(&server.url, "slow", slow_mirror.into_world()).await;
     let point = converge(&c, &[&slow]).await;

@@ -254,7 +254,11 @@ async fn requestless_connections_make_room_and_meet_the_request_deadline() {
     editor.status().await.unwrap();
     // Both listeners full of connections without a request.
     let mut stalled = stalled_connections(&grpc, 8, b"PRI * HTTP/2.0\r\n\r\nSM\r\n\r\n");
-    stalled.extend(stalled_connections(&server.http, 8, b"GET /health HTTP/1.1\r\nHost: x\r\n"));
+    stalled.extend(stalled_connections(
+        &server.http,
+        8,
+        b"GET /health HTTP/1.1\r\nHost: x\r\n",
+    ));
     let started = Instant::now();
     let http = server.http.clone();
     let (code, _) = tokio::task::spawn_blocking(move || support::http_get(&http, "/health"))
@@ -264,7 +268,10 @@ async fn requestless_connections_make_room_and_meet_the_request_deadline() {
     let status = Client::connect(&server.url, None, None).await.unwrap().status().await;
     assert!(status.is_ok(), "{status:?}");
     let answered = started.elapsed();
-    assert!(answered < Duration::from_millis(900), "answered after {answered:?}: before the deadline freed anything");
+    assert!(
+        answered < Duration::from_millis(900),
+        "answered after {answered:?}: before the deadline freed anything"
+    );
 
     // A slowloris and a silent HTTP/2 client are closed at the deadline.
     let mut slowloris = std::net::TcpStream::connect(&server.http).unwrap();
@@ -282,7 +289,10 @@ async fn requestless_connections_make_room_and_meet_the_request_deadline() {
     let silent_closed = tokio::time::timeout(Duration::from_secs(5), connection).await;
     assert!(silent_closed.is_ok(), "the silent HTTP/2 connection was closed");
     let after = started.elapsed();
-    assert!(after > Duration::from_millis(500), "closed after {after:?}: not before its deadline");
+    assert!(
+        after > Duration::from_millis(500),
+        "closed after {after:?}: not before its deadline"
+    );
     drop(send);
     let slow_closed = tokio::task::spawn_blocking(move || closed_within(&mut slowloris, Duration::from_secs(5)))
         .await

@@ -182,7 +182,11 @@ impl Usage {
 
     /// Records that a complete request head arrived (unless the connection was evicted).
     fn mark_used(&self) {
-        if self.state.compare_exchange(WAITING, USED, Ordering::AcqRel, Ordering::Acquire).is_ok() {
+        if self
+            .state
+            .compare_exchange(WAITING, USED, Ordering::AcqRel, Ordering::Acquire)
+            .is_ok()
+        {
             self.waker.lock().unwrap_or_else(PoisonError::into_inner).take();
         }
     }
@@ -593,13 +597,20 @@ mod tests {
             }
         });
         let started = Instant::now();
-        assert_eq!(read_fails(&mut server, Duration::from_secs(3)).await, Some(io::ErrorKind::TimedOut));
+        assert_eq!(
+            read_fails(&mut server, Duration::from_secs(3)).await,
+            Some(io::ErrorKind::TimedOut)
+        );
         assert!(started.elapsed() < Duration::from_secs(2), "{:?}", started.elapsed());
         trickle.abort();
 
         // A complete head in time: the deadline no longer applies, only the idle timeout.
         let (_client, mut server) = connect(&mut acceptor, b"GET /health HTTP/1.1\r\n\r\n").await;
-        assert_eq!(read_fails(&mut server, Duration::from_secs(1)).await, None, "still open");
+        assert_eq!(
+            read_fails(&mut server, Duration::from_secs(1)).await,
+            None,
+            "still open"
+        );
         assert!(server.usage.is_used());
     }
 

@@ -155,8 +155,14 @@ mod tests {
     fn http1_heads_end_at_the_empty_line() {
         assert!(complete(b"GET /health HTTP/1.1\r\nHost: x\r\n\r\n"));
         assert!(complete(b"GET / HTTP/1.0\n\n"), "bare line feeds");
-        assert!(complete(b"\r\nGET / HTTP/1.1\r\n\r\n"), "a leading empty line is skipped");
-        assert!(!complete(b"GET /health HTTP/1.1\r\nHost: x\r\n"), "slowloris: headers, no end");
+        assert!(
+            complete(b"\r\nGET / HTTP/1.1\r\n\r\n"),
+            "a leading empty line is skipped"
+        );
+        assert!(
+            !complete(b"GET /health HTTP/1.1\r\nHost: x\r\n"),
+            "slowloris: headers, no end"
+        );
         assert!(!complete(b"\r\n\r\n"), "no request line");
         // A method that starts like the HTTP/2 preface is HTTP/1 all the same.
         assert!(complete(b"PRIVATE / HTTP/1.1\r\n\r\n"));

@@ -188,7 +188,16 @@ pub fn run(a: FloodArgs) -> Result<()> {
     serve
         .arg(format!("--nofile={0}:{0}", a.nofile))
         .arg(std::env::current_exe()?)
-        .args(["serve", "--json", "--grpc", "127.0.0.1:0", "--http", "127.0.0.1:0", "--rate", "1000"])
+        .args([
+            "serve",
+            "--json",
+            "--grpc",
+            "127.0.0.1:0",
+            "--http",
+            "127.0.0.1:0",
+            "--rate",
+            "1000",
+        ])
         .arg("--data")
         .arg(dir.path().join("data"))
         .arg("--world")
@@ -289,7 +298,11 @@ pub fn run(a: FloodArgs) -> Result<()> {
         let s = |x: &Summary| format!("p50 {:.1} ms, p99 {:.1} ms, max {:.1} ms", x.p50, x.p99, x.max);
         println!("/health from a new connection: {}", s(&report.health_ms));
         println!("status from a new connection:  {}", s(&report.status_ms));
-        println!("edit acknowledgements:         {} ({} edits)", s(&report.ack_ms), report.edits);
+        println!(
+            "edit acknowledgements:         {} ({} edits)",
+            s(&report.ack_ms),
+            report.edits
+        );
         println!(
             "mirror complete: {}; failed probes: {}; flood connections closed: {}",
             report.mirror_complete, report.failed_probes, report.flood_closed
@@ -318,7 +331,8 @@ async fn probe(url: String, http: String, run_for: Duration) -> (Vec<f64>, Vec<f
             _ => failed += 1,
         }
         let t = Instant::now();
-        let asked = tokio::time::timeout(limit, async { Client::connect(&url, None, None).await?.status().await }).await;
+        let asked =
+            tokio::time::timeout(limit, async { Client::connect(&url, None, None).await?.status().await }).await;
         match asked {
             Ok(Ok(_)) => status.push(t.elapsed().as_secs_f64() * 1e3),
             _ => failed += 1,
