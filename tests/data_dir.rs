@@ -59,17 +59,24 @@ fn copy_dir(from: &str, to: &str) {
     }
 }
 
-/// Waits until `dir` holds exactly the snapshot at `version` and the log after it
-/// (snapshots are written, and older ones pruned, on a helper thread).
+/// Waits until `dir` holds the snapshot at `version` as its newest, with its log segment,
+/// at most the one snapshot before it (which checkpoints keep) and no snapshot write under
+/// way (snapshots are written, and older ones pruned, on a helper thread).
 fn wait_for_snapshot(dir: &str, version: u64) {
-    let want = vec![
-        "LOCK".to_string(),
-        format!("snapshot-{version:020}.naadf"),
-        format!("snapshot-{version:020}.state"),
-        format!("wal-{version:020}.log"),
-    ];
+    let newest = format!("snapshot-{version:020}.naadf");
+    let settled = |n: &[String]| {
+        let worlds: Vec<&String> = n
+            .iter()
+            .filter(|x| x.starts_with("snapshot-") && x.ends_with(".naadf"))
+            .collect();
+        worlds.last() == Some(&&newest)
+            && worlds.len() <= 2
+            && n.contains(&format!("snapshot-{version:020}.state"))
+            && n.contains(&format!("wal-{version:020}.log"))
+            && !n.iter().any(|x| x.starts_with('.'))
+    };
     let start = Instant::now();
-    while names(dir) != want {
+    while !settled(&names(dir)) {
         assert!(
             start.elapsed() < Duration::from_secs(30),
             "no snapshot at {version}: {:?}",
@@ -105,10 +112,10 @@ fn refused(args: &[&str]) -> String {
     err
 }
 
-/// A directory whose newest snapshot lost a file (or both) is never taken for a new one:
+/// A directory whose only snapshot lost a file (or both) is never taken for a new one:
 /// the server refuses, says what it found and how to recover, and writes nothing there.
 /// Both with the log starting at version 0 (where a new world would replay the log of
-/// another) and after a checkpoint.
+/// another) and after checkpoints (the previous snapshot, which they keep, removed too).
 #[test]
 fn a_directory_missing_its_snapshot_is_refused_untouched() {
     let tmp = tempfile::tempdir().unwrap();
@@ -134,6 +141,12 @@ fn a_directory_missing_its_snapshot_is_refused_untouched() {
             copy_dir(&data, &copy);
             for ext in missing {
                 std::fs::remove_file(Path::new(&copy).join(format!("snapshot-{snapshot:020}.{ext}"))).unwrap();
+            }
+            for older in names(&copy)
+                .into_iter()
+                .filter(|n| n.starts_with("snapshot-") && *n < format!("snapshot-{snapshot:020}"))
+            {
+                std::fs::remove_file(Path::new(&copy).join(older)).unwrap();
             }
             let before = contents(&copy);
             let err = refused(&["--world", &world, "--data", &copy]);
@@ -208,7 +221,7 @@ fn crash_leftovers_are_reported_repaired_and_cleaned_at_startup() {
     let report = ok(&["data", "check", &data], None);
     for needle in [
         "torn write at the end: 100 bytes",
-        &format!("{lone}: snapshot 15 is incomplete"),
+        &format!("{lone} (to quarantine/): snapshot 15 is incomplete"),
         "serve would resume from snapshot 10 and replay 2 logged record(s)",
     ] {
         assert!(report.contains(needle), "no '{needle}' in: {report}");
@@ -216,14 +229,19 @@ fn crash_leftovers_are_reported_repaired_and_cleaned_at_startup() {
     let json: serde_json::Value = serde_json::from_str(&ok(&["data", "check", &data, "--json"], None)).unwrap();
     assert_eq!(json["serve"]["starts"], true);
     assert_eq!(json["orphans"].as_array().unwrap().len(), 3, "{json}");
-    assert_eq!(json["segments"][0]["torn"]["bytes"], 100, "{json}");
+    assert_eq!(json["segments"][1]["torn"]["bytes"], 100, "{json}");
 
     let plan = ok(&["data", "repair", &data], None);
     assert_eq!(plan.lines().filter(|l| l.starts_with("  ")).count(), 4, "{plan}");
     assert_eq!(contents(&data), damaged, "a dry run changed the directory");
     let done = ok(&["data", "repair", &data, "--apply"], None);
     assert_eq!(done.lines().filter(|l| l.starts_with("done: ")).count(), 4, "{done}");
-    assert_eq!(names(&data), clean);
+    // The temporary files are gone; the lone state, no temporary, is kept aside.
+    let mut kept = clean.clone();
+    kept.push("quarantine".into());
+    kept.sort();
+    assert_eq!(names(&data), kept);
+    assert_eq!(names(&p(Path::new(&data), "quarantine")), std::slice::from_ref(&lone));
     assert_eq!(std::fs::metadata(&segment).unwrap().len(), intact);
     assert!(!ok(&["data", "check", &data], None).contains("orphans"));
     assert!(ok(&["data", "repair", &data], None).starts_with("nothing to repair"));
@@ -235,8 +253,94 @@ fn crash_leftovers_are_reported_repaired_and_cleaned_at_startup() {
         (&after["version"], &after["digest"]),
         (&before["version"], &before["digest"])
     );
-    assert_eq!(names(&restart), clean);
+    assert_eq!(names(&restart), kept);
+    assert_eq!(names(&p(Path::new(&restart), "quarantine")), [lone]);
     server.stop();
+}
+
+/// A damaged newest snapshot does not strand a directory: checkpoints keep the previous
+/// snapshot and the log after it, `data check` shows that road, `data repair` takes it
+/// (moving the damaged snapshot into quarantine/), and the server resumes the exact state
+/// it had. Until then the server refuses the directory without creating so much as a lock.
+#[test]
+fn a_damaged_newest_snapshot_is_passed_by_the_older_road() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    let world = start_world(dir);
+    let data = p(dir, "data");
+    let log = dir.join("server.log");
+    let server = Server::start(
+        &["--world", &world, "--data", &data, "--checkpoint-every", "5"],
+        &log,
+        &[],
+    );
+    edit(&server, 12, 5);
+    wait_for_snapshot(&data, 10);
+    let before = quiescent_status(&server);
+    server.kill9();
+    std::fs::remove_file(Path::new(&data).join("LOCK")).unwrap();
+    let newest = Path::new(&data).join(format!("snapshot-{:020}.naadf", 10));
+    let mut bytes = std::fs::read(&newest).unwrap();
+    let at = bytes.len() - 1;
+    bytes[at] ^= 0x40;
+    std::fs::write(&newest, bytes).unwrap();
+    let damaged = contents(&data);
+
+    let err = refused(&["--data", &data]);
+    assert!(
+        err.contains("cannot be loaded") && err.contains("resumes from snapshot 5"),
+        "{err}"
+    );
+    let out = naadf(&["data", "check", &data], None);
+    let report = String::from_utf8_lossy(&out.stdout);
+    assert!(!out.status.success(), "{report}");
+    assert!(
+        report.contains("older road: snapshot 5 and 7 logged record(s)"),
+        "{report}"
+    );
+    let plan = ok(&["data", "repair", &data], None);
+    for needle in [
+        &format!(
+            "move snapshot-{:020}.naadf into quarantine/: snapshot 10 cannot be loaded",
+            10
+        ),
+        "then serve would resume from snapshot 5 and replay 7 logged record(s)",
+    ] {
+        assert!(plan.contains(needle), "no '{needle}' in: {plan}");
+    }
+    assert_eq!(contents(&data), damaged, "refusals and dry runs changed the directory");
+
+    ok(&["data", "repair", &data, "--apply"], None);
+    let server = Server::start(&["--data", &data], &log, &[]);
+    let after = quiescent_status(&server);
+    assert_eq!(
+        (&after["version"], &after["digest"]),
+        (&before["version"], &before["digest"])
+    );
+    server.stop();
+}
+
+/// What is left of a served world (a server state in which requests were answered, without
+/// its world or any log) is never taken for a first start's leftovers: repair changes
+/// nothing and the server refuses, creating nothing.
+#[test]
+fn a_lone_state_of_a_served_world_is_never_started_anew() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    let world = start_world(dir);
+    let data = p(dir, "data");
+    let server = Server::start(&["--world", &world, "--data", &data], &dir.join("server.log"), &[]);
+    edit(&server, 5, 9);
+    server.stop();
+    let lone = p(dir, "lone");
+    std::fs::create_dir(&lone).unwrap();
+    let state = format!("snapshot-{:020}.state", 5);
+    std::fs::copy(Path::new(&data).join(&state), Path::new(&lone).join(&state)).unwrap();
+    let before = contents(&lone);
+    support::fails(&["data", "repair", &lone, "--apply"], None, "nothing was changed");
+    let err = refused(&["--data", &lone, "--world", &world]);
+    assert!(err.contains(&format!("{state} without its .naadf")), "{err}");
+    assert_eq!(contents(&lone), before, "the directory changed");
 }
 
 /// Records replayed after a crash count towards the next checkpoint, and a replay as long

@@ -2,7 +2,8 @@
 //! listeners, periodic checkpoints and graceful shutdown.
 
 use crate::data::fsck::Verdict;
-use crate::data::store::{DataDir, ServerState, StoreError};
+use crate::data::state::ServerState;
+use crate::data::store::{DataDir, StoreError};
 use crate::data::wal::{Entry, Wal};
 use crate::net::addresses::Bound;
 use crate::net::auth::Auth;
@@ -15,7 +16,7 @@ use crate::stream::actor::Actor;
 use crate::stream::committer::Committer;
 use crate::stream::messages::Request;
 use crate::stream::publisher::Publisher;
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 use naadf_proto::v1::world_service_server::WorldServiceServer;
 use naadf_world::World;
 use naadf_world::ops::Limits;
@@ -110,22 +111,18 @@ struct Recovered {
 }
 
 /// Opens the data directory `dir` as [`fsck`](crate::data::fsck) judges it: the newest complete
-/// snapshot and the log after it (orphans removed, a torn tail cut off), or a new directory
-/// started from `initial()`. A directory it refuses is left untouched.
+/// snapshot and the log after it (temporaries removed, other orphans moved into the
+/// quarantine, a torn tail cut off), or a new directory started from `initial()`. A
+/// directory it refuses is left untouched.
 fn recover(dir: &Path, initial: impl FnOnce() -> Result<World>) -> Result<Recovered> {
-    let (data, inspection) = DataDir::open(dir)?;
+    let (data, inspection, loaded) = DataDir::open(dir)?;
     match inspection.verdict() {
         Verdict::Resume { snapshot, records } => {
-            tracing::info!(version = snapshot, records, dir = %dir.display(), "loading snapshot");
-            let (world, state) = data.load(snapshot).with_context(|| {
-                format!(
-                    "cannot load snapshot {snapshot} (`naadf data check {}` reports the directory)",
-                    dir.display()
-                )
-            })?;
+            tracing::info!(version = snapshot, records, dir = %dir.display(), "resuming from snapshot");
+            let (world, state) = loaded.expect("DataDir::open loads the snapshot it resumes from");
             for orphan in inspection.orphans() {
-                tracing::warn!(file = %orphan.path.display(), "removing {}", orphan.why);
-                orphan.remove()?;
+                tracing::warn!(file = %orphan.path.display(), "{orphan}");
+                orphan.settle()?;
             }
             let (wal, entries) = Wal::resume(dir, inspection.into_log(snapshot)?, snapshot)?;
             Ok(Recovered {

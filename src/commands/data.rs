@@ -17,15 +17,19 @@ pub enum Data {
     ///
     /// Lists the snapshots (complete or not), the log segments with their versions and any
     /// torn write at the end, temporary files, orphans and other files, then what `serve`
-    /// would do. Loads the newest complete snapshot to verify it. Exits with status 1 when
+    /// would do. Loads the newest complete snapshot to verify it (and, if it is damaged,
+    /// looks for an older road). Ignores the quarantine/ folder. Exits with status 1 when
     /// `serve` would not start.
     Check(CheckArgs),
-    /// Cut a torn write off the log and remove orphan files (a dry run unless --apply).
+    /// Cut a torn write off the log, settle orphan files and take an older road past a
+    /// damaged snapshot (a dry run unless --apply).
     ///
     /// Judges the directory as `check` does (loading the snapshot `serve` would resume
-    /// from). Never removes a file of a complete snapshot or a log record that one needs. A
-    /// directory that cannot be made servable is left as it is, with what the operator can
-    /// do instead.
+    /// from). Deletes only the temporary files of unfinished snapshot writes; anything else
+    /// it cannot explain (an incomplete snapshot's file, a damaged snapshot when an older
+    /// snapshot and the log after it reach every logged version) is moved into the
+    /// directory's quarantine/ folder. A directory that cannot be made servable is left as
+    /// it is, with what the operator can do instead.
     Repair(RepairArgs),
 }
 
@@ -67,8 +71,13 @@ struct Report {
     segments: Vec<SegmentReport>,
     temporary: Vec<String>,
     other: Vec<String>,
-    /// What the next start (or `data repair --apply`) removes.
+    /// How many entries the quarantine/ folder holds (ignored by the judgement).
+    quarantined: usize,
+    /// What the next start (or `data repair --apply`) deletes or moves into quarantine/.
     orphans: Vec<OrphanReport>,
+    /// With a damaged newest snapshot: the older snapshot `data repair --apply` resumes
+    /// from instead, and the logged records that follow it.
+    road: Option<RoadReport>,
     serve: ServeReport,
 }
 
@@ -105,6 +114,14 @@ struct TornReport {
 struct OrphanReport {
     file: String,
     why: String,
+    /// Moved into quarantine/ (false: deleted, a temporary file).
+    quarantine: bool,
+}
+
+#[derive(Serialize)]
+struct RoadReport {
+    snapshot: u64,
+    replay: u64,
 }
 
 #[derive(Serialize)]
@@ -146,8 +163,14 @@ fn look(dir: &Path) -> Result<Inspection> {
 
 /// `inspection` of `dir` with the snapshot it would resume from loaded.
 fn verified(mut inspection: Inspection, dir: &Path) -> Inspection {
-    inspection.verify(|v| store::load_snapshot(dir, v).map(drop).map_err(|e| e.to_string()));
+    verify(&mut inspection, dir);
     inspection
+}
+
+/// Loads the snapshot `inspection` of `dir` would resume from (and, if it is damaged, the
+/// older ones that may replace it).
+fn verify(inspection: &mut Inspection, dir: &Path) {
+    inspection.verify(|v| store::load_snapshot(dir, v).map(drop).map_err(|e| e.to_string()));
 }
 
 fn report(dir: &Path) -> Result<Report> {
@@ -205,14 +228,19 @@ fn report(dir: &Path) -> Result<Report> {
         segments,
         temporary: inspection.temporary.iter().map(|p| file_name(p)).collect(),
         other: inspection.other.iter().map(|p| file_name(p)).collect(),
+        quarantined: inspection.quarantined,
         orphans: inspection
             .orphans()
             .into_iter()
             .map(|o| OrphanReport {
                 file: file_name(&o.path),
                 why: o.why,
+                quarantine: o.quarantine,
             })
             .collect(),
+        road: inspection
+            .road
+            .map(|(snapshot, replay)| RoadReport { snapshot, replay }),
         serve: ServeReport {
             starts: kind != "refuse",
             verdict: kind,
@@ -271,11 +299,21 @@ fn print_report(r: &Report) {
             }
         }
     }
+    if r.quarantined > 0 {
+        println!("quarantine/: {} file(s) moved aside earlier (ignored)", r.quarantined);
+    }
     if !r.orphans.is_empty() {
-        println!("orphans (the next start removes them, as does `naadf data repair --apply`)");
+        println!("orphans (the next start settles them, as does `naadf data repair --apply`)");
         for o in &r.orphans {
-            println!("  {}: {}", o.file, o.why);
+            let fate = if o.quarantine { "to quarantine/" } else { "to delete" };
+            println!("  {} ({fate}): {}", o.file, o.why);
         }
+    }
+    if let Some(road) = &r.road {
+        println!(
+            "older road: snapshot {} and {} logged record(s) after it reach every logged version",
+            road.snapshot, road.replay
+        );
     }
     println!("{}", r.serve.message);
 }
@@ -307,6 +345,9 @@ fn repair(a: &RepairArgs) -> Result<()> {
         for action in &actions {
             println!("  {action}");
         }
+        if let Some((snapshot, records)) = inspection.road {
+            println!("then serve would resume from snapshot {snapshot} and replay {records} logged record(s)");
+        }
         if in_use(dir) {
             println!("a running server holds the directory: stop it before --apply");
         }
@@ -314,8 +355,11 @@ fn repair(a: &RepairArgs) -> Result<()> {
         return Ok(());
     }
     // Held until the changes are made: no server may start on the directory meanwhile.
-    let (_lock, inspection) = fsck::inspect_locked(dir, |i| i.repair().is_ok_and(|a| !a.is_empty()))
-        .with_context(|| format!("cannot repair {}", dir.display()))?;
+    let (_lock, inspection) = fsck::inspect_locked(dir, |i| {
+        verify(i, dir);
+        i.repair().is_ok_and(|a| !a.is_empty())
+    })
+    .with_context(|| format!("cannot repair {}", dir.display()))?;
     let inspection = verified(inspection, dir);
     let actions = inspection.repair().map_err(cannot)?;
     if actions.is_empty() {

@@ -10,14 +10,23 @@
 //! operator can do.
 //!
 //! Orphans are files no recovery reads: temporary files of snapshot writes that never
-//! finished, and the single file of an incomplete snapshot. Startup removes them, as does
-//! `naadf data repair --apply`, but never a file of a complete snapshot. In a refused
-//! directory they stay as evidence, unless they are all it holds: then they are what a
-//! first start left when it was killed before any edit was logged.
+//! finished, which startup and `naadf data repair --apply` delete, and the single file of
+//! an incomplete snapshot, which they move into the directory's `quarantine/` folder
+//! instead: nothing but a crash's temporaries is ever deleted. In a refused directory
+//! orphans stay where they are as evidence, unless they are all it holds and no request
+//! was ever answered in them: then they are what a first start left when it was killed
+//! while writing its first snapshot. The judgement ignores `quarantine/`.
+//!
+//! When the newest complete snapshot cannot be loaded, an older complete snapshot that
+//! loads, with a log that continues it to the last logged version, is another road to the
+//! same state: the verdict stays a refusal, and `naadf data repair --apply` takes the road
+//! by moving the newer snapshots into `quarantine/`. Checkpoints keep the previous snapshot
+//! and the log after it so that such a road exists (see [`crate::data::store`]).
 //!
 //! [`DataDir::open`]: crate::data::store::DataDir::open
 
 use crate::data::layout::{self, Lock, Part, Refusal, StoreError};
+use crate::data::state::ServerState;
 use crate::data::wal::{self, Segment, WalError};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -31,6 +40,9 @@ pub struct SnapshotFiles {
     pub world: bool,
     /// Whether `snapshot-<version>.state` (the server state) is there.
     pub state: bool,
+    /// Whether its state file is there without its world, reads, and has no request
+    /// answered in it: what a first start writes before its first world file.
+    pub blank_state: bool,
 }
 
 impl SnapshotFiles {
@@ -64,9 +76,15 @@ pub struct Inspection {
     pub segments: Vec<SegmentFile>,
     /// Files that are none of these (left alone).
     pub other: Vec<PathBuf>,
+    /// How many entries the `quarantine/` folder holds (ignored otherwise).
+    pub quarantined: usize,
     /// The newest complete snapshot and why it could not be loaded, once
     /// [`Inspection::verify`] found it damaged.
     pub damaged: Option<(u64, String)>,
+    /// With a damaged newest snapshot: an older complete snapshot that loads and the
+    /// number of logged records that follow it, the log continuing it to the last logged
+    /// version (found by [`Inspection::verify`]).
+    pub road: Option<(u64, u64)>,
 }
 
 /// What a server does with a directory.
@@ -92,17 +110,36 @@ pub struct Orphan {
     pub path: PathBuf,
     /// What it is.
     pub why: String,
+    /// Whether it is moved into `quarantine/` (anything but a crash's temporary file)
+    /// rather than deleted.
+    pub quarantine: bool,
 }
 
 impl Orphan {
-    /// Removes the file, durably.
-    pub fn remove(&self) -> Result<(), StoreError> {
+    /// Deletes the file or moves it into the quarantine, durably.
+    pub fn settle(&self) -> Result<(), StoreError> {
+        let dir = match self.path.parent() {
+            Some(dir) if !dir.as_os_str().is_empty() => dir,
+            _ => Path::new("."),
+        };
+        if self.quarantine {
+            return layout::quarantine(dir, &self.path).map(drop);
+        }
         std::fs::remove_file(&self.path)
             .map_err(|e| StoreError::Io(format!("cannot remove {}", self.path.display()), e))?;
-        match self.path.parent() {
-            Some(dir) if !dir.as_os_str().is_empty() => Ok(wal::sync_dir(dir)?),
-            _ => Ok(wal::sync_dir(Path::new("."))?),
-        }
+        Ok(wal::sync_dir(dir)?)
+    }
+}
+
+impl std::fmt::Display for Orphan {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let verb = if self.quarantine { "move" } else { "remove" };
+        let to = if self.quarantine {
+            format!(" into {}/", layout::QUARANTINE)
+        } else {
+            String::new()
+        };
+        write!(f, "{verb} {}{to}: {}", name(&self.path), self.why)
     }
 }
 
@@ -118,8 +155,8 @@ pub enum Action {
         /// The segment's size.
         len: u64,
     },
-    /// Removes an orphan.
-    Remove(Orphan),
+    /// Deletes an orphan or moves it into the quarantine.
+    Settle(Orphan),
 }
 
 impl Action {
@@ -127,7 +164,7 @@ impl Action {
     pub fn apply(&self) -> Result<(), StoreError> {
         match self {
             Action::Cut { path, at, .. } => Ok(wal::cut_tail(path, *at)?),
-            Action::Remove(orphan) => orphan.remove(),
+            Action::Settle(orphan) => orphan.settle(),
         }
     }
 }
@@ -144,7 +181,7 @@ impl std::fmt::Display for Action {
                 name(path),
                 len - at
             ),
-            Action::Remove(o) => write!(f, "remove {}: {}", name(&o.path), o.why),
+            Action::Settle(o) => o.fmt(f),
         }
     }
 }
@@ -163,7 +200,9 @@ pub fn inspect(dir: &Path) -> Result<Inspection, StoreError> {
         temporary: Vec::new(),
         segments: Vec::new(),
         other: Vec::new(),
+        quarantined: 0,
         damaged: None,
+        road: None,
     };
     let listing = |e| StoreError::Io(format!("cannot list {}", dir.display()), e);
     let list = match std::fs::read_dir(dir) {
@@ -184,6 +223,10 @@ pub fn inspect(dir: &Path) -> Result<Inspection, StoreError> {
         if file_name == layout::LOCK {
             continue;
         }
+        if file_name == layout::QUARANTINE && path.is_dir() {
+            found.quarantined = std::fs::read_dir(&path).map_or(0, Iterator::count);
+            continue;
+        }
         if let Some(s) = layout::snapshot_name(file_name) {
             if s.temporary {
                 found.temporary.push(path);
@@ -193,6 +236,7 @@ pub fn inspect(dir: &Path) -> Result<Inspection, StoreError> {
                 version: s.version,
                 world: false,
                 state: false,
+                blank_state: false,
             });
             match s.part {
                 Part::World => files.world = true,
@@ -215,6 +259,10 @@ pub fn inspect(dir: &Path) -> Result<Inspection, StoreError> {
             path,
         })
         .collect();
+    for s in snapshots.values_mut().filter(|s| s.state && !s.world) {
+        let (_, state) = layout::snapshot_paths(dir, s.version);
+        s.blank_state = ServerState::read(&state).is_ok_and(|st| st.is_blank());
+    }
     found.snapshots = snapshots.into_values().collect();
     found.temporary.sort();
     found.other.sort();
@@ -228,13 +276,13 @@ pub fn inspect(dir: &Path) -> Result<Inspection, StoreError> {
 /// the directory in between). Returns the lock, if taken, and the inspection.
 pub fn inspect_locked(
     dir: &Path,
-    writes: impl Fn(&Inspection) -> bool,
+    mut writes: impl FnMut(&mut Inspection) -> bool,
 ) -> Result<(Option<Lock>, Inspection), StoreError> {
     if let Some(lock) = Lock::existing(dir)? {
         return Ok((Some(lock), inspect(dir)?));
     }
-    let first = inspect(dir)?;
-    if !writes(&first) {
+    let mut first = inspect(dir)?;
+    if !writes(&mut first) {
         return Ok((None, first));
     }
     let lock = Lock::create(dir)?;
@@ -255,10 +303,36 @@ impl Inspection {
 
     /// Loads the snapshot a server would resume from with `load` (the files' checksums
     /// and contents), so that the verdict, and what `naadf data check` and `data repair`
-    /// say, account for a damaged one. A server loads it itself as it starts.
-    pub fn verify(&mut self, load: impl FnOnce(u64) -> Result<(), String>) {
-        if let Verdict::Resume { snapshot, .. } = self.verdict() {
-            self.damaged = load(snapshot).err().map(|e| (snapshot, e));
+    /// say, account for a damaged one. When it is damaged, looks for an older road: the
+    /// newest older complete snapshot that loads, whose log segment is there and whose log
+    /// continues it to the last logged version.
+    pub fn verify(&mut self, mut load: impl FnMut(u64) -> Result<(), String>) {
+        self.damaged = None;
+        self.road = None;
+        let Verdict::Resume { snapshot, .. } = self.verdict() else {
+            return;
+        };
+        let Err(e) = load(snapshot) else {
+            return;
+        };
+        self.damaged = Some((snapshot, e));
+        let older: Vec<u64> = self
+            .snapshots
+            .iter()
+            .rev()
+            .filter(|s| s.complete() && s.version < snapshot)
+            .map(|s| s.version)
+            .collect();
+        for v in older {
+            if !self.segments.iter().any(|s| s.base == v) {
+                continue;
+            }
+            if let Ok(records) = self.replay(v)
+                && load(v).is_ok()
+            {
+                self.road = Some((v, records));
+                return;
+            }
         }
     }
 
@@ -267,11 +341,22 @@ impl Inspection {
         if let Some((snapshot, e)) = &self.damaged
             && self.newest_complete() == Some(*snapshot)
         {
-            return Verdict::Refuse(self.refusal(
-                format!("cannot be resumed: its newest complete snapshot (version {snapshot}) cannot be loaded: {e}"),
-                "Restore the directory from a backup.".into(),
-                false,
-            ));
+            let problem =
+                format!("cannot be resumed: its newest complete snapshot (version {snapshot}) cannot be loaded: {e}");
+            return Verdict::Refuse(match self.road {
+                Some((older, records)) => {
+                    let dir = self.dir.display();
+                    let remedy = format!(
+                        "The older snapshot {older} loads, and the log after it reaches every logged \
+                         version: `naadf data repair {dir} --apply` moves the newer snapshot files into \
+                         {dir}/{}/ and the next start resumes from snapshot {older} and replays \
+                         {records} logged record(s), losing nothing.",
+                        layout::QUARANTINE
+                    );
+                    self.refusal(problem, remedy, true)
+                }
+                None => self.refusal(problem, "Restore the directory from a backup.".into(), false),
+            });
         }
         match self.newest_complete() {
             None if self.snapshots.is_empty() && self.temporary.is_empty() && self.segments.is_empty() => Verdict::New,
@@ -356,13 +441,24 @@ impl Inspection {
         if let Some(world) = self.newest_world() {
             return self.refusal(problem, self.seed_remedy(world), false);
         }
-        if self.segments.is_empty() {
+        if self.segments.is_empty() && self.snapshots.iter().all(|s| s.blank_state) {
             let remedy = format!(
-                "No edit was ever logged here: these are what a first start left when it was \
-                 stopped while writing its first snapshot. `naadf data repair {dir} --apply` \
-                 removes them, and the next start begins a new world."
+                "No edit was ever logged or answered here: these are what a first start left \
+                 when it was stopped while writing its first snapshot. `naadf data repair {dir} \
+                 --apply` removes the temporary files and moves the rest into {dir}/{}/, and the \
+                 next start begins a new world.",
+                layout::QUARANTINE
             );
             return self.refusal(problem, remedy, true);
+        }
+        if self.segments.is_empty() {
+            let remedy = format!(
+                "A server state without its world is all that is left of a world that was served \
+                 here (it is not a blank first start's): restore the directory from a backup, or \
+                 move it aside and start anew from a world file with `naadf serve --world FILE \
+                 --data {dir}`."
+            );
+            return self.refusal(problem, remedy, false);
         }
         let remedy = format!(
             "The world itself is gone from it: restore the directory from a backup, or move it \
@@ -406,10 +502,11 @@ impl Inspection {
         }
     }
 
-    /// The orphans that startup and `naadf data repair --apply` remove: in a directory that
-    /// resumes, every temporary file and every file of an incomplete snapshot; in one refused
-    /// for holding nothing but what an interrupted first start left, those. None in any
-    /// other refused directory, where they are evidence.
+    /// The orphans that startup and `naadf data repair --apply` settle (delete if
+    /// temporary, move into the quarantine if not): in a directory that resumes, every
+    /// temporary file and every file of an incomplete snapshot; in one refused for holding
+    /// nothing but what an interrupted first start left, or refused with an older road,
+    /// those. None in any other refused directory, where they are evidence.
     pub fn orphans(&self) -> Vec<Orphan> {
         let removable = match self.verdict() {
             Verdict::Resume { .. } => true,
@@ -422,6 +519,7 @@ impl Inspection {
         let temporary = self.temporary.iter().map(|path| Orphan {
             path: path.clone(),
             why: "the temporary file of a snapshot write that never finished".into(),
+            quarantine: false,
         });
         let incomplete = self.snapshots.iter().filter(|s| !s.complete()).map(|s| {
             let (world, state) = layout::snapshot_paths(&self.dir, s.version);
@@ -429,14 +527,16 @@ impl Inspection {
             Orphan {
                 path,
                 why: format!("snapshot {} is incomplete ({} is missing)", s.version, name(&missing)),
+                quarantine: true,
             }
         });
         temporary.chain(incomplete).collect()
     }
 
-    /// What `naadf data repair` changes: cut a torn write off the log and remove the
-    /// orphans. Or, when the directory cannot be made servable, why (and then nothing may
-    /// change).
+    /// What `naadf data repair` changes: cut a torn write off the log, take the older road
+    /// past a damaged newest snapshot (its files and those of any snapshot between go into
+    /// the quarantine), and settle the orphans. Or, when the directory cannot be made
+    /// servable, why (and then nothing may change).
     pub fn repair(&self) -> Result<Vec<Action>, Refusal> {
         let mut actions = Vec::new();
         match self.verdict() {
@@ -455,7 +555,27 @@ impl Inspection {
             }
             _ => {}
         }
-        actions.extend(self.orphans().into_iter().map(Action::Remove));
+        if let (Some((newest, e)), Some((older, _))) = (&self.damaged, self.road) {
+            for s in self.snapshots.iter().filter(|s| s.complete() && s.version > older) {
+                let why = if s.version == *newest {
+                    format!("snapshot {newest} cannot be loaded: {e}")
+                } else {
+                    format!(
+                        "snapshot {} is newer than snapshot {older}, from which the log is replayed",
+                        s.version
+                    )
+                };
+                let (world, state) = layout::snapshot_paths(&self.dir, s.version);
+                for path in [world, state] {
+                    actions.push(Action::Settle(Orphan {
+                        path,
+                        why: why.clone(),
+                        quarantine: true,
+                    }));
+                }
+            }
+        }
+        actions.extend(self.orphans().into_iter().map(Action::Settle));
         Ok(actions)
     }
 
@@ -470,7 +590,8 @@ impl Inspection {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::data::store::{self, DataDir, ServerState};
+    use crate::data::state::ServerState;
+    use crate::data::store::{self, DataDir};
     use crate::data::wal::{Entry, Wal};
     use naadf_world::edit::BatchKind;
     use naadf_world::preset::Preset;
@@ -488,7 +609,7 @@ mod tests {
 
     /// A directory as a server leaves it: snapshot 0 and three logged edits after it.
     fn served(dir: &Path) {
-        let (data, _) = DataDir::open(dir).unwrap();
+        let (data, _, _) = DataDir::open(dir).unwrap();
         let source = Preset::Test
             .source(Some(WorldSize::new(64, 64, 64).unwrap()), 1)
             .unwrap();
@@ -529,11 +650,12 @@ mod tests {
         let found = inspect(&dir).unwrap();
         assert!(matches!(found.verdict(), Verdict::New));
         assert_eq!(found.other, vec![dir.join("notes.txt")]);
-        // A first start killed while writing its first snapshot: refused, but repairable.
-        let tmp_state = dir.join(".snapshot-00000000000000000000.state.tmp-7-0-1");
-        std::fs::write(&tmp_state, "half").unwrap();
+        // A first start killed while writing its first snapshot (its blank state written,
+        // its world not): refused, but repairable.
+        let tmp_world = dir.join(".snapshot-00000000000000000000.naadf.tmp-7-0-1");
+        std::fs::write(&tmp_world, "half").unwrap();
         let state = dir.join("snapshot-00000000000000000000.state");
-        std::fs::write(&state, "whole").unwrap();
+        std::fs::write(&state, ServerState::default().encode()).unwrap();
         let r = refusal(&dir);
         assert!(r.repairable, "{r}");
         assert!(r.to_string().contains("naadf data repair"), "{r}");
@@ -545,9 +667,96 @@ mod tests {
         for a in inspect(&dir).unwrap().repair().unwrap() {
             a.apply().unwrap();
         }
-        assert!(!tmp_state.exists() && !state.exists());
+        // The temporary file is deleted; the state, which is no temporary, is kept aside.
+        assert!(!tmp_world.exists() && !state.exists());
+        let kept = dir.join(layout::QUARANTINE).join("snapshot-00000000000000000000.state");
+        assert_eq!(std::fs::read(kept).unwrap(), ServerState::default().encode());
         assert!(dir.join("notes.txt").exists());
-        assert!(matches!(inspect(&dir).unwrap().verdict(), Verdict::New));
+        let found = inspect(&dir).unwrap();
+        assert_eq!(found.quarantined, 1);
+        assert!(matches!(found.verdict(), Verdict::New), "the quarantine is ignored");
+    }
+
+    /// A lone server state in which requests were answered is what is left of a world that
+    /// was served: never a first start's leftovers, never repaired away, never a new world.
+    #[test]
+    fn a_lone_state_of_a_served_world_is_refused_untouched() {
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path();
+        let mut state = ServerState {
+            version: 1000,
+            ..ServerState::default()
+        };
+        state.histories.answer("alice", 7, 1000);
+        std::fs::write(dir.join("snapshot-00000000000000001000.state"), state.encode()).unwrap();
+        let before = contents(dir);
+        let r = refusal(dir);
+        assert!(!r.repairable, "{r}");
+        assert!(!r.remedy.contains("data repair"), "no repair is offered: {r}");
+        assert_eq!(inspect(dir).unwrap().repair(), Err(r));
+        assert!(matches!(DataDir::open(dir), Err(StoreError::Refused(_))));
+        assert_eq!(contents(dir), before, "the refusal changed the directory");
+        assert!(!dir.join(layout::LOCK).exists());
+    }
+
+    /// Snapshot 0, the log 1–5 across two segments, and a snapshot 3 that does not load:
+    /// the older road reaches every version, and repair takes it by moving snapshot 3 into
+    /// the quarantine.
+    #[test]
+    fn a_damaged_newest_snapshot_is_passed_by_an_older_road() {
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path();
+        served(dir);
+        let (mut wal, _) = Wal::resume(dir, Vec::new(), 3).unwrap();
+        for version in 4..6 {
+            wal.append(&entry(version).frame()).unwrap();
+        }
+        wal.sync().unwrap();
+        drop(wal);
+        // Snapshot 3's files hold version 0: they do not load as snapshot 3.
+        let (w0, s0) = layout::snapshot_paths(dir, 0);
+        let (w3, s3) = layout::snapshot_paths(dir, 3);
+        std::fs::copy(&w0, &w3).unwrap();
+        std::fs::copy(&s0, &s3).unwrap();
+        std::fs::remove_file(dir.join(layout::LOCK)).unwrap();
+        let load = |v| store::load_snapshot(dir, v).map(drop).map_err(|e| e.to_string());
+        let mut found = inspect(dir).unwrap();
+        assert!(
+            matches!(found.verdict(), Verdict::Resume { snapshot: 3, .. }),
+            "unverified"
+        );
+        found.verify(load);
+        assert_eq!(found.road, Some((0, 5)));
+        let Verdict::Refuse(r) = found.verdict() else {
+            panic!("a damaged snapshot is refused")
+        };
+        assert!(
+            r.repairable && r.remedy.contains("resumes from snapshot 0 and replays 5"),
+            "{r}"
+        );
+        // Opening refuses it too, and writes nothing.
+        let before = contents(dir);
+        assert!(matches!(DataDir::open(dir), Err(StoreError::Refused(_))));
+        assert_eq!(contents(dir), before);
+        let actions = found.repair().unwrap();
+        assert_eq!(actions.len(), 2, "{actions:?}");
+        for a in &actions {
+            assert!(a.to_string().starts_with("move snapshot-00000000000000000003."), "{a}");
+            a.apply().unwrap();
+        }
+        let mut after = inspect(dir).unwrap();
+        after.verify(load);
+        assert!(matches!(
+            after.verdict(),
+            Verdict::Resume {
+                snapshot: 0,
+                records: 5
+            }
+        ));
+        assert!(dir.join(layout::QUARANTINE).join(name(&w3)).exists());
+        assert!(dir.join(layout::QUARANTINE).join(name(&s3)).exists());
+        let (_, _, loaded) = DataDir::open(dir).unwrap();
+        assert_eq!(loaded.unwrap().0.version(), 0);
     }
 
     #[test]
@@ -641,6 +850,10 @@ mod tests {
         ));
         assert_eq!(after.repair().unwrap(), vec![]);
         assert!(!lone.exists() && temps.iter().all(|t| !t.exists()));
+        assert!(
+            dir.join(layout::QUARANTINE).join(name(&lone)).exists(),
+            "the lone state is kept aside"
+        );
         assert_eq!(std::fs::metadata(&segment).unwrap().len(), intact);
         assert_eq!(store::snapshots(dir).unwrap(), vec![0]);
     }

@@ -8,6 +8,7 @@
 //! DATA/snapshot-<version>.naadf          the world at <version> (a world file)
 //! DATA/wal-<base>.log                    batches after <base> (see crate::data::wal)
 //! DATA/.snapshot-<version>.<ext>.tmp-…   a snapshot file being written
+//! DATA/quarantine/                       files no recovery could explain, moved aside
 //! ```
 
 use crate::data::wal::WalError;
@@ -16,6 +17,33 @@ use std::path::{Path, PathBuf};
 
 /// The name of the lock file in a data directory.
 pub const LOCK: &str = "LOCK";
+
+/// The folder inside a data directory where files that neither a start nor a repair can
+/// explain are moved, instead of being deleted: evidence for the operator, read by nothing.
+pub const QUARANTINE: &str = "quarantine";
+
+/// Moves `path`, a file of the data directory `dir`, into its [`QUARANTINE`] folder (under
+/// a new name if one of that name is there already), durably; returns where it went.
+pub fn quarantine(dir: &Path, path: &Path) -> Result<PathBuf, StoreError> {
+    let folder = dir.join(QUARANTINE);
+    std::fs::create_dir_all(&folder).map_err(|e| StoreError::Io(format!("cannot create {}", folder.display()), e))?;
+    let name = path
+        .file_name()
+        .unwrap_or(path.as_os_str())
+        .to_string_lossy()
+        .into_owned();
+    let mut to = folder.join(&name);
+    let mut n = 1;
+    while to.exists() {
+        to = folder.join(format!("{name}.{n}"));
+        n += 1;
+    }
+    std::fs::rename(path, &to)
+        .map_err(|e| StoreError::Io(format!("cannot move {} to {}", path.display(), to.display()), e))?;
+    crate::data::wal::sync_dir(&folder)?;
+    crate::data::wal::sync_dir(dir)?;
+    Ok(to)
+}
 
 /// The lock of a data directory, held until dropped.
 #[derive(Debug)]

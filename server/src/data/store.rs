@@ -2,34 +2,24 @@
 //! describes.
 //!
 //! A snapshot is written state first, then world, each atomically (temporary file, fsync,
-//! rename, directory fsync), so a snapshot counts only when both files exist. Older
-//! snapshots and the WAL segments they need are deleted only after a newer one is durable.
-//! What a directory holds, and whether a server may start on it, is judged by
-//! [`crate::data::fsck`].
+//! rename, directory fsync), so a snapshot counts only when both files exist. Once a
+//! newer one is durable, the snapshots before the previous one and the WAL segments only
+//! they need are deleted: the previous snapshot and the log after it stay, a second road
+//! to the newest state should the newest snapshot ever be damaged. What a directory holds,
+//! and whether a server may start on it, is judged by [`crate::data::fsck`].
 
 use crate::data::fsck::{self, Inspection, Verdict};
 use crate::data::layout::{Lock, Part, SnapshotName, snapshot_name, snapshot_paths};
+use crate::data::state::ServerState;
 use crate::data::wal;
 use naadf_world::World;
-use naadf_world::edit::Histories;
 use naadf_world::file::{self, WorldParts};
-use naadf_world::hash::xxh3_64;
-use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
 pub use crate::data::layout::StoreError;
 
-/// Magic of a state file.
-const STATE_MAGIC: &[u8; 8] = b"NAADFSTA";
-
-/// Server state persisted beside each world snapshot.
-#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
-pub struct ServerState {
-    /// The version the state belongs to.
-    pub version: u64,
-    /// Undo/redo histories and answered client sequence numbers.
-    pub histories: Histories,
-}
+/// A loaded snapshot: the world and the server state beside it.
+pub type Snapshot = (World, ServerState);
 
 /// A locked data directory.
 #[derive(Debug)]
@@ -39,22 +29,37 @@ pub struct DataDir {
 }
 
 impl DataDir {
-    /// Locks the directory and judges what it holds ([`crate::data::fsck`]): returns the locked
-    /// directory and what was found, to resume or start anew. A directory the judgement
-    /// refuses is left exactly as it was: not even its lock file is created.
-    pub fn open(path: &Path) -> Result<(Self, Inspection), StoreError> {
-        let (lock, inspection) = fsck::inspect_locked(path, |i| !matches!(i.verdict(), Verdict::Refuse(_)))?;
-        if let Verdict::Refuse(r) = inspection.verdict() {
-            return Err(StoreError::Refused(Box::new(r)));
-        }
+    /// Locks the directory and judges what it holds ([`crate::data::fsck`]), loading the
+    /// snapshot it would resume from first: returns the locked directory, what was found,
+    /// and that snapshot (none for a directory to start anew). A directory the judgement
+    /// refuses, a damaged snapshot included, is left exactly as it was: not even its lock
+    /// file is created.
+    pub fn open(path: &Path) -> Result<(Self, Inspection, Option<Snapshot>), StoreError> {
+        let mut loaded = None;
+        let mut verify = |i: &mut Inspection| {
+            i.verify(|v| {
+                if !matches!(&loaded, Some((at, _)) if *at == v) {
+                    loaded = Some((v, load_snapshot(path, v).map_err(|e| e.to_string())?));
+                }
+                Ok(())
+            });
+        };
+        let (lock, mut inspection) = fsck::inspect_locked(path, |i| {
+            verify(i);
+            !matches!(i.verdict(), Verdict::Refuse(_))
+        })?;
+        verify(&mut inspection);
+        let snapshot = match inspection.verdict() {
+            Verdict::Refuse(r) => return Err(StoreError::Refused(Box::new(r))),
+            Verdict::New => None,
+            Verdict::Resume { snapshot, .. } => loaded.filter(|(v, _)| *v == snapshot).map(|(_, s)| s),
+        };
         let lock = lock.expect("inspect_locked locks a directory that will be written");
-        Ok((
-            Self {
-                path: path.to_owned(),
-                _lock: lock,
-            },
-            inspection,
-        ))
+        let dir = Self {
+            path: path.to_owned(),
+            _lock: lock,
+        };
+        Ok((dir, inspection, snapshot))
     }
 
     /// The directory.
@@ -67,18 +72,10 @@ impl DataDir {
         snapshots(&self.path)
     }
 
-    /// Loads the snapshot at `version`.
-    pub fn load(&self, version: u64) -> Result<(World, ServerState), StoreError> {
-        load_snapshot(&self.path, version)
-    }
-
     /// Writes a snapshot durably (state, then world).
     pub fn save(&self, parts: &WorldParts, state: &ServerState) -> Result<(), StoreError> {
         let (world_path, state_path) = snapshot_paths(&self.path, parts.version);
-        let payload = postcard::to_allocvec(state).expect("state serializes");
-        let mut bytes = STATE_MAGIC.to_vec();
-        bytes.extend_from_slice(&xxh3_64(&payload).to_le_bytes());
-        bytes.extend_from_slice(&payload);
+        let bytes = state.encode();
         file::save_atomically(&state_path, &mut |out| {
             out.write_all(&bytes)
                 .map_err(|e| naadf_world::WorldError::io(format!("cannot write {}", state_path.display()), e))
@@ -87,11 +84,16 @@ impl DataDir {
         Ok(())
     }
 
-    /// Deletes the snapshots older than `version` and the log segments only they needed.
+    /// After the snapshot at `version` was written: deletes the snapshots before the one
+    /// that precedes it, and the log segments only they needed.
     pub fn prune(&self, version: u64) -> Result<(), StoreError> {
-        wal::prune(&self.path, version)?;
-        for v in self.snapshots()? {
-            if v < version {
+        let snapshots = self.snapshots()?;
+        let Some(&previous) = snapshots.iter().rev().find(|&&v| v < version) else {
+            return Ok(());
+        };
+        wal::prune(&self.path, previous)?;
+        for v in snapshots {
+            if v < previous {
                 let (w, s) = snapshot_paths(&self.path, v);
                 for p in [w, s] {
                     std::fs::remove_file(&p)
@@ -127,26 +129,19 @@ pub fn snapshots(dir: &Path) -> Result<Vec<u64>, StoreError> {
 }
 
 /// Loads the snapshot at `version` from `dir` (no lock needed: read-only tools use it).
-pub fn load_snapshot(dir: &Path, version: u64) -> Result<(World, ServerState), StoreError> {
+pub fn load_snapshot(dir: &Path, version: u64) -> Result<Snapshot, StoreError> {
     let (world_path, state_path) = snapshot_paths(dir, version);
-    let bytes =
-        std::fs::read(&state_path).map_err(|e| StoreError::Io(format!("cannot read {}", state_path.display()), e))?;
-    let bad = |m: &str| StoreError::BadState(state_path.clone(), m.to_owned());
-    if bytes.len() < 16 || &bytes[..8] != STATE_MAGIC {
-        return Err(bad("not a naadf state file"));
-    }
-    let sum = u64::from_le_bytes(bytes[8..16].try_into().expect("8 bytes"));
-    if xxh3_64(&bytes[16..]) != sum {
-        return Err(bad("checksum mismatch (the file is corrupt)"));
-    }
-    let state: ServerState = postcard::from_bytes(&bytes[16..]).map_err(|e| bad(&e.to_string()))?;
+    let state = ServerState::read(&state_path)?;
     let world = file::load(&world_path)?;
     if world.version() != version || state.version != version {
-        return Err(bad(&format!(
-            "snapshot {version} holds world version {} and state version {}",
-            world.version(),
-            state.version
-        )));
+        return Err(StoreError::BadState(
+            state_path,
+            format!(
+                "snapshot {version} holds world version {} and state version {}",
+                world.version(),
+                state.version
+            ),
+        ));
     }
     Ok((world, state))
 }
@@ -160,7 +155,8 @@ mod tests {
     #[test]
     fn snapshots_round_trip_and_prune() {
         let dir = tempfile::tempdir().unwrap();
-        let (d, _) = DataDir::open(dir.path()).unwrap();
+        let (d, _, loaded) = DataDir::open(dir.path()).unwrap();
+        assert!(loaded.is_none(), "a new directory");
         assert!(matches!(DataDir::open(dir.path()), Err(StoreError::Locked(_))));
         let source = Preset::Test
             .source(Some(WorldSize::new(64, 64, 64).unwrap()), 1)
@@ -169,7 +165,7 @@ mod tests {
         let mut state = ServerState::default();
         state.histories.answer("u", 3, 0);
         d.save(&world.to_parts(), &state).unwrap();
-        let (w, s) = d.load(0).unwrap();
+        let (w, s) = load_snapshot(dir.path(), 0).unwrap();
         assert_eq!((w.digest(), s), (world.digest(), state.clone()));
         // A state file without its world does not count; a damaged one is an error.
         std::fs::write(dir.path().join("snapshot-00000000000000000009.state"), b"x").unwrap();
@@ -178,6 +174,32 @@ mod tests {
         let mut b = std::fs::read(&sp).unwrap();
         *b.last_mut().unwrap() ^= 1;
         std::fs::write(&sp, &b).unwrap();
-        assert!(d.load(0).unwrap_err().to_string().contains("checksum"));
+        assert!(
+            load_snapshot(dir.path(), 0)
+                .unwrap_err()
+                .to_string()
+                .contains("checksum")
+        );
+
+        // Pruning after snapshot 9 keeps snapshot 5 and the log from it.
+        for v in [5, 9] {
+            let mut parts = world.to_parts();
+            parts.version = v;
+            d.save(
+                &parts,
+                &ServerState {
+                    version: v,
+                    ..state.clone()
+                },
+            )
+            .unwrap();
+        }
+        for base in [0, 5, 9] {
+            std::fs::write(dir.path().join(wal::segment_name(base)), b"").unwrap();
+        }
+        d.prune(9).unwrap();
+        assert_eq!(d.snapshots().unwrap(), vec![5, 9]);
+        let segments: Vec<u64> = wal::segments(dir.path()).unwrap().into_iter().map(|(b, _)| b).collect();
+        assert_eq!(segments, vec![5, 9]);
     }
 }

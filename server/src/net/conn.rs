@@ -38,6 +38,9 @@ const BACKOFF: Duration = Duration::from_millis(250);
 /// Out-of-descriptor errors are logged at most this often.
 const WARN_EVERY: Duration = Duration::from_secs(10);
 
+/// A spawned listener's task.
+pub(crate) type Listening = tokio::task::JoinHandle<Result<(), Box<dyn std::error::Error + Send + Sync>>>;
+
 /// The connection settings both listeners share.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct ConnLimits {

@@ -7,7 +7,7 @@
 use crate::metrics::Metrics;
 use crate::net::addresses::{Bound, DEFAULT_GRPC, DEFAULT_HTTP};
 use crate::net::auth::Auth;
-use crate::net::conn::{Acceptor, Caps, ConnLimits, incoming};
+use crate::net::conn::{Acceptor, Caps, ConnLimits, Listening, incoming};
 use crate::net::tls::ReloadingCert;
 use crate::shared::SlowClientLimits;
 use anyhow::{Context, Result};
@@ -98,9 +98,6 @@ impl Default for Frontend {
         }
     }
 }
-
-/// A spawned listener's task.
-pub(crate) type Listening = tokio::task::JoinHandle<Result<(), Box<dyn std::error::Error + Send + Sync>>>;
 
 impl Frontend {
     /// The listeners on which bearer tokens would cross a network in cleartext: gRPC on a

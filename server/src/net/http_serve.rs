@@ -6,8 +6,7 @@
 //! connection without one may be closed to make room), and hyper's header timer is set,
 //! so that a peer trickling a later request head a byte at a time is closed too.
 
-use crate::net::conn::{Acceptor, Watched};
-use crate::net::frontend::Listening;
+use crate::net::conn::{Acceptor, Listening, Watched};
 use axum::extract::ConnectInfo;
 use hyper_util::rt::{TokioExecutor, TokioIo, TokioTimer};
 use hyper_util::server::conn::auto::Builder;

@@ -7,7 +7,7 @@
 //! publishes them or answers their senders.
 
 use crate::data::pages::{PageStore, SnapshotView};
-use crate::data::store::ServerState;
+use crate::data::state::ServerState;
 use crate::data::wal::Entry;
 use crate::metrics::Metrics;
 use crate::stream::growth::GrowthWorker;

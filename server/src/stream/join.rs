@@ -57,7 +57,7 @@ const STREAM_BUFFER: usize = 64;
 pub const FELL_BEHIND: &str = "this client fell behind the world stream; join again announcing the world it holds";
 
 /// Starts streaming the world to `user`, who sent `req`: checks the protocol version and
-/// the announced cache, then spawns the task that runs [`run`] (counted in the metrics and
+/// the announced cache, then spawns the task that runs `run` (counted in the metrics and
 /// on the status page) and returns the stream it feeds.
 pub fn start(
     shared: Arc<Shared>,

@@ -6,7 +6,7 @@
 //! batch is durable.
 
 use crate::data::pages::{PageChange, SnapshotView};
-use crate::data::store::ServerState;
+use crate::data::state::ServerState;
 use naadf_proto::v1::{EditReply, WorldMessage};
 use naadf_world::file::WorldParts;
 use naadf_world::ops::Batch;
