@@ -86,6 +86,25 @@ fn wait_for_snapshot(dir: &str, version: u64) {
     }
 }
 
+/// A server with `--checkpoint-every 5` that took 12 edits (`seed`), so that it wrote
+/// snapshots 5 and 10, then was killed with -9: its data directory, its log file and its
+/// quiescent status before the kill.
+fn crashed_after_two_checkpoints(dir: &Path, seed: u64) -> (String, std::path::PathBuf, serde_json::Value) {
+    let world = start_world(dir);
+    let data = p(dir, "data");
+    let log = dir.join("server.log");
+    let server = Server::start(
+        &["--world", &world, "--data", &data, "--checkpoint-every", "5"],
+        &log,
+        &[],
+    );
+    edit(&server, 12, seed);
+    wait_for_snapshot(&data, 10);
+    let before = quiescent_status(&server);
+    server.kill9();
+    (data, log, before)
+}
+
 /// Runs `naadf serve ARGS`, which must refuse: exit with an error, quickly. A server that
 /// starts instead is killed and fails the test. Returns its stderr.
 fn refused(args: &[&str]) -> String {
@@ -184,18 +203,7 @@ fn a_directory_missing_its_snapshot_is_refused_untouched() {
 fn crash_leftovers_are_reported_repaired_and_cleaned_at_startup() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path();
-    let world = start_world(dir);
-    let data = p(dir, "data");
-    let log = dir.join("server.log");
-    let server = Server::start(
-        &["--world", &world, "--data", &data, "--checkpoint-every", "5"],
-        &log,
-        &[],
-    );
-    edit(&server, 12, 3);
-    wait_for_snapshot(&data, 10);
-    let before = quiescent_status(&server);
-    server.kill9();
+    let (data, log, before) = crashed_after_two_checkpoints(dir, 3);
     let clean = names(&data);
     let segment = Path::new(&data).join(format!("wal-{:020}.log", 10));
     let intact = std::fs::metadata(&segment).unwrap().len();
@@ -266,18 +274,7 @@ fn crash_leftovers_are_reported_repaired_and_cleaned_at_startup() {
 fn a_damaged_newest_snapshot_is_passed_by_the_older_road() {
     let tmp = tempfile::tempdir().unwrap();
     let dir = tmp.path();
-    let world = start_world(dir);
-    let data = p(dir, "data");
-    let log = dir.join("server.log");
-    let server = Server::start(
-        &["--world", &world, "--data", &data, "--checkpoint-every", "5"],
-        &log,
-        &[],
-    );
-    edit(&server, 12, 5);
-    wait_for_snapshot(&data, 10);
-    let before = quiescent_status(&server);
-    server.kill9();
+    let (data, log, before) = crashed_after_two_checkpoints(dir, 5);
     std::fs::remove_file(Path::new(&data).join("LOCK")).unwrap();
     let newest = Path::new(&data).join(format!("snapshot-{:020}.naadf", 10));
     let mut bytes = std::fs::read(&newest).unwrap();

@@ -14,7 +14,7 @@
 //! second), the editor's acknowledgement latency, whether the mirror received every
 //! version, and how many flood connections the server closed.
 
-use super::shared::{Proc, http_get, percentile};
+use super::shared::{Latency, Proc, http_get};
 use super::stream::{points, voxel_op};
 use crate::commands::args::PresetArgs;
 use crate::commands::print_json;
@@ -72,11 +72,11 @@ struct Report {
     flood: [usize; 4],
     reconnect: bool,
     seconds: f64,
-    health_ms: Summary,
-    status_ms: Summary,
+    health_ms: Latency,
+    status_ms: Latency,
     /// Probes that failed, or got no answer within 30 s.
     failed_probes: usize,
-    ack_ms: Summary,
+    ack_ms: Latency,
     edits: u64,
     /// Whether the mirror ended at the editor's last version with no error.
     mirror_complete: bool,
@@ -85,25 +85,6 @@ struct Report {
     /// Whether the target held: probes within 5 s, acknowledgements within 2 s, the mirror
     /// complete.
     target_held: bool,
-}
-
-/// Median, 99th percentile and largest of some latencies, ms.
-#[derive(Serialize)]
-struct Summary {
-    p50: f64,
-    p99: f64,
-    max: f64,
-}
-
-impl Summary {
-    fn of(mut values: Vec<f64>) -> Summary {
-        values.sort_by(f64::total_cmp);
-        Summary {
-            p50: percentile(&values, 0.5),
-            p99: percentile(&values, 0.99),
-            max: values.last().copied().unwrap_or(f64::NAN),
-        }
-    }
 }
 
 /// The kinds of flood connection.
@@ -267,9 +248,9 @@ pub fn run(a: FloodArgs) -> Result<()> {
         for f in &flooding {
             f.abort();
         }
-        let health_ms = Summary::of(health);
-        let status_ms = Summary::of(status);
-        let ack_ms = Summary::of(acks.clone());
+        let health_ms = Latency::of(health);
+        let status_ms = Latency::of(status);
+        let ack_ms = Latency::of(acks.clone());
         let target_held = failed_probes == 0
             && health_ms.max < 5000.0
             && status_ms.max < 5000.0
@@ -295,7 +276,7 @@ pub fn run(a: FloodArgs) -> Result<()> {
     if a.json {
         print_json(&report)?;
     } else {
-        let s = |x: &Summary| format!("p50 {:.1} ms, p99 {:.1} ms, max {:.1} ms", x.p50, x.p99, x.max);
+        let s = |x: &Latency| format!("p50 {:.1} ms, p99 {:.1} ms, max {:.1} ms", x.p50, x.p99, x.max);
         println!("/health from a new connection: {}", s(&report.health_ms));
         println!("status from a new connection:  {}", s(&report.status_ms));
         println!(

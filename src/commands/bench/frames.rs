@@ -3,7 +3,7 @@
 //! flight; with `--world`, the same frame rendered in-process (GPU, readback, PNG — what a
 //! node does per job) for the server's added latency.
 
-use super::shared::percentile;
+use super::shared::Latency;
 use crate::commands::args::{parse_image_size, parse_mode, read_camera};
 use crate::commands::remote::{ServerArgs, block_on};
 use crate::commands::{load_world, print_json};
@@ -42,23 +42,6 @@ pub struct FramesArgs {
     /// Print one JSON object.
     #[arg(long)]
     json: bool,
-}
-
-/// Latency percentiles in milliseconds.
-#[derive(Serialize)]
-struct Latency {
-    p50: f64,
-    p99: f64,
-}
-
-impl Latency {
-    fn of(mut ms: Vec<f64>) -> Latency {
-        ms.sort_by(f64::total_cmp);
-        Latency {
-            p50: percentile(&ms, 0.5),
-            p99: percentile(&ms, 0.99),
-        }
-    }
 }
 
 #[derive(Serialize)]

@@ -67,6 +67,29 @@ pub fn entity_model_op() -> Op {
     }
 }
 
+/// Latency percentiles and the largest latency, in milliseconds.
+#[derive(serde::Serialize)]
+pub struct Latency {
+    /// The median.
+    pub p50: f64,
+    /// The 99th percentile.
+    pub p99: f64,
+    /// The largest.
+    pub max: f64,
+}
+
+impl Latency {
+    /// The latencies `ms` (in any order) summed up.
+    pub fn of(mut ms: Vec<f64>) -> Latency {
+        ms.sort_by(f64::total_cmp);
+        Latency {
+            p50: percentile(&ms, 0.5),
+            p99: percentile(&ms, 0.99),
+            max: ms.last().copied().unwrap_or(f64::NAN),
+        }
+    }
+}
+
 /// A child process and the lines of its standard output.
 pub struct Proc {
     child: Child,
