@@ -10,6 +10,8 @@
 //! - [`requests`]: entity RPCs to and from edit batches;
 //! - [`mirror`]: a world kept byte-identical to a server's by applying its stream (what
 //!   clients and relays hold);
+//! - [`patch`]: the patch form of deltas, the bytes a change wrote (for mirrors without
+//!   the edit engine);
 //! - [`endpoint`]: the channel settings every caller of the service uses (TLS, no delay);
 //! - [`backoff`]: the doubling pauses between attempts to reach a peer that is out of reach.
 //!
@@ -21,6 +23,7 @@
 pub mod backoff;
 pub mod endpoint;
 pub mod mirror;
+pub mod patch;
 pub mod requests;
 pub mod snapshot;
 

@@ -12,11 +12,11 @@
 
 pub use crate::snapshot::DEFAULT_MAX_WORLD_BYTES;
 use crate::snapshot::{Assembly, buffers_of, cache_of};
-use crate::v1::{JoinRequest, ResumePoint, WorldMessage, world_message};
+use crate::v1::{DeltaForm, JoinRequest, ResumePoint, WorldMessage, world_message};
 use crate::{PROTOCOL_VERSION, WireError};
 use naadf_world::World;
 use naadf_world::digest::Digest;
-use naadf_world::edit::Record;
+use naadf_world::edit::{ChangeSet, Record};
 use naadf_world::ops::{Batch, Limits};
 use prost::Message;
 
@@ -89,6 +89,8 @@ pub struct Mirror {
     /// a copy of every batch.
     keep_edits: bool,
     last_edit: Option<StreamedEdit>,
+    /// The change the latest delta applied.
+    last_change: Option<ChangeSet>,
     /// The most bytes of buffers a snapshot may need ([`Mirror::with_max_world_bytes`]).
     max_world_bytes: u64,
     /// What was received so far.
@@ -115,6 +117,7 @@ impl Mirror {
             growth_seq: 0,
             keep_edits: false,
             last_edit: None,
+            last_change: None,
             max_world_bytes: DEFAULT_MAX_WORLD_BYTES,
             stats: Stats::default(),
         }
@@ -141,6 +144,7 @@ impl Mirror {
                 version: w.version(),
                 digest: w.digest().0,
             }),
+            delta_form: DeltaForm::Record.into(),
         }
     }
 
@@ -168,6 +172,12 @@ impl Mirror {
     /// Makes the mirror keep the latest edit batch for [`Mirror::last_edit`] (recorders).
     pub fn keep_edits(&mut self) {
         self.keep_edits = true;
+    }
+
+    /// The change the latest delta applied (its writes, for a relay's patch-form deltas);
+    /// none before the first delta.
+    pub fn last_change(&self) -> Option<&ChangeSet> {
+        self.last_change.as_ref()
     }
 
     /// The latest edit batch applied from a delta, when [`Mirror::keep_edits`] was asked
@@ -256,6 +266,13 @@ impl Mirror {
                 }
                 self.quiescent = decoded.quiescent;
                 self.growth_seq = decoded.growth_seq;
+                // The server's step and flag: a mirror runs no growth of its own, so its
+                // world's own idea of them is not the server's.
+                self.last_change = Some(ChangeSet {
+                    growth_seq: decoded.growth_seq,
+                    quiescent: decoded.quiescent,
+                    ..cs
+                });
                 Ok(Progress::Delta)
             }
         }

@@ -286,6 +286,7 @@ fn proto(out: &Out, world: &World) {
             protocol_version: naadf_proto::PROTOCOL_VERSION,
             cached: cache_of(world),
             resume: None,
+            ..Default::default()
         }
         .encode(b)
         .expect("encodes")

@@ -13,11 +13,11 @@
 
 use crate::data::pages::{PageStore, SnapshotView};
 use crate::metrics::Metrics;
-use crate::stream::messages::{Event, Subscription};
-use crate::stream::messages::{Request, StatusInfo};
+use crate::stream::messages::{Event, Request, StatusInfo, Subscription, patch_delta};
 use crate::stream::publisher::Publisher;
 use naadf_proto::mirror::{Mirror, Progress};
-use naadf_proto::v1::{JoinRequest, WorldMessage};
+use naadf_proto::patch::PatchMaker;
+use naadf_proto::v1::{JoinRequest, WorldMessage, world_message};
 use std::sync::Arc;
 use tokio::sync::{Notify, mpsc, oneshot};
 use tonic::Status;
@@ -43,6 +43,8 @@ pub struct Hub {
     mirror: Mirror,
     /// The pages of the published state (once a first snapshot completed).
     pages: Option<PageStore>,
+    /// Makes the patch-form deltas from the mirror's changes (set with the pages).
+    patches: Option<PatchMaker>,
     publisher: Option<Publisher>,
     /// The published state: `(version, digest)`.
     published: (u64, u64),
@@ -67,6 +69,7 @@ impl Hub {
         Self {
             mirror: Mirror::default().with_max_world_bytes(max_world_bytes),
             pages: None,
+            patches: None,
             publisher: None,
             published: (0, 0),
             view: None,
@@ -172,11 +175,18 @@ impl Hub {
         };
         let world = self.mirror.world().expect("a live mirror has a world");
         let changes = pages.update(world);
+        let change = self.mirror.last_change().expect("a delta was applied");
+        let patches = self.patches.as_mut().expect("set with the pages");
+        let user = match &m.kind {
+            Some(world_message::Kind::Delta(d)) => d.user.as_str(),
+            _ => "",
+        };
         let event = Arc::new(Event {
             version: world.version(),
             growth_seq: self.mirror.growth_seq(),
             digest: world.digest().0,
             message: m.clone(),
+            patch: patch_delta(patches.patch(world, change), world.digest().0, user),
             changes,
             lens: pages.lens(),
         });
@@ -193,6 +203,8 @@ impl Hub {
         let world = self.mirror.world().expect("a live mirror has a world");
         self.view = None;
         self.metrics.version.set(state.0 as i64);
+        // Patches follow the mirror's buffers from here on, whatever the re-join changed.
+        self.patches = Some(PatchMaker::new(world));
         match (&mut self.pages, &mut self.publisher) {
             (Some(pages), Some(publisher)) => {
                 let changed = !pages.update(world).is_empty();

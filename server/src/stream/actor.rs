@@ -11,7 +11,8 @@ use crate::data::state::ServerState;
 use crate::data::wal::Entry;
 use crate::metrics::Metrics;
 use crate::stream::growth::GrowthWorker;
-use crate::stream::messages::{Action, EditResult, Event, Outgoing, Request, StatusInfo};
+use crate::stream::messages::{Action, EditResult, Event, Outgoing, Request, StatusInfo, patch_delta};
+use naadf_proto::patch::PatchMaker;
 use naadf_proto::v1::{Delta, EditReply, WorldMessage, world_message};
 use naadf_world::World;
 use naadf_world::edit::{BatchKind, ChangeSet, GrowthTask, Histories};
@@ -27,6 +28,8 @@ pub struct Actor {
     world: World,
     histories: Histories,
     pages: PageStore,
+    /// Makes each change's patch-form delta.
+    patches: PatchMaker,
     limits: Limits,
     out: mpsc::Sender<Outgoing>,
     metrics: Arc<Metrics>,
@@ -59,6 +62,7 @@ impl Actor {
         let pages = PageStore::new(&world);
         shared.metrics.version.set(world.version() as i64);
         Self {
+            patches: PatchMaker::new(&world),
             world,
             histories: state.histories,
             pages,
@@ -156,8 +160,8 @@ impl Actor {
         let _ = self.out.blocking_send(o);
     }
 
-    /// The event publishing change set `cs` (the page store is updated on the way).
-    /// The event publishing `cs`, made by `user`'s request (empty for growth steps).
+    /// The event publishing change set `cs`, made by `user`'s request (empty for growth
+    /// steps); the page store is updated on the way.
     fn event(&mut self, cs: &ChangeSet, user: &str) -> Arc<Event> {
         self.view = None;
         let changes = self.pages.update(&self.world);
@@ -170,8 +174,10 @@ impl Actor {
                     change: cs.encode(),
                     digest: cs.digest.0,
                     user: user.to_owned(),
+                    patch: None,
                 })),
             },
+            patch: patch_delta(self.patches.patch(&self.world, cs), cs.digest.0, user),
             changes,
             lens: self.pages.lens(),
         })

@@ -19,7 +19,7 @@ use crate::stream::messages::Request;
 use crate::stream::messages::{Event, Subscription};
 use naadf_proto::PROTOCOL_VERSION;
 use naadf_proto::snapshot::{buffer_lengths, group_pages};
-use naadf_proto::v1::{CachedBuffer, Header, JoinRequest, Page, WorldMessage, world_message};
+use naadf_proto::v1::{CachedBuffer, DeltaForm, Header, JoinRequest, Page, WorldMessage, world_message};
 use naadf_world::digest::PAGE_BYTES;
 use naadf_world::file::TRANSFERRED;
 use prost::Message;
@@ -72,12 +72,14 @@ pub fn start(
         )));
     }
     let held = client_pages(&req.cached)?;
+    let form = DeltaForm::try_from(req.delta_form)
+        .map_err(|_| Status::invalid_argument(format!("unknown delta form {}", req.delta_form)))?;
     let resume = req.resume.map(|r| (r.version, r.digest));
     let (tx, rx, cut) = feed(STREAM_BUFFER);
     tokio::spawn(async move {
         let id = shared.activity.joined(&user);
         shared.metrics.clients.inc();
-        let out = Outbox::new(shared.clone(), tx);
+        let out = Outbox::new(shared.clone(), tx, form);
         if let Err(Stop::Behind(behind)) = run(&shared, actor, held, resume, out).await {
             tracing::info!(behind, "client fell behind; ending its stream");
             shared.metrics.resyncs.inc();
@@ -134,7 +136,7 @@ async fn run(
                 Ok(ev) => {
                     out.pos += ev.size() as u64;
                     track(&mut held, &ev);
-                    out.send(ev.message.clone()).await?;
+                    out.send_delta(&ev).await?;
                 }
                 // More deltas behind than the broadcast holds.
                 Err(broadcast::error::RecvError::Lagged(_)) => {
@@ -194,14 +196,17 @@ struct Outbox {
     head: watch::Receiver<u64>,
     /// The handle of this client's backlog in the metrics.
     id: u64,
+    /// The form of the deltas the client asked for.
+    form: DeltaForm,
 }
 
 impl Outbox {
-    fn new(shared: Arc<Shared>, tx: mpsc::Sender<Item>) -> Self {
+    fn new(shared: Arc<Shared>, tx: mpsc::Sender<Item>, form: DeltaForm) -> Self {
         let id = shared.metrics.backlogs.register();
         Self {
             shared,
             tx,
+            form,
             queue: Queue::default(),
             events: None,
             pos: 0,
@@ -223,6 +228,11 @@ impl Outbox {
         self.shared.metrics.backlogs.set(self.id, self.queue.bytes, false);
     }
 
+    /// Queues the delta of `ev` in the client's form, as [`Outbox::send`] does.
+    async fn send_delta(&mut self, ev: &Event) -> Result<(), Stop> {
+        self.send(ev.delta(self.form).clone()).await
+    }
+
     /// Queues `m` once the stream has room, or stops with [`Stop::Behind`] if the backlog
     /// goes over the limits first.
     async fn send(&mut self, m: WorldMessage) -> Result<(), Stop> {
@@ -235,6 +245,7 @@ impl Outbox {
             pos,
             head,
             id,
+            ..
         } = self;
         let permit = if events.is_none() {
             tx.reserve().await
@@ -318,7 +329,7 @@ async fn send_catch_up(
     out.send(message(world_message::Kind::Header(header))).await?;
     for ev in events {
         track(held, ev);
-        out.send(ev.message.clone()).await?;
+        out.send_delta(ev).await?;
     }
     Ok(())
 }

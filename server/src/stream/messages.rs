@@ -7,7 +7,7 @@
 
 use crate::data::pages::{PageChange, SnapshotView};
 use crate::data::state::ServerState;
-use naadf_proto::v1::{EditReply, WorldMessage};
+use naadf_proto::v1::{Delta, DeltaForm, EditReply, Patch, WorldMessage, world_message};
 use naadf_world::file::WorldParts;
 use naadf_world::ops::Batch;
 use std::sync::Arc;
@@ -27,8 +27,10 @@ pub struct Event {
     pub growth_seq: u32,
     /// The digest after the change.
     pub digest: u64,
-    /// The `Delta` message.
+    /// The `Delta` message in the record form.
     pub message: WorldMessage,
+    /// The same change as a `Delta` in the patch form.
+    pub patch: WorldMessage,
     /// The snapshot pages the change altered.
     pub changes: Vec<PageChange>,
     /// The transferred buffers' lengths after it.
@@ -40,7 +42,28 @@ impl Event {
     /// the backlog of slow clients).
     pub fn size(&self) -> usize {
         use prost::Message;
-        self.message.encoded_len() + 16 * self.changes.len() + 64
+        self.message.encoded_len() + self.patch.encoded_len() + 16 * self.changes.len() + 64
+    }
+
+    /// The `Delta` message in `form`.
+    pub fn delta(&self, form: DeltaForm) -> &WorldMessage {
+        match form {
+            DeltaForm::Record => &self.message,
+            DeltaForm::Patch => &self.patch,
+        }
+    }
+}
+
+/// The `Delta` message of a change in the patch form: `patch`, the digest after it and the
+/// user whose request it was.
+pub fn patch_delta(patch: Patch, digest: u64, user: &str) -> WorldMessage {
+    WorldMessage {
+        kind: Some(world_message::Kind::Delta(Delta {
+            change: Vec::new(),
+            digest,
+            user: user.to_owned(),
+            patch: Some(patch),
+        })),
     }
 }
 

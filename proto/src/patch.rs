@@ -1,0 +1,84 @@
+//! The patch form of a delta: what a change wrote, byte for byte, so that a mirror without
+//! the edit engine (a browser, a program in another language) can follow the world by
+//! copying bytes. docs/PROTOCOL.md, "The patch form", specifies it.
+//!
+//! The runs cover exactly the byte ranges the world's digest was updated for (the writes of
+//! the [`ChangeSet`], tables whole), so copying them reproduces every byte the digest
+//! covers. A server and a relay that applied the same change make the same patch.
+
+use crate::v1::{BufferLength, Patch, Run, Runs};
+use naadf_world::World;
+use naadf_world::digest::BufferId;
+use naadf_world::edit::ChangeSet;
+use prost::Message;
+
+/// The zstd level of compressed runs (the level snapshot pages use).
+const LEVEL: i32 = 3;
+
+/// Makes the patches of a world's changes, remembering its buffers' lengths between them.
+#[derive(Clone, Debug)]
+pub struct PatchMaker {
+    lens: [usize; 8],
+}
+
+impl PatchMaker {
+    /// Follows `world` from its current state.
+    pub fn new(world: &World) -> Self {
+        Self {
+            lens: BufferId::WORLD.map(|id| world.buffer_bytes(id).len()),
+        }
+    }
+
+    /// The patch of `change`, which `world` has just applied (the patches of all changes
+    /// since [`PatchMaker::new`] must be made in order).
+    pub fn patch(&mut self, world: &World, change: &ChangeSet) -> Patch {
+        let mut lengths = Vec::new();
+        for (k, id) in BufferId::WORLD.into_iter().enumerate() {
+            let len = world.buffer_bytes(id).len();
+            if len != self.lens[k] {
+                self.lens[k] = len;
+                lengths.push(BufferLength {
+                    buffer: id as u32,
+                    bytes: len as u64,
+                });
+            }
+        }
+        let mut runs: Vec<Run> = Vec::new();
+        for (id, words) in change.writes.ranges() {
+            let bytes = world.buffer_bytes(*id);
+            let range = match id {
+                // Tables are rewritten whole, once.
+                BufferId::Materials | BufferId::Models => {
+                    if runs.last().is_some_and(|r| r.buffer == *id as u32) {
+                        continue;
+                    }
+                    0..bytes.len()
+                }
+                _ => (4 * words.start as usize).min(bytes.len())..(4 * words.end as usize).min(bytes.len()),
+            };
+            if !range.is_empty() {
+                runs.push(Run {
+                    buffer: *id as u32,
+                    offset: range.start as u64,
+                    bytes: bytes[range].to_vec(),
+                });
+            }
+        }
+        let plain = Runs { runs };
+        let encoded = plain.encode_to_vec();
+        let zstd = zstd::bulk::compress(&encoded, LEVEL).expect("compressing into memory");
+        let (runs, zstd) = if zstd.len() < encoded.len() {
+            (Vec::new(), zstd)
+        } else {
+            (plain.runs, Vec::new())
+        };
+        Patch {
+            version: change.version,
+            growth_seq: change.growth_seq,
+            quiescent: change.quiescent,
+            lengths,
+            runs,
+            zstd,
+        }
+    }
+}
