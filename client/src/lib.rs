@@ -30,6 +30,8 @@
 //! - [`mirror`]: the CPU mirror, which applies the stream's messages to local buffers and
 //!   checks every digest (no I/O of its own); the basis of the GPU client, and defined in
 //!   `naadf-proto` so that relays hold the same one;
+//! - [`patch`]: the patch form of deltas (the bytes each change wrote), for mirrors
+//!   without the edit engine, and what a delta costs in each form;
 //! - [`cache`]: [`PageCache`], the mirrored world on disk, so that rejoining after a restart
 //!   costs only what changed;
 //! - [`node`]: [`node::RenderNode`], which keeps a render node registered and serving the
@@ -55,6 +57,7 @@ pub mod frame;
 pub mod gpu;
 pub mod light;
 pub use naadf_proto::mirror;
+pub use naadf_proto::patch;
 /// The stream's messages, as [`Client::stream`] yields them raw.
 pub use naadf_proto::v1::{WorldMessage, world_message};
 pub mod node;

@@ -6,7 +6,7 @@
 //! the [`ChangeSet`], tables whole), so copying them reproduces every byte the digest
 //! covers. A server and a relay that applied the same change make the same patch.
 
-use crate::v1::{BufferLength, Patch, Run, Runs};
+use crate::v1::{BufferLength, Delta, Patch, Run, Runs};
 use naadf_world::World;
 use naadf_world::digest::BufferId;
 use naadf_world::edit::ChangeSet;
@@ -81,4 +81,21 @@ impl PatchMaker {
             zstd,
         }
     }
+}
+
+/// The encoded sizes, in bytes, of the `Delta` of `change` (which `world` has just applied)
+/// in the record form and in the patch form, with no user: what a client of each form
+/// receives for it. The patch is made with `maker`, which it advances.
+pub fn delta_sizes(maker: &mut PatchMaker, world: &World, change: &ChangeSet) -> [usize; 2] {
+    let record = Delta {
+        change: change.encode(),
+        digest: change.digest.0,
+        ..Delta::default()
+    };
+    let patch = Delta {
+        digest: change.digest.0,
+        patch: Some(maker.patch(world, change)),
+        ..Delta::default()
+    };
+    [record.encoded_len(), patch.encoded_len()]
 }

@@ -1,11 +1,14 @@
-//! `naadf bench edit`: edit latency, change-set sizes, background regrowth and a real
-//! edit stream (HashDAG `EditSphere` replays), on a generated world.
+//! `naadf bench edit`: edit latency, change-set sizes (and what each change costs on the
+//! wire in the record and the patch form), background regrowth and a real edit stream
+//! (HashDAG `EditSphere` replays), on a generated world.
 
 use super::shared::{percentile, surface};
 use crate::commands::args::PresetArgs;
 use crate::commands::print_json;
 use anyhow::{Context, Result, bail};
+use naadf_client::patch::{PatchMaker, delta_sizes};
 use naadf_world::World;
+use naadf_world::edit::ChangeSet;
 use naadf_world::ops::{Batch, Limits, Op};
 use naadf_world::raysets::SplitMix64;
 use serde::Serialize;
@@ -40,6 +43,35 @@ struct KindReport {
     record_zstd_bytes: usize,
     /// Buffer words the change wrote (median): what a GPU mirror uploads.
     words_written: u64,
+    /// The `Delta` message of the edit in the record form, bytes (median).
+    delta_record_bytes: usize,
+    /// The same in the patch form, bytes (median).
+    delta_patch_bytes: usize,
+    /// The growth steps that followed the edit, in all: record form, bytes (median).
+    growth_record_bytes: usize,
+    /// The same in the patch form, bytes (median).
+    growth_patch_bytes: usize,
+}
+
+/// What a run of changes costs on the wire in each form, bytes.
+#[derive(Serialize, Default)]
+struct WireBytes {
+    record: u64,
+    patch: u64,
+}
+
+impl WireBytes {
+    /// Adds the deltas of `changes`, which `world` has applied, made with `maker`.
+    fn add(&mut self, maker: &mut PatchMaker, world: &World, changes: &[ChangeSet]) -> [usize; 2] {
+        let mut sum = [0; 2];
+        for cs in changes {
+            let [r, p] = delta_sizes(maker, world, cs);
+            sum = [sum[0] + r, sum[1] + p];
+        }
+        self.record += sum[0] as u64;
+        self.patch += sum[1] as u64;
+        sum
+    }
 }
 
 #[derive(Serialize)]
@@ -51,6 +83,10 @@ struct ReplayReport {
     edits_per_s: f64,
     /// Growth to quiescence after the whole stream.
     growth_ms: f64,
+    /// The edits' deltas on the wire, in all.
+    edit_bytes: WireBytes,
+    /// The growth steps' deltas on the wire, in all.
+    growth_bytes: WireBytes,
 }
 
 #[derive(Serialize)]
@@ -64,6 +100,8 @@ struct EditReport {
     entity_move_1000_ms: f64,
     /// Encoded record of that batch, bytes.
     entity_move_1000_record_bytes: usize,
+    /// Its `Delta` on the wire: record form, patch form, bytes.
+    entity_move_1000_delta_bytes: [usize; 2],
     replay: Option<ReplayReport>,
 }
 
@@ -76,6 +114,9 @@ fn median<T: Copy + Ord + Default>(mut v: Vec<T>) -> T {
 fn time_batches(world: &mut World, batches: &[Batch]) -> Result<KindReport> {
     let limits = Limits::default();
     let (mut times, mut bytes, mut zbytes, mut words) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let (mut edit_wire, mut growth_wire) = (Vec::new(), Vec::new());
+    let mut maker = PatchMaker::new(world);
+    let mut wire = WireBytes::default();
     for b in batches {
         let t0 = Instant::now();
         let applied = world.apply(b, &limits)?;
@@ -84,8 +125,13 @@ fn time_batches(world: &mut World, batches: &[Batch]) -> Result<KindReport> {
         zbytes.push(zstd::bulk::compress(&rec, 3)?.len());
         bytes.push(rec.len());
         words.push(applied.change.writes.words());
-        world.grow_until_quiescent();
+        edit_wire.push(wire.add(&mut maker, world, std::slice::from_ref(&applied.change)));
+        // The growth steps' patches read the buffers once growth is done: their sizes,
+        // not their exact bytes, are what counts here.
+        let grown = world.grow_until_quiescent();
+        growth_wire.push(wire.add(&mut maker, world, &grown));
     }
+    let form = |v: &[[usize; 2]], k: usize| median(v.iter().map(|s| s[k]).collect());
     times.sort_by(f64::total_cmp);
     Ok(KindReport {
         edits: batches.len(),
@@ -94,6 +140,10 @@ fn time_batches(world: &mut World, batches: &[Batch]) -> Result<KindReport> {
         record_bytes: median(bytes),
         record_zstd_bytes: median(zbytes),
         words_written: median(words),
+        delta_record_bytes: form(&edit_wire, 0),
+        delta_patch_bytes: form(&edit_wire, 1),
+        growth_record_bytes: form(&growth_wire, 0),
+        growth_patch_bytes: form(&growth_wire, 1),
     })
 }
 
@@ -160,7 +210,8 @@ pub fn run(a: EditArgs) -> Result<()> {
         regrow.push(t0.elapsed().as_secs_f64() * 1e3);
     }
     regrow.sort_by(f64::total_cmp);
-    let (entity_move_1000_ms, entity_move_1000_record_bytes) = time_entity_moves(&mut world, &points)?;
+    let (entity_move_1000_ms, entity_move_1000_record_bytes, entity_move_1000_delta_bytes) =
+        time_entity_moves(&mut world, &points)?;
     let replay = a
         .replay
         .as_ref()
@@ -173,6 +224,7 @@ pub fn run(a: EditArgs) -> Result<()> {
         regrow_samples: regrow.len(),
         entity_move_1000_ms,
         entity_move_1000_record_bytes,
+        entity_move_1000_delta_bytes,
         replay,
     };
     if a.json {
@@ -183,27 +235,39 @@ pub fn run(a: EditArgs) -> Result<()> {
             "{name:>10}: median {:8.1} µs, p99 {:8.1} µs, record {} B ({} B zstd), {} words written",
             k.median_us, k.p99_us, k.record_bytes, k.record_zstd_bytes, k.words_written
         );
+        println!(
+            "{:>10}  delta {} B record / {} B patch; its growth steps {} B record / {} B patch",
+            "", k.delta_record_bytes, k.delta_patch_bytes, k.growth_record_bytes, k.growth_patch_bytes
+        );
     }
     println!(
         "regrowth after emptying chunks: {:.1} ms (median of {})",
         report.regrow_after_emptying_ms, report.regrow_samples
     );
     println!(
-        "moving 1000 entities in one batch: {:.2} ms, record {} B",
-        report.entity_move_1000_ms, report.entity_move_1000_record_bytes
+        "moving 1000 entities in one batch: {:.2} ms, record {} B; delta {} B record / {} B patch",
+        report.entity_move_1000_ms,
+        report.entity_move_1000_record_bytes,
+        report.entity_move_1000_delta_bytes[0],
+        report.entity_move_1000_delta_bytes[1]
     );
     if let Some(r) = &report.replay {
         println!(
             "replay {}: {} edits at {:.0} edits/s (scale {:.4}), growth {:.1} ms",
             r.file, r.edits, r.edits_per_s, r.scale, r.growth_ms
         );
+        println!(
+            "  on the wire: edits {} B record / {} B patch; growth {} B record / {} B patch",
+            r.edit_bytes.record, r.edit_bytes.patch, r.growth_bytes.record, r.growth_bytes.patch
+        );
     }
     Ok(())
 }
 
 /// Spawns 1,000 entities a few voxels above surface points, then times batches that move
-/// all of them by a voxel or two (converging growth, untimed, between batches).
-fn time_entity_moves(world: &mut World, points: &[[u32; 3]]) -> Result<(f64, usize)> {
+/// all of them by a voxel or two (converging growth, untimed, between batches). Returns
+/// the median time, and the last batch's record and `Delta` sizes (record, patch form).
+fn time_entity_moves(world: &mut World, points: &[[u32; 3]]) -> Result<(f64, usize, [usize; 2])> {
     let limits = Limits {
         max_ops: 2000,
         ..Limits::default()
@@ -227,7 +291,8 @@ fn time_entity_moves(world: &mut World, points: &[[u32; 3]]) -> Result<(f64, usi
     world.apply(&Batch { ops }, &limits)?;
     world.grow_until_quiescent();
     let mut times = Vec::new();
-    let mut bytes = 0;
+    let (mut bytes, mut wire) = (0, [0; 2]);
+    let mut maker = PatchMaker::new(world);
     for step in 1..=10 {
         let ops = (0..1000)
             .map(|k| Op::MoveEntity {
@@ -240,10 +305,13 @@ fn time_entity_moves(world: &mut World, points: &[[u32; 3]]) -> Result<(f64, usi
         let applied = world.apply(&Batch { ops }, &limits)?;
         times.push(t0.elapsed().as_secs_f64() * 1e3);
         bytes = applied.change.encode().len();
-        world.grow_until_quiescent();
+        wire = delta_sizes(&mut maker, world, &applied.change);
+        for grown in world.grow_until_quiescent() {
+            delta_sizes(&mut maker, world, &grown);
+        }
     }
     times.sort_by(f64::total_cmp);
-    Ok((percentile(&times, 0.5), bytes))
+    Ok((percentile(&times, 0.5), bytes, wire))
 }
 
 /// Applies the `EditSphere,x,y,z,radius,add` rows of a HashDAG replay, scaled uniformly so
@@ -287,18 +355,26 @@ fn replay_hashdag(world: &mut World, path: &std::path::Path) -> Result<ReplayRep
         })
         .collect();
     let limits = Limits::default();
-    let t0 = Instant::now();
+    let mut maker = PatchMaker::new(world);
+    let (mut edit_bytes, mut growth_bytes) = (WireBytes::default(), WireBytes::default());
+    let mut apply_s = 0.0;
     for b in &batches {
-        world.apply(b, &limits)?;
+        let t0 = Instant::now();
+        let applied = world.apply(b, &limits)?;
+        apply_s += t0.elapsed().as_secs_f64();
+        edit_bytes.add(&mut maker, world, std::slice::from_ref(&applied.change));
     }
-    let apply_s = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
-    world.grow_until_quiescent();
+    let grown = world.grow_until_quiescent();
+    let growth_ms = t1.elapsed().as_secs_f64() * 1e3;
+    growth_bytes.add(&mut maker, world, &grown);
     Ok(ReplayReport {
         file: path.display().to_string(),
         edits: batches.len(),
         scale,
         edits_per_s: batches.len() as f64 / apply_s,
-        growth_ms: t1.elapsed().as_secs_f64() * 1e3,
+        growth_ms,
+        edit_bytes,
+        growth_bytes,
     })
 }
