@@ -480,7 +480,7 @@ async fn a_digest_mismatch_is_not_passed_on_and_leads_to_a_rejoin() {
     let client = Client::connect(&server.url, Some("ed"), None).await.unwrap();
     let rejoin = Arc::new(Notify::new());
     let metrics = Arc::new(Metrics::for_relay());
-    let mut hub = Hub::new(1 << 30, 64, rejoin.clone(), metrics.clone());
+    let mut hub = Hub::new(1 << 30, 64, rejoin.clone(), metrics.clone(), Default::default());
     let mut stream = feed_until_published(&mut hub, &client, 0).await;
     let (reply, rx) = oneshot::channel();
     hub.handle(Input::Request(Request::Join { resume: None, reply }));

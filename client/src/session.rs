@@ -48,6 +48,8 @@ pub enum MessageKind {
         /// The growth sub-step within it (0: the edit itself).
         growth_seq: u32,
     },
+    /// The presence table.
+    Presence,
     /// A message this client does not know (from a newer server).
     Unknown,
 }
@@ -58,13 +60,21 @@ impl MessageKind {
         Ok(match &message.kind {
             Some(world_message::Kind::Header(h)) => MessageKind::Header { pages: h.pages },
             Some(world_message::Kind::Page(_)) => MessageKind::Page,
-            Some(world_message::Kind::Delta(d)) => {
-                let r = Record::decode(&d.change).map_err(|e| Error::Malformed(format!("a delta's record: {e}")))?;
-                MessageKind::Delta {
-                    version: r.version,
-                    growth_seq: r.growth_seq,
+            Some(world_message::Kind::Presence(_)) => MessageKind::Presence,
+            Some(world_message::Kind::Delta(d)) => match &d.patch {
+                Some(p) => MessageKind::Delta {
+                    version: p.version,
+                    growth_seq: p.growth_seq,
+                },
+                None => {
+                    let r =
+                        Record::decode(&d.change).map_err(|e| Error::Malformed(format!("a delta's record: {e}")))?;
+                    MessageKind::Delta {
+                        version: r.version,
+                        growth_seq: r.growth_seq,
+                    }
                 }
-            }
+            },
             None => MessageKind::Unknown,
         })
     }

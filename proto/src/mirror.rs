@@ -12,7 +12,7 @@
 
 pub use crate::snapshot::DEFAULT_MAX_WORLD_BYTES;
 use crate::snapshot::{Assembly, buffers_of, cache_of};
-use crate::v1::{DeltaForm, JoinRequest, ResumePoint, WorldMessage, world_message};
+use crate::v1::{DeltaForm, JoinRequest, PresenceEntry, ResumePoint, WorldMessage, world_message};
 use crate::{PROTOCOL_VERSION, WireError};
 use naadf_world::World;
 use naadf_world::digest::Digest;
@@ -29,6 +29,8 @@ pub enum Progress {
     Ready,
     /// A delta was applied.
     Delta,
+    /// The presence table arrived ([`Mirror::presence`]).
+    Presence,
 }
 
 /// Errors of the mirror.
@@ -91,6 +93,8 @@ pub struct Mirror {
     last_edit: Option<StreamedEdit>,
     /// The change the latest delta applied.
     last_change: Option<ChangeSet>,
+    /// The latest presence table.
+    presence: Vec<PresenceEntry>,
     /// The most bytes of buffers a snapshot may need ([`Mirror::with_max_world_bytes`]).
     max_world_bytes: u64,
     /// What was received so far.
@@ -118,6 +122,7 @@ impl Mirror {
             keep_edits: false,
             last_edit: None,
             last_change: None,
+            presence: Vec::new(),
             max_world_bytes: DEFAULT_MAX_WORLD_BYTES,
             stats: Stats::default(),
         }
@@ -145,6 +150,7 @@ impl Mirror {
                 digest: w.digest().0,
             }),
             delta_form: DeltaForm::Record.into(),
+            presence: false,
         }
     }
 
@@ -172,6 +178,12 @@ impl Mirror {
     /// Makes the mirror keep the latest edit batch for [`Mirror::last_edit`] (recorders).
     pub fn keep_edits(&mut self) {
         self.keep_edits = true;
+    }
+
+    /// The latest presence table the stream carried (empty unless the join asked for it):
+    /// who is here, where they look, what they point at.
+    pub fn presence(&self) -> &[PresenceEntry] {
+        &self.presence
     }
 
     /// The change the latest delta applied (its writes, for a relay's patch-form deltas);
@@ -234,6 +246,10 @@ impl Mirror {
                     .ok_or_else(|| proto("a page outside a snapshot"))?
                     .page(p)?;
                 self.finish_if_complete()
+            }
+            world_message::Kind::Presence(p) => {
+                self.presence = p.entries.clone();
+                Ok(Progress::Presence)
             }
             world_message::Kind::Delta(d) => {
                 self.stats.deltas += 1;

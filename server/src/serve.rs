@@ -194,6 +194,7 @@ pub async fn serve(
         slow_clients: config.frontend.slow_clients,
         ..Shared::new(config.auth.clone(), config.rate, shutdown_rx)
     });
+    tokio::spawn(shared.presence.clone().run(shared.shutdown.clone()));
 
     let (out_tx, out_rx) = mpsc::channel(4096);
     let mut actor = Actor::new(

@@ -1,11 +1,13 @@
 //! [`Shared`]: what the gRPC service, the join tasks and the HTTP side of a server (or a
 //! relay) share — metrics, the page cache, tokens and roles, the edit rate limiter, the
-//! render router — and the [`SlowClientLimits`] the join tasks enforce.
+//! render router, the presence table — and the [`SlowClientLimits`] the join tasks
+//! enforce.
 
 use crate::data::pages;
 use crate::metrics;
 use crate::net::auth;
 use crate::render_router;
+use crate::stream::presence::Presence;
 use governor::{DefaultKeyedRateLimiter, Quota};
 use std::num::NonZeroU32;
 use std::sync::Arc;
@@ -31,6 +33,8 @@ pub struct Shared {
     pub router: render_router::Router,
     /// How many bytes clients may fall behind before their streams are cut.
     pub slow_clients: SlowClientLimits,
+    /// Who is here: the presence table the join tasks pass on.
+    pub presence: Arc<Presence>,
 }
 
 impl Shared {
@@ -57,6 +61,7 @@ impl Shared {
             rate,
             shutdown,
             slow_clients: SlowClientLimits::default(),
+            presence: Arc::default(),
         }
     }
 }

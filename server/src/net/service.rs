@@ -9,7 +9,8 @@ use naadf_proto::requests::{despawn_batch, move_batch, spawn_batch};
 use naadf_proto::v1::world_service_server::WorldService;
 use naadf_proto::v1::{
     DespawnEntitiesRequest, EditReply, EditRequest, FrameJob, FrameReply, FrameRequest, HistoryRequest, JoinRequest,
-    MoveEntitiesRequest, NodeMessage, SpawnEntitiesRequest, StatusReply, StatusRequest, WorldMessage, node_message,
+    MoveEntitiesRequest, NodeMessage, PresenceReply, PresenceRequest, SpawnEntitiesRequest, StatusReply, StatusRequest,
+    WorldMessage, node_message,
 };
 use naadf_proto::{PROTOCOL_VERSION, RETRY_AFTER_MS};
 use naadf_world::ops::{Batch, Op};
@@ -195,6 +196,18 @@ impl WorldService for WorldServer {
 
     async fn join(&self, r: Req<JoinRequest>) -> Result<Response<WorldStream>, Status> {
         reply(self.join_inner(r).await)
+    }
+
+    async fn publish(&self, r: Req<PresenceRequest>) -> Result<Response<PresenceReply>, Status> {
+        let result = async {
+            let caller = self.caller(&r)?;
+            // Without tokens the "user" is whatever the caller sent: the name stands alone.
+            let user = (!self.shared.auth.is_open()).then_some(caller.user.as_str());
+            self.shared.presence.publish(user, r.into_inner())?;
+            Ok(Response::new(PresenceReply {}))
+        }
+        .await;
+        reply(result)
     }
 
     async fn edit(&self, r: Req<EditRequest>) -> Result<Response<EditReply>, Status> {

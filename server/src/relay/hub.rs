@@ -14,6 +14,7 @@
 use crate::data::pages::{PageStore, SnapshotView};
 use crate::metrics::Metrics;
 use crate::stream::messages::{Event, Request, StatusInfo, Subscription, patch_delta};
+use crate::stream::presence::Presence;
 use crate::stream::publisher::Publisher;
 use naadf_proto::mirror::{Mirror, Progress};
 use naadf_proto::patch::PatchMaker;
@@ -60,12 +61,21 @@ pub struct Hub {
     metrics: Arc<Metrics>,
     /// How many deltas a client may fall behind (the broadcast's capacity).
     capacity: usize,
+    /// The relay's presence table: the upstream's, passed on.
+    presence: Arc<Presence>,
 }
 
 impl Hub {
     /// A hub whose mirror accepts worlds of up to `max_world_bytes`, whose clients may fall
-    /// `capacity` deltas behind, and which wakes `rejoin` when a stream must be given up.
-    pub fn new(max_world_bytes: u64, capacity: usize, rejoin: Arc<Notify>, metrics: Arc<Metrics>) -> Self {
+    /// `capacity` deltas behind, which wakes `rejoin` when a stream must be given up, and
+    /// which passes the upstream's presence table on to `presence`.
+    pub fn new(
+        max_world_bytes: u64,
+        capacity: usize,
+        rejoin: Arc<Notify>,
+        metrics: Arc<Metrics>,
+        presence: Arc<Presence>,
+    ) -> Self {
         Self {
             mirror: Mirror::default().with_max_world_bytes(max_world_bytes),
             pages: None,
@@ -79,6 +89,7 @@ impl Hub {
             rejoin,
             metrics,
             capacity,
+            presence,
         }
     }
 
@@ -96,7 +107,11 @@ impl Hub {
             Input::Rejoin(reply) => {
                 self.generation += 1;
                 self.rejected = false;
-                let _ = reply.send((self.mirror.join_request(), self.generation));
+                let request = JoinRequest {
+                    presence: true,
+                    ..self.mirror.join_request()
+                };
+                let _ = reply.send((request, self.generation));
             }
             Input::Message(generation, m) => {
                 if generation == self.generation && !self.rejected {
@@ -159,6 +174,7 @@ impl Hub {
             Ok(Progress::Snapshot) => {}
             Ok(Progress::Delta) => self.publish_delta(m),
             Ok(Progress::Ready) => self.ready(),
+            Ok(Progress::Presence) => self.presence.replace(self.mirror.presence().to_vec()),
         }
     }
 

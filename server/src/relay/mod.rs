@@ -137,6 +137,7 @@ pub async fn relay(
         config.frontend.slow_client_events,
         rejoin.clone(),
         metrics.clone(),
+        shared.presence.clone(),
     );
     let hub = std::thread::Builder::new()
         .name("naadf-relay-hub".into())

@@ -11,7 +11,7 @@ use crate::stream::messages::Request;
 use naadf_proto::v1::world_service_server::WorldService;
 use naadf_proto::v1::{
     DespawnEntitiesRequest, EditReply, EditRequest, FrameJob, FrameReply, FrameRequest, HistoryRequest, JoinRequest,
-    MoveEntitiesRequest, NodeMessage, SpawnEntitiesRequest, StatusReply, StatusRequest,
+    MoveEntitiesRequest, NodeMessage, PresenceReply, PresenceRequest, SpawnEntitiesRequest, StatusReply, StatusRequest,
 };
 use std::pin::Pin;
 use std::sync::Arc;
@@ -110,6 +110,13 @@ impl WorldService for RelayService {
 
     async fn redo(&self, r: Req<HistoryRequest>) -> Result<Response<EditReply>, Status> {
         forward!(self, r, redo)
+    }
+
+    async fn publish(&self, r: Req<PresenceRequest>) -> Result<Response<PresenceReply>, Status> {
+        // The upstream stamps the caller and sends the table back down the relay's join.
+        self.auth.admit(r.remote_addr()).await?;
+        let answer = self.upstream.client().publish(Upstream::forwarded(r)).await;
+        answer.map_err(upstream_error)
     }
 
     async fn render_frame(&self, r: Req<FrameRequest>) -> Result<Response<FrameReply>, Status> {

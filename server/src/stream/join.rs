@@ -17,9 +17,10 @@ use crate::shared::Shared;
 use crate::stream::feed::{Feed, Item, feed};
 use crate::stream::messages::Request;
 use crate::stream::messages::{Event, Subscription};
+use crate::stream::presence::Table;
 use naadf_proto::PROTOCOL_VERSION;
 use naadf_proto::snapshot::{buffer_lengths, group_pages};
-use naadf_proto::v1::{CachedBuffer, DeltaForm, Header, JoinRequest, Page, WorldMessage, world_message};
+use naadf_proto::v1::{CachedBuffer, DeltaForm, Header, JoinRequest, Page, Presence, WorldMessage, world_message};
 use naadf_world::digest::PAGE_BYTES;
 use naadf_world::file::TRANSFERRED;
 use prost::Message;
@@ -75,12 +76,18 @@ pub fn start(
     let form = DeltaForm::try_from(req.delta_form)
         .map_err(|_| Status::invalid_argument(format!("unknown delta form {}", req.delta_form)))?;
     let resume = req.resume.map(|r| (r.version, r.digest));
+    let presence = req.presence.then(|| {
+        // The table as it is now goes out after the snapshot, then every change.
+        let mut table = shared.presence.subscribe();
+        table.mark_changed();
+        table
+    });
     let (tx, rx, cut) = feed(STREAM_BUFFER);
     tokio::spawn(async move {
         let id = shared.activity.joined(&user);
         shared.metrics.clients.inc();
         let out = Outbox::new(shared.clone(), tx, form);
-        if let Err(Stop::Behind(behind)) = run(&shared, actor, held, resume, out).await {
+        if let Err(Stop::Behind(behind)) = run(&shared, actor, held, resume, presence, out).await {
             tracing::info!(behind, "client fell behind; ending its stream");
             shared.metrics.resyncs.inc();
             cut.end(Status::aborted(FELL_BEHIND));
@@ -93,12 +100,13 @@ pub fn start(
 
 /// Streams the world to one client through `out` until it leaves, the server shuts down
 /// (both `Ok`) or the client falls behind. `resume` is the state the client's cache holds,
-/// `(version, digest)`.
+/// `(version, digest)`; `presence`, the presence table, if the client asked for it.
 async fn run(
     shared: &Shared,
     actor: mpsc::Sender<Request>,
     mut held: ClientPages,
     resume: Option<(u64, u64)>,
+    mut presence: Option<watch::Receiver<Table>>,
     mut out: Outbox,
 ) -> Result<(), Stop> {
     let mut shutdown = shared.shutdown.clone();
@@ -131,6 +139,10 @@ async fn run(
                 _ = shutdown.changed() => return Ok(()),
                 // The client went away while nothing was being sent.
                 _ = out.tx.closed() => return Ok(()),
+                table = next_table(&mut presence) => {
+                    out.send(table).await?;
+                    continue;
+                }
             };
             match next {
                 Ok(ev) => {
@@ -150,6 +162,19 @@ async fn run(
         }
         resync = true;
     }
+}
+
+/// The presence table once it changed, as a stream message; never without `presence`.
+async fn next_table(presence: &mut Option<watch::Receiver<Table>>) -> WorldMessage {
+    let Some(table) = presence else {
+        return std::future::pending().await;
+    };
+    if table.changed().await.is_err() {
+        // The table is gone with the server: nothing more to send.
+        return std::future::pending().await;
+    }
+    let entries = table.borrow_and_update().to_vec();
+    message(world_message::Kind::Presence(Presence { entries }))
 }
 
 /// Why a client's stream stops early.

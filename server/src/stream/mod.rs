@@ -7,7 +7,9 @@
 //!   publishes through it too);
 //! - [`join`]: one client's stream — snapshot or resume, then every delta;
 //! - [`feed`]: that stream as the gRPC server reads it, which a fall behind cuts at once;
-//! - [`messages`]: what they hand each other, the actor's mailbox included.
+//! - [`messages`]: what they hand each other, the actor's mailbox included;
+//! - [`presence`]: who is here and where they look, passed on to the clients that ask,
+//!   never durable.
 
 pub mod actor;
 pub mod committer;
@@ -15,4 +17,5 @@ pub mod feed;
 pub mod growth;
 pub mod join;
 pub mod messages;
+pub mod presence;
 pub mod publisher;

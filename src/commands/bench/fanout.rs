@@ -132,7 +132,7 @@ pub fn client(a: FanoutClientArgs) -> Result<()> {
                         times.push((version, now));
                     }
                 }
-                MessageKind::Unknown => {}
+                MessageKind::Presence | MessageKind::Unknown => {}
             }
             if !ready && pages_left == Some(0) {
                 ready = true;
