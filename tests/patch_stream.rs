@@ -6,7 +6,7 @@
 
 mod support;
 
-use naadf_client::{Client, Mirror, Pose, Spawn};
+use naadf_client::{Client, Mirror, Pose};
 use naadf_proto::mirror::Progress;
 use naadf_proto::v1::world_service_client::WorldServiceClient;
 use naadf_proto::v1::{DeltaForm, Patch, Run, Runs, world_message};
@@ -143,19 +143,8 @@ async fn edit_everything(c: &Client) {
     for _ in 0..20 {
         c.edit(random_op(&mut rng), next()).await.unwrap();
     }
-    let model = r#"{"op":"define_model","name":"crate","size":[3,2,3],"voxels":[[0,0,0,2],[1,1,1,3],[2,0,2,4]]}"#;
+    let (model, spawns) = support::crates();
     c.edit(model, next()).await.unwrap();
-    let rot = [0.0, 0.38268343236508984, 0.0, 0.9238795325112867];
-    let spawns: Vec<Spawn> = (1..=3)
-        .map(|id| Spawn {
-            model: "crate".into(),
-            pose: Pose {
-                id,
-                pos: [20.0 * f64::from(id), 50.0, 30.0],
-                rot,
-            },
-        })
-        .collect();
     c.spawn_entities(&spawns, next()).await.unwrap();
     let moved = Pose {
         id: 2,

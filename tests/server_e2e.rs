@@ -4,7 +4,7 @@
 mod support;
 
 use naadf_client::error::Code;
-use naadf_client::{Client, Ended, Error, Mirror, Pose, Spawn};
+use naadf_client::{Client, Ended, Error, Mirror, Pose};
 use naadf_world::digest::BufferId;
 use naadf_world::{World, file};
 use std::ops::ControlFlow;
@@ -412,19 +412,8 @@ async fn entity_requests_reach_the_mirrors() {
     let (_, server) = serve_fresh(dir.path(), &[]);
     let f = Follower::start(&server.url, "viewer", None).await;
     let c = client(&server.url, "admin").await;
-    let model = r#"{"op":"define_model","name":"crate","size":[3,2,3],"voxels":[[0,0,0,2],[1,1,1,3],[2,0,2,4]]}"#;
+    let (model, spawns) = support::crates();
     c.edit(model, 1).await.unwrap();
-    let rot = [0.0, 0.38268343236508984, 0.0, 0.9238795325112867];
-    let spawns: Vec<Spawn> = (1..=3)
-        .map(|id| Spawn {
-            model: "crate".into(),
-            pose: Pose {
-                id,
-                pos: [20.0 * f64::from(id), 50.0, 30.0],
-                rot,
-            },
-        })
-        .collect();
     c.spawn_entities(&spawns, 2).await.unwrap();
     let unrotated = [0.0, 0.0, 0.0, 1.0];
     let moved = Pose {

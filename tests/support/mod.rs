@@ -315,3 +315,21 @@ pub async fn stalled_client(url: &str) -> tonic::Streaming<naadf_proto::v1::Worl
         .unwrap()
         .into_inner()
 }
+
+/// The `define_model` op of a small "crate" model, and three crates of it to spawn (ids
+/// 1–3, rotated 45° about y), as the entity tests use them.
+pub fn crates() -> (&'static str, Vec<naadf_client::Spawn>) {
+    let model = r#"{"op":"define_model","name":"crate","size":[3,2,3],"voxels":[[0,0,0,2],[1,1,1,3],[2,0,2,4]]}"#;
+    let rot = [0.0, 0.38268343236508984, 0.0, 0.9238795325112867];
+    let spawns = (1..=3)
+        .map(|id| naadf_client::Spawn {
+            model: "crate".into(),
+            pose: naadf_client::Pose {
+                id,
+                pos: [20.0 * f64::from(id), 50.0, 30.0],
+                rot,
+            },
+        })
+        .collect();
+    (model, spawns)
+}
