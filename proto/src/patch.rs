@@ -14,11 +14,15 @@ use prost::Message;
 
 /// The zstd level of compressed runs (the level snapshot pages use).
 const LEVEL: i32 = 3;
+/// Runs shorter than this, encoded, are not worth a zstd frame (its header and the
+/// compressor's set-up cost more than they could save).
+const MIN_COMPRESSED: usize = 128;
 
 /// Makes the patches of a world's changes, remembering its buffers' lengths between them.
-#[derive(Clone, Debug)]
 pub struct PatchMaker {
     lens: [usize; 8],
+    /// Kept between patches: making a compressor costs more than compressing a small run.
+    zstd: zstd::bulk::Compressor<'static>,
 }
 
 impl PatchMaker {
@@ -26,6 +30,7 @@ impl PatchMaker {
     pub fn new(world: &World) -> Self {
         Self {
             lens: BufferId::WORLD.map(|id| world.buffer_bytes(id).len()),
+            zstd: zstd::bulk::Compressor::new(LEVEL).expect("a zstd compressor"),
         }
     }
 
@@ -34,6 +39,12 @@ impl PatchMaker {
     pub fn patch(&mut self, world: &World, change: &ChangeSet) -> Patch {
         let mut lengths = Vec::new();
         for (k, id) in BufferId::WORLD.into_iter().enumerate() {
+            // The model table is an encoding made on request: its length changes only
+            // when the table is rewritten, which the writes say.
+            let models_written = || change.writes.ranges().iter().any(|(w, _)| *w == BufferId::Models);
+            if id == BufferId::Models && !models_written() {
+                continue;
+            }
             let len = world.buffer_bytes(id).len();
             if len != self.lens[k] {
                 self.lens[k] = len;
@@ -66,8 +77,12 @@ impl PatchMaker {
         }
         let plain = Runs { runs };
         let encoded = plain.encode_to_vec();
-        let zstd = zstd::bulk::compress(&encoded, LEVEL).expect("compressing into memory");
-        let (runs, zstd) = if zstd.len() < encoded.len() {
+        let zstd = if encoded.len() >= MIN_COMPRESSED {
+            self.zstd.compress(&encoded).expect("compressing into memory")
+        } else {
+            Vec::new()
+        };
+        let (runs, zstd) = if !zstd.is_empty() && zstd.len() < encoded.len() {
             (Vec::new(), zstd)
         } else {
             (plain.runs, Vec::new())
@@ -83,10 +98,10 @@ impl PatchMaker {
     }
 }
 
-/// The encoded sizes, in bytes, of the `Delta` of `change` (which `world` has just applied)
-/// in the record form and in the patch form, with no user: what a client of each form
-/// receives for it. The patch is made with `maker`, which it advances.
-pub fn delta_sizes(maker: &mut PatchMaker, world: &World, change: &ChangeSet) -> [usize; 2] {
+/// The encoded sizes, in bytes, of the `Delta` of `change` in the record form and in the
+/// patch form, `patch` being its patch, with no user: what a client of each form receives
+/// for it.
+pub fn delta_sizes(change: &ChangeSet, patch: Patch) -> [usize; 2] {
     let record = Delta {
         change: change.encode(),
         digest: change.digest.0,
@@ -94,7 +109,7 @@ pub fn delta_sizes(maker: &mut PatchMaker, world: &World, change: &ChangeSet) ->
     };
     let patch = Delta {
         digest: change.digest.0,
-        patch: Some(maker.patch(world, change)),
+        patch: Some(patch),
         ..Delta::default()
     };
     [record.encoded_len(), patch.encoded_len()]

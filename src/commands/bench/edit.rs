@@ -51,21 +51,30 @@ struct KindReport {
     growth_record_bytes: usize,
     /// The same in the patch form, bytes (median).
     growth_patch_bytes: usize,
+    /// Making the edit's patch (what the server's actor does for every change besides
+    /// applying it), µs (median).
+    patch_us: f64,
 }
 
-/// What a run of changes costs on the wire in each form, bytes.
+/// What a run of changes costs on the wire in each form, bytes, and making the patches.
 #[derive(Serialize, Default)]
 struct WireBytes {
     record: u64,
     patch: u64,
+    /// Making the patches, µs.
+    patch_us: f64,
 }
 
 impl WireBytes {
-    /// Adds the deltas of `changes`, which `world` has applied, made with `maker`.
+    /// Adds the deltas of `changes`, which `world` has applied, made with `maker`; returns
+    /// their sizes in each form.
     fn add(&mut self, maker: &mut PatchMaker, world: &World, changes: &[ChangeSet]) -> [usize; 2] {
         let mut sum = [0; 2];
         for cs in changes {
-            let [r, p] = delta_sizes(maker, world, cs);
+            let t0 = Instant::now();
+            let patch = maker.patch(world, cs);
+            self.patch_us += t0.elapsed().as_secs_f64() * 1e6;
+            let [r, p] = delta_sizes(cs, patch);
             sum = [sum[0] + r, sum[1] + p];
         }
         self.record += sum[0] as u64;
@@ -117,6 +126,7 @@ fn time_batches(world: &mut World, batches: &[Batch]) -> Result<KindReport> {
     let (mut edit_wire, mut growth_wire) = (Vec::new(), Vec::new());
     let mut maker = PatchMaker::new(world);
     let mut wire = WireBytes::default();
+    let mut patch_us = Vec::new();
     for b in batches {
         let t0 = Instant::now();
         let applied = world.apply(b, &limits)?;
@@ -125,7 +135,9 @@ fn time_batches(world: &mut World, batches: &[Batch]) -> Result<KindReport> {
         zbytes.push(zstd::bulk::compress(&rec, 3)?.len());
         bytes.push(rec.len());
         words.push(applied.change.writes.words());
+        let before = wire.patch_us;
         edit_wire.push(wire.add(&mut maker, world, std::slice::from_ref(&applied.change)));
+        patch_us.push(wire.patch_us - before);
         // The growth steps' patches read the buffers once growth is done: their sizes,
         // not their exact bytes, are what counts here.
         let grown = world.grow_until_quiescent();
@@ -144,6 +156,10 @@ fn time_batches(world: &mut World, batches: &[Batch]) -> Result<KindReport> {
         delta_patch_bytes: form(&edit_wire, 1),
         growth_record_bytes: form(&growth_wire, 0),
         growth_patch_bytes: form(&growth_wire, 1),
+        patch_us: {
+            patch_us.sort_by(f64::total_cmp);
+            percentile(&patch_us, 0.5)
+        },
     })
 }
 
@@ -236,8 +252,8 @@ pub fn run(a: EditArgs) -> Result<()> {
             k.median_us, k.p99_us, k.record_bytes, k.record_zstd_bytes, k.words_written
         );
         println!(
-            "{:>10}  delta {} B record / {} B patch; its growth steps {} B record / {} B patch",
-            "", k.delta_record_bytes, k.delta_patch_bytes, k.growth_record_bytes, k.growth_patch_bytes
+            "{:>10}  delta {} B record / {} B patch (made in {:.1} µs); its growth steps {} B record / {} B patch",
+            "", k.delta_record_bytes, k.delta_patch_bytes, k.patch_us, k.growth_record_bytes, k.growth_patch_bytes
         );
     }
     println!(
@@ -305,9 +321,9 @@ fn time_entity_moves(world: &mut World, points: &[[u32; 3]]) -> Result<(f64, usi
         let applied = world.apply(&Batch { ops }, &limits)?;
         times.push(t0.elapsed().as_secs_f64() * 1e3);
         bytes = applied.change.encode().len();
-        wire = delta_sizes(&mut maker, world, &applied.change);
+        wire = delta_sizes(&applied.change, maker.patch(world, &applied.change));
         for grown in world.grow_until_quiescent() {
-            delta_sizes(&mut maker, world, &grown);
+            maker.patch(world, &grown);
         }
     }
     times.sort_by(f64::total_cmp);
