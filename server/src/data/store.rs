@@ -48,7 +48,11 @@ impl DataDir {
             verify(i);
             !matches!(i.verdict(), Verdict::Refuse(_))
         })?;
-        verify(&mut inspection);
+        // Without a lock, the look above was verified and refused; with one, this is a
+        // new look (under the lock), which the verification must see.
+        if lock.is_some() {
+            verify(&mut inspection);
+        }
         let snapshot = match inspection.verdict() {
             Verdict::Refuse(r) => return Err(StoreError::Refused(Box::new(r))),
             Verdict::New => None,

@@ -104,7 +104,7 @@ async fn flood(kind: Flood, addr: String, reconnect: bool, closed: Arc<AtomicU64
             tokio::time::sleep(Duration::from_millis(100)).await;
             continue;
         };
-        let held = match kind {
+        match kind {
             Flood::Preface => hold(s, b"PRI * HTTP/2.0\r\n\r\nSM\r\n\r\n", None).await,
             Flood::Partial => hold(s, b"GET /health HTTP/1.1\r\nHost: x\r\n", None).await,
             Flood::Slowloris => hold(s, b"GET /health HTTP/1.1\r\nHost: x\r\n", Some(Duration::from_secs(5))).await,
@@ -115,12 +115,9 @@ async fn flood(kind: Flood, addr: String, reconnect: bool, closed: Arc<AtomicU64
                     let _ = connection.await;
                     drop(send);
                 }
-                true
             }
-        };
-        if held {
-            closed.fetch_add(1, Ordering::Relaxed);
         }
+        closed.fetch_add(1, Ordering::Relaxed);
         if !reconnect {
             return;
         }
@@ -128,11 +125,11 @@ async fn flood(kind: Flood, addr: String, reconnect: bool, closed: Arc<AtomicU64
 }
 
 /// Sends `first`, then a byte every `trickle` (or nothing), until the server closes the
-/// connection; true once it has.
-async fn hold(mut s: TcpStream, first: &[u8], trickle: Option<Duration>) -> bool {
+/// connection.
+async fn hold(mut s: TcpStream, first: &[u8], trickle: Option<Duration>) {
     use tokio::io::AsyncReadExt;
     if s.write_all(first).await.is_err() {
-        return true;
+        return;
     }
     let (mut r, mut w) = s.split();
     let reading = async {
@@ -154,7 +151,6 @@ async fn hold(mut s: TcpStream, first: &[u8], trickle: Option<Duration>) -> bool
         () = reading => {}
         () = writing => {}
     }
-    true
 }
 
 /// Runs the benchmark.
