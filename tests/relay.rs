@@ -192,11 +192,11 @@ async fn a_relay_widens_no_role_and_forwards_the_callers_token() {
         assert_eq!(e.code(), Some(naadf_client::error::Code::Unauthenticated), "{e}");
     }
     assert_eq!(
-        http_get(&relay.http, "/").0,
+        http_get(&relay.http, "/status").0,
         401,
         "the status page asks the upstream too"
     );
-    assert_eq!(http_get(&relay.http, "/?token=vt").0, 200);
+    assert_eq!(http_get(&relay.http, "/status?token=vt").0, 200);
     // The viewer reads the edit through the relay.
     let mut session = viewer.join(None).await.unwrap();
     let w = session.until_quiescent(first.version, SETTLE).await.unwrap();
@@ -258,7 +258,7 @@ async fn a_relay_in_front_of_an_open_server_admits_only_its_own_machine() {
         "admin",
         "loopback callers are served"
     );
-    assert_eq!(http_get(&format!("127.0.0.1:{http_port}"), "/").0, 200);
+    assert_eq!(http_get(&format!("127.0.0.1:{http_port}"), "/status").0, 200);
     let Some(ip) = non_loopback_ip() else {
         eprintln!("SKIPPED (part): this machine has no non-loopback address to call the relay from");
         relay.stop();
@@ -279,7 +279,7 @@ async fn a_relay_in_front_of_an_open_server_admits_only_its_own_machine() {
     ] {
         assert_eq!(e.code(), Some(naadf_client::error::Code::PermissionDenied), "{e}");
     }
-    assert_eq!(http_get(&at(http_port), "/?token=any").0, 403);
+    assert_eq!(http_get(&at(http_port), "/status?token=any").0, 403);
     assert_eq!(http_get(&at(http_port), "/frame.png?token=any").0, 403);
     let after = local.status().await.unwrap().version;
     assert_eq!(after, before, "nothing from the network reached the server");

@@ -240,8 +240,8 @@ fn frames_from_render_nodes_equal_local_renders() {
     let (code, _) = http_get_bytes(&server.http, "/frame.png?camera=%7B%7D&token=vw");
     assert_eq!(code, 400, "a bad camera");
     // With tokens, the page wants one too; the metrics (aggregates) do not.
-    assert_eq!(http_get(&server.http, "/").0, 401);
-    let (code, page) = http_get(&server.http, "/?token=vw");
+    assert_eq!(http_get(&server.http, "/status").0, 401);
+    let (code, page) = http_get(&server.http, "/status?token=vw");
     assert_eq!(code, 200);
     let adapter = v["node"].as_str().unwrap().to_owned();
     assert!(page.contains("Render nodes") && page.contains(&adapter), "{page}");
@@ -354,7 +354,7 @@ fn a_request_survives_the_death_of_its_node() {
     let Some((_, server)) = started(dir.path()) else { return };
     // Rows of the status page's node table.
     let count_nodes = || {
-        let page = http_get(&server.http, "/?token=vw").1;
+        let page = http_get(&server.http, "/status?token=vw").1;
         let table = page
             .split("<table id=nodes>")
             .nth(1)
@@ -408,7 +408,7 @@ fn a_request_survives_the_death_of_its_node() {
     assert_eq!((img.width(), img.height()), (1600, 1200));
     wait_for(1);
     // The frame came from the second node: the one left has served it.
-    let page = http_get(&server.http, "/?token=vw").1;
+    let page = http_get(&server.http, "/status?token=vw").1;
     let row = page
         .split("<table id=nodes>")
         .nth(1)

@@ -604,7 +604,7 @@ fn http_endpoints() {
         (end["version"].clone(), end["digest"].clone())
     );
 
-    let (code, page) = http_get(http, "/");
+    let (code, page) = http_get(http, "/status");
     assert_eq!(code, 200);
     assert!(page.contains("naadf"), "{page}");
     assert!(page.contains("<html"), "{page}");
@@ -867,7 +867,7 @@ fn http_wants_a_token_when_the_server_has_tokens() {
 
     let (code, body) = http_get(http, "/health");
     assert_eq!(code, 200, "{body}");
-    for path in ["/", "/?token=nope"] {
+    for path in ["/status", "/status?token=nope"] {
         let (code, body) = http_get(http, path);
         assert_eq!(code, 401, "{path}: {body}");
         assert!(!body.contains("edwin"), "{path} names a user without a token: {body}");
@@ -876,7 +876,7 @@ fn http_wants_a_token_when_the_server_has_tokens() {
     assert_eq!(code, 200, "{metrics}");
     assert!(metrics.lines().any(|l| l == "naadf_edits_total 1"), "{metrics}");
     assert!(!metrics.contains("edwin") && !metrics.contains("vera"), "{metrics}");
-    let (code, page) = http_get(http, "/?token=vt");
+    let (code, page) = http_get(http, "/status?token=vt");
     assert_eq!(code, 200, "{page}");
     assert!(page.contains("edwin"), "{page}");
     assert!(page.contains("token=vt"), "the live frame lacks the token: {page}");

@@ -25,6 +25,8 @@
 //!   model, [`crate::light`], the ground truth of the lit modes), [`Baseline`] (1-spp path
 //!   tracing with an exponential TAA, the paper's comparison) and [`Gi`] (the paper's GI
 //!   pipeline), the last two behind [`Temporal`];
+//! - [`browser`]: the browser page's WGSL and buffer layout, generated from the same
+//!   definitions;
 //! - [`Headless`]: a device, the renderers and a GPU copy that follows a changing world.
 //!
 //! [`World`]: naadf_world::World
@@ -32,6 +34,7 @@
 
 mod baseline;
 mod bindings;
+pub mod browser;
 mod context;
 mod gi;
 mod headless;

@@ -64,7 +64,7 @@ impl PassPipelines {
     ) -> Result<wgpu::ComputePipeline, GpuError> {
         let key = (world.split(), lp, aadf);
         if !self.cache.contains_key(&key) {
-            let src = shaders::source(&self.pass, lp, &key.0);
+            let src = shaders::source(&self.pass, lp, shaders::WorldBindings::Split(&key.0));
             let pipeline = gpu.checked(|| {
                 let module = gpu.device.create_shader_module(wgpu::ShaderModuleDescriptor {
                     label: Some(self.pass.entry),

@@ -1,5 +1,6 @@
 //! Tests of the generated WGSL: every pass validates with naga over whole and split
-//! buffers, declares no uniform buffer and lays its shared structs out as Rust does; the
+//! buffers (and over the browser page's one world binding within WebGPU's default limits),
+//! declares no uniform buffer and lays its shared structs out as Rust does; the
 //! prelude's constants read back with the Rust bits and its accessors pick the part.
 
 use super::baseline::taa_pass;
@@ -9,11 +10,12 @@ use super::params::{FrameInfo, GiInfo, LightInfo, RayCount, RayIn, View, WgslStr
 use super::pathtrace::path_pass;
 use super::rays::rays_pass;
 use super::render::render_pass;
-use super::shaders::{CONSTANTS, Loop, PassSource, WgslValue, prelude, source};
+use super::shaders::{CONSTANTS, Loop, PassSource, WgslValue, WorldBindings, prelude, source};
 
 fn validate(src: &str) -> Result<(), String> {
     let module = naga::front::wgsl::parse_str(src).map_err(|e| e.emit_to_string(src))?;
-    // The capabilities wgpu grants on every backend the client targets.
+    // The capabilities wgpu grants on every backend the client targets; the browser has
+    // them too (WebGPU's core `pack2x16float`).
     let caps = naga::valid::Capabilities::SHADER_FLOAT16_IN_FLOAT32;
     naga::valid::Validator::new(naga::valid::ValidationFlags::all(), caps)
         .validate(&module)
@@ -66,11 +68,37 @@ fn every_pass_validates_with_naga_for_whole_and_split_buffers() {
     for (s, g) in [(whole(), gi_whole), (split, gi_split)] {
         for pass in every_pass(g) {
             for lp in Loop::ALL {
-                if let Err(e) = validate(&source(&pass, lp, &s)) {
+                if let Err(e) = validate(&source(&pass, lp, WorldBindings::Split(&s))) {
                     panic!("{} with {lp:?} over {s:?}:\n{e}", pass.entry);
                 }
             }
         }
+    }
+}
+
+/// The browser page's form of every pass (the GI pipeline's too): the world in one storage
+/// binding and the parameters as uniforms validate (with `unpack2x16float`, core in WebGPU,
+/// as the only capability naga asks for) within
+/// WebGPU's default 8 storage buffers per stage.
+#[test]
+fn every_pass_fits_webgpu_default_limits_over_one_world_binding() {
+    let gi_whole = GiSplit {
+        part_bytes_shift: 27,
+        mem_parts: 1,
+        taa_parts: 1,
+    };
+    for pass in every_pass(gi_whole) {
+        let wgsl = source(&pass, Loop::Hierarchy, WorldBindings::Single);
+        if let Err(e) = validate(&wgsl) {
+            panic!("{}:\n{e}", pass.entry);
+        }
+        let module = parse(&wgsl);
+        let storage = module
+            .global_variables
+            .iter()
+            .filter(|(_, v)| matches!(v.space, naga::AddressSpace::Storage { .. }))
+            .count();
+        assert!(storage <= 8, "{} declares {storage} storage buffers", pass.entry);
     }
 }
 
@@ -85,7 +113,7 @@ fn no_pass_declares_a_uniform_buffer() {
     };
     for pass in every_pass(gi_split) {
         for lp in Loop::ALL {
-            let module = parse(&source(&pass, lp, &whole()));
+            let module = parse(&source(&pass, lp, WorldBindings::Split(&whole())));
             let uniforms: Vec<_> = module
                 .global_variables
                 .iter()
@@ -122,13 +150,17 @@ fn assert_rust_layout<T: WgslStruct>(module: &naga::Module) {
 
 #[test]
 fn the_shared_structs_are_laid_out_at_the_rust_offsets() {
-    let prelude = parse(&source(&taa_pass(), Loop::Hierarchy, &whole()));
+    let prelude = parse(&source(&taa_pass(), Loop::Hierarchy, WorldBindings::Split(&whole())));
     assert_rust_layout::<WorldInfo>(&prelude);
     assert_rust_layout::<FrameInfo>(&prelude);
     assert_rust_layout::<LightInfo>(&prelude);
     assert_rust_layout::<GiInfo>(&prelude);
-    assert_rust_layout::<View>(&parse(&source(&render_pass(), Loop::Hierarchy, &whole())));
-    let rays = parse(&source(&rays_pass(), Loop::Hierarchy, &whole()));
+    assert_rust_layout::<View>(&parse(&source(
+        &render_pass(),
+        Loop::Hierarchy,
+        WorldBindings::Split(&whole()),
+    )));
+    let rays = parse(&source(&rays_pass(), Loop::Hierarchy, WorldBindings::Split(&whole())));
     assert_rust_layout::<RayCount>(&rays);
     assert_rust_layout::<RayIn>(&rays);
 }
@@ -152,7 +184,7 @@ fn value(module: &naga::Module, e: naga::Handle<naga::Expression>) -> WgslValue 
 /// WGSL reads back every constant bit for bit: the same bits as the Rust item.
 #[test]
 fn the_prelude_constants_have_their_rust_values_bit_for_bit() {
-    let module = parse(&prelude(&whole()));
+    let module = parse(&prelude(WorldBindings::Split(&whole())));
     let wgsl: Vec<(&str, WgslValue)> = module
         .constants
         .iter()
@@ -170,10 +202,10 @@ fn the_prelude_constants_have_their_rust_values_bit_for_bit() {
 
 #[test]
 fn split_accessors_pick_the_part() {
-    let p = prelude(&Split {
+    let p = prelude(WorldBindings::Split(&Split {
         part_shift: 14,
         parts: [1, 1, 1, 3, 1, 1, 1, 1],
-    });
+    }));
     assert!(p.contains("fn voxel_word(i: u32) -> u32 {\n    let j = i & 16383u;\n    switch i >> 14u {"));
     assert!(p.contains("case 1u: { return voxels_1[j]; }"));
     assert!(p.contains("default: { return voxels_2[j]; }"));

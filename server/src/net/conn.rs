@@ -321,13 +321,18 @@ fn out_of_descriptors(e: &io::Error) -> bool {
 }
 
 /// An accepted connection: holds its place under the cap until dropped, and fails reads
-/// once it is past its request deadline without a complete request head, once its peer
-/// has sent nothing for the idle timeout, or once it was evicted.
+/// once it is past its request deadline without a complete request head, once it has been
+/// idle for the idle timeout, or once it was evicted.
+///
+/// It is in use while its peer sends, and while the peer takes what is written to it: an
+/// HTTP/1 response that streams for minutes (a browser's `Join` over gRPC-web, which has
+/// no pings to answer) keeps its connection. A peer that stops reading stops the writes
+/// as soon as the socket's buffers are full, so it still times out.
 pub struct Conn {
     io: TcpStream,
     idle: Duration,
-    /// When the peer last sent something.
-    last_read: tokio::time::Instant,
+    /// When the peer last sent something, or took bytes written to it.
+    last_active: tokio::time::Instant,
     /// When the request deadline runs out.
     request_by: tokio::time::Instant,
     /// The earlier of the two that applies, armed while a read waits.
@@ -343,7 +348,7 @@ impl Conn {
         Self {
             io,
             idle: limits.idle_timeout,
-            last_read: now,
+            last_active: now,
             request_by,
             deadline: Box::pin(tokio::time::sleep_until(request_by.min(now + limits.idle_timeout))),
             usage: Arc::default(),
@@ -363,11 +368,11 @@ impl Conn {
 
     /// When a waiting read fails, and why.
     fn due(&self) -> (tokio::time::Instant, &'static str) {
-        let idle = self.last_read + self.idle;
+        let idle = self.last_active + self.idle;
         if !self.usage.is_used() && self.request_by < idle {
             (self.request_by, "no complete request within the request deadline")
         } else {
-            (idle, "the peer sent nothing for the idle timeout")
+            (idle, "the connection was idle for the idle timeout")
         }
     }
 }
@@ -389,7 +394,7 @@ impl AsyncRead for Conn {
         match Pin::new(&mut self.io).poll_read(cx, buf) {
             Poll::Ready(Ok(())) if buf.filled().len() > before => {
                 // The deadline is moved when a read next waits, not on every read.
-                self.last_read = tokio::time::Instant::now();
+                self.last_active = tokio::time::Instant::now();
                 Poll::Ready(Ok(()))
             }
             Poll::Pending => {
@@ -413,37 +418,44 @@ impl AsyncRead for Conn {
     }
 }
 
-/// Implements `AsyncWrite` for a wrapper by handing every call to its field `$io`.
-macro_rules! write_through {
-    ($io:ident) => {
-        fn poll_write(mut self: Pin<&mut Self>, cx: &mut Context<'_>, buf: &[u8]) -> Poll<io::Result<usize>> {
-            Pin::new(&mut self.$io).poll_write(cx, buf)
+impl Conn {
+    /// Notes a write that the socket took as activity.
+    fn wrote(&mut self, written: Poll<io::Result<usize>>) -> Poll<io::Result<usize>> {
+        if let Poll::Ready(Ok(n)) = written
+            && n > 0
+        {
+            self.last_active = tokio::time::Instant::now();
         }
-
-        fn poll_write_vectored(
-            mut self: Pin<&mut Self>,
-            cx: &mut Context<'_>,
-            bufs: &[io::IoSlice<'_>],
-        ) -> Poll<io::Result<usize>> {
-            Pin::new(&mut self.$io).poll_write_vectored(cx, bufs)
-        }
-
-        fn is_write_vectored(&self) -> bool {
-            self.$io.is_write_vectored()
-        }
-
-        fn poll_flush(mut self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<io::Result<()>> {
-            Pin::new(&mut self.$io).poll_flush(cx)
-        }
-
-        fn poll_shutdown(mut self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<io::Result<()>> {
-            Pin::new(&mut self.$io).poll_shutdown(cx)
-        }
-    };
+        written
+    }
 }
 
 impl AsyncWrite for Conn {
-    write_through!(io);
+    fn poll_write(mut self: Pin<&mut Self>, cx: &mut Context<'_>, buf: &[u8]) -> Poll<io::Result<usize>> {
+        let written = Pin::new(&mut self.io).poll_write(cx, buf);
+        self.wrote(written)
+    }
+
+    fn poll_write_vectored(
+        mut self: Pin<&mut Self>,
+        cx: &mut Context<'_>,
+        bufs: &[io::IoSlice<'_>],
+    ) -> Poll<io::Result<usize>> {
+        let written = Pin::new(&mut self.io).poll_write_vectored(cx, bufs);
+        self.wrote(written)
+    }
+
+    fn is_write_vectored(&self) -> bool {
+        self.io.is_write_vectored()
+    }
+
+    fn poll_flush(mut self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<io::Result<()>> {
+        Pin::new(&mut self.io).poll_flush(cx)
+    }
+
+    fn poll_shutdown(mut self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<io::Result<()>> {
+        Pin::new(&mut self.io).poll_shutdown(cx)
+    }
 }
 
 /// A connection's plaintext (the [`Conn`] itself, or the TLS stream over it) as the HTTP
@@ -488,7 +500,29 @@ impl<IO: AsyncRead + Unpin> AsyncRead for Watched<IO> {
 }
 
 impl<IO: AsyncWrite + Unpin> AsyncWrite for Watched<IO> {
-    write_through!(io);
+    fn poll_write(mut self: Pin<&mut Self>, cx: &mut Context<'_>, buf: &[u8]) -> Poll<io::Result<usize>> {
+        Pin::new(&mut self.io).poll_write(cx, buf)
+    }
+
+    fn poll_write_vectored(
+        mut self: Pin<&mut Self>,
+        cx: &mut Context<'_>,
+        bufs: &[io::IoSlice<'_>],
+    ) -> Poll<io::Result<usize>> {
+        Pin::new(&mut self.io).poll_write_vectored(cx, bufs)
+    }
+
+    fn is_write_vectored(&self) -> bool {
+        self.io.is_write_vectored()
+    }
+
+    fn poll_flush(mut self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<io::Result<()>> {
+        Pin::new(&mut self.io).poll_flush(cx)
+    }
+
+    fn poll_shutdown(mut self: Pin<&mut Self>, cx: &mut Context<'_>) -> Poll<io::Result<()>> {
+        Pin::new(&mut self.io).poll_shutdown(cx)
+    }
 }
 
 impl tonic::transport::server::Connected for Conn {

@@ -8,6 +8,7 @@ use crate::metrics::Metrics;
 use crate::net::addresses::{Bound, DEFAULT_GRPC, DEFAULT_HTTP};
 use crate::net::auth::Auth;
 use crate::net::conn::{Acceptor, Caps, ConnLimits, Listening, incoming};
+use crate::net::page::PageHome;
 use crate::net::tls::ReloadingCert;
 use crate::shared::SlowClientLimits;
 use anyhow::{Context, Result};
@@ -20,9 +21,11 @@ use tokio::io::{AsyncRead, AsyncWrite};
 use tokio::sync::watch;
 use tokio_stream::wrappers::ReceiverStream;
 use tonic::codec::CompressionEncoding;
+use tonic::service::RoutesBuilder;
 use tonic::service::interceptor::InterceptedService;
 use tonic::transport::Server;
 use tonic::transport::server::{Connected, Router};
+use tonic_web::GrpcWebLayer;
 
 /// The client-facing settings a server and a relay share.
 #[derive(Clone, Debug)]
@@ -137,13 +140,14 @@ impl Frontend {
         }
     }
 
-    /// Binds both listeners and serves `svc` and `routes` until `shutdown` turns true; with
+    /// Binds both listeners and serves `svc` (with gRPC-web and the browser page, see
+    /// [`crate::net::page`]) and `http_routes` until `shutdown` turns true; with
     /// TLS, the certificate is reloaded as [`crate::net::tls`] describes, counted in `metrics`.
     /// `auth` is the server's token table (`None` for a relay), which reflection may ask.
     pub(crate) async fn start<S: WorldService>(
         &self,
         svc: WorldServiceServer<S>,
-        routes: axum::Router,
+        http_routes: axum::Router,
         auth: Option<&Auth>,
         metrics: &Arc<Metrics>,
         shutdown: &watch::Sender<bool>,
@@ -177,22 +181,34 @@ impl Frontend {
             .max_encoding_message_size(usize::MAX)
             .accept_compressed(CompressionEncoding::Zstd);
         let keepalive = crate::net::conn::keepalive(self.connections.idle_timeout);
-        let router = Server::builder()
-            .http2_keepalive_interval(Some(keepalive))
-            .http2_keepalive_timeout(Some(keepalive))
-            .add_service(svc);
-        let router = match reflection {
-            ReflectionGate::Anyone => router.add_service(reflection_v1).add_service(reflection_v1alpha),
+        let mut services = RoutesBuilder::default();
+        services.add_service(svc);
+        match reflection {
+            ReflectionGate::Anyone => {
+                services.add_service(reflection_v1).add_service(reflection_v1alpha);
+            }
             ReflectionGate::Tokens(auth) => {
                 // Any caller the token table knows; the refusal is the one every call gets.
                 let auth = auth.clone();
                 let check = move |req: tonic::Request<()>| auth.caller(req.metadata()).map(|_| req);
-                router
+                services
                     .add_service(InterceptedService::new(reflection_v1, check.clone()))
-                    .add_service(InterceptedService::new(reflection_v1alpha, check))
+                    .add_service(InterceptedService::new(reflection_v1alpha, check));
             }
-            ReflectionGate::Nobody => router,
-        };
+            ReflectionGate::Nobody => {}
+        }
+        // gRPC-web (browsers) wraps the services only: it answers any other HTTP/1 request
+        // with 400, so the page's routes are merged after it.
+        let routes = services
+            .routes()
+            .into_axum_router()
+            .layer(GrpcWebLayer::new())
+            .merge(crate::net::page::routes());
+        let router = Server::builder()
+            .accept_http1(true)
+            .http2_keepalive_interval(Some(keepalive))
+            .http2_keepalive_timeout(Some(keepalive))
+            .add_routes(routes.into());
         let mut stop = shutdown.subscribe();
         let stopped = async move {
             let _ = stop.wait_for(|s| *s).await;
@@ -212,9 +228,13 @@ impl Frontend {
             }
             None => serve_grpc(router, incoming(acceptor, |conn| std::future::ready(Ok(conn))), stopped),
         };
+        let home = PageHome {
+            grpc: bound.grpc,
+            tls: self.tls.is_some(),
+        };
         let http = crate::net::http_serve::serve(
             Acceptor::new(http_listener, caps.http, self.connections, false),
-            routes,
+            http_routes.merge(home.redirect_route()),
             self.connections.request_deadline,
             shutdown.subscribe(),
         );

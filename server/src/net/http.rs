@@ -84,7 +84,7 @@ pub fn router(shared: Arc<Shared>, actor: mpsc::Sender<Request>, backend: Backen
         .route("/health", get(health))
         .route("/metrics", get(metrics))
         .route("/frame.png", get(frame_png))
-        .route("/", get(status_page))
+        .route("/status", get(status_page))
         .with_state(App { shared, actor, backend })
 }
 

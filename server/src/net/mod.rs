@@ -7,6 +7,7 @@
 //!   the idle timeout, making room, the accept loop);
 //! - [`head`]: whether a connection's bytes hold a complete request head yet;
 //! - [`http_serve`]: the HTTP connections, served with the routes of [`http`];
+//! - [`page`]: the browser page on the gRPC listener, and the HTTP listener's way there;
 //! - [`tls`]: the gRPC listener's TLS, with certificates that reload while serving;
 //! - [`service`]: the gRPC world service (tokens, roles, rates, then the actor);
 //! - [`http`]: health, metrics, the status page and frames over HTTP;
@@ -19,5 +20,6 @@ pub mod frontend;
 pub mod head;
 pub mod http;
 pub mod http_serve;
+pub mod page;
 pub mod service;
 pub mod tls;

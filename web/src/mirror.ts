@@ -1,0 +1,219 @@
+// The world as the page holds it: the eight digested buffers, filled from a snapshot's
+// pages and kept current by the patch form's deltas (docs/PROTOCOL.md, "The patch form").
+// Every snapshot and every delta is checked against the server's digest.
+import { fromBinary } from "@bufbuild/protobuf";
+import { decompress } from "fzstd";
+import type { Delta, Header, Page } from "./gen/naadf/v1/naadf_pb";
+import { RunsSchema } from "./gen/naadf/v1/naadf_pb";
+import { PAGE_BYTES, pageHash } from "./digest";
+
+/** The digested buffers: 0 chunks, 1 chunk entities, 2 blocks, 3 voxels, 4 materials,
+ * 5 models, 6 entity types, 7 entity instances. */
+export const BUFFER_COUNT = 8;
+/** The buffers a snapshot sends as pages; 6 and 7 derive from the entity table. */
+export const PAGED_BUFFERS = 6;
+
+/** A byte range of one buffer that a change wrote. */
+export interface Touched {
+  id: number;
+  lo: number;
+  hi: number;
+}
+
+/** The mirror diverged from the server, or the server sent something it cannot hold. */
+export class MirrorError extends Error {}
+
+/** One buffer: its bytes (with room to grow) at its logical length, and its page hashes. */
+class WorldBuffer {
+  bytes = new Uint8Array(0);
+  len = 0;
+  hashes: bigint[] = [];
+
+  constructor(readonly id: number) {}
+
+  /** Sets the logical length: truncates, or extends with zero bytes. */
+  resize(len: number): void {
+    if (len > this.bytes.length) {
+      const grown = new Uint8Array(Math.max(len, Math.ceil(this.bytes.length * 1.5)));
+      grown.set(this.bytes.subarray(0, this.len));
+      this.bytes = grown;
+    } else if (len < this.len) {
+      this.bytes.fill(0, len, this.len);
+    }
+    const pages = Math.ceil(len / PAGE_BYTES);
+    const before = this.hashes.length;
+    this.len = len;
+    this.hashes.length = pages;
+    // The last page changed length (and pages past the old end are new): rehash them.
+    const from = Math.max(0, Math.min(before, pages) - 1);
+    this.rehash(from, pages);
+  }
+
+  /** Recomputes the hashes of pages `from..to`. */
+  rehash(from: number, to: number): void {
+    for (let p = from; p < to; p++) {
+      const lo = p * PAGE_BYTES;
+      this.hashes[p] = pageHash(this.id, p, this.bytes.subarray(lo, Math.min(lo + PAGE_BYTES, this.len)));
+    }
+  }
+
+  /** The XOR of its page hashes. */
+  digest(): bigint {
+    let d = 0n;
+    for (const h of this.hashes) d ^= h;
+    return d;
+  }
+}
+
+/** The world's state as a stream has left it. */
+export class Mirror {
+  readonly buffers: WorldBuffer[] = Array.from({ length: BUFFER_COUNT }, (_, id) => new WorldBuffer(id));
+  size: [number, number, number] = [0, 0, 0];
+  version = 0n;
+  growthSeq = 0;
+  quiescent = false;
+  digest = 0n;
+  /** Whether the buffers hold a verified world (a snapshot completed). */
+  holdsWorld = false;
+  private expected: Header | undefined;
+  private pagesLeft = 0;
+
+  /** The page hashes of the paged buffers, to announce as `JoinRequest.cached`. */
+  cached(): { buffer: number; pageHashes: bigint[] }[] {
+    if (!this.holdsWorld) return [];
+    return this.buffers.slice(0, PAGED_BUFFERS).map((b) => ({ buffer: b.id, pageHashes: [...b.hashes] }));
+  }
+
+  /** The bytes of buffer `id` at its logical length. */
+  bytes(id: number): Uint8Array {
+    const b = this.buffers[id];
+    return b.bytes.subarray(0, b.len);
+  }
+
+  /** Starts a snapshot (or a resume). Returns whether pages follow. */
+  header(h: Header): boolean {
+    if (h.resume) {
+      if (!this.holdsWorld || h.version !== this.version || h.digest !== this.digest) {
+        throw new MirrorError("the server resumed a state this page does not hold");
+      }
+      this.growthSeq = h.growthSeq;
+      this.quiescent = h.quiescent;
+      return false;
+    }
+    if (h.size.length !== 3) throw new MirrorError("the header's world size is not three numbers");
+    this.holdsWorld = false;
+    this.size = [h.size[0], h.size[1], h.size[2]];
+    for (const l of h.buffers) {
+      if (l.buffer >= PAGED_BUFFERS) throw new MirrorError(`the header names buffer ${l.buffer}`);
+    }
+    for (let id = 0; id < PAGED_BUFFERS; id++) {
+      const l = h.buffers.find((b) => b.buffer === id);
+      this.buffers[id].resize(l ? Number(l.bytes) : 0);
+    }
+    const entities = expandEntityTable(h.entityTable);
+    this.buffers[6].resize(entities[0].length);
+    this.buffers[6].bytes.set(entities[0]);
+    this.buffers[7].resize(entities[1].length);
+    this.buffers[7].bytes.set(entities[1]);
+    this.buffers[6].rehash(0, this.buffers[6].hashes.length);
+    this.buffers[7].rehash(0, this.buffers[7].hashes.length);
+    this.expected = h;
+    this.pagesLeft = h.pages;
+    if (this.pagesLeft === 0) this.finishSnapshot();
+    return this.pagesLeft > 0;
+  }
+
+  /** Takes one group of pages; returns whether the snapshot is complete. */
+  page(p: Page): boolean {
+    if (!this.expected || this.pagesLeft === 0) throw new MirrorError("a page arrived outside a snapshot");
+    const b = this.buffers[p.buffer];
+    if (!b || p.buffer >= PAGED_BUFFERS) throw new MirrorError(`a page of buffer ${p.buffer}`);
+    const bytes = decompress(p.zstd);
+    let at = 0;
+    for (const index of p.indices) {
+      const lo = index * PAGE_BYTES;
+      const n = Math.min(PAGE_BYTES, b.len - lo);
+      if (n <= 0 || at + n > bytes.length) throw new MirrorError(`page ${index} of buffer ${p.buffer} does not fit`);
+      b.bytes.set(bytes.subarray(at, at + n), lo);
+      at += n;
+      b.rehash(index, index + 1);
+    }
+    this.pagesLeft -= 1;
+    if (this.pagesLeft === 0) {
+      this.finishSnapshot();
+      return true;
+    }
+    return false;
+  }
+
+  private finishSnapshot(): void {
+    const h = this.expected!;
+    this.version = h.version;
+    this.growthSeq = h.growthSeq;
+    this.quiescent = h.quiescent;
+    this.digest = this.computeDigest();
+    this.expected = undefined;
+    if (this.digest !== h.digest) {
+      throw new MirrorError("the snapshot's pages do not give the header's digest");
+    }
+    this.holdsWorld = true;
+  }
+
+  /** Applies a patch-form delta; returns the byte ranges it wrote and whether a length changed. */
+  delta(d: Delta): { touched: Touched[]; resized: boolean } {
+    const p = d.patch;
+    if (!this.holdsWorld) throw new MirrorError("a delta arrived before a snapshot");
+    if (!p) throw new MirrorError("a delta without a patch (the page joins in the patch form)");
+    const dirty = new Map<number, Set<number>>();
+    const mark = (id: number, lo: number, hi: number) => {
+      let pages = dirty.get(id);
+      if (!pages) dirty.set(id, (pages = new Set()));
+      for (let q = Math.floor(lo / PAGE_BYTES); q * PAGE_BYTES < hi; q++) pages.add(q);
+    };
+    for (const l of p.lengths) {
+      const b = this.buffers[l.buffer];
+      if (!b) throw new MirrorError(`a patch resizes buffer ${l.buffer}`);
+      b.resize(Number(l.bytes));
+    }
+    const runs = p.zstd.length > 0 ? fromBinary(RunsSchema, decompress(p.zstd)).runs : p.runs;
+    const touched: Touched[] = [];
+    for (const r of runs) {
+      const b = this.buffers[r.buffer];
+      const lo = Number(r.offset);
+      const hi = lo + r.bytes.length;
+      if (!b || hi > b.len) throw new MirrorError(`a run reaches past buffer ${r.buffer}`);
+      b.bytes.set(r.bytes, lo);
+      mark(r.buffer, lo, hi);
+      touched.push({ id: r.buffer, lo, hi });
+    }
+    for (const [id, pages] of dirty) {
+      for (const q of pages) this.buffers[id].rehash(q, q + 1);
+    }
+    this.version = p.version;
+    this.growthSeq = p.growthSeq;
+    this.quiescent = p.quiescent;
+    this.digest = this.computeDigest();
+    if (this.digest !== d.digest) {
+      this.holdsWorld = false;
+      throw new MirrorError(`the page diverged from the server at version ${p.version}`);
+    }
+    return { touched, resized: p.lengths.length > 0 };
+  }
+
+  private computeDigest(): bigint {
+    let d = 0n;
+    for (const b of this.buffers) d ^= b.digest();
+    return d;
+  }
+}
+
+/** The entity buffers (6 and 7) of an entity table (docs/FORMAT.md §5.7–5.9). The page
+ * holds worlds without entities; a table that lists any is refused with a clear message. */
+function expandEntityTable(table: Uint8Array): [Uint8Array, Uint8Array] {
+  const v = new DataView(table.buffer, table.byteOffset, table.byteLength);
+  const empty = table.byteLength === 8 && v.getUint32(0, true) === 0 && v.getUint32(4, true) === 0;
+  if (table.byteLength !== 0 && !empty) {
+    throw new MirrorError("this world has entities, which the browser page does not draw yet; use `naadf view`");
+  }
+  return [new Uint8Array(0), new Uint8Array(0)];
+}

@@ -1,0 +1,158 @@
+// The page's connection to the service: gRPC-web calls on the page's own origin, the world
+// stream (`Join` in the patch form, with presence) re-joined with backoff, and the unary
+// calls with the session's token.
+import { create } from "@bufbuild/protobuf";
+import { Code, ConnectError, createClient } from "@connectrpc/connect";
+import type { Client } from "@connectrpc/connect";
+import { createGrpcWebTransport } from "@connectrpc/connect-web";
+import { DeltaForm, JoinRequestSchema, WorldService } from "./gen/naadf/v1/naadf_pb";
+import type { PresenceEntry, StatusReply } from "./gen/naadf/v1/naadf_pb";
+import { PROTOCOL_VERSION } from "./gen/layout";
+import { Mirror, MirrorError } from "./mirror";
+import type { Touched } from "./mirror";
+
+/** Where the session is. */
+export type SessionState = "connecting" | "need-token" | "syncing" | "live" | "reconnecting" | "error";
+
+/** What the session tells the page. */
+export interface SessionEvents {
+  state(s: SessionState, why?: string): void;
+  /** A snapshot completed: the whole world is new. */
+  snapshot(m: Mirror): void;
+  /** A delta was applied. */
+  patched(m: Mirror, touched: Touched[], resized: boolean): void;
+  presence(entries: PresenceEntry[]): void;
+}
+
+/** The key of the token in `sessionStorage` (never in a URL). */
+const TOKEN_KEY = "naadf.token";
+
+/** The first wait before joining again, and the longest. */
+const FIRST_BACKOFF_MS = 100;
+const MOST_BACKOFF_MS = 5000;
+
+/** The page's session with the server that served it. */
+export class Session {
+  readonly mirror = new Mirror();
+  readonly client: Client<typeof WorldService>;
+  /** Bytes of world messages received, for the benchmarks. */
+  bytesReceived = 0;
+  private abort: AbortController | undefined;
+  private stopped = false;
+
+  constructor(private readonly events: SessionEvents) {
+    this.client = createClient(WorldService, createGrpcWebTransport({ baseUrl: location.origin, useBinaryFormat: true }));
+  }
+
+  /** The token this tab holds, if any. */
+  static token(): string | null {
+    return sessionStorage.getItem(TOKEN_KEY);
+  }
+
+  /** Keeps `token` for this tab and joins again with it. */
+  setToken(token: string): void {
+    sessionStorage.setItem(TOKEN_KEY, token);
+    this.restart();
+  }
+
+  /** The call options with the token. */
+  callOptions(): { headers: Record<string, string> } {
+    const t = Session.token();
+    return { headers: t ? { authorization: `Bearer ${t}` } : {} };
+  }
+
+  /** Who the server takes this page for. */
+  async whoAmI(): Promise<StatusReply> {
+    return this.client.status({}, this.callOptions());
+  }
+
+  /** Joins, and joins again whenever the stream ends, until a refusal that a person must
+   * act on (a token) or `stop`. */
+  async run(): Promise<void> {
+    let backoff = FIRST_BACKOFF_MS;
+    let first = true;
+    while (!this.stopped) {
+      this.events.state(first ? "connecting" : "reconnecting");
+      first = false;
+      this.abort = new AbortController();
+      try {
+        const gotMessages = await this.follow(this.abort.signal);
+        if (gotMessages) backoff = FIRST_BACKOFF_MS;
+      } catch (e) {
+        if (e instanceof MirrorError) {
+          // Diverged or refused data: join again announcing what is held.
+          console.warn(e.message);
+          if (/entities/.test(e.message)) {
+            this.events.state("error", e.message);
+            return;
+          }
+        } else {
+          const err = ConnectError.from(e);
+          if (err.code === Code.Unauthenticated || err.code === Code.PermissionDenied) {
+            this.events.state("need-token", err.rawMessage);
+            return;
+          }
+          if (err.code === Code.FailedPrecondition) {
+            this.events.state("error", err.rawMessage);
+            return;
+          }
+          if (err.code === Code.Canceled && this.stopped) return;
+          if (err.code !== Code.Canceled) console.warn(`the world stream ended: ${err.message}`);
+        }
+      }
+      if (this.stopped) return;
+      this.events.state("reconnecting");
+      const wait = backoff * (1 + Math.random() / 4);
+      backoff = Math.min(MOST_BACKOFF_MS, backoff * 2);
+      await new Promise((r) => setTimeout(r, wait));
+    }
+  }
+
+  /** Ends the current stream; `run` joins again at once. */
+  restart(): void {
+    this.abort?.abort();
+  }
+
+  /** Follows one `Join` stream until it ends; returns whether any message came. */
+  private async follow(signal: AbortSignal): Promise<boolean> {
+    const m = this.mirror;
+    const request = create(JoinRequestSchema, {
+      protocolVersion: PROTOCOL_VERSION,
+      cached: m.cached(),
+      resume: m.holdsWorld ? { version: m.version, digest: m.digest } : undefined,
+      deltaForm: DeltaForm.PATCH,
+      presence: true,
+    });
+    let any = false;
+    for await (const msg of this.client.join(request, { ...this.callOptions(), signal })) {
+      any = true;
+      const k = msg.kind;
+      switch (k.case) {
+        case "header": {
+          this.bytesReceived += k.value.entityTable.length + 64;
+          this.events.state("syncing");
+          if (!m.header(k.value)) this.live(k.value.resume);
+          break;
+        }
+        case "page":
+          this.bytesReceived += k.value.zstd.length + 8 + 4 * k.value.indices.length;
+          if (m.page(k.value)) this.live(false);
+          break;
+        case "delta": {
+          const { touched, resized } = m.delta(k.value);
+          this.events.patched(m, touched, resized);
+          break;
+        }
+        case "presence":
+          this.events.presence(k.value.entries);
+          break;
+      }
+    }
+    return any;
+  }
+
+  private live(resumed: boolean): void {
+    if (!resumed) this.events.snapshot(this.mirror);
+    this.events.state("live");
+  }
+}

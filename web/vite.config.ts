@@ -1,0 +1,17 @@
+// The page is built into dist/, which the Rust server embeds and serves (server/src/net/page.rs).
+import { defineConfig } from "vite";
+
+export default defineConfig({
+  base: "/",
+  // The WGSL the Rust code generates is imported as text (`?raw`).
+  assetsInclude: [],
+  build: {
+    outDir: "dist",
+    emptyOutDir: true,
+    assetsDir: "assets",
+    target: "es2022",
+    // The server answers every file itself: keep them few and content-hashed.
+    modulePreload: { polyfill: false },
+    chunkSizeWarningLimit: 2048,
+  },
+});
