@@ -1,14 +1,16 @@
 //! The browser page in a real browser: headless Chromium with WebGPU on SwiftShader, driven
-//! by playwright-core through the scripts in `web/tests/` (docs/WEB.md).
+//! by playwright-core through `web/tests/driver.mjs` (docs/WEB.md).
 //!
 //! These need Node and Chromium. `scripts/test.sh` installs both and sets
 //! `NAADF_REQUIRE_BROWSER=1`, so that in CI a missing browser fails instead of skipping.
 
 mod support;
 
+use serde_json::{Value, json};
+use std::io::{BufRead, BufReader, Write};
 use std::path::{Path, PathBuf};
-use std::process::Command;
-use support::{Server, ok, serve_world, start_world};
+use std::process::{Child, ChildStdin, ChildStdout, Command, Stdio};
+use support::{Server, ok, p, serve_world, start_world};
 
 /// The repository's `web/`.
 fn web() -> PathBuf {
@@ -42,24 +44,67 @@ fn browser_available() -> bool {
     false
 }
 
-/// Runs `node web/tests/SCRIPT ARGS` and parses the JSON line it prints.
-fn drive(script: &str, args: &[&str]) -> serde_json::Value {
-    let out = Command::new("node")
-        .arg(web().join("tests").join(script))
-        .args(args)
-        .output()
-        .expect("node");
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(out.status.success(), "{script} failed:\n{stderr}");
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    serde_json::from_str(stdout.trim()).unwrap_or_else(|e| panic!("{script} printed {stdout:?}: {e}\n{stderr}"))
+/// `web/tests/driver.mjs`: pages in one headless Chromium, driven a command at a time.
+struct Browser {
+    child: Child,
+    input: ChildStdin,
+    output: BufReader<ChildStdout>,
 }
 
-/// The page's URL on `server`'s gRPC listener, with a query.
-fn page_url(server: &Server, query: &str) -> String {
-    format!("{}/?{query}", server.url)
+impl Browser {
+    fn start() -> Browser {
+        let mut child = Command::new("node")
+            .arg(web().join("tests/driver.mjs"))
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .spawn()
+            .expect("node");
+        let input = child.stdin.take().unwrap();
+        let output = BufReader::new(child.stdout.take().unwrap());
+        Browser { child, input, output }
+    }
+
+    /// Runs one command; its value, or the driver's error.
+    fn try_send(&mut self, cmd: Value) -> Result<Value, String> {
+        writeln!(self.input, "{cmd}").unwrap();
+        let mut line = String::new();
+        self.output.read_line(&mut line).unwrap();
+        let answer: Value = serde_json::from_str(&line).unwrap_or_else(|e| panic!("driver said {line:?}: {e}"));
+        if answer["ok"] == true {
+            Ok(answer["value"].clone())
+        } else {
+            Err(answer["error"].as_str().unwrap_or_default().to_owned())
+        }
+    }
+
+    fn send(&mut self, cmd: Value) -> Value {
+        let what = cmd.to_string();
+        self.try_send(cmd).unwrap_or_else(|e| panic!("{what}: {e}"))
+    }
+
+    fn open(&mut self, id: &str, url: &str) {
+        self.send(json!({"op": "open", "id": id, "url": url}));
+    }
+
+    /// Waits until `until` (JavaScript over `n`, the page's `window.naadf`) holds; the state.
+    fn wait(&mut self, id: &str, until: &str, ms: u64) -> Value {
+        self.send(json!({"op": "wait", "id": id, "until": until, "ms": ms}))
+    }
+
+    /// Runs `js` (an async function body over `n`) in page `id`.
+    fn eval(&mut self, id: &str, js: &str) -> Value {
+        self.send(json!({"op": "eval", "id": id, "js": js}))
+    }
 }
 
+impl Drop for Browser {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+/// `s` for a URL's query.
 fn encode(s: &str) -> String {
     s.bytes()
         .map(|b| match b {
@@ -68,6 +113,30 @@ fn encode(s: &str) -> String {
         })
         .collect()
 }
+
+/// The page on `server`'s gRPC listener at `camera`, `size` and `mode`.
+fn page_url(server: &Server, camera: &str, size: &str, mode: &str) -> String {
+    format!("{}/?mode={mode}&size={size}&camera={}", server.url, encode(camera))
+}
+
+/// `naadf status --json` of `server`, once quiescent.
+fn status(server: &Server) -> Value {
+    serde_json::from_str(&ok(&["status", "--server", &server.url, "--json"], None)).unwrap()
+}
+
+/// The page's (version, growth step, digest) equal the server's.
+fn assert_on_server(page: &Value, server: &Value) {
+    for (field, key) in [
+        ("version", "version"),
+        ("growthSeq", "growth_seq"),
+        ("digest", "digest"),
+    ] {
+        assert_eq!(page[field], server[key], "{field}: page {page} server {server}");
+    }
+}
+
+/// A page that is live on a quiescent world and has drawn it.
+const SETTLED: &str = "n.state === 'live' && n.quiescent && n.shownVersion === n.version && n.frameMs > 0";
 
 /// The page joins a served world and ends on the server's version, growth step and
 /// digest; its `albedo` and `material` frames at a camera and size from the URL equal
@@ -80,23 +149,16 @@ fn the_page_mirrors_the_world_and_draws_what_naadf_render_draws() {
     let dir = tempfile::tempdir().unwrap();
     let world = start_world(dir.path());
     let server = serve_world(dir.path(), &world, &[], &[]);
+    let mut browser = Browser::start();
     let camera = r#"{"pos":[64.5,50.25,-20],"yaw":10,"pitch":-25,"fov_y":70}"#;
     for mode in ["albedo", "material"] {
-        let png = dir.path().join(format!("page-{mode}.png"));
-        let query = format!("mode={mode}&size=160x90&camera={}", encode(camera));
-        let page = drive("join.mjs", &[&page_url(&server, &query), png.to_str().unwrap()]);
-        let status: serde_json::Value =
-            serde_json::from_str(&ok(&["status", "--server", &server.url, "--json"], None)).unwrap();
-        assert_eq!(page["state"], "live");
+        browser.open(mode, &page_url(&server, camera, "160x90", mode));
+        let page = browser.wait(mode, SETTLED, 120_000);
         assert_eq!(page["mode"], mode);
-        for (field, key) in [
-            ("version", "version"),
-            ("growthSeq", "growth_seq"),
-            ("digest", "digest"),
-        ] {
-            assert_eq!(page[field], status[key], "{field}: page {page} server {status}");
-        }
-        let native = dir.path().join(format!("native-{mode}.png"));
+        assert_on_server(&page, &status(&server));
+        let png = p(dir.path(), &format!("page-{mode}.png"));
+        browser.send(json!({"op": "capture", "id": mode, "path": png}));
+        let native = p(dir.path(), &format!("native-{mode}.png"));
         ok(
             &[
                 "render",
@@ -109,7 +171,7 @@ fn the_page_mirrors_the_world_and_draws_what_naadf_render_draws() {
                 "--mode",
                 mode,
                 "-o",
-                native.to_str().unwrap(),
+                &native,
             ],
             None,
         );
@@ -122,6 +184,80 @@ fn the_page_mirrors_the_world_and_draws_what_naadf_render_draws() {
             0,
             "{mode}: {differing} of {} pixels differ from naadf render",
             160 * 90
+        );
+    }
+    server.stop();
+}
+
+/// Two pages edit together: A places a sphere with the sphere tool, B shows it within 1 s;
+/// B lists A among the users and draws A's marker; A's undo reverts only A's batch, B's
+/// edits stay; both end on the server's digest. The server's idle timeout is shorter than
+/// the test, so the pages' streams (HTTP/1.1 gRPC-web) must count as in use throughout.
+#[test]
+fn two_pages_edit_together_and_see_each_other() {
+    if !browser_available() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let world = start_world(dir.path());
+    let server = serve_world(dir.path(), &world, &["--idle-timeout", "3"], &[]);
+    let mut browser = Browser::start();
+    // B stands behind A, both looking along +Z down onto the terrain: A is in B's view.
+    let a_cam = r#"{"pos":[64.5,60.5,30.5],"yaw":0,"pitch":-35,"fov_y":70}"#;
+    let b_cam = r#"{"pos":[64.5,62.5,4.5],"yaw":0,"pitch":-20,"fov_y":70}"#;
+    browser.open("a", &page_url(&server, a_cam, "96x54", "albedo"));
+    browser.open("b", &page_url(&server, b_cam, "96x54", "albedo"));
+    for id in ["a", "b"] {
+        browser.wait(id, SETTLED, 120_000);
+    }
+    let a_name = browser.eval("a", "return n.name");
+    let b = browser.wait(
+        "b",
+        &format!("n.users.includes({a_name}) && n.markers.some(m => m.name === {a_name})"),
+        10_000,
+    );
+    assert_eq!(b["users"].as_array().unwrap().len(), 2, "{b}");
+
+    // B edits first; then A places a sphere where its view's centre meets the terrain.
+    let b_box = r#"{"op":"box","min":[10,40,10],"max":[14,44,14],"material":2}"#;
+    browser.eval("b", &format!("return await n.edit({})", json!(b_box)));
+    browser.send(json!({"op": "select", "id": "a", "selector": "#tool", "value": "sphere"}));
+    browser.send(json!({"op": "fill", "id": "a", "selector": "#radius", "value": "3"}));
+    let before = browser.eval("a", "return n.version");
+    // The canvas's centre, where the sphere tool builds (the empty voxel before the hit).
+    let aimed = browser.eval("a", "return n.pointer");
+    let centre = &aimed["before"];
+    browser.send(json!({"op": "click", "id": "a", "x": 0.5, "y": 0.5}));
+    let a_state = browser.wait("a", &format!("n.version > {before}"), 10_000);
+    let at = |v: &Value| format!("n.voxel({}, {}, {})", v[0], v[1], v[2]);
+    assert_eq!(
+        browser.eval("a", &format!("return {}", at(centre))),
+        1,
+        "A's sphere at {centre}"
+    );
+    let sphere_version = a_state["version"].as_u64().unwrap();
+    let started = std::time::Instant::now();
+    browser.wait("b", &format!("n.shownVersion >= {sphere_version}"), 10_000);
+    let shown_after = started.elapsed();
+    assert!(
+        shown_after < std::time::Duration::from_secs(1),
+        "B showed A's sphere {shown_after:?} after A's acknowledgement"
+    );
+
+    // The idle timeout passes with both streams open; they keep following.
+    std::thread::sleep(std::time::Duration::from_secs(5));
+    browser.eval("a", "return await n.undo()");
+    let end = serde_json::from_str::<Value>(&ok(&["status", "--server", &server.url, "--json"], None)).unwrap();
+    for id in ["a", "b"] {
+        let page = browser.wait(id, &format!("n.version >= {} && {SETTLED}", end["version"]), 20_000);
+        assert_on_server(&page, &status(&server));
+        assert_eq!(page["joins"], 1, "{id} joined again: {page}");
+        // B's box stays; A's sphere is gone.
+        assert_eq!(browser.eval(id, "return n.voxel(11, 41, 11)"), 2, "{id}: B's box");
+        assert_eq!(
+            browser.eval(id, &format!("return {}", at(centre))),
+            0,
+            "{id}: A's sphere"
         );
     }
     server.stop();

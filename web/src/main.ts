@@ -2,14 +2,21 @@
 // edit and see who else is here. `window.naadf` is its state for tests and scripts
 // (docs/WEB.md).
 import { create } from "@bufbuild/protobuf";
-import { ConnectError } from "@connectrpc/connect";
+import { Code, ConnectError } from "@connectrpc/connect";
 import { EditRequestSchema, HistoryRequestSchema, PresenceRequestSchema } from "./gen/naadf/v1/naadf_pb";
+import type { PresenceEntry } from "./gen/naadf/v1/naadf_pb";
 import type { Camera } from "./camera";
-import { defaultCamera, basis } from "./camera";
+import { basis, defaultCamera } from "./camera";
 import { digestHex, loadHasher } from "./digest";
 import { GpuWorld, NoWebGpu, Renderer, openDevice } from "./gpu";
+import type { Marker } from "./overlay";
+import { drawOverlay, rayThrough } from "./overlay";
+import type { Pick } from "./pick";
+import { Voxels, pick } from "./pick";
 import { Session } from "./session";
 import type { SessionState } from "./session";
+import type { Region, ToolState } from "./tools";
+import { TOOLS, commit, palette, preview } from "./tools";
 import { MODES, drawnMode, readLink, writeLink } from "./view";
 
 /** The page's state, as `window.naadf` shows it. */
@@ -24,11 +31,23 @@ interface PageState {
   frameMs: number;
   /** Why the page is in `need-token`, `no-webgpu` or `error`, or what the last refusal said. */
   message: string;
-  /** The caller's role, once known. */
+  /** The caller's role, once known (`viewer` pages cannot edit). */
   role: string;
-  /** Bytes of world messages received since the page opened. */
+  /** `Join` streams opened, snapshots taken (a resume takes none) and world bytes received. */
+  joins: number;
+  snapshots: number;
   bytesReceived: number;
+  /** The other clients' markers drawn on the last frame. */
+  markers: Marker[];
+  /** The version the canvas shows. */
+  shownVersion: number;
+  /** The voxel under the pointer and the empty voxel before it (where placing tools build). */
+  pointer: { voxel: number[]; before: number[] } | null;
+  /** The display name this page publishes. */
+  name: string;
   capture(): Promise<string>;
+  /** The material of a voxel as the page holds it (0: empty). */
+  voxel(x: number, y: number, z: number): number;
   /** Sends one ops-JSON line (docs/OPS.md) as an edit; resolves to the new version. */
   edit(ops: string): Promise<number>;
   undo(): Promise<number>;
@@ -37,6 +56,7 @@ interface PageState {
 
 const $ = <T extends HTMLElement>(id: string) => document.getElementById(id) as T;
 const canvas = $<HTMLCanvasElement>("view");
+const overlay = $<HTMLCanvasElement>("overlay");
 const hud = $<HTMLDivElement>("hud");
 const notice = $<HTMLDivElement>("notice");
 
@@ -52,7 +72,14 @@ const naadf: PageState = {
   frameMs: 0,
   message: link.problems.join("\n"),
   role: "",
+  joins: 0,
+  snapshots: 0,
   bytesReceived: 0,
+  markers: [],
+  shownVersion: -1,
+  pointer: null,
+  name: "",
+  voxel: () => 0,
   capture: () => Promise.reject(new Error("no frame yet")),
   edit: () => Promise.reject(new Error("not joined")),
   undo: () => Promise.reject(new Error("not joined")),
@@ -67,8 +94,6 @@ function showNotice(text: string): void {
 showNotice(naadf.message);
 
 let camera: Camera | undefined = link.camera;
-let dirty = true;
-const frameTimes: number[] = [];
 let rtt = 0;
 
 function renderSize(): [number, number] {
@@ -88,6 +113,17 @@ function drawHud(): void {
   hud.textContent = lines.join("\n");
 }
 
+/** The frame point (render pixels) under a mouse event on the canvas, which is drawn
+ * letterboxed (`object-fit: contain`); the centre under pointer lock. */
+function framePoint(e: MouseEvent | undefined): [number, number] {
+  const [w, h] = [canvas.width, canvas.height];
+  if (!e || document.pointerLockElement === canvas) return [w / 2, h / 2];
+  const r = canvas.getBoundingClientRect();
+  const scale = Math.min(r.width / w, r.height / h);
+  const [ox, oy] = [(r.width - w * scale) / 2, (r.height - h * scale) / 2];
+  return [(e.clientX - r.left - ox) / scale, (e.clientY - r.top - oy) / scale];
+}
+
 async function main(): Promise<void> {
   await loadHasher();
   let device: GPUDevice;
@@ -97,7 +133,7 @@ async function main(): Promise<void> {
   } catch (e) {
     if (e instanceof NoWebGpu) {
       naadf.state = "no-webgpu";
-      naadf.message = `${e.message}. Open this page in a browser with WebGPU, or use the native viewer: naadf view --server <address>`;
+      naadf.message = `${e.message}. Open this page in a browser with WebGPU (https://, or http://localhost), or use the native viewer: naadf view --server <address>`;
       showNotice(naadf.message);
       drawHud();
       return;
@@ -106,10 +142,18 @@ async function main(): Promise<void> {
   }
   if (!link.mode) naadf.mode = fallback ? "albedo" : "gi";
   const context = canvas.getContext("2d")!;
+  const marks = overlay.getContext("2d")!;
   const world = new GpuWorld(device);
   const renderer = new Renderer(device);
-  let hasWorld = false;
+  let voxels: Voxels | undefined;
+  let others: PresenceEntry[] = [];
+  let dirty = true;
+  const tool: ToolState = { tool: "voxel", material: 1, radius: 4, anchor: undefined };
+  let pointer: Pick | undefined;
+  let region: Region | undefined;
+  let lastMouse: MouseEvent | undefined;
 
+  const presenceSession = BigInt(Math.floor(Math.random() * 2 ** 52));
   const session = new Session({
     state(s, why) {
       naadf.state = s;
@@ -120,22 +164,30 @@ async function main(): Promise<void> {
       }
       drawHud();
     },
+    joined() {
+      naadf.joins += 1;
+    },
     snapshot(m) {
+      naadf.snapshots += 1;
       world.uploadAll(m);
-      hasWorld = true;
       camera ??= defaultCamera(m.size);
+      fillPalette();
       sync(m);
     },
     patched(m, touched, resized) {
       world.update(m, touched, resized);
+      if (touched.some((t) => t.id === 4)) fillPalette();
       sync(m);
     },
     presence(entries) {
       naadf.users = entries.map((e) => e.name || e.user || "anonymous").sort();
+      others = entries.filter((e) => e.session !== presenceSession);
+      dirty = true;
       drawHud();
     },
   });
   function sync(m: typeof session.mirror): void {
+    voxels = new Voxels(m);
     naadf.version = Number(m.version);
     naadf.growthSeq = m.growthSeq;
     naadf.quiescent = m.quiescent;
@@ -145,28 +197,34 @@ async function main(): Promise<void> {
     drawHud();
   }
 
-  const seq = { next: BigInt(Date.now()) * 1000n };
-  const call = async (f: () => Promise<{ version: bigint }>): Promise<number> => {
-    const t0 = performance.now();
-    try {
-      const reply = await f();
-      rtt = performance.now() - t0;
-      return Number(reply.version);
-    } catch (e) {
-      const err = ConnectError.from(e);
-      naadf.message = err.rawMessage;
-      showNotice(`refused: ${err.rawMessage}`);
-      throw err;
+  // Calls: a refusal is shown as the server said it; a rate limit is retried with the same
+  // client_seq, so the edit is applied once.
+  let seq = BigInt(Date.now()) * 1000n;
+  const call = async (f: (clientSeq: bigint) => Promise<{ version: bigint }>): Promise<number> => {
+    const clientSeq = (seq += 1n);
+    for (let attempt = 0; ; attempt++) {
+      const t0 = performance.now();
+      try {
+        const reply = await f(clientSeq);
+        rtt = performance.now() - t0;
+        drawHud();
+        return Number(reply.version);
+      } catch (e) {
+        const err = ConnectError.from(e);
+        if (err.code === Code.ResourceExhausted && attempt < 8) {
+          showNotice(`rate-limited: ${err.rawMessage}; retrying`);
+          await new Promise((r) => setTimeout(r, 250 * 2 ** attempt));
+          continue;
+        }
+        naadf.message = err.rawMessage;
+        showNotice(`refused: ${err.rawMessage}`);
+        throw err;
+      }
     }
   };
-  naadf.edit = (ops) => {
-    const clientSeq = (seq.next += 1n);
-    return call(() => session.client.edit(create(EditRequestSchema, { ops, clientSeq }), session.callOptions()));
-  };
-  naadf.undo = () =>
-    call(() => session.client.undo(create(HistoryRequestSchema, { clientSeq: (seq.next += 1n) }), session.callOptions()));
-  naadf.redo = () =>
-    call(() => session.client.redo(create(HistoryRequestSchema, { clientSeq: (seq.next += 1n) }), session.callOptions()));
+  naadf.edit = (ops) => call((clientSeq) => session.client.edit(create(EditRequestSchema, { ops, clientSeq }), session.callOptions()));
+  naadf.undo = () => call((clientSeq) => session.client.undo(create(HistoryRequestSchema, { clientSeq }), session.callOptions()));
+  naadf.redo = () => call((clientSeq) => session.client.redo(create(HistoryRequestSchema, { clientSeq }), session.callOptions()));
   naadf.capture = async () => {
     const image = renderer.last;
     if (!image) throw new Error("no frame yet");
@@ -193,34 +251,113 @@ async function main(): Promise<void> {
     try {
       const me = await session.whoAmI();
       naadf.role = me.role;
-      if (me.role === "viewer") showNotice("viewer token: editing is disabled");
+      const viewer = me.role === "viewer";
+      $<HTMLDivElement>("tools").classList.toggle("disabled", viewer);
+      if (viewer) showNotice("viewer token: editing is disabled (ask for an editor token to edit)");
       drawHud();
     } catch {
       // The stream reports refusals.
     }
   }
 
-  // Presence: who this page is and where it looks, about 10 times a second while it moves.
+  // Presence: who this page is, where it looks and what it points at: at most every 100 ms
+  // while that changes, and every second regardless (entries leave the table after 5 s).
   const name = sessionStorage.getItem("naadf.name") ?? `guest-${Math.floor(Math.random() * 1e4)}`;
   sessionStorage.setItem("naadf.name", name);
-  const presenceSession = BigInt(Math.floor(Math.random() * 2 ** 52));
+  naadf.name = name;
+  naadf.voxel = (x, y, z) => (voxels?.inside(x, y, z) ? voxels.cell(x, y, z).material : 0);
+  let published = "";
+  let publishedAt = 0;
   setInterval(() => {
     if (naadf.state !== "live" || !camera) return;
-    const f = basis(camera).forward;
-    session.client
-      .publish(
-        create(PresenceRequestSchema, { session: presenceSession, name, position: camera.pos, forward: f, tool: "view" }),
-        session.callOptions(),
-      )
-      .catch(() => {});
-  }, 200);
+    const msg = {
+      session: presenceSession,
+      name,
+      position: [...camera.pos],
+      forward: basis(camera).forward,
+      pointer: pointer ? pointer.voxel.map(BigInt) : [],
+      tool: tool.tool,
+    };
+    const key = JSON.stringify(msg, (_, v) => (typeof v === "bigint" ? String(v) : v));
+    const now = performance.now();
+    if (key === published && now - publishedAt < 1000) return;
+    published = key;
+    publishedAt = now;
+    session.client.publish(create(PresenceRequestSchema, msg), session.callOptions()).catch(() => {});
+  }, 100);
 
-  // Flying: WASD (Space up, Shift down) and the mouse under pointer lock; the wheel sets the speed.
+  // Tools: the toolbar, the palette and the pointer.
+  const toolSelect = $<HTMLSelectElement>("tool");
+  for (const t of TOOLS) toolSelect.add(new Option(t, t));
+  toolSelect.onchange = () => {
+    tool.tool = toolSelect.value as ToolState["tool"];
+    tool.anchor = undefined;
+    dirty = true;
+  };
+  const radius = $<HTMLInputElement>("radius");
+  radius.onchange = () => {
+    tool.radius = Math.max(0, Number(radius.value) || 0);
+    dirty = true;
+  };
+  function fillPalette(): void {
+    const box = $<HTMLDivElement>("palette");
+    box.replaceChildren(
+      ...palette(session.mirror).map((s) => {
+        const b = document.createElement("button");
+        b.className = s.id === tool.material ? "swatch chosen" : "swatch";
+        b.style.background = s.colour;
+        b.title = `material ${s.id}`;
+        b.onclick = () => {
+          tool.material = s.id;
+          fillPalette();
+        };
+        return b;
+      }),
+    );
+  }
+  function aim(): void {
+    if (!camera || !voxels || canvas.width === 0) return;
+    const [x, y] = framePoint(lastMouse);
+    pointer = pick(voxels, [...camera.pos], rayThrough(camera, canvas.width, canvas.height, x, y));
+    region = pointer && naadf.role !== "viewer" ? preview(tool, voxels, pointer) : undefined;
+    naadf.pointer = pointer ? { voxel: pointer.voxel, before: pointer.before } : null;
+  }
+  canvas.addEventListener("mousemove", (e) => {
+    lastMouse = e;
+    dirty = true;
+  });
+  canvas.addEventListener("contextmenu", (e) => e.preventDefault());
+  canvas.addEventListener("mousedown", (e) => {
+    if (e.button === 2 && document.pointerLockElement !== canvas) {
+      canvas.requestPointerLock?.();
+      return;
+    }
+    if (e.button !== 0 || naadf.role === "viewer") return;
+    lastMouse = e;
+    aim();
+    if (!pointer || region?.refusal) {
+      if (region?.refusal) showNotice(`${tool.tool}: ${region.refusal}`);
+      return;
+    }
+    const ops = commit(tool, pointer);
+    dirty = true;
+    if (ops) naadf.edit(ops).then(() => showNotice(""), () => {});
+  });
+
+  // Flying: WASD (Space up, Shift down) and the mouse under pointer lock (right click);
+  // the wheel sets the speed. Ctrl+Z undoes this user's last batch, Ctrl+Shift+Z redoes.
   const keys = new Set<string>();
   let speed = 32;
-  addEventListener("keydown", (e) => keys.add(e.code));
+  addEventListener("keydown", (e) => {
+    if ((e.ctrlKey || e.metaKey) && e.code === "KeyZ") {
+      e.preventDefault();
+      (e.shiftKey ? naadf.redo() : naadf.undo()).catch(() => {});
+      return;
+    }
+    if (e.target instanceof HTMLInputElement) return;
+    keys.add(e.code);
+  });
   addEventListener("keyup", (e) => keys.delete(e.code));
-  canvas.addEventListener("click", () => canvas.requestPointerLock?.());
   addEventListener("mousemove", (e) => {
     if (document.pointerLockElement !== canvas || !camera) return;
     camera.yaw += e.movementX * 0.15;
@@ -231,10 +368,11 @@ async function main(): Promise<void> {
     speed = Math.max(1, Math.min(4096, speed * (e.deltaY < 0 ? 1.25 : 0.8)));
     e.preventDefault();
   });
-  let lastTick = performance.now();
-  let drawing = false;
-  let lastUrl = 0;
 
+  const frameTimes: number[] = [];
+  let lastTick = performance.now();
+  let lastUrl = 0;
+  let drawing = false;
   function frame(now: number): void {
     const dt = Math.min(0.1, (now - lastTick) / 1000);
     lastTick = now;
@@ -249,24 +387,26 @@ async function main(): Promise<void> {
       if (keys.has("ShiftLeft")) move([0, 1, 0], -1);
       dirty = true;
     }
-    if (hasWorld && camera && dirty && !drawing) {
+    if (world.buffer && camera && dirty && !drawing) {
       dirty = false;
       drawing = true;
       const [w, h] = renderSize();
       const t0 = performance.now();
       const version = naadf.version;
+      const view: Camera = { ...camera, pos: [...camera.pos] };
       renderer
-        .render(world, camera, w, h, drawnMode(naadf.mode))
+        .render(world, view, w, h, drawnMode(naadf.mode))
         .then((image) => {
-          if (canvas.width !== w || canvas.height !== h) {
-            canvas.width = w;
-            canvas.height = h;
+          for (const c of [canvas, overlay]) {
+            if (c.width !== w || c.height !== h) [c.width, c.height] = [w, h];
           }
           context.putImageData(image, 0, 0);
+          aim();
+          naadf.markers = drawOverlay(marks, view, region, others);
           frameTimes.push(performance.now() - t0);
           if (frameTimes.length > 30) frameTimes.shift();
           naadf.frameMs = frameTimes.reduce((a, b) => a + b, 0) / frameTimes.length;
-          document.body.dataset.shownVersion = String(version);
+          naadf.shownVersion = version;
           drawHud();
         })
         .catch((e) => console.error(`frame: ${e}`))
@@ -286,6 +426,8 @@ async function main(): Promise<void> {
     naadf.mode = modeSelect.value;
     dirty = true;
   };
+  $<HTMLButtonElement>("undo").onclick = () => naadf.undo().catch(() => {});
+  $<HTMLButtonElement>("redo").onclick = () => naadf.redo().catch(() => {});
   $<HTMLButtonElement>("shot").onclick = async () => {
     const a = document.createElement("a");
     a.href = await naadf.capture();

@@ -17,6 +17,8 @@ export type SessionState = "connecting" | "need-token" | "syncing" | "live" | "r
 /** What the session tells the page. */
 export interface SessionEvents {
   state(s: SessionState, why?: string): void;
+  /** A `Join` stream was opened. */
+  joined(): void;
   /** A snapshot completed: the whole world is new. */
   snapshot(m: Mirror): void;
   /** A delta was applied. */
@@ -124,6 +126,7 @@ export class Session {
       presence: true,
     });
     let any = false;
+    this.events.joined();
     for await (const msg of this.client.join(request, { ...this.callOptions(), signal })) {
       any = true;
       const k = msg.kind;
