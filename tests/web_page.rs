@@ -262,3 +262,148 @@ fn two_pages_edit_together_and_see_each_other() {
     }
     server.stop();
 }
+
+/// The server is killed with -9 and restarted on the same data and ports: the page
+/// reconnects, resumes from what it holds without a snapshot, and keeps following.
+#[test]
+fn the_page_resumes_after_the_server_is_killed() {
+    if !browser_available() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let world = start_world(dir.path());
+    let (grpc, http) = (support::free_addr(), support::free_addr());
+    let listen = ["--grpc", grpc.as_str(), "--http", http.as_str()];
+    let server = serve_world(dir.path(), &world, &listen, &[]);
+    let mut browser = Browser::start();
+    browser.open(
+        "a",
+        &page_url(&server, r#"{"pos":[64,60,-10],"yaw":0,"pitch":-30}"#, "64x36", "albedo"),
+    );
+    browser.wait("a", SETTLED, 120_000);
+    let op = r#"{"op":"box","min":[20,40,20],"max":[24,44,24],"material":3}"#;
+    ok(&["edit", "--server", &server.url, "--ops", "-"], Some(op));
+    let before = browser.wait(
+        "a",
+        &format!("n.version === {} && {SETTLED}", status(&server)["version"]),
+        20_000,
+    );
+    let received = before["bytesReceived"].as_u64().unwrap();
+    server.kill9();
+
+    browser.wait("a", "n.state === 'reconnecting'", 20_000);
+    let server = serve_world(dir.path(), &world, &listen, &[]);
+    let resumed = browser.wait(
+        "a",
+        &format!("n.state === 'live' && n.joins > {}", before["joins"]),
+        30_000,
+    );
+    assert_eq!(
+        resumed["snapshots"], 1,
+        "the page resumed without a snapshot: {resumed}"
+    );
+    let op = r#"{"op":"sphere","center":[40,45,40],"radius":4,"material":2}"#;
+    ok(&["edit", "--server", &server.url, "--ops", "-"], Some(op));
+    let end = status(&server);
+    let page = browser.wait("a", &format!("n.version === {} && {SETTLED}", end["version"]), 20_000);
+    assert_on_server(&page, &status(&server));
+    assert_eq!(page["snapshots"], 1, "{page}");
+    let resumed_bytes = page["bytesReceived"].as_u64().unwrap() - received;
+    assert!(
+        resumed_bytes < 64 << 10,
+        "the resume and an edit took {resumed_bytes} bytes"
+    );
+    server.stop();
+}
+
+/// With tokens: no token and a wrong token each ask for a token with the server's reason;
+/// a viewer token shows the world with editing disabled, and its edits are refused; nothing
+/// is edited.
+#[test]
+fn the_page_asks_for_a_token_and_refuses_viewers_edits() {
+    if !browser_available() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let world = start_world(dir.path());
+    let tokens = [("NAADF_TOKENS", "vt=vera:viewer,et=edwin:editor")];
+    let server = serve_world(dir.path(), &world, &[], &tokens);
+    let version = support::naadf(&["status", "--server", &server.url, "--token", "vt", "--json"], None);
+    let version: Value = serde_json::from_str(&String::from_utf8_lossy(&version.stdout)).unwrap();
+    let mut browser = Browser::start();
+    browser.open(
+        "a",
+        &page_url(&server, r#"{"pos":[64,60,-10],"yaw":0,"pitch":-30}"#, "64x36", "albedo"),
+    );
+    let asked = browser.wait("a", "n.state === 'need-token'", 30_000);
+    assert!(!asked["message"].as_str().unwrap().is_empty(), "{asked}");
+    assert!(
+        browser.eval("a", "return !document.getElementById('token').hidden") == true,
+        "the token form is shown"
+    );
+    let submit = |token: &str| {
+        format!(
+            "document.getElementById('token-value').value = {}; document.getElementById('token').requestSubmit(); return null",
+            json!(token)
+        )
+    };
+    browser.eval("a", &submit("wrong"));
+    let wrong = browser.wait("a", "n.state === 'need-token' && n.joins >= 2", 30_000);
+    assert!(wrong["message"].as_str().unwrap().contains("token"), "{wrong}");
+    browser.eval("a", &submit("vt"));
+    let viewer = browser.wait("a", &format!("n.role === 'viewer' && {SETTLED}"), 60_000);
+    assert_on_server(&viewer, &version);
+    assert!(
+        browser.eval(
+            "a",
+            "return document.getElementById('tools').classList.contains('disabled')"
+        ) == true,
+        "the tools are disabled for a viewer"
+    );
+    let refused = browser.send(json!({"op": "eval", "id": "a", "js": "try { await n.edit('{\"op\":\"set\",\"voxels\":[[1,1,1,1]]}'); return 'applied'; } catch (e) { return String(e.message); }"}));
+    assert!(
+        refused.as_str().unwrap().contains("permission") || refused.as_str().unwrap().contains("viewer"),
+        "{refused}"
+    );
+    let after = support::naadf(&["status", "--server", &server.url, "--token", "vt", "--json"], None);
+    let after: Value = serde_json::from_str(&String::from_utf8_lossy(&after.stdout)).unwrap();
+    assert_eq!(after["version"], version["version"], "nothing was edited");
+    assert_eq!(browser.eval("a", "return sessionStorage.getItem('naadf.token')"), "vt");
+    assert!(
+        !browser
+            .eval("a", "return location.href")
+            .as_str()
+            .unwrap()
+            .contains("vt"),
+        "the token is never in the URL"
+    );
+    server.stop();
+}
+
+/// A relay serves the page on its own gRPC listener, and forwards its edits upstream.
+#[test]
+fn a_relay_serves_the_page_and_forwards_its_edits() {
+    if !browser_available() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let world = start_world(dir.path());
+    let server = serve_world(dir.path(), &world, &[], &[]);
+    let relay = Server::relay(&server.url, &[], &dir.path().join("relay.log"));
+    let mut browser = Browser::start();
+    browser.open(
+        "a",
+        &page_url(&relay, r#"{"pos":[64,60,-10],"yaw":0,"pitch":-30}"#, "64x36", "albedo"),
+    );
+    browser.wait("a", SETTLED, 120_000);
+    let version = browser.eval(
+        "a",
+        r#"return await n.edit('{"op":"box","min":[30,40,30],"max":[34,44,34],"material":2}')"#,
+    );
+    assert_eq!(status(&server)["version"], version, "the edit reached the server");
+    let page = browser.wait("a", &format!("n.version === {version} && {SETTLED}"), 20_000);
+    assert_on_server(&page, &status(&server));
+    assert_eq!(browser.eval("a", "return n.voxel(31, 41, 31)"), 2);
+    relay.stop();
+    server.stop();
+}
