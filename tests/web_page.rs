@@ -264,7 +264,8 @@ fn two_pages_edit_together_and_see_each_other() {
 }
 
 /// The server is killed with -9 and restarted on the same data and ports: the page
-/// reconnects, resumes from what it holds without a snapshot, and keeps following.
+/// reconnects, resumes from what it holds without a snapshot, and keeps following; a reload
+/// of the page then takes the world from its cache and downloads none of it.
 #[test]
 fn the_page_resumes_after_the_server_is_killed() {
     if !browser_available() {

@@ -7,6 +7,7 @@ import { EditRequestSchema, HistoryRequestSchema, PresenceRequestSchema } from "
 import type { PresenceEntry } from "./gen/naadf/v1/naadf_pb";
 import type { Camera } from "./camera";
 import { basis, defaultCamera } from "./camera";
+import { PageCache } from "./cache";
 import { digestHex, loadHasher } from "./digest";
 import { GpuWorld, NoWebGpu, Renderer, openDevice } from "./gpu";
 import type { Marker } from "./overlay";
@@ -154,6 +155,12 @@ async function main(): Promise<void> {
   let lastMouse: MouseEvent | undefined;
 
   const presenceSession = BigInt(Math.floor(Math.random() * 2 ** 52));
+  const upload = (m: typeof session.mirror) => {
+    world.uploadAll(m);
+    camera ??= defaultCamera(m.size);
+    fillPalette();
+    sync(m);
+  };
   const session = new Session({
     state(s, why) {
       naadf.state = s;
@@ -169,11 +176,9 @@ async function main(): Promise<void> {
     },
     snapshot(m) {
       naadf.snapshots += 1;
-      world.uploadAll(m);
-      camera ??= defaultCamera(m.size);
-      fillPalette();
-      sync(m);
+      upload(m);
     },
+    restored: upload,
     patched(m, touched, resized) {
       world.update(m, touched, resized);
       if (touched.some((t) => t.id === 4)) fillPalette();
@@ -185,7 +190,7 @@ async function main(): Promise<void> {
       dirty = true;
       drawHud();
     },
-  });
+  }, await PageCache.open());
   function sync(m: typeof session.mirror): void {
     voxels = new Voxels(m);
     naadf.version = Number(m.version);
@@ -436,6 +441,7 @@ async function main(): Promise<void> {
   };
   addEventListener("resize", () => (dirty = true));
   void identify();
+  await session.restore();
   await session.run();
 }
 

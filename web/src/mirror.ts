@@ -90,6 +90,28 @@ export class Mirror {
     return b.bytes.subarray(0, b.len);
   }
 
+  /** Takes a state the page cached: the buffers from their pages, checked against the
+   * digest. Returns whether the mirror now holds that world. */
+  restore(
+    state: { size: [number, number, number]; version: bigint; growthSeq: number; quiescent: boolean; digest: bigint; lengths: number[] },
+    pages: Uint8Array[][],
+  ): boolean {
+    if (pages.length !== BUFFER_COUNT || state.lengths.length !== BUFFER_COUNT) return false;
+    for (let id = 0; id < BUFFER_COUNT; id++) {
+      const b = this.buffers[id];
+      b.resize(state.lengths[id]);
+      pages[id].forEach((page, p) => b.bytes.set(page.subarray(0, Math.max(0, Math.min(PAGE_BYTES, b.len - p * PAGE_BYTES))), p * PAGE_BYTES));
+      b.rehash(0, b.hashes.length);
+    }
+    this.size = state.size;
+    this.version = state.version;
+    this.growthSeq = state.growthSeq;
+    this.quiescent = state.quiescent;
+    this.digest = this.computeDigest();
+    this.holdsWorld = this.digest === state.digest;
+    return this.holdsWorld;
+  }
+
   /** Starts a snapshot (or a resume). Returns whether pages follow. */
   header(h: Header): boolean {
     if (h.resume) {

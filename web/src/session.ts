@@ -8,6 +8,7 @@ import { createGrpcWebTransport } from "@connectrpc/connect-web";
 import { DeltaForm, JoinRequestSchema, WorldService } from "./gen/naadf/v1/naadf_pb";
 import type { PresenceEntry, StatusReply } from "./gen/naadf/v1/naadf_pb";
 import { PROTOCOL_VERSION } from "./gen/layout";
+import type { PageCache } from "./cache";
 import { Mirror, MirrorError } from "./mirror";
 import type { Touched } from "./mirror";
 
@@ -21,6 +22,8 @@ export interface SessionEvents {
   joined(): void;
   /** A snapshot completed: the whole world is new. */
   snapshot(m: Mirror): void;
+  /** The world was rebuilt from the page's cache (before joining). */
+  restored(m: Mirror): void;
   /** A delta was applied. */
   patched(m: Mirror, touched: Touched[], resized: boolean): void;
   presence(entries: PresenceEntry[]): void;
@@ -41,8 +44,12 @@ export class Session {
   bytesReceived = 0;
   private abort: AbortController | undefined;
   private stopped = false;
+  private saving: ReturnType<typeof setTimeout> | undefined;
 
-  constructor(private readonly events: SessionEvents) {
+  constructor(
+    private readonly events: SessionEvents,
+    private readonly cache: PageCache | undefined,
+  ) {
     this.client = createClient(WorldService, createGrpcWebTransport({ baseUrl: location.origin, useBinaryFormat: true }));
   }
 
@@ -66,6 +73,22 @@ export class Session {
   /** Who the server takes this page for. */
   async whoAmI(): Promise<StatusReply> {
     return this.client.status({}, this.callOptions());
+  }
+
+  /** Rebuilds the world from the cache, if it holds one; whether it did. */
+  async restore(): Promise<boolean> {
+    if (!this.cache || !(await this.cache.restore(this.mirror).catch(() => false))) return false;
+    this.events.restored(this.mirror);
+    return true;
+  }
+
+  /** Saves the world to the cache soon (coalescing a burst of deltas). */
+  private saveSoon(): void {
+    if (!this.cache || this.saving) return;
+    this.saving = setTimeout(() => {
+      this.saving = undefined;
+      this.cache?.save(this.mirror).catch((e) => console.warn(`the page cache: ${e}`));
+    }, 1000);
   }
 
   /** Joins, and joins again whenever the stream ends, until a refusal that a person must
@@ -144,6 +167,7 @@ export class Session {
         case "delta": {
           const { touched, resized } = m.delta(k.value);
           this.events.patched(m, touched, resized);
+          this.saveSoon();
           break;
         }
         case "presence":
@@ -156,6 +180,7 @@ export class Session {
 
   private live(resumed: boolean): void {
     if (!resumed) this.events.snapshot(this.mirror);
+    this.saveSoon();
     this.events.state("live");
   }
 }

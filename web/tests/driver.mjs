@@ -10,6 +10,7 @@
 //   {"op":"select","id":"a","selector":"#tool","value":"sphere"}
 //   {"op":"fill","id":"a","selector":"#radius","value":"3"}
 //   {"op":"capture","id":"a","path":"f.png"}           writes the last frame as PNG
+//   {"op":"reload","id":"a"}                         reloads the page
 //   {"op":"close","id":"a"}
 import { createInterface } from "node:readline";
 import { writeFileSync } from "node:fs";
@@ -75,6 +76,7 @@ const commands = {
     const url = await evaluate(pages.get(id), "return await n.capture()");
     writeFileSync(path, Buffer.from(url.slice(url.indexOf(",") + 1), "base64"));
   },
+  reload: ({ id }) => pages.get(id).reload().then(() => null),
   async close({ id }) {
     await pages.get(id).context().close();
     pages.delete(id);
