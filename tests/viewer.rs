@@ -135,11 +135,16 @@ fn the_viewer_renders_a_server_world_in_a_window() {
         wait $pid
     "#;
     let summary_path = p(dir.path(), "clicks.json");
+    // Meanwhile another client watches the presence table for the window.
+    let watcher = watch_presence(server.url.clone(), "viewer-test");
     let out = display
         .viewer(&["bash", "-c", script, "clicks"], &server.url, "editor")
         .env("SUMMARY", &summary_path)
+        .env("NAADF_NAME", "viewer-test")
         .output()
         .expect("run the viewer");
+    let entry = watcher.join().unwrap().expect("the window published its presence");
+    assert_eq!(entry.position.len(), 3, "with its camera: {entry:?}");
     assert!(
         out.status.success(),
         "the clicking session failed: {}",
@@ -155,4 +160,31 @@ fn the_viewer_renders_a_server_world_in_a_window() {
     .unwrap();
     assert_eq!(status["version"], 3, "{status}");
     server.stop();
+}
+
+/// Joins `url` with the presence table in a thread of its own and returns the first entry
+/// named `name` (`None` after a minute).
+fn watch_presence(url: String, name: &'static str) -> std::thread::JoinHandle<Option<naadf_proto::v1::PresenceEntry>> {
+    std::thread::spawn(move || {
+        let rt = tokio::runtime::Runtime::new().unwrap();
+        rt.block_on(async {
+            let client = naadf_client::Client::connect(&url, None, None).await.ok()?;
+            let mut request = naadf_client::Mirror::new(None).join_request();
+            request.presence = true;
+            let mut stream = client.stream(request).await.ok()?;
+            let found = async {
+                while let Ok(Some(m)) = stream.message().await {
+                    if let Some(naadf_proto::v1::world_message::Kind::Presence(p)) = m.kind
+                        && let Some(e) = p.entries.into_iter().find(|e| e.name == name)
+                    {
+                        return Some(e);
+                    }
+                }
+                None
+            };
+            tokio::time::timeout(std::time::Duration::from_secs(60), found)
+                .await
+                .ok()?
+        })
+    })
 }

@@ -22,7 +22,8 @@ use naadf_proto::DEFAULT_FRAME_DEADLINE;
 use naadf_proto::requests::{entity_pose, entity_spawn};
 use naadf_proto::v1::{
     DespawnEntitiesRequest, EditReply, EditRequest, FrameJob, FrameReply, FrameRequest, FrameResult, HistoryRequest,
-    JoinRequest, MoveEntitiesRequest, NodeHello, NodeMessage, SpawnEntitiesRequest, StatusRequest, node_message,
+    JoinRequest, MoveEntitiesRequest, NodeHello, NodeMessage, PresenceRequest, SpawnEntitiesRequest, StatusRequest,
+    node_message,
 };
 use naadf_world::World;
 use naadf_world::digest::Digest;
@@ -154,6 +155,38 @@ pub struct RenderedFrame {
     pub image: FrameImage,
 }
 
+/// Where a client is and what it points at, published with [`Client::publish`] for the
+/// others to see (docs/PROTOCOL.md, "Presence"). The server stamps it with the caller's
+/// user and forgets it 5 s after the last update.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PresenceUpdate {
+    /// A number picked at random once per window or page, telling one user's sessions apart.
+    pub session: u64,
+    /// The name to show (64 characters are kept).
+    pub name: String,
+    /// The camera position in voxels.
+    pub position: Option<[f64; 3]>,
+    /// The camera's forward direction.
+    pub forward: Option<[f64; 3]>,
+    /// The voxel under the pointer.
+    pub pointer: Option<[i64; 3]>,
+    /// The tool in hand (32 characters are kept).
+    pub tool: String,
+}
+
+impl From<&PresenceUpdate> for PresenceRequest {
+    fn from(p: &PresenceUpdate) -> Self {
+        PresenceRequest {
+            session: p.session,
+            name: p.name.clone(),
+            position: p.position.map(Vec::from).unwrap_or_default(),
+            forward: p.forward.map(Vec::from).unwrap_or_default(),
+            pointer: p.pointer.map(Vec::from).unwrap_or_default(),
+            tool: p.tool.clone(),
+        }
+    }
+}
+
 impl From<EditReply> for Ack {
     fn from(r: EditReply) -> Self {
         Ack {
@@ -276,6 +309,27 @@ impl Client {
             client_seq,
         };
         Ok(self.raw.clone().despawn_entities(req).await?.into_inner().into())
+    }
+
+    /// Publishes where this client is (any role may). About 10 times a second is plenty;
+    /// faster updates only replace this session's entry.
+    ///
+    /// ```no_run
+    /// # async fn demo(client: naadf_client::Client) -> Result<(), naadf_client::Error> {
+    /// use naadf_client::PresenceUpdate;
+    /// client
+    ///     .publish(&PresenceUpdate {
+    ///         session: 7,
+    ///         name: "ada".into(),
+    ///         position: Some([64.0, 40.0, 64.0]),
+    ///         ..PresenceUpdate::default()
+    ///     })
+    ///     .await?;
+    /// # Ok(()) }
+    /// ```
+    pub async fn publish(&self, update: &PresenceUpdate) -> Result<(), Error> {
+        self.raw.clone().publish(PresenceRequest::from(update)).await?;
+        Ok(())
     }
 
     /// The server's state.

@@ -67,7 +67,8 @@ pub mod viewer;
 
 pub use cache::PageCache;
 pub use client::{
-    Ack, Client, FrameImage, Job, NodeInfo, Pose, Registration, RenderedFrame, ServerAddress, ServerStatus, Spawn,
+    Ack, Client, FrameImage, Job, NodeInfo, Pose, PresenceUpdate, Registration, RenderedFrame, ServerAddress,
+    ServerStatus, Spawn,
 };
 pub use error::{ConnectError, Error};
 pub use frame::{Frame, FrameSpec, Mode};

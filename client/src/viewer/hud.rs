@@ -26,51 +26,68 @@ pub fn draw_hud(rgba: &mut [u8], width: u32, height: u32, lines: &[String], swat
     let cols = lines.iter().map(|l| l.chars().count() as u32).max().unwrap_or(0) + 2 * u32::from(swatch.is_some());
     let panel_w = (2 * MARGIN + cols * CELL).min(width);
     let panel_h = (2 * MARGIN + lines.len() as u32 * (CELL + 2)).min(height);
-    let mut put = |x: u32, y: u32, c: [u8; 3], blend: bool| {
-        if x < width && y < height {
-            let i = ((y * width + x) * 4) as usize;
-            if let Some(p) = rgba.get_mut(i..i + 4) {
+    let mut canvas = Canvas { rgba, width, height };
+    for y in 0..panel_h {
+        for x in 0..panel_w {
+            canvas.put(x, y, [0, 0, 0], true);
+        }
+    }
+    let mut y0 = MARGIN;
+    for line in lines {
+        canvas.text(MARGIN, y0, line, [255; 3]);
+        y0 += CELL + 2;
+    }
+    if let (Some(c), Some(last)) = (swatch, lines.last()) {
+        let x0 = MARGIN + (last.chars().count() as u32 + 1) * CELL;
+        let y0 = MARGIN + (lines.len() as u32 - 1) * (CELL + 2);
+        canvas.fill(x0, y0, CELL, CELL, c);
+    }
+}
+
+/// A frame's RGBA pixels to draw into; everything outside the frame is clipped.
+pub(crate) struct Canvas<'a> {
+    /// The pixels, row by row.
+    pub rgba: &'a mut [u8],
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+}
+
+impl Canvas<'_> {
+    /// Sets pixel `(x, y)` to `c`, or, with `blend`, darkens it to a third and adds `c`.
+    pub fn put(&mut self, x: u32, y: u32, c: [u8; 3], blend: bool) {
+        if x < self.width && y < self.height {
+            let i = ((y * self.width + x) * 4) as usize;
+            if let Some(p) = self.rgba.get_mut(i..i + 4) {
                 for (dst, src) in p.iter_mut().zip(c) {
                     *dst = if blend { (*dst / 3).saturating_add(src) } else { src };
                 }
                 p[3] = 255;
             }
         }
-    };
-    for y in 0..panel_h {
-        for x in 0..panel_w {
-            put(x, y, [0, 0, 0], true);
+    }
+
+    /// Fills the `w × h` rectangle at `(x0, y0)` with `c`.
+    pub fn fill(&mut self, x0: u32, y0: u32, w: u32, h: u32, c: [u8; 3]) {
+        for y in 0..h {
+            for x in 0..w {
+                self.put(x0 + x, y0 + y, c, false);
+            }
         }
     }
-    let mut y0 = MARGIN;
-    for line in lines {
-        let mut x0 = MARGIN;
-        for ch in line.chars() {
+
+    /// Writes `text` with its top-left corner at `(x0, y0)` in colour `c`.
+    pub fn text(&mut self, x0: u32, y0: u32, text: &str, c: [u8; 3]) {
+        for (i, ch) in text.chars().enumerate() {
             let glyph = BASIC_LEGACY.get(ch as usize).unwrap_or(&BASIC_LEGACY[b'?' as usize]);
+            let x = x0 + i as u32 * CELL;
             for (gy, row) in glyph.iter().enumerate() {
                 for gx in 0..8 {
                     if row >> gx & 1 != 0 {
-                        for s in 0..SCALE * SCALE {
-                            put(
-                                x0 + gx * SCALE + s % SCALE,
-                                y0 + gy as u32 * SCALE + s / SCALE,
-                                [255; 3],
-                                false,
-                            );
-                        }
+                        self.fill(x + gx * SCALE, y0 + gy as u32 * SCALE, SCALE, SCALE, c);
                     }
                 }
-            }
-            x0 += CELL;
-        }
-        y0 += CELL + 2;
-    }
-    if let (Some(c), Some(last)) = (swatch, lines.last()) {
-        let x0 = MARGIN + (last.chars().count() as u32 + 1) * CELL;
-        let y0 = MARGIN + (lines.len() as u32 - 1) * (CELL + 2);
-        for y in 0..CELL {
-            for x in 0..CELL {
-                put(x0 + x, y0 + y, c, false);
             }
         }
     }

@@ -1,9 +1,9 @@
-//! [`Link`]: the viewer's connection to the server. The world stream, status polls and
-//! edit replies run on a small tokio runtime and reach the window's thread as [`Event`]s;
+//! [`Link`]: the viewer's connection to the server. The world stream, status polls,
+//! presence and edit replies run on a small tokio runtime and reach the window's thread as [`Event`]s;
 //! the world itself is only touched on that thread.
 
 use super::error::ViewerError;
-use crate::client::{Client, ServerAddress};
+use crate::client::{Client, PresenceUpdate, ServerAddress};
 use crate::connect::session_client_seq;
 use naadf_proto::v1::{JoinRequest, WorldMessage};
 use std::sync::Arc;
@@ -107,6 +107,17 @@ impl Link {
             let reply = c.edit(ops, client_seq).await;
             n(Event::Edited(reply.map(|a| a.version).map_err(|e| e.to_string())));
             pending.fetch_sub(1, Ordering::SeqCst);
+        });
+    }
+
+    /// Publishes where the window looks (docs/PROTOCOL.md, "Presence"); a failure only
+    /// leaves the others with an older entry.
+    pub fn publish(&self, update: PresenceUpdate) {
+        let c = self.client.clone();
+        self.runtime.spawn(async move {
+            if let Err(e) = c.publish(&update).await {
+                tracing::debug!("presence not published: {e}");
+            }
         });
     }
 

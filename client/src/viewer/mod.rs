@@ -5,6 +5,7 @@
 //! - `fly` ([`Fly`]): WASD + mouse-look camera control;
 //! - `pick` ([`edit_for_click`]): which voxel a click edits;
 //! - `hud` ([`draw_hud`]): the text overlay;
+//! - `markers` ([`draw_markers`]): the other people here, from the presence table;
 //! - `present` ([`Presenter`]): showing frames in the window;
 //! - this module: the window's event loop, which owns the [`Mirror`] and the [`GpuWorld`]
 //!   and applies stream messages in order on its own thread.
@@ -17,6 +18,7 @@ mod error;
 mod fly;
 mod hud;
 mod link;
+mod markers;
 mod pick;
 mod present;
 
@@ -24,10 +26,11 @@ pub use error::ViewerError;
 pub use fly::{Fly, Move};
 pub use hud::draw_hud;
 pub use link::{Event, Link};
+pub use markers::{draw_markers, project};
 pub use pick::{Click, edit_for_click};
 pub use present::Presenter;
 
-use crate::client::ServerAddress;
+use crate::client::{PresenceUpdate, ServerAddress};
 use crate::frame::{Frame, Mode};
 use crate::gpu::{Baseline, Gi, Gpu, GpuError, GpuWorld, PathTracer, Renderer, Shot, Temporal};
 use crate::light::{DEFAULT_LIT_BOUNCES, DEFAULT_PATHTRACE_BOUNCES, LitOptions};
@@ -49,6 +52,10 @@ const REJOIN_DELAY: Duration = Duration::from_secs(1);
 const SCROLL_STEP: f64 = 40.0;
 /// How long closing waits for edits still in flight.
 const EDIT_DRAIN: Duration = Duration::from_secs(10);
+/// Presence is published at most this often while the view changes, and at least this
+/// often regardless (the server forgets an entry 5 s after its last update).
+const PRESENCE_EVERY: Duration = Duration::from_millis(100);
+const PRESENCE_AT_LEAST: Duration = Duration::from_secs(1);
 
 /// What the viewer shows and where it gets it.
 #[derive(Clone, Debug)]
@@ -99,7 +106,7 @@ pub fn run(opts: ViewerOptions) -> Result<ViewerSummary, ViewerError> {
         }
     })?;
     let mut mirror = Mirror::new(None).with_max_world_bytes(opts.server.max_world_bytes);
-    link.join(mirror.join_request());
+    link.join(join_request(&mut mirror));
     let mut app = App {
         opts,
         link,
@@ -119,6 +126,13 @@ pub fn run(opts: ViewerOptions) -> Result<ViewerSummary, ViewerError> {
         frames: 0,
         edits: 0,
         title: String::new(),
+        presence: PresenceUpdate {
+            session: crate::connect::session_client_seq(),
+            name: presence_name(),
+            tool: "view".into(),
+            ..PresenceUpdate::default()
+        },
+        published: None,
         result: Ok(()),
     };
     event_loop
@@ -212,7 +226,26 @@ struct App {
     edits: u32,
     /// The window title shown now (version and clients; updated when they change).
     title: String,
+    /// What this window publishes about itself, and when it last did.
+    presence: PresenceUpdate,
+    published: Option<Instant>,
     result: Result<(), ViewerError>,
+}
+
+/// The mirror's join request, with the presence table.
+fn join_request(mirror: &mut Mirror) -> naadf_proto::v1::JoinRequest {
+    naadf_proto::v1::JoinRequest {
+        presence: true,
+        ..mirror.join_request()
+    }
+}
+
+/// The name this window shows the others: `NAADF_NAME`, or the system's user name.
+fn presence_name() -> String {
+    ["NAADF_NAME", "USER", "USERNAME"]
+        .iter()
+        .find_map(|k| std::env::var(k).ok().filter(|v| !v.is_empty()))
+        .unwrap_or_else(|| "viewer".into())
 }
 
 impl App {
@@ -425,7 +458,23 @@ impl App {
             w.set_title(&title);
             self.title = title;
         }
+        let others: Vec<_> = self
+            .mirror
+            .presence()
+            .iter()
+            .filter(|e| e.session != self.presence.session)
+            .cloned()
+            .collect();
+        draw_markers(&mut frame, &fly.camera, &others);
         draw_crosshair(&mut frame);
+        let camera = fly.camera;
+        publish_presence(
+            &self.link,
+            (&mut self.presence, &mut self.published),
+            &camera,
+            world,
+            size,
+        );
         gfx.presenter.present(&gfx.gpu, &frame)?;
         self.frames += 1;
         if self.opts.frames == Some(self.frames) {
@@ -436,6 +485,29 @@ impl App {
             el.exit();
         }
         Ok(())
+    }
+}
+
+/// Publishes where the window looks and points through `link`, when that changed (at most
+/// every [`PRESENCE_EVERY`]) or [`PRESENCE_AT_LEAST`] went by since `published`.
+fn publish_presence(
+    link: &Link,
+    (presence, published): (&mut PresenceUpdate, &mut Option<Instant>),
+    camera: &Camera,
+    world: &naadf_world::World,
+    size: (u32, u32),
+) {
+    let next = PresenceUpdate {
+        position: Some(camera.pos),
+        forward: Some(camera.basis().forward),
+        pointer: pick::pointed_voxel(world, camera, size),
+        ..presence.clone()
+    };
+    let since = published.map_or(Duration::MAX, |t| t.elapsed());
+    if (next != *presence && since >= PRESENCE_EVERY) || since >= PRESENCE_AT_LEAST {
+        *presence = next.clone();
+        *published = Some(Instant::now());
+        link.publish(next);
     }
 }
 
@@ -534,7 +606,7 @@ impl ApplicationHandler<Event> for App {
     fn about_to_wait(&mut self, _: &ActiveEventLoop) {
         if self.rejoin_at.is_some_and(|t| Instant::now() >= t) {
             self.rejoin_at = None;
-            self.link.join(self.mirror.join_request());
+            self.link.join(join_request(&mut self.mirror));
         }
         if let Some(w) = &self.window {
             w.request_redraw();

@@ -4,7 +4,7 @@
 
 use naadf_world::World;
 use naadf_world::camera::Camera;
-use naadf_world::traverse::trace_naadf;
+use naadf_world::traverse::{Hit, trace_naadf};
 
 /// What a click does.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -29,11 +29,8 @@ pub enum Click {
 /// let ops = edit_for_click(&world, &cam, (64, 64), Click::Erase).unwrap();
 /// assert!(ops.starts_with(r#"{"op":"set","voxels":[["#) && ops.ends_with(",0]]}"));
 /// ```
-pub fn edit_for_click(world: &World, camera: &Camera, (width, height): (u32, u32), click: Click) -> Option<String> {
-    let ray = camera
-        .ray(&camera.basis(), width / 2, height / 2, width.max(1), height.max(1))
-        .ok()?;
-    let hit = trace_naadf(world, &ray).filter(|h| h.entity.is_none())?;
+pub fn edit_for_click(world: &World, camera: &Camera, size: (u32, u32), click: Click) -> Option<String> {
+    let hit = centre_hit(world, camera, size)?;
     let v = hit.voxel.map(i64::from);
     let (target, material) = match click {
         Click::Erase => (v, 0),
@@ -49,6 +46,20 @@ pub fn edit_for_click(world: &World, camera: &Camera, (width, height): (u32, u32
             target[0], target[1], target[2]
         )
     })
+}
+
+/// The voxel of the world under the crosshair of a `width × height` view (`None` for the
+/// sky or an entity): what the window publishes as its pointer.
+pub(crate) fn pointed_voxel(world: &World, camera: &Camera, size: (u32, u32)) -> Option<[i64; 3]> {
+    centre_hit(world, camera, size).map(|h| h.voxel.map(i64::from))
+}
+
+/// The world's hit under the crosshair, if it is not an entity's.
+fn centre_hit(world: &World, camera: &Camera, (width, height): (u32, u32)) -> Option<Hit> {
+    let ray = camera
+        .ray(&camera.basis(), width / 2, height / 2, width.max(1), height.max(1))
+        .ok()?;
+    trace_naadf(world, &ray).filter(|h| h.entity.is_none())
 }
 
 #[cfg(test)]
