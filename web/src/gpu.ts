@@ -3,8 +3,22 @@
 // client runs). Frames are read back and put on a 2D canvas: presenting a WebGPU canvas
 // fails in headless Chromium on SwiftShader ("A valid external Instance reference no longer
 // exists"), and the read-back frame is what `capture()` returns anyway.
+import pathtraceWgsl from "./gen/pathtrace.wgsl?raw";
 import renderWgsl from "./gen/render.wgsl?raw";
-import { DEFAULT_MAX_STEPS, DEFAULT_SUN, GPU_BUFFERS, OFFSET_WORDS, RENDER_MODES, STEPS_FULL_SCALE, View, WorldInfo } from "./gen/layout";
+import {
+  DEFAULT_EXPOSURE,
+  DEFAULT_MAX_STEPS,
+  DEFAULT_SEED,
+  DEFAULT_SUN,
+  FrameInfo,
+  GPU_BUFFERS,
+  OFFSET_WORDS,
+  PATHTRACE_LIGHT_WORDS,
+  RENDER_MODES,
+  STEPS_FULL_SCALE,
+  View,
+  WorldInfo,
+} from "./gen/layout";
 import type { StructLayout } from "./gen/layout";
 import type { Camera } from "./camera";
 import { cameraRays } from "./camera";
@@ -144,38 +158,82 @@ export class GpuWorld {
   }
 }
 
+/** A compute-stage buffer binding. */
+const entry = (binding: number, type: GPUBufferBindingType): GPUBindGroupLayoutEntry => ({
+  binding,
+  visibility: GPUShaderStage.COMPUTE,
+  buffer: { type },
+});
+
+/** Group 0 of every pass: `world_info`, `world_offsets` and `world`, rebound when the
+ * world's buffer is replaced. */
+class WorldGroup {
+  readonly layout: GPUBindGroupLayout;
+  private group: GPUBindGroup | undefined;
+  private layoutGeneration = -1;
+
+  constructor(private readonly device: GPUDevice) {
+    this.layout = device.createBindGroupLayout({
+      entries: [entry(0, "uniform"), entry(1, "uniform"), entry(2, "read-only-storage")],
+    });
+  }
+
+  of(world: GpuWorld): GPUBindGroup {
+    if (!this.group || this.layoutGeneration !== world.layoutGeneration) {
+      this.group = this.device.createBindGroup({
+        layout: this.layout,
+        entries: [
+          { binding: 0, resource: { buffer: world.info } },
+          { binding: 1, resource: { buffer: world.offsets } },
+          { binding: 2, resource: { buffer: world.buffer! } },
+        ],
+      });
+      this.layoutGeneration = world.layoutGeneration;
+    }
+    return this.group;
+  }
+}
+
+/** A pass's pipeline over group 0 and its own group 1 of `group1` bindings. */
+function passPipeline(device: GPUDevice, world: WorldGroup, label: string, code: string, entryPoint: string, group1: GPUBufferBindingType[]) {
+  const layout = device.createBindGroupLayout({ entries: group1.map((t, i) => entry(i, t)) });
+  const pipeline = device.createComputePipeline({
+    layout: device.createPipelineLayout({ bindGroupLayouts: [world.layout, layout] }),
+    compute: { module: device.createShaderModule({ label, code }), entryPoint },
+  });
+  return { pipeline, layout };
+}
+
+/** Copies `source` to `staging` after `enc`'s work, submits, and resolves to the bytes. */
+async function readBack(device: GPUDevice, enc: GPUCommandEncoder, source: GPUBuffer, staging: GPUBuffer, bytes: number): Promise<ArrayBuffer> {
+  enc.copyBufferToBuffer(source, 0, staging, 0, bytes);
+  device.queue.submit([enc.finish()]);
+  await staging.mapAsync(GPUMapMode.READ);
+  const out = staging.getMappedRange().slice(0);
+  staging.unmap();
+  return out;
+}
+
 /** The render pass (albedo, material, normal, steps) into a pixel buffer, read back. */
-export class Renderer {
+class FramePass {
   private readonly compute: GPUComputePipeline;
-  private readonly group0: GPUBindGroupLayout;
   private readonly group1: GPUBindGroupLayout;
   private readonly view: GPUBuffer;
   private readonly gbuffer: GPUBuffer;
   private pixels: GPUBuffer | undefined;
   private staging: GPUBuffer | undefined;
-  private worldGroup: GPUBindGroup | undefined;
-  private worldLayout = -1;
-  /** The last frame read back. */
-  last: ImageData | undefined;
   width = 0;
   height = 0;
 
-  constructor(readonly device: GPUDevice) {
-    const entry = (binding: number, type: GPUBufferBindingType): GPUBindGroupLayoutEntry => ({
-      binding,
-      visibility: GPUShaderStage.COMPUTE,
-      buffer: { type },
-    });
-    this.group0 = device.createBindGroupLayout({
-      entries: [entry(0, "uniform"), entry(1, "uniform"), entry(2, "read-only-storage")],
-    });
-    this.group1 = device.createBindGroupLayout({
-      entries: [entry(0, "uniform"), entry(1, "storage"), entry(2, "storage")],
-    });
-    this.compute = device.createComputePipeline({
-      layout: device.createPipelineLayout({ bindGroupLayouts: [this.group0, this.group1] }),
-      compute: { module: device.createShaderModule({ label: "render.wgsl", code: renderWgsl }), entryPoint: "render" },
-    });
+  constructor(
+    readonly device: GPUDevice,
+    private readonly world: WorldGroup,
+  ) {
+    ({ pipeline: this.compute, layout: this.group1 } = passPipeline(device, world, "render.wgsl", renderWgsl, "render", [
+      "uniform",
+      "storage",
+      "storage",
+    ]));
     this.view = device.createBuffer({ size: View.size, usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST });
     this.gbuffer = device.createBuffer({ size: 16, usage: GPUBufferUsage.STORAGE });
   }
@@ -192,17 +250,6 @@ export class Renderer {
       this.staging = device.createBuffer({ label: "frame", size: bytes, usage: GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST });
       this.width = width;
       this.height = height;
-    }
-    if (!this.worldGroup || this.worldLayout !== world.layoutGeneration) {
-      this.worldGroup = device.createBindGroup({
-        layout: this.group0,
-        entries: [
-          { binding: 0, resource: { buffer: world.info } },
-          { binding: 1, resource: { buffer: world.offsets } },
-          { binding: 2, resource: { buffer: world.buffer! } },
-        ],
-      });
-      this.worldLayout = world.layoutGeneration;
     }
     const rays = cameraRays(camera, width, height);
     const code = RENDER_MODES[mode];
@@ -235,17 +282,132 @@ export class Renderer {
     const enc = device.createCommandEncoder();
     const pass = enc.beginComputePass();
     pass.setPipeline(this.compute);
-    pass.setBindGroup(0, this.worldGroup);
+    pass.setBindGroup(0, this.world.of(world));
     pass.setBindGroup(1, frameGroup);
     pass.dispatchWorkgroups(Math.ceil(width / 8), Math.ceil(height / 8));
     pass.end();
-    const staging = this.staging!;
-    enc.copyBufferToBuffer(this.pixels!, 0, staging, 0, bytes);
-    device.queue.submit([enc.finish()]);
-    await staging.mapAsync(GPUMapMode.READ);
-    const rgba = new Uint8ClampedArray(staging.getMappedRange().slice(0));
-    staging.unmap();
-    this.last = new ImageData(rgba, width, height);
+    const rgba = new Uint8ClampedArray(await readBack(device, enc, this.pixels!, this.staging!, bytes));
+    return new ImageData(rgba, width, height);
+  }
+}
+
+/** ACES filmic fit, as the native tone mapping (light/hdr.rs). */
+const aces = (x: number) => Math.min(1, Math.max(0, (x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14)));
+/** The sRGB transfer function as an 8-bit channel. */
+const srgb8 = (c: number) => Math.min(255, Math.max(0, Math.floor((c <= 0.0031308 ? 12.92 * c : 1.055 * c ** (1 / 2.4) - 0.055) * 255 + 0.5)));
+
+/** The progressive path tracer (`pathtrace`): one sample per pixel per frame added to
+ * running sums while the view and the world stay the same, shown as sRGB(ACES(mean)). */
+class PathTracer {
+  private readonly pipeline: GPUComputePipeline;
+  private readonly group1: GPUBindGroupLayout;
+  private readonly frame: GPUBuffer;
+  private readonly light: GPUBuffer;
+  private sums: GPUBuffer | undefined;
+  private staging: GPUBuffer | undefined;
+  private key = "";
+  samples = 0;
+
+  constructor(
+    readonly device: GPUDevice,
+    private readonly world: WorldGroup,
+  ) {
+    ({ pipeline: this.pipeline, layout: this.group1 } = passPipeline(device, world, "pathtrace.wgsl", pathtraceWgsl, "path_trace", [
+      "uniform",
+      "uniform",
+      "storage",
+    ]));
+    const uniform = (size: number) => device.createBuffer({ size, usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST });
+    this.frame = uniform(FrameInfo.size);
+    this.light = uniform(PATHTRACE_LIGHT_WORDS.length * 4);
+    device.queue.writeBuffer(this.light, 0, new Uint32Array(PATHTRACE_LIGHT_WORDS));
+  }
+
+  async render(world: GpuWorld, camera: Camera, width: number, height: number): Promise<ImageData> {
+    const device = this.device;
+    const bytes = width * height * 16;
+    const key = JSON.stringify([camera, width, height, world.generation]);
+    if (key !== this.key || !this.sums) {
+      this.sums?.destroy();
+      this.staging?.destroy();
+      // New buffers are zeroed: the sums start over.
+      this.sums = device.createBuffer({ label: "path sums", size: bytes, usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_SRC });
+      this.staging = device.createBuffer({ label: "path frame", size: bytes, usage: GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST });
+      this.key = key;
+      this.samples = 0;
+    }
+    const rays = cameraRays(camera, width, height);
+    device.queue.writeBuffer(
+      this.frame,
+      0,
+      writeStruct(FrameInfo, {
+        cam_int: rays.int,
+        width,
+        cam_frac: rays.frac,
+        height,
+        forward: rays.forward,
+        seed: DEFAULT_SEED,
+        right: rays.right,
+        sample: this.samples,
+        up: rays.up,
+        history: 0,
+      }),
+    );
+    const group = device.createBindGroup({
+      layout: this.group1,
+      entries: [
+        { binding: 0, resource: { buffer: this.frame } },
+        { binding: 1, resource: { buffer: this.light } },
+        { binding: 2, resource: { buffer: this.sums } },
+      ],
+    });
+    const enc = device.createCommandEncoder();
+    const pass = enc.beginComputePass();
+    pass.setPipeline(this.pipeline);
+    pass.setBindGroup(0, this.world.of(world));
+    pass.setBindGroup(1, group);
+    pass.dispatchWorkgroups(Math.ceil(width / 8), Math.ceil(height / 8));
+    pass.end();
+    this.samples += 1;
+    const sums = new Float32Array(await readBack(device, enc, this.sums, this.staging!, bytes));
+    const rgba = new Uint8ClampedArray(width * height * 4);
+    for (let i = 0; i < width * height; i++) {
+      const n = sums[4 * i + 3] || 1;
+      for (let c = 0; c < 3; c++) rgba[4 * i + c] = srgb8(aces(Math.max(0, sums[4 * i + c] / n) * DEFAULT_EXPOSURE));
+      rgba[4 * i + 3] = 255;
+    }
+    return new ImageData(rgba, width, height);
+  }
+}
+
+/** Every mode the page draws: the frame pass's and the path tracer. */
+export class Renderer {
+  private readonly frames: FramePass;
+  private readonly paths: PathTracer;
+  /** The last frame drawn. */
+  last: ImageData | undefined;
+
+  constructor(device: GPUDevice) {
+    const world = new WorldGroup(device);
+    this.frames = new FramePass(device, world);
+    this.paths = new PathTracer(device, world);
+  }
+
+  /** Whether `mode` keeps improving while nothing changes (the path tracer's samples). */
+  static accumulates(mode: string): boolean {
+    return mode === "pathtrace";
+  }
+
+  /** Samples per pixel of the path tracer's current view. */
+  get samples(): number {
+    return this.paths.samples;
+  }
+
+  /** Draws `camera`'s view of `world` at `width × height` in `mode`. */
+  async render(world: GpuWorld, camera: Camera, width: number, height: number, mode: string): Promise<ImageData> {
+    this.last = Renderer.accumulates(mode)
+      ? await this.paths.render(world, camera, width, height)
+      : await this.frames.render(world, camera, width, height, mode);
     return this.last;
   }
 }

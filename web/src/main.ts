@@ -42,6 +42,8 @@ interface PageState {
   markers: Marker[];
   /** The version the canvas shows. */
   shownVersion: number;
+  /** Samples per pixel in the path tracer's frame. */
+  samples: number;
   /** The voxel under the pointer and the empty voxel before it (where placing tools build). */
   pointer: { voxel: number[]; before: number[] } | null;
   /** The display name this page publishes. */
@@ -78,6 +80,7 @@ const naadf: PageState = {
   bytesReceived: 0,
   markers: [],
   shownVersion: -1,
+  samples: 0,
   pointer: null,
   name: "",
   voxel: () => 0,
@@ -109,7 +112,7 @@ function drawHud(): void {
     `version ${naadf.version}${naadf.growthSeq ? `.${naadf.growthSeq}` : ""}${naadf.quiescent ? "" : " (settling)"}`,
     `digest ${naadf.digest.slice(0, 8)}`,
     `${naadf.users.length} online${naadf.users.length ? `: ${naadf.users.join(", ")}` : ""}`,
-    `rtt ${rtt.toFixed(0)} ms · frame ${naadf.frameMs.toFixed(1)} ms · ${naadf.mode}`,
+    `rtt ${rtt.toFixed(0)} ms · frame ${naadf.frameMs.toFixed(1)} ms · ${naadf.mode}${naadf.mode === drawnMode(naadf.mode) ? "" : ` (drawn as ${drawnMode(naadf.mode)})`}`,
   ];
   hud.textContent = lines.join("\n");
 }
@@ -412,6 +415,9 @@ async function main(): Promise<void> {
           if (frameTimes.length > 30) frameTimes.shift();
           naadf.frameMs = frameTimes.reduce((a, b) => a + b, 0) / frameTimes.length;
           naadf.shownVersion = version;
+          // The path tracer keeps adding samples while nothing changes.
+          if (Renderer.accumulates(drawnMode(naadf.mode)) && renderer.samples < link.spp) dirty = true;
+          naadf.samples = renderer.samples;
           drawHud();
         })
         .catch((e) => console.error(`frame: ${e}`))

@@ -7,6 +7,8 @@ import { RENDER_MODES } from "./gen/layout";
 /** The modes of docs/RENDERING.md, in the order the page offers them. */
 export const MODES = ["albedo", "material", "normal", "steps", "gi", "pathtrace"] as const;
 
+/** The most samples per pixel the path tracer adds to one view. */
+const DEFAULT_MAX_SPP = 4096;
 /** Largest render edge, as the native renderer allows. */
 const MAX_EDGE = 8192;
 
@@ -15,13 +17,15 @@ export interface LinkedView {
   camera: Camera | undefined;
   mode: string | undefined;
   size: [number, number] | undefined;
+  /** The most samples per pixel `pathtrace` adds (`spp`). */
+  spp: number;
   problems: string[];
 }
 
 /** Reads the view from `search` (a `location.search`). */
 export function readLink(search: string): LinkedView {
   const q = new URLSearchParams(search);
-  const out: LinkedView = { camera: undefined, mode: undefined, size: undefined, problems: [] };
+  const out: LinkedView = { camera: undefined, mode: undefined, size: undefined, spp: DEFAULT_MAX_SPP, problems: [] };
   const camera = q.get("camera");
   if (camera !== null) {
     try {
@@ -42,6 +46,12 @@ export function readLink(search: string): LinkedView {
     if (w >= 1 && h >= 1 && w <= MAX_EDGE && h <= MAX_EDGE) out.size = [w, h];
     else out.problems.push(`size: '${size}' is not WxH with edges 1..=${MAX_EDGE}; using the canvas size`);
   }
+  const spp = q.get("spp");
+  if (spp !== null) {
+    const n = Number(spp);
+    if (Number.isInteger(n) && n >= 1 && n <= DEFAULT_MAX_SPP) out.spp = n;
+    else out.problems.push(`spp: '${spp}' is not a whole number in 1..=${DEFAULT_MAX_SPP}; using ${DEFAULT_MAX_SPP}`);
+  }
   return out;
 }
 
@@ -54,8 +64,8 @@ export function writeLink(camera: Camera, mode: string, size: [number, number] |
   history.replaceState(null, "", `${location.pathname}?${q.toString().replace(/\+/g, "%20")}`);
 }
 
-/** The mode the page draws for `wanted`: the render pass draws the unlit modes; the lit
- * ones (`gi`, `pathtrace`) are drawn as `albedo` until the page has their passes. */
+/** The mode the page draws for `wanted`: the render pass's modes and `pathtrace`; `gi`
+ * is drawn as `pathtrace` until the page has the GI pipeline's passes. */
 export function drawnMode(wanted: string): string {
-  return wanted in RENDER_MODES ? wanted : "albedo";
+  return wanted in RENDER_MODES || wanted === "pathtrace" ? wanted : "pathtrace";
 }

@@ -1,18 +1,20 @@
 //! What the browser page (`web/`) takes from the Rust definitions: its passes' WGSL, made
 //! by the same composition as the native passes but over [`WorldBindings::Single`] (every
-//! world buffer in one storage binding, parameters as uniforms), and the order of the world
-//! buffers in that binding.
+//! world buffer in one storage binding, parameters as uniforms), the order of the world
+//! buffers in that binding, the parameter structs' layouts and the default light.
 //!
 //! The files are generated into `web/src/gen/` and committed, so that building the page
 //! needs no Rust; a test fails when they are stale (`NAADF_BLESS=1` rewrites them).
 
 use super::bindings::BUFFERS;
-use super::params::{View, WgslStruct, WorldInfo};
+use super::params::{FrameInfo, LightInfo, View, WgslStruct, WorldInfo};
+use super::pathtrace::path_pass;
 use super::render::render_pass;
 use super::render::{DEFAULT_SUN, STEPS_FULL_SCALE};
 use super::shaders::{Loop, WorldBindings, source};
 use super::world::GPU_BUFFERS;
 use crate::frame::Mode;
+use crate::light::{DEFAULT_PATHTRACE_BOUNCES, LitOptions};
 use naadf_world::traverse::DEFAULT_MAX_STEPS;
 use std::fmt::Write;
 
@@ -22,6 +24,10 @@ pub fn generated_files() -> Vec<(&'static str, String)> {
         (
             "render.wgsl",
             source(&render_pass(), Loop::Hierarchy, WorldBindings::Single),
+        ),
+        (
+            "pathtrace.wgsl",
+            source(&path_pass("path_trace"), Loop::Hierarchy, WorldBindings::Single),
         ),
         ("layout.ts", layout_ts()),
     ]
@@ -50,6 +56,25 @@ fn layout_ts() -> String {
     );
     struct_ts::<WorldInfo>(&mut s);
     struct_ts::<View>(&mut s);
+    struct_ts::<FrameInfo>(&mut s);
+    struct_ts::<LightInfo>(&mut s);
+    let lit = LitOptions::default();
+    let light = lit
+        .light(DEFAULT_PATHTRACE_BOUNCES)
+        .expect("the default light is valid");
+    let words: Vec<String> = bytemuck::cast_slice::<_, u32>(&[LightInfo::new(&light)])
+        .iter()
+        .map(u32::to_string)
+        .collect();
+    let _ = writeln!(
+        s,
+        "\n/** `LightInfo` of the default light (physical sky and sun) with the path tracer's bounces, as words. */\n\
+         export const PATHTRACE_LIGHT_WORDS = [{}];\n\
+         /** The default seed and exposure of the lit modes. */\nexport const DEFAULT_SEED = {};\nexport const DEFAULT_EXPOSURE = {:?};",
+        words.join(", "),
+        lit.seed,
+        lit.exposure
+    );
     s.push_str("\n/** The render pass's modes and their codes (`MODE_*`). */\nexport const RENDER_MODES: Record<string, number> = {\n");
     for m in Mode::ALL.iter().filter(|m| !m.is_lit()) {
         let _ = writeln!(s, "  {}: {},", m.name(), m.code());

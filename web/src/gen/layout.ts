@@ -51,6 +51,44 @@ export const View: StructLayout = {
   },
 };
 
+/** `FrameInfo`, as the shaders declare it. */
+export const FrameInfo: StructLayout = {
+  size: 80,
+  fields: {
+    cam_int: { offset: 0, type: "vec3<i32>" },
+    width: { offset: 12, type: "u32" },
+    cam_frac: { offset: 16, type: "vec3<f32>" },
+    height: { offset: 28, type: "u32" },
+    forward: { offset: 32, type: "vec3<f32>" },
+    seed: { offset: 44, type: "u32" },
+    right: { offset: 48, type: "vec3<f32>" },
+    sample: { offset: 60, type: "u32" },
+    up: { offset: 64, type: "vec3<f32>" },
+    history: { offset: 76, type: "u32" },
+  },
+};
+
+/** `LightInfo`, as the shaders declare it. */
+export const LightInfo: StructLayout = {
+  size: 48,
+  fields: {
+    sky: { offset: 0, type: "vec3<f32>" },
+    sky_physical: { offset: 12, type: "u32" },
+    sun_dir: { offset: 16, type: "vec3<f32>" },
+    sun_on: { offset: 28, type: "u32" },
+    sun_disc: { offset: 32, type: "f32" },
+    sun_weight: { offset: 36, type: "f32" },
+    sun_omc: { offset: 40, type: "f32" },
+    bounces: { offset: 44, type: "u32" },
+  },
+};
+
+/** `LightInfo` of the default light (physical sky and sun) with the path tracer's bounces, as words. */
+export const PATHTRACE_LIGHT_WORDS = [1077936128, 1077936128, 1077936128, 1, 3208642560, 1056964608, 1054716887, 1, 1193802333, 1077936198, 926566462, 8];
+/** The default seed and exposure of the lit modes. */
+export const DEFAULT_SEED = 0;
+export const DEFAULT_EXPOSURE = 1.0;
+
 /** The render pass's modes and their codes (`MODE_*`). */
 export const RENDER_MODES: Record<string, number> = {
   albedo: 0,
