@@ -139,7 +139,8 @@ fn assert_on_server(page: &Value, server: &Value) {
 const SETTLED: &str = "n.state === 'live' && n.quiescent && n.shownVersion === n.version && n.frameMs > 0";
 
 /// The page joins a served world and ends on the server's version, growth step and
-/// digest; its `albedo` and `material` frames at a camera and size from the URL equal
+/// digest, having received as many bytes as the native mirror does; its `albedo` and
+/// `material` frames at a camera and size from the URL equal
 /// `naadf render` of the same camera and size, pixel for pixel.
 #[test]
 fn the_page_mirrors_the_world_and_draws_what_naadf_render_draws() {
@@ -156,6 +157,24 @@ fn the_page_mirrors_the_world_and_draws_what_naadf_render_draws() {
         let page = browser.wait(mode, SETTLED, 120_000);
         assert_eq!(page["mode"], mode);
         assert_on_server(&page, &status(&server));
+        let native: Value = serde_json::from_str(&ok(
+            &[
+                "mirror",
+                "--server",
+                &server.url,
+                "--once",
+                "--json",
+                "--no-cache",
+                "-o",
+                &p(dir.path(), "mirrored.naadf"),
+            ],
+            None,
+        ))
+        .unwrap();
+        assert_eq!(
+            page["snapshotBytes"], native["bytes"],
+            "bytes at join: page {page}, native {native}"
+        );
         let png = p(dir.path(), &format!("page-{mode}.png"));
         browser.send(json!({"op": "capture", "id": mode, "path": png}));
         let native = p(dir.path(), &format!("native-{mode}.png"));

@@ -38,6 +38,8 @@ interface PageState {
   joins: number;
   snapshots: number;
   bytesReceived: number;
+  /** Bytes of the last snapshot (or resume): its header and pages. */
+  snapshotBytes: number;
   /** The other clients' markers drawn on the last frame. */
   markers: Marker[];
   /** The version the canvas shows. */
@@ -51,6 +53,8 @@ interface PageState {
   capture(): Promise<string>;
   /** The material of a voxel as the page holds it (0: empty). */
   voxel(x: number, y: number, z: number): number;
+  /** Draws the next frame even if nothing changed (benchmarks). */
+  redraw(): void;
   /** Sends one ops-JSON line (docs/OPS.md) as an edit; resolves to the new version. */
   edit(ops: string): Promise<number>;
   undo(): Promise<number>;
@@ -78,6 +82,7 @@ const naadf: PageState = {
   joins: 0,
   snapshots: 0,
   bytesReceived: 0,
+  snapshotBytes: 0,
   markers: [],
   shownVersion: -1,
   samples: 0,
@@ -85,6 +90,7 @@ const naadf: PageState = {
   name: "",
   voxel: () => 0,
   capture: () => Promise.reject(new Error("no frame yet")),
+  redraw: () => {},
   edit: () => Promise.reject(new Error("not joined")),
   undo: () => Promise.reject(new Error("not joined")),
   redo: () => Promise.reject(new Error("not joined")),
@@ -201,6 +207,7 @@ async function main(): Promise<void> {
     naadf.quiescent = m.quiescent;
     naadf.digest = digestHex(m.digest);
     naadf.bytesReceived = session.bytesReceived;
+    naadf.snapshotBytes = session.snapshotBytes;
     dirty = true;
     drawHud();
   }
@@ -233,6 +240,9 @@ async function main(): Promise<void> {
   naadf.edit = (ops) => call((clientSeq) => session.client.edit(create(EditRequestSchema, { ops, clientSeq }), session.callOptions()));
   naadf.undo = () => call((clientSeq) => session.client.undo(create(HistoryRequestSchema, { clientSeq }), session.callOptions()));
   naadf.redo = () => call((clientSeq) => session.client.redo(create(HistoryRequestSchema, { clientSeq }), session.callOptions()));
+  naadf.redraw = () => {
+    dirty = true;
+  };
   naadf.capture = async () => {
     const image = renderer.last;
     if (!image) throw new Error("no frame yet");

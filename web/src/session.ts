@@ -1,12 +1,12 @@
 // The page's connection to the service: gRPC-web calls on the page's own origin, the world
 // stream (`Join` in the patch form, with presence) re-joined with backoff, and the unary
 // calls with the session's token.
-import { create } from "@bufbuild/protobuf";
+import { create, toBinary } from "@bufbuild/protobuf";
 import { Code, ConnectError, createClient } from "@connectrpc/connect";
 import type { Client } from "@connectrpc/connect";
 import { createGrpcWebTransport } from "@connectrpc/connect-web";
-import { DeltaForm, JoinRequestSchema, WorldService } from "./gen/naadf/v1/naadf_pb";
-import type { PresenceEntry, StatusReply } from "./gen/naadf/v1/naadf_pb";
+import { DeltaForm, JoinRequestSchema, WorldMessageSchema, WorldService } from "./gen/naadf/v1/naadf_pb";
+import type { Page, PresenceEntry, StatusReply, WorldMessage } from "./gen/naadf/v1/naadf_pb";
 import { PROTOCOL_VERSION } from "./gen/layout";
 import type { PageCache } from "./cache";
 import { Mirror, MirrorError } from "./mirror";
@@ -40,8 +40,10 @@ const MOST_BACKOFF_MS = 5000;
 export class Session {
   readonly mirror = new Mirror();
   readonly client: Client<typeof WorldService>;
-  /** Bytes of world messages received, for the benchmarks. */
+  /** Bytes of world messages received, as the native mirror counts them. */
   bytesReceived = 0;
+  /** Bytes of the last snapshot or resume: its header and pages. */
+  snapshotBytes = 0;
   private abort: AbortController | undefined;
   private stopped = false;
   private saving: ReturnType<typeof setTimeout> | undefined;
@@ -152,16 +154,18 @@ export class Session {
     this.events.joined();
     for await (const msg of this.client.join(request, { ...this.callOptions(), signal })) {
       any = true;
+      const bytes = encodedLength(msg);
+      this.bytesReceived += bytes;
       const k = msg.kind;
+      if (k.case === "header") this.snapshotBytes = 0;
+      if (k.case === "header" || k.case === "page") this.snapshotBytes += bytes;
       switch (k.case) {
         case "header": {
-          this.bytesReceived += k.value.entityTable.length + 64;
           this.events.state("syncing");
           if (!m.header(k.value)) this.live(k.value.resume);
           break;
         }
         case "page":
-          this.bytesReceived += k.value.zstd.length + 8 + 4 * k.value.indices.length;
           if (m.page(k.value)) this.live(false);
           break;
         case "delta": {
@@ -183,4 +187,21 @@ export class Session {
     this.saveSoon();
     this.events.state("live");
   }
+}
+
+/** Bytes of a varint. */
+const varintLength = (n: number) => (n < 0x80 ? 1 : n < 0x4000 ? 2 : n < 0x200000 ? 3 : n < 0x10000000 ? 4 : 5);
+
+/** A field's tag and length prefix, and its bytes. */
+const lengthDelimited = (n: number) => 1 + varintLength(n) + n;
+
+/** The encoded size of a stream message, as the native mirror counts its bytes: pages
+ * (nearly all of a snapshot) computed from their fields, the rest encoded. */
+function encodedLength(msg: WorldMessage): number {
+  if (msg.kind.case !== "page") return toBinary(WorldMessageSchema, msg).length;
+  const p: Page = msg.kind.value;
+  const indices = p.indices.reduce((a, i) => a + varintLength(i), 0);
+  const inner =
+    (p.buffer ? 1 + varintLength(p.buffer) : 0) + (p.indices.length ? lengthDelimited(indices) : 0) + (p.zstd.length ? lengthDelimited(p.zstd.length) : 0);
+  return lengthDelimited(inner);
 }
