@@ -485,3 +485,46 @@ fn the_path_tracer_accumulates_what_naadf_render_traces() {
     assert!(mean < 0.01 && most <= 2, "mean {mean}, largest {most}");
     server.stop();
 }
+
+/// With `--tls-cert`, the gRPC listener serves the page, its assets and gRPC-web over https
+/// with the server's certificate, and the page works there (a secure context on any
+/// address); the HTTP port's `/` sends browsers to it.
+#[test]
+fn the_page_is_served_over_https_with_the_servers_certificate() {
+    if !browser_available() {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let world = start_world(dir.path());
+    let pair = rcgen::generate_simple_self_signed(vec!["localhost".to_string()]).unwrap();
+    let (cert, key) = (p(dir.path(), "cert.pem"), p(dir.path(), "key.pem"));
+    std::fs::write(&cert, pair.cert.pem()).unwrap();
+    std::fs::write(&key, pair.signing_key.serialize_pem()).unwrap();
+    let server = serve_world(dir.path(), &world, &["--tls-cert", &cert, "--tls-key", &key], &[]);
+    let port = server.url.rsplit(':').next().unwrap().to_owned();
+    let redirect = redirect_of(&server.http, "/?mode=material");
+    assert_eq!(redirect, format!("https://127.0.0.1:{port}/?mode=material"));
+    let mut browser = Browser::start();
+    let url = format!("https://localhost:{port}/?mode=albedo&size=64x36");
+    browser.send(json!({"op": "open", "id": "a", "url": url, "insecure": true}));
+    let page = browser.wait("a", SETTLED, 120_000);
+    let https = format!("https://localhost:{port}");
+    let status: Value =
+        serde_json::from_str(&ok(&["status", "--server", &https, "--ca", &cert, "--json"], None)).unwrap();
+    assert_on_server(&page, &status);
+    server.stop();
+}
+
+/// The `Location` of the HTTP listener's answer to `GET path`.
+fn redirect_of(http: &str, path: &str) -> String {
+    use std::io::Read;
+    let mut s = std::net::TcpStream::connect(http).unwrap();
+    write!(s, "GET {path} HTTP/1.1\r\nHost: {http}\r\nConnection: close\r\n\r\n").unwrap();
+    let mut head = String::new();
+    s.read_to_string(&mut head).unwrap();
+    assert!(head.starts_with("HTTP/1.1 307"), "{head}");
+    head.lines()
+        .find_map(|l| l.strip_prefix("location: "))
+        .unwrap_or_else(|| panic!("no location in {head}"))
+        .to_owned()
+}

@@ -1,10 +1,9 @@
 // The page is built into dist/, which the Rust server embeds and serves (server/src/net/page.rs).
+// The WGSL that the Rust client generates into src/gen/ is imported as text (`?raw`).
 import { defineConfig } from "vite";
 
 export default defineConfig({
   base: "/",
-  // The WGSL the Rust code generates is imported as text (`?raw`).
-  assetsInclude: [],
   build: {
     outDir: "dist",
     emptyOutDir: true,

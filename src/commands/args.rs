@@ -53,7 +53,8 @@ pub fn parse_size(s: &str) -> Result<WorldSize, String> {
 /// `serve` and `relay` share.
 #[derive(clap::Args)]
 pub struct ListenArgs {
-    /// TLS certificate chain (PEM); needs --tls-key. Read again every 10 s and on SIGHUP:
+    /// TLS certificate chain (PEM) for the gRPC listener (gRPC, gRPC-web and the page); needs
+    /// --tls-key. Read again every 10 s and on SIGHUP:
     /// a changed pair that loads serves the connections opened after it.
     #[arg(long, requires = "tls_key")]
     pub tls_cert: Option<PathBuf>,

@@ -22,10 +22,10 @@ pub struct Args {
     /// CA certificate (PEM) to trust for an `https://` upstream, besides the system roots.
     #[arg(long)]
     ca: Option<PathBuf>,
-    /// gRPC listen address.
+    /// gRPC listen address (gRPC, gRPC-web and the browser page at /).
     #[arg(long, default_value = DEFAULT_RELAY_GRPC)]
     grpc: SocketAddr,
-    /// HTTP listen address (/health, /metrics, status page).
+    /// HTTP listen address (/health, /metrics, /status, /frame.png; / redirects to the page).
     #[arg(long, default_value = DEFAULT_RELAY_HTTP)]
     http: SocketAddr,
     /// The largest world, in bytes of buffers, to accept from the upstream.

@@ -32,10 +32,10 @@ pub struct Args {
     /// --world / --generate are ignored).
     #[arg(long, default_value = naadf_server::DEFAULT_DATA)]
     data: PathBuf,
-    /// gRPC listen address.
+    /// gRPC listen address (gRPC, gRPC-web and the browser page at /).
     #[arg(long, default_value = naadf_server::DEFAULT_GRPC)]
     grpc: SocketAddr,
-    /// HTTP listen address (/health, /metrics, status page).
+    /// HTTP listen address (/health, /metrics, /status, /frame.png; / redirects to the page).
     #[arg(long, default_value = naadf_server::DEFAULT_HTTP)]
     http: SocketAddr,
     /// Token file (TOML, `[[token]]` entries with token, user, role); tokens in the

@@ -78,6 +78,7 @@ export class PageCache {
     const lengths: number[] = [];
     for (let id = 0; id < BUFFER_COUNT; id++) {
       const b = mirror.buffers[id];
+      b.settle();
       lengths.push(b.len);
       hashes.push([...b.hashes]);
       b.hashes.forEach((h, p) => {

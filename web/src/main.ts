@@ -42,6 +42,9 @@ interface PageState {
   snapshotBytes: number;
   /** The other clients' markers drawn on the last frame. */
   markers: Marker[];
+  /** Milliseconds from navigation to each step of opening: `device`, `restored` (the
+   * cache), `live` and `firstFrame`. */
+  timings: Record<string, number>;
   /** The version the canvas shows. */
   shownVersion: number;
   /** Samples per pixel in the path tracer's frame. */
@@ -84,6 +87,7 @@ const naadf: PageState = {
   bytesReceived: 0,
   snapshotBytes: 0,
   markers: [],
+  timings: {},
   shownVersion: -1,
   samples: 0,
   pointer: null,
@@ -150,6 +154,7 @@ async function main(): Promise<void> {
     }
     throw e;
   }
+  naadf.timings.device = performance.now();
   if (!link.mode) naadf.mode = fallback ? "albedo" : "gi";
   const context = canvas.getContext("2d")!;
   const marks = overlay.getContext("2d")!;
@@ -157,7 +162,11 @@ async function main(): Promise<void> {
   const renderer = new Renderer(device);
   let voxels: Voxels | undefined;
   let others: PresenceEntry[] = [];
+  // `dirty`: the next animation frame renders the world again; `overlayDirty`: it only
+  // redraws the overlay (markers, the tool's preview) over the frame shown.
   let dirty = true;
+  let overlayDirty = false;
+  let shownView: Camera | undefined;
   const tool: ToolState = { tool: "voxel", material: 1, radius: 4, anchor: undefined };
   let pointer: Pick | undefined;
   let region: Region | undefined;
@@ -173,6 +182,9 @@ async function main(): Promise<void> {
   const session = new Session({
     state(s, why) {
       naadf.state = s;
+      naadf.bytesReceived = session.bytesReceived;
+      naadf.snapshotBytes = session.snapshotBytes;
+      if (s === "live") naadf.timings.live ??= performance.now();
       if (why !== undefined) {
         naadf.message = why;
         showNotice(s === "need-token" ? `${why}: enter a token` : why);
@@ -196,7 +208,7 @@ async function main(): Promise<void> {
     presence(entries) {
       naadf.users = entries.map((e) => e.name || e.user || "anonymous").sort();
       others = entries.filter((e) => e.session !== presenceSession);
-      dirty = true;
+      overlayDirty = true;
       drawHud();
     },
   }, await PageCache.open());
@@ -310,12 +322,12 @@ async function main(): Promise<void> {
   toolSelect.onchange = () => {
     tool.tool = toolSelect.value as ToolState["tool"];
     tool.anchor = undefined;
-    dirty = true;
+    overlayDirty = true;
   };
   const radius = $<HTMLInputElement>("radius");
   radius.onchange = () => {
     tool.radius = Math.max(0, Number(radius.value) || 0);
-    dirty = true;
+    overlayDirty = true;
   };
   function fillPalette(): void {
     const box = $<HTMLDivElement>("palette");
@@ -333,16 +345,17 @@ async function main(): Promise<void> {
       }),
     );
   }
-  function aim(): void {
-    if (!camera || !voxels || canvas.width === 0) return;
+  /** Picks the voxel under the pointer in the frame shown, seen from `view`. */
+  function aim(view: Camera): void {
+    if (!voxels || canvas.width === 0) return;
     const [x, y] = framePoint(lastMouse);
-    pointer = pick(voxels, [...camera.pos], rayThrough(camera, canvas.width, canvas.height, x, y));
+    pointer = pick(voxels, [...view.pos], rayThrough(view, canvas.width, canvas.height, x, y));
     region = pointer && naadf.role !== "viewer" ? preview(tool, voxels, pointer) : undefined;
     naadf.pointer = pointer ? { voxel: pointer.voxel, before: pointer.before } : null;
   }
   canvas.addEventListener("mousemove", (e) => {
     lastMouse = e;
-    dirty = true;
+    overlayDirty = true;
   });
   canvas.addEventListener("contextmenu", (e) => e.preventDefault());
   canvas.addEventListener("mousedown", (e) => {
@@ -350,15 +363,15 @@ async function main(): Promise<void> {
       canvas.requestPointerLock?.();
       return;
     }
-    if (e.button !== 0 || naadf.role === "viewer") return;
+    if (e.button !== 0 || naadf.role === "viewer" || !shownView) return;
     lastMouse = e;
-    aim();
+    aim(shownView);
     if (!pointer || region?.refusal) {
       if (region?.refusal) showNotice(`${tool.tool}: ${region.refusal}`);
       return;
     }
     const ops = commit(tool, pointer);
-    dirty = true;
+    overlayDirty = true;
     if (ops) naadf.edit(ops).then(() => showNotice(""), () => {});
   });
 
@@ -419,12 +432,13 @@ async function main(): Promise<void> {
             if (c.width !== w || c.height !== h) [c.width, c.height] = [w, h];
           }
           context.putImageData(image, 0, 0);
-          aim();
-          naadf.markers = drawOverlay(marks, view, region, others);
+          shownView = view;
+          overlayDirty = true;
           frameTimes.push(performance.now() - t0);
           if (frameTimes.length > 30) frameTimes.shift();
           naadf.frameMs = frameTimes.reduce((a, b) => a + b, 0) / frameTimes.length;
           naadf.shownVersion = version;
+          naadf.timings.firstFrame ??= performance.now();
           // The path tracer keeps adding samples while nothing changes.
           if (Renderer.accumulates(drawnMode(naadf.mode)) && renderer.samples < link.spp) dirty = true;
           naadf.samples = renderer.samples;
@@ -436,6 +450,11 @@ async function main(): Promise<void> {
         lastUrl = now;
         writeLink(camera, naadf.mode, link.size);
       }
+    }
+    if (overlayDirty && shownView) {
+      overlayDirty = false;
+      aim(shownView);
+      naadf.markers = drawOverlay(marks, shownView, region, others);
     }
     requestAnimationFrame(frame);
   }
@@ -457,7 +476,7 @@ async function main(): Promise<void> {
   };
   addEventListener("resize", () => (dirty = true));
   void identify();
-  await session.restore();
+  if (await session.restore()) naadf.timings.restored = performance.now();
   await session.run();
 }
 

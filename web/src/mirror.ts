@@ -23,11 +23,14 @@ export interface Touched {
 /** The mirror diverged from the server, or the server sent something it cannot hold. */
 export class MirrorError extends Error {}
 
-/** One buffer: its bytes (with room to grow) at its logical length, and its page hashes. */
+/** One buffer: its bytes (with room to grow) at its logical length, and its page hashes.
+ * A resize leaves the pages it changed stale until `settle`, so that pages about to be
+ * written are hashed once, after they are. */
 class WorldBuffer {
   bytes = new Uint8Array(0);
   len = 0;
   hashes: bigint[] = [];
+  private readonly stale = new Set<number>();
 
   constructor(readonly id: number) {}
 
@@ -44,21 +47,28 @@ class WorldBuffer {
     const before = this.hashes.length;
     this.len = len;
     this.hashes.length = pages;
-    // The last page changed length (and pages past the old end are new): rehash them.
-    const from = Math.max(0, Math.min(before, pages) - 1);
-    this.rehash(from, pages);
+    for (const p of this.stale) if (p >= pages) this.stale.delete(p);
+    // The old last page may have changed length, and pages past the old end are new.
+    for (let p = Math.max(0, Math.min(before, pages) - 1); p < pages; p++) this.stale.add(p);
   }
 
-  /** Recomputes the hashes of pages `from..to`. */
-  rehash(from: number, to: number): void {
-    for (let p = from; p < to; p++) {
+  /** Marks page `p` as written. */
+  touch(p: number): void {
+    this.stale.add(p);
+  }
+
+  /** Recomputes the hashes of the stale pages. */
+  settle(): void {
+    for (const p of this.stale) {
       const lo = p * PAGE_BYTES;
       this.hashes[p] = pageHash(this.id, p, this.bytes.subarray(lo, Math.min(lo + PAGE_BYTES, this.len)));
     }
+    this.stale.clear();
   }
 
   /** The XOR of its page hashes. */
   digest(): bigint {
+    this.settle();
     let d = 0n;
     for (const h of this.hashes) d ^= h;
     return d;
@@ -78,10 +88,14 @@ export class Mirror {
   private expected: Header | undefined;
   private pagesLeft = 0;
 
-  /** The page hashes of the paged buffers, to announce as `JoinRequest.cached`. */
+  /** The page hashes of the paged buffers, to announce as `JoinRequest.cached`. They hash
+   * the bytes held, so they are true even of a mirror that diverged: the server then sends
+   * only the pages that differ. */
   cached(): { buffer: number; pageHashes: bigint[] }[] {
-    if (!this.holdsWorld) return [];
-    return this.buffers.slice(0, PAGED_BUFFERS).map((b) => ({ buffer: b.id, pageHashes: [...b.hashes] }));
+    return this.buffers.slice(0, PAGED_BUFFERS).map((b) => {
+      b.settle();
+      return { buffer: b.id, pageHashes: [...b.hashes] };
+    });
   }
 
   /** The bytes of buffer `id` at its logical length. */
@@ -100,8 +114,10 @@ export class Mirror {
     for (let id = 0; id < BUFFER_COUNT; id++) {
       const b = this.buffers[id];
       b.resize(state.lengths[id]);
-      pages[id].forEach((page, p) => b.bytes.set(page.subarray(0, Math.max(0, Math.min(PAGE_BYTES, b.len - p * PAGE_BYTES))), p * PAGE_BYTES));
-      b.rehash(0, b.hashes.length);
+      pages[id].forEach((page, p) => {
+        b.bytes.set(page.subarray(0, Math.max(0, Math.min(PAGE_BYTES, b.len - p * PAGE_BYTES))), p * PAGE_BYTES);
+        b.touch(p);
+      });
     }
     this.size = state.size;
     this.version = state.version;
@@ -133,12 +149,12 @@ export class Mirror {
       this.buffers[id].resize(l ? Number(l.bytes) : 0);
     }
     const entities = expandEntityTable(h.entityTable);
-    this.buffers[6].resize(entities[0].length);
-    this.buffers[6].bytes.set(entities[0]);
-    this.buffers[7].resize(entities[1].length);
-    this.buffers[7].bytes.set(entities[1]);
-    this.buffers[6].rehash(0, this.buffers[6].hashes.length);
-    this.buffers[7].rehash(0, this.buffers[7].hashes.length);
+    entities.forEach((bytes, k) => {
+      const b = this.buffers[6 + k];
+      b.resize(bytes.length);
+      b.bytes.set(bytes);
+      for (let p = 0; p < b.hashes.length; p++) b.touch(p);
+    });
     this.expected = h;
     this.pagesLeft = h.pages;
     if (this.pagesLeft === 0) this.finishSnapshot();
@@ -158,7 +174,7 @@ export class Mirror {
       if (n <= 0 || at + n > bytes.length) throw new MirrorError(`page ${index} of buffer ${p.buffer} does not fit`);
       b.bytes.set(bytes.subarray(at, at + n), lo);
       at += n;
-      b.rehash(index, index + 1);
+      b.touch(index);
     }
     this.pagesLeft -= 1;
     if (this.pagesLeft === 0) {
@@ -186,12 +202,6 @@ export class Mirror {
     const p = d.patch;
     if (!this.holdsWorld) throw new MirrorError("a delta arrived before a snapshot");
     if (!p) throw new MirrorError("a delta without a patch (the page joins in the patch form)");
-    const dirty = new Map<number, Set<number>>();
-    const mark = (id: number, lo: number, hi: number) => {
-      let pages = dirty.get(id);
-      if (!pages) dirty.set(id, (pages = new Set()));
-      for (let q = Math.floor(lo / PAGE_BYTES); q * PAGE_BYTES < hi; q++) pages.add(q);
-    };
     for (const l of p.lengths) {
       const b = this.buffers[l.buffer];
       if (!b) throw new MirrorError(`a patch resizes buffer ${l.buffer}`);
@@ -205,11 +215,8 @@ export class Mirror {
       const hi = lo + r.bytes.length;
       if (!b || hi > b.len) throw new MirrorError(`a run reaches past buffer ${r.buffer}`);
       b.bytes.set(r.bytes, lo);
-      mark(r.buffer, lo, hi);
+      for (let q = Math.floor(lo / PAGE_BYTES); q * PAGE_BYTES < hi; q++) b.touch(q);
       touched.push({ id: r.buffer, lo, hi });
-    }
-    for (const [id, pages] of dirty) {
-      for (const q of pages) this.buffers[id].rehash(q, q + 1);
     }
     this.version = p.version;
     this.growthSeq = p.growthSeq;

@@ -2,7 +2,8 @@
 // and benchmarks. Reads one JSON command per line on stdin, answers one JSON line each:
 // {"ok":true,"value":…} or {"ok":false,"error":"…"}.
 //
-//   {"op":"open","id":"a","url":"…"}                 opens a page
+//   {"op":"open","id":"a","url":"…"}                 opens a page (`"insecure":true` accepts
+//                                                     a self-signed certificate)
 //   {"op":"wait","id":"a","until":"n.state === 'live'","ms":60000}
 //                                                     polls the expression over n = window.naadf
 //   {"op":"eval","id":"a","js":"return n.version"}     runs an async function body (n = window.naadf)
@@ -41,8 +42,8 @@ async function evaluate(page, body) {
 }
 
 const commands = {
-  async open({ id, url }) {
-    const context = await browser.newContext({ viewport: { width: 640, height: 360 } });
+  async open({ id, url, insecure = false }) {
+    const context = await browser.newContext({ viewport: { width: 640, height: 360 }, ignoreHTTPSErrors: insecure });
     const page = await context.newPage();
     page.on("console", (m) => process.stderr.write(`[${id}] ${m.type()}: ${m.text()}\n`));
     page.on("pageerror", (e) => process.stderr.write(`[${id}] error: ${e.message}\n`));

@@ -169,6 +169,11 @@ impl Frontend {
             http: http_listener.local_addr()?,
         };
         tracing::info!(grpc = %bound.grpc, http = %bound.http, "serving");
+        let home = PageHome {
+            grpc: bound.grpc,
+            tls: self.tls.is_some(),
+        };
+        tracing::info!("the browser page: {}", home.url(None, None));
 
         let reflection_v1 = tonic_reflection::server::Builder::configure()
             .register_encoded_file_descriptor_set(FILE_DESCRIPTOR_SET)
@@ -227,10 +232,6 @@ impl Frontend {
                 serve_grpc(router, incoming, stopped)
             }
             None => serve_grpc(router, incoming(acceptor, |conn| std::future::ready(Ok(conn))), stopped),
-        };
-        let home = PageHome {
-            grpc: bound.grpc,
-            tls: self.tls.is_some(),
         };
         let http = crate::net::http_serve::serve(
             Acceptor::new(http_listener, caps.http, self.connections, false),

@@ -86,7 +86,9 @@ impl ReloadingCert {
             .with_safe_default_protocol_versions()?
             .with_no_client_auth()
             .with_cert_resolver(self.clone());
-        config.alpn_protocols = vec![b"h2".to_vec()];
+        // HTTP/2 for gRPC; HTTP/1.1 too, for the browser page and gRPC-web from clients that
+        // speak only that (the server tells them apart by the connection's first bytes).
+        config.alpn_protocols = vec![b"h2".to_vec(), b"http/1.1".to_vec()];
         Ok(TlsAcceptor::from(Arc::new(config)))
     }
 
