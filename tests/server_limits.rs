@@ -326,3 +326,29 @@ async fn idle_live_clients_outlast_the_idle_timeout() {
         .unwrap();
     server.stop();
 }
+
+/// A client that stops reading and then leaves frees its join at once: the task that
+/// waited for room in its stream ends (`naadf_clients` drops to 0), and the server still
+/// shuts down cleanly. (A stream dropped by the transport used to keep its queue alive, so
+/// that task waited forever, holding the actor's mailbox open past shutdown.)
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_client_that_leaves_mid_snapshot_frees_its_join() {
+    let dir = tempfile::tempdir().unwrap();
+    let world = start_world(dir.path());
+    let server = serve_world(dir.path(), &world, &[], &[]);
+    let stalled = stalled_client(&server.url).await;
+    let joined = Instant::now();
+    while metric(&server, "naadf_clients") == 0 && joined.elapsed() < Duration::from_secs(10) {
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
+    assert_eq!(metric(&server, "naadf_clients"), 1);
+    // Its stream's queue fills up with pages it never reads.
+    tokio::time::sleep(Duration::from_millis(500)).await;
+    drop(stalled);
+    let left = Instant::now();
+    while metric(&server, "naadf_clients") > 0 && left.elapsed() < Duration::from_secs(10) {
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
+    assert_eq!(metric(&server, "naadf_clients"), 0, "the join ended with its client");
+    server.stop();
+}

@@ -194,10 +194,12 @@ class WorldGroup {
   }
 }
 
-/** A pass's pipeline over group 0 and its own group 1 of `group1` bindings. */
+/** A pass's pipeline over group 0 and its own group 1 of `group1` bindings, compiled in
+ * the background (a big pass takes seconds on a software adapter): the compile overlaps
+ * the world's download, and a mode never drawn is never compiled. */
 function passPipeline(device: GPUDevice, world: WorldGroup, label: string, code: string, entryPoint: string, group1: GPUBufferBindingType[]) {
   const layout = device.createBindGroupLayout({ entries: group1.map((t, i) => entry(i, t)) });
-  const pipeline = device.createComputePipeline({
+  const pipeline = device.createComputePipelineAsync({
     layout: device.createPipelineLayout({ bindGroupLayouts: [world.layout, layout] }),
     compute: { module: device.createShaderModule({ label, code }), entryPoint },
   });
@@ -216,7 +218,7 @@ async function readBack(device: GPUDevice, enc: GPUCommandEncoder, source: GPUBu
 
 /** The render pass (albedo, material, normal, steps) into a pixel buffer, read back. */
 class FramePass {
-  private readonly compute: GPUComputePipeline;
+  private readonly compute: Promise<GPUComputePipeline>;
   private readonly group1: GPUBindGroupLayout;
   private readonly view: GPUBuffer;
   private readonly gbuffer: GPUBuffer;
@@ -281,7 +283,7 @@ class FramePass {
     });
     const enc = device.createCommandEncoder();
     const pass = enc.beginComputePass();
-    pass.setPipeline(this.compute);
+    pass.setPipeline(await this.compute);
     pass.setBindGroup(0, this.world.of(world));
     pass.setBindGroup(1, frameGroup);
     pass.dispatchWorkgroups(Math.ceil(width / 8), Math.ceil(height / 8));
@@ -299,7 +301,7 @@ const srgb8 = (c: number) => Math.min(255, Math.max(0, Math.floor((c <= 0.003130
 /** The progressive path tracer (`pathtrace`): one sample per pixel per frame added to
  * running sums while the view and the world stay the same, shown as sRGB(ACES(mean)). */
 class PathTracer {
-  private readonly pipeline: GPUComputePipeline;
+  private readonly pipeline: Promise<GPUComputePipeline>;
   private readonly group1: GPUBindGroupLayout;
   private readonly frame: GPUBuffer;
   private readonly light: GPUBuffer;
@@ -363,7 +365,7 @@ class PathTracer {
     });
     const enc = device.createCommandEncoder();
     const pass = enc.beginComputePass();
-    pass.setPipeline(this.pipeline);
+    pass.setPipeline(await this.pipeline);
     pass.setBindGroup(0, this.world.of(world));
     pass.setBindGroup(1, group);
     pass.dispatchWorkgroups(Math.ceil(width / 8), Math.ceil(height / 8));
@@ -382,15 +384,25 @@ class PathTracer {
 
 /** Every mode the page draws: the frame pass's and the path tracer. */
 export class Renderer {
-  private readonly frames: FramePass;
-  private readonly paths: PathTracer;
+  private readonly world: WorldGroup;
+  private frames: FramePass | undefined;
+  private paths: PathTracer | undefined;
   /** The last frame drawn. */
   last: ImageData | undefined;
 
-  constructor(device: GPUDevice) {
-    const world = new WorldGroup(device);
-    this.frames = new FramePass(device, world);
-    this.paths = new PathTracer(device, world);
+  /** Prepares the passes, starting to compile the one that draws `mode`. */
+  constructor(
+    readonly device: GPUDevice,
+    mode: string,
+  ) {
+    this.world = new WorldGroup(device);
+    this.pass(mode);
+  }
+
+  /** The pass that draws `mode`, made on first use. */
+  private pass(mode: string): FramePass | PathTracer {
+    if (Renderer.accumulates(mode)) return (this.paths ??= new PathTracer(this.device, this.world));
+    return (this.frames ??= new FramePass(this.device, this.world));
   }
 
   /** Whether `mode` keeps improving while nothing changes (the path tracer's samples). */
@@ -400,14 +412,13 @@ export class Renderer {
 
   /** Samples per pixel of the path tracer's current view. */
   get samples(): number {
-    return this.paths.samples;
+    return this.paths?.samples ?? 0;
   }
 
   /** Draws `camera`'s view of `world` at `width × height` in `mode`. */
   async render(world: GpuWorld, camera: Camera, width: number, height: number, mode: string): Promise<ImageData> {
-    this.last = Renderer.accumulates(mode)
-      ? await this.paths.render(world, camera, width, height)
-      : await this.frames.render(world, camera, width, height, mode);
+    const pass = this.pass(mode);
+    this.last = pass instanceof PathTracer ? await pass.render(world, camera, width, height) : await pass.render(world, camera, width, height, mode);
     return this.last;
   }
 }

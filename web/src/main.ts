@@ -159,7 +159,7 @@ async function main(): Promise<void> {
   const context = canvas.getContext("2d")!;
   const marks = overlay.getContext("2d")!;
   const world = new GpuWorld(device);
-  const renderer = new Renderer(device);
+  const renderer = new Renderer(device, drawnMode(naadf.mode));
   let voxels: Voxels | undefined;
   let others: PresenceEntry[] = [];
   // `dirty`: the next animation frame renders the world again; `overlayDirty`: it only

@@ -92,6 +92,16 @@ impl Stream for Feed {
     }
 }
 
+impl Drop for Feed {
+    /// The transport dropped the stream (the client left): the queue goes with it, so the
+    /// join task's sender fails and its wait for room ends, instead of waiting for a reader
+    /// that will never come (the [`Cut`] keeps the slot alive).
+    fn drop(&mut self) {
+        let queue = lock(&self.slot).queue.take();
+        drop(queue);
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -122,6 +132,22 @@ mod tests {
         let ending = feed.next().await.unwrap().unwrap_err();
         assert_eq!((ending.code(), ending.message()), (tonic::Code::Aborted, "fell behind"));
         assert!(feed.next().await.is_none());
+    }
+
+    #[tokio::test]
+    async fn a_dropped_stream_fails_its_sender_and_frees_its_queue() {
+        let (tx, feed, _cut) = feed(2);
+        tx.send(Ok(message(0))).await.unwrap();
+        tx.send(Ok(message(1))).await.unwrap();
+        let waiting = tokio::spawn({
+            let tx = tx.clone();
+            async move { tx.reserve().await.is_err() }
+        });
+        tokio::task::yield_now().await;
+        drop(feed);
+        assert!(waiting.await.unwrap(), "a sender waiting for room fails");
+        assert!(tx.is_closed());
+        assert_eq!(tx.capacity(), 2, "the queued messages are freed");
     }
 
     #[tokio::test]

@@ -87,7 +87,15 @@ pub fn start(
         let id = shared.activity.joined(&user);
         shared.metrics.clients.inc();
         let out = Outbox::new(shared.clone(), tx, form);
-        if let Err(Stop::Behind(behind)) = run(&shared, actor, held, resume, presence, out).await {
+        // Shutdown ends the task wherever it waits (for room in a stream nobody reads, say):
+        // it holds a sender of the actor's mailbox, which the actor outlives only until the
+        // last sender is gone.
+        let mut shutdown = shared.shutdown.clone();
+        let ended = tokio::select! {
+            ended = run(&shared, actor, held, resume, presence, out) => ended,
+            _ = shutdown.wait_for(|&down| down) => Ok(()),
+        };
+        if let Err(Stop::Behind(behind)) = ended {
             tracing::info!(behind, "client fell behind; ending its stream");
             shared.metrics.resyncs.inc();
             cut.end(Status::aborted(FELL_BEHIND));
