@@ -44,6 +44,28 @@ fn browser_available() -> bool {
     false
 }
 
+/// What every test starts from: a temporary directory with the test world in it, and a
+/// browser.
+struct Fixture {
+    dir: tempfile::TempDir,
+    world: String,
+    browser: Browser,
+}
+
+/// The fixture, or `None` (the test skips) where the browser is missing.
+fn fixture() -> Option<Fixture> {
+    if !browser_available() {
+        return None;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let world = start_world(dir.path());
+    Some(Fixture {
+        dir,
+        world,
+        browser: Browser::start(),
+    })
+}
+
 /// `web/tests/driver.mjs`: pages in one headless Chromium, driven a command at a time.
 struct Browser {
     child: Child,
@@ -144,13 +166,15 @@ const SETTLED: &str = "n.state === 'live' && n.quiescent && n.shownVersion === n
 /// `naadf render` of the same camera and size, pixel for pixel.
 #[test]
 fn the_page_mirrors_the_world_and_draws_what_naadf_render_draws() {
-    if !browser_available() {
+    let Some(Fixture {
+        dir,
+        world,
+        mut browser,
+    }) = fixture()
+    else {
         return;
-    }
-    let dir = tempfile::tempdir().unwrap();
-    let world = start_world(dir.path());
+    };
     let server = serve_world(dir.path(), &world, &[], &[]);
-    let mut browser = Browser::start();
     let camera = r#"{"pos":[64.5,50.25,-20],"yaw":10,"pitch":-25,"fov_y":70}"#;
     for mode in ["albedo", "material"] {
         browser.open(mode, &page_url(&server, camera, "160x90", mode));
@@ -214,13 +238,15 @@ fn the_page_mirrors_the_world_and_draws_what_naadf_render_draws() {
 /// the test, so the pages' streams (HTTP/1.1 gRPC-web) must count as in use throughout.
 #[test]
 fn two_pages_edit_together_and_see_each_other() {
-    if !browser_available() {
+    let Some(Fixture {
+        dir,
+        world,
+        mut browser,
+    }) = fixture()
+    else {
         return;
-    }
-    let dir = tempfile::tempdir().unwrap();
-    let world = start_world(dir.path());
+    };
     let server = serve_world(dir.path(), &world, &["--idle-timeout", "3"], &[]);
-    let mut browser = Browser::start();
     // B stands behind A, both looking along +Z down onto the terrain: A is in B's view.
     let a_cam = r#"{"pos":[64.5,60.5,30.5],"yaw":0,"pitch":-35,"fov_y":70}"#;
     let b_cam = r#"{"pos":[64.5,62.5,4.5],"yaw":0,"pitch":-20,"fov_y":70}"#;
@@ -287,15 +313,17 @@ fn two_pages_edit_together_and_see_each_other() {
 /// of the page then takes the world from its cache and downloads none of it.
 #[test]
 fn the_page_resumes_after_the_server_is_killed() {
-    if !browser_available() {
+    let Some(Fixture {
+        dir,
+        world,
+        mut browser,
+    }) = fixture()
+    else {
         return;
-    }
-    let dir = tempfile::tempdir().unwrap();
-    let world = start_world(dir.path());
+    };
     let (grpc, http) = (support::free_addr(), support::free_addr());
     let listen = ["--grpc", grpc.as_str(), "--http", http.as_str()];
     let server = serve_world(dir.path(), &world, &listen, &[]);
-    let mut browser = Browser::start();
     browser.open(
         "a",
         &page_url(&server, r#"{"pos":[64,60,-10],"yaw":0,"pitch":-30}"#, "64x36", "albedo"),
@@ -333,6 +361,17 @@ fn the_page_resumes_after_the_server_is_killed() {
         resumed_bytes < 64 << 10,
         "the resume and an edit took {resumed_bytes} bytes"
     );
+
+    // A reload rebuilds the world from the page's cache and downloads none of it again.
+    std::thread::sleep(std::time::Duration::from_millis(1500)); // the cache is written within 1 s
+    browser.send(json!({"op": "reload", "id": "a"}));
+    let reloaded = browser.wait("a", SETTLED, 60_000);
+    assert_on_server(&reloaded, &status(&server));
+    assert_eq!(reloaded["snapshots"], 0, "{reloaded}");
+    assert!(
+        reloaded["snapshotBytes"].as_u64().unwrap() < 1024,
+        "only a resume: {reloaded}"
+    );
     server.stop();
 }
 
@@ -341,16 +380,18 @@ fn the_page_resumes_after_the_server_is_killed() {
 /// is edited.
 #[test]
 fn the_page_asks_for_a_token_and_refuses_viewers_edits() {
-    if !browser_available() {
+    let Some(Fixture {
+        dir,
+        world,
+        mut browser,
+    }) = fixture()
+    else {
         return;
-    }
-    let dir = tempfile::tempdir().unwrap();
-    let world = start_world(dir.path());
+    };
     let tokens = [("NAADF_TOKENS", "vt=vera:viewer,et=edwin:editor")];
     let server = serve_world(dir.path(), &world, &[], &tokens);
     let version = support::naadf(&["status", "--server", &server.url, "--token", "vt", "--json"], None);
     let version: Value = serde_json::from_str(&String::from_utf8_lossy(&version.stdout)).unwrap();
-    let mut browser = Browser::start();
     browser.open(
         "a",
         &page_url(&server, r#"{"pos":[64,60,-10],"yaw":0,"pitch":-30}"#, "64x36", "albedo"),
@@ -403,14 +444,16 @@ fn the_page_asks_for_a_token_and_refuses_viewers_edits() {
 /// A relay serves the page on its own gRPC listener, and forwards its edits upstream.
 #[test]
 fn a_relay_serves_the_page_and_forwards_its_edits() {
-    if !browser_available() {
+    let Some(Fixture {
+        dir,
+        world,
+        mut browser,
+    }) = fixture()
+    else {
         return;
-    }
-    let dir = tempfile::tempdir().unwrap();
-    let world = start_world(dir.path());
+    };
     let server = serve_world(dir.path(), &world, &[], &[]);
     let relay = Server::relay(&server.url, &[], &dir.path().join("relay.log"));
-    let mut browser = Browser::start();
     browser.open(
         "a",
         &page_url(&relay, r#"{"pos":[64,60,-10],"yaw":0,"pitch":-30}"#, "64x36", "albedo"),
@@ -436,13 +479,15 @@ fn a_relay_serves_the_page_and_forwards_its_edits() {
 /// of the channels): the test bounds the mean and the largest difference.
 #[test]
 fn the_path_tracer_accumulates_what_naadf_render_traces() {
-    if !browser_available() {
+    let Some(Fixture {
+        dir,
+        world,
+        mut browser,
+    }) = fixture()
+    else {
         return;
-    }
-    let dir = tempfile::tempdir().unwrap();
-    let world = start_world(dir.path());
+    };
     let server = serve_world(dir.path(), &world, &[], &[]);
-    let mut browser = Browser::start();
     let camera = r#"{"pos":[64.5,50.25,-20],"yaw":10,"pitch":-25,"fov_y":70}"#;
     browser.open(
         "a",
@@ -491,11 +536,14 @@ fn the_path_tracer_accumulates_what_naadf_render_traces() {
 /// address); the HTTP port's `/` sends browsers to it.
 #[test]
 fn the_page_is_served_over_https_with_the_servers_certificate() {
-    if !browser_available() {
+    let Some(Fixture {
+        dir,
+        world,
+        mut browser,
+    }) = fixture()
+    else {
         return;
-    }
-    let dir = tempfile::tempdir().unwrap();
-    let world = start_world(dir.path());
+    };
     let pair = rcgen::generate_simple_self_signed(vec!["localhost".to_string()]).unwrap();
     let (cert, key) = (p(dir.path(), "cert.pem"), p(dir.path(), "key.pem"));
     std::fs::write(&cert, pair.cert.pem()).unwrap();
@@ -504,7 +552,6 @@ fn the_page_is_served_over_https_with_the_servers_certificate() {
     let port = server.url.rsplit(':').next().unwrap().to_owned();
     let redirect = redirect_of(&server.http, "/?mode=material");
     assert_eq!(redirect, format!("https://127.0.0.1:{port}/?mode=material"));
-    let mut browser = Browser::start();
     let url = format!("https://localhost:{port}/?mode=albedo&size=64x36");
     browser.send(json!({"op": "open", "id": "a", "url": url, "insecure": true}));
     let page = browser.wait("a", SETTLED, 120_000);
