@@ -309,7 +309,7 @@ fn status_page_in_a_browser(http: &str, adapter: &str, scratch: &std::path::Path
         return;
     }
     // The page passes its token on to the live frame (this server has tokens).
-    let url = format!("http://{http}/?token=vw");
+    let url = format!("http://{http}/status?token=vw");
     let chromium = |extra: &[&str]| {
         let profile = tempfile::tempdir_in(scratch).unwrap();
         Command::new("chromium")
