@@ -880,8 +880,10 @@ fn http_wants_a_token_when_the_server_has_tokens() {
     assert_eq!(code, 200, "{page}");
     assert!(page.contains("edwin"), "{page}");
     assert!(page.contains("token=vt"), "the live frame lacks the token: {page}");
-    let (code, page) = http_get_with(http, "/", &["Authorization: Bearer vt"]);
+    let (code, page) = http_get_with(http, "/status", &["Authorization: Bearer vt"]);
     assert_eq!(code, 200, "{page}");
+    // `/` only sends browsers to the page (on the gRPC listener), which asks for a token.
+    assert_eq!(http_get(http, "/").0, 307);
 
     // Without a valid token, every frame request is 401, whatever its parameters.
     let camera = "%7B%22pos%22%3A%5B0%2C80%2C0%5D%2C%22yaw%22%3A45%2C%22pitch%22%3A-30%7D";
