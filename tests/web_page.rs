@@ -575,3 +575,35 @@ fn redirect_of(http: &str, path: &str) -> String {
         .unwrap_or_else(|| panic!("no location in {head}"))
         .to_owned()
 }
+
+/// A world with entities, which the page does not draw yet, is refused with a message
+/// that names the native viewer, and the page does not join again and again.
+#[test]
+fn a_world_with_entities_is_refused_with_a_clear_message() {
+    let Some(Fixture {
+        dir,
+        world,
+        mut browser,
+    }) = fixture()
+    else {
+        return;
+    };
+    let server = serve_world(dir.path(), &world, &[], &[]);
+    let rt = tokio::runtime::Runtime::new().unwrap();
+    rt.block_on(async {
+        let client = naadf_client::Client::connect(&server.url, None, None).await.unwrap();
+        let (model, spawns) = support::crates();
+        client.edit(model, 1).await.unwrap();
+        client.spawn_entities(&spawns, 2).await.unwrap();
+    });
+    browser.open(
+        "a",
+        &page_url(&server, r#"{"pos":[64,60,-10],"yaw":0,"pitch":-30}"#, "64x36", "albedo"),
+    );
+    let page = browser.wait("a", "n.state === 'error'", 60_000);
+    let message = page["message"].as_str().unwrap();
+    assert!(message.contains("entities") && message.contains("naadf view"), "{page}");
+    std::thread::sleep(std::time::Duration::from_millis(500));
+    assert_eq!(browser.eval("a", "return n.joins"), 1, "no join loop");
+    server.stop();
+}

@@ -20,8 +20,16 @@ export interface Touched {
   hi: number;
 }
 
-/** The mirror diverged from the server, or the server sent something it cannot hold. */
-export class MirrorError extends Error {}
+/** The mirror diverged from the server, or the server sent something it cannot hold;
+ * `fatal` when joining again would not help (a world the page cannot draw). */
+export class MirrorError extends Error {
+  constructor(
+    message: string,
+    readonly fatal = false,
+  ) {
+    super(message);
+  }
+}
 
 /** One buffer: its bytes (with room to grow) at its logical length, and its page hashes.
  * A resize leaves the pages it changed stale until `settle`, so that pages about to be
@@ -242,7 +250,7 @@ function expandEntityTable(table: Uint8Array): [Uint8Array, Uint8Array] {
   const v = new DataView(table.buffer, table.byteOffset, table.byteLength);
   const empty = table.byteLength === 8 && v.getUint32(0, true) === 0 && v.getUint32(4, true) === 0;
   if (table.byteLength !== 0 && !empty) {
-    throw new MirrorError("this world has entities, which the browser page does not draw yet; use `naadf view`");
+    throw new MirrorError("this world has entities, which the browser page does not draw yet; use `naadf view`", true);
   }
   return [new Uint8Array(0), new Uint8Array(0)];
 }

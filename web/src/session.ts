@@ -109,7 +109,7 @@ export class Session {
         if (e instanceof MirrorError) {
           // Diverged or refused data: join again announcing what is held.
           console.warn(e.message);
-          if (/entities/.test(e.message)) {
+          if (e.fatal) {
             this.events.state("error", e.message);
             return;
           }
