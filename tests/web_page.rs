@@ -607,3 +607,40 @@ fn a_world_with_entities_is_refused_with_a_clear_message() {
     assert_eq!(browser.eval("a", "return n.joins"), 1, "no join loop");
     server.stop();
 }
+
+/// A rate-limited edit is shown (the notice, `rateLimited`) and retried with the same
+/// `client_seq`: every edit of a burst is applied exactly once.
+#[test]
+fn rate_limited_edits_are_retried_and_applied_once() {
+    let Some(Fixture {
+        dir,
+        world,
+        mut browser,
+    }) = fixture()
+    else {
+        return;
+    };
+    let server = serve_world(dir.path(), &world, &["--rate", "1"], &[]);
+    browser.open(
+        "a",
+        &page_url(&server, r#"{"pos":[64,60,-10],"yaw":0,"pitch":-30}"#, "64x36", "albedo"),
+    );
+    browser.wait("a", "n.state === 'live'", 60_000);
+    let versions = browser.eval(
+        "a",
+        r#"const ops = [1, 2, 3, 4].map((x) => `{"op":"set","voxels":[[${x},50,1,1]]}`);
+           return await Promise.all(ops.map((o) => n.edit(o)));"#,
+    );
+    let mut versions: Vec<u64> = versions
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_u64().unwrap())
+        .collect();
+    versions.sort_unstable();
+    assert_eq!(versions, [1, 2, 3, 4], "each edit once");
+    assert_eq!(status(&server)["version"], 4);
+    let retried = browser.eval("a", "return n.rateLimited").as_u64().unwrap();
+    assert!(retried > 0, "the burst met the limit and was retried");
+    server.stop();
+}

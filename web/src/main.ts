@@ -42,6 +42,8 @@ interface PageState {
   snapshotBytes: number;
   /** The other clients' markers drawn on the last frame. */
   markers: Marker[];
+  /** Calls retried after the server's rate limit turned them away. */
+  rateLimited: number;
   /** Milliseconds from navigation to each step of opening: `device`, `restored` (the
    * cache), `live` and `firstFrame`. */
   timings: Record<string, number>;
@@ -87,6 +89,7 @@ const naadf: PageState = {
   bytesReceived: 0,
   snapshotBytes: 0,
   markers: [],
+  rateLimited: 0,
   timings: {},
   shownVersion: -1,
   samples: 0,
@@ -234,11 +237,13 @@ async function main(): Promise<void> {
       try {
         const reply = await f(clientSeq);
         rtt = performance.now() - t0;
+        if (attempt > 0) showNotice("");
         drawHud();
         return Number(reply.version);
       } catch (e) {
         const err = ConnectError.from(e);
         if (err.code === Code.ResourceExhausted && attempt < 8) {
+          naadf.rateLimited += 1;
           showNotice(`rate-limited: ${err.rawMessage}; retrying`);
           await new Promise((r) => setTimeout(r, 250 * 2 ** attempt));
           continue;

@@ -1,0 +1,2149 @@
+function e(e,t){return typeof e==`object`&&e&&`$typeName`in e&&typeof e.$typeName==`string`?t===void 0||t.typeName===e.$typeName:!1}var t;(function(e){e[e.DOUBLE=1]=`DOUBLE`,e[e.FLOAT=2]=`FLOAT`,e[e.INT64=3]=`INT64`,e[e.UINT64=4]=`UINT64`,e[e.INT32=5]=`INT32`,e[e.FIXED64=6]=`FIXED64`,e[e.FIXED32=7]=`FIXED32`,e[e.BOOL=8]=`BOOL`,e[e.STRING=9]=`STRING`,e[e.BYTES=12]=`BYTES`,e[e.UINT32=13]=`UINT32`,e[e.SFIXED32=15]=`SFIXED32`,e[e.SFIXED64=16]=`SFIXED64`,e[e.SINT32=17]=`SINT32`,e[e.SINT64=18]=`SINT64`})(t||={});function n(){let e=this.buf,t=this.pos,n=0,r=0;for(let i=0;i<28;i+=7){let a=e[t++];if(n|=(a&127)<<i,!(a&128)){this.pos=t,this.assertBounds(),this.varint64Lo=n,this.varint64Hi=r;return}}let i=e[t++];if(n|=(i&15)<<28,r=(i&112)>>4,!(i&128))this.pos=t,this.assertBounds(),this.varint64Lo=n,this.varint64Hi=r;else{for(let i=3;i<=31;i+=7){let a=e[t++];if(r|=(a&127)<<i,!(a&128)){this.pos=t,this.assertBounds(),this.varint64Lo=n,this.varint64Hi=r;return}}throw Error(`invalid varint`)}}var r=4294967296;function i(e){let t=e[0]===`-`;t&&(e=e.slice(1));let n=1e6,i=0,a=0;function o(t,o){let s=Number(e.slice(t,o));a*=n,i=i*n+s,i>=r&&(a+=i/r|0,i%=r)}return o(-24,-18),o(-18,-12),o(-12,-6),o(-6),t?l(i,a):c(i,a)}function a(e,t){let n=c(e,t),r=n.hi&0x80000000;r&&(n=l(n.lo,n.hi));let i=o(n.lo,n.hi);return r?`-`+i:i}function o(e,t){if({lo:e,hi:t}=s(e,t),t<=2097151)return String(r*t+e);let n=e&0xffffff,i=(e>>>24|t<<8)&0xffffff,a=t>>16&65535,o=n+i*6777216+a*6710656,c=i+a*8147497,l=a*2,d=1e7;return o>=d&&(c+=Math.floor(o/d),o%=d),c>=d&&(l+=Math.floor(c/d),c%=d),l.toString()+u(c)+u(o)}function s(e,t){return{lo:e>>>0,hi:t>>>0}}function c(e,t){return{lo:e|0,hi:t|0}}function l(e,t){return t=~t,e?e=~e+1:t+=1,c(e,t)}var u=e=>{let t=String(e);return`0000000`.slice(t.length)+t};function d(e,t){if(e>>>0<128)t.push(e);else if(e>=0){for(;e>127;)t.push(e&127|128),e>>>=7;t.push(e)}else{for(let n=0;n<9;n++)t.push(e&127|128),e>>=7;t.push(1)}}function f(){let e=this.buf[this.pos++];if(!(e&128))return this.assertBounds(),e;let t=e&127;if(e=this.buf[this.pos++],t|=(e&127)<<7,!(e&128)||(e=this.buf[this.pos++],t|=(e&127)<<14,!(e&128))||(e=this.buf[this.pos++],t|=(e&127)<<21,!(e&128)))return this.assertBounds(),t;e=this.buf[this.pos++],t|=(e&15)<<28;for(let t=5;e&128&&t<10;t++)e=this.buf[this.pos++];if(e&128)throw Error(`invalid varint`);return this.assertBounds(),t>>>0}var p=m();function m(){let e=new DataView(new ArrayBuffer(8));if(typeof BigInt==`function`&&typeof e.getBigInt64==`function`&&typeof e.getBigUint64==`function`&&typeof e.setBigInt64==`function`&&typeof e.setBigUint64==`function`&&(globalThis.Deno||globalThis.Bun||typeof process!=`object`||{}.BUF_BIGINT_DISABLE!==`1`)){let t=BigInt(`-9223372036854775808`),n=BigInt(`9223372036854775807`),r=BigInt(`0`),i=BigInt(`18446744073709551615`);return{zero:BigInt(0),supported:!0,parse(e){let r=typeof e==`bigint`?e:BigInt(e);if(r>n||r<t)throw Error(`invalid int64: ${e}`);return r},uParse(e){let t=typeof e==`bigint`?e:BigInt(e);if(t>i||t<r)throw Error(`invalid uint64: ${e}`);return t},enc(t){return e.setBigInt64(0,this.parse(t),!0),{lo:e.getInt32(0,!0),hi:e.getInt32(4,!0)}},uEnc(t){return e.setBigInt64(0,this.uParse(t),!0),{lo:e.getInt32(0,!0),hi:e.getInt32(4,!0)}},dec(t,n){return e.setInt32(0,t,!0),e.setInt32(4,n,!0),e.getBigInt64(0,!0)},uDec(t,n){return e.setInt32(0,t,!0),e.setInt32(4,n,!0),e.getBigUint64(0,!0)}}}return{zero:`0`,supported:!1,parse(e){return typeof e!=`string`&&(e=e.toString()),h(e),e},uParse(e){return typeof e!=`string`&&(e=e.toString()),g(e),e},enc(e){return typeof e!=`string`&&(e=e.toString()),h(e),i(e)},uEnc(e){return typeof e!=`string`&&(e=e.toString()),g(e),i(e)},dec(e,t){return a(e,t)},uDec(e,t){return o(e,t)}}}function h(e){if(!/^-?[0-9]+$/.test(e))throw Error(`invalid int64: `+e)}function g(e){if(!/^[0-9]+$/.test(e))throw Error(`invalid uint64: `+e)}function _(e,n){switch(e){case t.STRING:return``;case t.BOOL:return!1;case t.DOUBLE:case t.FLOAT:return 0;case t.INT64:case t.UINT64:case t.SFIXED64:case t.FIXED64:case t.SINT64:return n?`0`:p.zero;case t.BYTES:return new Uint8Array;default:return 0}}function v(e,n){switch(e){case t.BOOL:return n===!1;case t.STRING:return n===``;case t.BYTES:return n instanceof Uint8Array&&!n.byteLength;case t.DOUBLE:case t.FLOAT:return Object.is(n,0);default:return n==0}}var y=2,b=Symbol.for(`reflect unsafe local`);function x(e,t){let n=e[t.localName].case;return n===void 0?n:t.fields.find(e=>e.localName===n)}function S(e,t){let n=t.localName;if(t.oneof)return e[t.oneof.localName].case===n;if(t.presence!=y)return e[n]!==void 0&&Object.prototype.hasOwnProperty.call(e,n);switch(t.fieldKind){case`list`:return e[n].length>0;case`map`:return Object.keys(e[n]).length>0;case`scalar`:return!v(t.scalar,e[n]);case`enum`:return e[n]!==t.enum.values[0].number}throw Error(`message field with implicit presence`)}function C(e,t){return Object.prototype.hasOwnProperty.call(e,t)&&e[t]!==void 0}function w(e,t){if(t.oneof){let n=e[t.oneof.localName];return n.case===t.localName?n.value:void 0}return e[t.localName]}function T(e,t,n){t.oneof?e[t.oneof.localName]={case:t.localName,value:n}:e[t.localName]=n}function E(e,t,n){t===`__proto__`?Object.defineProperty(e,"__proto__",{value:n,writable:!0,enumerable:!0,configurable:!0}):e[t]=n}function D(e,t){return Object.prototype.hasOwnProperty.call(e,t)?e[t]:void 0}function O(e,t){let n=t.localName;if(t.oneof){let r=t.oneof.localName;e[r].case===n&&(e[r]={case:void 0})}else if(t.presence!=y)delete e[n];else switch(t.fieldKind){case`map`:e[n]={};break;case`list`:e[n]=[];break;case`enum`:e[n]=t.enum.values[0].number;break;case`scalar`:e[n]=_(t.scalar,t.longAsString)}}function k(e){return typeof e==`object`&&!!e&&!Array.isArray(e)}function A(e,t){if(k(e)&&b in e&&`add`in e&&`field`in e&&typeof e.field==`function`){if(t!==void 0){let n=t,r=e.field();return n.listKind==r.listKind&&n.scalar===r.scalar&&n.message?.typeName===r.message?.typeName&&n.enum?.typeName===r.enum?.typeName}return!0}return!1}function j(e,t){if(k(e)&&b in e&&`has`in e&&`field`in e&&typeof e.field==`function`){if(t!==void 0){let n=t,r=e.field();return n.mapKey===r.mapKey&&n.mapKind==r.mapKind&&n.scalar===r.scalar&&n.message?.typeName===r.message?.typeName&&n.enum?.typeName===r.enum?.typeName}return!0}return!1}function M(e,t){return k(e)&&b in e&&`desc`in e&&k(e.desc)&&e.desc.kind===`message`&&(t===void 0||e.desc.typeName==t.typeName)}function ee(e){return re(e.$typeName)}function N(e){let t=e.fields[0];return re(e.typeName)&&t!==void 0&&t.fieldKind==`scalar`&&t.name==`value`&&t.number==1}function te(e){switch(e.typeName){case`google.protobuf.Any`:case`google.protobuf.Timestamp`:case`google.protobuf.Duration`:case`google.protobuf.FieldMask`:case`google.protobuf.Struct`:case`google.protobuf.Value`:case`google.protobuf.ListValue`:return!0;default:return N(e)}}var ne=new Set([`google.protobuf.DoubleValue`,`google.protobuf.FloatValue`,`google.protobuf.Int64Value`,`google.protobuf.UInt64Value`,`google.protobuf.Int32Value`,`google.protobuf.UInt32Value`,`google.protobuf.BoolValue`,`google.protobuf.StringValue`,`google.protobuf.BytesValue`]);function re(e){return ne.has(e)}var ie=999,ae=998,oe=2;function P(t,n){return e(n,t)?n:ce(t)(n)}var se=new WeakMap;function ce(e){let t=se.get(e);return t===void 0&&(t=pe(e),se.set(e,t)),t}var le=0,ue=1,de=2,fe=3;function pe(e){let t=e.typeName,{properties:n,prototype:r}=me(e);return e=>{let i;r===void 0?i={$typeName:t}:(i=Object.create(r),i.$typeName=t);for(let t=0;t<n.length;t++){let r=n[t],a=r.name,o=e?.[a];switch(r.kind){case le:o==null?r.constant!==void 0&&(i[a]=r.constant):i[a]=r.convert===void 0?o:r.convert(o);break;case ue:i[a]=r.convert!==void 0&&Array.isArray(o)?o.map(r.convert):o??[];break;case de:if(r.convert===void 0||!k(o))i[a]=o??{};else{let e={},t=Object.keys(o);for(let n=0;n<t.length;n++)E(e,t[n],r.convert(o[t[n]]));i[a]=e}break;case fe:{let e=o;if(e?.case!=null){let t=r.convert.get(e.case);if(t!==void 0){i[a]={case:e.case,value:t(e.value)};break}}i[a]={case:void 0};break}}}return i}}function me(e){let n=[],r={},i=ve(e);for(let a of e.members){let e=a.localName;if(a.kind==`oneof`)n.push({name:e,kind:fe,constant:void 0,convert:he(a)});else switch(a.fieldKind){case`message`:n.push({name:e,kind:le,constant:void 0,convert:ge(a)});break;case`list`:n.push({name:e,kind:ue,constant:void 0,convert:a.listKind==`message`?ge(a)??(e=>e):a.scalar==t.BYTES?_e:void 0});break;case`map`:n.push({name:e,kind:de,constant:void 0,convert:a.mapKind==`message`?ge(a)??(e=>e):a.scalar==t.BYTES?_e:void 0});break;default:{let o=ye(a);n.push({name:e,kind:le,constant:a.presence==oe?o:void 0,convert:a.fieldKind==`scalar`&&a.scalar==t.BYTES?_e:void 0}),i&&(r[e]=o);break}}}return{properties:n,prototype:i?r:void 0}}function he(e){let n=new Map;for(let r of e.fields){let e;r.fieldKind==`message`?e=ge(r):r.fieldKind==`scalar`&&r.scalar==t.BYTES&&(e=_e),n.set(r.localName,e??(e=>e))}return n}function ge(n){if(n.fieldKind==`message`&&!n.oneof&&N(n.message))return n.message.fields[0].scalar==t.BYTES?_e:void 0;if(n.message.typeName==`google.protobuf.Struct`&&n.parent.typeName!==`google.protobuf.Value`)return;let r=n.message,i;return t=>!k(t)||e(t,r)?t:(i??=ce(r),i(t))}function _e(e){return Array.isArray(e)?new Uint8Array(e):e}function ve(e){switch(e.file.edition){case ie:return!1;case ae:return!0;default:return e.fields.some(e=>e.presence!=oe&&e.fieldKind!=`message`&&!e.oneof)}}function ye(e){let t=e.getDefaultValue();return t===void 0?e.fieldKind==`scalar`?_(e.scalar,e.longAsString):e.enum.values[0].number:e.fieldKind==`scalar`&&e.longAsString?t.toString():t}var be=[`FieldValueInvalidError`,`FieldListRangeError`,`ForeignFieldError`],F=class extends Error{constructor(e,t,n=`FieldValueInvalidError`){super(t),this.name=n,this.field=()=>e}};function xe(e){return e instanceof Error&&be.includes(e.name)&&`field`in e&&typeof e.field==`function`}var Se;function Ce(e){Se=Object.assign(Object.assign({},e),{encodeUtf8Into:e.encodeUtf8Into??Te(e.encodeUtf8.bind(e))})}function we(){if(!Se){let e=globalThis;if(!e.TextEncoder||!e.TextDecoder)throw Error(`encoding API missing: install TextEncoder and TextDecoder on globalThis`);let t=new e.TextEncoder,n=new e.TextDecoder(`utf-8`,{ignoreBOM:!0}),r,i={encodeUtf8(e){return t.encode(e)},decodeUtf8(t,i){return i?(r||=new e.TextDecoder(`utf-8`,{fatal:!0,ignoreBOM:!0}),r.decode(t)):n.decode(t)},checkUtf8(e){try{return encodeURIComponent(e),!0}catch{return!1}}};t.encodeInto&&(i.encodeUtf8Into=t.encodeInto.bind(t));let a=String.prototype.isWellFormed;a&&(i.checkUtf8=e=>a.call(e)),Ce(i)}return Se}function Te(e){return(t,n)=>{let r=e(t);return n.set(r),{written:r.byteLength}}}var I;(function(e){e[e.Varint=0]=`Varint`,e[e.Bit64=1]=`Bit64`,e[e.LengthDelimited=2]=`LengthDelimited`,e[e.StartGroup=3]=`StartGroup`,e[e.EndGroup=4]=`EndGroup`,e[e.Bit32=5]=`Bit32`})(I||={});var Ee=class{constructor(e){this.stackPos=[],this.encodeUtf8Into=e?Te(e):we().encodeUtf8Into,this.buffer=ke,this.viewCache=Ae,this.pos=0}ensureCapacity(e){let t=this.pos+e;if(t>this.buffer.length){let e=this.buffer.length||De;for(;e<t;)e*=2;let n=new Uint8Array(e);this.pos>0&&n.set(this.buffer),this.buffer=n}}view(){let e=this.buffer,t=this.viewCache;if(t.byteLength===e.byteLength)return t;let n=new DataView(e.buffer);return this.viewCache=n,n}finish(){let e=this.buffer.slice(0,this.pos);return this.pos=0,this.stackPos=[],e}fork(){return this.stackPos.push(this.pos),this.ensureCapacity(Oe),this.buffer[this.pos++]=0,this}join(){let e=this.stackPos.pop();if(e===void 0)throw Error(`invalid state, fork stack empty`);let t=this.pos-e-Oe,n=Me(t);return n>Oe&&(this.ensureCapacity(n-Oe),this.buffer.copyWithin(e+n,e+Oe,this.pos)),this.pos=e,this.uint32(t),this.pos+=t,this}tag(e,t){return this.uint32((e<<3|t)>>>0)}raw(e){return this.ensureCapacity(e.length),this.buffer.set(e,this.pos),this.pos+=e.length,this}uint32(e){if(Fe(e),this.ensureCapacity(5),e<128)return this.buffer[this.pos++]=e,this;for(;e>127;)this.buffer[this.pos++]=e&127|128,e>>>=7;return this.buffer[this.pos++]=e,this}int32(e){if(Pe(e),e>=0)return this.uint32(e);this.ensureCapacity(10);for(let t=0;t<9;t++)this.buffer[this.pos++]=e&127|128,e>>=7;return this.buffer[this.pos++]=1,this}bool(e){return this.ensureCapacity(1),this.buffer[this.pos++]=+!!e,this}bytes(e){return this.uint32(e.byteLength),this.raw(e)}string(e){typeof e!=`string`&&(e=String(e));let t=e.length;if(t<=je){this.ensureCapacity(t+1);let n=this.buffer,r=this.pos;n[r++]=t;let i=0;for(;i<t;i++){let t=e.charCodeAt(i);if(t>127)break;n[r++]=t}if(i==t)return this.pos=r,this}this.ensureCapacity(t*3+5);let n=Me(t),r=this.buffer,i=this.pos,{written:a}=this.encodeUtf8Into(e,r.subarray(i+n)),o=Me(a);return o!=n&&r.copyWithin(i+o,i+n,i+n+a),this.uint32(a),this.pos+=a,this}float(e){return Ie(e),this.ensureCapacity(4),this.view().setFloat32(this.pos,e,!0),this.pos+=4,this}double(e){return this.ensureCapacity(8),this.view().setFloat64(this.pos,e,!0),this.pos+=8,this}fixed32(e){return Fe(e),this.ensureCapacity(4),this.view().setUint32(this.pos,e,!0),this.pos+=4,this}sfixed32(e){return Pe(e),this.ensureCapacity(4),this.view().setInt32(this.pos,e,!0),this.pos+=4,this}sint32(e){return Pe(e),this.uint32((e<<1^e>>31)>>>0)}sfixed64(e){let t=p.enc(e);this.ensureCapacity(8);let n=this.view();return n.setInt32(this.pos,t.lo,!0),n.setInt32(this.pos+4,t.hi,!0),this.pos+=8,this}fixed64(e){let t=p.uEnc(e);this.ensureCapacity(8);let n=this.view();return n.setInt32(this.pos,t.lo,!0),n.setInt32(this.pos+4,t.hi,!0),this.pos+=8,this}int64(e){let t=p.enc(e);return this.writeVarint64(t.lo,t.hi)}sint64(e){let t=p.enc(e),n=t.hi>>31,r=t.lo<<1^n,i=(t.hi<<1|t.lo>>>31)^n;return this.writeVarint64(r,i)}uint64(e){let t=p.uEnc(e);return this.writeVarint64(t.lo,t.hi)}writeVarint64(e,t){this.ensureCapacity(10);let n=this.buffer,r=this.pos;for(let i=0;i<28;i+=7){let a=e>>>i,o=!(!(a>>>7)&&t==0);if(n[r++]=(o?a|128:a)&255,!o)return this.pos=r,this}let i=e>>>28&15|(t&7)<<4,a=!!(t>>3);if(n[r++]=(a?i|128:i)&255,!a)return this.pos=r,this;for(let e=3;e<31;e+=7){let i=t>>>e,a=!!(i>>>7);if(n[r++]=(a?i|128:i)&255,!a)return this.pos=r,this}return n[r++]=t>>>31&1,this.pos=r,this}},De=128,Oe=1,ke=new Uint8Array,Ae=new DataView(ke.buffer),je=32;function Me(e){return e<128?1:e<16384?2:e<2097152?3:e<268435456?4:5}var Ne=class{constructor(e,t=we().decodeUtf8){this.decodeUtf8=t,this.varint64Lo=0,this.varint64Hi=0,this.varint64=n,this.uint32=f,this.buf=e,this.len=e.length,this.pos=0,this.view=new DataView(e.buffer,e.byteOffset,e.byteLength)}tag(){let e=this.pos,t=this.uint32(),n=this.pos-e;if(n>5||n==5&&this.buf[this.pos-1]>15)throw Error(`illegal tag: varint overflows uint32`);let r=t>>>3,i=t&7;if(r<=0||i>5)throw Error(`illegal tag: field no `+r+` wire type `+i);return[r,i]}skip(e,t,n=100){let r=this.pos;switch(e){case I.Varint:for(;this.buf[this.pos++]&128;);break;case I.Bit64:this.pos+=4;case I.Bit32:this.pos+=4;break;case I.LengthDelimited:let r=this.uint32();this.pos+=r;break;case I.StartGroup:if(n<=0)throw Error(`maximum recursion depth reached`);for(;;){let[e,r]=this.tag();if(r===I.EndGroup){if(t!==void 0&&e!==t)throw Error(`invalid end group tag`);break}this.skip(r,e,n-1)}break;default:throw Error(`cant skip wire type `+e)}return this.assertBounds(),this.buf.subarray(r,this.pos)}assertBounds(){if(this.pos>this.len)throw RangeError(`premature EOF`)}int32(){return this.uint32()|0}sint32(){let e=this.uint32();return e>>>1^-(e&1)}int64(){return this.varint64(),p.dec(this.varint64Lo,this.varint64Hi)}uint64(){return this.varint64(),p.uDec(this.varint64Lo,this.varint64Hi)}sint64(){this.varint64();let e=this.varint64Lo,t=this.varint64Hi,n=-(e&1);return e=(e>>>1|(t&1)<<31)^n,t=t>>>1^n,p.dec(e,t)}bool(){let e=this.buf[this.pos];return e<128?(this.pos++,e!==0):(this.varint64(),this.varint64Lo!==0||this.varint64Hi!==0)}fixed32(){return this.view.getUint32((this.pos+=4)-4,!0)}sfixed32(){return this.view.getInt32((this.pos+=4)-4,!0)}fixed64(){return p.uDec(this.sfixed32(),this.sfixed32())}sfixed64(){return p.dec(this.sfixed32(),this.sfixed32())}float(){return this.view.getFloat32((this.pos+=4)-4,!0)}double(){return this.view.getFloat64((this.pos+=8)-8,!0)}bytes(){let e=this.uint32(),t=this.pos;return this.pos+=e,this.assertBounds(),this.buf.subarray(t,t+e)}string(e){let t=this.uint32(),n=this.pos;this.pos+=t,this.assertBounds();let r=this.buf;if(t<=je){let i=Array(t);for(let a=0;a<t;a++){let t=r[n+a];if(t>127)return this.decodeUtf8(r.subarray(n,this.pos),e);i[a]=t}return String.fromCharCode.apply(String,i)}return this.decodeUtf8(r.subarray(n,this.pos),e)}};function Pe(e){if(typeof e==`string`)e=Number(e);else if(typeof e!=`number`)throw Error(`invalid int32: `+typeof e);if(!Number.isInteger(e)||e>0x7fffffff||e<-0x80000000)throw Error(`invalid int32: `+e)}function Fe(e){if(typeof e==`string`)e=Number(e);else if(typeof e!=`number`)throw Error(`invalid uint32: `+typeof e);if(!Number.isInteger(e)||e>0xffffffff||e<0)throw Error(`invalid uint32: `+e)}function Ie(e){if(typeof e==`string`){let t=e;if(e=Number(e),Number.isNaN(e)&&t!==`NaN`)throw Error(`invalid float32: `+t)}else if(typeof e!=`number`)throw Error(`invalid float32: `+typeof e);if(!Number.isFinite(Math.fround(e))&&Number.isFinite(e))throw Error(`invalid float32: `+e)}function Le(e,t){let n=e.fieldKind==`list`?A(t,e):e.fieldKind==`map`?j(t,e):Be(e,t);if(n===!0)return;let r;switch(e.fieldKind){case`list`:r=`expected ${Ue(e)}, got ${R(t)}`;break;case`map`:r=`expected ${We(e)}, got ${R(t)}`;break;default:r=L(e,t,n)}return new F(e,r)}function Re(e,t,n){let r=Be(e,n);if(r!==!0)return new F(e,`list item #${t+1}: ${L(e,n,r)}`)}function ze(e,t,n){let r=Ve(e.mapKey)(t);if(r!==!0)return new F(e,`invalid map key: ${L({scalar:e.mapKey},t,r)}`);let i=Be(e,n);if(i!==!0)return new F(e,`map entry ${R(t)}: ${L(e,n,i)}`)}function Be(e,n){return e.scalar===void 0?e.enum===void 0?M(n,e.message):e.enum.open?Ve(t.INT32)(n):e.enum.values.some(e=>e.number===n):Ve(e.scalar)(n)}function Ve(e){switch(e){case t.DOUBLE:return e=>typeof e==`number`;case t.FLOAT:return e=>typeof e==`number`?!Number.isFinite(Math.fround(e))&&Number.isFinite(e)?`${e.toFixed()} out of range`:!0:!1;case t.INT32:case t.SFIXED32:case t.SINT32:return e=>typeof e!=`number`||!Number.isInteger(e)?!1:e>0x7fffffff||e<-0x80000000?`${e.toFixed()} out of range`:!0;case t.FIXED32:case t.UINT32:return e=>typeof e!=`number`||!Number.isInteger(e)?!1:e>0xffffffff||e<0?`${e.toFixed()} out of range`:!0;case t.BOOL:return e=>typeof e==`boolean`;case t.STRING:return e=>typeof e==`string`?we().checkUtf8(e)||`invalid UTF8`:!1;case t.BYTES:return e=>e instanceof Uint8Array;case t.INT64:case t.SFIXED64:case t.SINT64:return e=>{if(typeof e==`bigint`||typeof e==`number`||typeof e==`string`&&e.length>0)try{return p.parse(e),!0}catch{return`${e} out of range`}return!1};case t.FIXED64:case t.UINT64:return e=>{if(typeof e==`bigint`||typeof e==`number`||typeof e==`string`&&e.length>0)try{return p.uParse(e),!0}catch{return`${e} out of range`}return!1}}}function L(e,t,n){return n=typeof n==`string`?`: ${n}`:`, got ${R(t)}`,e.scalar===void 0?e.enum===void 0?`expected ${He(e.message)}`+n:`expected ${e.enum.toString()}`+n:`expected ${Ge(e.scalar)}`+n}function R(t){switch(typeof t){case`object`:return t===null?`null`:t instanceof Uint8Array?`Uint8Array(${t.length})`:Array.isArray(t)?`Array(${t.length})`:A(t)?Ue(t.field()):j(t)?We(t.field()):M(t)?He(t.desc):e(t)?`message ${t.$typeName}`:`object`;case`string`:return t.length>30?`string`:`"${t.split(`"`).join(`\\"`)}"`;case`boolean`:case`number`:return String(t);case`bigint`:return String(t)+`n`;default:return typeof t}}function He(e){return`ReflectMessage (${e.typeName})`}function Ue(e){switch(e.listKind){case`message`:return`ReflectList (${e.message.toString()})`;case`enum`:return`ReflectList (${e.enum.toString()})`;case`scalar`:return`ReflectList (${t[e.scalar]})`}}function We(e){switch(e.mapKind){case`message`:return`ReflectMap (${t[e.mapKey]}, ${e.message.toString()})`;case`enum`:return`ReflectMap (${t[e.mapKey]}, ${e.enum.toString()})`;case`scalar`:return`ReflectMap (${t[e.mapKey]}, ${t[e.scalar]})`}}function Ge(e){switch(e){case t.STRING:return`string`;case t.BOOL:return`boolean`;case t.INT64:case t.SINT64:case t.SFIXED64:return`bigint (int64)`;case t.UINT64:case t.FIXED64:return`bigint (uint64)`;case t.BYTES:return`Uint8Array`;case t.DOUBLE:return`number (float64)`;case t.FLOAT:return`number (float32)`;case t.FIXED32:case t.UINT32:return`number (uint32)`;case t.INT32:case t.SFIXED32:case t.SINT32:return`number (int32)`}}var Ke=0;function z(e){if(qe(e))return{toMessage:e=>Je(e),toLocal:e=>Ye(e)};if(e.fieldKind==`message`&&!e.oneof&&N(e.message)){let t=e.message,n=t.fields[0].localName;return{toMessage:e=>{let r=P(t);return e!==void 0&&(r[n]=e),r},toLocal:e=>e[n]}}let t=e.message;return{toMessage:e=>e===void 0?P(t):e,toLocal:e=>e}}function qe(e){return e.message.typeName==`google.protobuf.Struct`&&e.parent.typeName!=`google.protobuf.Value`}function Je(e){let t={$typeName:`google.protobuf.Struct`,fields:{}};if(k(e))for(let n of Object.keys(e))E(t.fields,n,Ze(e[n]));return t}function Ye(e){let t={};for(let n of Object.keys(e.fields))E(t,n,Xe(e.fields[n]));return t}function Xe(e){switch(e.kind.case){case`structValue`:return Ye(e.kind.value);case`listValue`:return e.kind.value.values.map(Xe);case`nullValue`:case void 0:return null;default:return e.kind.value}}function Ze(e){let t={$typeName:`google.protobuf.Value`,kind:{case:void 0}};switch(typeof e){case`number`:t.kind={case:`numberValue`,value:e};break;case`string`:t.kind={case:`stringValue`,value:e};break;case`boolean`:t.kind={case:`boolValue`,value:e};break;case`object`:if(e===null)t.kind={case:`nullValue`,value:Ke};else if(Array.isArray(e)){let n={$typeName:`google.protobuf.ListValue`,values:[]};if(Array.isArray(e))for(let t of e)n.values.push(Ze(t));t.kind={case:`listValue`,value:n}}else t.kind={case:`structValue`,value:Je(e)}}return t}function Qe(e,t,n=!0){return new et(e,t,n)}var $e=new WeakMap,et=class{get sortedFields(){let e=$e.get(this.desc);if(e)return e;let t=this.desc.fields.concat().sort((e,t)=>e.number-t.number);return $e.set(this.desc,t),t}constructor(e,t,n=!0){this.lists=new Map,this.maps=new Map,this.check=n,this.desc=e,this.message=this[b]=t??P(e),this.fields=e.fields,this.oneofs=e.oneofs,this.members=e.members}findNumber(e){return this._fieldsByNumber||=new Map(this.desc.fields.map(e=>[e.number,e])),this._fieldsByNumber.get(e)}oneofCase(e){return tt(this.message,e),x(this.message,e)}isSet(e){return tt(this.message,e),S(this.message,e)}clear(e){tt(this.message,e),O(this.message,e)}get(e){tt(this.message,e);let t=w(this.message,e);switch(e.fieldKind){case`list`:let n=this.lists.get(e);return n&&n[b]===t||this.lists.set(e,n=new nt(e,t,this.check)),n;case`map`:let r=this.maps.get(e);return r&&r[b]===t||this.maps.set(e,r=new rt(e,t,this.check)),r;case`message`:return at(e,t,this.check);case`scalar`:return t===void 0?_(e.scalar,!1):ft(e,t);case`enum`:return t??e.enum.values[0].number}}set(e,t){if(tt(this.message,e),this.check){let n=Le(e,t);if(n)throw n}let n;n=e.fieldKind==`message`?it(e,t):j(t)||A(t)?t[b]:pt(e,t),T(this.message,e,n)}getUnknown(){return this.message.$unknown}setUnknown(e){this.message.$unknown=e}};function tt(e,t){if(t.parent.typeName!==e.$typeName)throw new F(t,`cannot use ${t.toString()} with message ${e.$typeName}`,`ForeignFieldError`)}var nt=class{field(){return this._field}get size(){return this._arr.length}constructor(e,t,n){this._field=e,this._arr=this[b]=t,this.check=n}get(e){let t=this._arr[e];return t===void 0?void 0:st(this._field,t,this.check)}set(e,t){if(e<0||e>=this._arr.length)throw new F(this._field,`list item #${e+1}: out of range`);if(this.check){let n=Re(this._field,e,t);if(n)throw n}this._arr[e]=ot(this._field,t)}add(e){if(this.check){let t=Re(this._field,this._arr.length,e);if(t)throw t}this._arr.push(ot(this._field,e))}clear(){this._arr.splice(0,this._arr.length)}[Symbol.iterator](){return this.values()}keys(){return this._arr.keys()}*values(){for(let e of this._arr)yield st(this._field,e,this.check)}*entries(){for(let e=0;e<this._arr.length;e++)yield[e,st(this._field,this._arr[e],this.check)]}},rt=class{constructor(e,t,n=!0){this.obj=this[b]=t??{},this.check=n,this._field=e}field(){return this._field}set(e,t){if(this.check){let n=ze(this._field,e,t);if(n)throw n}return E(this.obj,ut(e),ct(this._field,t)),this}delete(e){let t=ut(e),n=Object.prototype.hasOwnProperty.call(this.obj,t);return n&&delete this.obj[t],n}clear(){for(let e of Object.keys(this.obj))delete this.obj[e]}get(e){let t=D(this.obj,ut(e));return t!==void 0&&(t=lt(this._field,t,this.check)),t}has(e){return Object.prototype.hasOwnProperty.call(this.obj,ut(e))}*keys(){for(let e of Object.keys(this.obj))yield dt(e,this._field.mapKey)}*entries(){for(let e of Object.entries(this.obj))yield[dt(e[0],this._field.mapKey),lt(this._field,e[1],this.check)]}[Symbol.iterator](){return this.entries()}get size(){return Object.keys(this.obj).length}*values(){for(let e of Object.values(this.obj))yield lt(this._field,e,this.check)}forEach(e,t){for(let n of this.entries())e.call(t,n[1],n[0],this)}};function it(e,t){return M(t)?ee(t.message)&&!e.oneof&&e.fieldKind==`message`?t.message.value:t.desc.typeName==`google.protobuf.Struct`&&e.parent.typeName!=`google.protobuf.Value`?Ye(t.message):t.message:t}function at(e,t,n){return t!==void 0&&(N(e.message)&&!e.oneof&&e.fieldKind==`message`?t={$typeName:e.message.typeName,value:ft(e.message.fields[0],t)}:e.message.typeName==`google.protobuf.Struct`&&e.parent.typeName!=`google.protobuf.Value`&&k(t)&&(t=Je(t))),new et(e.message,t,n)}function ot(e,t){return e.listKind==`message`?it(e,t):pt(e,t)}function st(e,t,n){return e.listKind==`message`?at(e,t,n):ft(e,t)}function ct(e,t){return e.mapKind==`message`?it(e,t):pt(e,t)}function lt(e,t,n){return e.mapKind==`message`?at(e,t,n):t}function ut(e){return typeof e==`string`||typeof e==`number`?e:String(e)}function dt(e,n){switch(n){case t.STRING:return e;case t.INT32:case t.FIXED32:case t.UINT32:case t.SFIXED32:case t.SINT32:{let t=Number.parseInt(e);if(Number.isFinite(t))return t;break}case t.BOOL:switch(e){case`true`:return!0;case`false`:return!1}break;case t.UINT64:case t.FIXED64:try{return p.uParse(e)}catch{}break;default:try{return p.parse(e)}catch{}}return e}function ft(e,n){switch(e.scalar){case t.INT64:case t.SFIXED64:case t.SINT64:`longAsString`in e&&e.longAsString&&typeof n==`string`&&(n=p.parse(n));break;case t.FIXED64:case t.UINT64:`longAsString`in e&&e.longAsString&&typeof n==`string`&&(n=p.uParse(n))}return n}function pt(e,n){switch(e.scalar){case t.INT64:case t.SFIXED64:case t.SINT64:`longAsString`in e&&e.longAsString?n=String(n):(typeof n==`string`||typeof n==`number`)&&(n=p.parse(n));break;case t.FIXED64:case t.UINT64:`longAsString`in e&&e.longAsString?n=String(n):(typeof n==`string`||typeof n==`number`)&&(n=p.uParse(n))}return n}var mt=Uint8Array.prototype.setFromBase64;function ht(e){let t=e.length,n=t-(t+3>>2);!(t&3)&&e[t-1]==`=`&&(n-=e[t-2]==`=`?2:1);let r=new Uint8Array(n),i=-1;if(mt)try{let n=mt.call(r,e);n.read==t&&(i=n.written)}catch{}return i<0&&(i=gt(r,e)),i==n?r:r.subarray(0,i)}function gt(e,t){let n=wt(),r=0,i=0,a,o=0;for(let s=0;s<t.length;s++){if(a=n[t.charCodeAt(s)],a===void 0)switch(t[s]){case`=`:i=0;case`
+`:case`\r`:case`	`:case` `:continue;default:throw Error(`invalid base64 string`)}switch(i){case 0:o=a,i=1;break;case 1:e[r++]=o<<2|(a&48)>>4,o=a,i=2;break;case 2:e[r++]=(o&15)<<4|(a&60)>>2,o=a,i=3;break;case 3:e[r++]=(o&3)<<6|a,i=0}}if(i==1)throw Error(`invalid base64 string`);return r}var _t=Uint8Array.prototype.toBase64,vt={std:{alphabet:`base64`,omitPadding:!1},std_raw:{alphabet:`base64`,omitPadding:!0},url:{alphabet:`base64url`,omitPadding:!0}};function yt(e,t=`std`){if(_t)return _t.call(e,vt[t]);let n=Ct(t),r=t==`std`,i=``,a=0,o,s=0;for(let t=0;t<e.length;t++)switch(o=e[t],a){case 0:i+=n[o>>2],s=(o&3)<<4,a=1;break;case 1:i+=n[s|o>>4],s=(o&15)<<2,a=2;break;case 2:i+=n[s|o>>6],i+=n[o&63],a=0}return a&&(i+=n[s],r&&(i+=`=`,a==1&&(i+=`=`))),i}var bt,xt,St;function Ct(e){return bt||(bt=`ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/`.split(``),xt=bt.slice(0,-2).concat(`-`,`_`)),e==`url`?xt:bt}function wt(){if(!St){St=[];let e=Ct(`std`);for(let t=0;t<e.length;t++)St[e[t].charCodeAt(0)]=t;St[45]=e.indexOf(`+`),St[95]=e.indexOf(`/`)}return St}function Tt(e){let t=!1,n=[];for(let r=0;r<e.length;r++){let i=e.charAt(r);switch(i){case`_`:t=!0;break;case`0`:case`1`:case`2`:case`3`:case`4`:case`5`:case`6`:case`7`:case`8`:case`9`:n.push(i),t=!1;break;default:t&&(t=!1,i=i.toUpperCase()),n.push(i)}}return n.join(``)}function Et(e){return e.replace(/[A-Z]/g,e=>`_`+e.toLowerCase())}var Dt=new Set([`constructor`,`toString`,`toJSON`,`valueOf`]);function Ot(e){return Dt.has(e)?e+`$`:e}function kt(e){for(let t of e.field)C(t,`jsonName`)||(t.jsonName=Tt(t.name));e.nestedType.forEach(kt)}function At(e,t){let n=e.values.find(e=>e.name===t);if(!n)throw Error(`cannot parse ${e} default value: ${t}`);return n.number}function jt(e,n){switch(e){case t.STRING:return n;case t.BYTES:{let r=Mt(n);if(r===!1)throw Error(`cannot parse ${t[e]} default value: ${n}`);return r}case t.INT64:case t.SFIXED64:case t.SINT64:return p.parse(n);case t.UINT64:case t.FIXED64:return p.uParse(n);case t.DOUBLE:case t.FLOAT:switch(n){case`inf`:return 1/0;case`-inf`:return-1/0;case`nan`:return NaN;default:return parseFloat(n)}case t.BOOL:return n===`true`;case t.INT32:case t.UINT32:case t.SINT32:case t.FIXED32:case t.SFIXED32:return parseInt(n,10)}}function Mt(e){let t=[],n={tail:e,c:``,next(){return this.tail.length!=0&&(this.c=this.tail[0],this.tail=this.tail.substring(1),!0)},take(e){if(this.tail.length>=e){let t=this.tail.substring(0,e);return this.tail=this.tail.substring(e),t}return!1}};for(;n.next();)if(n.c===`\\`){if(n.next())switch(n.c){case`\\`:t.push(n.c.charCodeAt(0));break;case`b`:t.push(8);break;case`f`:t.push(12);break;case`n`:t.push(10);break;case`r`:t.push(13);break;case`t`:t.push(9);break;case`v`:t.push(11);break;case`0`:case`1`:case`2`:case`3`:case`4`:case`5`:case`6`:case`7`:{let e=n.c,r=n.take(2);if(r===!1)return!1;let i=parseInt(e+r,8);if(Number.isNaN(i))return!1;t.push(i);break}case`x`:{let e=n.c,r=n.take(2);if(r===!1)return!1;let i=parseInt(e+r,16);if(Number.isNaN(i))return!1;t.push(i);break}case`u`:{let e=n.c,r=n.take(4);if(r===!1)return!1;let i=parseInt(e+r,16);if(Number.isNaN(i))return!1;let a=new Uint8Array(4);new DataView(a.buffer).setInt32(0,i,!0),t.push(a[0],a[1],a[2],a[3]);break}case`U`:{let e=n.c,r=n.take(8);if(r===!1)return!1;let i=p.uEnc(e+r),a=new Uint8Array(8),o=new DataView(a.buffer);o.setInt32(0,i.lo,!0),o.setInt32(4,i.hi,!0),t.push(a[0],a[1],a[2],a[3],a[4],a[5],a[6],a[7]);break}}}else t.push(n.c.charCodeAt(0));return new Uint8Array(t)}function*Nt(e){switch(e.kind){case`file`:for(let t of e.messages)yield t,yield*Nt(t);yield*e.enums,yield*e.services,yield*e.extensions;break;case`message`:for(let t of e.nestedMessages)yield t,yield*Nt(t);yield*e.nestedEnums,yield*e.nestedExtensions}}function Pt(e,t){return Ft([e,t])}function Ft(e,t){let n=It();if(!e.length)return n;if(`$typeName`in e[0]&&e[0].$typeName==`google.protobuf.FileDescriptorSet`){for(let r of e[0].file)t?.(r),an(r,n);return n}if(`$typeName`in e[0]){let r=e[0],i=e[1],a=new Set;function o(e){let t=[];for(let r of e.dependency){if(n.getFile(r)!=null||a.has(r))continue;let o=i(r);if(!o)throw Error(`Unable to resolve ${r}, imported by ${e.name}`);`kind`in o?n.addFile(o,!1,!0):(a.add(o.name),t.push(o))}return t.concat(...t.map(o))}for(let e of[r,...o(r)].reverse())t?.(e),an(e,n)}else for(let t of e)for(let e of t.files)n.addFile(e);return n}function It(){let e=new Map,t=new Map,n=new Map;return{kind:`registry`,types:e,extendees:t,[Symbol.iterator](){return e.values()},get files(){return n.values()},addFile(e,t,r){if(n.set(e.proto.name,e),!t)for(let t of Nt(e))this.add(t);if(r)for(let n of e.dependencies)this.addFile(n,t,r)},add(n){if(n.kind==`extension`){let e=t.get(n.extendee.typeName);e||t.set(n.extendee.typeName,e=new Map),e.set(n.number,n)}e.set(n.typeName,n)},get(t){return e.get(t)},getFile(e){return n.get(e)},getMessage(t){let n=e.get(t);return n?.kind==`message`?n:void 0},getEnum(t){let n=e.get(t);return n?.kind==`enum`?n:void 0},getExtension(t){let n=e.get(t);return n?.kind==`extension`?n:void 0},getExtensionFor(e,n){return t.get(e.typeName)?.get(n)},getService(t){let n=e.get(t);return n?.kind==`service`?n:void 0}}}var Lt=998,Rt=999,zt=9999,Bt=9,Vt=10,Ht=11,Ut=12,Wt=14,Gt=3,Kt=2,qt=1,Jt=0,Yt=1,Xt=2,Zt=3,Qt=1,$t=2,en=1,tn=2,nn=1002,rn={998:{fieldPresence:1,enumType:2,repeatedFieldEncoding:2,utf8Validation:3,messageEncoding:1,jsonFormat:2,enforceNamingStyle:2,defaultSymbolVisibility:1,enforceProtoLimits:1},999:{fieldPresence:2,enumType:1,repeatedFieldEncoding:1,utf8Validation:2,messageEncoding:1,jsonFormat:1,enforceNamingStyle:2,defaultSymbolVisibility:1,enforceProtoLimits:1},1e3:{fieldPresence:1,enumType:1,repeatedFieldEncoding:1,utf8Validation:2,messageEncoding:1,jsonFormat:1,enforceNamingStyle:2,defaultSymbolVisibility:1,enforceProtoLimits:1},1001:{fieldPresence:1,enumType:1,repeatedFieldEncoding:1,utf8Validation:2,messageEncoding:1,jsonFormat:1,enforceNamingStyle:1,defaultSymbolVisibility:2,enforceProtoLimits:1},1002:{fieldPresence:1,enumType:1,repeatedFieldEncoding:1,utf8Validation:2,messageEncoding:1,jsonFormat:1,enforceNamingStyle:3,defaultSymbolVisibility:4,enforceProtoLimits:2}};function an(e,t){let n={kind:`file`,proto:e,deprecated:e.options?.deprecated??!1,edition:mn(e),name:e.name.replace(/\.proto$/,``),dependencies:hn(e,t),enums:[],messages:[],extensions:[],services:[],toString(){return`file ${e.name}`}},r=new Map,i={get(e){return r.get(e)},add(e){B(e.proto.options?.mapEntry===!0),r.set(e.typeName,e)}};for(let r of e.enumType)cn(r,n,void 0,t);for(let r of e.messageType)ln(r,n,void 0,t,i);for(let r of e.service)un(r,n,t);on(n,t);for(let e of r.values())sn(e,t,i);for(let e of n.messages)sn(e,t,i),on(e,t);t.addFile(n,!0)}function on(e,t){switch(e.kind){case`file`:for(let n of e.proto.extension){let r=pn(n,e,t);e.extensions.push(r),t.add(r)}break;case`message`:for(let n of e.proto.extension){let r=pn(n,e,t);e.nestedExtensions.push(r),t.add(r)}for(let n of e.nestedMessages)on(n,t)}}function sn(e,t,n){let r=e.proto.oneofDecl.map(t=>fn(t,e)),i=new Set;for(let a of e.proto.field){let o=xn(a,r),s=pn(a,e,t,o,n);e.fields.push(s),e.field[s.localName]=s,o===void 0?e.members.push(s):(o.fields.push(s),i.has(o)||(i.add(o),e.members.push(o)))}for(let t of r.filter(e=>i.has(e)))e.oneofs.push(t);for(let r of e.nestedMessages)sn(r,t,n)}function cn(e,t,n,r){var i,a;let o=gn(e.name,e.value),s={kind:`enum`,proto:e,deprecated:e.options?.deprecated??!1,file:t,parent:n,open:!0,name:e.name,typeName:yn(e,n,t),value:{},values:[],sharedPrefix:o,toString(){return`enum ${this.typeName}`}};s.open=Tn(s),r.add(s);for(let t of e.value){let e=t.name,n={kind:`enum_value`,proto:t,deprecated:t.options?.deprecated??!1,parent:s,name:e,localName:Ot(o==null?e:e.substring(o.length)),number:t.number,jsonName:_n(t)??e,toString(){return`enum value ${s.typeName}.${e}`}};s.values.push(n),(i=s.value)[a=t.number]??(i[a]=n)}(n?.nestedEnums??t.enums).push(s)}function ln(e,t,n,r,i){let a={kind:`message`,proto:e,deprecated:e.options?.deprecated??!1,file:t,parent:n,name:e.name,typeName:yn(e,n,t),fields:[],field:{},oneofs:[],members:[],nestedEnums:[],nestedMessages:[],nestedExtensions:[],toString(){return`message ${this.typeName}`}};e.options?.mapEntry===!0?i.add(a):((n?.nestedMessages??t.messages).push(a),r.add(a));for(let n of e.enumType)cn(n,t,a,r);for(let n of e.nestedType)ln(n,t,a,r,i)}function un(e,t,n){let r={kind:`service`,proto:e,deprecated:e.options?.deprecated??!1,file:t,name:e.name,typeName:yn(e,void 0,t),methods:[],method:{},toString(){return`service ${this.typeName}`}};t.services.push(r),n.add(r);for(let t of e.method){let e=dn(t,r,n);r.methods.push(e),r.method[e.localName]=e}}function dn(e,t,n){let r;r=e.clientStreaming&&e.serverStreaming?`bidi_streaming`:e.clientStreaming?`client_streaming`:e.serverStreaming?`server_streaming`:`unary`;let i=n.getMessage(bn(e.inputType)),a=n.getMessage(bn(e.outputType));B(i,`invalid MethodDescriptorProto: input_type ${e.inputType} not found`),B(a,`invalid MethodDescriptorProto: output_type ${e.inputType} not found`);let o=e.name;return{kind:`rpc`,proto:e,deprecated:e.options?.deprecated??!1,parent:t,name:o,localName:Ot(o.length?Ot(o[0].toLowerCase()+o.substring(1)):o),methodKind:r,input:i,output:a,idempotency:e.options?.idempotencyLevel??Jt,toString(){return`rpc ${t.typeName}.${o}`}}}function fn(e,t){return{kind:`oneof`,proto:e,deprecated:!1,parent:t,fields:[],name:e.name,localName:Ot(Tt(e.name)),toString(){return`oneof ${t.typeName}.${this.name}`}}}function pn(e,t,n,r,i){let a=i===void 0,o={kind:`field`,proto:e,deprecated:e.options?.deprecated??!1,name:e.name,number:e.number,scalar:void 0,message:void 0,enum:void 0,presence:Sn(e,r,a,t),utf8Validation:Dn(e,t),listKind:void 0,mapKind:void 0,mapKey:void 0,delimitedEncoding:void 0,packed:void 0,longAsString:!1,getDefaultValue:void 0},s;if(a){let r=t.kind==`file`?t:t.file,i=t.kind==`file`?void 0:t,a=yn(e,i,r);o.kind=`extension`,o.file=r,o.parent=i,o.oneof=void 0,o.typeName=a,o.jsonName=`[${a}]`,s=()=>`extension ${a}`;let c=n.getMessage(bn(e.extendee));B(c,`invalid FieldDescriptorProto: extendee ${e.extendee} not found`),o.extendee=c}else{let n=t;B(n.kind==`message`),o.parent=n,o.oneof=r,o.localName=r?Tt(e.name):Ot(Tt(e.name)),o.jsonName=e.jsonName,s=()=>`field ${n.typeName}.${e.name}`}Object.defineProperty(o,"toString",{value:s,writable:!0,enumerable:!0,configurable:!0});let c=e.label,l=e.type,u=e.options?.jstype;if(c===Gt){let r=l==Ht?i?.get(bn(e.typeName)):void 0;if(r){o.fieldKind=`map`;let{key:e,value:t}=wn(r);return o.mapKey=e.scalar,o.mapKind=t.fieldKind,o.message=t.message,o.delimitedEncoding=!1,o.enum=t.enum,o.scalar=t.scalar,o}switch(o.fieldKind=`list`,l){case Ht:case Vt:o.listKind=`message`,o.message=n.getMessage(bn(e.typeName)),B(o.message),o.delimitedEncoding=En(e,t);break;case Wt:o.listKind=`enum`,o.enum=n.getEnum(bn(e.typeName)),B(o.enum);break;default:o.listKind=`scalar`,o.scalar=l,o.longAsString=u==qt}return o.packed=Cn(e,t),o}switch(l){case Ht:case Vt:o.fieldKind=`message`,o.message=n.getMessage(bn(e.typeName)),B(o.message,`invalid FieldDescriptorProto: type_name ${e.typeName} not found`),o.delimitedEncoding=En(e,t),o.getDefaultValue=()=>void 0;break;case Wt:{let t=n.getEnum(bn(e.typeName));B(t!==void 0,`invalid FieldDescriptorProto: type_name ${e.typeName} not found`),o.fieldKind=`enum`,o.enum=n.getEnum(bn(e.typeName)),o.getDefaultValue=()=>C(e,`defaultValue`)?At(t,e.defaultValue):void 0;break}default:o.fieldKind=`scalar`,o.scalar=l,o.longAsString=u==qt,o.getDefaultValue=()=>C(e,`defaultValue`)?jt(l,e.defaultValue):void 0}return o}function mn(e){switch(e.syntax){case``:case`proto2`:return Lt;case`proto3`:return Rt;case`editions`:if(e.edition===zt)return nn;if(e.edition in rn)return e.edition;throw Error(`${e.name}: unsupported edition`);default:throw Error(`${e.name}: unsupported syntax "${e.syntax}"`)}}function hn(e,t){return e.dependency.map(n=>{let r=t.getFile(n);if(!r)throw Error(`Cannot find ${n}, imported by ${e.name}`);return r})}function gn(e,t){let n=vn(e)+`_`;for(let e of t){if(!e.name.toLowerCase().startsWith(n))return;let t=e.name.substring(n.length);if(t.length==0||/^\d/.test(t))return}return n}function _n(e){let t;for(let n of e.options?.$unknown??[]){if(n.no!==998||n.wireType!==I.LengthDelimited)continue;let e=new Ne(new Ne(n.data).bytes());for(;e.pos<e.len;){let[n,r]=e.tag();n===1&&r===I.LengthDelimited?t=e.string():e.skip(r,n)}}return t}function vn(e){return(e.substring(0,1)+e.substring(1).replace(/[A-Z]/g,e=>`_`+e)).toLowerCase()}function yn(e,t,n){let r;return r=t?`${t.typeName}.${e.name}`:n.proto.package.length>0?`${n.proto.package}.${e.name}`:`${e.name}`,r}function bn(e){return e.startsWith(`.`)?e.substring(1):e}function xn(e,t){if(!C(e,`oneofIndex`)||e.proto3Optional)return;let n=t[e.oneofIndex];return B(n,`invalid FieldDescriptorProto: oneof #${e.oneofIndex} for field #${e.number} not found`),n}function Sn(e,t,n,r){if(e.label==Kt)return Zt;if(e.label==Gt)return Xt;if(t||e.proto3Optional||n)return Yt;let i=On(`fieldPresence`,{proto:e,parent:r});return i==Xt&&(e.type==Ht||e.type==Vt)?Yt:i}function Cn(e,t){if(e.label!=Gt)return!1;switch(e.type){case Bt:case Ut:case Vt:case Ht:return!1}let n=e.options;return n&&C(n,`packed`)?n.packed:Qt==On(`repeatedFieldEncoding`,{proto:e,parent:t})}function wn(e){let n=e.fields.find(e=>e.number===1),r=e.fields.find(e=>e.number===2);return B(n&&n.fieldKind==`scalar`&&n.scalar!=t.BYTES&&n.scalar!=t.FLOAT&&n.scalar!=t.DOUBLE&&r&&r.fieldKind!=`list`&&r.fieldKind!=`map`),{key:n,value:r}}function Tn(e){return en==On(`enumType`,{proto:e.proto,parent:e.parent??e.file})}function En(e,t){return e.type==Vt||$t==On(`messageEncoding`,{proto:e,parent:t})}function Dn(e,t){return tn==On(`utf8Validation`,{proto:e,parent:t})}function On(e,t){let n=t.proto.options?.features;if(n){let t=n[e];if(t!=0)return t}if(`kind`in t){if(t.kind==`message`)return On(e,t.parent??t.file);let n=rn[t.edition];if(!n)throw Error(`feature default for edition ${t.edition} not found`);return n[e]}return On(e,t.parent)}function B(e,t){if(!e)throw Error(t)}function kn(e){let t=An(e);return t.messageType.forEach(kt),Pt(t,()=>void 0).getFile(t.name)}function An(e){return Object.assign(Object.create({syntax:``,edition:0}),Object.assign(Object.assign({$typeName:`google.protobuf.FileDescriptorProto`,dependency:[],publicDependency:[],weakDependency:[],optionDependency:[],service:[],extension:[]},e),{messageType:e.messageType.map(jn),enumType:e.enumType.map(Pn)}))}function jn(e){return Object.assign(Object.create({visibility:0}),{$typeName:`google.protobuf.DescriptorProto`,name:e.name,field:e.field?.map(Mn)??[],extension:[],nestedType:e.nestedType?.map(jn)??[],enumType:e.enumType?.map(Pn)??[],extensionRange:e.extensionRange?.map(e=>Object.assign({$typeName:`google.protobuf.DescriptorProto.ExtensionRange`},e))??[],oneofDecl:[],reservedRange:[],reservedName:[]})}function Mn(e){return Object.assign(Object.create({label:1,typeName:``,extendee:``,defaultValue:``,oneofIndex:0,jsonName:``,proto3Optional:!1}),Object.assign(Object.assign({$typeName:`google.protobuf.FieldDescriptorProto`},e),{options:e.options?Nn(e.options):void 0}))}function Nn(e){return Object.assign(Object.create({ctype:0,packed:!1,jstype:0,lazy:!1,unverifiedLazy:!1,deprecated:!1,weak:!1,debugRedact:!1,retention:0}),Object.assign(Object.assign({$typeName:`google.protobuf.FieldOptions`},e),{targets:e.targets??[],editionDefaults:e.editionDefaults?.map(e=>Object.assign({$typeName:`google.protobuf.FieldOptions.EditionDefault`},e))??[],uninterpretedOption:[]}))}function Pn(e){return Object.assign(Object.create({visibility:0}),{$typeName:`google.protobuf.EnumDescriptorProto`,name:e.name,reservedName:[],reservedRange:[],value:e.value.map(e=>Object.assign({$typeName:`google.protobuf.EnumValueDescriptorProto`},e))})}function V(e,t,...n){return n.reduce((e,t)=>e.nestedMessages[t],e.messages[t])}var Fn=V(kn({name:`google/protobuf/descriptor.proto`,package:`google.protobuf`,messageType:[{name:`FileDescriptorSet`,field:[{name:`file`,number:1,type:11,label:3,typeName:`.google.protobuf.FileDescriptorProto`}],extensionRange:[{start:536e6,end:536000001}]},{name:`FileDescriptorProto`,field:[{name:`name`,number:1,type:9,label:1},{name:`package`,number:2,type:9,label:1},{name:`dependency`,number:3,type:9,label:3},{name:`public_dependency`,number:10,type:5,label:3},{name:`weak_dependency`,number:11,type:5,label:3},{name:`option_dependency`,number:15,type:9,label:3},{name:`message_type`,number:4,type:11,label:3,typeName:`.google.protobuf.DescriptorProto`},{name:`enum_type`,number:5,type:11,label:3,typeName:`.google.protobuf.EnumDescriptorProto`},{name:`service`,number:6,type:11,label:3,typeName:`.google.protobuf.ServiceDescriptorProto`},{name:`extension`,number:7,type:11,label:3,typeName:`.google.protobuf.FieldDescriptorProto`},{name:`options`,number:8,type:11,label:1,typeName:`.google.protobuf.FileOptions`},{name:`source_code_info`,number:9,type:11,label:1,typeName:`.google.protobuf.SourceCodeInfo`},{name:`syntax`,number:12,type:9,label:1},{name:`edition`,number:14,type:14,label:1,typeName:`.google.protobuf.Edition`}]},{name:`DescriptorProto`,field:[{name:`name`,number:1,type:9,label:1},{name:`field`,number:2,type:11,label:3,typeName:`.google.protobuf.FieldDescriptorProto`},{name:`extension`,number:6,type:11,label:3,typeName:`.google.protobuf.FieldDescriptorProto`},{name:`nested_type`,number:3,type:11,label:3,typeName:`.google.protobuf.DescriptorProto`},{name:`enum_type`,number:4,type:11,label:3,typeName:`.google.protobuf.EnumDescriptorProto`},{name:`extension_range`,number:5,type:11,label:3,typeName:`.google.protobuf.DescriptorProto.ExtensionRange`},{name:`oneof_decl`,number:8,type:11,label:3,typeName:`.google.protobuf.OneofDescriptorProto`},{name:`options`,number:7,type:11,label:1,typeName:`.google.protobuf.MessageOptions`},{name:`reserved_range`,number:9,type:11,label:3,typeName:`.google.protobuf.DescriptorProto.ReservedRange`},{name:`reserved_name`,number:10,type:9,label:3},{name:`visibility`,number:11,type:14,label:1,typeName:`.google.protobuf.SymbolVisibility`}],nestedType:[{name:`ExtensionRange`,field:[{name:`start`,number:1,type:5,label:1},{name:`end`,number:2,type:5,label:1},{name:`options`,number:3,type:11,label:1,typeName:`.google.protobuf.ExtensionRangeOptions`}]},{name:`ReservedRange`,field:[{name:`start`,number:1,type:5,label:1},{name:`end`,number:2,type:5,label:1}]}]},{name:`ExtensionRangeOptions`,field:[{name:`uninterpreted_option`,number:999,type:11,label:3,typeName:`.google.protobuf.UninterpretedOption`},{name:`declaration`,number:2,type:11,label:3,typeName:`.google.protobuf.ExtensionRangeOptions.Declaration`,options:{retention:2}},{name:`features`,number:50,type:11,label:1,typeName:`.google.protobuf.FeatureSet`},{name:`verification`,number:3,type:14,label:1,typeName:`.google.protobuf.ExtensionRangeOptions.VerificationState`,defaultValue:`UNVERIFIED`,options:{retention:2}}],nestedType:[{name:`Declaration`,field:[{name:`number`,number:1,type:5,label:1},{name:`full_name`,number:2,type:9,label:1},{name:`type`,number:3,type:9,label:1},{name:`reserved`,number:5,type:8,label:1},{name:`repeated`,number:6,type:8,label:1}]}],enumType:[{name:`VerificationState`,value:[{name:`DECLARATION`,number:0},{name:`UNVERIFIED`,number:1}]}],extensionRange:[{start:990,end:999},{start:1e3,end:536870912}]},{name:`FieldDescriptorProto`,field:[{name:`name`,number:1,type:9,label:1},{name:`number`,number:3,type:5,label:1},{name:`label`,number:4,type:14,label:1,typeName:`.google.protobuf.FieldDescriptorProto.Label`},{name:`type`,number:5,type:14,label:1,typeName:`.google.protobuf.FieldDescriptorProto.Type`},{name:`type_name`,number:6,type:9,label:1},{name:`extendee`,number:2,type:9,label:1},{name:`default_value`,number:7,type:9,label:1},{name:`oneof_index`,number:9,type:5,label:1},{name:`json_name`,number:10,type:9,label:1},{name:`options`,number:8,type:11,label:1,typeName:`.google.protobuf.FieldOptions`},{name:`proto3_optional`,number:17,type:8,label:1}],enumType:[{name:`Type`,value:[{name:`TYPE_DOUBLE`,number:1},{name:`TYPE_FLOAT`,number:2},{name:`TYPE_INT64`,number:3},{name:`TYPE_UINT64`,number:4},{name:`TYPE_INT32`,number:5},{name:`TYPE_FIXED64`,number:6},{name:`TYPE_FIXED32`,number:7},{name:`TYPE_BOOL`,number:8},{name:`TYPE_STRING`,number:9},{name:`TYPE_GROUP`,number:10},{name:`TYPE_MESSAGE`,number:11},{name:`TYPE_BYTES`,number:12},{name:`TYPE_UINT32`,number:13},{name:`TYPE_ENUM`,number:14},{name:`TYPE_SFIXED32`,number:15},{name:`TYPE_SFIXED64`,number:16},{name:`TYPE_SINT32`,number:17},{name:`TYPE_SINT64`,number:18}]},{name:`Label`,value:[{name:`LABEL_OPTIONAL`,number:1},{name:`LABEL_REPEATED`,number:3},{name:`LABEL_REQUIRED`,number:2}]}]},{name:`OneofDescriptorProto`,field:[{name:`name`,number:1,type:9,label:1},{name:`options`,number:2,type:11,label:1,typeName:`.google.protobuf.OneofOptions`}]},{name:`EnumDescriptorProto`,field:[{name:`name`,number:1,type:9,label:1},{name:`value`,number:2,type:11,label:3,typeName:`.google.protobuf.EnumValueDescriptorProto`},{name:`options`,number:3,type:11,label:1,typeName:`.google.protobuf.EnumOptions`},{name:`reserved_range`,number:4,type:11,label:3,typeName:`.google.protobuf.EnumDescriptorProto.EnumReservedRange`},{name:`reserved_name`,number:5,type:9,label:3},{name:`visibility`,number:6,type:14,label:1,typeName:`.google.protobuf.SymbolVisibility`}],nestedType:[{name:`EnumReservedRange`,field:[{name:`start`,number:1,type:5,label:1},{name:`end`,number:2,type:5,label:1}]}]},{name:`EnumValueDescriptorProto`,field:[{name:`name`,number:1,type:9,label:1},{name:`number`,number:2,type:5,label:1},{name:`options`,number:3,type:11,label:1,typeName:`.google.protobuf.EnumValueOptions`}]},{name:`ServiceDescriptorProto`,field:[{name:`name`,number:1,type:9,label:1},{name:`method`,number:2,type:11,label:3,typeName:`.google.protobuf.MethodDescriptorProto`},{name:`options`,number:3,type:11,label:1,typeName:`.google.protobuf.ServiceOptions`}]},{name:`MethodDescriptorProto`,field:[{name:`name`,number:1,type:9,label:1},{name:`input_type`,number:2,type:9,label:1},{name:`output_type`,number:3,type:9,label:1},{name:`options`,number:4,type:11,label:1,typeName:`.google.protobuf.MethodOptions`},{name:`client_streaming`,number:5,type:8,label:1,defaultValue:`false`},{name:`server_streaming`,number:6,type:8,label:1,defaultValue:`false`}]},{name:`FileOptions`,field:[{name:`java_package`,number:1,type:9,label:1},{name:`java_outer_classname`,number:8,type:9,label:1},{name:`java_multiple_files`,number:10,type:8,label:1,defaultValue:`false`,options:{}},{name:`java_generate_equals_and_hash`,number:20,type:8,label:1,options:{deprecated:!0}},{name:`java_string_check_utf8`,number:27,type:8,label:1,defaultValue:`false`},{name:`optimize_for`,number:9,type:14,label:1,typeName:`.google.protobuf.FileOptions.OptimizeMode`,defaultValue:`SPEED`},{name:`go_package`,number:11,type:9,label:1},{name:`cc_generic_services`,number:16,type:8,label:1,defaultValue:`false`},{name:`java_generic_services`,number:17,type:8,label:1,defaultValue:`false`},{name:`py_generic_services`,number:18,type:8,label:1,defaultValue:`false`},{name:`deprecated`,number:23,type:8,label:1,defaultValue:`false`},{name:`cc_enable_arenas`,number:31,type:8,label:1,defaultValue:`true`,options:{}},{name:`objc_class_prefix`,number:36,type:9,label:1},{name:`csharp_namespace`,number:37,type:9,label:1},{name:`swift_prefix`,number:39,type:9,label:1},{name:`php_class_prefix`,number:40,type:9,label:1},{name:`php_namespace`,number:41,type:9,label:1},{name:`php_metadata_namespace`,number:44,type:9,label:1},{name:`ruby_package`,number:45,type:9,label:1},{name:`features`,number:50,type:11,label:1,typeName:`.google.protobuf.FeatureSet`},{name:`uninterpreted_option`,number:999,type:11,label:3,typeName:`.google.protobuf.UninterpretedOption`}],enumType:[{name:`OptimizeMode`,value:[{name:`SPEED`,number:1},{name:`CODE_SIZE`,number:2},{name:`LITE_RUNTIME`,number:3}]}],extensionRange:[{start:990,end:999},{start:1e3,end:536870912}]},{name:`MessageOptions`,field:[{name:`message_set_wire_format`,number:1,type:8,label:1,defaultValue:`false`},{name:`no_standard_descriptor_accessor`,number:2,type:8,label:1,defaultValue:`false`},{name:`deprecated`,number:3,type:8,label:1,defaultValue:`false`},{name:`map_entry`,number:7,type:8,label:1},{name:`deprecated_legacy_json_field_conflicts`,number:11,type:8,label:1,options:{deprecated:!0}},{name:`features`,number:12,type:11,label:1,typeName:`.google.protobuf.FeatureSet`},{name:`uninterpreted_option`,number:999,type:11,label:3,typeName:`.google.protobuf.UninterpretedOption`}],extensionRange:[{start:990,end:999},{start:1e3,end:536870912}]},{name:`FieldOptions`,field:[{name:`ctype`,number:1,type:14,label:1,typeName:`.google.protobuf.FieldOptions.CType`,defaultValue:`STRING`},{name:`packed`,number:2,type:8,label:1},{name:`jstype`,number:6,type:14,label:1,typeName:`.google.protobuf.FieldOptions.JSType`,defaultValue:`JS_NORMAL`},{name:`lazy`,number:5,type:8,label:1,defaultValue:`false`},{name:`unverified_lazy`,number:15,type:8,label:1,defaultValue:`false`},{name:`deprecated`,number:3,type:8,label:1,defaultValue:`false`},{name:`weak`,number:10,type:8,label:1,defaultValue:`false`,options:{deprecated:!0}},{name:`debug_redact`,number:16,type:8,label:1,defaultValue:`false`},{name:`retention`,number:17,type:14,label:1,typeName:`.google.protobuf.FieldOptions.OptionRetention`},{name:`targets`,number:19,type:14,label:3,typeName:`.google.protobuf.FieldOptions.OptionTargetType`},{name:`edition_defaults`,number:20,type:11,label:3,typeName:`.google.protobuf.FieldOptions.EditionDefault`},{name:`features`,number:21,type:11,label:1,typeName:`.google.protobuf.FeatureSet`},{name:`feature_support`,number:22,type:11,label:1,typeName:`.google.protobuf.FieldOptions.FeatureSupport`},{name:`uninterpreted_option`,number:999,type:11,label:3,typeName:`.google.protobuf.UninterpretedOption`}],nestedType:[{name:`EditionDefault`,field:[{name:`edition`,number:3,type:14,label:1,typeName:`.google.protobuf.Edition`},{name:`value`,number:2,type:9,label:1}]},{name:`FeatureSupport`,field:[{name:`edition_introduced`,number:1,type:14,label:1,typeName:`.google.protobuf.Edition`},{name:`edition_deprecated`,number:2,type:14,label:1,typeName:`.google.protobuf.Edition`},{name:`deprecation_warning`,number:3,type:9,label:1},{name:`edition_removed`,number:4,type:14,label:1,typeName:`.google.protobuf.Edition`},{name:`removal_error`,number:5,type:9,label:1}]}],enumType:[{name:`CType`,value:[{name:`STRING`,number:0},{name:`CORD`,number:1},{name:`STRING_PIECE`,number:2}]},{name:`JSType`,value:[{name:`JS_NORMAL`,number:0},{name:`JS_STRING`,number:1},{name:`JS_NUMBER`,number:2}]},{name:`OptionRetention`,value:[{name:`RETENTION_UNKNOWN`,number:0},{name:`RETENTION_RUNTIME`,number:1},{name:`RETENTION_SOURCE`,number:2}]},{name:`OptionTargetType`,value:[{name:`TARGET_TYPE_UNKNOWN`,number:0},{name:`TARGET_TYPE_FILE`,number:1},{name:`TARGET_TYPE_EXTENSION_RANGE`,number:2},{name:`TARGET_TYPE_MESSAGE`,number:3},{name:`TARGET_TYPE_FIELD`,number:4},{name:`TARGET_TYPE_ONEOF`,number:5},{name:`TARGET_TYPE_ENUM`,number:6},{name:`TARGET_TYPE_ENUM_ENTRY`,number:7},{name:`TARGET_TYPE_SERVICE`,number:8},{name:`TARGET_TYPE_METHOD`,number:9}]}],extensionRange:[{start:990,end:999},{start:1e3,end:536870912}]},{name:`OneofOptions`,field:[{name:`features`,number:1,type:11,label:1,typeName:`.google.protobuf.FeatureSet`},{name:`uninterpreted_option`,number:999,type:11,label:3,typeName:`.google.protobuf.UninterpretedOption`}],extensionRange:[{start:990,end:999},{start:1e3,end:536870912}]},{name:`EnumOptions`,field:[{name:`allow_alias`,number:2,type:8,label:1},{name:`deprecated`,number:3,type:8,label:1,defaultValue:`false`},{name:`deprecated_legacy_json_field_conflicts`,number:6,type:8,label:1,options:{deprecated:!0}},{name:`features`,number:7,type:11,label:1,typeName:`.google.protobuf.FeatureSet`},{name:`uninterpreted_option`,number:999,type:11,label:3,typeName:`.google.protobuf.UninterpretedOption`}],extensionRange:[{start:990,end:999},{start:1e3,end:536870912}]},{name:`EnumValueOptions`,field:[{name:`deprecated`,number:1,type:8,label:1,defaultValue:`false`},{name:`features`,number:2,type:11,label:1,typeName:`.google.protobuf.FeatureSet`},{name:`debug_redact`,number:3,type:8,label:1,defaultValue:`false`},{name:`feature_support`,number:4,type:11,label:1,typeName:`.google.protobuf.FieldOptions.FeatureSupport`},{name:`uninterpreted_option`,number:999,type:11,label:3,typeName:`.google.protobuf.UninterpretedOption`}],extensionRange:[{start:990,end:999},{start:1e3,end:536870912}]},{name:`ServiceOptions`,field:[{name:`features`,number:34,type:11,label:1,typeName:`.google.protobuf.FeatureSet`},{name:`deprecated`,number:33,type:8,label:1,defaultValue:`false`},{name:`uninterpreted_option`,number:999,type:11,label:3,typeName:`.google.protobuf.UninterpretedOption`}],extensionRange:[{start:990,end:999},{start:1e3,end:536870912}]},{name:`MethodOptions`,field:[{name:`deprecated`,number:33,type:8,label:1,defaultValue:`false`},{name:`idempotency_level`,number:34,type:14,label:1,typeName:`.google.protobuf.MethodOptions.IdempotencyLevel`,defaultValue:`IDEMPOTENCY_UNKNOWN`},{name:`features`,number:35,type:11,label:1,typeName:`.google.protobuf.FeatureSet`},{name:`uninterpreted_option`,number:999,type:11,label:3,typeName:`.google.protobuf.UninterpretedOption`}],enumType:[{name:`IdempotencyLevel`,value:[{name:`IDEMPOTENCY_UNKNOWN`,number:0},{name:`NO_SIDE_EFFECTS`,number:1},{name:`IDEMPOTENT`,number:2}]}],extensionRange:[{start:990,end:999},{start:1e3,end:536870912}]},{name:`UninterpretedOption`,field:[{name:`name`,number:2,type:11,label:3,typeName:`.google.protobuf.UninterpretedOption.NamePart`},{name:`identifier_value`,number:3,type:9,label:1},{name:`positive_int_value`,number:4,type:4,label:1},{name:`negative_int_value`,number:5,type:3,label:1},{name:`double_value`,number:6,type:1,label:1},{name:`string_value`,number:7,type:12,label:1},{name:`aggregate_value`,number:8,type:9,label:1}],nestedType:[{name:`NamePart`,field:[{name:`name_part`,number:1,type:9,label:2},{name:`is_extension`,number:2,type:8,label:2}]}]},{name:`FeatureSet`,field:[{name:`field_presence`,number:1,type:14,label:1,typeName:`.google.protobuf.FeatureSet.FieldPresence`,options:{retention:1,targets:[4,1],editionDefaults:[{value:`EXPLICIT`,edition:900},{value:`IMPLICIT`,edition:999},{value:`EXPLICIT`,edition:1e3}]}},{name:`enum_type`,number:2,type:14,label:1,typeName:`.google.protobuf.FeatureSet.EnumType`,options:{retention:1,targets:[6,1],editionDefaults:[{value:`CLOSED`,edition:900},{value:`OPEN`,edition:999}]}},{name:`repeated_field_encoding`,number:3,type:14,label:1,typeName:`.google.protobuf.FeatureSet.RepeatedFieldEncoding`,options:{retention:1,targets:[4,1],editionDefaults:[{value:`EXPANDED`,edition:900},{value:`PACKED`,edition:999}]}},{name:`utf8_validation`,number:4,type:14,label:1,typeName:`.google.protobuf.FeatureSet.Utf8Validation`,options:{retention:1,targets:[4,1],editionDefaults:[{value:`NONE`,edition:900},{value:`VERIFY`,edition:999}]}},{name:`message_encoding`,number:5,type:14,label:1,typeName:`.google.protobuf.FeatureSet.MessageEncoding`,options:{retention:1,targets:[4,1],editionDefaults:[{value:`LENGTH_PREFIXED`,edition:900}]}},{name:`json_format`,number:6,type:14,label:1,typeName:`.google.protobuf.FeatureSet.JsonFormat`,options:{retention:1,targets:[3,6,1],editionDefaults:[{value:`LEGACY_BEST_EFFORT`,edition:900},{value:`ALLOW`,edition:999}]}},{name:`enforce_naming_style`,number:7,type:14,label:1,typeName:`.google.protobuf.FeatureSet.EnforceNamingStyle`,options:{retention:2,targets:[1,2,3,4,5,6,7,8,9],editionDefaults:[{value:`STYLE_LEGACY`,edition:900},{value:`STYLE2024`,edition:1001},{value:`STYLE2026`,edition:1002}]}},{name:`default_symbol_visibility`,number:8,type:14,label:1,typeName:`.google.protobuf.FeatureSet.VisibilityFeature.DefaultSymbolVisibility`,options:{retention:2,targets:[1],editionDefaults:[{value:`EXPORT_ALL`,edition:900},{value:`EXPORT_TOP_LEVEL`,edition:1001},{value:`STRICT`,edition:1002}]}},{name:`enforce_proto_limits`,number:9,type:14,label:1,typeName:`.google.protobuf.FeatureSet.ProtoLimitsFeature.EnforceProtoLimits`,options:{retention:2,targets:[6,3,4,5],editionDefaults:[{value:`LEGACY_NO_EXPLICIT_LIMITS`,edition:900},{value:`PROTO_LIMITS2026`,edition:1002}]}}],nestedType:[{name:`VisibilityFeature`,enumType:[{name:`DefaultSymbolVisibility`,value:[{name:`DEFAULT_SYMBOL_VISIBILITY_UNKNOWN`,number:0},{name:`EXPORT_ALL`,number:1},{name:`EXPORT_TOP_LEVEL`,number:2},{name:`LOCAL_ALL`,number:3},{name:`STRICT`,number:4}]}]},{name:`ProtoLimitsFeature`,enumType:[{name:`EnforceProtoLimits`,value:[{name:`PROTO_LIMITS_UNKNOWN`,number:0},{name:`LEGACY_NO_EXPLICIT_LIMITS`,number:1},{name:`PROTO_LIMITS2026`,number:2}]}]}],enumType:[{name:`FieldPresence`,value:[{name:`FIELD_PRESENCE_UNKNOWN`,number:0},{name:`EXPLICIT`,number:1},{name:`IMPLICIT`,number:2},{name:`LEGACY_REQUIRED`,number:3}]},{name:`EnumType`,value:[{name:`ENUM_TYPE_UNKNOWN`,number:0},{name:`OPEN`,number:1},{name:`CLOSED`,number:2}]},{name:`RepeatedFieldEncoding`,value:[{name:`REPEATED_FIELD_ENCODING_UNKNOWN`,number:0},{name:`PACKED`,number:1},{name:`EXPANDED`,number:2}]},{name:`Utf8Validation`,value:[{name:`UTF8_VALIDATION_UNKNOWN`,number:0},{name:`VERIFY`,number:2},{name:`NONE`,number:3}]},{name:`MessageEncoding`,value:[{name:`MESSAGE_ENCODING_UNKNOWN`,number:0},{name:`LENGTH_PREFIXED`,number:1},{name:`DELIMITED`,number:2}]},{name:`JsonFormat`,value:[{name:`JSON_FORMAT_UNKNOWN`,number:0},{name:`ALLOW`,number:1},{name:`LEGACY_BEST_EFFORT`,number:2}]},{name:`EnforceNamingStyle`,value:[{name:`ENFORCE_NAMING_STYLE_UNKNOWN`,number:0},{name:`STYLE2024`,number:1},{name:`STYLE_LEGACY`,number:2},{name:`STYLE2026`,number:3}]}],extensionRange:[{start:1e3,end:9995},{start:9995,end:1e4},{start:1e4,end:10001}]},{name:`FeatureSetDefaults`,field:[{name:`defaults`,number:1,type:11,label:3,typeName:`.google.protobuf.FeatureSetDefaults.FeatureSetEditionDefault`},{name:`minimum_edition`,number:4,type:14,label:1,typeName:`.google.protobuf.Edition`},{name:`maximum_edition`,number:5,type:14,label:1,typeName:`.google.protobuf.Edition`}],nestedType:[{name:`FeatureSetEditionDefault`,field:[{name:`edition`,number:3,type:14,label:1,typeName:`.google.protobuf.Edition`},{name:`overridable_features`,number:4,type:11,label:1,typeName:`.google.protobuf.FeatureSet`},{name:`fixed_features`,number:5,type:11,label:1,typeName:`.google.protobuf.FeatureSet`}]}]},{name:`SourceCodeInfo`,field:[{name:`location`,number:1,type:11,label:3,typeName:`.google.protobuf.SourceCodeInfo.Location`}],nestedType:[{name:`Location`,field:[{name:`path`,number:1,type:5,label:3,options:{packed:!0}},{name:`span`,number:2,type:5,label:3,options:{packed:!0}},{name:`leading_comments`,number:3,type:9,label:1},{name:`trailing_comments`,number:4,type:9,label:1},{name:`leading_detached_comments`,number:6,type:9,label:3}]}],extensionRange:[{start:536e6,end:536000001}]},{name:`GeneratedCodeInfo`,field:[{name:`annotation`,number:1,type:11,label:3,typeName:`.google.protobuf.GeneratedCodeInfo.Annotation`}],nestedType:[{name:`Annotation`,field:[{name:`path`,number:1,type:5,label:3,options:{packed:!0}},{name:`source_file`,number:2,type:9,label:1},{name:`begin`,number:3,type:5,label:1},{name:`end`,number:4,type:5,label:1},{name:`semantic`,number:5,type:14,label:1,typeName:`.google.protobuf.GeneratedCodeInfo.Annotation.Semantic`}],enumType:[{name:`Semantic`,value:[{name:`NONE`,number:0},{name:`SET`,number:1},{name:`ALIAS`,number:2}]}]}]}],enumType:[{name:`Edition`,value:[{name:`EDITION_UNKNOWN`,number:0},{name:`EDITION_LEGACY`,number:900},{name:`EDITION_PROTO2`,number:998},{name:`EDITION_PROTO3`,number:999},{name:`EDITION_2023`,number:1e3},{name:`EDITION_2024`,number:1001},{name:`EDITION_2026`,number:1002},{name:`EDITION_UNSTABLE`,number:9999},{name:`EDITION_1_TEST_ONLY`,number:1},{name:`EDITION_2_TEST_ONLY`,number:2},{name:`EDITION_99997_TEST_ONLY`,number:99997},{name:`EDITION_99998_TEST_ONLY`,number:99998},{name:`EDITION_99999_TEST_ONLY`,number:99999},{name:`EDITION_MAX`,number:0x7fffffff}]},{name:`SymbolVisibility`,value:[{name:`VISIBILITY_UNSET`,number:0},{name:`VISIBILITY_LOCAL`,number:1},{name:`VISIBILITY_EXPORT`,number:2}]}]}),1),In;(function(e){e[e.DECLARATION=0]=`DECLARATION`,e[e.UNVERIFIED=1]=`UNVERIFIED`})(In||={});var Ln;(function(e){e[e.DOUBLE=1]=`DOUBLE`,e[e.FLOAT=2]=`FLOAT`,e[e.INT64=3]=`INT64`,e[e.UINT64=4]=`UINT64`,e[e.INT32=5]=`INT32`,e[e.FIXED64=6]=`FIXED64`,e[e.FIXED32=7]=`FIXED32`,e[e.BOOL=8]=`BOOL`,e[e.STRING=9]=`STRING`,e[e.GROUP=10]=`GROUP`,e[e.MESSAGE=11]=`MESSAGE`,e[e.BYTES=12]=`BYTES`,e[e.UINT32=13]=`UINT32`,e[e.ENUM=14]=`ENUM`,e[e.SFIXED32=15]=`SFIXED32`,e[e.SFIXED64=16]=`SFIXED64`,e[e.SINT32=17]=`SINT32`,e[e.SINT64=18]=`SINT64`})(Ln||={});var Rn;(function(e){e[e.OPTIONAL=1]=`OPTIONAL`,e[e.REPEATED=3]=`REPEATED`,e[e.REQUIRED=2]=`REQUIRED`})(Rn||={});var zn;(function(e){e[e.SPEED=1]=`SPEED`,e[e.CODE_SIZE=2]=`CODE_SIZE`,e[e.LITE_RUNTIME=3]=`LITE_RUNTIME`})(zn||={});var Bn;(function(e){e[e.STRING=0]=`STRING`,e[e.CORD=1]=`CORD`,e[e.STRING_PIECE=2]=`STRING_PIECE`})(Bn||={});var Vn;(function(e){e[e.JS_NORMAL=0]=`JS_NORMAL`,e[e.JS_STRING=1]=`JS_STRING`,e[e.JS_NUMBER=2]=`JS_NUMBER`})(Vn||={});var Hn;(function(e){e[e.RETENTION_UNKNOWN=0]=`RETENTION_UNKNOWN`,e[e.RETENTION_RUNTIME=1]=`RETENTION_RUNTIME`,e[e.RETENTION_SOURCE=2]=`RETENTION_SOURCE`})(Hn||={});var Un;(function(e){e[e.TARGET_TYPE_UNKNOWN=0]=`TARGET_TYPE_UNKNOWN`,e[e.TARGET_TYPE_FILE=1]=`TARGET_TYPE_FILE`,e[e.TARGET_TYPE_EXTENSION_RANGE=2]=`TARGET_TYPE_EXTENSION_RANGE`,e[e.TARGET_TYPE_MESSAGE=3]=`TARGET_TYPE_MESSAGE`,e[e.TARGET_TYPE_FIELD=4]=`TARGET_TYPE_FIELD`,e[e.TARGET_TYPE_ONEOF=5]=`TARGET_TYPE_ONEOF`,e[e.TARGET_TYPE_ENUM=6]=`TARGET_TYPE_ENUM`,e[e.TARGET_TYPE_ENUM_ENTRY=7]=`TARGET_TYPE_ENUM_ENTRY`,e[e.TARGET_TYPE_SERVICE=8]=`TARGET_TYPE_SERVICE`,e[e.TARGET_TYPE_METHOD=9]=`TARGET_TYPE_METHOD`})(Un||={});var Wn;(function(e){e[e.IDEMPOTENCY_UNKNOWN=0]=`IDEMPOTENCY_UNKNOWN`,e[e.NO_SIDE_EFFECTS=1]=`NO_SIDE_EFFECTS`,e[e.IDEMPOTENT=2]=`IDEMPOTENT`})(Wn||={});var Gn;(function(e){e[e.DEFAULT_SYMBOL_VISIBILITY_UNKNOWN=0]=`DEFAULT_SYMBOL_VISIBILITY_UNKNOWN`,e[e.EXPORT_ALL=1]=`EXPORT_ALL`,e[e.EXPORT_TOP_LEVEL=2]=`EXPORT_TOP_LEVEL`,e[e.LOCAL_ALL=3]=`LOCAL_ALL`,e[e.STRICT=4]=`STRICT`})(Gn||={});var Kn;(function(e){e[e.PROTO_LIMITS_UNKNOWN=0]=`PROTO_LIMITS_UNKNOWN`,e[e.LEGACY_NO_EXPLICIT_LIMITS=1]=`LEGACY_NO_EXPLICIT_LIMITS`,e[e.PROTO_LIMITS2026=2]=`PROTO_LIMITS2026`})(Kn||={});var qn;(function(e){e[e.FIELD_PRESENCE_UNKNOWN=0]=`FIELD_PRESENCE_UNKNOWN`,e[e.EXPLICIT=1]=`EXPLICIT`,e[e.IMPLICIT=2]=`IMPLICIT`,e[e.LEGACY_REQUIRED=3]=`LEGACY_REQUIRED`})(qn||={});var Jn;(function(e){e[e.ENUM_TYPE_UNKNOWN=0]=`ENUM_TYPE_UNKNOWN`,e[e.OPEN=1]=`OPEN`,e[e.CLOSED=2]=`CLOSED`})(Jn||={});var Yn;(function(e){e[e.REPEATED_FIELD_ENCODING_UNKNOWN=0]=`REPEATED_FIELD_ENCODING_UNKNOWN`,e[e.PACKED=1]=`PACKED`,e[e.EXPANDED=2]=`EXPANDED`})(Yn||={});var Xn;(function(e){e[e.UTF8_VALIDATION_UNKNOWN=0]=`UTF8_VALIDATION_UNKNOWN`,e[e.VERIFY=2]=`VERIFY`,e[e.NONE=3]=`NONE`})(Xn||={});var Zn;(function(e){e[e.MESSAGE_ENCODING_UNKNOWN=0]=`MESSAGE_ENCODING_UNKNOWN`,e[e.LENGTH_PREFIXED=1]=`LENGTH_PREFIXED`,e[e.DELIMITED=2]=`DELIMITED`})(Zn||={});var Qn;(function(e){e[e.JSON_FORMAT_UNKNOWN=0]=`JSON_FORMAT_UNKNOWN`,e[e.ALLOW=1]=`ALLOW`,e[e.LEGACY_BEST_EFFORT=2]=`LEGACY_BEST_EFFORT`})(Qn||={});var $n;(function(e){e[e.ENFORCE_NAMING_STYLE_UNKNOWN=0]=`ENFORCE_NAMING_STYLE_UNKNOWN`,e[e.STYLE2024=1]=`STYLE2024`,e[e.STYLE_LEGACY=2]=`STYLE_LEGACY`,e[e.STYLE2026=3]=`STYLE2026`})($n||={});var er;(function(e){e[e.NONE=0]=`NONE`,e[e.SET=1]=`SET`,e[e.ALIAS=2]=`ALIAS`})(er||={});var tr;(function(e){e[e.EDITION_UNKNOWN=0]=`EDITION_UNKNOWN`,e[e.EDITION_LEGACY=900]=`EDITION_LEGACY`,e[e.EDITION_PROTO2=998]=`EDITION_PROTO2`,e[e.EDITION_PROTO3=999]=`EDITION_PROTO3`,e[e.EDITION_2023=1e3]=`EDITION_2023`,e[e.EDITION_2024=1001]=`EDITION_2024`,e[e.EDITION_2026=1002]=`EDITION_2026`,e[e.EDITION_UNSTABLE=9999]=`EDITION_UNSTABLE`,e[e.EDITION_1_TEST_ONLY=1]=`EDITION_1_TEST_ONLY`,e[e.EDITION_2_TEST_ONLY=2]=`EDITION_2_TEST_ONLY`,e[e.EDITION_99997_TEST_ONLY=99997]=`EDITION_99997_TEST_ONLY`,e[e.EDITION_99998_TEST_ONLY=99998]=`EDITION_99998_TEST_ONLY`,e[e.EDITION_99999_TEST_ONLY=99999]=`EDITION_99999_TEST_ONLY`,e[e.EDITION_MAX=0x7fffffff]=`EDITION_MAX`})(tr||={});var nr;(function(e){e[e.VISIBILITY_UNSET=0]=`VISIBILITY_UNSET`,e[e.VISIBILITY_LOCAL=1]=`VISIBILITY_LOCAL`,e[e.VISIBILITY_EXPORT=2]=`VISIBILITY_EXPORT`})(nr||={});function rr(e){return Object.assign(Object.assign({readUnknownFields:!0,recursionLimit:100},e),{depth:0})}function ir(e,t,n){let r=P(e);return or(e).read(r,new Ne(t),rr(n),t.byteLength),r}var ar=new WeakMap;function or(e){let t=ar.get(e);return t===void 0&&(t=sr(e)),t}function sr(e){let t=String(e),n=new Map,r={read:cr(t,n),readGroup:lr(t,n)};ar.set(e,r);for(let t of e.fields)n.set(t.number,dr(t));return r}function cr(e,t){return(n,r,i,a)=>{if(++i.depth>i.recursionLimit)throw Error(`cannot decode ${e} from binary: maximum recursion depth of ${i.recursionLimit} reached`);let o=r.pos+a,s=n.$unknown??[];for(;r.pos<o;){let[e,a]=r.tag(),o=t.get(e);if(o===void 0){let t=r.skip(a,e,i.recursionLimit-i.depth);i.readUnknownFields&&s.push({no:e,wireType:a,data:t})}else o(n,r,i,a)}s.length>0&&(n.$unknown=s),i.depth--}}function lr(e,t){return(n,r,i,a)=>{if(++i.depth>i.recursionLimit)throw Error(`cannot decode ${e} from binary: maximum recursion depth of ${i.recursionLimit} reached`);let o,s,c=n.$unknown??[];for(;r.pos<r.len&&([o,s]=r.tag(),s!=I.EndGroup);){let e=t.get(o);if(e===void 0){let e=r.skip(s,o,i.recursionLimit-i.depth);i.readUnknownFields&&c.push({no:o,wireType:s,data:e})}else e(n,r,i,s)}if(s!=I.EndGroup||o!==a)throw Error(`invalid end group tag`);c.length>0&&(n.$unknown=c),i.depth--}}function ur(e,t,n,r,i){dr(n)(e[b],t,i,r)}function dr(e){switch(e.fieldKind){case`scalar`:return fr(e);case`enum`:return pr(e);case`message`:return mr(e);case`list`:return gr(e);case`map`:return _r(e)}}function fr(e){let t=vr(e.scalar,e.utf8Validation,e.longAsString),n=e.localName;if(e.oneof){let r=e.oneof.localName;return(e,i)=>{e[r]={case:n,value:t(i)}}}return(e,r)=>{e[n]=t(r)}}function pr(e){let t=e.localName,n=e.oneof?.localName;if(e.enum.open)return n===void 0?(e,n)=>{e[t]=n.int32()}:(e,r)=>{e[n]={case:t,value:r.int32()}};let r=e.enum.values,i=e.number;return(e,a,o,s)=>{let c=a.int32();if(r.some(e=>e.number===c))n===void 0?e[t]=c:e[n]={case:t,value:c};else if(o.readUnknownFields){let t=[];d(c,t);let n=e.$unknown??[];n.push({no:i,wireType:s,data:new Uint8Array(t)}),e.$unknown=n}}}function mr(e){let t=e.localName,{toMessage:n,toLocal:r}=z(e),i=hr(e);if(e.oneof){let a=e.oneof.localName;return(e,o,s)=>{let c=e[a],l=n(c.case===t?c.value:void 0);i(l,o,s),e[a]={case:t,value:r(l)}}}return(e,a,o)=>{let s=n(e[t]);i(s,a,o),e[t]=r(s)}}function hr(e){let t=or(e.message);if(e.delimitedEncoding){let n=e.number;return(e,r,i)=>t.readGroup(e,r,i,n)}return(e,n,r)=>t.read(e,n,r,n.uint32())}function gr(e){let n=e.localName;if(e.listKind==`message`){let{toMessage:t,toLocal:r}=z(e),i=hr(e);return(e,a,o)=>{let s=t(void 0);i(s,a,o),e[n].push(r(s))}}let r=e.listKind==`enum`?t.INT32:e.scalar,i=e.listKind==`scalar`&&e.longAsString,a=vr(r,e.utf8Validation,i),o=r!=t.STRING&&r!=t.BYTES;return(e,t,r,i)=>{let s=e[n];if(i==I.LengthDelimited&&o){let e=t.uint32()+t.pos;for(;t.pos<e;)s.push(a(t))}else s.push(a(t))}}function _r(e){let n=e.localName,r=vr(e.mapKey,e.utf8Validation,!1),i=_(e.mapKey,!1),a,o;switch(e.mapKind){case`scalar`:{let n=e.scalar,r=vr(n,e.utf8Validation,!1);if(a=e=>r(e),n==t.BYTES)o=()=>new Uint8Array;else{let e=_(n,!1);o=()=>e}break}case`enum`:{let t=e.enum.values[0].number;a=e=>e.int32(),o=()=>t;break}case`message`:{let{toMessage:t,toLocal:n}=z(e),r=or(e.message).read;a=(e,i,a)=>{let o=t(a);return r(o,e,i,e.uint32()),n(o)},o=()=>n(t(void 0));break}}return(e,t,s)=>{let c=e[n],l,u,d=t.uint32(),f=t.pos+d;for(;t.pos<f;){let[e,n]=t.tag();switch(e){case 1:l=r(t);break;case 2:u=a(t,s,u);break;default:t.skip(n,e,s.recursionLimit-s.depth)}}l===void 0&&(l=i),u===void 0&&(u=o()),E(c,l,u)}}function vr(e,n,r){switch(e){case t.STRING:return e=>e.string(n);case t.BOOL:return e=>e.bool();case t.DOUBLE:return e=>e.double();case t.FLOAT:return e=>e.float();case t.INT32:return e=>e.int32();case t.INT64:return r?e=>String(e.int64()):e=>e.int64();case t.UINT64:return r?e=>String(e.uint64()):e=>e.uint64();case t.FIXED64:return r?e=>String(e.fixed64()):e=>e.fixed64();case t.BYTES:return e=>e.bytes();case t.FIXED32:return e=>e.fixed32();case t.SFIXED32:return e=>e.sfixed32();case t.SFIXED64:return r?e=>String(e.sfixed64()):e=>e.sfixed64();case t.SINT64:return r?e=>String(e.sint64()):e=>e.sint64();case t.UINT32:return e=>e.uint32();case t.SINT32:return e=>e.sint32()}}function yr(e,t){let n=ir(Fn,ht(e));return n.messageType.forEach(kt),n.dependency=t?.map(e=>e.proto.name)??[],Pt(n,e=>t?.find(t=>t.proto.name===e)).getFile(n.name)}var br=yr(`Chlnb29nbGUvcHJvdG9idWYvYW55LnByb3RvEg9nb29nbGUucHJvdG9idWYiJgoDQW55EhAKCHR5cGVfdXJsGAEgASgJEg0KBXZhbHVlGAIgASgMQnYKE2NvbS5nb29nbGUucHJvdG9idWZCCEFueVByb3RvUAFaLGdvb2dsZS5nb2xhbmcub3JnL3Byb3RvYnVmL3R5cGVzL2tub3duL2FueXBiogIDR1BCqgIeR29vZ2xlLlByb3RvYnVmLldlbGxLbm93blR5cGVzYgZwcm90bzM`),xr=V(br,0),Sr=2,Cr=3,wr={writeUnknownFields:!0};function Tr(e){return e?Object.assign(Object.assign({},wr),e):wr}function Er(e,t,n){let r=new Ee;return Or(e)(r,Tr(n),t),r.finish()}var Dr=new WeakMap;function Or(e){let t=Dr.get(e);return t===void 0&&(t=kr(e)),t}function kr(e){let t=e.typeName,n=e.fields.concat().sort((e,t)=>e.number-t.number),r=n[0],i=[],a=(e,n,a)=>{if(a.$typeName!==t&&r!==void 0)throw new F(r,`cannot use ${r} with message ${a.$typeName}`,`ForeignFieldError`);for(let t=0;t<i.length;t++)i[t](e,n,a);let o=a.$unknown;if(o!==void 0&&n.writeUnknownFields)for(let t=0;t<o.length;t++){let{no:n,wireType:r,data:i}=o[t];e.tag(n,r).raw(i)}};Dr.set(e,a);for(let e of n)i.push(Ar(e));return a}function Ar(e){switch(e.fieldKind){case`message`:case`scalar`:case`enum`:return jr(e);case`list`:return Nr(e);case`map`:return Pr(e)}}function jr(e){let n=Mr(e),r=e.localName;if(e.oneof){let t=e.oneof.localName;return(e,i,a)=>{let o=a[t];o.case===r&&n(e,i,o.value)}}if(e.presence!=Sr){let t=e.presence==Cr?`cannot encode ${e} to binary: required field not set`:void 0;return(e,i,a)=>{let o=a[r];if(o!==void 0&&Object.prototype.hasOwnProperty.call(a,r))n(e,i,o);else if(t!==void 0)throw Error(t)}}if(e.fieldKind==`enum`){let t=e.enum.values[0].number;return(e,i,a)=>{let o=a[r];o!==t&&n(e,i,o)}}switch(e.scalar){case t.BOOL:return(e,t,i)=>{let a=i[r];a!==!1&&n(e,t,a)};case t.STRING:return(e,t,i)=>{let a=i[r];a!==``&&n(e,t,a)};case t.BYTES:return(e,t,i)=>{let a=i[r];(!(a instanceof Uint8Array)||a.byteLength>0)&&n(e,t,a)};case t.DOUBLE:case t.FLOAT:return(e,t,i)=>{let a=i[r];Object.is(a,0)||n(e,t,a)};default:return(e,t,i)=>{let a=i[r];a!=0&&n(e,t,a)}}}function Mr(e){switch(e.fieldKind){case`message`:{let{toMessage:t}=z(e),n=Br(e);return(e,r,i)=>{n(e,r,t(i))}}case`scalar`:case`enum`:{let n=e.fieldKind==`enum`?t.INT32:e.scalar,r=e.number,i=Vr(n),a=Lr(n,e.parent.typeName,e.name);return(e,t,n)=>{e.tag(r,i),a(e,n)}}}}function Nr(e){let n=e.localName,r=e.number;switch(e.listKind){case`message`:{let{toMessage:t}=z(e),r=Br(e);return(e,i,a)=>{let o=a[n];for(let n=0;n<o.length;n++)r(e,i,t(o[n]))}}case`scalar`:case`enum`:{let i=e.listKind==`enum`?t.INT32:e.scalar,a=Lr(i,e.parent.typeName,e.name);if(e.packed)return(e,t,i)=>{let o=i[n];if(o.length!=0){e.tag(r,I.LengthDelimited).fork();for(let t=0;t<o.length;t++)a(e,o[t]);e.join()}};let o=Vr(i);return(e,t,i)=>{let s=i[n];for(let t=0;t<s.length;t++)e.tag(r,o),a(e,s[t])}}}}function Pr(e){let n=e.localName,r=e.number,i=Fr(e);if(e.mapKind==`message`){let{toMessage:t}=z(e),a=Or(e.message);return(e,o,s)=>{let c=s[n],l=Object.keys(c);for(let n=0;n<l.length;n++){let s=l[n];e.tag(r,I.LengthDelimited).fork(),i(e,s),e.tag(2,I.LengthDelimited).fork(),a(e,o,t(c[s])),e.join(),e.join()}}}let a=e.mapKind==`enum`?t.INT32:e.scalar,o=Vr(a),s=Lr(a,e.parent.typeName,e.name);return(e,t,a)=>{let c=a[n],l=Object.keys(c);for(let t=0;t<l.length;t++){let n=l[t];e.tag(r,I.LengthDelimited).fork(),i(e,n),e.tag(2,o),s(e,c[n]),e.join()}}}function Fr(e){let t=Vr(e.mapKey),n=Lr(e.mapKey,e.parent.typeName,e.name),r=Ir(e.mapKey);return(e,i)=>{e.tag(1,t),n(e,r(i))}}function Ir(e){switch(e){case t.STRING:return e=>e;case t.BOOL:return e=>e===`true`||e!==`false`&&e;case t.UINT64:case t.FIXED64:return e=>{try{return p.uParse(e)}catch{return e}};case t.INT64:case t.SFIXED64:case t.SINT64:return e=>{try{return p.parse(e)}catch{return e}};default:return e=>{let t=Number.parseInt(e);return Number.isFinite(t)?t:e}}}function Lr(e,t,n){let r=Rr(e);return(e,i)=>{try{r(e,i)}catch(e){throw e instanceof Error?Error(`cannot encode field ${t}.${n} to binary: ${e.message}`):e}}}function Rr(e){switch(e){case t.STRING:return(e,t)=>e.string(t);case t.BOOL:return(e,t)=>e.bool(t);case t.DOUBLE:return(e,t)=>e.double(t);case t.FLOAT:return(e,t)=>e.float(t);case t.INT32:return(e,t)=>e.int32(t);case t.INT64:return(e,t)=>e.int64(t);case t.UINT64:return(e,t)=>e.uint64(t);case t.FIXED64:return(e,t)=>e.fixed64(t);case t.BYTES:return(e,t)=>e.bytes(t);case t.FIXED32:return(e,t)=>e.fixed32(t);case t.SFIXED32:return(e,t)=>e.sfixed32(t);case t.SFIXED64:return(e,t)=>e.sfixed64(t);case t.SINT64:return(e,t)=>e.sint64(t);case t.UINT32:return(e,t)=>e.uint32(t);case t.SINT32:return(e,t)=>e.sint32(t)}}function zr(e,t,n,r){Ar(r)(e,t,n[b])}function Br(e){let t=e.number,n=Or(e.message);return e.delimitedEncoding?(e,r,i)=>{e.tag(t,I.StartGroup),n(e,r,i),e.tag(t,I.EndGroup)}:(e,r,i)=>{e.tag(t,I.LengthDelimited).fork(),n(e,r,i),e.join()}}function Vr(e){switch(e){case t.BYTES:case t.STRING:return I.LengthDelimited;case t.DOUBLE:case t.FIXED64:case t.SFIXED64:return I.Bit64;case t.FIXED32:case t.SFIXED32:case t.FLOAT:return I.Bit32;default:return I.Varint}}function Hr(e,t,n){let r=!1;return n||(n=P(xr),r=!0),n.value=Er(e,t),n.typeUrl=Gr(t.$typeName),r?n:void 0}function Ur(e,t){return e.typeUrl!==``&&(typeof t==`string`?t:t.typeName)===Kr(e.typeUrl)}function Wr(e,t){if(e.typeUrl===``)return;let n=t.kind==`message`?t:t.getMessage(Kr(e.typeUrl));if(n&&Ur(e,n))return ir(n,e.value)}function Gr(e){return`type.googleapis.com/${e}`}function Kr(e){let t=e.lastIndexOf(`/`),n=t>=0?e.substring(t+1):e;if(!n.length)throw Error(`invalid type url: ${e}`);return n}var qr=yr(`Chxnb29nbGUvcHJvdG9idWYvc3RydWN0LnByb3RvEg9nb29nbGUucHJvdG9idWYihAEKBlN0cnVjdBIzCgZmaWVsZHMYASADKAsyIy5nb29nbGUucHJvdG9idWYuU3RydWN0LkZpZWxkc0VudHJ5GkUKC0ZpZWxkc0VudHJ5EgsKA2tleRgBIAEoCRIlCgV2YWx1ZRgCIAEoCzIWLmdvb2dsZS5wcm90b2J1Zi5WYWx1ZToCOAEi6gEKBVZhbHVlEjAKCm51bGxfdmFsdWUYASABKA4yGi5nb29nbGUucHJvdG9idWYuTnVsbFZhbHVlSAASFgoMbnVtYmVyX3ZhbHVlGAIgASgBSAASFgoMc3RyaW5nX3ZhbHVlGAMgASgJSAASFAoKYm9vbF92YWx1ZRgEIAEoCEgAEi8KDHN0cnVjdF92YWx1ZRgFIAEoCzIXLmdvb2dsZS5wcm90b2J1Zi5TdHJ1Y3RIABIwCgpsaXN0X3ZhbHVlGAYgASgLMhouZ29vZ2xlLnByb3RvYnVmLkxpc3RWYWx1ZUgAQgYKBGtpbmQiMwoJTGlzdFZhbHVlEiYKBnZhbHVlcxgBIAMoCzIWLmdvb2dsZS5wcm90b2J1Zi5WYWx1ZSobCglOdWxsVmFsdWUSDgoKTlVMTF9WQUxVRRAAQn8KE2NvbS5nb29nbGUucHJvdG9idWZCC1N0cnVjdFByb3RvUAFaL2dvb2dsZS5nb2xhbmcub3JnL3Byb3RvYnVmL3R5cGVzL2tub3duL3N0cnVjdHBi+AEBogIDR1BCqgIeR29vZ2xlLlByb3RvYnVmLldlbGxLbm93blR5cGVzYgZwcm90bzM`),Jr=V(qr,0),Yr=V(qr,1),Xr=V(qr,2),Zr;(function(e){e[e.NULL_VALUE=0]=`NULL_VALUE`})(Zr||={});function Qr(e,t,n){ni(t,e);let r=ei(e.$unknown,t),[i,a,o]=ti(t),s=rr(n);for(let e of r)ur(i,new Ne(e.data),a,e.wireType,s);return o()}function $r(e,t,n){ni(t,e);let r=(e.$unknown??[]).filter(e=>e.no!==t.number),[i,a]=ti(t,n),o=new Ee;zr(o,{writeUnknownFields:!0},i,a);let s=new Ne(o.finish());for(;s.pos<s.len;){let[e,t]=s.tag(),n=s.skip(t,e);r.push({no:e,wireType:t,data:n})}e.$unknown=r}function ei(e,t){if(e===void 0)return[];if(t.fieldKind===`enum`||t.fieldKind===`scalar`){for(let n=e.length-1;n>=0;--n)if(e[n].no==t.number)return[e[n]];return[]}return e.filter(e=>e.no===t.number)}function ti(e,t){let n=e.typeName,r=Object.assign(Object.assign({},e),{kind:`field`,parent:e.extendee,localName:n}),i=Object.assign(Object.assign({},e.extendee),{fields:[r],members:[r],oneofs:[]}),a=P(i,t===void 0?void 0:{[n]:t});return[Qe(i,a),r,()=>{let t=a[n];if(t===void 0){let t=e.message;return N(t)?_(t.fields[0].scalar,t.fields[0].longAsString):P(t)}return t}]}function ni(e,t){if(e.extendee.typeName!=t.$typeName)throw Error(`extension ${e.typeName} can only be applied to message ${e.extendee.typeName}`)}var ri=Date.parse(`0001-01-01T00:00:00Z`),ii=Date.parse(`9999-12-31T23:59:59Z`),ai=3,oi=2,si={alwaysEmitImplicit:!1,enumAsInteger:!1,useProtoFieldName:!1};function ci(e){return e?Object.assign(Object.assign({},si),e):si}function li(e,t,n){return fi(e)(ci(n),t)}function ui(e,t,n){let r=li(e,t,n);return JSON.stringify(r,null,n?.prettySpaces??0)}var di=new WeakMap;function fi(e){let t=di.get(e);return t===void 0&&(t=pi(e)),t}function pi(e){let t=e.typeName,n=hi(e);if(n!==void 0){let r=e.fields[0],i=(e,i)=>{if(i.$typeName!==t&&r!==void 0)throw new F(r,`cannot use ${r} with message ${i.$typeName}`,`ForeignFieldError`);return n(e,i)};return di.set(e,i),i}let r=e.fields.concat().sort((e,t)=>e.number-t.number),i=r[0],a=[],o=(n,r)=>{if(r.$typeName!==t&&i!==void 0)throw new F(i,`cannot use ${i} with message ${r.$typeName}`,`ForeignFieldError`);let o={};for(let e=0;e<a.length;e++)a[e](n,r,o);return n.registry&&ki(o,n,n.registry,r,e),o};di.set(e,o);for(let e of r){let t=gi(e);a.push(e.jsonName===`__proto__`||e.name===`__proto__`?mi(t):t)}return o}function mi(e){return(t,n,r)=>{let i=Object.create(null);e(t,n,i);for(let e of Object.keys(i))E(r,e,i[e])}}function hi(e){if(e.typeName.startsWith(`google.protobuf.`))switch(e.typeName){case`google.protobuf.Any`:return(e,t)=>Ai(t,e);case`google.protobuf.Timestamp`:return(e,t)=>Ii(t);case`google.protobuf.Duration`:return(e,t)=>ji(t);case`google.protobuf.FieldMask`:return(e,t)=>Mi(t);case`google.protobuf.Struct`:return(e,t)=>Ni(t);case`google.protobuf.Value`:return(e,t)=>Pi(t);case`google.protobuf.ListValue`:return(e,t)=>Fi(t);default:if(N(e)){let t=e.fields[0],n=t.localName,r=_(t.scalar,!1),i=Di(t);return(e,t)=>{let a=t[n];return i(e,a===void 0?r:a)}}return}}function gi(e){switch(e.fieldKind){case`scalar`:case`enum`:case`message`:return _i(e);case`list`:case`map`:{let t=e.fieldKind==`list`?xi(e):Ci(e),n=e.name,r=e.jsonName,i=e.localName;return(e,a,o)=>{let s=t(e,a[i]);s!==void 0&&(o[e.useProtoFieldName?n:r]=s)}}}}function _i(e){let n=yi(e),r=e.name,i=e.jsonName,a=e.localName;if(e.oneof){let t=e.oneof.localName;return(e,o,s)=>{let c=o[t];c.case===a&&(s[e.useProtoFieldName?r:i]=n(e,c.value))}}if(e.presence!=oi){let t=e.presence==ai?`cannot encode ${e} to JSON: required field not set`:void 0;return(e,o,s)=>{let c=o[a];if(c!==void 0&&Object.prototype.hasOwnProperty.call(o,a))s[e.useProtoFieldName?r:i]=n(e,c);else if(t!==void 0)throw Error(t)}}if(e.fieldKind==`enum`){let t=e.enum.values[0].number;return(e,o,s)=>{let c=o[a];(c!==t||e.alwaysEmitImplicit)&&(s[e.useProtoFieldName?r:i]=n(e,c))}}switch(e.scalar){case t.BOOL:return(e,t,o)=>{let s=t[a];(s!==!1||e.alwaysEmitImplicit)&&(o[e.useProtoFieldName?r:i]=n(e,s))};case t.STRING:return(e,t,o)=>{let s=t[a];(s!==``||e.alwaysEmitImplicit)&&(o[e.useProtoFieldName?r:i]=n(e,s))};case t.BYTES:return(e,t,o)=>{let s=t[a];(!(s instanceof Uint8Array)||s.byteLength>0||e.alwaysEmitImplicit)&&(o[e.useProtoFieldName?r:i]=n(e,s))};case t.DOUBLE:case t.FLOAT:return(e,t,o)=>{let s=t[a];(!Object.is(s,0)||e.alwaysEmitImplicit)&&(o[e.useProtoFieldName?r:i]=n(e,s))};default:return(e,t,o)=>{let s=t[a];(s!=0||e.alwaysEmitImplicit)&&(o[e.useProtoFieldName?r:i]=n(e,s))}}}function vi(e){switch(e.fieldKind){case`scalar`:case`enum`:case`message`:return yi(e);case`list`:return xi(e);case`map`:return Ci(e)}}function yi(e){switch(e.fieldKind){case`scalar`:return Di(e);case`enum`:return Ti(e);case`message`:return bi(e)}}function bi(e){let{toMessage:t}=z(e),n=fi(e.message);return(e,r)=>n(e,t(r))}function xi(e){let t=Si(e);return(e,n)=>{let r=n;if(r.length==0&&!e.alwaysEmitImplicit)return;let i=[];for(let n=0;n<r.length;n++)i.push(t(e,r[n]));return i}}function Si(e){switch(e.listKind){case`scalar`:return Di(e);case`enum`:return Ti(e);case`message`:return bi(e)}}function Ci(e){let t=wi(e);return(e,n)=>{let r=n,i=Object.keys(r);if(i.length==0&&!e.alwaysEmitImplicit)return;let a={};for(let n=0;n<i.length;n++){let o=i[n];E(a,o,t(e,r[o]))}return a}}function wi(e){switch(e.mapKind){case`scalar`:return Di(e);case`enum`:return Ti(e);case`message`:return bi(e)}}function Ti(e){let t=e.enum;return t.typeName==`google.protobuf.NullValue`?(e,n)=>{if(typeof n!=`number`)throw Ei(t,n);return null}:(e,n)=>{if(typeof n!=`number`)throw Ei(t,n);return e.enumAsInteger?n:t.value[n]?.jsonName??n}}function Ei(e,t){return Error(`cannot encode ${e} to JSON: expected number, got ${R(t)}`)}function Di(e){switch(e.scalar){case t.INT32:case t.SFIXED32:case t.SINT32:case t.FIXED32:case t.UINT32:return(t,n)=>{if(typeof n!=`number`)throw Oi(e,n);return n};case t.FLOAT:case t.DOUBLE:return(t,n)=>{if(typeof n!=`number`)throw Oi(e,n);return Number.isNaN(n)?`NaN`:n===1/0?`Infinity`:n===-1/0?`-Infinity`:n};case t.STRING:return(t,n)=>{if(typeof n!=`string`)throw Oi(e,n);return n};case t.BOOL:return(t,n)=>{if(typeof n!=`boolean`)throw Oi(e,n);return n};case t.UINT64:case t.FIXED64:case t.INT64:case t.SFIXED64:case t.SINT64:return(t,n)=>{if(typeof n==`bigint`||typeof n==`string`||typeof n==`number`&&Number.isInteger(n))return n.toString();throw Oi(e,n)};case t.BYTES:return(t,n)=>{if(n instanceof Uint8Array)return yt(n);throw Oi(e,n)}}}function Oi(e,t){return Error(`cannot encode ${e} to JSON: ${Le(e,t)?.message}`)}function ki(e,t,n,r,i){let a=r.$unknown;if(a===void 0)return;let o=new Set;for(let s=0;s<a.length;s++){let{no:c}=a[s];if(!o.has(c)){o.add(c);let a=n.getExtensionFor(i,c);if(!a)continue;let[s,l]=ti(a,Qr(r,a)),u=s[b],d=vi(l)(t,u[l.localName]);d!==void 0&&(e[a.jsonName]=d)}}}function Ai(e,t){if(e.typeUrl===``)return{};let{registry:n}=t,r,i;if(n&&(r=Wr(e,n),r&&(i=n.getMessage(r.$typeName))),!i||!r)throw Error(`cannot encode message ${e.$typeName} to JSON: "${e.typeUrl}" is not in the type registry`);let a=te(i)?{value:fi(i)(t,r)}:fi(i)(t,r);return a[`@type`]=e.typeUrl,a}function ji(e){let t=Number(e.seconds),n=e.nanos;if(t>315576e6||t<-315576e6)throw Error(`cannot encode message ${e.$typeName} to JSON: value out of range`);if(t>0&&n<0||t<0&&n>0)throw Error(`cannot encode message ${e.$typeName} to JSON: nanos sign must match seconds sign`);let r=e.seconds.toString();if(n!==0){let e=Math.abs(n).toString();e=`0`.repeat(9-e.length)+e,e.substring(3)===`000000`?e=e.substring(0,3):e.substring(6)===`000`&&(e=e.substring(0,6)),r+=`.`+e,n<0&&t==0&&(r=`-`+r)}return r+`s`}function Mi(e){return e.paths.map(t=>{if(Et(Tt(t))!==t)throw Error(`cannot encode message ${e.$typeName} to JSON: lowerCamelCase of path name "${t}" is irreversible`);return Tt(t)}).join(`,`)}function Ni(e){let t={},n=Object.keys(e.fields);for(let r=0;r<n.length;r++){let i=n[r];E(t,i,Pi(e.fields[i]))}return t}function Pi(e){switch(e.kind.case){case`nullValue`:return null;case`numberValue`:if(!Number.isFinite(e.kind.value))throw Error(`${e.$typeName} cannot be NaN or Infinity`);return e.kind.value;case`boolValue`:case`stringValue`:return e.kind.value;case`structValue`:return Ni(e.kind.value);case`listValue`:return Fi(e.kind.value);default:throw Error(`${e.$typeName} must have a value`)}}function Fi(e){return e.values.map(Pi)}function Ii(e){let t=Number(e.seconds)*1e3;if(t<ri||t>ii)throw Error(`cannot encode message ${e.$typeName} to JSON: must be from 0001-01-01T00:00:00Z to 9999-12-31T23:59:59Z inclusive`);if(e.nanos<0)throw Error(`cannot encode message ${e.$typeName} to JSON: nanos must not be negative`);if(e.nanos>999999999)throw Error(`cannot encode message ${e.$typeName} to JSON: nanos must not be greater than 999999999`);let n=`Z`;if(e.nanos>0){let t=(e.nanos+1e9).toString().substring(1);n=t.substring(3)===`000000`?`.`+t.substring(0,3)+`Z`:t.substring(6)===`000`?`.`+t.substring(0,6)+`Z`:`.`+t+`Z`}return new Date(t).toISOString().replace(`.000Z`,n)}var Li=2;function Ri(e){return Object.assign(Object.assign({ignoreUnknownFields:!1,recursionLimit:100},e),{depth:0})}function zi(e,t,n){return Bi(e,ca(t,e.typeName),n)}function Bi(e,t,n){let r=P(e);return Vi(e,r,t,n),r}function Vi(e,t,n,r){try{Ui(e)(t,n,Ri(r))}catch(e){throw xe(e)?Error(`cannot decode ${e.field()} from JSON: ${e.message}`,{cause:e}):e}}var Hi=new WeakMap;function Ui(e){let t=Hi.get(e);return t===void 0&&(t=Wi(e)),t}function Wi(e){let t=String(e),n=Gi(e);if(n!==void 0){let r=(e,r,i)=>{if(++i.depth>i.recursionLimit)throw Error(`cannot decode ${t} from JSON: maximum recursion depth of ${i.recursionLimit} reached`);n(e,r,i),i.depth--};return Hi.set(e,r),r}let r=e.typeName,i=new Map,a=(e,n,a)=>{if(++a.depth>a.recursionLimit)throw Error(`cannot decode ${t} from JSON: maximum recursion depth of ${a.recursionLimit} reached`);if(n==null||Array.isArray(n)||typeof n!=`object`)throw Error(`cannot decode ${t} from JSON: ${R(n)}`);let o=new Map,s=new Set,c=Object.keys(n);for(let l=0;l<c.length;l++){let u=c[l],d=n[u],f=i.get(u);if(f!==void 0){let t=f.field;if(s.has(t))throw new F(t,`set multiple times`);if(s.add(t),f.oneofScalarNullSkip&&d===null)continue;if(f.oneof){let e=o.get(f.oneof);if(e!==void 0)throw new F(f.oneof,`oneof set multiple times by ${e.name} and ${t.name}`);o.set(f.oneof,t)}f.read(e,d,a)}else{let n=u.startsWith(`[`)&&u.endsWith(`]`)?a.registry?.getExtension(u.substring(1,u.length-1)):void 0;if(n?.extendee.typeName==r){let[t,r,i]=ti(n);Ki(r)(t[b],d,a),$r(e,n,i())}if(n===void 0&&!a.ignoreUnknownFields)throw Error(`cannot decode ${t} from JSON: key "${u}" is unknown`)}}a.depth--};Hi.set(e,a);for(let t of e.fields){let e={read:Ki(t),field:t,oneof:t.oneof,oneofScalarNullSkip:t.oneof!==void 0&&t.fieldKind==`scalar`};i.set(t.name,e).set(t.jsonName,e)}return a}function Gi(e){if(e.typeName.startsWith(`google.protobuf.`))switch(e.typeName){case`google.protobuf.Any`:return(e,t,n)=>ua(e,t,n);case`google.protobuf.Timestamp`:return(e,t)=>da(e,t);case`google.protobuf.Duration`:return(e,t)=>fa(e,t);case`google.protobuf.FieldMask`:return(e,t)=>pa(e,t);case`google.protobuf.Struct`:return(e,t,n)=>ma(e,t,n);case`google.protobuf.Value`:return(e,t,n)=>ha(e,t,n);case`google.protobuf.ListValue`:return(e,t,n)=>ga(e,t,n);default:if(N(e)){let t=e.fields[0],n=t.localName,r=t.scalar,i=t.longAsString,a=ra(t);return(e,t)=>{t===null?e[n]=_(r,i):e[n]=a(t)}}return}}function Ki(e){switch(e.fieldKind){case`scalar`:return qi(e);case`enum`:return Yi(e);case`message`:return Xi(e);case`list`:return Zi(e);case`map`:return $i(e)}}function qi(e){let t=ra(e),n=e.localName;if(e.oneof){let r=e.oneof.localName;return(e,i)=>{e[r]={case:n,value:t(i)}}}let r=Ji(e);return(e,i)=>{i===null?r(e):e[n]=t(i)}}function Ji(e){let t=e.localName;if(e.presence!=Li)return e=>{delete e[t]};if(e.fieldKind==`enum`){let n=e.enum.values[0].number;return e=>{e[t]=n}}let n=e.scalar,r=e.longAsString;return e=>{e[t]=_(n,r)}}function Yi(e){let t=ta(e.enum),n=na(e.enum),r=e.localName,i=e.enum.typeName!=`google.protobuf.NullValue`;if(e.oneof){let a=e.oneof.localName;return(o,s,c)=>{if(s===null&&i){o[a].case===r&&(o[a]={case:void 0});return}let l=t(s,c.ignoreUnknownFields);if(l===ea)return;let u=n(l);if(u!==!0)throw new F(e,L(e,l,u));o[a]={case:r,value:l}}}let a=Ji(e);return(o,s,c)=>{if(s===null&&i){a(o);return}let l=t(s,c.ignoreUnknownFields);if(l===ea)return;let u=n(l);if(u!==!0)throw new F(e,L(e,l,u));o[r]=l}}function Xi(e){let t=e.localName,{toMessage:n,toLocal:r}=z(e),i=Ui(e.message),a=e.message.typeName!=`google.protobuf.Value`;if(e.oneof){let o=e.oneof.localName;return(e,s,c)=>{let l=e[o];if(s===null&&a){l.case===t&&(e[o]={case:void 0});return}let u=n(l.case===t?l.value:void 0);i(u,s,c),e[o]={case:t,value:r(u)}}}return(e,o,s)=>{if(o===null&&a){delete e[t];return}let c=n(e[t]);i(c,o,s),e[t]=r(c)}}function Zi(e){let t=e.localName,n=Qi(e);return(r,i,a)=>{if(i===null)return;if(!Array.isArray(i))throw new F(e,`expected Array, got `+R(i));let o=r[t];for(let e=0;e<i.length;e++){let t=n(i[e],a,o.length);t!==ea&&o.push(t)}}}function Qi(e){switch(e.listKind){case`scalar`:{let t=ia(e),n=Ve(e.scalar),r=aa(e);return(i,a,o)=>{if(i===null)throw new F(e,`list item must not be null`);let s=t(i),c=n(s);if(c!==!0)throw new F(e,`list item #${o+1}: ${L(e,s,c)}`);return r(s)}}case`enum`:{let t=ta(e.enum),n=na(e.enum),r=e.enum.typeName!=`google.protobuf.NullValue`;return(i,a,o)=>{if(i===null&&r)throw new F(e,`list item must not be null`);let s=t(i,a.ignoreUnknownFields);if(s===ea)return s;let c=n(s);if(c!==!0)throw new F(e,`list item #${o+1}: ${L(e,s,c)}`);return s}}case`message`:{let{toMessage:t,toLocal:n}=z(e),r=Ui(e.message),i=e.message.typeName!=`google.protobuf.Value`;return(a,o)=>{if(a===null&&i)throw new F(e,`list item must not be null`);let s=t(void 0);return r(s,a,o),n(s)}}}}function $i(e){let t=e.localName,n=e.mapKey,r=oa(n),i=Ve(n),a,o,s=e=>e,c=!0;switch(e.mapKind){case`scalar`:a=ia(e),o=Ve(e.scalar),s=aa(e);break;case`enum`:{let t=ta(e.enum);a=(e,n)=>t(e,n.ignoreUnknownFields),o=na(e.enum),c=e.enum.typeName!=`google.protobuf.NullValue`;break}case`message`:{let{toMessage:t,toLocal:n}=z(e),r=Ui(e.message);c=e.message.typeName!=`google.protobuf.Value`,a=(e,i)=>{let a=t(void 0);return r(a,e,i),n(a)};break}}return(l,u,d)=>{if(u===null)return;if(typeof u!=`object`||Array.isArray(u))throw new F(e,`expected object, got `+R(u));let f=l[t],p=new Set,m=Object.keys(u);for(let t=0;t<m.length;t++){let l=m[t],h=u[l],g=r(l);if(p.has(g))throw new F(e,`duplicate map key "${l}"`);if(p.add(g),h===null&&c)throw new F(e,`map value must not be null`);let _=a(h,d);if(_===ea)continue;let v=i(g);if(v!==!0)throw new F(e,`invalid map key: ${L({scalar:n},g,v)}`);if(o!==void 0){let t=o(_);if(t!==!0)throw new F(e,`map entry ${R(g)}: ${L(e,_,t)}`)}E(f,g,s(_))}}}var ea=Symbol();function ta(e){let t=e.values[0].number,n=new Map;for(let t of e.values)n.set(t.jsonName,t.number);for(let t of e.values)n.set(t.name,t.number);return(r,i)=>{if(r===null)return t;switch(typeof r){case`number`:if(Number.isInteger(r))return r;break;case`string`:{let e=n.get(r);if(e!==void 0)return e;if(i)return ea;break}}throw Error(`cannot decode ${e} from JSON: ${R(r)}`)}}function na(e){if(e.open)return Ve(t.INT32);let n=e.values;return e=>n.some(t=>t.number===e)}function ra(e){let t=ia(e),n=Ve(e.scalar),r=aa(e);return i=>{let a=t(i),o=n(a);if(o!==!0)throw new F(e,L(e,a,o));return r(a)}}function ia(e){switch(e.scalar){case t.DOUBLE:case t.FLOAT:return t=>{if(t===`NaN`)return NaN;if(t===`Infinity`)return 1/0;if(t===`-Infinity`)return-1/0;if(typeof t==`number`){if(Number.isNaN(t))throw new F(e,`unexpected NaN number`);if(!Number.isFinite(t))throw new F(e,`unexpected infinite number`);return t}if(typeof t==`string`){if(t===``||t.trim().length!==t.length)return t;let e=Number(t);return Number.isFinite(e)?e:t}return t};case t.INT32:case t.FIXED32:case t.SFIXED32:case t.SINT32:case t.UINT32:return sa;case t.BYTES:return t=>{if(typeof t==`string`){if(t===``)return new Uint8Array;try{return ht(t)}catch(t){throw new F(e,t instanceof Error?t.message:String(t))}}return t};default:return e=>e}}function aa(e){let n=e.fieldKind!==`map`&&e.longAsString;switch(e.scalar){case t.INT64:case t.SFIXED64:case t.SINT64:return n?e=>String(e):e=>typeof e==`string`||typeof e==`number`?p.parse(e):e;case t.FIXED64:case t.UINT64:return n?e=>String(e):e=>typeof e==`string`||typeof e==`number`?p.uParse(e):e;default:return e=>e}}function oa(e){switch(e){case t.BOOL:return e=>{switch(e){case`true`:return!0;case`false`:return!1}return e};case t.INT32:case t.FIXED32:case t.UINT32:case t.SFIXED32:case t.SINT32:return sa;case t.INT64:case t.SINT64:case t.SFIXED64:case t.UINT64:case t.FIXED64:return e=>/^-?0+$/.test(e)?`0`:e.replace(/^(-?)0+(?=\d)/,`$1`);default:return e=>e}}function sa(e){if(typeof e==`string`){if(e===``||e.trim().length!==e.length)return e;let t=Number(e);return Number.isNaN(t)?e:t}return e}function ca(e,t){let n;try{n=JSON.parse(e)}catch(e){let n=e instanceof Error?e.message:String(e);throw Error(`cannot decode message ${t} from JSON: ${n}`,{cause:e})}return la(e,t),n}function la(e,t){let n=[],r=!1,i=0;for(;i<e.length;)switch(e[i]){case`{`:n.push(new Set),r=!0,i++;break;case`[`:n.push(null),r=!1,i++;break;case`}`:case`]`:n.pop(),r=!1,i++;break;case`,`:r=n[n.length-1]!=null,i++;break;case`:`:r=!1,i++;break;case`"`:{let a=i++,o=!1;for(;i<e.length;)if(e[i]==`\\`)o=!0,i+=2;else{if(e[i]==`"`)break;i++}let s=i++,c=n[n.length-1];if(r&&c){let n=o?JSON.parse(e.substring(a,s+1)):e.substring(a+1,s);if(c.has(n))throw Error(`cannot decode message ${t} from JSON: duplicate object key "${n}"`);c.add(n)}r=!1;break}default:i++}}function ua(e,t,n){if(t===null||Array.isArray(t)||typeof t!=`object`)throw Error(`cannot decode message ${e.$typeName} from JSON: expected object but got ${R(t)}`);if(Object.keys(t).length==0)return;let r=t[`@type`];if(typeof r!=`string`||r==``)throw Error(`cannot decode message ${e.$typeName} from JSON: "@type" is empty`);let i=r.includes(`/`)?r.substring(r.lastIndexOf(`/`)+1):r;if(!i.length)throw Error(`cannot decode message ${e.$typeName} from JSON: "@type" is invalid`);let a=n.registry?.getMessage(i);if(!a)throw Error(`cannot decode message ${e.$typeName} from JSON: ${r} is not in the type registry`);let o=P(a);if(te(a)&&Object.prototype.hasOwnProperty.call(t,`value`))Ui(a)(o,t.value,n);else{let e={};for(let n of Object.keys(t))n!==`@type`&&E(e,n,t[n]);Ui(a)(o,e,n)}Hr(a,o,e)}function da(e,t){if(typeof t!=`string`)throw Error(`cannot decode message ${e.$typeName} from JSON: ${R(t)}`);let n=t.match(/^([0-9]{4})-([0-9]{2})-([0-9]{2})T([0-9]{2}):([0-9]{2}):([0-9]{2})(?:\.([0-9]{1,9}))?(?:Z|([+-][0-9][0-9]:[0-9][0-9]))$/);if(!n)throw Error(`cannot decode message ${e.$typeName} from JSON: invalid RFC 3339 string`);let r=Date.parse(n[1]+`-`+n[2]+`-`+n[3]+`T`+n[4]+`:`+n[5]+`:`+n[6]+(n[8]?n[8]:`Z`));if(Number.isNaN(r))throw Error(`cannot decode message ${e.$typeName} from JSON: invalid RFC 3339 string`);if(r<ri||r>ii)throw Error(`cannot decode message ${e.$typeName} from JSON: must be from 0001-01-01T00:00:00Z to 9999-12-31T23:59:59Z inclusive`);e.seconds=p.parse(r/1e3),e.nanos=0,n[7]&&(e.nanos=parseInt(`1`+n[7]+`0`.repeat(9-n[7].length))-1e9)}function fa(e,t){if(typeof t!=`string`)throw Error(`cannot decode message ${e.$typeName} from JSON: ${R(t)}`);let n=t.match(/^(-?[0-9]+)(?:\.([0-9]+))?s/);if(n===null)throw Error(`cannot decode message ${e.$typeName} from JSON: ${R(t)}`);let r=Number(n[1]);if(r>315576e6||r<-315576e6)throw Error(`cannot decode message ${e.$typeName} from JSON: ${R(t)}`);if(e.seconds=p.parse(r),typeof n[2]!=`string`)return;let i=n[2]+`0`.repeat(9-n[2].length);e.nanos=parseInt(i),(r<0||Object.is(r,-0))&&(e.nanos=-e.nanos)}function pa(e,t){if(typeof t!=`string`)throw Error(`cannot decode message ${e.$typeName} from JSON: ${R(t)}`);t!==``&&(e.paths=t.split(`,`).map(t=>{if(t.includes(`_`))throw Error(`cannot decode message ${e.$typeName} from JSON: path names must be lowerCamelCase`);return Et(t)}))}function ma(e,t,n){if(typeof t!=`object`||!t||Array.isArray(t))throw Error(`cannot decode message ${e.$typeName} from JSON ${R(t)}`);let r=Object.keys(t);for(let i=0;i<r.length;i++){let a=r[i],o=P(Yr);ha(o,t[a],n),E(e.fields,a,o)}}function ha(e,t,n){if(++n.depth>n.recursionLimit)throw Error(`cannot decode ${e.$typeName} from JSON: maximum recursion depth of ${n.recursionLimit} reached`);switch(typeof t){case`number`:e.kind={case:`numberValue`,value:t};break;case`string`:e.kind={case:`stringValue`,value:t};break;case`boolean`:e.kind={case:`boolValue`,value:t};break;case`object`:if(t===null)e.kind={case:`nullValue`,value:Zr.NULL_VALUE};else if(Array.isArray(t)){let r=P(Xr);ga(r,t,n),e.kind={case:`listValue`,value:r}}else{let r=P(Jr);ma(r,t,n),e.kind={case:`structValue`,value:r}}break;default:throw Error(`cannot decode message ${e.$typeName} from JSON ${R(t)}`)}return n.depth--,e}function ga(e,t,n){if(!Array.isArray(t))throw Error(`cannot decode message ${e.$typeName} from JSON ${R(t)}`);for(let r=0;r<t.length;r++){let i=P(Yr);ha(i,t[r],n),e.values.push(i)}}var H;(function(e){e[e.Canceled=1]=`Canceled`,e[e.Unknown=2]=`Unknown`,e[e.InvalidArgument=3]=`InvalidArgument`,e[e.DeadlineExceeded=4]=`DeadlineExceeded`,e[e.NotFound=5]=`NotFound`,e[e.AlreadyExists=6]=`AlreadyExists`,e[e.PermissionDenied=7]=`PermissionDenied`,e[e.ResourceExhausted=8]=`ResourceExhausted`,e[e.FailedPrecondition=9]=`FailedPrecondition`,e[e.Aborted=10]=`Aborted`,e[e.OutOfRange=11]=`OutOfRange`,e[e.Unimplemented=12]=`Unimplemented`,e[e.Internal=13]=`Internal`,e[e.Unavailable=14]=`Unavailable`,e[e.DataLoss=15]=`DataLoss`,e[e.Unauthenticated=16]=`Unauthenticated`})(H||={});function _a(e){let t=H[e];return typeof t==`string`?t[0].toLowerCase()+t.substring(1).replace(/[A-Z]/g,e=>`_`+e.toLowerCase()):e.toString()}var U=class e extends Error{constructor(e,t=H.Unknown,n,r,i){super(va(e,t)),this.name=`ConnectError`,this.isWireError=!1,Object.setPrototypeOf(this,new.target.prototype),this.rawMessage=e,this.code=t,this.metadata=new Headers(n??{}),this.details=r??[],this.cause=i}static from(t,n=H.Unknown){return t instanceof e?t:t instanceof Error?t.name==`AbortError`||t.name==`TimeoutError`?new e(t.message,H.Canceled):new e(t.message,n,void 0,void 0,t):new e(String(t),n,void 0,void 0,t)}static[Symbol.hasInstance](t){return t instanceof Error?Object.getPrototypeOf(t)===e.prototype||t.name===`ConnectError`&&`code`in t&&typeof t.code==`number`&&`metadata`in t&&`details`in t&&Array.isArray(t.details)&&`rawMessage`in t&&typeof t.rawMessage==`string`&&`cause`in t:!1}findDetails(e){let t=e.kind===`message`?{getMessage:t=>t===e.typeName?e:void 0}:e,n=[];for(let e of this.details){if(`desc`in e){t.getMessage(e.desc.typeName)&&n.push(P(e.desc,e.value));continue}let r=t.getMessage(e.type);if(r)try{n.push(ir(r,e.value))}catch{}}return n}};function va(e,t){return e.length?`[${_a(t)}] ${e}`:`[${_a(t)}]`}function ya(e,t,n){try{let r=ht(e);return t?ir(t,r,n):r}catch(e){throw U.from(e,H.DataLoss)}}function ba(e,t){let n={};for(let r of e.methods){let e=t(r);e!=null&&(n[r.localName]=e)}return n}function xa(e,t,n=!1){if(t>e){let r=`message size is larger than configured readMaxBytes ${e}`;throw n&&(r=`message size ${t} is larger than configured readMaxBytes ${e}`),new U(r,H.ResourceExhausted)}}function Sa(e){return new Ca(e)}var Ca=class{constructor(e){this.readMaxBytes=e,this.header=new Uint8Array(5),this.headerView=new DataView(this.header.buffer),this.buf=[]}get byteLength(){return this.buf.reduce((e,t)=>e+t.byteLength,0)}decode(e){this.buf.push(e);let t=[];for(;;){let e=this.pop();if(!e)break;t.push(e)}return t}pop(){if(!(!this.env&&(this.env=this.head(),!this.env))&&this.cons(this.env.data)){let e=this.env;return this.env=void 0,e}}head(){if(!this.cons(this.header))return;let e=this.headerView.getUint8(0),t=this.headerView.getUint32(1);return xa(this.readMaxBytes,t,!0),{flags:e,data:new Uint8Array(t)}}cons(e){let t=e.byteLength;if(this.byteLength<t)return!1;let n=0;for(;n<t;){let r=this.buf.shift();r.byteLength>t-n?(e.set(r.subarray(0,t-n),n),this.buf.unshift(r.subarray(t-n)),n+=t-n):(e.set(r,n),n+=r.byteLength)}return!0}};function wa(e){let t,n=Sa(0xffffffff);return new ReadableStream({start(){t=e.getReader()},async pull(e){let r=!1;for(;!r;){let i=await t.read();if(i.done)n.byteLength>0&&e.error(new U(`protocol error: incomplete envelope`,H.InvalidArgument)),e.close();else for(let t of n.decode(i.value))e.enqueue(t),r=!0}}})}function Ta(e,t){let n=new Uint8Array(t.length+5);n.set(t,5);let r=new DataView(n.buffer,n.byteOffset,n.byteLength);return r.setUint8(0,e),r.setUint32(1,t.length),n}var Ea=function(e){if(!Symbol.asyncIterator)throw TypeError(`Symbol.asyncIterator is not defined.`);var t=e[Symbol.asyncIterator],n;return t?t.call(e):(e=typeof __values==`function`?__values(e):e[Symbol.iterator](),n={},r(`next`),r(`throw`),r(`return`),n[Symbol.asyncIterator]=function(){return this},n);function r(t){n[t]=e[t]&&function(n){return new Promise(function(r,a){n=e[t](n),i(r,a,n.done,n.value)})}}function i(e,t,n,r){Promise.resolve(r).then(function(t){e({value:t,done:n})},t)}},Da=function(e){return this instanceof Da?(this.v=e,this):new Da(e)},Oa=function(e,t,n){if(!Symbol.asyncIterator)throw TypeError(`Symbol.asyncIterator is not defined.`);var r=n.apply(e,t||[]),i,a=[];return i=Object.create((typeof AsyncIterator==`function`?AsyncIterator:Object).prototype),s(`next`),s(`throw`),s(`return`,o),i[Symbol.asyncIterator]=function(){return this},i;function o(e){return function(t){return Promise.resolve(t).then(e,d)}}function s(e,t){r[e]&&(i[e]=function(t){return new Promise(function(n,r){a.push([e,t,n,r])>1||c(e,t)})},t&&(i[e]=t(i[e])))}function c(e,t){try{l(r[e](t))}catch(e){f(a[0][3],e)}}function l(e){e.value instanceof Da?Promise.resolve(e.value.v).then(u,d):f(a[0][2],e)}function u(e){c(`next`,e)}function d(e){c(`throw`,e)}function f(e,t){e(t),a.shift(),a.length&&c(a[0][0],a[0][1])}},ka=function(e){var t={},n;return r(`next`),r(`throw`,function(e){throw e}),r(`return`),t[Symbol.iterator]=function(){return this},t;function r(r,i){t[r]=e[r]?function(t){return(n=!n)?{value:Da(e[r](t)),done:!1}:i?i(t):t}:i}};function Aa(e){return Oa(this,arguments,function*(){yield Da(yield*ka(Ea(e)))})}var ja=function(e){if(!Symbol.asyncIterator)throw TypeError(`Symbol.asyncIterator is not defined.`);var t=e[Symbol.asyncIterator],n;return t?t.call(e):(e=typeof __values==`function`?__values(e):e[Symbol.iterator](),n={},r(`next`),r(`throw`),r(`return`),n[Symbol.asyncIterator]=function(){return this},n);function r(t){n[t]=e[t]&&function(n){return new Promise(function(r,a){n=e[t](n),i(r,a,n.done,n.value)})}}function i(e,t,n,r){Promise.resolve(r).then(function(t){e({value:t,done:n})},t)}},Ma=function(e){return this instanceof Ma?(this.v=e,this):new Ma(e)},Na=function(e){var t={},n;return r(`next`),r(`throw`,function(e){throw e}),r(`return`),t[Symbol.iterator]=function(){return this},t;function r(r,i){t[r]=e[r]?function(t){return(n=!n)?{value:Ma(e[r](t)),done:!1}:i?i(t):t}:i}},Pa=function(e,t,n){if(!Symbol.asyncIterator)throw TypeError(`Symbol.asyncIterator is not defined.`);var r=n.apply(e,t||[]),i,a=[];return i=Object.create((typeof AsyncIterator==`function`?AsyncIterator:Object).prototype),s(`next`),s(`throw`),s(`return`,o),i[Symbol.asyncIterator]=function(){return this},i;function o(e){return function(t){return Promise.resolve(t).then(e,d)}}function s(e,t){r[e]&&(i[e]=function(t){return new Promise(function(n,r){a.push([e,t,n,r])>1||c(e,t)})},t&&(i[e]=t(i[e])))}function c(e,t){try{l(r[e](t))}catch(e){f(a[0][3],e)}}function l(e){e.value instanceof Ma?Promise.resolve(e.value.v).then(u,d):f(a[0][2],e)}function u(e){c(`next`,e)}function d(e){c(`throw`,e)}function f(e,t){e(t),a.shift(),a.length&&c(a[0][0],a[0][1])}};function Fa(e,t){return ba(e,e=>{switch(e.methodKind){case`unary`:return Ia(t,e);case`server_streaming`:return La(t,e);case`client_streaming`:return Ra(t,e);case`bidi_streaming`:return za(t,e);default:return null}})}function Ia(e,t){return async(n,r)=>{var i,a;let o=await e.unary(t,r?.signal,r?.timeoutMs,r?.headers,n,r?.contextValues);return(i=r?.onHeader)==null||i.call(r,o.header),(a=r?.onTrailer)==null||a.call(r,o.trailer),o.message}}function La(e,t){return(n,r)=>Ba(e.stream(t,r?.signal,r?.timeoutMs,r?.headers,Aa([n]),r?.contextValues),r)}function Ra(e,t){return async(n,r)=>{var i,a,o,s,c,l;let u=await e.stream(t,r?.signal,r?.timeoutMs,r?.headers,n,r?.contextValues);(c=r?.onHeader)==null||c.call(r,u.header);let d,f=0;try{for(var p=!0,m=ja(u.message),h;h=await m.next(),i=h.done,!i;p=!0)s=h.value,p=!1,d=s,f++}catch(e){a={error:e}}finally{try{!p&&!i&&(o=m.return)&&await o.call(m)}finally{if(a)throw a.error}}if(!d)throw new U(`protocol error: missing response message`,H.Unimplemented);if(f>1)throw new U(`protocol error: received extra messages for client streaming method`,H.Unimplemented);return(l=r?.onTrailer)==null||l.call(r,u.trailer),d}}function za(e,t){return(n,r)=>Ba(e.stream(t,r?.signal,r?.timeoutMs,r?.headers,n,r?.contextValues),r)}function Ba(e,t){return(function(){return Pa(this,arguments,function*(){var n,r;let i=yield Ma(e);(n=t?.onHeader)==null||n.call(t,i.header),yield Ma(yield*Na(ja(i.message))),(r=t?.onTrailer)==null||r.call(t,i.trailer)})})()}function Va(...e){let t=new AbortController,n=e.filter(e=>e!==void 0).concat(t.signal);for(let e of n){if(e.aborted){r.apply(e);break}e.addEventListener(`abort`,r)}function r(){t.signal.aborted||t.abort(Ua(this));for(let e of n)e.removeEventListener(`abort`,r)}return t}function Ha(e){let t=new AbortController,n=()=>{t.abort(new U(`the operation timed out`,H.DeadlineExceeded))},r;return e!==void 0&&(e<=0?n():r=setTimeout(n,e)),{signal:t.signal,cleanup:()=>clearTimeout(r)}}function Ua(e){if(!e.aborted)return;if(e.reason!==void 0)return e.reason;let t=Error(`This operation was aborted`);return t.name=`AbortError`,t}function Wa(){return{get(e){return e.id in this?this[e.id]:e.defaultValue},set(e,t){return this[e.id]=t,this},delete(e){return delete this[e.id],this}}}function Ga(e){let t=new Headers,n=new TextDecoder().decode(e).split(`\r
+`);for(let e of n){if(e===``)continue;let n=e.indexOf(`:`);if(n>0){let r=e.substring(0,n).trim(),i=e.substring(n+1).trim();t.append(r,i)}}return t}var Ka=`Content-Type`,qa=`Grpc-Timeout`,Ja=`Grpc-Status`,Ya=`Grpc-Status-Details-Bin`,Xa=`User-Agent`,Za=`X-User-Agent`,Qa=`X-Grpc-Web`,$a=`application/grpc-web+proto`,eo=`application/grpc-web+json`;function to(e,t,...n){if(n.length>0)throw Error();return e.services[t]}var no=V(yr(`CgxzdGF0dXMucHJvdG8SCmdvb2dsZS5ycGMiTgoGU3RhdHVzEgwKBGNvZGUYASABKAUSDwoHbWVzc2FnZRgCIAEoCRIlCgdkZXRhaWxzGAMgAygLMhQuZ29vZ2xlLnByb3RvYnVmLkFueUJeCg5jb20uZ29vZ2xlLnJwY0ILU3RhdHVzUHJvdG9QAVo3Z29vZ2xlLmdvbGFuZy5vcmcvZ2VucHJvdG8vZ29vZ2xlYXBpcy9ycGMvc3RhdHVzO3N0YXR1c6ICA1JQQ2IGcHJvdG8z`,[br]),0);function ro(e){let t=e.get(Ya);if(t!=null){let n=ya(t,no);if(n.code==0)return;let r=new U(n.message,n.code,e);return r.details=n.details.map(e=>({type:e.typeUrl.substring(e.typeUrl.lastIndexOf(`/`)+1),value:e.value})),r.isWireError=!0,r}let n=e.get(Ja);if(n!=null){if(n===`0`)return;let t=parseInt(n,10),r;return r=t in H?new U(decodeURIComponent(e.get(`Grpc-Message`)??``),t,e):new U(`invalid grpc-status: ${n}`,H.Internal,e),r.isWireError=!0,r}}function io(e,t){return e.toString().replace(/\/?$/,`/${t.parent.typeName}/${t.name}`)}function ao(e,t){return P(e,t)}function oo(e,t){function n(t){return t.done===!0?t:{done:t.done,value:ao(e,t.value)}}return{[Symbol.asyncIterator](){let e=t[Symbol.asyncIterator](),r={next:()=>e.next().then(n)};return e.throw!==void 0&&(r.throw=t=>e.throw(t).then(n)),e.return!==void 0&&(r.return=t=>e.return(t).then(n)),r}}}function so(e,t){if(!t)return e;for(let n of t.concat().reverse())e=n(e);return e}function co(e){let t=Object.assign({},e);return t.ignoreUnknownFields??=!0,t}function lo(e,t,n,r){let i=t?uo(e.input,r):fo(e.input,n);return{parse:(t?uo(e.output,r):fo(e.output,n)).parse,serialize:i.serialize}}function uo(e,t){return{parse(n){try{return ir(e,n,t)}catch(e){throw new U(`parse binary: ${e instanceof Error?e.message:String(e)}`,H.Internal)}},serialize(n){try{return Er(e,n,t)}catch(e){throw new U(`serialize binary: ${e instanceof Error?e.message:String(e)}`,H.Internal)}}}}function fo(e,t){let n=t?.textEncoder??new TextEncoder,r=t?.textDecoder??new TextDecoder,i=co(t);return{parse(t){try{return zi(e,r.decode(t),i)}catch(e){throw U.from(e,H.InvalidArgument)}},serialize(t){try{let r=ui(e,t,i);return n.encode(r)}catch(e){throw U.from(e,H.Internal)}}}}function po(e){let t=so(e.next,e.interceptors),[n,r,i]=ho(e);return t(Object.assign(Object.assign({},e.req),{message:ao(e.req.method.input,e.req.message),signal:n})).then(e=>(i(),e),r)}function mo(e){let[t,n,r]=ho(e),i=!1,a=new Promise(e=>{t.aborted?e():t.addEventListener(`abort`,()=>e())});return a.then(()=>{var n,r;let a=e.req.message[Symbol.asyncIterator]();if(!i){let e=U.from(Ua(t),H.Canceled);(n=a.throw)==null||n.call(a,e).catch(()=>{})}(r=a.return)==null||r.call(a).catch(()=>{})}),so(async r=>{let o=await e.next(r),s=o.message[Symbol.asyncIterator]();return a.then(()=>s.return?.call(s).catch(()=>{})),Object.assign(Object.assign({},o),{message:{[Symbol.asyncIterator]:()=>({next:async()=>{let e=t.aborted?void 0:await Promise.race([s.next(),a]);return e===void 0?i?{done:!0,value:void 0}:n(Ua(t)):e}})}})},e.interceptors)(Object.assign(Object.assign({},e.req),{message:oo(e.req.method.input,e.req.message),signal:t})).then(e=>{let o=e.message[Symbol.asyncIterator](),s=a.then(async()=>{try{for(;(await o.next()).done!==!0;);}catch{}});return Object.assign(Object.assign({},e),{message:{[Symbol.asyncIterator]:()=>({async next(){if(t.aborted)return await s,i?{done:!0,value:void 0}:n(Ua(t));try{let e=await o.next();return e.done===!0&&(i=!0,r()),e}catch(e){return n(e)}},async return(e){return t.aborted||(i=!0,r()),await s,{done:!0,value:e}},async throw(e){if(i)throw U.from(e);try{return await n(e)}finally{await s}}})}})},n)}function ho(e){let{signal:t,cleanup:n}=Ha(e.timeoutMs),r=Va(e.signal,t);return[r.signal,function(e){let t=r.signal.aborted?U.from(Ua(r.signal),H.Canceled):U.from(e);return r.abort(t),n(),Promise.reject(t)},function(){n(),r.abort()}]}var go=yr(`ChRuYWFkZi92MS9uYWFkZi5wcm90bxIIbmFhZGYudjEiigIKDEZyYW1lUmVxdWVzdBIOCgZjYW1lcmEYASABKAkSDQoFd2lkdGgYAiABKA0SDgoGaGVpZ2h0GAMgASgNEgwKBG1vZGUYBCABKAkSEwoLbWluX3ZlcnNpb24YBSABKAQSCwoDcmF3GAYgASgIEhIKCnRpbWVvdXRfbXMYByABKA0SCwoDc3BwGAggASgNEg4KBmZyYW1lcxgJIAEoDRIMCgRzZWVkGAogASgNEhQKB2JvdW5jZXMYCyABKA1IAIgBARILCgNza3kYDCABKAkSCwoDc3VuGA0gASgJEhAKCGV4cG9zdXJlGA4gASgCEg4KBnN0cmVhbRgPIAEoCUIKCghfYm91bmNlcyJZCgpGcmFtZVJlcGx5Eg8KB3ZlcnNpb24YASABKAQSDQoFd2lkdGgYAiABKA0SDgoGaGVpZ2h0GAMgASgNEg0KBWltYWdlGAQgASgMEgwKBG5vZGUYBSABKAkiZAoLTm9kZU1lc3NhZ2USJAoFaGVsbG8YASABKAsyEy5uYWFkZi52MS5Ob2RlSGVsbG9IABInCgZyZXN1bHQYAiABKAsyFS5uYWFkZi52MS5GcmFtZVJlc3VsdEgAQgYKBGtpbmQiUgoJTm9kZUhlbGxvEg8KB2FkYXB0ZXIYASABKAkSDQoFbW9kZXMYAiADKAkSEQoJbWF4X3dpZHRoGAMgASgNEhIKCm1heF9oZWlnaHQYBCABKA0iPwoIRnJhbWVKb2ISCgoCaWQYASABKAQSJwoHcmVxdWVzdBgCIAEoCzIWLm5hYWRmLnYxLkZyYW1lUmVxdWVzdCJnCgtGcmFtZVJlc3VsdBIKCgJpZBgBIAEoBBIPCgd2ZXJzaW9uGAIgASgEEg0KBXdpZHRoGAMgASgNEg4KBmhlaWdodBgEIAEoDRINCgVpbWFnZRgFIAEoDBINCgVlcnJvchgGIAEoCSKxAQoLSm9pblJlcXVlc3QSGAoQcHJvdG9jb2xfdmVyc2lvbhgBIAEoDRImCgZjYWNoZWQYAiADKAsyFi5uYWFkZi52MS5DYWNoZWRCdWZmZXISJQoGcmVzdW1lGAMgASgLMhUubmFhZGYudjEuUmVzdW1lUG9pbnQSJwoKZGVsdGFfZm9ybRgEIAEoDjITLm5hYWRmLnYxLkRlbHRhRm9ybRIQCghwcmVzZW5jZRgFIAEoCCIuCgtSZXN1bWVQb2ludBIPCgd2ZXJzaW9uGAEgASgEEg4KBmRpZ2VzdBgCIAEoBiIzCgxDYWNoZWRCdWZmZXISDgoGYnVmZmVyGAEgASgNEhMKC3BhZ2VfaGFzaGVzGAIgAygGIqQBCgxXb3JsZE1lc3NhZ2USIgoGaGVhZGVyGAEgASgLMhAubmFhZGYudjEuSGVhZGVySAASHgoEcGFnZRgCIAEoCzIOLm5hYWRmLnYxLlBhZ2VIABIgCgVkZWx0YRgDIAEoCzIPLm5hYWRmLnYxLkRlbHRhSAASJgoIcHJlc2VuY2UYBCABKAsyEi5uYWFkZi52MS5QcmVzZW5jZUgAQgYKBGtpbmQicgoPUHJlc2VuY2VSZXF1ZXN0Eg8KB3Nlc3Npb24YASABKAYSDAoEbmFtZRgCIAEoCRIQCghwb3NpdGlvbhgDIAMoARIPCgdmb3J3YXJkGAQgAygBEg8KB3BvaW50ZXIYBSADKAMSDAoEdG9vbBgGIAEoCSIPCg1QcmVzZW5jZVJlcGx5IjQKCFByZXNlbmNlEigKB2VudHJpZXMYASADKAsyFy5uYWFkZi52MS5QcmVzZW5jZUVudHJ5Io4BCg1QcmVzZW5jZUVudHJ5EgwKBHVzZXIYASABKAkSDwoHc2Vzc2lvbhgCIAEoBhIMCgRuYW1lGAMgASgJEhAKCHBvc2l0aW9uGAQgAygBEg8KB2ZvcndhcmQYBSADKAESDwoHcG9pbnRlchgGIAMoAxIMCgR0b29sGAcgASgJEg4KBmFnZV9tcxgIIAEoDSLmAQoGSGVhZGVyEhgKEHByb3RvY29sX3ZlcnNpb24YASABKA0SDAoEc2l6ZRgCIAMoDRIPCgd2ZXJzaW9uGAMgASgEEhIKCmdyb3d0aF9zZXEYBCABKA0SEQoJcXVpZXNjZW50GAUgASgIEg4KBmRpZ2VzdBgGIAEoBhInCgdidWZmZXJzGAcgAygLMhYubmFhZGYudjEuQnVmZmVyTGVuZ3RoEhQKDGVudGl0eV90YWJsZRgIIAEoDBINCgVwYWdlcxgJIAEoDRIOCgZyZXN5bmMYCiABKAgSDgoGcmVzdW1lGAsgASgIIi0KDEJ1ZmZlckxlbmd0aBIOCgZidWZmZXIYASABKA0SDQoFYnl0ZXMYAiABKAQiNQoEUGFnZRIOCgZidWZmZXIYASABKA0SDwoHaW5kaWNlcxgCIAMoDRIMCgR6c3RkGAMgASgMIlUKBURlbHRhEg4KBmNoYW5nZRgBIAEoDBIOCgZkaWdlc3QYAiABKAYSDAoEdXNlchgDIAEoCRIeCgVwYXRjaBgEIAEoCzIPLm5hYWRmLnYxLlBhdGNoIpMBCgVQYXRjaBIPCgd2ZXJzaW9uGAEgASgEEhIKCmdyb3d0aF9zZXEYAiABKA0SEQoJcXVpZXNjZW50GAMgASgIEicKB2xlbmd0aHMYBCADKAsyFi5uYWFkZi52MS5CdWZmZXJMZW5ndGgSGwoEcnVucxgFIAMoCzINLm5hYWRmLnYxLlJ1bhIMCgR6c3RkGAYgASgMIjQKA1J1bhIOCgZidWZmZXIYASABKA0SDgoGb2Zmc2V0GAIgASgEEg0KBWJ5dGVzGAMgASgMIiMKBFJ1bnMSGwoEcnVucxgBIAMoCzINLm5hYWRmLnYxLlJ1biIuCgtFZGl0UmVxdWVzdBILCgNvcHMYASABKAkSEgoKY2xpZW50X3NlcRgCIAEoBCIvCglFZGl0UmVwbHkSDwoHdmVyc2lvbhgBIAEoBBIRCglkdXBsaWNhdGUYAiABKAgiMgoKRW50aXR5UG9zZRIKCgJpZBgBIAEoDRILCgNwb3MYAiADKAESCwoDcm90GAMgAygBIlMKFFNwYXduRW50aXRpZXNSZXF1ZXN0EicKCGVudGl0aWVzGAEgAygLMhUubmFhZGYudjEuRW50aXR5U3Bhd24SEgoKY2xpZW50X3NlcRgCIAEoBCJACgtFbnRpdHlTcGF3bhINCgVtb2RlbBgBIAEoCRIiCgRwb3NlGAIgASgLMhQubmFhZGYudjEuRW50aXR5UG9zZSJOChNNb3ZlRW50aXRpZXNSZXF1ZXN0EiMKBW1vdmVzGAEgAygLMhQubmFhZGYudjEuRW50aXR5UG9zZRISCgpjbGllbnRfc2VxGAIgASgEIjkKFkRlc3Bhd25FbnRpdGllc1JlcXVlc3QSCwoDaWRzGAEgAygNEhIKCmNsaWVudF9zZXEYAiABKAQiJAoOSGlzdG9yeVJlcXVlc3QSEgoKY2xpZW50X3NlcRgBIAEoBCIPCg1TdGF0dXNSZXF1ZXN0IqoBCgtTdGF0dXNSZXBseRIYChBwcm90b2NvbF92ZXJzaW9uGAEgASgNEgwKBHNpemUYAiADKA0SDwoHdmVyc2lvbhgDIAEoBBISCgpncm93dGhfc2VxGAQgASgNEhEKCXF1aWVzY2VudBgFIAEoCBIOCgZkaWdlc3QYBiABKAkSDwoHY2xpZW50cxgHIAEoDRIMCgR1c2VyGAggASgJEgwKBHJvbGUYCSABKAkqOAoJRGVsdGFGb3JtEhUKEURFTFRBX0ZPUk1fUkVDT1JEEAASFAoQREVMVEFfRk9STV9QQVRDSBABMrIFCgxXb3JsZFNlcnZpY2USNwoESm9pbhIVLm5hYWRmLnYxLkpvaW5SZXF1ZXN0GhYubmFhZGYudjEuV29ybGRNZXNzYWdlMAESMgoERWRpdBIVLm5hYWRmLnYxLkVkaXRSZXF1ZXN0GhMubmFhZGYudjEuRWRpdFJlcGx5EkQKDVNwYXduRW50aXRpZXMSHi5uYWFkZi52MS5TcGF3bkVudGl0aWVzUmVxdWVzdBoTLm5hYWRmLnYxLkVkaXRSZXBseRJCCgxNb3ZlRW50aXRpZXMSHS5uYWFkZi52MS5Nb3ZlRW50aXRpZXNSZXF1ZXN0GhMubmFhZGYudjEuRWRpdFJlcGx5EkgKD0Rlc3Bhd25FbnRpdGllcxIgLm5hYWRmLnYxLkRlc3Bhd25FbnRpdGllc1JlcXVlc3QaEy5uYWFkZi52MS5FZGl0UmVwbHkSNQoEVW5kbxIYLm5hYWRmLnYxLkhpc3RvcnlSZXF1ZXN0GhMubmFhZGYudjEuRWRpdFJlcGx5EjUKBFJlZG8SGC5uYWFkZi52MS5IaXN0b3J5UmVxdWVzdBoTLm5hYWRmLnYxLkVkaXRSZXBseRI4CgZTdGF0dXMSFy5uYWFkZi52MS5TdGF0dXNSZXF1ZXN0GhUubmFhZGYudjEuU3RhdHVzUmVwbHkSPQoMUmVnaXN0ZXJOb2RlEhUubmFhZGYudjEuTm9kZU1lc3NhZ2UaEi5uYWFkZi52MS5GcmFtZUpvYigBMAESOwoLUmVuZGVyRnJhbWUSFi5uYWFkZi52MS5GcmFtZVJlcXVlc3QaFC5uYWFkZi52MS5GcmFtZVJlcGx5Ej0KB1B1Ymxpc2gSGS5uYWFkZi52MS5QcmVzZW5jZVJlcXVlc3QaFy5uYWFkZi52MS5QcmVzZW5jZVJlcGx5YgZwcm90bzM`),_o=V(go,6),vo=V(go,9),yo=V(go,10),bo=V(go,20),xo=V(go,21),So=V(go,28),Co=function(e){return e[e.RECORD=0]=`RECORD`,e[e.PATCH=1]=`PATCH`,e}({}),wo=to(go,0),To=2**30,Eo=Math.fround(.99999994);function Do(e){let t;try{t=JSON.parse(e)}catch(e){throw Error(`camera JSON: ${e.message}`)}if(typeof t!=`object`||!t)throw Error(`camera JSON: not an object`);let n=t,r=n.pos;if(!Array.isArray(r)||r.length!==3||r.some(e=>typeof e!=`number`))throw Error(`camera JSON: pos must be three numbers`);for(let e of[`yaw`,`pitch`])if(typeof n[e]!=`number`)throw Error(`camera JSON: missing number ${e}`);if(n.fov_y!==void 0&&typeof n.fov_y!=`number`)throw Error(`camera JSON: fov_y must be a number`);let i={pos:[r[0],r[1],r[2]],yaw:n.yaw,pitch:n.pitch,fov_y:n.fov_y??90};if(![...i.pos,i.yaw,i.pitch,i.fov_y].every(Number.isFinite)||!(i.fov_y>0&&i.fov_y<180))throw Error(`camera values must be finite and 0 < fov_y < 180`);return i}function Oo(e){return JSON.stringify({pos:e.pos,yaw:e.yaw,pitch:e.pitch,fov_y:e.fov_y})}var ko=e=>Math.PI/180*e,Ao=(e,t)=>[e[1]*t[2]-e[2]*t[1],e[2]*t[0]-e[0]*t[2],e[0]*t[1]-e[1]*t[0]],jo=e=>{let t=Math.sqrt(e[0]*e[0]+e[1]*e[1]+e[2]*e[2]);return[e[0]/t,e[1]/t,e[2]/t]};function Mo(e){let t=ko(e.yaw),n=ko(Math.min(89.9,Math.max(-89.9,e.pitch))),r=[Math.sin(t)*Math.cos(n),Math.sin(n),Math.cos(t)*Math.cos(n)],i=jo(Ao([0,1,0],r));return{forward:r,right:i,up:Ao(r,i)}}function No(e,t,n){if(e.pos.some(e=>Math.abs(e)>To))throw Error(`camera position is out of range (within ±2^30)`);let r=Mo(e),i=Math.tan(ko(e.fov_y)/2),a=t/n,o=e.pos.map(Math.floor),s=e.pos.map((e,t)=>Math.min(Math.fround(e-o[t]),Eo)),c=(e,t)=>e.map(e=>Math.fround(e*t));return{int:o,frac:s,forward:c(r.forward,1),right:c(r.right,i*a),up:c(r.up,i)}}function Po(e){return{pos:[.5*e[0],.7*e[1],.05*e[2]],yaw:0,pitch:-15,fov_y:70}}function Fo(e,t,n,r){function i(e){return e instanceof n?e:new n(function(t){t(e)})}return new(n||=Promise)(function(n,a){function o(e){try{c(r.next(e))}catch(e){a(e)}}function s(e){try{c(r.throw(e))}catch(e){a(e)}}function c(e){e.done?n(e.value):i(e.value).then(o,s)}c((r=r.apply(e,t||[])).next())})}var W=class{constructor(){this.mutex=Promise.resolve()}lock(){let e=()=>{};return this.mutex=this.mutex.then(()=>new Promise(e)),new Promise(t=>{e=t})}dispatch(e){return Fo(this,void 0,void 0,function*(){let t=yield this.lock();try{return yield Promise.resolve(e())}finally{t()}})}};function Io(){return typeof globalThis<`u`?globalThis:typeof self<`u`?self:typeof window<`u`?window:global}var Lo=Io(),Ro=Lo.Buffer??null,zo=Lo.TextEncoder?new Lo.TextEncoder:null;function Bo(e,t){return(e&15)+(e>>6|e>>3&8)<<4|(t&15)+(t>>6|t>>3&8)}function Vo(e,t){let n=t.length>>1;for(let r=0;r<n;r++){let n=r<<1;e[r]=Bo(t.charCodeAt(n),t.charCodeAt(n+1))}}function Ho(e,t){if(e.length!==t.length*2)return!1;for(let n=0;n<t.length;n++){let r=n<<1;if(t[n]!==Bo(e.charCodeAt(r),e.charCodeAt(r+1)))return!1}return!0}var Uo=87,Wo=48;function Go(e,t,n){let r=0;for(let i=0;i<n;i++){let n=t[i]>>>4;e[r++]=n>9?n+Uo:n+Wo,n=t[i]&15,e[r++]=n>9?n+Uo:n+Wo}return String.fromCharCode.apply(null,e)}var Ko=Ro===null?e=>{if(typeof e==`string`)return zo.encode(e);if(ArrayBuffer.isView(e))return new Uint8Array(e.buffer,e.byteOffset,e.byteLength);throw Error(`Invalid data type!`)}:e=>{if(typeof e==`string`){let t=Ro.from(e,`utf8`);return new Uint8Array(t.buffer,t.byteOffset,t.length)}if(Ro.isBuffer(e))return new Uint8Array(e.buffer,e.byteOffset,e.length);if(ArrayBuffer.isView(e))return new Uint8Array(e.buffer,e.byteOffset,e.byteLength);throw Error(`Invalid data type!`)},qo=`ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/`,Jo=new Uint8Array(256);for(let e=0;e<64;e++)Jo[qo.charCodeAt(e)]=e;function Yo(e){let t=Math.floor(e.length*.75),n=e.length;return e[n-1]===`=`&&(--t,e[n-2]===`=`&&--t),t}function Xo(e){let t=Yo(e),n=e.length,r=new Uint8Array(t),i=0;for(let t=0;t<n;t+=4){let n=Jo[e.charCodeAt(t)],a=Jo[e.charCodeAt(t+1)],o=Jo[e.charCodeAt(t+2)],s=Jo[e.charCodeAt(t+3)];r[i]=n<<2|a>>4,i+=1,r[i]=(a&15)<<4|o>>2,i+=1,r[i]=(o&3)<<6|s&63,i+=1}return r}var Zo=16384,Qo=4,$o=new W,es=new Map;function ts(e,t){return Fo(this,void 0,void 0,function*(){let n=null,r=null,i=!1;if(typeof WebAssembly>`u`)throw Error(`WebAssembly is not supported in this environment!`);let a=(e,t=0)=>{r.set(e,t)},o=()=>r,s=()=>n.exports,c=e=>{n.exports.Hash_SetMemorySize(e);let t=n.exports.Hash_GetBuffer(),i=n.exports.memory.buffer;r=new Uint8Array(i,t,e)},l=()=>new DataView(n.exports.memory.buffer).getUint32(n.exports.STATE_SIZE,!0),u=$o.dispatch(()=>Fo(this,void 0,void 0,function*(){if(!es.has(e.name)){let t=Xo(e.data),n=WebAssembly.compile(t.buffer);es.set(e.name,n)}let t=yield es.get(e.name);n=yield WebAssembly.instantiate(t,{})})),d=()=>Fo(this,void 0,void 0,function*(){n||(yield u);let e=n.exports.Hash_GetBuffer(),t=n.exports.memory.buffer;r=new Uint8Array(t,e,Zo)}),f=(e=null)=>{i=!0,n.exports.Hash_Init(e)},p=e=>{let t=0;for(;t<e.length;){let i=e.subarray(t,t+Zo);t+=i.length,r.set(i),n.exports.Hash_Update(i.length)}},m=e=>{if(!i)throw Error(`update() called before init()`);let t=Ko(e);p(t)},h=new Uint8Array(t*2),g=(e,a=null)=>{if(!i)throw Error(`digest() called before init()`);return i=!1,n.exports.Hash_Final(a),e===`binary`?r.slice(0,t):Go(h,r,t)},_=()=>{if(!i)throw Error(`save() can only be called after init() and before digest()`);let t=n.exports.Hash_GetState(),r=l(),a=n.exports.memory.buffer,o=new Uint8Array(a,t,r),s=new Uint8Array(Qo+r);return Vo(s,e.hash),s.set(o,Qo),s},v=t=>{if(!(t instanceof Uint8Array))throw Error(`load() expects an Uint8Array generated by save()`);let r=n.exports.Hash_GetState(),a=l(),o=Qo+a,s=n.exports.memory.buffer;if(t.length!==o)throw Error(`Bad state length (expected ${o} bytes, got ${t.length})`);if(!Ho(e.hash,t.subarray(0,Qo)))throw Error(`This state was written by an incompatible hash implementation`);let c=t.subarray(Qo);new Uint8Array(s,r,a).set(c),i=!0},y=e=>typeof e==`string`?e.length<Zo/4:e.byteLength<Zo,b=y;switch(e.name){case`argon2`:case`scrypt`:b=()=>!0;break;case`blake2b`:case`blake2s`:b=(e,t)=>t<=512&&y(e);break;case`blake3`:b=(e,t)=>t===0&&y(e);break;case`xxhash64`:case`xxhash3`:case`xxhash128`:case`crc64`:b=()=>!1}return yield d(),{getMemory:o,writeMemory:a,getExports:s,setMemorySize:c,init:f,update:m,digest:g,save:_,load:v,calculate:(e,i=null,a=null)=>{if(!b(e,i))return f(i),m(e),g(`hex`,a);let o=Ko(e);return r.set(o),n.exports.Hash_Calculate(o.length,i,a),Go(h,r,t)},hashLength:t}})}new W,new W,new W,new W,new W,new W,new W,new W,new W,new W,new W,new W,new W,new W,new W,new W,new W;var ns={name:`xxhash3`,data:`AGFzbQEAAAABNAhgAAF/YAR/f39/AGAHf39/f39/fwBgBH9+fn4BfmAEf39/fgF+YAN/f34BfmAAAGABfwADDg0AAQIDBAUFBQYHBgAGBQQBAQICBg8CfwFBgIAEC38AQcCBBAsHggEJBm1lbW9yeQIAD19fc3RhY2tfcG9pbnRlcgMADkhhc2hfR2V0QnVmZmVyAAAJSGFzaF9Jbml0AAgLSGFzaF9VcGRhdGUACQpIYXNoX0ZpbmFsAAoNSGFzaF9HZXRTdGF0ZQALDkhhc2hfQ2FsY3VsYXRlAAwKU1RBVEVfU0laRQMBCo9CDQYAQYCCBAvzAwQBfwh+AX8IfgJAIANFDQAgA0EDdCEEIAApAzAhBSAAKQM4IQYgACkDICEHIAApAyghCCAAKQMQIQkgACkDGCEKIAApAwAhCyAAKQMIIQxBACENA0AgBiABQTBqKQMAIg58IAIgDWoiA0E4aikDACABQThqKQMAIg+FIgZCIIggBkL/////D4N+fCEGIAggAUEgaikDACIQfCADQShqKQMAIAFBKGopAwAiEYUiCEIgiCAIQv////8Pg358IQggCiABQRBqKQMAIhJ8IANBGGopAwAgAUEYaikDACIThSIKQiCIIApC/////w+DfnwhCiAMIAEpAwAiFHwgA0EIaikDACABQQhqKQMAIhWFIgxCIIggDEL/////D4N+fCEMIANBMGopAwAgDoUiDkIgiCAOQv////8Pg34gBXwgD3whBSADQSBqKQMAIBCFIg5CIIggDkL/////D4N+IAd8IBF8IQcgA0EQaikDACAShSIOQiCIIA5C/////w+DfiAJfCATfCEJIAMpAwAgFIUiDkIgiCAOQv////8Pg34gC3wgFXwhCyABQcAAaiEBIAQgDUEIaiINRw0ACyAAIAo3AxggACALNwMAIAAgDDcDCCAAIAg3AyggACAJNwMQIAAgBjcDOCAAIAc3AyAgACAFNwMwCwveAgIBfwF+AkAgBCACIAEoAgAiB2siAkkNACAAIAMgBSAHQQN0aiACEAEgACAFIAZqIgcpAwAgACkDACIIQi+IhSAIhUKx893xCX43AwAgACAHKQMIIAApAwgiCEIviIUgCIVCsfPd8Ql+NwMIIAAgBykDECAAKQMQIghCL4iFIAiFQrHz3fEJfjcDECAAIAcpAxggACkDGCIIQi+IhSAIhUKx893xCX43AxggACAHKQMgIAApAyAiCEIviIUgCIVCsfPd8Ql+NwMgIAAgBykDKCAAKQMoIghCL4iFIAiFQrHz3fEJfjcDKCAAIAcpAzAgACkDMCIIQi+IhSAIhUKx893xCX43AzAgACAHKQM4IAApAzgiCEIviIUgCIVCsfPd8Ql+NwM4IAAgAyACQQZ0aiAFIAQgAmsiBxABIAEgBzYCAA8LIAAgAyAFIAdBA3RqIAQQASABIAcgBGo2AgALewEBfyACIAGFIAOnIgRB/4H8B3FBCHggBEEYeEH/gfwHcXKtQiCGIAOFfUEANQKAhAVCIIYgAEH8gwVqNQIAhIUiA0IxiSADQhiJhSADhUKlvuP00YyH2Z9/fiIDQiOIIACtfCADhUKlvuP00YyH2Z9/fiIDQhyIIAOFC2QAIAMgAiABc618IgNCIYhBAC0AgIQFQRB0IABBCHRyIABBAXYtAICEBUEYdHIgAEH/gwVqLQAAcq2FIAOFQs/W077Sx6vZQn4iA0IdiCADhUL5893xmfaZqxZ+IgNCIIggA4ULhwMBBX4CQCAAQQlJDQBBACkDgIQFIAEpAyAgASkDGIUgAnyFIgNCOIYgA0KA/gODQiiGhCADQoCA/AeDQhiGIANCgICA+A+DQgiGhIQgA0IIiEKAgID4D4MgA0IYiEKAgPwHg4QgA0IoiEKA/gODIANCOIiEhIQgAK18IABB+IMFaikDACABKQMwIAEpAyiFIAJ9hSICfCACQv////8PgyIEIANCIIgiBX4iBiACQiCIIgIgA0L/////D4MiB358IgNCIIggAiAFfnxCgICAgBBCACADIAZUG3wgA0IghiIDIAQgB358IgIgA1StfCAChXwiA0IliCADhUL5893xmfKZqxZ+IgNCIIggA4UPCwJAIABBBEkNACAAIAFBCGopAwAgAUEQaikDACACEAMPCwJAIABFDQAgACABKAIAIAFBBGooAgAgAhAEDwsgASkDOCABKQNAhSAChSIDQiGIIAOFQs/W077Sx6vZQn4iA0IdiCADhUL5893xmfaZqxZ+IgNCIIggA4ULzggBB34gAK1Ch5Wvr5i23puef34hAwJAIABBIUkNAAJAIABBwQBJDQACQCAAQeEASQ0AIAEpA2ggAn1BACkDuIQFhSIEQv////8PgyIFIAEpA2AgAnxBACkDsIQFhSIGQiCIIgd+IgggBEIgiCIJIAZC/////w+DIgZ+fCIEQiCIIAkgB358QoCAgIAQQgAgBCAIVBt8IARCIIYiBCAFIAZ+fCIFIARUrXwgBYUgA3wgASkDeCACfSAAQciDBWopAwCFIgNC/////w+DIgQgASkDcCACfCAAQcCDBWopAwCFIgVCIIgiBn4iByADQiCIIgggBUL/////D4MiBX58IgNCIIggCCAGfnxCgICAgBBCACADIAdUG3wgA0IghiIDIAQgBX58IgQgA1StfCAEhXwhAwsgASkDSCACfUEAKQOohAWFIgRC/////w+DIgUgASkDQCACfEEAKQOghAWFIgZCIIgiB34iCCAEQiCIIgkgBkL/////D4MiBn58IgRCIIggCSAHfnxCgICAgBBCACAEIAhUG3wgBEIghiIEIAUgBn58IgUgBFStfCAFhSADfCABKQNYIAJ9IABB2IMFaikDAIUiA0L/////D4MiBCABKQNQIAJ8IABB0IMFaikDAIUiBUIgiCIGfiIHIANCIIgiCCAFQv////8PgyIFfnwiA0IgiCAIIAZ+fEKAgICAEEIAIAMgB1QbfCADQiCGIgMgBCAFfnwiBCADVK18IASFfCEDCyABKQMoIAJ9QQApA5iEBYUiBEL/////D4MiBSABKQMgIAJ8QQApA5CEBYUiBkIgiCIHfiIIIARCIIgiCSAGQv////8PgyIGfnwiBEIgiCAJIAd+fEKAgICAEEIAIAQgCFQbfCAEQiCGIgQgBSAGfnwiBSAEVK18IAWFIAN8IAEpAzggAn0gAEHogwVqKQMAhSIDQv////8PgyIEIAEpAzAgAnwgAEHggwVqKQMAhSIFQiCIIgZ+IgcgA0IgiCIIIAVC/////w+DIgV+fCIDQiCIIAggBn58QoCAgIAQQgAgAyAHVBt8IANCIIYiAyAEIAV+fCIEIANUrXwgBIV8IQMLIAEpAwggAn1BACkDiIQFhSIEQv////8PgyIFIAEpAwAgAnxBACkDgIQFhSIGQiCIIgd+IgggBEIgiCIJIAZC/////w+DIgZ+fCIEQiCIIAkgB358QoCAgIAQQgAgBCAIVBt8IARCIIYiBCAFIAZ+fCIFIARUrXwgBYUgA3wgASkDGCACfSAAQfiDBWopAwCFIgNC/////w+DIgQgASkDECACfCAAQfCDBWopAwCFIgJCIIgiBX4iBiADQiCIIgMgAkL/////D4MiB358IgJCIIggAyAFfnxCgICAgBBCACACIAZUG3wgAkIghiICIAQgB358IgMgAlStfCADhXwiAkIliCAChUL5893xmfKZqxZ+IgJCIIggAoUL5QoEAX8GfgJ/AX5BACEDIAEpA3ggAn1BACkD+IQFhSIEQv////8PgyIFIAEpA3AgAnxBACkD8IQFhSIGQiCIIgd+IgggBEIgiCIJIAZC/////w+DIgZ+fCIEQiCIIAkgB358QoCAgIAQQgAgBCAIVBt8IARCIIYiBCAFIAZ+fCIFIARUrXwgBYUgASkDaCACfUEAKQPohAWFIgRC/////w+DIgUgASkDYCACfEEAKQPghAWFIgZCIIgiB34iCCAEQiCIIgkgBkL/////D4MiBn58IgRCIIggCSAHfnxCgICAgBBCACAEIAhUG3wgBEIghiIEIAUgBn58IgUgBFStfCAFhSABKQNYIAJ9QQApA9iEBYUiBEL/////D4MiBSABKQNQIAJ8QQApA9CEBYUiBkIgiCIHfiIIIARCIIgiCSAGQv////8PgyIGfnwiBEIgiCAJIAd+fEKAgICAEEIAIAQgCFQbfCAEQiCGIgQgBSAGfnwiBSAEVK18IAWFIAEpA0ggAn1BACkDyIQFhSIEQv////8PgyIFIAEpA0AgAnxBACkDwIQFhSIGQiCIIgd+IgggBEIgiCIJIAZC/////w+DIgZ+fCIEQiCIIAkgB358QoCAgIAQQgAgBCAIVBt8IARCIIYiBCAFIAZ+fCIFIARUrXwgBYUgASkDOCACfUEAKQO4hAWFIgRC/////w+DIgUgASkDMCACfEEAKQOwhAWFIgZCIIgiB34iCCAEQiCIIgkgBkL/////D4MiBn58IgRCIIggCSAHfnxCgICAgBBCACAEIAhUG3wgBEIghiIEIAUgBn58IgUgBFStfCAFhSABKQMoIAJ9QQApA6iEBYUiBEL/////D4MiBSABKQMgIAJ8QQApA6CEBYUiBkIgiCIHfiIIIARCIIgiCSAGQv////8PgyIGfnwiBEIgiCAJIAd+fEKAgICAEEIAIAQgCFQbfCAEQiCGIgQgBSAGfnwiBSAEVK18IAWFIAEpAxggAn1BACkDmIQFhSIEQv////8PgyIFIAEpAxAgAnxBACkDkIQFhSIGQiCIIgd+IgggBEIgiCIJIAZC/////w+DIgZ+fCIEQiCIIAkgB358QoCAgIAQQgAgBCAIVBt8IARCIIYiBCAFIAZ+fCIFIARUrXwgBYUgASkDCCACfUEAKQOIhAWFIgRC/////w+DIgUgASkDACACfEEAKQOAhAWFIgZCIIgiB34iCCAEQiCIIgkgBkL/////D4MiBn58IgRCIIggCSAHfnxCgICAgBBCACAEIAhUG3wgBEIghiIEIAUgBn58IgUgBFStfCAFhSAArUKHla+vmLbem55/fnx8fHx8fHx8IgRCJYggBIVC+fPd8ZnymasWfiIEQiCIIASFIQUCQCAAQZABSQ0AIABBcHFBgH9qIQoDQCABIANqIgtBC2opAwAgAn0gA0GIhQVqKQMAhSIEQv////8PgyIGIAtBA2opAwAgAnwgA0GAhQVqKQMAhSIHQiCIIgh+IgkgBEIgiCIMIAdC/////w+DIgd+fCIEQiCIIAwgCH58QoCAgIAQQgAgBCAJVBt8IARCIIYiBCAGIAd+fCIGIARUrXwgBoUgBXwhBSAKIANBEGoiA0cNAAsLIAEpA38gAn0gAEH4gwVqKQMAhSIEQv////8PgyIGIAEpA3cgAnwgAEHwgwVqKQMAhSICQiCIIgd+IgggBEIgiCIEIAJC/////w+DIgl+fCICQiCIIAQgB358QoCAgIAQQgAgAiAIVBt8IAJCIIYiAiAGIAl+fCIEIAJUrXwgBIUgBXwiAkIliCAChUL5893xmfKZqxZ+IgJCIIggAoUL4QUCAX4BfwJAAkBBACkDgIIEIgBQRQ0AQYCABCEBQgAhAAwBCwJAIABBACkDoIYFUg0AQQAhAQwBC0EAIQFBAEKvr+/XvPeSoP4AIAB9NwP4gwVBACAAQsWW6/nY0oWCKHw3A/CDBUEAQo/x442tj/SYTiAAfTcD6IMFQQAgAEKrrPjF1e/R0Hx8NwPggwVBAELTrdSykoW1tJ5/IAB9NwPYgwVBACAAQpea9I71lrztyQB8NwPQgwVBAELFg4L9r//EsWsgAH03A8iDBUEAIABC6ouzncjm9PVDfDcDwIMFQQBCyL/6y5yb3rnkACAAfTcDuIMFQQAgAEKKo4Hf1JntrDF8NwOwgwVBAEL5ue+9/PjCpx0gAH03A6iDBUEAIABCqPXb+7Ocp5o/fDcDoIMFQQBCuLK8t5TVt9ZYIAB9NwOYgwVBACAAQvHIobqptMP8zgB8NwOQgwVBAEKIoZfbuOOUl6N/IAB9NwOIgwVBACAAQrzQyNqb8rCAS3w3A4CDBUEAQuDrwLSe0I6TzAAgAH03A/iCBUEAIABCuJGYovf+kJKOf3w3A/CCBUEAQoK1we7H+b+5ISAAfTcD6IIFQQAgAELL85n3xJnw8vgAfDcD4IIFQQBC8oCRpfr27LMfIAB9NwPYggVBACAAQt6pt8u+kOTLW3w3A9CCBUEAQvyChOTyvsjWHCAAfTcDyIIFQQAgAEK4/bPLs4Tppb5/fDcDwIIFC0EAQgA3A5CGBUEAQgA3A4iGBUEAQgA3A4CGBUEAQr3cypUMNwOAggVBAEKHla+vmLbem55/NwOIggVBAELP1tO+0ser2UI3A5CCBUEAQvnz3fGZ9pmrFjcDmIIFQQBC49zKlfzO8vWFfzcDoIIFQQBC95Svrwg3A6iCBUEAQsXP2bLx5brqJzcDsIIFQQBCsfPd8Qk3A7iCBUEAIAA3A6CGBUEAIAE2ArCGBUEAQpCAgICAEDcDmIYFC9YKAQh/QQBBACkDkIYFIACtfDcDkIYFAkACQAJAQQAoAoCGBSIBIABqIgJBgAJLDQAgAUGAhAVqIQNBgIIEIQQCQCAAQQhPDQAgACEFDAILQYCCBCEEAkACQCAAQXhqIgFBOHFBOEcNACAAIQUMAQtBgIIEIQQgAUEDdkEBakEHcSIGIQUDQCADIAQpAwA3AwAgA0EIaiEDIARBCGohBCAFQX9qIgUNAAsgACAGQQN0ayEFIAFBOEkNAgsDQCADIAQpAwA3AwAgA0EIaiAEQQhqKQMANwMAIANBEGogBEEQaikDADcDACADQRhqIARBGGopAwA3AwAgA0EgaiAEQSBqKQMANwMAIANBKGogBEEoaikDADcDACADQTBqIARBMGopAwA3AwAgA0E4aiAEQThqKQMANwMAIANBwABqIQMgBEHAAGohBCAFQUBqIgVBB0sNAAwCCwtBgIIEIQQgAEGAggRqIQZBACgCsIYFIgNBwIIFIAMbIQUCQCABRQ0AIAFBgIQFaiEDQYCCBCEEAkACQEGAAiABayIHQQhPDQAgByECDAELQYCCBCEEAkACQEH4ASABayIAQThxQThHDQAgByECDAELQQAgAEEDdkEBakEHcSIIayECQYCCBCEEA0AgAyAEKQMANwMAIANBCGohAyAEQQhqIQQgAkEBaiICDQALQYACIAEgCEEDdGprIQIgAEE4SQ0BCwNAIAMgBCkDADcDACADQQhqIARBCGopAwA3AwAgA0EQaiAEQRBqKQMANwMAIANBGGogBEEYaikDADcDACADQSBqIARBIGopAwA3AwAgA0EoaiAEQShqKQMANwMAIANBMGogBEEwaikDADcDACADQThqIARBOGopAwA3AwAgA0HAAGohAyAEQcAAaiEEIAJBQGoiAkEHSw0ACwsCQCACRQ0AAkACQCACQQdxIgANACACIQAMAQsDQCADIAQtAAA6AAAgA0EBaiEDIARBAWohBCAAQX9qIgANAAsgAkF4cSEACyACQQhJDQADQCADIAQpAAA3AAAgA0EIaiEDIARBCGohBCAAQXhqIgANAAsLQYCCBUGIhgVBACgCmIYFQYCEBUEEIAVBACgCnIYFEAJBAEEANgKAhgUgB0GAggRqIQQLAkAgBEGAAmogBk8NACAGQYB+aiECA0BBgIIFQYiGBUEAKAKYhgUgBCIDQQQgBUEAKAKchgUQAiADQYACaiIEIAJJDQALQQAgAykDwAE3A8CFBUEAIAMpA8gBNwPIhQVBACADKQPQATcD0IUFQQAgAykD2AE3A9iFBUEAIAMpA+ABNwPghQVBACADKQPoATcD6IUFQQAgAykD8AE3A/CFBUEAIAMpA/gBNwP4hQULQYCEBSEDAkACQCAGIARrIgJBCE8NACACIQUMAQtBgIQFIQMgAiEFA0AgAyAEKQMANwMAIANBCGohAyAEQQhqIQQgBUF4aiIFQQdLDQALCyAFRQ0BIAMgBC0AADoAACAFQQFGDQEgAyAELQABOgABIAVBAkYNASADIAQtAAI6AAIgBUEDRg0BIAMgBC0AAzoAAyAFQQRGDQEgAyAELQAEOgAEIAVBBUYNASADIAQtAAU6AAUgBUEGRg0BIAMgBC0ABjoABgwBCyAFRQ0AAkACQCAFQQdxIgINACAFIQIMAQsDQCADIAQtAAA6AAAgA0EBaiEDIARBAWohBCACQX9qIgINAAsgBUF4cSECCwJAIAVBCEkNAANAIAMgBCkAADcAACADQQhqIQMgBEEIaiEEIAJBeGoiAg0ACwtBACgCgIYFIABqIQILQQAgAjYCgIYFC8oSBQR/CH4BfxB+BX8jACIAIQEgAEGAAWtBQHEiAiQAQQAoArCGBSIAQcCCBSAAGyEDAkACQAJAAkACQAJAQQApA5CGBSIEQvEBVA0AIAJBACkDgIIFNwMAIAJBACkDiIIFIgU3AwggAkEAKQOQggUiBjcDECACQQApA5iCBSIHNwMYIAJBACkDoIIFIgg3AyAgAkEAKQOoggUiCTcDKCACQQApA7CCBSIKNwMwIAJBACkDuIIFIgs3AzgCQEEAKAKAhgUiDEHAAEkNACACQQAoAoiGBTYCQCACIAJBwABqQQAoApiGBUGAhAUgDEF/akEGdiADQQAoApyGBSIAEAIgAyAAaiIAQXlqKQMAIQ0gACkDCSEOIAApAxkhDyAAKQMpIQUgDEHAgwVqKQMAIQogACkDASELIAxByIMFaikDACEQIAxB0IMFaikDACEGIAApAxEhByAMQdiDBWopAwAhESAMQeCDBWopAwAhCCAAKQMhIQkgDEHogwVqKQMAIRIgAikDACETIAIpAxAhFCACKQMgIRUgAikDMCEWIAIpAwghFyACKQMYIRggAikDKCEZIAIgAikDOCAMQfCDBWopAwAiGnwgACkDMSAMQfiDBWopAwAiG4UiHEIgiCAcQv////8Pg358NwM4IBkgCHwgCSAShSIJQiCIIAlC/////w+DfnwhCSAYIAZ8IAcgEYUiB0IgiCAHQv////8Pg358IQcgFyAKfCALIBCFIgtCIIggC0L/////D4N+fCELIBsgFiAFIBqFIgVCIIggBUL/////D4N+fHwhBSASIBUgDyAIhSIIQiCIIAhC/////w+Dfnx8IQggESAUIA4gBoUiBkIgiCAGQv////8Pg358fCEGIBAgEyANIAqFIgpCIIggCkL/////D4N+fHwhCgwFCyAMQcCFBWohHUHAACAMayEeIAJBwABqIQACQCAMQThNDQAgHiEfDAMLAkBBOCAMa0EDdiIAQQdGDQBBACAAQQFqQQdxIiBrIR8gAkHAAGohAANAIAAgHSkDADcDACAAQQhqIQAgHUEIaiEdIB9BAWoiHw0AC0HAACAMICBBA3RqayEfDAILIAJBwABqIQAgHiEfA0AgACAdKQMANwMAIABBCGogHUEIaikDADcDACAAQRBqIB1BEGopAwA3AwAgAEEYaiAdQRhqKQMANwMAIABBIGogHUEgaikDADcDACAAQShqIB1BKGopAwA3AwAgAEEwaiAdQTBqKQMANwMAIABBOGogHUE4aikDADcDACAAQcAAaiEAIB1BwABqIR0gH0FAaiIfQQdLDQAMAgsLIASnIQACQEEAKQOghgUiBVANAAJAIARCEFYNACAAQYCABCAFEAUhBAwGCwJAIARCgAFWDQAgAEGAgAQgBRAGIQQMBgsgAEGAgAQgBRAHIQQMBQsCQCAEQhBWDQAgACADQgAQBSEEDAULAkAgBEKAAVYNACAAIANCABAGIQQMBQsgACADQgAQByEEDAQLIB9FDQELIB9Bf2ohIQJAIB9BB3EiIEUNAANAIAAgHS0AADoAACAAQQFqIQAgHUEBaiEdICBBf2oiIA0ACyAfQXhxIR8LICFBB0kNAANAIAAgHSkAADcAACAAQQhqIQAgHUEIaiEdIB9BeGoiHw0ACwsgAkHAAGogHmohHUGAhAUhAAJAIAxBCEkNACAMQXhqIiBBA3ZBAWohH0GAhAUhAANAIB0gACkDADcDACAdQQhqIR0gAEEIaiEAIB9Bf2oiHw0ACyAMICBBeHFrQXhqIQwLAkAgDEUNAAJAAkAgDEEHcSIfDQAgDCEfDAELA0AgHSAALQAAOgAAIB1BAWohHSAAQQFqIQAgH0F/aiIfDQALIAxBeHEhHwsgDEEISQ0AA0AgHSAAKQAANwAAIB1BCGohHSAAQQhqIQAgH0F4aiIfDQALCyADQQAoApyGBWoiAEF5aikDACETIAApAwkhFCAAKQMZIRUgACkDKSEWIAApAwEhFyAAKQMRIRggACkDISEZIAIpAwAhGiACKQNAIRAgAikDSCERIAIpA1AhEiACKQNYIQ0gAikDYCEOIAIpA2ghDyACIAsgAikDcCIbfCAAKQMxIAIpA3giHIUiC0IgiCALQv////8Pg358NwM4IAkgDnwgGSAPhSIJQiCIIAlC/////w+DfnwhCSAHIBJ8IBggDYUiB0IgiCAHQv////8Pg358IQcgBSAQfCAXIBGFIgVCIIggBUL/////D4N+fCELIBwgFiAbhSIFQiCIIAVC/////w+DfiAKfHwhBSAPIBUgDoUiCkIgiCAKQv////8Pg34gCHx8IQggDSAUIBKFIgpCIIggCkL/////D4N+IAZ8fCEGIBEgGiATIBCFIgpCIIggCkL/////D4N+fHwhCgsgAykDQyACKQM4hSIQQv////8PgyIRIAMpAzsgBYUiBUIgiCISfiINIBBCIIgiECAFQv////8PgyIOfnwiBUIgiCAQIBJ+fEKAgICAEEIAIAUgDVQbfCAFQiCGIgUgESAOfnwiECAFVK18IBCFIAMpAzMgCYUiBUL/////D4MiCSADKQMrIAiFIghCIIgiEH4iESAFQiCIIhIgCEL/////D4MiCH58IgVCIIggEiAQfnxCgICAgBBCACAFIBFUG3wgBUIghiIFIAkgCH58IgkgBVStfCAJhSADKQMjIAeFIgVC/////w+DIgkgAykDGyAGhSIHQiCIIgh+IgYgBUIgiCIQIAdC/////w+DIgd+fCIFQiCIIBAgCH58QoCAgIAQQgAgBSAGVBt8IAVCIIYiBSAJIAd+fCIJIAVUrXwgCYUgAykDEyALhSIFQv////8PgyIJIAMpAwsgCoUiB0IgiCILfiIIIAVCIIgiBiAHQv////8PgyIHfnwiBUIgiCAGIAt+fEKAgICAEEIAIAUgCFQbfCAFQiCGIgUgCSAHfnwiCSAFVK18IAmFIARCh5Wvr5i23puef358fHx8IgRCJYggBIVC+fPd8ZnymasWfiIEQiCIIASFIQQLQQAgBEI4hiAEQoD+A4NCKIaEIARCgID8B4NCGIYgBEKAgID4D4NCCIaEhCAEQgiIQoCAgPgPgyAEQhiIQoCA/AeDhCAEQiiIQoD+A4MgBEI4iISEhDcDgIIEIAEkAAsGAEGAggULAgALC80BAQBBgIAEC8QBuP5sOSOkS758AYEs9yGtHN7UbemDkJfbckCkpLezZx/LeeZOzMDleIJa0H3M/3IhuAhGdPdDJI7gNZDmgTomTDwoUruRwwDLiNBlixtTLqNxZEiXog35TjgZ70ap3qzYqPp2P+OcND/53LvHxwtPHYpR4EvNtFkxyJ9+ydl4c2TqxayDNNPrw8WBoP/6E2PrFw3dUbfw2knTFlUmKdRonisWvlh9R6H8j/i40XrQMc5FyzqPlRYEKK/X+8q7S0B+QAIAAA==`,hash:`8d0b08d4`};new W;function rs(e){return!Number.isInteger(e)||e<0||e>0xffffffff?Error(`Seed must be given as two valid 32-bit long unsigned integers (lo + high).`):null}function is(e,t,n){let r=new DataView(e);r.setUint32(0,t,!0),r.setUint32(4,n,!0)}function as(e=0,t=0){return rs(e)?Promise.reject(rs(e)):rs(t)?Promise.reject(rs(t)):ts(ns,8).then(n=>{let r=new Uint8Array(8);is(r.buffer,e,t),n.writeMemory(r),n.init();let i={init:()=>(n.writeMemory(r),n.init(),i),update:e=>(n.update(e),i),digest:e=>n.digest(e),save:()=>n.save(),load:e=>(n.load(e),i),blockSize:512,digestSize:8};return i})}new W,new W,new W,new W;var G=65536,os;async function ss(){os??=await as(0,0)}function cs(e,t,n){if(!os)throw Error(`loadHasher() was not awaited`);let r=new Uint8Array(8),i=new DataView(r.buffer);return i.setUint32(0,e,!0),i.setUint32(4,t,!0),os.init(),os.update(r),os.update(n),BigInt(`0x`+os.digest(`hex`))}function ls(e){return e.toString(16).padStart(16,`0`)}var us=ArrayBuffer,K=Uint8Array,ds=Uint16Array,fs=Int16Array,ps=Int32Array,ms=function(e,t,n){if(K.prototype.slice)return K.prototype.slice.call(e,t,n);(t==null||t<0)&&(t=0),(n==null||n>e.length)&&(n=e.length);var r=new K(n-t);return r.set(e.subarray(t,n)),r},hs=function(e,t,n,r){if(K.prototype.fill)return K.prototype.fill.call(e,t,n,r);for((n==null||n<0)&&(n=0),(r==null||r>e.length)&&(r=e.length);n<r;++n)e[n]=t;return e},gs=function(e,t,n,r){if(K.prototype.copyWithin)return K.prototype.copyWithin.call(e,t,n,r);for((n==null||n<0)&&(n=0),(r==null||r>e.length)&&(r=e.length);n<r;)e[t++]=e[n++]},_s=[`invalid zstd data`,`window size too large (>2046MB)`,`invalid block type`,`FSE accuracy too high`,`match distance too far back`,`unexpected EOF`],q=function(e,t,n){var r=Error(t||_s[e]);if(r.code=e,Error.captureStackTrace&&Error.captureStackTrace(r,q),!n)throw r;return r},vs=function(e,t,n){for(var r=0,i=0;r<n;++r)i|=e[t++]<<(r<<3);return i},ys=function(e,t){return(e[t]|e[t+1]<<8|e[t+2]<<16|e[t+3]<<24)>>>0},bs=function(e,t){var n=e[0]|e[1]<<8|e[2]<<16;if(n==3126568&&e[3]==253){var r=e[4],i=r>>5&1,a=r>>2&1,o=r&3,s=r>>6;r&8&&q(0);var c=6-i,l=o==3?4:o,u=vs(e,c,l);c+=l;var d=s?1<<s:i,f=vs(e,c,d)+(s==1&&256),p=f;if(!i){var m=1<<10+(e[5]>>3);p=m+(m>>3)*(e[5]&7)}p>0x7fe00000&&q(1);var h=new K((t==1?f||p:t?0:p)+12);return h[0]=1,h[4]=4,h[8]=8,{b:c+d,y:0,l:0,d:u,w:t&&t!=1?t:h.subarray(12),e:p,o:new ps(h.buffer,0,3),u:f,c:a,m:Math.min(131072,p)}}if((n>>4|e[3]<<20)==25481893)return ys(e,4)+8;q(0)},xs=function(e){for(var t=0;1<<t<=e;++t);return t-1},Ss=function(e,t,n){var r=(t<<3)+4,i=(e[t]&15)+5;i>n&&q(3);for(var a=1<<i,o=a,s=-1,c=-1,l=-1,u=a,d=new us(512+(a<<2)),f=new fs(d,0,256),p=new ds(d,0,256),m=new ds(d,512,a),h=512+(a<<1),g=new K(d,h,a),_=new K(d,h+a);s<255&&o>0;){var v=xs(o+1),y=r>>3,b=(1<<v+1)-1,x=(e[y]|e[y+1]<<8|e[y+2]<<16)>>(r&7)&b,S=(1<<v)-1,C=b-o-1,w=x&S;if(w<C?(r+=v,x=w):(r+=v+1,x>S&&(x-=C)),f[++s]=--x,x==-1?(o+=x,g[--u]=s):o-=x,!x)do{var T=r>>3;c=(e[T]|e[T+1]<<8)>>(r&7)&3,r+=2,s+=c}while(c==3)}(s>255||o)&&q(0);for(var E=0,D=(a>>1)+(a>>3)+3,O=a-1,k=0;k<=s;++k){var A=f[k];if(A<1)p[k]=-A;else for(l=0;l<A;++l){g[E]=k;do E=E+D&O;while(E>=u)}}for(E&&q(0),l=0;l<a;++l){var j=p[g[l]]++,M=_[l]=i-xs(j);m[l]=(j<<M)-a}return[r+7>>3,{b:i,s:g,n:_,t:m}]},Cs=function(e,t){var n=0,r=-1,i=new K(292),a=e[t],o=i.subarray(0,256),s=i.subarray(256,268),c=new ds(i.buffer,268);if(a<128){var l=Ss(e,t+1,6),u=l[0],d=l[1];t+=a;var f=u<<3,p=e[t];p||q(0);for(var m=0,h=0,g=d.b,_=g,v=(++t<<3)-8+xs(p);v-=g,!(v<f);){var y=v>>3;if(m+=(e[y]|e[y+1]<<8)>>(v&7)&(1<<g)-1,o[++r]=d.s[m],v-=_,v<f)break;y=v>>3,h+=(e[y]|e[y+1]<<8)>>(v&7)&(1<<_)-1,o[++r]=d.s[h],g=d.n[m],m=d.t[m],_=d.n[h],h=d.t[h]}++r>255&&q(0)}else{for(r=a-127;n<r;n+=2){var b=e[++t];o[n]=b>>4,o[n+1]=b&15}++t}var x=0;for(n=0;n<r;++n){var S=o[n];S>11&&q(0),x+=S&&1<<S-1}var C=xs(x)+1,w=1<<C,T=w-x;for(T&T-1&&q(0),o[r++]=xs(T)+1,n=0;n<r;++n){var S=o[n];++s[o[n]=S&&C+1-S]}var E=new K(w<<1),D=E.subarray(0,w),O=E.subarray(w);for(c[C]=0,n=C;n>0;--n){var k=c[n];hs(O,n,k,c[n-1]=k+s[n]*(1<<C-n))}for(c[0]!=w&&q(0),n=0;n<r;++n){var A=o[n];if(A){var j=c[A];hs(D,n,j,c[A]=j+(1<<C-A))}}return[t,{n:O,b:C,s:D}]},ws=Ss(new K([81,16,99,140,49,198,24,99,12,33,196,24,99,102,102,134,70,146,4]),0,6)[1],Ts=Ss(new K([33,20,196,24,99,140,33,132,16,66,8,33,132,16,66,8,33,68,68,68,68,68,68,68,68,36,9]),0,6)[1],Es=Ss(new K([32,132,16,66,102,70,68,68,68,68,36,73,2]),0,5)[1],Ds=function(e,t){for(var n=e.length,r=new ps(n),i=0;i<n;++i)r[i]=t,t+=1<<e[i];return r},Os=new K(new ps([0,0,0,0,16843009,50528770,0x8070604,0xc0b0a09,269422093]).buffer,0,36),ks=Ds(Os,0),As=new K(new ps([0,0,0,0,0,0,0,0,16843009,50528770,0x7050404,0xb0a0908,0xf0e0d0c,16]).buffer,0,53),js=Ds(As,3),Ms=function(e,t,n){var r=e.length,i=t.length,a=e[r-1],o=(1<<n.b)-1,s=-n.b;a||q(0);for(var c=0,l=n.b,u=(r<<3)-8+xs(a)-l,d=-1;u>s&&d<i;){var f=u>>3,p=(e[f]|e[f+1]<<8|e[f+2]<<16)>>(u&7);c=(c<<l|p)&o,t[++d]=n.s[c],u-=l=n.n[c]}(u!=s||d+1!=i)&&q(0)},Ns=function(e,t,n){var r=6,i=t.length+3>>2,a=i<<1,o=i+a;Ms(e.subarray(r,r+=e[0]|e[1]<<8),t.subarray(0,i),n),Ms(e.subarray(r,r+=e[2]|e[3]<<8),t.subarray(i,a),n),Ms(e.subarray(r,r+=e[4]|e[5]<<8),t.subarray(a,o),n),Ms(e.subarray(r),t.subarray(o),n)},Ps=function(e,t,n){var r,i=t.b,a=e[i],o=a>>1&3;t.l=a&1;var s=a>>3|e[i+1]<<5|e[i+2]<<13,c=(i+=3)+s;if(o==1)return i>=e.length?void 0:(t.b=i+1,n?(hs(n,e[i],t.y,t.y+=s),n):hs(new K(s),e[i]));if(!(c>e.length)){if(o==0)return t.b=c,n?(n.set(e.subarray(i,c),t.y),t.y+=s,n):ms(e,i,c);if(o==2){var l=e[i],u=l&3,d=l>>2&3,f=l>>4,p=0,m=0;u<2?d&1?f|=e[++i]<<4|(d&2&&e[++i]<<12):f=l>>3:(m=d,d<2?(f|=(e[++i]&63)<<4,p=e[i]>>6|e[++i]<<2):d==2?(f|=e[++i]<<4|(e[++i]&3)<<12,p=e[i]>>2|e[++i]<<6):(f|=e[++i]<<4|(e[++i]&63)<<12,p=e[i]>>6|e[++i]<<2|e[++i]<<10)),++i;var h=n?n.subarray(t.y,t.y+t.m):new K(t.m),g=h.length-f;if(u==0)h.set(e.subarray(i,i+=f),g);else if(u==1)hs(h,e[i++],g);else{var _=t.h;if(u==2){var v=Cs(e,i);p+=i-(i=v[0]),t.h=_=v[1]}else _||q(0);(m?Ns:Ms)(e.subarray(i,i+=p),h.subarray(g),_)}var y=e[i++];if(y){y==255?y=(e[i++]|e[i++]<<8)+32512:y>127&&(y=y-128<<8|e[i++]);var b=e[i++];b&3&&q(0);for(var x=[Ts,Es,ws],S=2;S>-1;--S){var C=b>>(S<<1)+2&3;if(C==1){var w=new K([0,0,e[i++]]);x[S]={s:w.subarray(2,3),n:w.subarray(0,1),t:new ds(w.buffer,0,1),b:0}}else C==2?(r=Ss(e,i,9-(S&1)),i=r[0],x[S]=r[1]):C==3&&(t.t||q(0),x[S]=t.t[S])}var T=t.t=x,E=T[0],D=T[1],O=T[2],k=e[c-1];k||q(0);var A=(c<<3)-8+xs(k)-O.b,j=A>>3,M=0,ee=(e[j]|e[j+1]<<8)>>(A&7)&(1<<O.b)-1;j=(A-=D.b)>>3;var N=(e[j]|e[j+1]<<8)>>(A&7)&(1<<D.b)-1;j=(A-=E.b)>>3;var te=(e[j]|e[j+1]<<8)>>(A&7)&(1<<E.b)-1;for(++y;--y;){var ne=O.s[ee],re=O.n[ee],ie=E.s[te],ae=E.n[te],oe=D.s[N],P=D.n[N];j=(A-=oe)>>3;var se=1<<oe,ce=se+((e[j]|e[j+1]<<8|e[j+2]<<16|e[j+3]<<24)>>>(A&7)&se-1);j=(A-=As[ie])>>3;var le=js[ie]+((e[j]|e[j+1]<<8|e[j+2]<<16)>>(A&7)&(1<<As[ie])-1);j=(A-=Os[ne])>>3;var ue=ks[ne]+((e[j]|e[j+1]<<8|e[j+2]<<16)>>(A&7)&(1<<Os[ne])-1);if(j=(A-=re)>>3,ee=O.t[ee]+((e[j]|e[j+1]<<8)>>(A&7)&(1<<re)-1),j=(A-=ae)>>3,te=E.t[te]+((e[j]|e[j+1]<<8)>>(A&7)&(1<<ae)-1),j=(A-=P)>>3,N=D.t[N]+((e[j]|e[j+1]<<8)>>(A&7)&(1<<P)-1),ce>3)t.o[2]=t.o[1],t.o[1]=t.o[0],t.o[0]=ce-=3;else{var de=ce-(ue!=0);de?(ce=de==3?t.o[0]-1:t.o[de],de>1&&(t.o[2]=t.o[1]),t.o[1]=t.o[0],t.o[0]=ce):ce=t.o[0]}for(var S=0;S<ue;++S)h[M+S]=h[g+S];M+=ue,g+=ue;var fe=M-ce;if(fe<0){var pe=-fe,me=t.e+fe;pe>le&&(pe=le);for(var S=0;S<pe;++S)h[M+S]=t.w[me+S];M+=pe,le-=pe,fe=0}for(var S=0;S<le;++S)h[M+S]=h[fe+S];M+=le}if(M!=g)for(;g<h.length;)h[M++]=h[g++];else M=h.length;n?t.y+=M:h=ms(h,0,M)}else if(n){if(t.y+=f,g)for(var S=0;S<f;++S)h[S]=h[g+S]}else g&&(h=ms(h,g));return t.b=c,h}q(2)}},Fs=function(e,t){if(e.length==1)return e[0];for(var n=new K(t),r=0,i=0;r<e.length;++r){var a=e[r];n.set(a,i),i+=a.length}return n};function Is(e,t){for(var n=[],r=+!t,i=0,a=0;e.length;){var o=bs(e,r||t);if(typeof o==`object`){for(r?(t=null,o.w.length==o.u&&(n.push(t=o.w),a+=o.u)):(n.push(t),o.e=0);!o.l;){var s=Ps(e,o,t);s||q(5),t?o.e=o.y:(n.push(s),a+=s.length,gs(o.w,0,s.length),o.w.set(s,o.w.length-s.length))}i=o.b+o.c*4}else i=o;e=e.subarray(i)}return Fs(n,a)}var J=class extends Error{fatal;constructor(e,t=!1){super(e),this.fatal=t}},Ls=class{id;bytes=new Uint8Array;len=0;hashes=[];stale=new Set;constructor(e){this.id=e}resize(e){if(e>this.bytes.length){let t=new Uint8Array(Math.max(e,Math.ceil(this.bytes.length*1.5)));t.set(this.bytes.subarray(0,this.len)),this.bytes=t}else e<this.len&&this.bytes.fill(0,e,this.len);let t=Math.ceil(e/G),n=this.hashes.length;this.len=e,this.hashes.length=t;for(let e of this.stale)e>=t&&this.stale.delete(e);for(let e=Math.max(0,Math.min(n,t)-1);e<t;e++)this.stale.add(e)}touch(e){this.stale.add(e)}settle(){for(let e of this.stale){let t=e*G;this.hashes[e]=cs(this.id,e,this.bytes.subarray(t,Math.min(t+G,this.len)))}this.stale.clear()}digest(){this.settle();let e=0n;for(let t of this.hashes)e^=t;return e}},Rs=class{buffers=Array.from({length:8},(e,t)=>new Ls(t));size=[0,0,0];version=0n;growthSeq=0;quiescent=!1;digest=0n;holdsWorld=!1;expected;pagesLeft=0;cached(){return this.buffers.slice(0,6).map(e=>(e.settle(),{buffer:e.id,pageHashes:[...e.hashes]}))}bytes(e){let t=this.buffers[e];return t.bytes.subarray(0,t.len)}restore(e,t){if(t.length!==8||e.lengths.length!==8)return!1;for(let n=0;n<8;n++){let r=this.buffers[n];r.resize(e.lengths[n]),t[n].forEach((e,t)=>{r.bytes.set(e.subarray(0,Math.max(0,Math.min(G,r.len-t*G))),t*G),r.touch(t)})}return this.size=e.size,this.version=e.version,this.growthSeq=e.growthSeq,this.quiescent=e.quiescent,this.digest=this.computeDigest(),this.holdsWorld=this.digest===e.digest,this.holdsWorld}header(e){if(e.resume){if(!this.holdsWorld||e.version!==this.version||e.digest!==this.digest)throw new J(`the server resumed a state this page does not hold`);return this.growthSeq=e.growthSeq,this.quiescent=e.quiescent,!1}if(e.size.length!==3)throw new J(`the header's world size is not three numbers`);this.holdsWorld=!1,this.size=[e.size[0],e.size[1],e.size[2]];for(let t of e.buffers)if(t.buffer>=6)throw new J(`the header names buffer ${t.buffer}`);for(let t=0;t<6;t++){let n=e.buffers.find(e=>e.buffer===t);this.buffers[t].resize(n?Number(n.bytes):0)}return zs(e.entityTable).forEach((e,t)=>{let n=this.buffers[6+t];n.resize(e.length),n.bytes.set(e);for(let e=0;e<n.hashes.length;e++)n.touch(e)}),this.expected=e,this.pagesLeft=e.pages,this.pagesLeft===0&&this.finishSnapshot(),this.pagesLeft>0}page(e){if(!this.expected||this.pagesLeft===0)throw new J(`a page arrived outside a snapshot`);let t=this.buffers[e.buffer];if(!t||e.buffer>=6)throw new J(`a page of buffer ${e.buffer}`);let n=Is(e.zstd),r=0;for(let i of e.indices){let a=i*G,o=Math.min(G,t.len-a);if(o<=0||r+o>n.length)throw new J(`page ${i} of buffer ${e.buffer} does not fit`);t.bytes.set(n.subarray(r,r+o),a),r+=o,t.touch(i)}return--this.pagesLeft,this.pagesLeft===0&&(this.finishSnapshot(),!0)}finishSnapshot(){let e=this.expected;if(this.version=e.version,this.growthSeq=e.growthSeq,this.quiescent=e.quiescent,this.digest=this.computeDigest(),this.expected=void 0,this.digest!==e.digest)throw new J(`the snapshot's pages do not give the header's digest`);this.holdsWorld=!0}delta(e){let t=e.patch;if(!this.holdsWorld)throw new J(`a delta arrived before a snapshot`);if(!t)throw new J(`a delta without a patch (the page joins in the patch form)`);for(let e of t.lengths){let t=this.buffers[e.buffer];if(!t)throw new J(`a patch resizes buffer ${e.buffer}`);t.resize(Number(e.bytes))}let n=t.zstd.length>0?ir(bo,Is(t.zstd)).runs:t.runs,r=[];for(let e of n){let t=this.buffers[e.buffer],n=Number(e.offset),i=n+e.bytes.length;if(!t||i>t.len)throw new J(`a run reaches past buffer ${e.buffer}`);t.bytes.set(e.bytes,n);for(let e=Math.floor(n/G);e*G<i;e++)t.touch(e);r.push({id:e.buffer,lo:n,hi:i})}if(this.version=t.version,this.growthSeq=t.growthSeq,this.quiescent=t.quiescent,this.digest=this.computeDigest(),this.digest!==e.digest)throw this.holdsWorld=!1,new J(`the page diverged from the server at version ${t.version}`);return{touched:r,resized:t.lengths.length>0}}computeDigest(){let e=0n;for(let t of this.buffers)e^=t.digest();return e}};function zs(e){let t=new DataView(e.buffer,e.byteOffset,e.byteLength),n=e.byteLength===8&&t.getUint32(0,!0)===0&&t.getUint32(4,!0)===0;if(e.byteLength!==0&&!n)throw new J("this world has entities, which the browser page does not draw yet; use `naadf view`",!0);return[new Uint8Array,new Uint8Array]}var Bs=`naadf`,Vs=`pages`,Hs=`states`,Us=(e,t)=>`${e}:${t.toString(16)}`;function Ws(e){return new Promise((t,n)=>{e.onsuccess=()=>t(e.result),e.onerror=()=>n(e.error)})}function Gs(e){return new Promise((t,n)=>{e.oncomplete=()=>t(),e.onerror=e.onabort=()=>n(e.error)})}var Ks=class e{db;constructor(e){this.db=e}static async open(){try{let t=indexedDB.open(Bs,1);return t.onupgradeneeded=()=>{t.result.createObjectStore(Vs),t.result.createObjectStore(Hs)},new e(await Ws(t))}catch{return}}async restore(e){let t=this.db.transaction([Vs,Hs],`readonly`),n=await Ws(t.objectStore(Hs).get(location.origin));if(!n)return!1;let r=t.objectStore(Vs),i=n.hashes.map((e,t)=>Promise.all(e.map(e=>Ws(r.get(Us(t,e)))))),a=await Promise.all(i);return!a.some(e=>e.some(e=>!e))&&e.restore(n,a)}async save(e){if(!e.holdsWorld)return;let t=this.db.transaction([Vs,Hs],`readwrite`),n=t.objectStore(Vs),r=new Set((await Ws(n.getAllKeys())).map(String)),i=new Set,a=[],o=[];for(let t=0;t<8;t++){let s=e.buffers[t];s.settle(),o.push(s.len),a.push([...s.hashes]),s.hashes.forEach((e,a)=>{let o=Us(t,e);i.add(o),r.has(o)||n.put(s.bytes.slice(a*G,Math.min((a+1)*G,s.len)),o)})}for(let e of r)i.has(e)||n.delete(e);let s={size:e.size,version:e.version,growthSeq:e.growthSeq,quiescent:e.quiescent,digest:e.digest,lengths:o,hashes:a};t.objectStore(Hs).put(s,location.origin),await Gs(t)}},qs=`// Generated by naadf-client (shaders.rs): the world parameters, the constants shared with the
+// Rust code, the world's storage bindings.
+struct WorldInfo {
+    // World size in voxels.
+    size: vec3<u32>,
+    // 1 when some chunk lists entities.
+    has_entities: u32,
+    // World size in chunks.
+    chunks: vec3<u32>,
+    // Cells a ray may visit before it counts as a miss.
+    max_steps: u32,
+}
+@group(0) @binding(0) var<uniform> world_info: WorldInfo;
+struct FrameInfo {
+    // Camera position, integer part (floor).
+    cam_int: vec3<i32>,
+    // Image width in pixels.
+    width: u32,
+    // Camera position, fractional part in [0, 1).
+    cam_frac: vec3<f32>,
+    // Image height in pixels.
+    height: u32,
+    // View direction.
+    forward: vec3<f32>,
+    // The run's seed.
+    seed: u32,
+    // Image right, scaled by a·W/H.
+    right: vec3<f32>,
+    // Number of the sample this dispatch adds.
+    sample: u32,
+    // Image up, scaled by a.
+    up: vec3<f32>,
+    // 1 when a temporal pass has a history to blend with (0 for the path tracer).
+    history: u32,
+}
+struct LightInfo {
+    // Uniform sky: its radiance. Physical sky: the irradiance of the sun lighting it.
+    sky: vec3<f32>,
+    // 1 for the physical sky.
+    sky_physical: u32,
+    // Unit vector toward the sun (the sun lighting the physical sky when it is off).
+    sun_dir: vec3<f32>,
+    // 1 when the sun shines (its disc and its samples).
+    sun_on: u32,
+    // The disc's radiance.
+    sun_disc: f32,
+    // The weight of one disc sample: radiance times solid angle.
+    sun_weight: f32,
+    // 1 − cos of the disc's angular radius.
+    sun_omc: f32,
+    // Scattered rays after the camera ray.
+    bounces: u32,
+}
+struct GiInfo {
+    // Frames rendered in this history before this one.
+    frame: u32,
+    // The long-term TAA slot this frame writes (\`frame % TAA_SLOTS\`).
+    taa_slot: u32,
+    // Earlier frames the TAA may read (at most \`TAA_SLOTS − 1\`).
+    taa_valid: u32,
+    // The first frame rendered after the newest change of the materials, or of more
+    // chunks than are marked one by one (0: none): the near-change rule everywhere.
+    edit_frame: u32,
+    // The first frame rendered after the newest change of any chunk, entity moves
+    // included (0: none): the still path keeps no sample from before it.
+    change_frame: u32,
+    // This frame's jitter in the pixel, x (a point of a 32-point (0, 5, 2)-net).
+    jitter_x: f32,
+    // This frame's jitter in the pixel, y.
+    jitter_y: f32,
+    // 8×8 regions across.
+    regions_x: u32,
+    // 8×8 regions down.
+    regions_y: u32,
+    // Samples the sample ring holds.
+    ring_capacity: u32,
+    // 1 when the bilateral denoiser runs.
+    denoise: u32,
+    // Where each pixel's own secondary sample starts in \`mem\` (tagged with the
+    // frame that traced it).
+    off_own: u32,
+    // Where the atmosphere table starts in \`mem\` (vec4 words; the cameras start at 0).
+    off_lut: u32,
+    // Where the first-hit surfaces start in \`mem\`.
+    off_gbuf: u32,
+    // Where the first-hit materials start in \`mem\`.
+    off_gmat: u32,
+    // Where the first-hit light starts in \`mem\`.
+    off_emitted: u32,
+    // Where the TAA's per-pixel sums and ranges start in \`mem\`.
+    off_taa_info: u32,
+    // Where the incoming light starts in \`mem\`.
+    off_illum: u32,
+    // Where the denoiser's intermediate starts in \`mem\`.
+    off_illum2: u32,
+    // Where the results start in \`mem\`.
+    off_result: u32,
+    // Where the refined samples start in \`mem\`.
+    off_refined: u32,
+    // Where the regions' statistics start in \`mem\`.
+    off_region_info: u32,
+    // Where the sample ring starts in \`mem\`.
+    off_ring: u32,
+    // Where the queued pixels start in \`words\`.
+    off_queue_list: u32,
+}
+const STATE_SHIFT: u32 = 30u;
+const STATE_EMPTY: u32 = 0u;
+const STATE_FULL: u32 = 1u;
+const STATE_MIXED: u32 = 2u;
+const PAYLOAD: u32 = 1073741823u;
+const MAX_MATERIAL: u32 = 32767u;
+const VOXEL_SOLID: u32 = 32768u;
+const CHUNK_FIELD_BITS: u32 = 5u;
+const CELL_FIELD_BITS: u32 = 2u;
+const KIND_DIFFUSE: u32 = 0u;
+const KIND_EMISSIVE: u32 = 1u;
+const KIND_METAL: u32 = 2u;
+const KIND_MIRROR: u32 = 3u;
+const ENTITY_SOLID: u32 = 2147483648u;
+const TYPE_ALIGN: u32 = 64u;
+const RECORD_WORDS: u32 = 5u;
+const NO_ENTITY: u32 = 16383u;
+const SURFACE_OFFSET: f32 = 0.01f;
+const MIN_ALPHA: f32 = 0.001f;
+const PI: f32 = 3.1415927f;
+const PLANET_RADIUS: f32 = 6360000.0f;
+const ATMOSPHERE_HEIGHT: f32 = 60000.0f;
+const EYE_HEIGHT: f32 = 100.0f;
+const VIEW_STEPS: u32 = 24u;
+const LIGHT_STEPS: u32 = 6u;
+const RAYLEIGH: vec3<f32> = vec3<f32>(5.802e-6f, 1.3558e-5f, 3.31e-5f);
+const RAYLEIGH_SCALE: f32 = 8000.0f;
+const MIE_SCATTER: f32 = 3.996e-6f;
+const MIE_EXTINCTION: f32 = 4.44e-6f;
+const MIE_SCALE: f32 = 1200.0f;
+const MIE_G: f32 = 0.8f;
+const OZONE: vec3<f32> = vec3<f32>(6.5e-7f, 1.881e-6f, 8.5e-8f);
+const OZONE_CENTRE: f32 = 25000.0f;
+const OZONE_HALF_WIDTH: f32 = 15000.0f;
+// The first word of each buffer in \`world\`.
+struct WorldOffsets {
+    chunks: u32,
+    chunk_entities: u32,
+    blocks: u32,
+    voxels: u32,
+    materials: u32,
+    entity_types: u32,
+    entity_instances: u32,
+    structure: u32,
+}
+@group(0) @binding(1) var<uniform> world_offsets: WorldOffsets;
+@group(0) @binding(2) var<storage, read> world: array<u32>;
+fn chunk_word(i: u32) -> u32 { return world[world_offsets.chunks + i]; }
+fn chunk_entity_word(i: u32) -> u32 { return world[world_offsets.chunk_entities + i]; }
+fn block_word(i: u32) -> u32 { return world[world_offsets.blocks + i]; }
+fn voxel_word(i: u32) -> u32 { return world[world_offsets.voxels + i]; }
+fn material_word(i: u32) -> u32 { return world[world_offsets.materials + i]; }
+fn entity_type_word(i: u32) -> u32 { return world[world_offsets.entity_types + i]; }
+fn instance_word(i: u32) -> u32 { return world[world_offsets.entity_instances + i]; }
+fn structure_word(i: u32) -> u32 { return world[world_offsets.structure + i]; }
+
+// The world buffers (docs/FORMAT.md §5) and how to read their cells.
+//
+// Generated by naadf-client (client/src/gpu/shaders.rs) from the Rust definitions, in the
+// prelude before this file:
+// - the parameters \`world_info: WorldInfo\` (size in voxels and chunks, whether entities
+//   exist, the step budget);
+// - the constants of the cell layout (STATE_*, PAYLOAD, MAX_MATERIAL, VOXEL_SOLID,
+//   CHUNK_FIELD_BITS, CELL_FIELD_BITS), the material kinds (KIND_*), the entity layout
+//   (ENTITY_SOLID, TYPE_ALIGN, RECORD_WORDS, NO_ENTITY) and the frame modes (MODE_*);
+// - the storage bindings and the accessors \`chunk_word\`, \`chunk_entity_word\`,
+//   \`block_word\`, \`voxel_word\`, \`material_word\`, \`entity_type_word\`, \`instance_word\` (and
+//   \`grid_word\` for the dense-grid variant): a buffer larger than the adapter's
+//   storage-binding limit is split across several bindings, and the accessor picks the
+//   part.
+
+// State of a chunk or block cell: STATE_EMPTY, STATE_FULL or (also for state 3)
+// STATE_MIXED.
+fn cell_state(c: u32) -> u32 {
+    return min(c >> STATE_SHIFT, STATE_MIXED);
+}
+
+// Field \`dir\` (order −x, +x, −y, +y, −z, +z) of a packed AADF.
+fn aadf_field(word: u32, dir: u32, bits: u32) -> u32 {
+    return (word >> (bits * dir)) & ((1u << bits) - 1u);
+}
+
+// The index of chunk \`c\` in a world of \`chunks\` chunks (\`world_info.chunks\`). Loops read
+// \`world_info\` once before they start and pass its fields: it is a storage buffer, and a
+// storage read in every step is a bounds-checked load on lavapipe.
+fn chunk_index(c: vec3<u32>, chunks: vec3<u32>) -> u32 {
+    return c.x + chunks.x * (c.y + chunks.y * c.z);
+}
+
+fn index4(p: vec3<u32>) -> u32 {
+    return p.x + 4u * p.y + 16u * p.z;
+}
+
+// Voxel \`i\` (0..64) of the voxel group starting at word \`ptr\`.
+fn group_voxel(ptr: u32, i: u32) -> u32 {
+    return (voxel_word(ptr + i / 2u) >> (16u * (i & 1u))) & 0xFFFFu;
+}
+
+// A material's entry (docs/FORMAT.md §5.4).
+struct Material {
+    kind: u32,
+    albedo: vec3<f32>,
+    emission: f32,
+    roughness: f32,
+}
+
+fn material(id: u32) -> Material {
+    let w0 = material_word(4u * id);
+    let w1 = material_word(4u * id + 1u);
+    let w2 = material_word(4u * id + 2u);
+    let rg = unpack2x16float(w1);
+    let be = unpack2x16float(w2);
+    return Material(w0 & 3u, vec3<f32>(rg.x, rg.y, be.x), be.y, unpack2x16float(w0).y);
+}
+
+// Rays and the event model every traversal shares (world/src/traverse/ray.rs, in f32).
+//
+// A ray keeps its origin split into an integer part \`o_int\` and a fraction \`o_frac\` in [0, 1)
+// (docs/NAADF.md §9), so precision does not depend on where in the world it starts.
+// The direction \`d\` is kept exactly as given (not renormalised, which would move the line
+// by an f32 rounding): times are in units of |d| and the ray's \`len\` converts them to
+// distances. Every decision compares plane-crossing times from the one function \`t_at\`,
+// so the traversal is a consistent walk of the event order "(t, axis), x before y before
+// z at equal t"; it departs from the CPU's f64 order only where two crossings are within
+// f32 rounding of each other.
+
+// A cell bound beyond any world for unconstrained axes (the CPU walk uses 2^40, which no
+// i32 holds).
+const FAR_CELL: i32 = 1073741824;
+const T_INF: f32 = 3.0e38;
+const NO_AXIS: u32 = 3u;
+
+struct Ray {
+    o_int: vec3<i32>,
+    o_frac: vec3<f32>,
+    d: vec3<f32>,
+    inv: vec3<f32>,
+    len: f32,
+}
+
+fn ray_new(o_int: vec3<i32>, o_frac: vec3<f32>, d: vec3<f32>) -> Ray {
+    // The inverse of a zero component is never read: such axes never cross a plane.
+    let safe = select(vec3<f32>(1.0), d, d != vec3<f32>(0.0));
+    return Ray(o_int, o_frac, d, 1.0 / safe, length(d));
+}
+
+// A ray from an unsplit origin.
+fn ray_from(o: vec3<f32>, d: vec3<f32>) -> Ray {
+    let fl = floor(o);
+    return ray_new(vec3<i32>(fl), min(o - fl, vec3<f32>(0.99999994)), d);
+}
+
+// The ray's point at time \`t\`, relative to its integer origin.
+fn ray_local(r: Ray, t: f32) -> vec3<f32> {
+    return r.o_frac + r.d * t;
+}
+
+// A ray starting at \`p\` (relative to \`r\`'s integer origin) along \`d\`.
+fn ray_at(r: Ray, p: vec3<f32>, d: vec3<f32>) -> Ray {
+    let fl = floor(p);
+    return ray_new(r.o_int + vec3<i32>(fl), min(p - fl, vec3<f32>(0.99999994)), d);
+}
+
+// Time at which the ray crosses plane \`k\` of \`axis\`.
+fn t_at(r: Ray, a: u32, k: i32) -> f32 {
+    return (f32(k - r.o_int[a]) - r.o_frac[a]) * r.inv[a];
+}
+
+// Whether the crossing of plane \`k\` of axis \`b\` comes before the event \`(t, a)\`.
+fn crossed(r: Ray, b: u32, k: i32, t: f32, a: u32) -> bool {
+    let tb = t_at(r, b, k);
+    return tb < t || (tb == t && b < a);
+}
+
+// The cell of axis \`b\` right after event \`(t, a)\`, known to lie in \`lo..=hi\`.
+fn cell_after(r: Ray, b: u32, t: f32, a: u32, lo: i32, hi: i32) -> i32 {
+    let d = r.d[b];
+    if lo == hi || d == 0.0 {
+        return lo;
+    }
+    let p = r.o_frac[b] + d * t;
+    let fl = floor(p);
+    var k = clamp(i32(fl) + r.o_int[b], lo, hi);
+    let f = p - fl;
+    // Far from a plane the floor is certain; near one, decide by crossing times.
+    let tol = 4e-6 * (abs(d * t) + 1.0);
+    if f > tol && f < 1.0 - tol {
+        return k;
+    }
+    if d > 0.0 {
+        while k < hi && crossed(r, b, k + 1, t, a) {
+            k += 1;
+        }
+        while k > lo && !crossed(r, b, k, t, a) {
+            k -= 1;
+        }
+    } else {
+        while k > lo && crossed(r, b, k, t, a) {
+            k -= 1;
+        }
+        while k < hi && !crossed(r, b, k + 1, t, a) {
+            k += 1;
+        }
+    }
+    return k;
+}
+
+// Where a ray begins inside the box [0, size): its first cell, the time it is entered and
+// the axis whose plane it crossed (NO_AXIS when the origin is inside). \`ok\` is false when
+// the ray misses the box.
+struct Entry {
+    cell: vec3<i32>,
+    t: f32,
+    axis: u32,
+    ok: bool,
+}
+
+fn ray_entry(r: Ray, size: vec3<i32>) -> Entry {
+    let start = r.o_int;
+    var miss = Entry(vec3<i32>(0), 0.0, NO_AXIS, false);
+    if all(start >= vec3<i32>(0)) && all(start < size) {
+        return Entry(start, 0.0, NO_AXIS, true);
+    }
+    // The last slab-entry event, in (t, axis) order.
+    var bt = 0.0;
+    var ba = NO_AXIS;
+    for (var a = 0u; a < 3u; a++) {
+        var plane: i32;
+        if start[a] < 0 {
+            if r.d[a] <= 0.0 {
+                return miss;
+            }
+            plane = 0;
+        } else if start[a] >= size[a] {
+            if r.d[a] >= 0.0 {
+                return miss;
+            }
+            plane = size[a];
+        } else {
+            continue;
+        }
+        let t = t_at(r, a, plane);
+        if ba == NO_AXIS || t >= bt {
+            bt = t;
+            ba = a;
+        }
+    }
+    var cell = vec3<i32>(0);
+    for (var b = 0u; b < 3u; b++) {
+        if b == ba {
+            cell[b] = select(size[b] - 1, 0, r.d[b] > 0.0);
+        } else if r.d[b] > 0.0 {
+            cell[b] = cell_after(r, b, bt, ba, start[b], FAR_CELL);
+        } else if r.d[b] < 0.0 {
+            cell[b] = cell_after(r, b, bt, ba, -FAR_CELL, start[b]);
+        } else {
+            cell[b] = start[b];
+        }
+    }
+    if any(cell < vec3<i32>(0)) || any(cell >= size) {
+        return miss;
+    }
+    return Entry(cell, bt, ba, true);
+}
+
+// Leaving the empty cuboid made of \`cell\` extended by \`skip\` cells toward the ray on each
+// axis: the exit event and the cell entered by it.
+struct Exit {
+    t: f32,
+    axis: u32,
+    next: vec3<i32>,
+}
+
+fn ray_exit(r: Ray, cell: vec3<i32>, skip: vec3<i32>) -> Exit {
+    var bound = vec3<i32>(0);
+    var bt = T_INF;
+    var ba = 0u;
+    for (var a = 0u; a < 3u; a++) {
+        if r.d[a] == 0.0 {
+            continue;
+        }
+        bound[a] = select(cell[a] - skip[a], cell[a] + 1 + skip[a], r.d[a] > 0.0);
+        let t = t_at(r, a, bound[a]);
+        if t < bt {
+            bt = t;
+            ba = a;
+        }
+    }
+    var next = cell;
+    for (var b = 0u; b < 3u; b++) {
+        if b == ba {
+            next[b] = select(bound[b] - 1, bound[b], r.d[b] > 0.0);
+        } else if r.d[b] > 0.0 {
+            next[b] = cell_after(r, b, bt, ba, cell[b], cell[b] + skip[b]);
+        } else if r.d[b] < 0.0 {
+            next[b] = cell_after(r, b, bt, ba, cell[b] - skip[b], cell[b]);
+        }
+    }
+    return Exit(bt, ba, next);
+}
+
+// Amanatides–Woo state in the same event order (ties step the lowest axis first).
+struct Dda {
+    cell: vec3<i32>,
+    tmax: vec3<f32>,
+    t: f32,
+    axis: u32,
+}
+
+fn dda_start(r: Ray, e: Entry) -> Dda {
+    var tmax = vec3<f32>(T_INF);
+    for (var a = 0u; a < 3u; a++) {
+        if r.d[a] != 0.0 {
+            tmax[a] = t_at(r, a, select(e.cell[a], e.cell[a] + 1, r.d[a] > 0.0));
+        }
+    }
+    return Dda(e.cell, tmax, e.t, e.axis);
+}
+
+fn dda_advance(r: Ray, s: ptr<function, Dda>) {
+    var a = 0u;
+    if (*s).tmax[1] < (*s).tmax[a] {
+        a = 1u;
+    }
+    if (*s).tmax[2] < (*s).tmax[a] {
+        a = 2u;
+    }
+    (*s).t = (*s).tmax[a];
+    let c = (*s).cell[a] + select(-1, 1, r.d[a] > 0.0);
+    (*s).cell[a] = c;
+    (*s).axis = a;
+    (*s).tmax[a] = t_at(r, a, select(c, c + 1, r.d[a] > 0.0));
+}
+
+// The first solid voxel along a ray (of the world, or of an entity: then voxel and normal
+// are entity-local).
+struct Hit {
+    hit: bool,
+    // The step budget ran out (counts as a miss).
+    exhausted: bool,
+    voxel: vec3<i32>,
+    // Axis of the entry face (NO_AXIS: the origin was inside the voxel).
+    axis: u32,
+    // Entry-face normal (zero when the origin was inside).
+    normal: vec3<i32>,
+    // Time of entry, in units of the ray's |d|.
+    t: f32,
+    material: u32,
+    steps: u32,
+    // Entity id, or NO_ENTITY (generated in the prelude).
+    entity: u32,
+}
+
+fn no_hit(steps: u32) -> Hit {
+    return Hit(false, false, vec3<i32>(0), NO_AXIS, vec3<i32>(0), T_INF, 0u, steps, NO_ENTITY);
+}
+
+fn make_hit(r: Ray, cell: vec3<i32>, t: f32, axis: u32, material: u32, steps: u32) -> Hit {
+    var n = vec3<i32>(0);
+    if axis != NO_AXIS {
+        n[axis] = select(1, -1, r.d[axis] > 0.0);
+    }
+    return Hit(true, false, cell, axis, n, t, material, steps, NO_ENTITY);
+}
+
+// One full trace: the world loop (traverse.wgsl or grid.wgsl), then the entities of the
+// chunks it visited (docs/NAADF.md §11): the GPU twin of world/src/entity/trace.rs.
+//
+// The world loop hands every chunk entity field it meets to \`record_field\`. Fields are
+// kept in a small list; when it fills up, its instances are tested at once, which gives
+// the same answer as testing them all at the end: each instance's first solid voxel
+// entered at or after the world entry is found whatever the limit, and only the nearest
+// (lowest id at equal times) survives, and only if it comes strictly before the world's
+// hit or exit.
+
+// How the world loop ended.
+const END_HIT: u32 = 0u;
+const END_LEFT: u32 = 1u;
+const END_MISSED: u32 = 2u;
+const END_EXHAUSTED: u32 = 3u;
+
+struct WorldTrace {
+    hit: Hit,
+    end: u32,
+    // When the ray entered the world, and when it hit or left it.
+    t_entry: f32,
+    t_end: f32,
+}
+
+// The end of a world loop whose step budget ran out at time \`t\` (entered at \`t_entry\`).
+fn ran_out(t_entry: f32, t: f32) -> WorldTrace {
+    var h = no_hit(world_info.max_steps);
+    h.exhausted = true;
+    return WorldTrace(h, END_EXHAUSTED, t_entry, t);
+}
+
+const MAX_FIELDS: u32 = 16u;
+
+var<private> fields: array<u32, MAX_FIELDS>;
+var<private> field_count: u32;
+var<private> best_entity: Hit;
+// The inverse rotation of \`best_entity\`'s instance.
+var<private> best_rotation: vec4<f32>;
+// Entity-grid cells visited (added to the step count of an entity hit).
+var<private> entity_steps: u32;
+
+fn record_field(r: Ray, field: u32, t_entry: f32) {
+    if field == 0u || (field_count > 0u && fields[field_count - 1u] == field) {
+        return;
+    }
+    if field_count == MAX_FIELDS {
+        flush_fields(r, t_entry);
+    }
+    fields[field_count] = field;
+    field_count += 1u;
+}
+
+fn flush_fields(r: Ray, t_entry: f32) {
+    for (var k = 0u; k < field_count; k++) {
+        let f = fields[k];
+        let first = f >> 8u;
+        for (var j = 0u; j < (f & 0xFFu); j++) {
+            test_instance(r, (first + j) * RECORD_WORDS, t_entry);
+        }
+    }
+    field_count = 0u;
+}
+
+// Decodes a smallest-three quaternion (world/src/entity/pack.rs).
+fn decode_quat(w0: u32, w1: u32) -> vec4<f32> {
+    let s = vec3<f32>(vec3<u32>(w0 & 0x3FFFu, (w0 >> 14u) & 0x3FFFu, (w0 >> 28u) | ((w1 & 0x3FFu) << 4u)));
+    let small = (s - 8192.0) / 8192.0;
+    let rest = sqrt(max(1.0 - dot(small, small), 0.0));
+    let k = (w1 >> 10u) & 3u;
+    if k == 0u {
+        return vec4<f32>(rest, small.x, small.y, small.z);
+    } else if k == 1u {
+        return vec4<f32>(small.x, rest, small.y, small.z);
+    } else if k == 2u {
+        return vec4<f32>(small.x, small.y, rest, small.z);
+    }
+    return vec4<f32>(small, rest);
+}
+
+// Rotates \`v\` by the unit quaternion \`q = (x, y, z, w)\`.
+fn rotate(q: vec4<f32>, v: vec3<f32>) -> vec3<f32> {
+    let t = 2.0 * cross(q.xyz, v);
+    return v + q.w * t + cross(q.xyz, t);
+}
+
+fn conjugate(q: vec4<f32>) -> vec4<f32> {
+    return vec4<f32>(-q.xyz, q.w);
+}
+
+// An instance record's position in 1/128 voxel (record words 0 and 1).
+fn record_position(dx: u32, dy: u32) -> vec3<u32> {
+    return vec3<u32>(dx & 0x1FFFFFu, (dx >> 21u) | (((dy >> 21u) & 0xFFu) << 11u), dy & 0x1FFFFFu);
+}
+
+// An instance record's entity id (record word 4).
+fn record_id(e: u32) -> u32 {
+    return e & 0x3FFFu;
+}
+
+// Tests one chunk-instance record against the ray; keeps the nearest entity hit.
+fn test_instance(r: Ray, at: u32, t_lo: f32) {
+    let dx = instance_word(at);
+    let dy = instance_word(at + 1u);
+    let dz = instance_word(at + 2u);
+    let dw = instance_word(at + 3u);
+    let e = instance_word(at + 4u);
+    let id = record_id(e);
+    let size = vec3<u32>((e >> 14u) & 0x7Fu, (e >> 21u) & 0x7Fu, ((e >> 28u) & 0xFu) | (((dy >> 29u) & 7u) << 4u));
+    let pos = record_position(dx, dy);
+    var limit = T_INF;
+    var equal_ok = false;
+    if best_entity.hit {
+        limit = best_entity.t;
+        equal_ok = id < best_entity.entity;
+    }
+    // The entity lies within |size| of its local-origin corner: reject rays that pass
+    // farther (with slack for f32), before transforming anything.
+    let rel = vec3<f32>(r.o_int - vec3<i32>(pos >> vec3<u32>(7u))) + (r.o_frac - vec3<f32>(pos & vec3<u32>(127u)) / 128.0);
+    let tc = -dot(rel, r.d) / (r.len * r.len);
+    let radius = (length(vec3<f32>(size)) + 0.01) / r.len;
+    let closest = rel + r.d * tc;
+    if dot(closest, closest) > radius * radius * r.len * r.len || tc + radius < t_lo || tc - radius > limit {
+        return;
+    }
+    let q = decode_quat(dz, dw & 0xFFFu);
+    let local = ray_from(rotate(q, rel), rotate(q, r.d));
+    let isize = vec3<i32>(size);
+    let entry = ray_entry(local, isize);
+    if !entry.ok {
+        return;
+    }
+    let base = (dw >> 12u) * TYPE_ALIGN;
+    var s = dda_start(local, entry);
+    loop {
+        entity_steps += 1u;
+        if s.t > limit || (s.t == limit && !equal_ok) {
+            return;
+        }
+        if s.t >= t_lo {
+            let c = vec3<u32>(s.cell);
+            let v = entity_type_word(base + c.x + size.x * (c.y + size.y * c.z));
+            if (v & ENTITY_SOLID) != 0u {
+                var h = make_hit(local, s.cell, s.t, s.axis, v & MAX_MATERIAL, 0u);
+                h.entity = id;
+                best_entity = h;
+                best_rotation = q;
+                return;
+            }
+        }
+        dda_advance(local, &s);
+        if any(s.cell < vec3<i32>(0)) || any(s.cell >= isize) {
+            return;
+        }
+    }
+}
+
+// The world-space normal of the hit the last \`trace\` returned (entity-local normals are
+// rotated back to the world).
+fn world_normal(h: Hit) -> vec3<f32> {
+    let n = vec3<f32>(h.normal);
+    if h.entity == NO_ENTITY {
+        return n;
+    }
+    return rotate(conjugate(best_rotation), n);
+}
+
+// Traces \`r\` through the world and its entities.
+fn trace(r: Ray) -> Hit {
+    field_count = 0u;
+    entity_steps = 0u;
+    best_entity = no_hit(0u);
+    let w = world_loop(r);
+    if w.end == END_MISSED || w.end == END_EXHAUSTED {
+        return w.hit;
+    }
+    flush_fields(r, w.t_entry);
+    if best_entity.hit && best_entity.t < w.t_end {
+        var h = best_entity;
+        h.steps = w.hit.steps + entity_steps;
+        return h;
+    }
+    var h = w.hit;
+    h.steps += entity_steps;
+    return h;
+}
+
+// The world loop over the chunk → block → voxel hierarchy (docs/NAADF.md §9), with
+// AADF jumps (\`USE_AADF\`, the \`naadf\` method) or without (\`nodf\`): the GPU twin of
+// world/src/traverse/hierarchy.rs. Chunks with entities skip only to their own edge and
+// have their entity fields recorded for the entity pass.
+
+override USE_AADF: bool = true;
+
+
+fn to_edge(c: u32, neg: bool, edge: u32) -> i32 {
+    let m = c & (edge - 1u);
+    return i32(select(edge - 1u - m, m, neg));
+}
+
+fn world_loop(r: Ray) -> WorldTrace {
+    let dims = vec3<i32>(world_info.size);
+    let entry = ray_entry(r, dims);
+    if !entry.ok {
+        return WorldTrace(no_hit(0u), END_MISSED, 0.0, 0.0);
+    }
+    var cell = entry.cell;
+    var t = entry.t;
+    var axis = entry.axis;
+    let neg = r.d <= vec3<f32>(0.0);
+    // The AADF field facing the ray on each axis: −a for negative directions, +a otherwise.
+    let facing = vec3<u32>(0u, 2u, 4u) + select(vec3<u32>(0u), vec3<u32>(1u), r.d > vec3<f32>(0.0));
+    // Each chunk's entity field says whether entities are there, read once per chunk
+    // entered, so the loop needs no world-wide flag.
+    var last_chunk = 0xFFFFFFFFu;
+    var last_field = 0u;
+    // The world's parameters, read once (see chunk_index in world.wgsl).
+    let chunks = world_info.chunks;
+    let max_steps = world_info.max_steps;
+    for (var steps = 1u; steps <= max_steps; steps++) {
+        let p = vec3<u32>(cell);
+        let ci = chunk_index(p >> vec3<u32>(4u), chunks);
+        if ci != last_chunk {
+            last_chunk = ci;
+            last_field = chunk_entity_word(ci);
+            record_field(r, last_field, entry.t);
+        }
+        let entities_here = last_field != 0u;
+        let chunk = chunk_word(ci);
+        var skip = vec3<i32>(0);
+        let cs = cell_state(chunk);
+        if cs == STATE_FULL {
+            return WorldTrace(make_hit(r, cell, t, axis, chunk & MAX_MATERIAL, steps), END_HIT, entry.t, t);
+        } else if cs == STATE_EMPTY {
+            for (var a = 0u; a < 3u; a++) {
+                skip[a] = to_edge(p[a], neg[a], 16u);
+                if USE_AADF && !entities_here {
+                    skip[a] += 16 * i32(aadf_field(chunk, facing[a], CHUNK_FIELD_BITS));
+                }
+            }
+        } else {
+            let block = block_word((chunk & PAYLOAD) + index4((p >> vec3<u32>(2u)) & vec3<u32>(3u)));
+            let bs = cell_state(block);
+            if bs == STATE_FULL {
+                return WorldTrace(make_hit(r, cell, t, axis, block & MAX_MATERIAL, steps), END_HIT, entry.t, t);
+            } else if bs == STATE_EMPTY {
+                for (var a = 0u; a < 3u; a++) {
+                    skip[a] = to_edge(p[a], neg[a], 4u);
+                    if USE_AADF {
+                        skip[a] += 4 * i32(aadf_field(block, facing[a], CELL_FIELD_BITS));
+                    }
+                }
+            } else {
+                let v = group_voxel(block & PAYLOAD, index4(p & vec3<u32>(3u)));
+                if (v & VOXEL_SOLID) != 0u {
+                    return WorldTrace(make_hit(r, cell, t, axis, v & MAX_MATERIAL, steps), END_HIT, entry.t, t);
+                }
+                if USE_AADF {
+                    for (var a = 0u; a < 3u; a++) {
+                        skip[a] = i32(aadf_field(v, facing[a], CELL_FIELD_BITS));
+                    }
+                }
+            }
+        }
+        let ex = ray_exit(r, cell, skip);
+        if any(ex.next < vec3<i32>(0)) || any(ex.next >= dims) {
+            var h = no_hit(steps);
+            return WorldTrace(h, END_LEFT, entry.t, ex.t);
+        }
+        cell = ex.next;
+        t = ex.t;
+        axis = ex.axis;
+    }
+    return ran_out(entry.t, t);
+}
+
+// The samples of the lit passes: random streams (client/src/light/rng.rs), one per sample
+// of each pixel, seeded from the run's seed, the pixel's index and the sample's number
+// only; and the jittered camera ray of a sample.
+
+fn pcg_hash(v: u32) -> u32 {
+    let state = v * 747796405u + 2891336453u;
+    let word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+    return (word >> 22u) ^ word;
+}
+
+// The stream of sample \`sample\` of pixel \`pixel\` under \`seed\`.
+fn rng_new(seed: u32, pixel: u32, sample: u32) -> u32 {
+    return pcg_hash(seed ^ pcg_hash(pixel ^ pcg_hash(sample)));
+}
+
+// A uniform number in [0, 1) with 24 random bits.
+fn rng_next(state: ptr<function, u32>) -> f32 {
+    *state = pcg_hash(*state);
+    return f32(*state >> 8u) * (1.0 / 16777216.0);
+}
+
+// The stream of sample \`sample\` of pixel \`pixel\`, after its first two draws: where in the
+// pixel the sample's camera ray goes (uniform in [0, 1)²).
+struct PixelStream {
+    rng: u32,
+    jitter: vec2<f32>,
+}
+
+fn pixel_stream(seed: u32, pixel: u32, sample: u32) -> PixelStream {
+    var rng = rng_new(seed, pixel, sample);
+    let jx = rng_next(&rng);
+    let jy = rng_next(&rng);
+    return PixelStream(rng, vec2<f32>(jx, jy));
+}
+
+// The camera's (unnormalised) direction through point \`jitter\` ([0, 1)²) of pixel \`gid\` of
+// frame \`f\` (docs/CAMERA.md, with \`px + jitter.x\` for \`px + 0.5\`).
+fn camera_dir(f: FrameInfo, gid: vec2<u32>, jitter: vec2<f32>) -> vec3<f32> {
+    let sx = 2.0 * (f32(gid.x) + jitter.x) / f32(f.width) - 1.0;
+    let sy = 1.0 - 2.0 * (f32(gid.y) + jitter.y) / f32(f.height);
+    return f.forward + sx * f.right + sy * f.up;
+}
+
+// The light model of the lit modes (docs/RENDERING.md §3a): the physical sky, the sun,
+// BRDF sampling and one path's radiance. The GPU twin of client/src/light/ (sky.rs,
+// scatter.rs, cpu.rs), written operation by operation like it so that the two path
+// tracers agree up to rounding. Needs random.wgsl before it.
+//
+// The pass binds \`light: LightInfo\` (generated in the prelude from the Rust \`LightInfo\`).
+
+// PI, SURFACE_OFFSET (how far scattered and shadow rays start off the surface),
+// MIN_ALPHA (the smallest GGX α a metal is traced with) and the physical sky's constants
+// (PLANET_RADIUS, VIEW_STEPS, RAYLEIGH, MIE_G, OZONE, …) come from the prelude, generated
+// from their Rust definitions in client/src/light/ (mod.rs, scatter.rs, sky.rs).
+
+// ---- The physical sky (sky.rs) ----
+
+// Distance from height \`h\` along zenith cosine \`mu\` to the sphere at height \`top\`; a
+// negative value when it is not reached going forward.
+fn sphere_distance(h: f32, mu: f32, top: f32) -> f32 {
+    let r = PLANET_RADIUS + h;
+    let disc = (top - h) * (2.0 * PLANET_RADIUS + top + h) + r * r * mu * mu;
+    if disc < 0.0 {
+        return -1.0;
+    }
+    let s = sqrt(disc);
+    let far = -r * mu + s;
+    if far < 0.0 {
+        return -1.0;
+    }
+    let near = -r * mu - s;
+    return select(far, near, near > 0.0);
+}
+
+struct Medium {
+    sigma: vec3<f32>,
+    rayleigh: f32,
+    mie: f32,
+}
+
+fn medium(h: f32) -> Medium {
+    let rayleigh = exp(-h / RAYLEIGH_SCALE);
+    let mie = exp(-h / MIE_SCALE);
+    let ozone = max(1.0 - abs(h - OZONE_CENTRE) / OZONE_HALF_WIDTH, 0.0);
+    return Medium(RAYLEIGH * rayleigh + MIE_EXTINCTION * mie + OZONE * ozone, rayleigh, mie);
+}
+
+fn sun_transmittance(h: f32, mu: f32) -> vec3<f32> {
+    if mu < 0.0 && sphere_distance(h, mu, 0.0) >= 0.0 {
+        return vec3<f32>(0.0);
+    }
+    let length = max(sphere_distance(h, mu, ATMOSPHERE_HEIGHT), 0.0);
+    let dt = length / f32(LIGHT_STEPS);
+    let r = PLANET_RADIUS + h;
+    var depth = vec3<f32>(0.0);
+    for (var i = 0u; i < LIGHT_STEPS; i++) {
+        let t = (f32(i) + 0.5) * dt;
+        let hi = sqrt(t * t + 2.0 * r * mu * t + r * r) - PLANET_RADIUS;
+        depth += medium(hi).sigma * dt;
+    }
+    return exp(-depth);
+}
+
+// Sky radiance along unit \`dir\` for unit sun direction \`sun\`, per unit of irradiance.
+fn sky_physical(dir: vec3<f32>, sun: vec3<f32>) -> vec3<f32> {
+    let mu = dir.y;
+    let nu = dot(dir, sun);
+    let h0 = EYE_HEIGHT;
+    let r0 = PLANET_RADIUS + h0;
+    var length = sphere_distance(h0, mu, 0.0);
+    if !(mu < 0.0 && length >= 0.0) {
+        length = max(sphere_distance(h0, mu, ATMOSPHERE_HEIGHT), 0.0);
+    }
+    let dt = length / f32(VIEW_STEPS);
+    let phase_r = 3.0 / (16.0 * PI) * (1.0 + nu * nu);
+    let g2 = MIE_G * MIE_G;
+    let phase_m = (1.0 - g2) / (4.0 * PI * pow(1.0 + g2 - 2.0 * MIE_G * nu, 1.5));
+    var depth = vec3<f32>(0.0);
+    var inscatter = vec3<f32>(0.0);
+    for (var i = 0u; i < VIEW_STEPS; i++) {
+        let t = (f32(i) + 0.5) * dt;
+        let r = sqrt(t * t + 2.0 * r0 * mu * t + r0 * r0);
+        let h = r - PLANET_RADIUS;
+        let mu_sun = (r0 * sun.y + t * nu) / r;
+        let m = medium(h);
+        let to_sun = sun_transmittance(h, mu_sun);
+        let view = exp(-(depth + 0.5 * m.sigma * dt));
+        let scatter = RAYLEIGH * m.rayleigh * phase_r + MIE_SCATTER * m.mie * phase_m;
+        inscatter += view * to_sun * scatter * dt;
+        depth += m.sigma * dt;
+    }
+    return inscatter;
+}
+
+// The sky along unit \`d\`, evaluated directly (no disc).
+fn sky_direct(d: vec3<f32>) -> vec3<f32> {
+    if light.sky_physical != 0u {
+        return sky_physical(d, light.sun_dir) * light.sky;
+    }
+    return light.sky;
+}
+
+// The sky along unit \`d\`; with \`disc\`, the sun's disc too. \`sky_base(d)\` is the including
+// pass's choice: \`sky_direct\` (the path tracer) or the atmosphere table (\`gi\`).
+fn sky_radiance(d: vec3<f32>, disc: bool) -> vec3<f32> {
+    var l = sky_base(d);
+    if disc {
+        l += sun_disc(d);
+    }
+    return l;
+}
+
+// The sun's disc along unit \`d\` (0 off the disc, or with the sun off).
+fn sun_disc(d: vec3<f32>) -> vec3<f32> {
+    if light.sun_on != 0u && 1.0 - dot(d, light.sun_dir) <= light.sun_omc {
+        return vec3<f32>(light.sun_disc);
+    }
+    return vec3<f32>(0.0);
+}
+
+// ---- Scattering (scatter.rs) ----
+
+struct Basis {
+    t: vec3<f32>,
+    b: vec3<f32>,
+}
+
+fn basis(n: vec3<f32>) -> Basis {
+    let sign = select(-1.0, 1.0, n.z >= 0.0);
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    return Basis(vec3<f32>(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x), vec3<f32>(b, sign + n.y * n.y * a, -n.y));
+}
+
+fn sample_cosine(n: vec3<f32>, u: vec2<f32>) -> vec3<f32> {
+    let f = basis(n);
+    let r = sqrt(u.x);
+    let phi = 2.0 * PI * u.y;
+    return normalize(f.t * (r * cos(phi)) + f.b * (r * sin(phi)) + n * sqrt(max(1.0 - u.x, 0.0)));
+}
+
+fn sample_cone(axis: vec3<f32>, omc: f32, u: vec2<f32>) -> vec3<f32> {
+    let f = basis(axis);
+    let x = u.x * omc;
+    let c = 1.0 - x;
+    let s = sqrt(max(x * (2.0 - x), 0.0));
+    let phi = 2.0 * PI * u.y;
+    return normalize(f.t * (s * cos(phi)) + f.b * (s * sin(phi)) + axis * c);
+}
+
+fn schlick(f0: vec3<f32>, c: f32) -> vec3<f32> {
+    let k = 1.0 - clamp(c, 0.0, 1.0);
+    let k2 = k * k;
+    return f0 + (vec3<f32>(1.0) - f0) * (k2 * k2 * k);
+}
+
+fn smith_lambda(alpha: f32, c: f32) -> f32 {
+    let c2 = max(c * c, 1e-12);
+    let tan2 = max(1.0 - c2, 0.0) / c2;
+    return 0.5 * (-1.0 + sqrt(1.0 + alpha * alpha * tan2));
+}
+
+fn ggx_d(alpha: f32, c: f32) -> f32 {
+    let a2 = alpha * alpha;
+    let k = c * c * (a2 - 1.0) + 1.0;
+    return a2 / (PI * k * k);
+}
+
+fn ggx(n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>, alpha: f32, f0: vec3<f32>) -> vec3<f32> {
+    let co = dot(n, wo);
+    let ci = dot(n, wi);
+    if co <= 0.0 || ci <= 0.0 {
+        return vec3<f32>(0.0);
+    }
+    let h = normalize(wo + wi);
+    let g2 = 1.0 / (1.0 + smith_lambda(alpha, co) + smith_lambda(alpha, ci));
+    return schlick(f0, dot(wo, h)) * (ggx_d(alpha, dot(n, h)) * g2 / (4.0 * co * ci));
+}
+
+struct Scattered {
+    dir: vec3<f32>,
+    weight: vec3<f32>,
+}
+
+fn ggx_sample(n: vec3<f32>, wo: vec3<f32>, alpha: f32, f0: vec3<f32>, u: vec2<f32>) -> Scattered {
+    let f = basis(n);
+    let v = vec3<f32>(dot(wo, f.t), dot(wo, f.b), dot(wo, n));
+    let vh = normalize(vec3<f32>(alpha * v.x, alpha * v.y, v.z));
+    let lensq = vh.x * vh.x + vh.y * vh.y;
+    var t1 = vec3<f32>(1.0, 0.0, 0.0);
+    if lensq > 0.0 {
+        t1 = vec3<f32>(-vh.y, vh.x, 0.0) / sqrt(lensq);
+    }
+    let t2 = cross(vh, t1);
+    let r = sqrt(u.x);
+    let phi = 2.0 * PI * u.y;
+    let p1 = r * cos(phi);
+    let s = 0.5 * (1.0 + vh.z);
+    let p2 = (1.0 - s) * sqrt(max(1.0 - p1 * p1, 0.0)) + s * r * sin(phi);
+    let nh = t1 * p1 + t2 * p2 + vh * sqrt(max(1.0 - p1 * p1 - p2 * p2, 0.0));
+    let m = normalize(vec3<f32>(alpha * nh.x, alpha * nh.y, max(nh.z, 0.0)));
+    let lwi = m * (2.0 * dot(v, m)) - v;
+    let wi = normalize(f.t * lwi.x + f.b * lwi.y + n * lwi.z);
+    let lo = smith_lambda(alpha, v.z);
+    let li = smith_lambda(alpha, lwi.z);
+    return Scattered(wi, schlick(f0, dot(v, m)) * ((1.0 + lo) / (1.0 + lo + li)));
+}
+
+// ---- Paths (cpu.rs) ----
+
+// Whether a shadow ray meets anything before leaving the world (a ray out of cells counts
+// as blocked).
+fn blocked(r: Ray, p: vec3<f32>, dir: vec3<f32>) -> bool {
+    let h = trace(ray_at(r, p, dir));
+    return h.hit || h.exhausted;
+}
+
+// One step of a path: what it adds and whether it goes on.
+struct PathState {
+    r: Ray,
+    radiance: vec3<f32>,
+    throughput: vec3<f32>,
+    sees_disc: bool,
+    alive: bool,
+    // The normal of the first surface met (zero until then).
+    first_normal: vec3<f32>,
+}
+
+// Follows the path in \`s\` to its next surface: adds the light found there and, when
+// \`scatter\`, picks the next ray (or ends the path). Returns the distance to the surface
+// (−1 when the ray found none).
+fn path_step(s: ptr<function, PathState>, scatter: bool, rng: ptr<function, u32>) -> f32 {
+    let r = (*s).r;
+    let h = trace(r);
+    let d = r.d / r.len;
+    (*s).alive = false;
+    if h.exhausted {
+        return -1.0;
+    }
+    if !h.hit {
+        (*s).radiance += (*s).throughput * sky_radiance(d, (*s).sees_disc);
+        return -1.0;
+    }
+    let distance = h.t * r.len;
+    if h.axis == NO_AXIS {
+        return distance;
+    }
+    // Before any other trace: world_normal reads the last trace's entity rotation.
+    let n = world_normal(h);
+    if all((*s).first_normal == vec3<f32>(0.0)) {
+        (*s).first_normal = n;
+    }
+    let m = material(h.material);
+    if m.kind == KIND_EMISSIVE {
+        (*s).radiance += (*s).throughput * m.albedo * m.emission;
+    }
+    if !scatter {
+        return distance;
+    }
+    let p = ray_local(r, h.t) + n * SURFACE_OFFSET;
+    var next: Scattered;
+    if m.kind == KIND_MIRROR {
+        (*s).sees_disc = true;
+        next = Scattered(d - n * (2.0 * dot(d, n)), m.albedo);
+    } else {
+        let wo = -d;
+        let alpha = max(m.roughness, MIN_ALPHA);
+        if light.sun_on != 0u {
+            let u = vec2<f32>(rng_next(rng), rng_next(rng));
+            let wi = sample_cone(light.sun_dir, light.sun_omc, u);
+            let c = dot(n, wi);
+            if c > 0.0 && !blocked(r, p, wi) {
+                var f = m.albedo / PI;
+                if m.kind == KIND_METAL {
+                    f = ggx(n, wo, wi, alpha, m.albedo);
+                }
+                (*s).radiance += (*s).throughput * f * (c * light.sun_weight);
+            }
+        }
+        let u = vec2<f32>(rng_next(rng), rng_next(rng));
+        (*s).sees_disc = false;
+        if m.kind == KIND_METAL {
+            next = ggx_sample(n, wo, alpha, m.albedo, u);
+        } else {
+            next = Scattered(sample_cosine(n, u), m.albedo);
+        }
+    }
+    if dot(next.dir, n) > 0.0 {
+        (*s).throughput *= next.weight;
+        (*s).r = ray_at(r, p, next.dir);
+        (*s).alive = true;
+    }
+    return distance;
+}
+
+// One path: the radiance it brought back, the distance from its origin to the first
+// surface (−1 for the sky) and that surface's normal.
+struct PathSample {
+    radiance: vec3<f32>,
+    distance: f32,
+    normal: vec3<f32>,
+}
+
+// The radiance arriving along \`primary\` when the path may scatter \`bounces\` more times,
+// drawing from \`rng\`. \`sees_disc\`: whether the ray sees the sun's disc (camera and mirror
+// rays do; rays scattered by other surfaces get the sun by next-event estimation instead).
+fn path_radiance(primary: Ray, bounces: u32, sees_disc: bool, rng: ptr<function, u32>) -> PathSample {
+    var s = PathState(primary, vec3<f32>(0.0), vec3<f32>(1.0), sees_disc, true, vec3<f32>(0.0));
+    let distance = path_step(&s, bounces > 0u, rng);
+    for (var bounce = 1u; bounce <= bounces && s.alive; bounce++) {
+        path_step(&s, bounce < bounces, rng);
+    }
+    return PathSample(s.radiance, distance, s.first_normal);
+}
+
+// Passes \`path_trace\` (progressive path tracing, \`pathtrace\`) and \`path_sample\` (one sample
+// per pixel per frame, \`baseline\`), one invocation per pixel (docs/RENDERING.md §3a, §3b).
+//
+// \`path_trace\`: each dispatch adds sample number \`frame.sample\` to every pixel's running
+// sum; the host divides by the count. A sample's random stream depends only on (seed, pixel, sample
+// number), and every pixel adds its samples in number order, so the sums are the same bit
+// for bit however the dispatches are grouped into submissions.
+//
+// One sample per dispatch, not a loop over samples: lavapipe (Mesa 22.3) miscompiles a
+// sample loop around the bounce loop around the traversal loop, and pixels silently lose
+// samples.
+//
+// \`FrameInfo\` and \`LightInfo\` are generated in the prelude from their Rust twins.
+
+@group(1) @binding(0) var<uniform> frame: FrameInfo;
+@group(1) @binding(1) var<uniform> light: LightInfo;
+// \`path_trace\`: running sums (RGB, count). \`path_sample\`: this frame's sample (RGB, and
+// the distance to the first surface, −1 for the sky).
+@group(1) @binding(2) var<storage, read_write> radiance: array<vec4<f32>>;
+
+// The path tracer sees the sky as the light model defines it, direction by direction.
+fn sky_base(d: vec3<f32>) -> vec3<f32> {
+    return sky_direct(d);
+}
+
+// Sample \`frame.sample\` of pixel \`gid\`.
+fn pixel_sample(gid: vec2<u32>) -> PathSample {
+    let stream = pixel_stream(frame.seed, gid.x + gid.y * frame.width, frame.sample);
+    var rng = stream.rng;
+    let r = ray_new(frame.cam_int, frame.cam_frac, camera_dir(frame, gid, stream.jitter));
+    return path_radiance(r, light.bounces, true, &rng);
+}
+
+@compute @workgroup_size(8, 8)
+fn path_trace(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if gid.x >= frame.width || gid.y >= frame.height {
+        return;
+    }
+    let s = pixel_sample(gid.xy);
+    radiance[gid.x + gid.y * frame.width] += vec4<f32>(s.radiance, 1.0);
+}
+
+@compute @workgroup_size(8, 8)
+fn path_sample(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if gid.x >= frame.width || gid.y >= frame.height {
+        return;
+    }
+    let s = pixel_sample(gid.xy);
+    radiance[gid.x + gid.y * frame.width] = vec4<f32>(s.radiance, s.distance);
+}
+
+`,Js=`// Generated by naadf-client (shaders.rs): the world parameters, the constants shared with the
+// Rust code, the world's storage bindings.
+struct WorldInfo {
+    // World size in voxels.
+    size: vec3<u32>,
+    // 1 when some chunk lists entities.
+    has_entities: u32,
+    // World size in chunks.
+    chunks: vec3<u32>,
+    // Cells a ray may visit before it counts as a miss.
+    max_steps: u32,
+}
+@group(0) @binding(0) var<uniform> world_info: WorldInfo;
+struct FrameInfo {
+    // Camera position, integer part (floor).
+    cam_int: vec3<i32>,
+    // Image width in pixels.
+    width: u32,
+    // Camera position, fractional part in [0, 1).
+    cam_frac: vec3<f32>,
+    // Image height in pixels.
+    height: u32,
+    // View direction.
+    forward: vec3<f32>,
+    // The run's seed.
+    seed: u32,
+    // Image right, scaled by a·W/H.
+    right: vec3<f32>,
+    // Number of the sample this dispatch adds.
+    sample: u32,
+    // Image up, scaled by a.
+    up: vec3<f32>,
+    // 1 when a temporal pass has a history to blend with (0 for the path tracer).
+    history: u32,
+}
+struct LightInfo {
+    // Uniform sky: its radiance. Physical sky: the irradiance of the sun lighting it.
+    sky: vec3<f32>,
+    // 1 for the physical sky.
+    sky_physical: u32,
+    // Unit vector toward the sun (the sun lighting the physical sky when it is off).
+    sun_dir: vec3<f32>,
+    // 1 when the sun shines (its disc and its samples).
+    sun_on: u32,
+    // The disc's radiance.
+    sun_disc: f32,
+    // The weight of one disc sample: radiance times solid angle.
+    sun_weight: f32,
+    // 1 − cos of the disc's angular radius.
+    sun_omc: f32,
+    // Scattered rays after the camera ray.
+    bounces: u32,
+}
+struct GiInfo {
+    // Frames rendered in this history before this one.
+    frame: u32,
+    // The long-term TAA slot this frame writes (\`frame % TAA_SLOTS\`).
+    taa_slot: u32,
+    // Earlier frames the TAA may read (at most \`TAA_SLOTS − 1\`).
+    taa_valid: u32,
+    // The first frame rendered after the newest change of the materials, or of more
+    // chunks than are marked one by one (0: none): the near-change rule everywhere.
+    edit_frame: u32,
+    // The first frame rendered after the newest change of any chunk, entity moves
+    // included (0: none): the still path keeps no sample from before it.
+    change_frame: u32,
+    // This frame's jitter in the pixel, x (a point of a 32-point (0, 5, 2)-net).
+    jitter_x: f32,
+    // This frame's jitter in the pixel, y.
+    jitter_y: f32,
+    // 8×8 regions across.
+    regions_x: u32,
+    // 8×8 regions down.
+    regions_y: u32,
+    // Samples the sample ring holds.
+    ring_capacity: u32,
+    // 1 when the bilateral denoiser runs.
+    denoise: u32,
+    // Where each pixel's own secondary sample starts in \`mem\` (tagged with the
+    // frame that traced it).
+    off_own: u32,
+    // Where the atmosphere table starts in \`mem\` (vec4 words; the cameras start at 0).
+    off_lut: u32,
+    // Where the first-hit surfaces start in \`mem\`.
+    off_gbuf: u32,
+    // Where the first-hit materials start in \`mem\`.
+    off_gmat: u32,
+    // Where the first-hit light starts in \`mem\`.
+    off_emitted: u32,
+    // Where the TAA's per-pixel sums and ranges start in \`mem\`.
+    off_taa_info: u32,
+    // Where the incoming light starts in \`mem\`.
+    off_illum: u32,
+    // Where the denoiser's intermediate starts in \`mem\`.
+    off_illum2: u32,
+    // Where the results start in \`mem\`.
+    off_result: u32,
+    // Where the refined samples start in \`mem\`.
+    off_refined: u32,
+    // Where the regions' statistics start in \`mem\`.
+    off_region_info: u32,
+    // Where the sample ring starts in \`mem\`.
+    off_ring: u32,
+    // Where the queued pixels start in \`words\`.
+    off_queue_list: u32,
+}
+const STATE_SHIFT: u32 = 30u;
+const STATE_EMPTY: u32 = 0u;
+const STATE_FULL: u32 = 1u;
+const STATE_MIXED: u32 = 2u;
+const PAYLOAD: u32 = 1073741823u;
+const MAX_MATERIAL: u32 = 32767u;
+const VOXEL_SOLID: u32 = 32768u;
+const CHUNK_FIELD_BITS: u32 = 5u;
+const CELL_FIELD_BITS: u32 = 2u;
+const KIND_DIFFUSE: u32 = 0u;
+const KIND_EMISSIVE: u32 = 1u;
+const KIND_METAL: u32 = 2u;
+const KIND_MIRROR: u32 = 3u;
+const ENTITY_SOLID: u32 = 2147483648u;
+const TYPE_ALIGN: u32 = 64u;
+const RECORD_WORDS: u32 = 5u;
+const NO_ENTITY: u32 = 16383u;
+const SURFACE_OFFSET: f32 = 0.01f;
+const MIN_ALPHA: f32 = 0.001f;
+const PI: f32 = 3.1415927f;
+const PLANET_RADIUS: f32 = 6360000.0f;
+const ATMOSPHERE_HEIGHT: f32 = 60000.0f;
+const EYE_HEIGHT: f32 = 100.0f;
+const VIEW_STEPS: u32 = 24u;
+const LIGHT_STEPS: u32 = 6u;
+const RAYLEIGH: vec3<f32> = vec3<f32>(5.802e-6f, 1.3558e-5f, 3.31e-5f);
+const RAYLEIGH_SCALE: f32 = 8000.0f;
+const MIE_SCATTER: f32 = 3.996e-6f;
+const MIE_EXTINCTION: f32 = 4.44e-6f;
+const MIE_SCALE: f32 = 1200.0f;
+const MIE_G: f32 = 0.8f;
+const OZONE: vec3<f32> = vec3<f32>(6.5e-7f, 1.881e-6f, 8.5e-8f);
+const OZONE_CENTRE: f32 = 25000.0f;
+const OZONE_HALF_WIDTH: f32 = 15000.0f;
+// The first word of each buffer in \`world\`.
+struct WorldOffsets {
+    chunks: u32,
+    chunk_entities: u32,
+    blocks: u32,
+    voxels: u32,
+    materials: u32,
+    entity_types: u32,
+    entity_instances: u32,
+    structure: u32,
+}
+@group(0) @binding(1) var<uniform> world_offsets: WorldOffsets;
+@group(0) @binding(2) var<storage, read> world: array<u32>;
+fn chunk_word(i: u32) -> u32 { return world[world_offsets.chunks + i]; }
+fn chunk_entity_word(i: u32) -> u32 { return world[world_offsets.chunk_entities + i]; }
+fn block_word(i: u32) -> u32 { return world[world_offsets.blocks + i]; }
+fn voxel_word(i: u32) -> u32 { return world[world_offsets.voxels + i]; }
+fn material_word(i: u32) -> u32 { return world[world_offsets.materials + i]; }
+fn entity_type_word(i: u32) -> u32 { return world[world_offsets.entity_types + i]; }
+fn instance_word(i: u32) -> u32 { return world[world_offsets.entity_instances + i]; }
+fn structure_word(i: u32) -> u32 { return world[world_offsets.structure + i]; }
+
+// The world buffers (docs/FORMAT.md §5) and how to read their cells.
+//
+// Generated by naadf-client (client/src/gpu/shaders.rs) from the Rust definitions, in the
+// prelude before this file:
+// - the parameters \`world_info: WorldInfo\` (size in voxels and chunks, whether entities
+//   exist, the step budget);
+// - the constants of the cell layout (STATE_*, PAYLOAD, MAX_MATERIAL, VOXEL_SOLID,
+//   CHUNK_FIELD_BITS, CELL_FIELD_BITS), the material kinds (KIND_*), the entity layout
+//   (ENTITY_SOLID, TYPE_ALIGN, RECORD_WORDS, NO_ENTITY) and the frame modes (MODE_*);
+// - the storage bindings and the accessors \`chunk_word\`, \`chunk_entity_word\`,
+//   \`block_word\`, \`voxel_word\`, \`material_word\`, \`entity_type_word\`, \`instance_word\` (and
+//   \`grid_word\` for the dense-grid variant): a buffer larger than the adapter's
+//   storage-binding limit is split across several bindings, and the accessor picks the
+//   part.
+
+// State of a chunk or block cell: STATE_EMPTY, STATE_FULL or (also for state 3)
+// STATE_MIXED.
+fn cell_state(c: u32) -> u32 {
+    return min(c >> STATE_SHIFT, STATE_MIXED);
+}
+
+// Field \`dir\` (order −x, +x, −y, +y, −z, +z) of a packed AADF.
+fn aadf_field(word: u32, dir: u32, bits: u32) -> u32 {
+    return (word >> (bits * dir)) & ((1u << bits) - 1u);
+}
+
+// The index of chunk \`c\` in a world of \`chunks\` chunks (\`world_info.chunks\`). Loops read
+// \`world_info\` once before they start and pass its fields: it is a storage buffer, and a
+// storage read in every step is a bounds-checked load on lavapipe.
+fn chunk_index(c: vec3<u32>, chunks: vec3<u32>) -> u32 {
+    return c.x + chunks.x * (c.y + chunks.y * c.z);
+}
+
+fn index4(p: vec3<u32>) -> u32 {
+    return p.x + 4u * p.y + 16u * p.z;
+}
+
+// Voxel \`i\` (0..64) of the voxel group starting at word \`ptr\`.
+fn group_voxel(ptr: u32, i: u32) -> u32 {
+    return (voxel_word(ptr + i / 2u) >> (16u * (i & 1u))) & 0xFFFFu;
+}
+
+// A material's entry (docs/FORMAT.md §5.4).
+struct Material {
+    kind: u32,
+    albedo: vec3<f32>,
+    emission: f32,
+    roughness: f32,
+}
+
+fn material(id: u32) -> Material {
+    let w0 = material_word(4u * id);
+    let w1 = material_word(4u * id + 1u);
+    let w2 = material_word(4u * id + 2u);
+    let rg = unpack2x16float(w1);
+    let be = unpack2x16float(w2);
+    return Material(w0 & 3u, vec3<f32>(rg.x, rg.y, be.x), be.y, unpack2x16float(w0).y);
+}
+
+// Rays and the event model every traversal shares (world/src/traverse/ray.rs, in f32).
+//
+// A ray keeps its origin split into an integer part \`o_int\` and a fraction \`o_frac\` in [0, 1)
+// (docs/NAADF.md §9), so precision does not depend on where in the world it starts.
+// The direction \`d\` is kept exactly as given (not renormalised, which would move the line
+// by an f32 rounding): times are in units of |d| and the ray's \`len\` converts them to
+// distances. Every decision compares plane-crossing times from the one function \`t_at\`,
+// so the traversal is a consistent walk of the event order "(t, axis), x before y before
+// z at equal t"; it departs from the CPU's f64 order only where two crossings are within
+// f32 rounding of each other.
+
+// A cell bound beyond any world for unconstrained axes (the CPU walk uses 2^40, which no
+// i32 holds).
+const FAR_CELL: i32 = 1073741824;
+const T_INF: f32 = 3.0e38;
+const NO_AXIS: u32 = 3u;
+
+struct Ray {
+    o_int: vec3<i32>,
+    o_frac: vec3<f32>,
+    d: vec3<f32>,
+    inv: vec3<f32>,
+    len: f32,
+}
+
+fn ray_new(o_int: vec3<i32>, o_frac: vec3<f32>, d: vec3<f32>) -> Ray {
+    // The inverse of a zero component is never read: such axes never cross a plane.
+    let safe = select(vec3<f32>(1.0), d, d != vec3<f32>(0.0));
+    return Ray(o_int, o_frac, d, 1.0 / safe, length(d));
+}
+
+// A ray from an unsplit origin.
+fn ray_from(o: vec3<f32>, d: vec3<f32>) -> Ray {
+    let fl = floor(o);
+    return ray_new(vec3<i32>(fl), min(o - fl, vec3<f32>(0.99999994)), d);
+}
+
+// The ray's point at time \`t\`, relative to its integer origin.
+fn ray_local(r: Ray, t: f32) -> vec3<f32> {
+    return r.o_frac + r.d * t;
+}
+
+// A ray starting at \`p\` (relative to \`r\`'s integer origin) along \`d\`.
+fn ray_at(r: Ray, p: vec3<f32>, d: vec3<f32>) -> Ray {
+    let fl = floor(p);
+    return ray_new(r.o_int + vec3<i32>(fl), min(p - fl, vec3<f32>(0.99999994)), d);
+}
+
+// Time at which the ray crosses plane \`k\` of \`axis\`.
+fn t_at(r: Ray, a: u32, k: i32) -> f32 {
+    return (f32(k - r.o_int[a]) - r.o_frac[a]) * r.inv[a];
+}
+
+// Whether the crossing of plane \`k\` of axis \`b\` comes before the event \`(t, a)\`.
+fn crossed(r: Ray, b: u32, k: i32, t: f32, a: u32) -> bool {
+    let tb = t_at(r, b, k);
+    return tb < t || (tb == t && b < a);
+}
+
+// The cell of axis \`b\` right after event \`(t, a)\`, known to lie in \`lo..=hi\`.
+fn cell_after(r: Ray, b: u32, t: f32, a: u32, lo: i32, hi: i32) -> i32 {
+    let d = r.d[b];
+    if lo == hi || d == 0.0 {
+        return lo;
+    }
+    let p = r.o_frac[b] + d * t;
+    let fl = floor(p);
+    var k = clamp(i32(fl) + r.o_int[b], lo, hi);
+    let f = p - fl;
+    // Far from a plane the floor is certain; near one, decide by crossing times.
+    let tol = 4e-6 * (abs(d * t) + 1.0);
+    if f > tol && f < 1.0 - tol {
+        return k;
+    }
+    if d > 0.0 {
+        while k < hi && crossed(r, b, k + 1, t, a) {
+            k += 1;
+        }
+        while k > lo && !crossed(r, b, k, t, a) {
+            k -= 1;
+        }
+    } else {
+        while k > lo && crossed(r, b, k, t, a) {
+            k -= 1;
+        }
+        while k < hi && !crossed(r, b, k + 1, t, a) {
+            k += 1;
+        }
+    }
+    return k;
+}
+
+// Where a ray begins inside the box [0, size): its first cell, the time it is entered and
+// the axis whose plane it crossed (NO_AXIS when the origin is inside). \`ok\` is false when
+// the ray misses the box.
+struct Entry {
+    cell: vec3<i32>,
+    t: f32,
+    axis: u32,
+    ok: bool,
+}
+
+fn ray_entry(r: Ray, size: vec3<i32>) -> Entry {
+    let start = r.o_int;
+    var miss = Entry(vec3<i32>(0), 0.0, NO_AXIS, false);
+    if all(start >= vec3<i32>(0)) && all(start < size) {
+        return Entry(start, 0.0, NO_AXIS, true);
+    }
+    // The last slab-entry event, in (t, axis) order.
+    var bt = 0.0;
+    var ba = NO_AXIS;
+    for (var a = 0u; a < 3u; a++) {
+        var plane: i32;
+        if start[a] < 0 {
+            if r.d[a] <= 0.0 {
+                return miss;
+            }
+            plane = 0;
+        } else if start[a] >= size[a] {
+            if r.d[a] >= 0.0 {
+                return miss;
+            }
+            plane = size[a];
+        } else {
+            continue;
+        }
+        let t = t_at(r, a, plane);
+        if ba == NO_AXIS || t >= bt {
+            bt = t;
+            ba = a;
+        }
+    }
+    var cell = vec3<i32>(0);
+    for (var b = 0u; b < 3u; b++) {
+        if b == ba {
+            cell[b] = select(size[b] - 1, 0, r.d[b] > 0.0);
+        } else if r.d[b] > 0.0 {
+            cell[b] = cell_after(r, b, bt, ba, start[b], FAR_CELL);
+        } else if r.d[b] < 0.0 {
+            cell[b] = cell_after(r, b, bt, ba, -FAR_CELL, start[b]);
+        } else {
+            cell[b] = start[b];
+        }
+    }
+    if any(cell < vec3<i32>(0)) || any(cell >= size) {
+        return miss;
+    }
+    return Entry(cell, bt, ba, true);
+}
+
+// Leaving the empty cuboid made of \`cell\` extended by \`skip\` cells toward the ray on each
+// axis: the exit event and the cell entered by it.
+struct Exit {
+    t: f32,
+    axis: u32,
+    next: vec3<i32>,
+}
+
+fn ray_exit(r: Ray, cell: vec3<i32>, skip: vec3<i32>) -> Exit {
+    var bound = vec3<i32>(0);
+    var bt = T_INF;
+    var ba = 0u;
+    for (var a = 0u; a < 3u; a++) {
+        if r.d[a] == 0.0 {
+            continue;
+        }
+        bound[a] = select(cell[a] - skip[a], cell[a] + 1 + skip[a], r.d[a] > 0.0);
+        let t = t_at(r, a, bound[a]);
+        if t < bt {
+            bt = t;
+            ba = a;
+        }
+    }
+    var next = cell;
+    for (var b = 0u; b < 3u; b++) {
+        if b == ba {
+            next[b] = select(bound[b] - 1, bound[b], r.d[b] > 0.0);
+        } else if r.d[b] > 0.0 {
+            next[b] = cell_after(r, b, bt, ba, cell[b], cell[b] + skip[b]);
+        } else if r.d[b] < 0.0 {
+            next[b] = cell_after(r, b, bt, ba, cell[b] - skip[b], cell[b]);
+        }
+    }
+    return Exit(bt, ba, next);
+}
+
+// Amanatides–Woo state in the same event order (ties step the lowest axis first).
+struct Dda {
+    cell: vec3<i32>,
+    tmax: vec3<f32>,
+    t: f32,
+    axis: u32,
+}
+
+fn dda_start(r: Ray, e: Entry) -> Dda {
+    var tmax = vec3<f32>(T_INF);
+    for (var a = 0u; a < 3u; a++) {
+        if r.d[a] != 0.0 {
+            tmax[a] = t_at(r, a, select(e.cell[a], e.cell[a] + 1, r.d[a] > 0.0));
+        }
+    }
+    return Dda(e.cell, tmax, e.t, e.axis);
+}
+
+fn dda_advance(r: Ray, s: ptr<function, Dda>) {
+    var a = 0u;
+    if (*s).tmax[1] < (*s).tmax[a] {
+        a = 1u;
+    }
+    if (*s).tmax[2] < (*s).tmax[a] {
+        a = 2u;
+    }
+    (*s).t = (*s).tmax[a];
+    let c = (*s).cell[a] + select(-1, 1, r.d[a] > 0.0);
+    (*s).cell[a] = c;
+    (*s).axis = a;
+    (*s).tmax[a] = t_at(r, a, select(c, c + 1, r.d[a] > 0.0));
+}
+
+// The first solid voxel along a ray (of the world, or of an entity: then voxel and normal
+// are entity-local).
+struct Hit {
+    hit: bool,
+    // The step budget ran out (counts as a miss).
+    exhausted: bool,
+    voxel: vec3<i32>,
+    // Axis of the entry face (NO_AXIS: the origin was inside the voxel).
+    axis: u32,
+    // Entry-face normal (zero when the origin was inside).
+    normal: vec3<i32>,
+    // Time of entry, in units of the ray's |d|.
+    t: f32,
+    material: u32,
+    steps: u32,
+    // Entity id, or NO_ENTITY (generated in the prelude).
+    entity: u32,
+}
+
+fn no_hit(steps: u32) -> Hit {
+    return Hit(false, false, vec3<i32>(0), NO_AXIS, vec3<i32>(0), T_INF, 0u, steps, NO_ENTITY);
+}
+
+fn make_hit(r: Ray, cell: vec3<i32>, t: f32, axis: u32, material: u32, steps: u32) -> Hit {
+    var n = vec3<i32>(0);
+    if axis != NO_AXIS {
+        n[axis] = select(1, -1, r.d[axis] > 0.0);
+    }
+    return Hit(true, false, cell, axis, n, t, material, steps, NO_ENTITY);
+}
+
+// One full trace: the world loop (traverse.wgsl or grid.wgsl), then the entities of the
+// chunks it visited (docs/NAADF.md §11): the GPU twin of world/src/entity/trace.rs.
+//
+// The world loop hands every chunk entity field it meets to \`record_field\`. Fields are
+// kept in a small list; when it fills up, its instances are tested at once, which gives
+// the same answer as testing them all at the end: each instance's first solid voxel
+// entered at or after the world entry is found whatever the limit, and only the nearest
+// (lowest id at equal times) survives, and only if it comes strictly before the world's
+// hit or exit.
+
+// How the world loop ended.
+const END_HIT: u32 = 0u;
+const END_LEFT: u32 = 1u;
+const END_MISSED: u32 = 2u;
+const END_EXHAUSTED: u32 = 3u;
+
+struct WorldTrace {
+    hit: Hit,
+    end: u32,
+    // When the ray entered the world, and when it hit or left it.
+    t_entry: f32,
+    t_end: f32,
+}
+
+// The end of a world loop whose step budget ran out at time \`t\` (entered at \`t_entry\`).
+fn ran_out(t_entry: f32, t: f32) -> WorldTrace {
+    var h = no_hit(world_info.max_steps);
+    h.exhausted = true;
+    return WorldTrace(h, END_EXHAUSTED, t_entry, t);
+}
+
+const MAX_FIELDS: u32 = 16u;
+
+var<private> fields: array<u32, MAX_FIELDS>;
+var<private> field_count: u32;
+var<private> best_entity: Hit;
+// The inverse rotation of \`best_entity\`'s instance.
+var<private> best_rotation: vec4<f32>;
+// Entity-grid cells visited (added to the step count of an entity hit).
+var<private> entity_steps: u32;
+
+fn record_field(r: Ray, field: u32, t_entry: f32) {
+    if field == 0u || (field_count > 0u && fields[field_count - 1u] == field) {
+        return;
+    }
+    if field_count == MAX_FIELDS {
+        flush_fields(r, t_entry);
+    }
+    fields[field_count] = field;
+    field_count += 1u;
+}
+
+fn flush_fields(r: Ray, t_entry: f32) {
+    for (var k = 0u; k < field_count; k++) {
+        let f = fields[k];
+        let first = f >> 8u;
+        for (var j = 0u; j < (f & 0xFFu); j++) {
+            test_instance(r, (first + j) * RECORD_WORDS, t_entry);
+        }
+    }
+    field_count = 0u;
+}
+
+// Decodes a smallest-three quaternion (world/src/entity/pack.rs).
+fn decode_quat(w0: u32, w1: u32) -> vec4<f32> {
+    let s = vec3<f32>(vec3<u32>(w0 & 0x3FFFu, (w0 >> 14u) & 0x3FFFu, (w0 >> 28u) | ((w1 & 0x3FFu) << 4u)));
+    let small = (s - 8192.0) / 8192.0;
+    let rest = sqrt(max(1.0 - dot(small, small), 0.0));
+    let k = (w1 >> 10u) & 3u;
+    if k == 0u {
+        return vec4<f32>(rest, small.x, small.y, small.z);
+    } else if k == 1u {
+        return vec4<f32>(small.x, rest, small.y, small.z);
+    } else if k == 2u {
+        return vec4<f32>(small.x, small.y, rest, small.z);
+    }
+    return vec4<f32>(small, rest);
+}
+
+// Rotates \`v\` by the unit quaternion \`q = (x, y, z, w)\`.
+fn rotate(q: vec4<f32>, v: vec3<f32>) -> vec3<f32> {
+    let t = 2.0 * cross(q.xyz, v);
+    return v + q.w * t + cross(q.xyz, t);
+}
+
+fn conjugate(q: vec4<f32>) -> vec4<f32> {
+    return vec4<f32>(-q.xyz, q.w);
+}
+
+// An instance record's position in 1/128 voxel (record words 0 and 1).
+fn record_position(dx: u32, dy: u32) -> vec3<u32> {
+    return vec3<u32>(dx & 0x1FFFFFu, (dx >> 21u) | (((dy >> 21u) & 0xFFu) << 11u), dy & 0x1FFFFFu);
+}
+
+// An instance record's entity id (record word 4).
+fn record_id(e: u32) -> u32 {
+    return e & 0x3FFFu;
+}
+
+// Tests one chunk-instance record against the ray; keeps the nearest entity hit.
+fn test_instance(r: Ray, at: u32, t_lo: f32) {
+    let dx = instance_word(at);
+    let dy = instance_word(at + 1u);
+    let dz = instance_word(at + 2u);
+    let dw = instance_word(at + 3u);
+    let e = instance_word(at + 4u);
+    let id = record_id(e);
+    let size = vec3<u32>((e >> 14u) & 0x7Fu, (e >> 21u) & 0x7Fu, ((e >> 28u) & 0xFu) | (((dy >> 29u) & 7u) << 4u));
+    let pos = record_position(dx, dy);
+    var limit = T_INF;
+    var equal_ok = false;
+    if best_entity.hit {
+        limit = best_entity.t;
+        equal_ok = id < best_entity.entity;
+    }
+    // The entity lies within |size| of its local-origin corner: reject rays that pass
+    // farther (with slack for f32), before transforming anything.
+    let rel = vec3<f32>(r.o_int - vec3<i32>(pos >> vec3<u32>(7u))) + (r.o_frac - vec3<f32>(pos & vec3<u32>(127u)) / 128.0);
+    let tc = -dot(rel, r.d) / (r.len * r.len);
+    let radius = (length(vec3<f32>(size)) + 0.01) / r.len;
+    let closest = rel + r.d * tc;
+    if dot(closest, closest) > radius * radius * r.len * r.len || tc + radius < t_lo || tc - radius > limit {
+        return;
+    }
+    let q = decode_quat(dz, dw & 0xFFFu);
+    let local = ray_from(rotate(q, rel), rotate(q, r.d));
+    let isize = vec3<i32>(size);
+    let entry = ray_entry(local, isize);
+    if !entry.ok {
+        return;
+    }
+    let base = (dw >> 12u) * TYPE_ALIGN;
+    var s = dda_start(local, entry);
+    loop {
+        entity_steps += 1u;
+        if s.t > limit || (s.t == limit && !equal_ok) {
+            return;
+        }
+        if s.t >= t_lo {
+            let c = vec3<u32>(s.cell);
+            let v = entity_type_word(base + c.x + size.x * (c.y + size.y * c.z));
+            if (v & ENTITY_SOLID) != 0u {
+                var h = make_hit(local, s.cell, s.t, s.axis, v & MAX_MATERIAL, 0u);
+                h.entity = id;
+                best_entity = h;
+                best_rotation = q;
+                return;
+            }
+        }
+        dda_advance(local, &s);
+        if any(s.cell < vec3<i32>(0)) || any(s.cell >= isize) {
+            return;
+        }
+    }
+}
+
+// The world-space normal of the hit the last \`trace\` returned (entity-local normals are
+// rotated back to the world).
+fn world_normal(h: Hit) -> vec3<f32> {
+    let n = vec3<f32>(h.normal);
+    if h.entity == NO_ENTITY {
+        return n;
+    }
+    return rotate(conjugate(best_rotation), n);
+}
+
+// Traces \`r\` through the world and its entities.
+fn trace(r: Ray) -> Hit {
+    field_count = 0u;
+    entity_steps = 0u;
+    best_entity = no_hit(0u);
+    let w = world_loop(r);
+    if w.end == END_MISSED || w.end == END_EXHAUSTED {
+        return w.hit;
+    }
+    flush_fields(r, w.t_entry);
+    if best_entity.hit && best_entity.t < w.t_end {
+        var h = best_entity;
+        h.steps = w.hit.steps + entity_steps;
+        return h;
+    }
+    var h = w.hit;
+    h.steps += entity_steps;
+    return h;
+}
+
+// The world loop over the chunk → block → voxel hierarchy (docs/NAADF.md §9), with
+// AADF jumps (\`USE_AADF\`, the \`naadf\` method) or without (\`nodf\`): the GPU twin of
+// world/src/traverse/hierarchy.rs. Chunks with entities skip only to their own edge and
+// have their entity fields recorded for the entity pass.
+
+override USE_AADF: bool = true;
+
+
+fn to_edge(c: u32, neg: bool, edge: u32) -> i32 {
+    let m = c & (edge - 1u);
+    return i32(select(edge - 1u - m, m, neg));
+}
+
+fn world_loop(r: Ray) -> WorldTrace {
+    let dims = vec3<i32>(world_info.size);
+    let entry = ray_entry(r, dims);
+    if !entry.ok {
+        return WorldTrace(no_hit(0u), END_MISSED, 0.0, 0.0);
+    }
+    var cell = entry.cell;
+    var t = entry.t;
+    var axis = entry.axis;
+    let neg = r.d <= vec3<f32>(0.0);
+    // The AADF field facing the ray on each axis: −a for negative directions, +a otherwise.
+    let facing = vec3<u32>(0u, 2u, 4u) + select(vec3<u32>(0u), vec3<u32>(1u), r.d > vec3<f32>(0.0));
+    // Each chunk's entity field says whether entities are there, read once per chunk
+    // entered, so the loop needs no world-wide flag.
+    var last_chunk = 0xFFFFFFFFu;
+    var last_field = 0u;
+    // The world's parameters, read once (see chunk_index in world.wgsl).
+    let chunks = world_info.chunks;
+    let max_steps = world_info.max_steps;
+    for (var steps = 1u; steps <= max_steps; steps++) {
+        let p = vec3<u32>(cell);
+        let ci = chunk_index(p >> vec3<u32>(4u), chunks);
+        if ci != last_chunk {
+            last_chunk = ci;
+            last_field = chunk_entity_word(ci);
+            record_field(r, last_field, entry.t);
+        }
+        let entities_here = last_field != 0u;
+        let chunk = chunk_word(ci);
+        var skip = vec3<i32>(0);
+        let cs = cell_state(chunk);
+        if cs == STATE_FULL {
+            return WorldTrace(make_hit(r, cell, t, axis, chunk & MAX_MATERIAL, steps), END_HIT, entry.t, t);
+        } else if cs == STATE_EMPTY {
+            for (var a = 0u; a < 3u; a++) {
+                skip[a] = to_edge(p[a], neg[a], 16u);
+                if USE_AADF && !entities_here {
+                    skip[a] += 16 * i32(aadf_field(chunk, facing[a], CHUNK_FIELD_BITS));
+                }
+            }
+        } else {
+            let block = block_word((chunk & PAYLOAD) + index4((p >> vec3<u32>(2u)) & vec3<u32>(3u)));
+            let bs = cell_state(block);
+            if bs == STATE_FULL {
+                return WorldTrace(make_hit(r, cell, t, axis, block & MAX_MATERIAL, steps), END_HIT, entry.t, t);
+            } else if bs == STATE_EMPTY {
+                for (var a = 0u; a < 3u; a++) {
+                    skip[a] = to_edge(p[a], neg[a], 4u);
+                    if USE_AADF {
+                        skip[a] += 4 * i32(aadf_field(block, facing[a], CELL_FIELD_BITS));
+                    }
+                }
+            } else {
+                let v = group_voxel(block & PAYLOAD, index4(p & vec3<u32>(3u)));
+                if (v & VOXEL_SOLID) != 0u {
+                    return WorldTrace(make_hit(r, cell, t, axis, v & MAX_MATERIAL, steps), END_HIT, entry.t, t);
+                }
+                if USE_AADF {
+                    for (var a = 0u; a < 3u; a++) {
+                        skip[a] = i32(aadf_field(v, facing[a], CELL_FIELD_BITS));
+                    }
+                }
+            }
+        }
+        let ex = ray_exit(r, cell, skip);
+        if any(ex.next < vec3<i32>(0)) || any(ex.next >= dims) {
+            var h = no_hit(steps);
+            return WorldTrace(h, END_LEFT, entry.t, ex.t);
+        }
+        cell = ex.next;
+        t = ex.t;
+        axis = ex.axis;
+    }
+    return ran_out(entry.t, t);
+}
+
+// The first-hit chain shared by \`albedo\` (render.wgsl) and \`gi\` (gi_primary.wgsl): a camera
+// ray followed through up to MAX_SEGMENTS − 1 mirror bounces to the first surface that is
+// not a mirror, with the bounce planes of the reference's first-hit record
+// (docs/RENDERING.md §2, §3c).
+
+// Hit-plane sentinels of the first-hit record (docs/NAADF.md §10).
+const HIT_NOTHING: u32 = 0x1FFFFu;
+const HIT_UNDEFINED: u32 = 0u;
+// Mirror segments a path may follow (the primary segment included).
+const MAX_SEGMENTS: u32 = 4u;
+// Secondary-ray origins start SURFACE_OFFSET off the surface, along its normal
+// (docs/NAADF.md §12; from the prelude).
+
+// How a chain ended.
+const CHAIN_SURFACE: u32 = 0u;
+const CHAIN_SKY: u32 = 1u;
+// The last segment allowed met a mirror too.
+const CHAIN_LIMIT: u32 = 2u;
+
+// The 17-bit hit plane: normal id (1 −x, 2 +x, 3 −y, 4 +y, 5 −z, 6 +z; 7 = origin inside
+// the voxel) in bits 0–2, the plane's integer coordinate in bits 3–16.
+fn encode_plane(h: Hit) -> u32 {
+    if h.axis == NO_AXIS {
+        return 7u;
+    }
+    let positive = h.normal[h.axis] > 0;
+    let id = 2u * h.axis + select(1u, 2u, positive);
+    let coord = u32(h.voxel[h.axis] + select(0, 1, positive)) & 0x3FFFu;
+    return id | (coord << 3u);
+}
+
+struct Chain {
+    // The last segment and what it met (\`h.hit\` is false for the sky).
+    r: Ray,
+    h: Hit,
+    // The final surface's world normal (read right after its trace: world_normal reads the
+    // entity rotation of the last trace).
+    n: vec3<f32>,
+    // The product of the mirror weights along the chain.
+    throughput: vec3<f32>,
+    planes: array<u32, 4>,
+    // Path length to the final surface; −1 for the sky and the mirror limit.
+    distance: f32,
+    end: u32,
+}
+
+// Follows \`primary\` (whose first hit is \`first\`) through mirrors. A mirror weighs the path
+// by Schlick's Fresnel with F0 = albedo when \`schlick\`, by its albedo otherwise (the light
+// model's tinted mirror, docs/RENDERING.md §3a).
+fn first_hit_chain(primary: Ray, first: Hit, schlick: bool) -> Chain {
+    var c = Chain(primary, first, vec3<f32>(0.0), vec3<f32>(1.0),
+        array<u32, 4>(HIT_UNDEFINED, HIT_UNDEFINED, HIT_UNDEFINED, HIT_UNDEFINED), 0.0, CHAIN_SURFACE);
+    for (var seg = 0u; seg < MAX_SEGMENTS; seg++) {
+        if seg > 0u {
+            c.h = trace(c.r);
+        }
+        let dn = c.r.d / c.r.len;
+        if !c.h.hit {
+            c.planes[seg] = HIT_NOTHING;
+            c.distance = -1.0;
+            c.end = CHAIN_SKY;
+            return c;
+        }
+        c.planes[seg] = encode_plane(c.h);
+        c.distance += c.h.t * c.r.len;
+        c.n = world_normal(c.h);
+        let m = material(c.h.material);
+        if m.kind != KIND_MIRROR {
+            return c;
+        }
+        if seg + 1u == MAX_SEGMENTS {
+            c.planes[seg] = HIT_NOTHING;
+            c.distance = -1.0;
+            c.end = CHAIN_LIMIT;
+            return c;
+        }
+        if schlick {
+            let cos_i = clamp(-dot(c.n, dn), 0.0, 1.0);
+            c.throughput *= m.albedo + (1.0 - m.albedo) * pow(1.0 - cos_i, 5.0);
+        } else {
+            c.throughput *= m.albedo;
+        }
+        let p = ray_local(c.r, c.h.t) + c.n * SURFACE_OFFSET;
+        c.r = ray_at(c.r, p, reflect(dn, c.n));
+    }
+    return c;
+}
+
+// Pass: render one frame, one invocation per pixel (docs/RENDERING.md).
+//
+// Camera rays follow the camera contract (docs/CAMERA.md): the host passes the camera position
+// split into integer and fraction, \`forward\`, and \`right\`/\`up\` already scaled by
+// a·W/H and a (a = tan(fov_y/2)), so that dir = forward + sx·right + sy·up with
+// sx = 2(px + 0.5)/W − 1 and sy = 1 − 2(py + 0.5)/H.
+//
+// Modes (MODE_*, generated after the pass from the client's \`Mode\`): albedo, material,
+// normal, steps. Every pixel becomes one RGBA8 word; with bit 0 of \`flags\`, the pixel's
+// first-hit record (the reference's \`firstHitData\`) is written to \`gbuffer\` as well.
+
+// \`View\` is generated after the pass from its Rust definition (client/src/gpu/params.rs).
+
+@group(1) @binding(0) var<uniform> view: View;
+@group(1) @binding(1) var<storage, read_write> pixels: array<u32>;
+@group(1) @binding(2) var<storage, read_write> gbuffer: array<vec4<u32>>;
+
+const SUN_COLOR: vec3<f32> = vec3<f32>(1.0, 0.96, 0.88);
+// Cosine of the sun disc's angular radius (about 1.8°).
+const SUN_DISC_COS: f32 = 0.9995;
+
+fn srgb(c: vec3<f32>) -> vec3<f32> {
+    let x = clamp(c, vec3<f32>(0.0), vec3<f32>(1.0));
+    return select(1.055 * pow(x, vec3<f32>(1.0 / 2.4)) - 0.055, 12.92 * x, x <= vec3<f32>(0.0031308));
+}
+
+fn pack_rgb(c: vec3<f32>) -> u32 {
+    let b = vec3<u32>(floor(clamp(c, vec3<f32>(0.0), vec3<f32>(1.0)) * 255.0 + 0.5));
+    return b.x | (b.y << 8u) | (b.z << 16u) | 0xFF000000u;
+}
+
+// The sky: a vertical gradient plus the sun disc.
+fn sky(d: vec3<f32>) -> vec3<f32> {
+    let horizon = vec3<f32>(0.70, 0.80, 0.95);
+    var c: vec3<f32>;
+    if d.y >= 0.0 {
+        c = mix(horizon, vec3<f32>(0.20, 0.40, 0.80), sqrt(d.y));
+    } else {
+        c = mix(horizon, vec3<f32>(0.30, 0.28, 0.25), sqrt(-d.y));
+    }
+    if dot(d, view.sun) > SUN_DISC_COS {
+        c += 8.0 * SUN_COLOR;
+    }
+    return c;
+}
+
+// ACES filmic fit (Narkowicz 2015).
+fn tone_map(c: vec3<f32>) -> vec3<f32> {
+    return clamp((c * (2.51 * c + 0.03)) / (c * (2.43 * c + 0.59) + 0.14), vec3<f32>(0.0), vec3<f32>(1.0));
+}
+
+// Step-count heat map: blue → cyan → green → yellow → red over [0, 1].
+fn heat(v: f32) -> vec3<f32> {
+    let x = clamp(v, 0.0, 1.0) * 4.0;
+    return clamp(vec3<f32>(x - 2.0, select(x, 4.0 - x, x > 3.0), 2.0 - x), vec3<f32>(0.0), vec3<f32>(1.0));
+}
+
+// Follows the primary hit through up to MAX_SEGMENTS − 1 mirror bounces and shades the
+// first non-mirror surface: albedo × (hard sun shadow + ambient) + emission, Schlick
+// weights on mirrors, the sky on a miss. Returns the colour and writes the first-hit
+// record.
+fn shade_path(primary: Ray, first: Hit, gb: ptr<function, vec4<u32>>) -> vec3<f32> {
+    let c = first_hit_chain(primary, first, true);
+    var light = vec3<f32>(0.0);
+    var kind = KIND_DIFFUSE;
+    var mat_id = 0u;
+    var entity = NO_ENTITY;
+    if c.end == CHAIN_SKY {
+        light = c.throughput * sky(c.r.d / c.r.len);
+    } else if c.end == CHAIN_SURFACE {
+        let m = material(c.h.material);
+        kind = m.kind;
+        mat_id = c.h.material;
+        entity = c.h.entity;
+        let p = ray_local(c.r, c.h.t) + c.n * SURFACE_OFFSET;
+        let shadow = trace(ray_at(c.r, p, view.sun));
+        let lit = select(1.0, 0.0, shadow.hit);
+        let direct = 2.0 * max(dot(c.n, view.sun), 0.0) * lit;
+        let ambient = 0.2 * max(dot(view.sun, normalize(c.n + 1.01 * view.sun)), 0.0);
+        var col = m.albedo * (direct + ambient) * SUN_COLOR;
+        if m.kind == KIND_EMISSIVE {
+            col += m.albedo * m.emission;
+        }
+        light = c.throughput * col;
+    }
+    let dist_bits = pack2x16float(vec2<f32>(c.distance, 0.0)) & 0x7FFFu;
+    *gb = vec4<u32>(
+        entity | (c.planes[0] << 15u),
+        select(0u, 1u, kind != KIND_METAL) | (c.planes[1] << 15u),
+        mat_id | (c.planes[2] << 15u),
+        dist_bits | (c.planes[3] << 15u),
+    );
+    return light;
+}
+
+@compute @workgroup_size(8, 8)
+fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if gid.x >= view.width || gid.y >= view.height {
+        return;
+    }
+    let sx = 2.0 * (f32(gid.x) + 0.5) / f32(view.width) - 1.0;
+    let sy = 1.0 - 2.0 * (f32(gid.y) + 0.5) / f32(view.height);
+    let r = ray_new(view.cam_oi, view.cam_of, view.forward + sx * view.right + sy * view.up);
+    let h = trace(r);
+    // The diagnostic colour comes first: world_normal reads the entity rotation of the
+    // last trace, which shade_path's shadow and mirror traces overwrite.
+    var color = vec3<f32>(0.0);
+    if view.mode == MODE_MATERIAL {
+        color = select(vec3<f32>(0.0), srgb(material(h.material).albedo), h.hit);
+    } else if view.mode == MODE_NORMAL {
+        color = select(vec3<f32>(0.0), world_normal(h) * 0.5 + 0.5, h.hit);
+    } else if view.mode == MODE_STEPS {
+        color = heat(log2(1.0 + f32(h.steps)) * view.steps_scale);
+    }
+    var gb = vec4<u32>(0u);
+    if view.mode == MODE_ALBEDO || (view.flags & 1u) != 0u {
+        let shaded = srgb(tone_map(shade_path(r, h, &gb)));
+        if view.mode == MODE_ALBEDO {
+            color = shaded;
+        }
+    }
+    let i = gid.x + gid.y * view.width;
+    pixels[i] = pack_rgb(color);
+    if (view.flags & 1u) != 0u {
+        gbuffer[i] = gb;
+    }
+}
+
+struct View {
+    // Camera position, integer part (floor).
+    cam_oi: vec3<i32>,
+    // The mode's code (\`MODE_*\`).
+    mode: u32,
+    // Camera position, fractional part in [0, 1).
+    cam_of: vec3<f32>,
+    // Image width in pixels.
+    width: u32,
+    // View direction.
+    forward: vec3<f32>,
+    // Image height in pixels.
+    height: u32,
+    // Image right, scaled by a·W/H.
+    right: vec3<f32>,
+    // Bit 0: write each pixel's first-hit record.
+    flags: u32,
+    // Image up, scaled by a.
+    up: vec3<f32>,
+    // \`1 / log2(1 + STEPS_FULL_SCALE)\`: the heat map's scale.
+    steps_scale: f32,
+    // Unit vector toward the sun.
+    sun: vec3<f32>,
+    // Padding to 16 bytes.
+    _pad: u32,
+}
+const MODE_ALBEDO: u32 = 0u;
+const MODE_MATERIAL: u32 = 1u;
+const MODE_NORMAL: u32 = 2u;
+const MODE_STEPS: u32 = 3u;
+`,Ys=[{name:`chunks`,id:0},{name:`chunk_entities`,id:1},{name:`blocks`,id:2},{name:`voxels`,id:3},{name:`materials`,id:4},{name:`entity_types`,id:6},{name:`entity_instances`,id:7}],Xs={size:32,fields:{size:{offset:0,type:`vec3<u32>`},has_entities:{offset:12,type:`u32`},chunks:{offset:16,type:`vec3<u32>`},max_steps:{offset:28,type:`u32`}}},Zs={size:96,fields:{cam_oi:{offset:0,type:`vec3<i32>`},mode:{offset:12,type:`u32`},cam_of:{offset:16,type:`vec3<f32>`},width:{offset:28,type:`u32`},forward:{offset:32,type:`vec3<f32>`},height:{offset:44,type:`u32`},right:{offset:48,type:`vec3<f32>`},flags:{offset:60,type:`u32`},up:{offset:64,type:`vec3<f32>`},steps_scale:{offset:76,type:`f32`},sun:{offset:80,type:`vec3<f32>`},_pad:{offset:92,type:`u32`}}},Qs={size:80,fields:{cam_int:{offset:0,type:`vec3<i32>`},width:{offset:12,type:`u32`},cam_frac:{offset:16,type:`vec3<f32>`},height:{offset:28,type:`u32`},forward:{offset:32,type:`vec3<f32>`},seed:{offset:44,type:`u32`},right:{offset:48,type:`vec3<f32>`},sample:{offset:60,type:`u32`},up:{offset:64,type:`vec3<f32>`},history:{offset:76,type:`u32`}}},$s=[0x40400000,0x40400000,0x40400000,1,0xbf400000,0x3f000000,0x3eddb3d7,1,0x4727fa5d,0x40400046,926566462,8],ec={albedo:0,material:1,normal:2,steps:3},tc=[-.75,.5,.4330127],nc=65536,rc=class extends Error{};function ic(e,t){let n=new ArrayBuffer(e.size),r=new DataView(n);for(let[n,i]of Object.entries(t)){let t=e.fields[n];if(!t)throw Error(`no field ${n}`);(Array.isArray(i)?i:[i]).forEach((e,n)=>{let i=t.offset+4*n;t.type.includes(`f32`)?r.setFloat32(i,e,!0):t.type.includes(`i32`)?r.setInt32(i,e,!0):r.setUint32(i,e,!0)})}return n}async function ac(){if(!(`gpu`in navigator)||!navigator.gpu)throw new rc(`this browser has no WebGPU`);let e=await navigator.gpu.requestAdapter();if(!e)throw new rc(`this browser offers WebGPU but no adapter`);let t=await e.requestDevice({requiredLimits:{maxStorageBufferBindingSize:e.limits.maxStorageBufferBindingSize,maxBufferSize:e.limits.maxBufferSize}});return t.addEventListener(`uncapturederror`,e=>console.error(`WebGPU: ${e.error.message}`)),t.lost.then(e=>console.error(`WebGPU device lost: ${e.message}`)),{device:t,fallback:(e.info?.isFallbackAdapter??!1)||/swiftshader/i.test(e.info?.description??``)}}var oc=class{device;buffer;info;offsets;regions=[];generation=0;layoutGeneration=0;constructor(e){this.device=e;let t=(t,n)=>e.createBuffer({label:t,size:n,usage:GPUBufferUsage.UNIFORM|GPUBufferUsage.COPY_DST});this.info=t(`world_info`,Xs.size),this.offsets=t(`world_offsets`,32)}uploadAll(e){let t=Ys.map(t=>e.bytes(t.id).length),n=0;this.regions=t.map(e=>{let t=Math.ceil((e*1.25+65536)/256)*256,r={at:n,capacity:t};return n+=t,r});let r=this.device.limits.maxStorageBufferBindingSize;if(n>r)throw new rc(`the world needs ${n} bytes in one binding; this adapter allows ${r}`);this.buffer?.destroy(),this.buffer=this.device.createBuffer({label:`world`,size:Math.max(n,16),usage:GPUBufferUsage.STORAGE|GPUBufferUsage.COPY_DST}),Ys.forEach((t,n)=>this.write(n,0,e.bytes(t.id)));let i=new Uint32Array(8);this.regions.forEach((e,t)=>i[t]=e.at/4),this.device.queue.writeBuffer(this.offsets,0,i),this.writeInfo(e),this.layoutGeneration+=1,this.generation+=1}update(e,t,n){let r=e=>Ys.findIndex(t=>t.id===e);if(n&&Ys.some((t,n)=>e.bytes(t.id).length>this.regions[n].capacity))this.uploadAll(e);else{for(let n of t){let t=r(n.id);if(t<0)continue;let i=n.lo&-4,a=e.bytes(n.id),o=Math.min(a.length,n.hi+3&-4);this.write(t,i,a.subarray(i,o))}n&&this.writeInfo(e),this.generation+=1}}write(e,t,n){if(n.length===0)return;let r=n.length%4==0?n:(()=>{let e=new Uint8Array(n.length+3&-4);return e.set(n),e})();this.device.queue.writeBuffer(this.buffer,this.regions[e].at+t,r)}writeInfo(e){let[t,n,r]=e.size,i=+(e.bytes(7).length>0);this.device.queue.writeBuffer(this.info,0,ic(Xs,{size:[t,n,r],has_entities:i,chunks:[Math.ceil(t/16),Math.ceil(n/16),Math.ceil(r/16)],max_steps:nc}))}},sc=(e,t)=>({binding:e,visibility:GPUShaderStage.COMPUTE,buffer:{type:t}}),cc=class{device;layout;group;layoutGeneration=-1;constructor(e){this.device=e,this.layout=e.createBindGroupLayout({entries:[sc(0,`uniform`),sc(1,`uniform`),sc(2,`read-only-storage`)]})}of(e){return this.group&&this.layoutGeneration===e.layoutGeneration||(this.group=this.device.createBindGroup({layout:this.layout,entries:[{binding:0,resource:{buffer:e.info}},{binding:1,resource:{buffer:e.offsets}},{binding:2,resource:{buffer:e.buffer}}]}),this.layoutGeneration=e.layoutGeneration),this.group}};function lc(e,t,n,r,i,a){let o=e.createBindGroupLayout({entries:a.map((e,t)=>sc(t,e))});return{pipeline:e.createComputePipelineAsync({layout:e.createPipelineLayout({bindGroupLayouts:[t.layout,o]}),compute:{module:e.createShaderModule({label:n,code:r}),entryPoint:i}}),layout:o}}async function uc(e,t,n,r,i){t.copyBufferToBuffer(n,0,r,0,i),e.queue.submit([t.finish()]),await r.mapAsync(GPUMapMode.READ);let a=r.getMappedRange().slice(0);return r.unmap(),a}var dc=class{device;world;compute;group1;view;gbuffer;pixels;staging;width=0;height=0;constructor(e,t){this.device=e,this.world=t,{pipeline:this.compute,layout:this.group1}=lc(e,t,`render.wgsl`,Js,`render`,[`uniform`,`storage`,`storage`]),this.view=e.createBuffer({size:Zs.size,usage:GPUBufferUsage.UNIFORM|GPUBufferUsage.COPY_DST}),this.gbuffer=e.createBuffer({size:16,usage:GPUBufferUsage.STORAGE})}async render(e,t,n,r,i){let a=this.device,o=n*r*4;n===this.width&&r===this.height&&this.pixels||(this.pixels?.destroy(),this.staging?.destroy(),this.pixels=a.createBuffer({label:`pixels`,size:o,usage:GPUBufferUsage.STORAGE|GPUBufferUsage.COPY_SRC}),this.staging=a.createBuffer({label:`frame`,size:o,usage:GPUBufferUsage.MAP_READ|GPUBufferUsage.COPY_DST}),this.width=n,this.height=r);let s=No(t,n,r),c=ec[i];if(c===void 0)throw Error(`the render pass has no mode ${i}`);a.queue.writeBuffer(this.view,0,ic(Zs,{cam_oi:s.int,mode:c,cam_of:s.frac,width:n,forward:s.forward,height:r,right:s.right,flags:0,up:s.up,steps_scale:Math.fround(1/Math.log2(513)),sun:tc}));let l=a.createBindGroup({layout:this.group1,entries:[{binding:0,resource:{buffer:this.view}},{binding:1,resource:{buffer:this.pixels}},{binding:2,resource:{buffer:this.gbuffer}}]}),u=a.createCommandEncoder(),d=u.beginComputePass();d.setPipeline(await this.compute),d.setBindGroup(0,this.world.of(e)),d.setBindGroup(1,l),d.dispatchWorkgroups(Math.ceil(n/8),Math.ceil(r/8)),d.end();let f=new Uint8ClampedArray(await uc(a,u,this.pixels,this.staging,o));return new ImageData(f,n,r)}},fc=e=>Math.min(1,Math.max(0,e*(2.51*e+.03)/(e*(2.43*e+.59)+.14))),pc=e=>Math.min(255,Math.max(0,Math.floor((e<=.0031308?12.92*e:1.055*e**(1/2.4)-.055)*255+.5))),mc=class{device;world;pipeline;group1;frame;light;sums;staging;key=``;samples=0;constructor(e,t){this.device=e,this.world=t,{pipeline:this.pipeline,layout:this.group1}=lc(e,t,`pathtrace.wgsl`,qs,`path_trace`,[`uniform`,`uniform`,`storage`]);let n=t=>e.createBuffer({size:t,usage:GPUBufferUsage.UNIFORM|GPUBufferUsage.COPY_DST});this.frame=n(Qs.size),this.light=n($s.length*4),e.queue.writeBuffer(this.light,0,new Uint32Array($s))}async render(e,t,n,r){let i=this.device,a=n*r*16,o=JSON.stringify([t,n,r,e.generation]);o===this.key&&this.sums||(this.sums?.destroy(),this.staging?.destroy(),this.sums=i.createBuffer({label:`path sums`,size:a,usage:GPUBufferUsage.STORAGE|GPUBufferUsage.COPY_SRC}),this.staging=i.createBuffer({label:`path frame`,size:a,usage:GPUBufferUsage.MAP_READ|GPUBufferUsage.COPY_DST}),this.key=o,this.samples=0);let s=No(t,n,r);i.queue.writeBuffer(this.frame,0,ic(Qs,{cam_int:s.int,width:n,cam_frac:s.frac,height:r,forward:s.forward,seed:0,right:s.right,sample:this.samples,up:s.up,history:0}));let c=i.createBindGroup({layout:this.group1,entries:[{binding:0,resource:{buffer:this.frame}},{binding:1,resource:{buffer:this.light}},{binding:2,resource:{buffer:this.sums}}]}),l=i.createCommandEncoder(),u=l.beginComputePass();u.setPipeline(await this.pipeline),u.setBindGroup(0,this.world.of(e)),u.setBindGroup(1,c),u.dispatchWorkgroups(Math.ceil(n/8),Math.ceil(r/8)),u.end(),this.samples+=1;let d=new Float32Array(await uc(i,l,this.sums,this.staging,a)),f=new Uint8ClampedArray(n*r*4);for(let e=0;e<n*r;e++){let t=d[4*e+3]||1;for(let n=0;n<3;n++)f[4*e+n]=pc(fc(+Math.max(0,d[4*e+n]/t)));f[4*e+3]=255}return new ImageData(f,n,r)}},hc=class e{device;world;frames;paths;last;constructor(e,t){this.device=e,this.world=new cc(e),this.pass(t)}pass(t){return e.accumulates(t)?this.paths??=new mc(this.device,this.world):this.frames??=new dc(this.device,this.world)}static accumulates(e){return e===`pathtrace`}get samples(){return this.paths?.samples??0}async render(e,t,n,r,i){let a=this.pass(i);return this.last=a instanceof mc?await a.render(e,t,n,r):await a.render(e,t,n,r,i),this.last}};function gc(e,t,n,r){let i=Mo(e),a=r.map((t,n)=>t-e.pos[n]),o=(e,t)=>e[0]*t[0]+e[1]*t[1]+e[2]*t[2],s=o(a,i.forward);if(s<=.001)return;let c=Math.tan(e.fov_y*Math.PI/360),l=o(a,i.right)/(s*c*(t/n)),u=o(a,i.up)/(s*c);return[(l+1)/2*t,(1-u)/2*n]}function _c(e,t,n,r,i){let a=Mo(e),o=Math.tan(e.fov_y*Math.PI/360),s=(2*r/t-1)*o*(t/n),c=(1-2*i/n)*o;return[0,1,2].map(e=>a.forward[e]+s*a.right[e]+c*a.up[e])}function vc(e,t,n,r,i){let{width:a,height:o}=e.canvas,s=e=>[e&1?r[0]:n[0],e&2?r[1]:n[1],e&4?r[2]:n[2]];e.strokeStyle=i,e.lineWidth=2,e.beginPath();for(let n=0;n<8;n++)for(let r of[1,2,4]){if(n&r)continue;let i=gc(t,a,o,s(n)),c=gc(t,a,o,s(n|r));i&&c&&(e.moveTo(i[0],i[1]),e.lineTo(c[0],c[1]))}e.stroke()}function yc(e,t,n,r){let{width:i,height:a}=e.canvas;e.clearRect(0,0,i,a),n&&vc(e,t,n.min,n.max,n.refusal?`#f44`:`#ff0`);let o=[];e.font=`${Math.max(11,Math.round(a/40))}px system-ui, sans-serif`;for(let n of r){let r=n.name||n.user||`anonymous`;if(n.pointer.length===3){let r=n.pointer.map(Number);vc(e,t,r,[r[0]+1,r[1]+1,r[2]+1],`#0ff`)}if(n.position.length!==3)continue;let s=gc(t,i,a,n.position);!s||s[0]<0||s[1]<0||s[0]>i||s[1]>a||(e.fillStyle=`#0ff`,e.beginPath(),e.arc(s[0],s[1],5,0,2*Math.PI),e.fill(),e.fillStyle=`#fff`,e.fillText(r,s[0]+8,s[1]-8),o.push({name:r,x:s[0],y:s[1]}))}return o}var bc=30,xc=0,Sc=1,Cc=32767,wc=class{chunks;blocks;voxels;size;dims;constructor(e){let t=t=>{let n=e.bytes(t);return new Uint32Array(n.buffer,n.byteOffset,Math.floor(n.length/4))};this.chunks=t(0),this.blocks=t(2),this.voxels=t(3),this.size=e.size,this.dims=[e.size[0]>>4,e.size[1]>>4,e.size[2]>>4]}inside(e,t,n){return e>=0&&t>=0&&n>=0&&e<this.size[0]&&t<this.size[1]&&n<this.size[2]}cell(e,t,n){let[r,i,a]=[e>>4,t>>4,n>>4],o=this.chunks[r+this.dims[0]*(i+this.dims[1]*a)],s=o>>>bc;if(s===xc)return{material:0,edge:16};if(s===Sc)return{material:o&Cc,edge:16};let c=this.blocks[(o&0x3fffffff)+((e>>2&3)+4*(t>>2&3)+16*(n>>2&3))],l=c>>>bc;if(l===xc)return{material:0,edge:4};if(l===Sc)return{material:c&Cc,edge:4};let u=(e&3)+4*(t&3)+16*(n&3),d=this.voxels[(c&0x3fffffff)+(u>>1)],f=u&1?d>>>16:d&65535;return{material:f&32768?f&Cc:0,edge:1}}};function Tc(e,t,n,r=4096){let i=0,a=r;for(let r=0;r<3;r++){if(n[r]===0){if(t[r]<0||t[r]>=e.size[r])return;continue}let o=(0-t[r])/n[r],s=(e.size[r]-t[r])/n[r];i=Math.max(i,Math.min(o,s)),a=Math.min(a,Math.max(o,s))}if(i>a)return;let o=1e-7,s;for(;i<=a;){let r=t.map((e,t)=>e+n[t]*(i+o)).map(Math.floor);if(!e.inside(r[0],r[1],r[2]))return;let a=e.cell(r[0],r[1],r[2]);if(a.material!==0)return{voxel:r,before:s??r,material:a.material};s=r;let c=1/0;for(let e=0;e<3;e++){if(n[e]===0)continue;let i=Math.floor(r[e]/a.edge)*a.edge,o=n[e]>0?i+a.edge:i;c=Math.min(c,(o-t[e])/n[e])}s=t.map((e,t)=>e+n[t]*(c-o)).map(Math.floor),i=Math.max(c,i+o)}}function Ec(){try{new Headers}catch{throw Error(`connect-web requires the fetch API. Are you running on an old version of Node.js?`)}}function Dc(e,t){let n=ro(e);if(n)throw t.forEach((e,t)=>{n.metadata.append(t,e)}),n;if(!t.has(`Grpc-Status`)&&!e.has(`Grpc-Status`))throw new U(`protocol error: missing status`,H.Internal)}function Oc(e,t,n,r){let i=new Headers(n??{});i.set(Ka,e?$a:eo),i.set(Qa,`1`);let a=i.get(`User-Agent`)??i.get(`X-User-Agent`)??`connect-es/2.3.0`;return i.set(Za,a),r&&i.set(Xa,a),t!==void 0&&i.set(qa,`${t}m`),i}function kc(e){switch(e){case 400:return H.Internal;case 401:return H.Unauthenticated;case 403:return H.PermissionDenied;case 404:return H.Unimplemented;case 429:case 502:case 503:case 504:return H.Unavailable;default:return H.Unknown}}function Ac(e,t){if(e>=200&&e<300)return{foundStatus:t.has(Ja),headerError:ro(t)};throw new U(decodeURIComponent(t.get(`Grpc-Message`)??`HTTP ${e}`),kc(e),t)}var jc=function(e){return this instanceof jc?(this.v=e,this):new jc(e)},Mc=function(e,t,n){if(!Symbol.asyncIterator)throw TypeError(`Symbol.asyncIterator is not defined.`);var r=n.apply(e,t||[]),i,a=[];return i=Object.create((typeof AsyncIterator==`function`?AsyncIterator:Object).prototype),s(`next`),s(`throw`),s(`return`,o),i[Symbol.asyncIterator]=function(){return this},i;function o(e){return function(t){return Promise.resolve(t).then(e,d)}}function s(e,t){r[e]&&(i[e]=function(t){return new Promise(function(n,r){a.push([e,t,n,r])>1||c(e,t)})},t&&(i[e]=t(i[e])))}function c(e,t){try{l(r[e](t))}catch(e){f(a[0][3],e)}}function l(e){e.value instanceof jc?Promise.resolve(e.value.v).then(u,d):f(a[0][2],e)}function u(e){c(`next`,e)}function d(e){c(`throw`,e)}function f(e,t){e(t),a.shift(),a.length&&c(a[0][0],a[0][1])}},Nc={redirect:`error`};function Pc(e){Ec();let t=e.useBinaryFormat??!0;return{async unary(n,r,i,a,o,s){let{serialize:c,parse:l}=lo(n,t,e.jsonOptions,e.binaryOptions);return i=i===void 0?e.defaultTimeoutMs:i<=0?void 0:i,await po({interceptors:e.interceptors,signal:r,timeoutMs:i,req:{stream:!1,service:n.parent,method:n,requestMethod:`POST`,url:io(e.baseUrl,n),header:Oc(t,i,a,!1),contextValues:s??Wa(),message:o},next:async t=>{let r=await(e.fetch??globalThis.fetch)(t.url,Object.assign(Object.assign({},Nc),{method:t.requestMethod,headers:t.header,signal:t.signal,body:Ta(0,c(t.message))})),{headerError:i}=Ac(r.status,r.headers);if(!r.body)throw i===void 0?`missing response body`:i;let a=wa(r.body).getReader(),o,s;for(;;){let e=await a.read();if(e.done)break;let{flags:t,data:n}=e.value;if((t&1)==1)throw new U(`protocol error: received unsupported compressed output`,H.Internal);if(t===128){if(o!==void 0)throw`extra trailer`;o=Ga(n)}else{if(s!==void 0)throw new U(`extra message`,H.Unimplemented);s=l(n)}}if(o===void 0)throw i===void 0?new U(`missing trailer`,r.headers.has(`Grpc-Status`)?H.Unimplemented:H.Unknown):i;if(Dc(o,r.headers),s===void 0)throw new U(`missing message`,o.has(`Grpc-Status`)?H.Unimplemented:H.Unknown);return{stream:!1,service:n.parent,method:n,header:r.headers,message:s,trailer:o}}})},async stream(n,r,i,a,o,s){let{serialize:c,parse:l}=lo(n,t,e.jsonOptions,e.binaryOptions);function u(e,t,n,r,i){return Mc(this,arguments,function*(){let i=wa(e).getReader();if(t){if(!(yield jc(i.read())).done)throw`extra data for trailers-only`;return yield jc(void 0)}let a=!1;for(;;){let e=yield jc(i.read());if(e.done)break;let{flags:t,data:o}=e.value;if((t&128)==128){if(a)throw`extra trailer`;a=!0;let e=Ga(o);Dc(e,r),e.forEach((e,t)=>n.set(t,e))}else{if(a)throw`extra message`;yield yield jc(l(o))}}if(!a)throw`missing trailer`})}async function d(e){if(n.methodKind!=`server_streaming`)throw`The fetch API does not support streaming request bodies`;let t=await e[Symbol.asyncIterator]().next();if(t.done==1)throw`missing request message`;return Ta(0,c(t.value))}return i=i===void 0?e.defaultTimeoutMs:i<=0?void 0:i,mo({interceptors:e.interceptors,signal:r,timeoutMs:i,req:{stream:!0,service:n.parent,method:n,requestMethod:`POST`,url:io(e.baseUrl,n),header:Oc(t,i,a,!1),contextValues:s??Wa(),message:o},next:async t=>{let n=await(e.fetch??globalThis.fetch)(t.url,Object.assign(Object.assign({},Nc),{method:t.requestMethod,headers:t.header,signal:t.signal,body:await d(t.message)})),{foundStatus:r,headerError:i}=Ac(n.status,n.headers);if(i!=null)throw i;if(!n.body)throw`missing response body`;let a=new Headers;return Object.assign(Object.assign({},t),{header:n.headers,trailer:a,message:u(n.body,r,a,n.headers,t.signal)})}})}}}var Fc=`naadf.token`,Ic=100,Lc=5e3,Rc=class e{events;cache;mirror=new Rs;client;bytesReceived=0;snapshotBytes=0;abort;stopped=!1;saving;constructor(e,t){this.events=e,this.cache=t,this.client=Fa(wo,Pc({baseUrl:location.origin,useBinaryFormat:!0}))}static token(){return sessionStorage.getItem(Fc)}setToken(e){sessionStorage.setItem(Fc,e),this.restart()}callOptions(){let t=e.token();return{headers:t?{authorization:`Bearer ${t}`}:{}}}async whoAmI(){return this.client.status({},this.callOptions())}async restore(){return!this.cache||!await this.cache.restore(this.mirror).catch(()=>!1)?!1:(this.events.restored(this.mirror),!0)}saveSoon(){this.cache&&!this.saving&&(this.saving=setTimeout(()=>{this.saving=void 0,this.cache?.save(this.mirror).catch(e=>console.warn(`the page cache: ${e}`))},1e3))}async run(){let e=Ic,t=!0;for(;!this.stopped;){this.events.state(t?`connecting`:`reconnecting`),t=!1,this.abort=new AbortController;try{await this.follow(this.abort.signal)&&(e=Ic)}catch(e){if(e instanceof J){if(console.warn(e.message),e.fatal){this.events.state(`error`,e.message);return}}else{let t=U.from(e);if(t.code===H.Unauthenticated||t.code===H.PermissionDenied){this.events.state(`need-token`,t.rawMessage);return}if(t.code===H.FailedPrecondition){this.events.state(`error`,t.rawMessage);return}if(t.code===H.Canceled&&this.stopped)return;t.code!==H.Canceled&&console.warn(`the world stream ended: ${t.message}`)}}if(this.stopped)return;this.events.state(`reconnecting`);let n=e*(1+Math.random()/4);e=Math.min(Lc,e*2),await new Promise(e=>setTimeout(e,n))}}restart(){this.abort?.abort()}async follow(e){let t=this.mirror,n=P(_o,{protocolVersion:1,cached:t.cached(),resume:t.holdsWorld?{version:t.version,digest:t.digest}:void 0,deltaForm:Co.PATCH,presence:!0}),r=!1;this.events.joined();for await(let i of this.client.join(n,{...this.callOptions(),signal:e})){r=!0;let e=Vc(i);this.bytesReceived+=e;let n=i.kind;switch(n.case===`header`&&(this.snapshotBytes=0),(n.case===`header`||n.case===`page`)&&(this.snapshotBytes+=e),n.case){case`header`:this.events.state(`syncing`),t.header(n.value)||this.live(n.value.resume);break;case`page`:t.page(n.value)&&this.live(!1);break;case`delta`:{let{touched:e,resized:r}=t.delta(n.value);this.events.patched(t,e,r),this.saveSoon();break}case`presence`:this.events.presence(n.value.entries)}}return r}live(e){e||this.events.snapshot(this.mirror),this.saveSoon(),this.events.state(`live`)}},zc=e=>e<128?1:e<16384?2:e<2097152?3:e<268435456?4:5,Bc=e=>1+zc(e)+e;function Vc(e){if(e.kind.case!==`page`)return Er(vo,e).length;let t=e.kind.value,n=t.indices.reduce((e,t)=>e+zc(t),0);return Bc((t.buffer?1+zc(t.buffer):0)+(t.indices.length?Bc(n):0)+(t.zstd.length?Bc(t.zstd.length):0))}var Hc=[`voxel`,`erase`,`box`,`sphere`,`paint`,`flood`],Uc=65536,Wc=(e,t)=>[e[0]+t,e[1]+t,e[2]+t],Gc=e=>[e[0]+.5,e[1]+.5,e[2]+.5];function Kc(e,t){return{min:e.map(e=>Math.floor(e-t-.5)+1),max:e.map(e=>Math.ceil(e+t-.5))}}function qc(e,t){return{min:e.map((e,n)=>Math.min(e,t[n])),max:e.map((e,n)=>Math.max(e,t[n])+1)}}function Jc(e,t,n){let r=e.cell(t[0],t[1],t[2]).material;if(r===n)return{min:t,max:Wc(t,1),refusal:`already that material`};let i=new Set,a=t=>t[0]+e.size[0]*(t[1]+e.size[1]*t[2]),o=[t];i.add(a(t));let s=[...t],c=Wc(t,1);for(;o.length;){let t=o.pop();for(let e=0;e<3;e++)s[e]=Math.min(s[e],t[e]),c[e]=Math.max(c[e],t[e]+1);for(let[n,l,u]of[[1,0,0],[-1,0,0],[0,1,0],[0,-1,0],[0,0,1],[0,0,-1]]){let d=[t[0]+n,t[1]+l,t[2]+u];if(e.inside(d[0],d[1],d[2])&&!i.has(a(d))&&e.cell(d[0],d[1],d[2]).material===r){if(i.size>=65536)return{min:s,max:c,refusal:`more than ${Uc} voxels`};i.add(a(d)),o.push(d)}}}return{min:s,max:c}}function Yc(e,t,n){switch(e.tool){case`voxel`:return{min:n.before,max:Wc(n.before,1)};case`erase`:return{min:n.voxel,max:Wc(n.voxel,1)};case`box`:return qc(e.anchor??n.before,n.before);case`sphere`:return Kc(Gc(n.before),e.radius);case`paint`:return Kc(Gc(n.voxel),e.radius);case`flood`:return Jc(t,n.voxel,e.material)}}function Xc(e,t){let n=e.material;switch(e.tool){case`voxel`:return JSON.stringify({op:`set`,voxels:[[...t.before,n]]});case`erase`:return JSON.stringify({op:`set`,voxels:[[...t.voxel,0]]});case`box`:{if(!e.anchor){e.anchor=t.before;return}let r=qc(e.anchor,t.before);return e.anchor=void 0,JSON.stringify({op:`box`,min:r.min,max:r.max,material:n})}case`sphere`:return JSON.stringify({op:`sphere`,center:Gc(t.before),radius:e.radius,material:n});case`paint`:return JSON.stringify({op:`paint`,center:Gc(t.voxel),radius:e.radius,material:n});case`flood`:return JSON.stringify({op:`flood_paint`,start:t.voxel,material:n,limit:Uc})}}function Zc(e){let t=e>>10&31,n=e&1023,r=e&32768?-1:1;return t===0?r*n*2**-24:t===31?n?NaN:r*(1/0):r*(1+n/1024)*2**(t-15)}function Qc(e){let t=e.bytes(4),n=new Uint32Array(t.buffer,t.byteOffset,Math.floor(t.length/4)),r=[],i=e=>Math.round(255*Math.min(1,Math.max(0,e<=.0031308?12.92*e:1.055*e**(1/2.4)-.055)));for(let e=1;4*e+3<n.length;e++){let t=n[4*e+1],a=n[4*e+2],[o,s,c]=[Zc(t&65535),Zc(t>>>16),Zc(a&65535)];r.push({id:e,colour:`rgb(${i(o)},${i(s)},${i(c)})`})}return r}var $c=[`albedo`,`material`,`normal`,`steps`,`gi`,`pathtrace`],el=4096,tl=8192;function nl(e){let t=new URLSearchParams(e),n={camera:void 0,mode:void 0,size:void 0,spp:el,problems:[]},r=t.get(`camera`);if(r!==null)try{n.camera=Do(r)}catch(e){n.problems.push(`camera: ${e.message}; using the default view`)}let i=t.get(`mode`);i!==null&&($c.includes(i)?n.mode=i:n.problems.push(`mode: '${i}' is not one of ${$c.join(`, `)}; using the default`));let a=t.get(`size`);if(a!==null){let e=/^(\d{1,5})x(\d{1,5})$/.exec(a),[t,r]=e?[Number(e[1]),Number(e[2])]:[0,0];t>=1&&r>=1&&t<=tl&&r<=tl?n.size=[t,r]:n.problems.push(`size: '${a}' is not WxH with edges 1..=${tl}; using the canvas size`)}let o=t.get(`spp`);if(o!==null){let e=Number(o);Number.isInteger(e)&&e>=1&&e<=el?n.spp=e:n.problems.push(`spp: '${o}' is not a whole number in 1..=${el}; using ${el}`)}return n}function rl(e,t,n){let r=new URLSearchParams;r.set(`camera`,Oo(e)),r.set(`mode`,t),n&&r.set(`size`,`${n[0]}x${n[1]}`),history.replaceState(null,``,`${location.pathname}?${r.toString().replace(/\+/g,`%20`)}`)}function il(e){return e in ec||e===`pathtrace`?e:`pathtrace`}var Y=e=>document.getElementById(e),X=Y(`view`),al=Y(`overlay`),ol=Y(`hud`),sl=Y(`notice`),cl=nl(location.search),Z={state:`connecting`,version:0,growthSeq:0,quiescent:!1,digest:``,users:[],mode:cl.mode??`albedo`,frameMs:0,message:cl.problems.join(`
+`),role:``,joins:0,snapshots:0,bytesReceived:0,snapshotBytes:0,markers:[],rateLimited:0,timings:{},shownVersion:-1,samples:0,pointer:null,name:``,voxel:()=>0,capture:()=>Promise.reject(Error(`no frame yet`)),redraw:()=>{},edit:()=>Promise.reject(Error(`not joined`)),undo:()=>Promise.reject(Error(`not joined`)),redo:()=>Promise.reject(Error(`not joined`))};window.naadf=Z;function Q(e){sl.textContent=e,sl.hidden=e===``}Q(Z.message);var $=cl.camera,ll=0;function ul(){if(cl.size)return cl.size;let e=window.devicePixelRatio||1;return[Math.max(1,Math.round(X.clientWidth*e)),Math.max(1,Math.round(X.clientHeight*e))]}function dl(){ol.textContent=[`${Z.state}${Z.role?` · ${Z.role}`:``}`,`version ${Z.version}${Z.growthSeq?`.${Z.growthSeq}`:``}${Z.quiescent?``:` (settling)`}`,`digest ${Z.digest.slice(0,8)}`,`${Z.users.length} online${Z.users.length?`: ${Z.users.join(`, `)}`:``}`,`rtt ${ll.toFixed(0)} ms · frame ${Z.frameMs.toFixed(1)} ms · ${Z.mode}${Z.mode===il(Z.mode)?``:` (drawn as ${il(Z.mode)})`}`].join(`
+`)}function fl(e){let[t,n]=[X.width,X.height];if(!e||document.pointerLockElement===X)return[t/2,n/2];let r=X.getBoundingClientRect(),i=Math.min(r.width/t,r.height/n),[a,o]=[(r.width-t*i)/2,(r.height-n*i)/2];return[(e.clientX-r.left-a)/i,(e.clientY-r.top-o)/i]}async function pl(){await ss();let e,t;try{({device:e,fallback:t}=await ac())}catch(e){if(e instanceof rc){Z.state=`no-webgpu`,Z.message=`${e.message}. Open this page in a browser with WebGPU (https://, or http://localhost), or use the native viewer: naadf view --server <address>`,Q(Z.message),dl();return}throw e}Z.timings.device=performance.now(),cl.mode||(Z.mode=t?`albedo`:`gi`);let n=X.getContext(`2d`),r=al.getContext(`2d`),i=new oc(e),a=new hc(e,il(Z.mode)),o,s=[],c=!0,l=!1,u,d={tool:`voxel`,material:1,radius:4,anchor:void 0},f,p,m,h=BigInt(Math.floor(Math.random()*2**52)),g=e=>{i.uploadAll(e),$??=Po(e.size),O(),v(e)},_=new Rc({state(e,t){Z.state=e,Z.bytesReceived=_.bytesReceived,Z.snapshotBytes=_.snapshotBytes,e===`live`&&(Z.timings.live??=performance.now()),t!==void 0&&(Z.message=t,Q(e===`need-token`?`${t}: enter a token`:t),e===`need-token`&&x(t)),dl()},joined(){Z.joins+=1},snapshot(e){Z.snapshots+=1,g(e)},restored:g,patched(e,t,n){i.update(e,t,n),t.some(e=>e.id===4)&&O(),v(e)},presence(e){Z.users=e.map(e=>e.name||e.user||`anonymous`).sort(),s=e.filter(e=>e.session!==h),l=!0,dl()}},await Ks.open());function v(e){o=new wc(e),Z.version=Number(e.version),Z.growthSeq=e.growthSeq,Z.quiescent=e.quiescent,Z.digest=ls(e.digest),Z.bytesReceived=_.bytesReceived,Z.snapshotBytes=_.snapshotBytes,c=!0,dl()}let y=BigInt(Date.now())*1000n,b=async e=>{let t=y+=1n;for(let n=0;;n++){let r=performance.now();try{let i=await e(t);return ll=performance.now()-r,n>0&&Q(``),dl(),Number(i.version)}catch(e){let t=U.from(e);if(t.code===H.ResourceExhausted&&n<8){Z.rateLimited+=1,Q(`rate-limited: ${t.rawMessage}; retrying`),await new Promise(e=>setTimeout(e,250*2**n));continue}throw Z.message=t.rawMessage,Q(`refused: ${t.rawMessage}`),t}}};Z.edit=e=>b(t=>_.client.edit(P(xo,{ops:e,clientSeq:t}),_.callOptions())),Z.undo=()=>b(e=>_.client.undo(P(So,{clientSeq:e}),_.callOptions())),Z.redo=()=>b(e=>_.client.redo(P(So,{clientSeq:e}),_.callOptions())),Z.redraw=()=>{c=!0},Z.capture=async()=>{let e=a.last;if(!e)throw Error(`no frame yet`);let t=document.createElement(`canvas`);return t.width=e.width,t.height=e.height,t.getContext(`2d`).putImageData(e,0,0),t.toDataURL(`image/png`)};function x(e){let t=Y(`token`);t.hidden=!1,Y(`token-why`).textContent=e,t.onsubmit=e=>{e.preventDefault(),t.hidden=!0,_.setToken(Y(`token-value`).value),_.run(),S()}}async function S(){try{let e=await _.whoAmI();Z.role=e.role;let t=e.role===`viewer`;Y(`tools`).classList.toggle(`disabled`,t),t&&Q(`viewer token: editing is disabled (ask for an editor token to edit)`),dl()}catch{}}let C=sessionStorage.getItem(`naadf.name`)??`guest-${Math.floor(Math.random()*1e4)}`;sessionStorage.setItem(`naadf.name`,C),Z.name=C,Z.voxel=(e,t,n)=>o?.inside(e,t,n)?o.cell(e,t,n).material:0;let w=``,T=0;setInterval(()=>{if(Z.state!==`live`||!$)return;let e={session:h,name:C,position:[...$.pos],forward:Mo($).forward,pointer:f?f.voxel.map(BigInt):[],tool:d.tool},t=JSON.stringify(e,(e,t)=>typeof t==`bigint`?String(t):t),n=performance.now();t===w&&n-T<1e3||(w=t,T=n,_.client.publish(P(yo,e),_.callOptions()).catch(()=>{}))},100);let E=Y(`tool`);for(let e of Hc)E.add(new Option(e,e));E.onchange=()=>{d.tool=E.value,d.anchor=void 0,l=!0};let D=Y(`radius`);D.onchange=()=>{d.radius=Math.max(0,Number(D.value)||0),l=!0};function O(){Y(`palette`).replaceChildren(...Qc(_.mirror).map(e=>{let t=document.createElement(`button`);return t.className=e.id===d.material?`swatch chosen`:`swatch`,t.style.background=e.colour,t.title=`material ${e.id}`,t.onclick=()=>{d.material=e.id,O()},t}))}function k(e){if(!o||X.width===0)return;let[t,n]=fl(m);f=Tc(o,[...e.pos],_c(e,X.width,X.height,t,n)),p=f&&Z.role!==`viewer`?Yc(d,o,f):void 0,Z.pointer=f?{voxel:f.voxel,before:f.before}:null}X.addEventListener(`mousemove`,e=>{m=e,l=!0}),X.addEventListener(`contextmenu`,e=>e.preventDefault()),X.addEventListener(`mousedown`,e=>{if(e.button===2&&document.pointerLockElement!==X){X.requestPointerLock?.();return}if(e.button!==0||Z.role===`viewer`||!u)return;if(m=e,k(u),!f||p?.refusal){p?.refusal&&Q(`${d.tool}: ${p.refusal}`);return}let t=Xc(d,f);l=!0,t&&Z.edit(t).then(()=>Q(``),()=>{})});let A=new Set,j=32;addEventListener(`keydown`,e=>{(e.ctrlKey||e.metaKey)&&e.code===`KeyZ`?(e.preventDefault(),(e.shiftKey?Z.redo():Z.undo()).catch(()=>{})):e.target instanceof HTMLInputElement||A.add(e.code)}),addEventListener(`keyup`,e=>A.delete(e.code)),addEventListener(`mousemove`,e=>{document.pointerLockElement===X&&$&&($.yaw+=e.movementX*.15,$.pitch=Math.max(-89.9,Math.min(89.9,$.pitch-e.movementY*.15)),c=!0)}),X.addEventListener(`wheel`,e=>{j=Math.max(1,Math.min(4096,j*(e.deltaY<0?1.25:.8))),e.preventDefault()});let M=[],ee=performance.now(),N=0,te=!1;function ne(e){let t=Math.min(.1,(e-ee)/1e3);if(ee=e,$&&A.size>0){let e=Mo($),n=(e,n)=>e.forEach((e,r)=>$.pos[r]+=e*n*j*t);A.has(`KeyW`)&&n(e.forward,1),A.has(`KeyS`)&&n(e.forward,-1),A.has(`KeyD`)&&n(e.right,1),A.has(`KeyA`)&&n(e.right,-1),A.has(`Space`)&&n([0,1,0],1),A.has(`ShiftLeft`)&&n([0,1,0],-1),c=!0}if(i.buffer&&$&&c&&!te){c=!1,te=!0;let[t,r]=ul(),o=performance.now(),s=Z.version,d={...$,pos:[...$.pos]};a.render(i,d,t,r,il(Z.mode)).then(e=>{for(let e of[X,al])(e.width!==t||e.height!==r)&&([e.width,e.height]=[t,r]);n.putImageData(e,0,0),u=d,l=!0,M.push(performance.now()-o),M.length>30&&M.shift(),Z.frameMs=M.reduce((e,t)=>e+t,0)/M.length,Z.shownVersion=s,Z.timings.firstFrame??=performance.now(),hc.accumulates(il(Z.mode))&&a.samples<cl.spp&&(c=!0),Z.samples=a.samples,dl()}).catch(e=>console.error(`frame: ${e}`)).finally(()=>te=!1),e-N>500&&(N=e,rl($,Z.mode,cl.size))}l&&u&&(l=!1,k(u),Z.markers=yc(r,u,p,s)),requestAnimationFrame(ne)}requestAnimationFrame(ne);let re=Y(`mode`);for(let e of $c)re.add(new Option(e,e,!1,e===Z.mode));re.onchange=()=>{Z.mode=re.value,c=!0},Y(`undo`).onclick=()=>Z.undo().catch(()=>{}),Y(`redo`).onclick=()=>Z.redo().catch(()=>{}),Y(`shot`).onclick=async()=>{let e=document.createElement(`a`);e.href=await Z.capture(),e.download=`naadf-${Z.version}.png`,e.click()},addEventListener(`resize`,()=>c=!0),S(),await _.restore()&&(Z.timings.restored=performance.now()),await _.run()}pl().catch(e=>{Z.state=`error`,Z.message=String(e instanceof Error?e.message:e),Q(Z.message),dl()});
