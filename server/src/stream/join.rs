@@ -86,13 +86,15 @@ pub fn start(
     tokio::spawn(async move {
         let id = shared.activity.joined(&user);
         shared.metrics.clients.inc();
-        let out = Outbox::new(shared.clone(), tx, form);
+        // The outbox (the queue's sender) lives until after a cut: were it dropped first,
+        // the transport could find the queue closed and end the stream without the status.
+        let mut out = Outbox::new(shared.clone(), tx, form);
         // Shutdown ends the task wherever it waits (for room in a stream nobody reads, say):
         // it holds a sender of the actor's mailbox, which the actor outlives only until the
         // last sender is gone.
         let mut shutdown = shared.shutdown.clone();
         let ended = tokio::select! {
-            ended = run(&shared, actor, held, resume, presence, out) => ended,
+            ended = run(&shared, actor, held, resume, presence, &mut out) => ended,
             _ = shutdown.wait_for(|&down| down) => Ok(()),
         };
         if let Err(Stop::Behind(behind)) = ended {
@@ -115,7 +117,7 @@ async fn run(
     mut held: ClientPages,
     resume: Option<(u64, u64)>,
     mut presence: Option<watch::Receiver<Table>>,
-    mut out: Outbox,
+    out: &mut Outbox,
 ) -> Result<(), Stop> {
     let mut shutdown = shared.shutdown.clone();
     let mut resync = false;
@@ -136,9 +138,9 @@ async fn run(
         out.attach(sub.events, sub.start, sub.head);
         match (sub.catch_up, from) {
             (Some(events), Some((version, digest))) => {
-                send_catch_up(&mut out, &sub.view, version, digest, &events, &mut held).await?
+                send_catch_up(out, &sub.view, version, digest, &events, &mut held).await?
             }
-            _ => send_snapshot(&mut out, &sub.view, &mut held, resync).await?,
+            _ => send_snapshot(out, &sub.view, &mut held, resync).await?,
         };
         // Forward deltas until the publisher starts over (the subscription is dropped).
         while let Some(rx) = out.events.as_mut() {
