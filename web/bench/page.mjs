@@ -17,6 +17,7 @@ import { tmpdir } from "node:os";
 import { join } from "node:path";
 import { parseArgs } from "node:util";
 import { chromium } from "playwright-core";
+import { FLAGS, executablePath } from "../tests/chromium.mjs";
 
 const { values: args } = parseArgs({
   options: {
@@ -26,8 +27,6 @@ const { values: args } = parseArgs({
     reps: { type: "string", default: "3" },
   },
 });
-const FLAGS = ["--headless=new", "--no-sandbox", "--enable-unsafe-webgpu", "--disable-background-networking", "--disable-component-update", "--disable-sync", "--disable-quic", "--no-first-run"];
-const executablePath = process.env.NAADF_CHROMIUM || "/usr/bin/chromium";
 
 /** A browser with a profile of its own (so its IndexedDB starts empty). */
 async function launch() {

@@ -22,6 +22,7 @@ import {
 import type { StructLayout } from "./gen/layout";
 import type { Camera } from "./camera";
 import { cameraRays } from "./camera";
+import { aces, srgb8 } from "./colour";
 import type { Mirror, Touched } from "./mirror";
 
 /** Why the page cannot draw: shown to the person, with the native viewer as the way out. */
@@ -206,6 +207,26 @@ function passPipeline(device: GPUDevice, world: WorldGroup, label: string, code:
   return { pipeline, layout };
 }
 
+/** An encoder holding one dispatch of `pipeline` over `width × height` pixels in 8×8
+ * workgroups, with the world as group 0 and `group1`. */
+async function dispatchPixels(
+  device: GPUDevice,
+  pipeline: Promise<GPUComputePipeline>,
+  world: GPUBindGroup,
+  group1: GPUBindGroup,
+  width: number,
+  height: number,
+): Promise<GPUCommandEncoder> {
+  const enc = device.createCommandEncoder();
+  const pass = enc.beginComputePass();
+  pass.setPipeline(await pipeline);
+  pass.setBindGroup(0, world);
+  pass.setBindGroup(1, group1);
+  pass.dispatchWorkgroups(Math.ceil(width / 8), Math.ceil(height / 8));
+  pass.end();
+  return enc;
+}
+
 /** Copies `source` to `staging` after `enc`'s work, submits, and resolves to the bytes. */
 async function readBack(device: GPUDevice, enc: GPUCommandEncoder, source: GPUBuffer, staging: GPUBuffer, bytes: number): Promise<ArrayBuffer> {
   enc.copyBufferToBuffer(source, 0, staging, 0, bytes);
@@ -281,22 +302,11 @@ class FramePass {
         { binding: 2, resource: { buffer: this.gbuffer } },
       ],
     });
-    const enc = device.createCommandEncoder();
-    const pass = enc.beginComputePass();
-    pass.setPipeline(await this.compute);
-    pass.setBindGroup(0, this.world.of(world));
-    pass.setBindGroup(1, frameGroup);
-    pass.dispatchWorkgroups(Math.ceil(width / 8), Math.ceil(height / 8));
-    pass.end();
+    const enc = await dispatchPixels(device, this.compute, this.world.of(world), frameGroup, width, height);
     const rgba = new Uint8ClampedArray(await readBack(device, enc, this.pixels!, this.staging!, bytes));
     return new ImageData(rgba, width, height);
   }
 }
-
-/** ACES filmic fit, as the native tone mapping (light/hdr.rs). */
-const aces = (x: number) => Math.min(1, Math.max(0, (x * (2.51 * x + 0.03)) / (x * (2.43 * x + 0.59) + 0.14)));
-/** The sRGB transfer function as an 8-bit channel. */
-const srgb8 = (c: number) => Math.min(255, Math.max(0, Math.floor((c <= 0.0031308 ? 12.92 * c : 1.055 * c ** (1 / 2.4) - 0.055) * 255 + 0.5)));
 
 /** The progressive path tracer (`pathtrace`): one sample per pixel per frame added to
  * running sums while the view and the world stay the same, shown as sRGB(ACES(mean)). */
@@ -363,13 +373,7 @@ class PathTracer {
         { binding: 2, resource: { buffer: this.sums } },
       ],
     });
-    const enc = device.createCommandEncoder();
-    const pass = enc.beginComputePass();
-    pass.setPipeline(await this.pipeline);
-    pass.setBindGroup(0, this.world.of(world));
-    pass.setBindGroup(1, group);
-    pass.dispatchWorkgroups(Math.ceil(width / 8), Math.ceil(height / 8));
-    pass.end();
+    const enc = await dispatchPixels(device, this.pipeline, this.world.of(world), group, width, height);
     this.samples += 1;
     const sums = new Float32Array(await readBack(device, enc, this.sums, this.staging!, bytes));
     const rgba = new Uint8ClampedArray(width * height * 4);

@@ -1,5 +1,6 @@
 // The editing tools: what each one would change at the voxel under the pointer (the preview)
 // and the ops-JSON line it sends when committed (docs/OPS.md).
+import { srgb8 } from "./colour";
 import type { Mirror } from "./mirror";
 import type { Pick, Voxels } from "./pick";
 
@@ -138,12 +139,11 @@ export function palette(m: Mirror): Swatch[] {
   const b = m.bytes(4);
   const words = new Uint32Array(b.buffer, b.byteOffset, Math.floor(b.length / 4));
   const out: Swatch[] = [];
-  const srgb = (x: number) => Math.round(255 * Math.min(1, Math.max(0, x <= 0.0031308 ? 12.92 * x : 1.055 * x ** (1 / 2.4) - 0.055)));
   for (let id = 1; 4 * id + 3 < words.length; id++) {
     const w1 = words[4 * id + 1];
     const w2 = words[4 * id + 2];
     const [r, g, bl] = [half(w1 & 0xffff), half(w1 >>> 16), half(w2 & 0xffff)];
-    out.push({ id, colour: `rgb(${srgb(r)},${srgb(g)},${srgb(bl)})` });
+    out.push({ id, colour: `rgb(${srgb8(r)},${srgb8(g)},${srgb8(bl)})` });
   }
   return out;
 }

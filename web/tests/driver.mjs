@@ -16,20 +16,10 @@
 import { createInterface } from "node:readline";
 import { writeFileSync } from "node:fs";
 import { chromium } from "playwright-core";
+import { FLAGS, executablePath } from "./chromium.mjs";
 
-/** Chromium's flags: WebGPU on, and nothing that reaches the network by itself. */
-const FLAGS = [
-  "--headless=new",
-  "--no-sandbox",
-  "--enable-unsafe-webgpu",
-  "--disable-background-networking",
-  "--disable-component-update",
-  "--disable-sync",
-  "--disable-quic",
-  "--no-first-run",
-];
 
-const browser = await chromium.launch({ executablePath: process.env.NAADF_CHROMIUM || "/usr/bin/chromium", args: FLAGS });
+const browser = await chromium.launch({ executablePath, args: FLAGS });
 const pages = new Map();
 
 async function evaluate(page, body) {
