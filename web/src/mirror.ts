@@ -39,6 +39,8 @@ class WorldBuffer {
   len = 0;
   hashes: bigint[] = [];
   private readonly stale = new Set<number>();
+  /** The XOR of `hashes`, kept as they change (a delta rehashes a few pages of many). */
+  private xor = 0n;
 
   constructor(readonly id: number) {}
 
@@ -54,6 +56,7 @@ class WorldBuffer {
     const pages = Math.ceil(len / PAGE_BYTES);
     const before = this.hashes.length;
     this.len = len;
+    for (let p = pages; p < before; p++) this.xor ^= this.hashes[p] ?? 0n;
     this.hashes.length = pages;
     for (const p of this.stale) if (p >= pages) this.stale.delete(p);
     // The old last page may have changed length, and pages past the old end are new.
@@ -69,7 +72,9 @@ class WorldBuffer {
   settle(): void {
     for (const p of this.stale) {
       const lo = p * PAGE_BYTES;
-      this.hashes[p] = pageHash(this.id, p, this.bytes.subarray(lo, Math.min(lo + PAGE_BYTES, this.len)));
+      const hash = pageHash(this.id, p, this.bytes.subarray(lo, Math.min(lo + PAGE_BYTES, this.len)));
+      this.xor ^= (this.hashes[p] ?? 0n) ^ hash;
+      this.hashes[p] = hash;
     }
     this.stale.clear();
   }
@@ -77,9 +82,7 @@ class WorldBuffer {
   /** The XOR of its page hashes. */
   digest(): bigint {
     this.settle();
-    let d = 0n;
-    for (const h of this.hashes) d ^= h;
-    return d;
+    return this.xor;
   }
 }
 
