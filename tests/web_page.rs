@@ -6,6 +6,8 @@
 
 mod support;
 
+use naadf_world::digest::BufferId;
+use naadf_world::fingerprint::{ChunkChanges, ChunkPrints, stale_words};
 use serde_json::{Value, json};
 use std::io::{BufRead, BufReader, Write};
 use std::path::{Path, PathBuf};
@@ -156,6 +158,9 @@ fn assert_on_server(page: &Value, server: &Value) {
         assert_eq!(page[field], server[key], "{field}: page {page} server {server}");
     }
 }
+
+/// Long enough for a native mirror's join and the distance fields to settle on a slow machine.
+const SETTLE: std::time::Duration = std::time::Duration::from_secs(120);
 
 /// A page that is live on a quiescent world and has drawn it.
 const SETTLED: &str = "n.state === 'live' && n.quiescent && n.shownVersion === n.version && n.frameMs > 0";
@@ -529,6 +534,120 @@ fn the_path_tracer_accumulates_what_naadf_render_traces() {
     eprintln!("pathtrace: mean channel difference {mean:.4}, largest {most}");
     assert!(mean < 0.01 && most <= 2, "mean {mean}, largest {most}");
     server.stop();
+}
+
+/// `gi` runs the native GI pipeline's passes; after N frames of a still view (`spp=N`),
+/// the page's frame is `naadf render --mode gi --frames N` of the same view.
+#[test]
+fn the_gi_mode_draws_what_naadf_render_draws() {
+    let Some(Fixture {
+        dir,
+        world,
+        mut browser,
+    }) = fixture()
+    else {
+        return;
+    };
+    let server = serve_world(dir.path(), &world, &[], &[]);
+    let camera = r#"{"pos":[64.5,50.25,-20],"yaw":10,"pitch":-25,"fov_y":70}"#;
+    let frames = "6";
+    browser.open(
+        "a",
+        &format!("{}&spp={frames}", page_url(&server, camera, "64x36", "gi")),
+    );
+    let page = browser.wait(
+        "a",
+        &format!("n.samples === {frames} && n.state === 'live' && n.quiescent"),
+        180_000,
+    );
+    assert_eq!(page["mode"], "gi");
+    let png = p(dir.path(), "page.png");
+    browser.send(json!({"op": "capture", "id": "a", "path": png}));
+    let native = p(dir.path(), "native.png");
+    ok(
+        &[
+            "render",
+            "--server",
+            &server.url,
+            "--camera",
+            camera,
+            "--size",
+            "64x36",
+            "--mode",
+            "gi",
+            "--frames",
+            frames,
+            "-o",
+            &native,
+        ],
+        None,
+    );
+    let (mean, most) = difference(&png, &native);
+    eprintln!("gi: mean channel difference {mean:.4}, largest {most}");
+    assert!(mean < 0.01 && most <= 2, "mean {mean}, largest {most}");
+
+    // An edit in view: the page names the chunks that show something else, which the GI's
+    // history drops and fades the light of. The oracle: the native fingerprints of every
+    // chunk of the world before and after, from a native mirror.
+    let rt = tokio::runtime::Runtime::new().unwrap();
+    let client = rt
+        .block_on(naadf_client::Client::connect(&server.url, None, None))
+        .unwrap();
+    let mut session = rt.block_on(client.join(None)).unwrap();
+    let before_version = page["version"].as_u64().unwrap();
+    let mut prints = ChunkPrints::new(rt.block_on(session.until_quiescent(before_version, SETTLE)).unwrap());
+    let generation = browser.eval("a", "return n.generation()");
+    let aimed = browser.eval("a", "return n.pointer");
+    let v = &aimed["before"];
+    let (x, y, z) = (v[0].as_i64().unwrap(), v[1].as_i64().unwrap(), v[2].as_i64().unwrap());
+    let edit = format!(
+        r#"{{"op":"box","min":[{},{y},{}],"max":[{},{},{}],"material":2}}"#,
+        x - 3,
+        z - 3,
+        x + 3,
+        y + 6,
+        z + 3
+    );
+    let version = browser.eval("a", &format!("return await n.edit({})", json!(edit)));
+    let page = browser.wait(
+        "a",
+        &format!(
+            "n.shownVersion >= {version} && n.samples === {frames} && n.quiescent && n.shownVersion === n.version"
+        ),
+        180_000,
+    );
+    let after = rt
+        .block_on(session.until_quiescent(page["version"].as_u64().unwrap(), SETTLE))
+        .unwrap();
+    assert_eq!(after.version(), page["version"].as_u64().unwrap());
+    // Every page of every buffer but the materials (the edit kept them) may have changed.
+    let every_page: Vec<_> = BufferId::WORLD
+        .iter()
+        .filter(|&&id| id != BufferId::Materials)
+        .map(|&id| (id, stale_words(&[], after.page_hashes(id))))
+        .collect();
+    let ChunkChanges::Chunks(expected) = prints.update(after, &every_page) else {
+        panic!("a box edit changed everything");
+    };
+    let changed = browser.eval("a", &format!("return n.changedChunks({generation})"));
+    assert!(!expected.is_empty());
+    assert_eq!(changed, json!(expected), "the chunks the page found changed");
+    server.stop();
+}
+
+/// The mean and the largest difference of two equally sized images' channels.
+fn difference(a: &str, b: &str) -> (f64, i32) {
+    let a = image::open(a).unwrap().to_rgba8();
+    let b = image::open(b).unwrap().to_rgba8();
+    assert_eq!(a.dimensions(), b.dimensions());
+    let diffs: Vec<i32> = a
+        .as_raw()
+        .iter()
+        .zip(b.as_raw())
+        .map(|(x, y)| (i32::from(*x) - i32::from(*y)).abs())
+        .collect();
+    let mean = diffs.iter().sum::<i32>() as f64 / diffs.len() as f64;
+    (mean, diffs.iter().max().copied().unwrap_or(0))
 }
 
 /// With `--tls-cert`, the gRPC listener serves the page, its assets and gRPC-web over https

@@ -19,32 +19,17 @@ import {
   View,
   WorldInfo,
 } from "./gen/layout";
-import type { StructLayout } from "./gen/layout";
+import { WorldGroup, dispatchPixels, passPipeline, readBack, writeStruct } from "./compute";
 import type { Camera } from "./camera";
 import { cameraRays } from "./camera";
-import { aces, srgb8 } from "./colour";
+import { toneMapped } from "./colour";
 import type { Mirror, Touched } from "./mirror";
+import { ChunkPrints } from "./changes";
+import type { ChunkChanges } from "./changes";
+import { GiRenderer } from "./gi";
 
 /** Why the page cannot draw: shown to the person, with the native viewer as the way out. */
 export class NoWebGpu extends Error {}
-
-/** Writes `values` into `layout`'s fields of a struct's bytes. */
-function writeStruct(layout: StructLayout, values: Record<string, number | number[]>): ArrayBuffer {
-  const bytes = new ArrayBuffer(layout.size);
-  const view = new DataView(bytes);
-  for (const [name, value] of Object.entries(values)) {
-    const f = layout.fields[name];
-    if (!f) throw new Error(`no field ${name}`);
-    const list = Array.isArray(value) ? value : [value];
-    list.forEach((v, i) => {
-      const at = f.offset + 4 * i;
-      if (f.type.includes("f32")) view.setFloat32(at, v, true);
-      else if (f.type.includes("i32")) view.setInt32(at, v, true);
-      else view.setUint32(at, v, true);
-    });
-  }
-  return bytes;
-}
 
 /** A device for the page: the adapter's own limits for buffer sizes (the world may be
  * larger than WebGPU's default 128 MiB binding), the defaults for everything else. */
@@ -76,6 +61,15 @@ export class GpuWorld {
   generation = 0;
   /** Bumped when `buffer` is replaced, so bind groups are rebuilt. */
   layoutGeneration = 0;
+  /** The world's size in chunks. */
+  chunks: [number, number, number] = [0, 0, 0];
+  /** The mirror last uploaded (the page has one). */
+  private mirror: Mirror | undefined;
+  /** The chunks' fingerprints, once a renderer asked which chunks change (`trackChanges`). */
+  private prints: ChunkPrints | undefined;
+  /** The chunks each generation changed, oldest first, back to just after `logFrom`. */
+  private log: { generation: number; changes: ChunkChanges }[] = [];
+  private logFrom = 0;
 
   constructor(readonly device: GPUDevice) {
     const uniform = (label: string, size: number) =>
@@ -110,6 +104,11 @@ export class GpuWorld {
     this.writeInfo(mirror);
     this.layoutGeneration += 1;
     this.generation += 1;
+    this.mirror = mirror;
+    if (this.prints) {
+      this.prints = new ChunkPrints(mirror);
+      this.note("everything");
+    }
   }
 
   /** Uploads the ranges a patch wrote; lays out anew when a buffer outgrew its room. */
@@ -130,6 +129,35 @@ export class GpuWorld {
     }
     if (resized) this.writeInfo(mirror);
     this.generation += 1;
+    if (this.prints) this.note(this.prints.update(mirror, touched));
+  }
+
+  /** Starts fingerprinting the chunks, so that `changesSince` can name the chunks each
+   * change touched from now on (the GI's history needs them; the other modes do not pay). */
+  trackChanges(): void {
+    if (this.prints || !this.mirror) return;
+    this.prints = new ChunkPrints(this.mirror);
+    this.log = [];
+    this.logFrom = this.generation;
+  }
+
+  /** The chunks that show something else than at `generation`: everything when that is
+   * older than the log (or than `trackChanges`). */
+  changesSince(generation: number): ChunkChanges {
+    if (generation < this.logFrom) return "everything";
+    const out = new Set<number>();
+    for (const e of this.log) {
+      if (e.generation <= generation) continue;
+      if (e.changes === "everything") return "everything";
+      for (const c of e.changes) out.add(c);
+    }
+    return [...out].sort((a, b) => a - b);
+  }
+
+  /** Logs what the newest generation changed, keeping the last 64 generations. */
+  private note(changes: ChunkChanges): void {
+    this.log.push({ generation: this.generation, changes });
+    if (this.log.length > 64) this.logFrom = this.log.shift()!.generation;
   }
 
   private write(k: number, offset: number, bytes: Uint8Array): void {
@@ -146,95 +174,18 @@ export class GpuWorld {
   private writeInfo(mirror: Mirror): void {
     const [x, y, z] = mirror.size;
     const hasEntities = mirror.bytes(7).length > 0 ? 1 : 0;
+    this.chunks = [Math.ceil(x / 16), Math.ceil(y / 16), Math.ceil(z / 16)];
     this.device.queue.writeBuffer(
       this.info,
       0,
       writeStruct(WorldInfo, {
         size: [x, y, z],
         has_entities: hasEntities,
-        chunks: [Math.ceil(x / 16), Math.ceil(y / 16), Math.ceil(z / 16)],
+        chunks: this.chunks,
         max_steps: DEFAULT_MAX_STEPS,
       }),
     );
   }
-}
-
-/** A compute-stage buffer binding. */
-const entry = (binding: number, type: GPUBufferBindingType): GPUBindGroupLayoutEntry => ({
-  binding,
-  visibility: GPUShaderStage.COMPUTE,
-  buffer: { type },
-});
-
-/** Group 0 of every pass: `world_info`, `world_offsets` and `world`, rebound when the
- * world's buffer is replaced. */
-class WorldGroup {
-  readonly layout: GPUBindGroupLayout;
-  private group: GPUBindGroup | undefined;
-  private layoutGeneration = -1;
-
-  constructor(private readonly device: GPUDevice) {
-    this.layout = device.createBindGroupLayout({
-      entries: [entry(0, "uniform"), entry(1, "uniform"), entry(2, "read-only-storage")],
-    });
-  }
-
-  of(world: GpuWorld): GPUBindGroup {
-    if (!this.group || this.layoutGeneration !== world.layoutGeneration) {
-      this.group = this.device.createBindGroup({
-        layout: this.layout,
-        entries: [
-          { binding: 0, resource: { buffer: world.info } },
-          { binding: 1, resource: { buffer: world.offsets } },
-          { binding: 2, resource: { buffer: world.buffer! } },
-        ],
-      });
-      this.layoutGeneration = world.layoutGeneration;
-    }
-    return this.group;
-  }
-}
-
-/** A pass's pipeline over group 0 and its own group 1 of `group1` bindings, compiled in
- * the background (a big pass takes seconds on a software adapter): the compile overlaps
- * the world's download, and a mode never drawn is never compiled. */
-function passPipeline(device: GPUDevice, world: WorldGroup, label: string, code: string, entryPoint: string, group1: GPUBufferBindingType[]) {
-  const layout = device.createBindGroupLayout({ entries: group1.map((t, i) => entry(i, t)) });
-  const pipeline = device.createComputePipelineAsync({
-    layout: device.createPipelineLayout({ bindGroupLayouts: [world.layout, layout] }),
-    compute: { module: device.createShaderModule({ label, code }), entryPoint },
-  });
-  return { pipeline, layout };
-}
-
-/** An encoder holding one dispatch of `pipeline` over `width × height` pixels in 8×8
- * workgroups, with the world as group 0 and `group1`. */
-async function dispatchPixels(
-  device: GPUDevice,
-  pipeline: Promise<GPUComputePipeline>,
-  world: GPUBindGroup,
-  group1: GPUBindGroup,
-  width: number,
-  height: number,
-): Promise<GPUCommandEncoder> {
-  const enc = device.createCommandEncoder();
-  const pass = enc.beginComputePass();
-  pass.setPipeline(await pipeline);
-  pass.setBindGroup(0, world);
-  pass.setBindGroup(1, group1);
-  pass.dispatchWorkgroups(Math.ceil(width / 8), Math.ceil(height / 8));
-  pass.end();
-  return enc;
-}
-
-/** Copies `source` to `staging` after `enc`'s work, submits, and resolves to the bytes. */
-async function readBack(device: GPUDevice, enc: GPUCommandEncoder, source: GPUBuffer, staging: GPUBuffer, bytes: number): Promise<ArrayBuffer> {
-  enc.copyBufferToBuffer(source, 0, staging, 0, bytes);
-  device.queue.submit([enc.finish()]);
-  await staging.mapAsync(GPUMapMode.READ);
-  const out = staging.getMappedRange().slice(0);
-  staging.unmap();
-  return out;
 }
 
 /** The render pass (albedo, material, normal, steps) into a pixel buffer, read back. */
@@ -303,7 +254,7 @@ class FramePass {
       ],
     });
     const enc = await dispatchPixels(device, this.compute, this.world.of(world), frameGroup, width, height);
-    const rgba = new Uint8ClampedArray(await readBack(device, enc, this.pixels!, this.staging!, bytes));
+    const rgba = new Uint8ClampedArray(await readBack(device, enc, this.pixels!, 0, this.staging!, bytes));
     return new ImageData(rgba, width, height);
   }
 }
@@ -375,22 +326,17 @@ class PathTracer {
     });
     const enc = await dispatchPixels(device, this.pipeline, this.world.of(world), group, width, height);
     this.samples += 1;
-    const sums = new Float32Array(await readBack(device, enc, this.sums, this.staging!, bytes));
-    const rgba = new Uint8ClampedArray(width * height * 4);
-    for (let i = 0; i < width * height; i++) {
-      const n = sums[4 * i + 3] || 1;
-      for (let c = 0; c < 3; c++) rgba[4 * i + c] = srgb8(aces(Math.max(0, sums[4 * i + c] / n) * DEFAULT_EXPOSURE));
-      rgba[4 * i + 3] = 255;
-    }
-    return new ImageData(rgba, width, height);
+    const sums = new Float32Array(await readBack(device, enc, this.sums, 0, this.staging!, bytes));
+    return toneMapped(sums, width, height, DEFAULT_EXPOSURE, true);
   }
 }
 
-/** Every mode the page draws: the frame pass's and the path tracer. */
+/** Every mode the page draws: the frame pass's, the GI and the path tracer. */
 export class Renderer {
   private readonly world: WorldGroup;
   private frames: FramePass | undefined;
   private paths: PathTracer | undefined;
+  private gi: GiRenderer | undefined;
   /** The last frame drawn. */
   last: ImageData | undefined;
 
@@ -404,25 +350,31 @@ export class Renderer {
   }
 
   /** The pass that draws `mode`, made on first use. */
-  private pass(mode: string): FramePass | PathTracer {
-    if (Renderer.accumulates(mode)) return (this.paths ??= new PathTracer(this.device, this.world));
+  private pass(mode: string): FramePass | PathTracer | GiRenderer {
+    if (mode === "pathtrace") return (this.paths ??= new PathTracer(this.device, this.world));
+    if (mode === "gi") return (this.gi ??= new GiRenderer(this.device, this.world));
     return (this.frames ??= new FramePass(this.device, this.world));
   }
 
-  /** Whether `mode` keeps improving while nothing changes (the path tracer's samples). */
+  /** Whether `mode` keeps improving while nothing changes (the path tracer's samples, the
+   * GI's history). */
   static accumulates(mode: string): boolean {
-    return mode === "pathtrace";
+    return mode === "pathtrace" || mode === "gi";
   }
 
-  /** Samples per pixel of the path tracer's current view. */
-  get samples(): number {
-    return this.paths?.samples ?? 0;
+  /** How far `mode` has come with the current view: the path tracer's samples per pixel,
+   * or the GI's frames since the view or the world last changed. */
+  samples(mode: string): number {
+    if (mode === "gi") return this.gi?.still ?? 0;
+    return mode === "pathtrace" ? (this.paths?.samples ?? 0) : 0;
   }
 
-  /** Draws `camera`'s view of `world` at `width × height` in `mode`. */
+  /** Draws `camera`'s view of `world` at `width × height` in `mode` (`gi` may draw a
+   * smaller frame: see `giSize`). */
   async render(world: GpuWorld, camera: Camera, width: number, height: number, mode: string): Promise<ImageData> {
     const pass = this.pass(mode);
-    this.last = pass instanceof PathTracer ? await pass.render(world, camera, width, height) : await pass.render(world, camera, width, height, mode);
+    this.last =
+      pass instanceof FramePass ? await pass.render(world, camera, width, height, mode) : await pass.render(world, camera, width, height);
     return this.last;
   }
 }

@@ -18,7 +18,7 @@ import { Session } from "./session";
 import type { SessionState } from "./session";
 import type { Region, ToolState } from "./tools";
 import { TOOLS, commit, palette, preview } from "./tools";
-import { MODES, drawnMode, readLink, writeLink } from "./view";
+import { MODES, accumulationCap, readLink, writeLink } from "./view";
 
 /** The page's state, as `window.naadf` shows it. */
 interface PageState {
@@ -49,7 +49,7 @@ interface PageState {
   timings: Record<string, number>;
   /** The version the canvas shows. */
   shownVersion: number;
-  /** Samples per pixel in the path tracer's frame. */
+  /** The path tracer's samples per pixel, or the GI's frames, since the view last changed. */
   samples: number;
   /** The voxel under the pointer and the empty voxel before it (where placing tools build). */
   pointer: { voxel: number[]; before: number[] } | null;
@@ -60,6 +60,11 @@ interface PageState {
   voxel(x: number, y: number, z: number): number;
   /** Draws the next frame even if nothing changed (benchmarks). */
   redraw(): void;
+  /** Counts the changes of the world's bytes on the GPU. */
+  generation(): number;
+  /** The chunks that show something else than at `generation` (`"everything"` when that
+   * is too old), as the GI's history learns them; tracked once `gi` has drawn. */
+  changedChunks(since: number): number[] | "everything";
   /** Sends one ops-JSON line (docs/OPS.md) as an edit; resolves to the new version. */
   edit(ops: string): Promise<number>;
   undo(): Promise<number>;
@@ -98,6 +103,8 @@ const naadf: PageState = {
   voxel: () => 0,
   capture: () => Promise.reject(new Error("no frame yet")),
   redraw: () => {},
+  generation: () => 0,
+  changedChunks: () => "everything",
   edit: () => Promise.reject(new Error("not joined")),
   undo: () => Promise.reject(new Error("not joined")),
   redo: () => Promise.reject(new Error("not joined")),
@@ -125,7 +132,7 @@ function drawHud(): void {
     `version ${naadf.version}${naadf.growthSeq ? `.${naadf.growthSeq}` : ""}${naadf.quiescent ? "" : " (settling)"}`,
     `digest ${naadf.digest.slice(0, 8)}`,
     `${naadf.users.length} online${naadf.users.length ? `: ${naadf.users.join(", ")}` : ""}`,
-    `rtt ${rtt.toFixed(0)} ms · frame ${naadf.frameMs.toFixed(1)} ms · ${naadf.mode}${naadf.mode === drawnMode(naadf.mode) ? "" : ` (drawn as ${drawnMode(naadf.mode)})`}`,
+    `rtt ${rtt.toFixed(0)} ms · frame ${naadf.frameMs.toFixed(1)} ms · ${naadf.mode}`,
   ];
   hud.textContent = lines.join("\n");
 }
@@ -162,7 +169,7 @@ async function main(): Promise<void> {
   const context = canvas.getContext("2d")!;
   const marks = overlay.getContext("2d")!;
   const world = new GpuWorld(device);
-  const renderer = new Renderer(device, drawnMode(naadf.mode));
+  const renderer = new Renderer(device, naadf.mode);
   let voxels: Voxels | undefined;
   let others: PresenceEntry[] = [];
   // `dirty`: the next animation frame renders the world again; `overlayDirty`: it only
@@ -260,6 +267,8 @@ async function main(): Promise<void> {
   naadf.redraw = () => {
     dirty = true;
   };
+  naadf.generation = () => world.generation;
+  naadf.changedChunks = (since) => world.changesSince(since);
   naadf.capture = async () => {
     const image = renderer.last;
     if (!image) throw new Error("no frame yet");
@@ -431,10 +440,11 @@ async function main(): Promise<void> {
       const version = naadf.version;
       const view: Camera = { ...camera, pos: [...camera.pos] };
       renderer
-        .render(world, view, w, h, drawnMode(naadf.mode))
+        .render(world, view, w, h, naadf.mode)
         .then((image) => {
           for (const c of [canvas, overlay]) {
-            if (c.width !== w || c.height !== h) [c.width, c.height] = [w, h];
+            // `gi` may draw a smaller frame than asked for (its history must fit the adapter).
+            if (c.width !== image.width || c.height !== image.height) [c.width, c.height] = [image.width, image.height];
           }
           context.putImageData(image, 0, 0);
           shownView = view;
@@ -444,16 +454,16 @@ async function main(): Promise<void> {
           naadf.frameMs = frameTimes.reduce((a, b) => a + b, 0) / frameTimes.length;
           naadf.shownVersion = version;
           naadf.timings.firstFrame ??= performance.now();
-          // The path tracer keeps adding samples while nothing changes.
-          if (Renderer.accumulates(drawnMode(naadf.mode)) && renderer.samples < link.spp) dirty = true;
-          naadf.samples = renderer.samples;
+          // The path tracer and the GI keep improving while nothing changes.
+          naadf.samples = renderer.samples(naadf.mode);
+          if (Renderer.accumulates(naadf.mode) && naadf.samples < accumulationCap(naadf.mode, link)) dirty = true;
           drawHud();
         })
         .catch((e) => console.error(`frame: ${e}`))
         .finally(() => (drawing = false));
       if (now - lastUrl > 500) {
         lastUrl = now;
-        writeLink(camera, naadf.mode, link.size);
+        writeLink(camera, naadf.mode, link);
       }
     }
     if (overlayDirty && shownView) {

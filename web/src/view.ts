@@ -2,13 +2,15 @@
 // is reported and its default used instead; camera and mode are kept current in the URL.
 import type { Camera } from "./camera";
 import { cameraJson, parseCamera } from "./camera";
-import { RENDER_MODES } from "./gen/layout";
+import { GI } from "./gen/layout";
 
 /** The modes of docs/RENDERING.md, in the order the page offers them. */
 export const MODES = ["albedo", "material", "normal", "steps", "gi", "pathtrace"] as const;
 
-/** The most samples per pixel the path tracer adds to one view. */
+/** The most samples per pixel the path tracer adds to one view, and the most `spp` takes. */
 const DEFAULT_MAX_SPP = 4096;
+/** The most frames the GI draws of a view that stays still: its TAA is full twice over. */
+const DEFAULT_GI_FRAMES = 2 * GI.TAA_SLOTS;
 /** Largest render edge, as the native renderer allows. */
 const MAX_EDGE = 8192;
 
@@ -17,15 +19,16 @@ export interface LinkedView {
   camera: Camera | undefined;
   mode: string | undefined;
   size: [number, number] | undefined;
-  /** The most samples per pixel `pathtrace` adds (`spp`). */
-  spp: number;
+  /** The most samples per pixel `pathtrace` adds, or frames `gi` draws, to a still view
+   * (`spp`), when given. */
+  spp: number | undefined;
   problems: string[];
 }
 
 /** Reads the view from `search` (a `location.search`). */
 export function readLink(search: string): LinkedView {
   const q = new URLSearchParams(search);
-  const out: LinkedView = { camera: undefined, mode: undefined, size: undefined, spp: DEFAULT_MAX_SPP, problems: [] };
+  const out: LinkedView = { camera: undefined, mode: undefined, size: undefined, spp: undefined, problems: [] };
   const camera = q.get("camera");
   if (camera !== null) {
     try {
@@ -50,22 +53,23 @@ export function readLink(search: string): LinkedView {
   if (spp !== null) {
     const n = Number(spp);
     if (Number.isInteger(n) && n >= 1 && n <= DEFAULT_MAX_SPP) out.spp = n;
-    else out.problems.push(`spp: '${spp}' is not a whole number in 1..=${DEFAULT_MAX_SPP}; using ${DEFAULT_MAX_SPP}`);
+    else out.problems.push(`spp: '${spp}' is not a whole number in 1..=${DEFAULT_MAX_SPP}; using the mode's default`);
   }
   return out;
 }
 
-/** Writes camera and mode into the URL (keeping `size` only when it was given). */
-export function writeLink(camera: Camera, mode: string, size: [number, number] | undefined): void {
+/** Writes camera and mode into the URL (keeping `size` and `spp` only when they were given). */
+export function writeLink(camera: Camera, mode: string, link: LinkedView): void {
   const q = new URLSearchParams();
   q.set("camera", cameraJson(camera));
   q.set("mode", mode);
-  if (size) q.set("size", `${size[0]}x${size[1]}`);
+  if (link.size) q.set("size", `${link.size[0]}x${link.size[1]}`);
+  if (link.spp) q.set("spp", String(link.spp));
   history.replaceState(null, "", `${location.pathname}?${q.toString().replace(/\+/g, "%20")}`);
 }
 
-/** The mode the page draws for `wanted`: the render pass's modes and `pathtrace`; `gi`
- * is drawn as `pathtrace` until the page has the GI pipeline's passes. */
-export function drawnMode(wanted: string): string {
-  return wanted in RENDER_MODES || wanted === "pathtrace" ? wanted : "pathtrace";
+/** How far an accumulating mode goes with a still view: `spp` when given, else 4096
+ * samples per pixel for `pathtrace` and 64 frames for `gi`. */
+export function accumulationCap(mode: string, link: LinkedView): number {
+  return link.spp ?? (mode === "gi" ? DEFAULT_GI_FRAMES : DEFAULT_MAX_SPP);
 }

@@ -7,20 +7,38 @@
 //! needs no Rust; a test fails when they are stale (`NAADF_BLESS=1` rewrites them).
 
 use super::bindings::BUFFERS;
-use super::params::{FrameInfo, LightInfo, View, WgslStruct, WorldInfo};
+use super::gi::{GiPass, GiSplit, gi_pass, host_constants};
+use super::params::{FrameInfo, GiInfo, LightInfo, View, WgslStruct, WorldInfo};
 use super::pathtrace::path_pass;
 use super::render::render_pass;
 use super::render::{DEFAULT_SUN, STEPS_FULL_SCALE};
 use super::shaders::{Loop, WorldBindings, source};
 use super::world::GPU_BUFFERS;
 use crate::frame::Mode;
-use crate::light::{DEFAULT_PATHTRACE_BOUNCES, LitOptions};
+use crate::light::{DEFAULT_LIT_BOUNCES, DEFAULT_PATHTRACE_BOUNCES, LitOptions};
 use naadf_world::traverse::DEFAULT_MAX_STEPS;
 use std::fmt::Write;
+
+/// How the page binds the GI history's two large arrays: one binding each (the page
+/// lowers the GI's internal resolution until they fit the adapter's binding size).
+const PAGE_GI_SPLIT: GiSplit = GiSplit {
+    part_bytes_shift: 30,
+    mem_parts: 1,
+    taa_parts: 1,
+};
 
 /// The generated files of `web/src/gen/`, by name, with their contents.
 pub fn generated_files() -> Vec<(&'static str, String)> {
     vec![
+        // Every GI pass is an entry point of the same source.
+        (
+            "gi.wgsl",
+            source(
+                &gi_pass(GiPass::ALL[0], PAGE_GI_SPLIT),
+                Loop::Hierarchy,
+                WorldBindings::Single,
+            ),
+        ),
         (
             "render.wgsl",
             source(&render_pass(), Loop::Hierarchy, WorldBindings::Single),
@@ -58,20 +76,25 @@ fn layout_ts() -> String {
     struct_ts::<View>(&mut s);
     struct_ts::<FrameInfo>(&mut s);
     struct_ts::<LightInfo>(&mut s);
+    struct_ts::<GiInfo>(&mut s);
     let lit = LitOptions::default();
-    let light = lit
-        .light(DEFAULT_PATHTRACE_BOUNCES)
-        .expect("the default light is valid");
-    let words: Vec<String> = bytemuck::cast_slice::<_, u32>(&[LightInfo::new(&light)])
-        .iter()
-        .map(u32::to_string)
-        .collect();
+    let light_words = |bounces: u32| -> String {
+        let light = lit.light(bounces).expect("the default light is valid");
+        let words: Vec<String> = bytemuck::cast_slice::<_, u32>(&[LightInfo::new(&light)])
+            .iter()
+            .map(u32::to_string)
+            .collect();
+        words.join(", ")
+    };
     let _ = writeln!(
         s,
         "\n/** `LightInfo` of the default light (physical sky and sun) with the path tracer's bounces, as words. */\n\
          export const PATHTRACE_LIGHT_WORDS = [{}];\n\
+         /** `LightInfo` of the default light with the GI's bounces, as words. */\n\
+         export const GI_LIGHT_WORDS = [{}];\n\
          /** The default seed and exposure of the lit modes. */\nexport const DEFAULT_SEED = {};\nexport const DEFAULT_EXPOSURE = {:?};",
-        words.join(", "),
+        light_words(DEFAULT_PATHTRACE_BOUNCES),
+        light_words(DEFAULT_LIT_BOUNCES),
         lit.seed,
         lit.exposure
     );
@@ -92,6 +115,17 @@ fn layout_ts() -> String {
         DEFAULT_MAX_STEPS,
         naadf_proto::PROTOCOL_VERSION
     );
+    s.push_str("\n/** The GI passes' entry points in `gi.wgsl`, in frame order. */\nexport const GI_PASSES = [\n");
+    for p in GiPass::ALL {
+        let _ = writeln!(s, "  \"{}\",", p.entry());
+    }
+    s.push_str(
+        "] as const;\n\n/** The GI pipeline's constants (client/src/gpu/gi), by name. */\nexport const GI = {\n",
+    );
+    for (name, value) in host_constants() {
+        let _ = writeln!(s, "  {name}: {value},");
+    }
+    s.push_str("} as const;\n");
     s
 }
 

@@ -83,8 +83,41 @@ export const LightInfo: StructLayout = {
   },
 };
 
+/** `GiInfo`, as the shaders declare it. */
+export const GiInfo: StructLayout = {
+  size: 96,
+  fields: {
+    frame: { offset: 0, type: "u32" },
+    taa_slot: { offset: 4, type: "u32" },
+    taa_valid: { offset: 8, type: "u32" },
+    edit_frame: { offset: 12, type: "u32" },
+    change_frame: { offset: 16, type: "u32" },
+    jitter_x: { offset: 20, type: "f32" },
+    jitter_y: { offset: 24, type: "f32" },
+    regions_x: { offset: 28, type: "u32" },
+    regions_y: { offset: 32, type: "u32" },
+    ring_capacity: { offset: 36, type: "u32" },
+    denoise: { offset: 40, type: "u32" },
+    off_own: { offset: 44, type: "u32" },
+    off_lut: { offset: 48, type: "u32" },
+    off_gbuf: { offset: 52, type: "u32" },
+    off_gmat: { offset: 56, type: "u32" },
+    off_emitted: { offset: 60, type: "u32" },
+    off_taa_info: { offset: 64, type: "u32" },
+    off_illum: { offset: 68, type: "u32" },
+    off_illum2: { offset: 72, type: "u32" },
+    off_result: { offset: 76, type: "u32" },
+    off_refined: { offset: 80, type: "u32" },
+    off_region_info: { offset: 84, type: "u32" },
+    off_ring: { offset: 88, type: "u32" },
+    off_queue_list: { offset: 92, type: "u32" },
+  },
+};
+
 /** `LightInfo` of the default light (physical sky and sun) with the path tracer's bounces, as words. */
 export const PATHTRACE_LIGHT_WORDS = [1077936128, 1077936128, 1077936128, 1, 3208642560, 1056964608, 1054716887, 1, 1193802333, 1077936198, 926566462, 8];
+/** `LightInfo` of the default light with the GI's bounces, as words. */
+export const GI_LIGHT_WORDS = [1077936128, 1077936128, 1077936128, 1, 3208642560, 1056964608, 1054716887, 1, 1193802333, 1077936198, 926566462, 3];
 /** The default seed and exposure of the lit modes. */
 export const DEFAULT_SEED = 0;
 export const DEFAULT_EXPOSURE = 1.0;
@@ -106,3 +139,51 @@ export const DEFAULT_MAX_STEPS = 65536;
 
 /** The protocol version the page speaks (`JoinRequest.protocol_version`). */
 export const PROTOCOL_VERSION = 1;
+
+
+/** The GI passes' entry points in `gi.wgsl`, in frame order. */
+export const GI_PASSES = [
+  "gi_atmosphere",
+  "gi_first_hit",
+  "gi_poses_clear",
+  "gi_poses",
+  "gi_taa",
+  "gi_queue",
+  "gi_queue_scan",
+  "gi_trace",
+  "gi_project",
+  "gi_project_store",
+  "gi_refine",
+  "gi_resample",
+  "gi_denoise_x",
+  "gi_denoise_y",
+  "gi_merge",
+] as const;
+
+/** The GI pipeline's constants (client/src/gpu/gi), by name. */
+export const GI = {
+  TAA_SLOTS: 32,
+  CONTROL_WORDS: 144,
+  CAMERA_HISTORY: 128,
+  LUT_SIZE: 256,
+  BUCKET_SLOTS: 32,
+  MAX_KEPT: 7,
+  QUEUE_PERIOD: 2,
+  RING_VEC4: 3,
+  EDIT_HISTORY_FRAMES: 8,
+  CONTROL_TRACE_ARGS: 0,
+  CONTROL_PROJECT_ARGS: 4,
+  CAM_WORDS: 5,
+  CONTROL_QUEUED: 8,
+  CONTROL_START: 9,
+  CONTROL_VALID: 10,
+  CONTROL_HEAD: 11,
+  CONTROL_FRAMES: 16,
+  TAA_PIXEL_BYTES: 256,
+  RING_PER_PIXEL: 2,
+  POSE_TABLE_WORDS: 2097024,
+  CHANGE_REACH: 2,
+  MAX_LOCAL_CHANGES: 4096,
+  ARGS_BYTES: 32,
+  NO_ENTITY: 16383,
+} as const;

@@ -67,9 +67,9 @@ pub const GI_CONSTANTS: [(&str, WgslValue); 17] = [
 ];
 
 /// Bytes per pixel of the TAA.
-const TAA_PIXEL_BYTES: u64 = TAA_SLOTS as u64 * 8;
+pub(super) const TAA_PIXEL_BYTES: u64 = TAA_SLOTS as u64 * 8;
 /// Ring samples per pixel.
-const RING_PER_PIXEL: u64 = 2;
+pub(super) const RING_PER_PIXEL: u64 = 2;
 /// Words of the entity pose table at the end of `words`: per TAA slot, four record words
 /// per entity id (shaders/gi_entities.wgsl).
 pub(super) const POSE_TABLE_WORDS: u64 = TAA_SLOTS as u64 * NO_ENTITY as u64 * 4;

@@ -22,19 +22,45 @@ mod passes;
 pub use history::{CHANGE_REACH, GiHistory};
 pub use memory::GiSplit;
 pub use passes::GiPass;
-#[cfg(test)]
 pub(crate) use passes::gi_pass;
 
 use super::context::{Gpu, GpuError};
 use super::pipeline::{PassPipelines, dispatch_2d};
+use super::shaders::WgslValue;
 use super::shaders::{Loop, NO_ENTITY};
 use super::shot::{CameraRays, Shot, check_frame_size};
 use super::temporal::Temporal;
 use super::world::GpuWorld;
 use crate::light::hdr::Radiance;
-use history::ARGS_BYTES;
-use memory::{CONTROL_PROJECT_ARGS, CONTROL_TRACE_ARGS, LUT_SIZE, Layout, POSE_TABLE_WORDS, Plan, RING_VEC4};
+use history::{ARGS_BYTES, MAX_LOCAL_CHANGES};
+use memory::{
+    CONTROL_PROJECT_ARGS, CONTROL_TRACE_ARGS, GI_CONSTANTS, LUT_SIZE, Layout, POSE_TABLE_WORDS, Plan, RING_PER_PIXEL,
+    RING_VEC4, TAA_PIXEL_BYTES,
+};
 use std::collections::HashMap;
+
+/// The constants a host of the GI passes needs, by name: those the WGSL shares
+/// ([`GI_CONSTANTS`]) and the host side's own (the arrays' sizes, the change rule, the
+/// indirect arguments). The browser page takes them from here (`gpu/browser.rs`).
+pub(crate) fn host_constants() -> Vec<(&'static str, u64)> {
+    let mut out: Vec<(&'static str, u64)> = GI_CONSTANTS
+        .iter()
+        .filter_map(|&(name, v)| match v {
+            WgslValue::U32(v) => Some((name, u64::from(v))),
+            _ => None,
+        })
+        .collect();
+    out.extend([
+        ("TAA_PIXEL_BYTES", TAA_PIXEL_BYTES),
+        ("RING_PER_PIXEL", RING_PER_PIXEL),
+        ("POSE_TABLE_WORDS", POSE_TABLE_WORDS),
+        ("CHANGE_REACH", u64::from(CHANGE_REACH)),
+        ("MAX_LOCAL_CHANGES", MAX_LOCAL_CHANGES as u64),
+        ("ARGS_BYTES", ARGS_BYTES),
+        ("NO_ENTITY", u64::from(NO_ENTITY)),
+    ]);
+    out
+}
 
 /// The smallest part of a split array: the cameras (written from the CPU) fit in the first.
 const MIN_PART_BYTES: u64 = 1 << 16;

@@ -2144,6 +2144,2561 @@ const MODE_ALBEDO: u32 = 0u;
 const MODE_MATERIAL: u32 = 1u;
 const MODE_NORMAL: u32 = 2u;
 const MODE_STEPS: u32 = 3u;
-`,Ys=[{name:`chunks`,id:0},{name:`chunk_entities`,id:1},{name:`blocks`,id:2},{name:`voxels`,id:3},{name:`materials`,id:4},{name:`entity_types`,id:6},{name:`entity_instances`,id:7}],Xs={size:32,fields:{size:{offset:0,type:`vec3<u32>`},has_entities:{offset:12,type:`u32`},chunks:{offset:16,type:`vec3<u32>`},max_steps:{offset:28,type:`u32`}}},Zs={size:96,fields:{cam_oi:{offset:0,type:`vec3<i32>`},mode:{offset:12,type:`u32`},cam_of:{offset:16,type:`vec3<f32>`},width:{offset:28,type:`u32`},forward:{offset:32,type:`vec3<f32>`},height:{offset:44,type:`u32`},right:{offset:48,type:`vec3<f32>`},flags:{offset:60,type:`u32`},up:{offset:64,type:`vec3<f32>`},steps_scale:{offset:76,type:`f32`},sun:{offset:80,type:`vec3<f32>`},_pad:{offset:92,type:`u32`}}},Qs={size:80,fields:{cam_int:{offset:0,type:`vec3<i32>`},width:{offset:12,type:`u32`},cam_frac:{offset:16,type:`vec3<f32>`},height:{offset:28,type:`u32`},forward:{offset:32,type:`vec3<f32>`},seed:{offset:44,type:`u32`},right:{offset:48,type:`vec3<f32>`},sample:{offset:60,type:`u32`},up:{offset:64,type:`vec3<f32>`},history:{offset:76,type:`u32`}}},$s=[0x40400000,0x40400000,0x40400000,1,0xbf400000,0x3f000000,0x3eddb3d7,1,0x4727fa5d,0x40400046,926566462,8],ec={albedo:0,material:1,normal:2,steps:3},tc=[-.75,.5,.4330127],nc=65536,rc=e=>Math.min(1,Math.max(0,e*(2.51*e+.03)/(e*(2.43*e+.59)+.14))),ic=e=>Math.min(255,Math.max(0,Math.floor((e<=.0031308?12.92*e:1.055*e**(1/2.4)-.055)*255+.5))),ac=class extends Error{};function oc(e,t){let n=new ArrayBuffer(e.size),r=new DataView(n);for(let[n,i]of Object.entries(t)){let t=e.fields[n];if(!t)throw Error(`no field ${n}`);(Array.isArray(i)?i:[i]).forEach((e,n)=>{let i=t.offset+4*n;t.type.includes(`f32`)?r.setFloat32(i,e,!0):t.type.includes(`i32`)?r.setInt32(i,e,!0):r.setUint32(i,e,!0)})}return n}async function sc(){if(!(`gpu`in navigator)||!navigator.gpu)throw new ac(`this browser has no WebGPU`);let e=await navigator.gpu.requestAdapter();if(!e)throw new ac(`this browser offers WebGPU but no adapter`);let t=await e.requestDevice({requiredLimits:{maxStorageBufferBindingSize:e.limits.maxStorageBufferBindingSize,maxBufferSize:e.limits.maxBufferSize}});return t.addEventListener(`uncapturederror`,e=>console.error(`WebGPU: ${e.error.message}`)),t.lost.then(e=>console.error(`WebGPU device lost: ${e.message}`)),{device:t,fallback:(e.info?.isFallbackAdapter??!1)||/swiftshader/i.test(e.info?.description??``)}}var cc=class{device;buffer;info;offsets;regions=[];generation=0;layoutGeneration=0;constructor(e){this.device=e;let t=(t,n)=>e.createBuffer({label:t,size:n,usage:GPUBufferUsage.UNIFORM|GPUBufferUsage.COPY_DST});this.info=t(`world_info`,Xs.size),this.offsets=t(`world_offsets`,32)}uploadAll(e){let t=Ys.map(t=>e.bytes(t.id).length),n=0;this.regions=t.map(e=>{let t=Math.ceil((e*1.25+65536)/256)*256,r={at:n,capacity:t};return n+=t,r});let r=this.device.limits.maxStorageBufferBindingSize;if(n>r)throw new ac(`the world needs ${n} bytes in one binding; this adapter allows ${r}`);this.buffer?.destroy(),this.buffer=this.device.createBuffer({label:`world`,size:Math.max(n,16),usage:GPUBufferUsage.STORAGE|GPUBufferUsage.COPY_DST}),Ys.forEach((t,n)=>this.write(n,0,e.bytes(t.id)));let i=new Uint32Array(8);this.regions.forEach((e,t)=>i[t]=e.at/4),this.device.queue.writeBuffer(this.offsets,0,i),this.writeInfo(e),this.layoutGeneration+=1,this.generation+=1}update(e,t,n){let r=e=>Ys.findIndex(t=>t.id===e);if(n&&Ys.some((t,n)=>e.bytes(t.id).length>this.regions[n].capacity))this.uploadAll(e);else{for(let n of t){let t=r(n.id);if(t<0)continue;let i=n.lo&-4,a=e.bytes(n.id),o=Math.min(a.length,n.hi+3&-4);this.write(t,i,a.subarray(i,o))}n&&this.writeInfo(e),this.generation+=1}}write(e,t,n){if(n.length===0)return;let r=n.length%4==0?n:(()=>{let e=new Uint8Array(n.length+3&-4);return e.set(n),e})();this.device.queue.writeBuffer(this.buffer,this.regions[e].at+t,r)}writeInfo(e){let[t,n,r]=e.size,i=+(e.bytes(7).length>0);this.device.queue.writeBuffer(this.info,0,oc(Xs,{size:[t,n,r],has_entities:i,chunks:[Math.ceil(t/16),Math.ceil(n/16),Math.ceil(r/16)],max_steps:nc}))}},lc=(e,t)=>({binding:e,visibility:GPUShaderStage.COMPUTE,buffer:{type:t}}),uc=class{device;layout;group;layoutGeneration=-1;constructor(e){this.device=e,this.layout=e.createBindGroupLayout({entries:[lc(0,`uniform`),lc(1,`uniform`),lc(2,`read-only-storage`)]})}of(e){return this.group&&this.layoutGeneration===e.layoutGeneration||(this.group=this.device.createBindGroup({layout:this.layout,entries:[{binding:0,resource:{buffer:e.info}},{binding:1,resource:{buffer:e.offsets}},{binding:2,resource:{buffer:e.buffer}}]}),this.layoutGeneration=e.layoutGeneration),this.group}};function dc(e,t,n,r,i,a){let o=e.createBindGroupLayout({entries:a.map((e,t)=>lc(t,e))});return{pipeline:e.createComputePipelineAsync({layout:e.createPipelineLayout({bindGroupLayouts:[t.layout,o]}),compute:{module:e.createShaderModule({label:n,code:r}),entryPoint:i}}),layout:o}}async function fc(e,t,n,r,i,a){let o=e.createCommandEncoder(),s=o.beginComputePass();return s.setPipeline(await t),s.setBindGroup(0,n),s.setBindGroup(1,r),s.dispatchWorkgroups(Math.ceil(i/8),Math.ceil(a/8)),s.end(),o}async function pc(e,t,n,r,i){t.copyBufferToBuffer(n,0,r,0,i),e.queue.submit([t.finish()]),await r.mapAsync(GPUMapMode.READ);let a=r.getMappedRange().slice(0);return r.unmap(),a}var mc=class{device;world;compute;group1;view;gbuffer;pixels;staging;width=0;height=0;constructor(e,t){this.device=e,this.world=t,{pipeline:this.compute,layout:this.group1}=dc(e,t,`render.wgsl`,Js,`render`,[`uniform`,`storage`,`storage`]),this.view=e.createBuffer({size:Zs.size,usage:GPUBufferUsage.UNIFORM|GPUBufferUsage.COPY_DST}),this.gbuffer=e.createBuffer({size:16,usage:GPUBufferUsage.STORAGE})}async render(e,t,n,r,i){let a=this.device,o=n*r*4;n===this.width&&r===this.height&&this.pixels||(this.pixels?.destroy(),this.staging?.destroy(),this.pixels=a.createBuffer({label:`pixels`,size:o,usage:GPUBufferUsage.STORAGE|GPUBufferUsage.COPY_SRC}),this.staging=a.createBuffer({label:`frame`,size:o,usage:GPUBufferUsage.MAP_READ|GPUBufferUsage.COPY_DST}),this.width=n,this.height=r);let s=No(t,n,r),c=ec[i];if(c===void 0)throw Error(`the render pass has no mode ${i}`);a.queue.writeBuffer(this.view,0,oc(Zs,{cam_oi:s.int,mode:c,cam_of:s.frac,width:n,forward:s.forward,height:r,right:s.right,flags:0,up:s.up,steps_scale:Math.fround(1/Math.log2(513)),sun:tc}));let l=a.createBindGroup({layout:this.group1,entries:[{binding:0,resource:{buffer:this.view}},{binding:1,resource:{buffer:this.pixels}},{binding:2,resource:{buffer:this.gbuffer}}]}),u=await fc(a,this.compute,this.world.of(e),l,n,r),d=new Uint8ClampedArray(await pc(a,u,this.pixels,this.staging,o));return new ImageData(d,n,r)}},hc=class{device;world;pipeline;group1;frame;light;sums;staging;key=``;samples=0;constructor(e,t){this.device=e,this.world=t,{pipeline:this.pipeline,layout:this.group1}=dc(e,t,`pathtrace.wgsl`,qs,`path_trace`,[`uniform`,`uniform`,`storage`]);let n=t=>e.createBuffer({size:t,usage:GPUBufferUsage.UNIFORM|GPUBufferUsage.COPY_DST});this.frame=n(Qs.size),this.light=n($s.length*4),e.queue.writeBuffer(this.light,0,new Uint32Array($s))}async render(e,t,n,r){let i=this.device,a=n*r*16,o=JSON.stringify([t,n,r,e.generation]);o===this.key&&this.sums||(this.sums?.destroy(),this.staging?.destroy(),this.sums=i.createBuffer({label:`path sums`,size:a,usage:GPUBufferUsage.STORAGE|GPUBufferUsage.COPY_SRC}),this.staging=i.createBuffer({label:`path frame`,size:a,usage:GPUBufferUsage.MAP_READ|GPUBufferUsage.COPY_DST}),this.key=o,this.samples=0);let s=No(t,n,r);i.queue.writeBuffer(this.frame,0,oc(Qs,{cam_int:s.int,width:n,cam_frac:s.frac,height:r,forward:s.forward,seed:0,right:s.right,sample:this.samples,up:s.up,history:0}));let c=i.createBindGroup({layout:this.group1,entries:[{binding:0,resource:{buffer:this.frame}},{binding:1,resource:{buffer:this.light}},{binding:2,resource:{buffer:this.sums}}]}),l=await fc(i,this.pipeline,this.world.of(e),c,n,r);this.samples+=1;let u=new Float32Array(await pc(i,l,this.sums,this.staging,a)),d=new Uint8ClampedArray(n*r*4);for(let e=0;e<n*r;e++){let t=u[4*e+3]||1;for(let n=0;n<3;n++)d[4*e+n]=ic(rc(+Math.max(0,u[4*e+n]/t)));d[4*e+3]=255}return new ImageData(d,n,r)}},gc=class e{device;world;frames;paths;last;constructor(e,t){this.device=e,this.world=new uc(e),this.pass(t)}pass(t){return e.accumulates(t)?this.paths??=new hc(this.device,this.world):this.frames??=new mc(this.device,this.world)}static accumulates(e){return e===`pathtrace`}get samples(){return this.paths?.samples??0}async render(e,t,n,r,i){let a=this.pass(i);return this.last=a instanceof hc?await a.render(e,t,n,r):await a.render(e,t,n,r,i),this.last}};function _c(e,t,n,r){let i=Mo(e),a=r.map((t,n)=>t-e.pos[n]),o=(e,t)=>e[0]*t[0]+e[1]*t[1]+e[2]*t[2],s=o(a,i.forward);if(s<=.001)return;let c=Math.tan(e.fov_y*Math.PI/360),l=o(a,i.right)/(s*c*(t/n)),u=o(a,i.up)/(s*c);return[(l+1)/2*t,(1-u)/2*n]}function vc(e,t,n,r,i){let a=Mo(e),o=Math.tan(e.fov_y*Math.PI/360),s=(2*r/t-1)*o*(t/n),c=(1-2*i/n)*o;return[0,1,2].map(e=>a.forward[e]+s*a.right[e]+c*a.up[e])}function yc(e,t,n,r,i){let{width:a,height:o}=e.canvas,s=e=>[e&1?r[0]:n[0],e&2?r[1]:n[1],e&4?r[2]:n[2]];e.strokeStyle=i,e.lineWidth=2,e.beginPath();for(let n=0;n<8;n++)for(let r of[1,2,4]){if(n&r)continue;let i=_c(t,a,o,s(n)),c=_c(t,a,o,s(n|r));i&&c&&(e.moveTo(i[0],i[1]),e.lineTo(c[0],c[1]))}e.stroke()}function bc(e,t,n,r){let{width:i,height:a}=e.canvas;e.clearRect(0,0,i,a),n&&yc(e,t,n.min,n.max,n.refusal?`#f44`:`#ff0`);let o=[];e.font=`${Math.max(11,Math.round(a/40))}px system-ui, sans-serif`;for(let n of r){let r=n.name||n.user||`anonymous`;if(n.pointer.length===3){let r=n.pointer.map(Number);yc(e,t,r,[r[0]+1,r[1]+1,r[2]+1],`#0ff`)}if(n.position.length!==3)continue;let s=_c(t,i,a,n.position);!s||s[0]<0||s[1]<0||s[0]>i||s[1]>a||(e.fillStyle=`#0ff`,e.beginPath(),e.arc(s[0],s[1],5,0,2*Math.PI),e.fill(),e.fillStyle=`#fff`,e.fillText(r,s[0]+8,s[1]-8),o.push({name:r,x:s[0],y:s[1]}))}return o}var xc=30,Sc=0,Cc=1,wc=32767,Tc=class{chunks;blocks;voxels;size;dims;constructor(e){let t=t=>{let n=e.bytes(t);return new Uint32Array(n.buffer,n.byteOffset,Math.floor(n.length/4))};this.chunks=t(0),this.blocks=t(2),this.voxels=t(3),this.size=e.size,this.dims=[e.size[0]>>4,e.size[1]>>4,e.size[2]>>4]}inside(e,t,n){return e>=0&&t>=0&&n>=0&&e<this.size[0]&&t<this.size[1]&&n<this.size[2]}cell(e,t,n){let[r,i,a]=[e>>4,t>>4,n>>4],o=this.chunks[r+this.dims[0]*(i+this.dims[1]*a)],s=o>>>xc;if(s===Sc)return{material:0,edge:16};if(s===Cc)return{material:o&wc,edge:16};let c=this.blocks[(o&0x3fffffff)+((e>>2&3)+4*(t>>2&3)+16*(n>>2&3))],l=c>>>xc;if(l===Sc)return{material:0,edge:4};if(l===Cc)return{material:c&wc,edge:4};let u=(e&3)+4*(t&3)+16*(n&3),d=this.voxels[(c&0x3fffffff)+(u>>1)],f=u&1?d>>>16:d&65535;return{material:f&32768?f&wc:0,edge:1}}};function Ec(e,t,n,r=4096){let i=0,a=r;for(let r=0;r<3;r++){if(n[r]===0){if(t[r]<0||t[r]>=e.size[r])return;continue}let o=(0-t[r])/n[r],s=(e.size[r]-t[r])/n[r];i=Math.max(i,Math.min(o,s)),a=Math.min(a,Math.max(o,s))}if(i>a)return;let o=1e-7,s;for(;i<=a;){let r=t.map((e,t)=>e+n[t]*(i+o)).map(Math.floor);if(!e.inside(r[0],r[1],r[2]))return;let a=e.cell(r[0],r[1],r[2]);if(a.material!==0)return{voxel:r,before:s??r,material:a.material};s=r;let c=1/0;for(let e=0;e<3;e++){if(n[e]===0)continue;let i=Math.floor(r[e]/a.edge)*a.edge,o=n[e]>0?i+a.edge:i;c=Math.min(c,(o-t[e])/n[e])}s=t.map((e,t)=>e+n[t]*(c-o)).map(Math.floor),i=Math.max(c,i+o)}}function Dc(){try{new Headers}catch{throw Error(`connect-web requires the fetch API. Are you running on an old version of Node.js?`)}}function Oc(e,t){let n=ro(e);if(n)throw t.forEach((e,t)=>{n.metadata.append(t,e)}),n;if(!t.has(`Grpc-Status`)&&!e.has(`Grpc-Status`))throw new U(`protocol error: missing status`,H.Internal)}function kc(e,t,n,r){let i=new Headers(n??{});i.set(Ka,e?$a:eo),i.set(Qa,`1`);let a=i.get(`User-Agent`)??i.get(`X-User-Agent`)??`connect-es/2.3.0`;return i.set(Za,a),r&&i.set(Xa,a),t!==void 0&&i.set(qa,`${t}m`),i}function Ac(e){switch(e){case 400:return H.Internal;case 401:return H.Unauthenticated;case 403:return H.PermissionDenied;case 404:return H.Unimplemented;case 429:case 502:case 503:case 504:return H.Unavailable;default:return H.Unknown}}function jc(e,t){if(e>=200&&e<300)return{foundStatus:t.has(Ja),headerError:ro(t)};throw new U(decodeURIComponent(t.get(`Grpc-Message`)??`HTTP ${e}`),Ac(e),t)}var Mc=function(e){return this instanceof Mc?(this.v=e,this):new Mc(e)},Nc=function(e,t,n){if(!Symbol.asyncIterator)throw TypeError(`Symbol.asyncIterator is not defined.`);var r=n.apply(e,t||[]),i,a=[];return i=Object.create((typeof AsyncIterator==`function`?AsyncIterator:Object).prototype),s(`next`),s(`throw`),s(`return`,o),i[Symbol.asyncIterator]=function(){return this},i;function o(e){return function(t){return Promise.resolve(t).then(e,d)}}function s(e,t){r[e]&&(i[e]=function(t){return new Promise(function(n,r){a.push([e,t,n,r])>1||c(e,t)})},t&&(i[e]=t(i[e])))}function c(e,t){try{l(r[e](t))}catch(e){f(a[0][3],e)}}function l(e){e.value instanceof Mc?Promise.resolve(e.value.v).then(u,d):f(a[0][2],e)}function u(e){c(`next`,e)}function d(e){c(`throw`,e)}function f(e,t){e(t),a.shift(),a.length&&c(a[0][0],a[0][1])}},Pc={redirect:`error`};function Fc(e){Dc();let t=e.useBinaryFormat??!0;return{async unary(n,r,i,a,o,s){let{serialize:c,parse:l}=lo(n,t,e.jsonOptions,e.binaryOptions);return i=i===void 0?e.defaultTimeoutMs:i<=0?void 0:i,await po({interceptors:e.interceptors,signal:r,timeoutMs:i,req:{stream:!1,service:n.parent,method:n,requestMethod:`POST`,url:io(e.baseUrl,n),header:kc(t,i,a,!1),contextValues:s??Wa(),message:o},next:async t=>{let r=await(e.fetch??globalThis.fetch)(t.url,Object.assign(Object.assign({},Pc),{method:t.requestMethod,headers:t.header,signal:t.signal,body:Ta(0,c(t.message))})),{headerError:i}=jc(r.status,r.headers);if(!r.body)throw i===void 0?`missing response body`:i;let a=wa(r.body).getReader(),o,s;for(;;){let e=await a.read();if(e.done)break;let{flags:t,data:n}=e.value;if((t&1)==1)throw new U(`protocol error: received unsupported compressed output`,H.Internal);if(t===128){if(o!==void 0)throw`extra trailer`;o=Ga(n)}else{if(s!==void 0)throw new U(`extra message`,H.Unimplemented);s=l(n)}}if(o===void 0)throw i===void 0?new U(`missing trailer`,r.headers.has(`Grpc-Status`)?H.Unimplemented:H.Unknown):i;if(Oc(o,r.headers),s===void 0)throw new U(`missing message`,o.has(`Grpc-Status`)?H.Unimplemented:H.Unknown);return{stream:!1,service:n.parent,method:n,header:r.headers,message:s,trailer:o}}})},async stream(n,r,i,a,o,s){let{serialize:c,parse:l}=lo(n,t,e.jsonOptions,e.binaryOptions);function u(e,t,n,r,i){return Nc(this,arguments,function*(){let i=wa(e).getReader();if(t){if(!(yield Mc(i.read())).done)throw`extra data for trailers-only`;return yield Mc(void 0)}let a=!1;for(;;){let e=yield Mc(i.read());if(e.done)break;let{flags:t,data:o}=e.value;if((t&128)==128){if(a)throw`extra trailer`;a=!0;let e=Ga(o);Oc(e,r),e.forEach((e,t)=>n.set(t,e))}else{if(a)throw`extra message`;yield yield Mc(l(o))}}if(!a)throw`missing trailer`})}async function d(e){if(n.methodKind!=`server_streaming`)throw`The fetch API does not support streaming request bodies`;let t=await e[Symbol.asyncIterator]().next();if(t.done==1)throw`missing request message`;return Ta(0,c(t.value))}return i=i===void 0?e.defaultTimeoutMs:i<=0?void 0:i,mo({interceptors:e.interceptors,signal:r,timeoutMs:i,req:{stream:!0,service:n.parent,method:n,requestMethod:`POST`,url:io(e.baseUrl,n),header:kc(t,i,a,!1),contextValues:s??Wa(),message:o},next:async t=>{let n=await(e.fetch??globalThis.fetch)(t.url,Object.assign(Object.assign({},Pc),{method:t.requestMethod,headers:t.header,signal:t.signal,body:await d(t.message)})),{foundStatus:r,headerError:i}=jc(n.status,n.headers);if(i!=null)throw i;if(!n.body)throw`missing response body`;let a=new Headers;return Object.assign(Object.assign({},t),{header:n.headers,trailer:a,message:u(n.body,r,a,n.headers,t.signal)})}})}}}var Ic=`naadf.token`,Lc=100,Rc=5e3,zc=class e{events;cache;mirror=new Rs;client;bytesReceived=0;snapshotBytes=0;abort;stopped=!1;saving;constructor(e,t){this.events=e,this.cache=t,this.client=Fa(wo,Fc({baseUrl:location.origin,useBinaryFormat:!0}))}static token(){return sessionStorage.getItem(Ic)}setToken(e){sessionStorage.setItem(Ic,e),this.restart()}callOptions(){let t=e.token();return{headers:t?{authorization:`Bearer ${t}`}:{}}}async whoAmI(){return this.client.status({},this.callOptions())}async restore(){return!this.cache||!await this.cache.restore(this.mirror).catch(()=>!1)?!1:(this.events.restored(this.mirror),!0)}saveSoon(){this.cache&&!this.saving&&(this.saving=setTimeout(()=>{this.saving=void 0,this.cache?.save(this.mirror).catch(e=>console.warn(`the page cache: ${e}`))},1e3))}async run(){let e=Lc,t=!0;for(;!this.stopped;){this.events.state(t?`connecting`:`reconnecting`),t=!1,this.abort=new AbortController;try{await this.follow(this.abort.signal)&&(e=Lc)}catch(e){if(e instanceof J){if(console.warn(e.message),e.fatal){this.events.state(`error`,e.message);return}}else{let t=U.from(e);if(t.code===H.Unauthenticated||t.code===H.PermissionDenied){this.events.state(`need-token`,t.rawMessage);return}if(t.code===H.FailedPrecondition){this.events.state(`error`,t.rawMessage);return}if(t.code===H.Canceled&&this.stopped)return;t.code!==H.Canceled&&console.warn(`the world stream ended: ${t.message}`)}}if(this.stopped)return;this.events.state(`reconnecting`);let n=e*(1+Math.random()/4);e=Math.min(Rc,e*2),await new Promise(e=>setTimeout(e,n))}}restart(){this.abort?.abort()}async follow(e){let t=this.mirror,n=P(_o,{protocolVersion:1,cached:t.cached(),resume:t.holdsWorld?{version:t.version,digest:t.digest}:void 0,deltaForm:Co.PATCH,presence:!0}),r=!1;this.events.joined();for await(let i of this.client.join(n,{...this.callOptions(),signal:e})){r=!0;let e=Hc(i);this.bytesReceived+=e;let n=i.kind;switch(n.case===`header`&&(this.snapshotBytes=0),(n.case===`header`||n.case===`page`)&&(this.snapshotBytes+=e),n.case){case`header`:this.events.state(`syncing`),t.header(n.value)||this.live(n.value.resume);break;case`page`:t.page(n.value)&&this.live(!1);break;case`delta`:{let{touched:e,resized:r}=t.delta(n.value);this.events.patched(t,e,r),this.saveSoon();break}case`presence`:this.events.presence(n.value.entries)}}return r}live(e){e||this.events.snapshot(this.mirror),this.saveSoon(),this.events.state(`live`)}},Bc=e=>e<128?1:e<16384?2:e<2097152?3:e<268435456?4:5,Vc=e=>1+Bc(e)+e;function Hc(e){if(e.kind.case!==`page`)return Er(vo,e).length;let t=e.kind.value,n=t.indices.reduce((e,t)=>e+Bc(t),0);return Vc((t.buffer?1+Bc(t.buffer):0)+(t.indices.length?Vc(n):0)+(t.zstd.length?Vc(t.zstd.length):0))}var Uc=[`voxel`,`erase`,`box`,`sphere`,`paint`,`flood`],Wc=65536,Gc=(e,t)=>[e[0]+t,e[1]+t,e[2]+t],Kc=e=>[e[0]+.5,e[1]+.5,e[2]+.5];function qc(e,t){return{min:e.map(e=>Math.floor(e-t-.5)+1),max:e.map(e=>Math.ceil(e+t-.5))}}function Jc(e,t){return{min:e.map((e,n)=>Math.min(e,t[n])),max:e.map((e,n)=>Math.max(e,t[n])+1)}}function Yc(e,t,n){let r=e.cell(t[0],t[1],t[2]).material;if(r===n)return{min:t,max:Gc(t,1),refusal:`already that material`};let i=new Set,a=t=>t[0]+e.size[0]*(t[1]+e.size[1]*t[2]),o=[t];i.add(a(t));let s=[...t],c=Gc(t,1);for(;o.length;){let t=o.pop();for(let e=0;e<3;e++)s[e]=Math.min(s[e],t[e]),c[e]=Math.max(c[e],t[e]+1);for(let[n,l,u]of[[1,0,0],[-1,0,0],[0,1,0],[0,-1,0],[0,0,1],[0,0,-1]]){let d=[t[0]+n,t[1]+l,t[2]+u];if(e.inside(d[0],d[1],d[2])&&!i.has(a(d))&&e.cell(d[0],d[1],d[2]).material===r){if(i.size>=65536)return{min:s,max:c,refusal:`more than ${Wc} voxels`};i.add(a(d)),o.push(d)}}}return{min:s,max:c}}function Xc(e,t,n){switch(e.tool){case`voxel`:return{min:n.before,max:Gc(n.before,1)};case`erase`:return{min:n.voxel,max:Gc(n.voxel,1)};case`box`:return Jc(e.anchor??n.before,n.before);case`sphere`:return qc(Kc(n.before),e.radius);case`paint`:return qc(Kc(n.voxel),e.radius);case`flood`:return Yc(t,n.voxel,e.material)}}function Zc(e,t){let n=e.material;switch(e.tool){case`voxel`:return JSON.stringify({op:`set`,voxels:[[...t.before,n]]});case`erase`:return JSON.stringify({op:`set`,voxels:[[...t.voxel,0]]});case`box`:{if(!e.anchor){e.anchor=t.before;return}let r=Jc(e.anchor,t.before);return e.anchor=void 0,JSON.stringify({op:`box`,min:r.min,max:r.max,material:n})}case`sphere`:return JSON.stringify({op:`sphere`,center:Kc(t.before),radius:e.radius,material:n});case`paint`:return JSON.stringify({op:`paint`,center:Kc(t.voxel),radius:e.radius,material:n});case`flood`:return JSON.stringify({op:`flood_paint`,start:t.voxel,material:n,limit:Wc})}}function Qc(e){let t=e>>10&31,n=e&1023,r=e&32768?-1:1;return t===0?r*n*2**-24:t===31?n?NaN:r*(1/0):r*(1+n/1024)*2**(t-15)}function $c(e){let t=e.bytes(4),n=new Uint32Array(t.buffer,t.byteOffset,Math.floor(t.length/4)),r=[];for(let e=1;4*e+3<n.length;e++){let t=n[4*e+1],i=n[4*e+2],[a,o,s]=[Qc(t&65535),Qc(t>>>16),Qc(i&65535)];r.push({id:e,colour:`rgb(${ic(a)},${ic(o)},${ic(s)})`})}return r}var el=[`albedo`,`material`,`normal`,`steps`,`gi`,`pathtrace`],tl=4096,nl=8192;function rl(e){let t=new URLSearchParams(e),n={camera:void 0,mode:void 0,size:void 0,spp:tl,problems:[]},r=t.get(`camera`);if(r!==null)try{n.camera=Do(r)}catch(e){n.problems.push(`camera: ${e.message}; using the default view`)}let i=t.get(`mode`);i!==null&&(el.includes(i)?n.mode=i:n.problems.push(`mode: '${i}' is not one of ${el.join(`, `)}; using the default`));let a=t.get(`size`);if(a!==null){let e=/^(\d{1,5})x(\d{1,5})$/.exec(a),[t,r]=e?[Number(e[1]),Number(e[2])]:[0,0];t>=1&&r>=1&&t<=nl&&r<=nl?n.size=[t,r]:n.problems.push(`size: '${a}' is not WxH with edges 1..=${nl}; using the canvas size`)}let o=t.get(`spp`);if(o!==null){let e=Number(o);Number.isInteger(e)&&e>=1&&e<=tl?n.spp=e:n.problems.push(`spp: '${o}' is not a whole number in 1..=${tl}; using ${tl}`)}return n}function il(e,t,n){let r=new URLSearchParams;r.set(`camera`,Oo(e)),r.set(`mode`,t),n&&r.set(`size`,`${n[0]}x${n[1]}`),history.replaceState(null,``,`${location.pathname}?${r.toString().replace(/\+/g,`%20`)}`)}function al(e){return e in ec||e===`pathtrace`?e:`pathtrace`}var Y=e=>document.getElementById(e),X=Y(`view`),ol=Y(`overlay`),sl=Y(`hud`),cl=Y(`notice`),ll=rl(location.search),Z={state:`connecting`,version:0,growthSeq:0,quiescent:!1,digest:``,users:[],mode:ll.mode??`albedo`,frameMs:0,message:ll.problems.join(`
-`),role:``,joins:0,snapshots:0,bytesReceived:0,snapshotBytes:0,markers:[],rateLimited:0,timings:{},shownVersion:-1,samples:0,pointer:null,name:``,voxel:()=>0,capture:()=>Promise.reject(Error(`no frame yet`)),redraw:()=>{},edit:()=>Promise.reject(Error(`not joined`)),undo:()=>Promise.reject(Error(`not joined`)),redo:()=>Promise.reject(Error(`not joined`))};window.naadf=Z;function Q(e){cl.textContent=e,cl.hidden=e===``}Q(Z.message);var $=ll.camera,ul=0;function dl(){if(ll.size)return ll.size;let e=window.devicePixelRatio||1;return[Math.max(1,Math.round(X.clientWidth*e)),Math.max(1,Math.round(X.clientHeight*e))]}function fl(){sl.textContent=[`${Z.state}${Z.role?` · ${Z.role}`:``}`,`version ${Z.version}${Z.growthSeq?`.${Z.growthSeq}`:``}${Z.quiescent?``:` (settling)`}`,`digest ${Z.digest.slice(0,8)}`,`${Z.users.length} online${Z.users.length?`: ${Z.users.join(`, `)}`:``}`,`rtt ${ul.toFixed(0)} ms · frame ${Z.frameMs.toFixed(1)} ms · ${Z.mode}${Z.mode===al(Z.mode)?``:` (drawn as ${al(Z.mode)})`}`].join(`
-`)}function pl(e){let[t,n]=[X.width,X.height];if(!e||document.pointerLockElement===X)return[t/2,n/2];let r=X.getBoundingClientRect(),i=Math.min(r.width/t,r.height/n),[a,o]=[(r.width-t*i)/2,(r.height-n*i)/2];return[(e.clientX-r.left-a)/i,(e.clientY-r.top-o)/i]}async function ml(){await ss();let e,t;try{({device:e,fallback:t}=await sc())}catch(e){if(e instanceof ac){Z.state=`no-webgpu`,Z.message=`${e.message}. Open this page in a browser with WebGPU (https://, or http://localhost), or use the native viewer: naadf view --server <address>`,Q(Z.message),fl();return}throw e}Z.timings.device=performance.now(),ll.mode||(Z.mode=t?`albedo`:`gi`);let n=X.getContext(`2d`),r=ol.getContext(`2d`),i=new cc(e),a=new gc(e,al(Z.mode)),o,s=[],c=!0,l=!1,u,d={tool:`voxel`,material:1,radius:4,anchor:void 0},f,p,m,h=BigInt(Math.floor(Math.random()*2**52)),g=e=>{i.uploadAll(e),$??=Po(e.size),O(),v(e)},_=new zc({state(e,t){Z.state=e,Z.bytesReceived=_.bytesReceived,Z.snapshotBytes=_.snapshotBytes,e===`live`&&(Z.timings.live??=performance.now()),t!==void 0&&(Z.message=t,Q(e===`need-token`?`${t}: enter a token`:t),e===`need-token`&&x(t)),fl()},joined(){Z.joins+=1},snapshot(e){Z.snapshots+=1,g(e)},restored:g,patched(e,t,n){i.update(e,t,n),t.some(e=>e.id===4)&&O(),v(e)},presence(e){Z.users=e.map(e=>e.name||e.user||`anonymous`).sort(),s=e.filter(e=>e.session!==h),l=!0,fl()}},await Ks.open());function v(e){o=new Tc(e),Z.version=Number(e.version),Z.growthSeq=e.growthSeq,Z.quiescent=e.quiescent,Z.digest=ls(e.digest),Z.bytesReceived=_.bytesReceived,Z.snapshotBytes=_.snapshotBytes,c=!0,fl()}let y=BigInt(Date.now())*1000n,b=async e=>{let t=y+=1n;for(let n=0;;n++){let r=performance.now();try{let i=await e(t);return ul=performance.now()-r,n>0&&Q(``),fl(),Number(i.version)}catch(e){let t=U.from(e);if(t.code===H.ResourceExhausted&&n<8){Z.rateLimited+=1,Q(`rate-limited: ${t.rawMessage}; retrying`),await new Promise(e=>setTimeout(e,250*2**n));continue}throw Z.message=t.rawMessage,Q(`refused: ${t.rawMessage}`),t}}};Z.edit=e=>b(t=>_.client.edit(P(xo,{ops:e,clientSeq:t}),_.callOptions())),Z.undo=()=>b(e=>_.client.undo(P(So,{clientSeq:e}),_.callOptions())),Z.redo=()=>b(e=>_.client.redo(P(So,{clientSeq:e}),_.callOptions())),Z.redraw=()=>{c=!0},Z.capture=async()=>{let e=a.last;if(!e)throw Error(`no frame yet`);let t=document.createElement(`canvas`);return t.width=e.width,t.height=e.height,t.getContext(`2d`).putImageData(e,0,0),t.toDataURL(`image/png`)};function x(e){let t=Y(`token`);t.hidden=!1,Y(`token-why`).textContent=e,t.onsubmit=e=>{e.preventDefault(),t.hidden=!0,_.setToken(Y(`token-value`).value),_.run(),S()}}async function S(){try{let e=await _.whoAmI();Z.role=e.role;let t=e.role===`viewer`;Y(`tools`).classList.toggle(`disabled`,t),t&&Q(`viewer token: editing is disabled (ask for an editor token to edit)`),fl()}catch{}}let C=sessionStorage.getItem(`naadf.name`)??`guest-${Math.floor(Math.random()*1e4)}`;sessionStorage.setItem(`naadf.name`,C),Z.name=C,Z.voxel=(e,t,n)=>o?.inside(e,t,n)?o.cell(e,t,n).material:0;let w=``,T=0;setInterval(()=>{if(Z.state!==`live`||!$)return;let e={session:h,name:C,position:[...$.pos],forward:Mo($).forward,pointer:f?f.voxel.map(BigInt):[],tool:d.tool},t=JSON.stringify(e,(e,t)=>typeof t==`bigint`?String(t):t),n=performance.now();t===w&&n-T<1e3||(w=t,T=n,_.client.publish(P(yo,e),_.callOptions()).catch(()=>{}))},100);let E=Y(`tool`);for(let e of Uc)E.add(new Option(e,e));E.onchange=()=>{d.tool=E.value,d.anchor=void 0,l=!0};let D=Y(`radius`);D.onchange=()=>{d.radius=Math.max(0,Number(D.value)||0),l=!0};function O(){Y(`palette`).replaceChildren(...$c(_.mirror).map(e=>{let t=document.createElement(`button`);return t.className=e.id===d.material?`swatch chosen`:`swatch`,t.style.background=e.colour,t.title=`material ${e.id}`,t.onclick=()=>{d.material=e.id,O()},t}))}function k(e){if(!o||X.width===0)return;let[t,n]=pl(m);f=Ec(o,[...e.pos],vc(e,X.width,X.height,t,n)),p=f&&Z.role!==`viewer`?Xc(d,o,f):void 0,Z.pointer=f?{voxel:f.voxel,before:f.before}:null}X.addEventListener(`mousemove`,e=>{m=e,l=!0}),X.addEventListener(`contextmenu`,e=>e.preventDefault()),X.addEventListener(`mousedown`,e=>{if(e.button===2&&document.pointerLockElement!==X){X.requestPointerLock?.();return}if(e.button!==0||Z.role===`viewer`||!u)return;if(m=e,k(u),!f||p?.refusal){p?.refusal&&Q(`${d.tool}: ${p.refusal}`);return}let t=Zc(d,f);l=!0,t&&Z.edit(t).then(()=>Q(``),()=>{})});let A=new Set,j=32;addEventListener(`keydown`,e=>{(e.ctrlKey||e.metaKey)&&e.code===`KeyZ`?(e.preventDefault(),(e.shiftKey?Z.redo():Z.undo()).catch(()=>{})):e.target instanceof HTMLInputElement||A.add(e.code)}),addEventListener(`keyup`,e=>A.delete(e.code)),addEventListener(`mousemove`,e=>{document.pointerLockElement===X&&$&&($.yaw+=e.movementX*.15,$.pitch=Math.max(-89.9,Math.min(89.9,$.pitch-e.movementY*.15)),c=!0)}),X.addEventListener(`wheel`,e=>{j=Math.max(1,Math.min(4096,j*(e.deltaY<0?1.25:.8))),e.preventDefault()});let M=[],ee=performance.now(),N=0,te=!1;function ne(e){let t=Math.min(.1,(e-ee)/1e3);if(ee=e,$&&A.size>0){let e=Mo($),n=(e,n)=>e.forEach((e,r)=>$.pos[r]+=e*n*j*t);A.has(`KeyW`)&&n(e.forward,1),A.has(`KeyS`)&&n(e.forward,-1),A.has(`KeyD`)&&n(e.right,1),A.has(`KeyA`)&&n(e.right,-1),A.has(`Space`)&&n([0,1,0],1),A.has(`ShiftLeft`)&&n([0,1,0],-1),c=!0}if(i.buffer&&$&&c&&!te){c=!1,te=!0;let[t,r]=dl(),o=performance.now(),s=Z.version,d={...$,pos:[...$.pos]};a.render(i,d,t,r,al(Z.mode)).then(e=>{for(let e of[X,ol])(e.width!==t||e.height!==r)&&([e.width,e.height]=[t,r]);n.putImageData(e,0,0),u=d,l=!0,M.push(performance.now()-o),M.length>30&&M.shift(),Z.frameMs=M.reduce((e,t)=>e+t,0)/M.length,Z.shownVersion=s,Z.timings.firstFrame??=performance.now(),gc.accumulates(al(Z.mode))&&a.samples<ll.spp&&(c=!0),Z.samples=a.samples,fl()}).catch(e=>console.error(`frame: ${e}`)).finally(()=>te=!1),e-N>500&&(N=e,il($,Z.mode,ll.size))}l&&u&&(l=!1,k(u),Z.markers=bc(r,u,p,s)),requestAnimationFrame(ne)}requestAnimationFrame(ne);let re=Y(`mode`);for(let e of el)re.add(new Option(e,e,!1,e===Z.mode));re.onchange=()=>{Z.mode=re.value,c=!0},Y(`undo`).onclick=()=>Z.undo().catch(()=>{}),Y(`redo`).onclick=()=>Z.redo().catch(()=>{}),Y(`shot`).onclick=async()=>{let e=document.createElement(`a`);e.href=await Z.capture(),e.download=`naadf-${Z.version}.png`,e.click()},addEventListener(`resize`,()=>c=!0),S(),await _.restore()&&(Z.timings.restored=performance.now()),await _.run()}ml().catch(e=>{Z.state=`error`,Z.message=String(e instanceof Error?e.message:e),Q(Z.message),fl()});
+`,Ys=[{name:`chunks`,id:0},{name:`chunk_entities`,id:1},{name:`blocks`,id:2},{name:`voxels`,id:3},{name:`materials`,id:4},{name:`entity_types`,id:6},{name:`entity_instances`,id:7}],Xs={size:32,fields:{size:{offset:0,type:`vec3<u32>`},has_entities:{offset:12,type:`u32`},chunks:{offset:16,type:`vec3<u32>`},max_steps:{offset:28,type:`u32`}}},Zs={size:96,fields:{cam_oi:{offset:0,type:`vec3<i32>`},mode:{offset:12,type:`u32`},cam_of:{offset:16,type:`vec3<f32>`},width:{offset:28,type:`u32`},forward:{offset:32,type:`vec3<f32>`},height:{offset:44,type:`u32`},right:{offset:48,type:`vec3<f32>`},flags:{offset:60,type:`u32`},up:{offset:64,type:`vec3<f32>`},steps_scale:{offset:76,type:`f32`},sun:{offset:80,type:`vec3<f32>`},_pad:{offset:92,type:`u32`}}},Qs={size:80,fields:{cam_int:{offset:0,type:`vec3<i32>`},width:{offset:12,type:`u32`},cam_frac:{offset:16,type:`vec3<f32>`},height:{offset:28,type:`u32`},forward:{offset:32,type:`vec3<f32>`},seed:{offset:44,type:`u32`},right:{offset:48,type:`vec3<f32>`},sample:{offset:60,type:`u32`},up:{offset:64,type:`vec3<f32>`},history:{offset:76,type:`u32`}}},$s={size:96,fields:{frame:{offset:0,type:`u32`},taa_slot:{offset:4,type:`u32`},taa_valid:{offset:8,type:`u32`},edit_frame:{offset:12,type:`u32`},change_frame:{offset:16,type:`u32`},jitter_x:{offset:20,type:`f32`},jitter_y:{offset:24,type:`f32`},regions_x:{offset:28,type:`u32`},regions_y:{offset:32,type:`u32`},ring_capacity:{offset:36,type:`u32`},denoise:{offset:40,type:`u32`},off_own:{offset:44,type:`u32`},off_lut:{offset:48,type:`u32`},off_gbuf:{offset:52,type:`u32`},off_gmat:{offset:56,type:`u32`},off_emitted:{offset:60,type:`u32`},off_taa_info:{offset:64,type:`u32`},off_illum:{offset:68,type:`u32`},off_illum2:{offset:72,type:`u32`},off_result:{offset:76,type:`u32`},off_refined:{offset:80,type:`u32`},off_region_info:{offset:84,type:`u32`},off_ring:{offset:88,type:`u32`},off_queue_list:{offset:92,type:`u32`}}},ec=[0x40400000,0x40400000,0x40400000,1,0xbf400000,0x3f000000,0x3eddb3d7,1,0x4727fa5d,0x40400046,926566462,8],tc=[0x40400000,0x40400000,0x40400000,1,0xbf400000,0x3f000000,0x3eddb3d7,1,0x4727fa5d,0x40400046,926566462,3],nc={albedo:0,material:1,normal:2,steps:3},rc=[-.75,.5,.4330127],ic=65536,ac=[`gi_atmosphere`,`gi_first_hit`,`gi_poses_clear`,`gi_poses`,`gi_taa`,`gi_queue`,`gi_queue_scan`,`gi_trace`,`gi_project`,`gi_project_store`,`gi_refine`,`gi_resample`,`gi_denoise_x`,`gi_denoise_y`,`gi_merge`],Y={TAA_SLOTS:32,CONTROL_WORDS:144,CAMERA_HISTORY:128,LUT_SIZE:256,BUCKET_SLOTS:32,MAX_KEPT:7,QUEUE_PERIOD:2,RING_VEC4:3,EDIT_HISTORY_FRAMES:8,CONTROL_TRACE_ARGS:0,CONTROL_PROJECT_ARGS:4,CAM_WORDS:5,CONTROL_QUEUED:8,CONTROL_START:9,CONTROL_VALID:10,CONTROL_HEAD:11,CONTROL_FRAMES:16,TAA_PIXEL_BYTES:256,RING_PER_PIXEL:2,POSE_TABLE_WORDS:2097024,CHANGE_REACH:2,MAX_LOCAL_CHANGES:4096,ARGS_BYTES:32,NO_ENTITY:16383};function oc(e,t){let n=new ArrayBuffer(e.size),r=new DataView(n);for(let[n,i]of Object.entries(t)){let t=e.fields[n];if(!t)throw Error(`no field ${n}`);(Array.isArray(i)?i:[i]).forEach((e,n)=>{let i=t.offset+4*n;t.type.includes(`f32`)?r.setFloat32(i,e,!0):t.type.includes(`i32`)?r.setInt32(i,e,!0):r.setUint32(i,e,!0)})}return n}var sc=(e,t)=>({binding:e,visibility:GPUShaderStage.COMPUTE,buffer:{type:t}}),cc=class{device;layout;group;layoutGeneration=-1;constructor(e){this.device=e,this.layout=e.createBindGroupLayout({entries:[sc(0,`uniform`),sc(1,`uniform`),sc(2,`read-only-storage`)]})}of(e){return this.group&&this.layoutGeneration===e.layoutGeneration||(this.group=this.device.createBindGroup({layout:this.layout,entries:[{binding:0,resource:{buffer:e.info}},{binding:1,resource:{buffer:e.offsets}},{binding:2,resource:{buffer:e.buffer}}]}),this.layoutGeneration=e.layoutGeneration),this.group}};function lc(e,t,n,r,i,a){let o=e.createBindGroupLayout({entries:a.map((e,t)=>sc(t,e))});return{pipeline:e.createComputePipelineAsync({layout:e.createPipelineLayout({bindGroupLayouts:[t.layout,o]}),compute:{module:e.createShaderModule({label:n,code:r}),entryPoint:i}}),layout:o}}async function uc(e,t,n,r,i,a){let o=e.createCommandEncoder(),s=o.beginComputePass();return s.setPipeline(await t),s.setBindGroup(0,n),s.setBindGroup(1,r),s.dispatchWorkgroups(Math.ceil(i/8),Math.ceil(a/8)),s.end(),o}async function dc(e,t,n,r,i,a){t.copyBufferToBuffer(n,r,i,0,a),e.queue.submit([t.finish()]),await i.mapAsync(GPUMapMode.READ);let o=i.getMappedRange().slice(0);return i.unmap(),o}var fc=e=>Math.min(1,Math.max(0,e*(2.51*e+.03)/(e*(2.43*e+.59)+.14))),pc=e=>Math.min(255,Math.max(0,Math.floor((e<=.0031308?12.92*e:1.055*e**(1/2.4)-.055)*255+.5)));function mc(e,t,n,r,i){let a=new Uint8ClampedArray(t*n*4);for(let o=0;o<t*n;o++){let t=i&&e[4*o+3]||1;for(let n=0;n<3;n++)a[4*o+n]=pc(fc(Math.max(0,e[4*o+n]/t)*r));a[4*o+3]=255}return new ImageData(a,t,n)}var hc=30,gc=2,_c=32767,vc=0x3fffffff,yc=64,bc=32,xc=5;function Sc(e){let t=t=>{let n=e.bytes(t);return new Uint32Array(n.buffer,n.byteOffset,n.length>>2)};return{chunks:t(0),entities:t(1),blocks:t(2),voxels:t(3),records:t(7)}}var Cc=class{h1=0xdeadbeef;h2=0x41c6ce57;word(e){this.h1=Math.imul(this.h1^e,0x9e3779b1),this.h2=Math.imul(this.h2^e,0x5f356495)}words(e){for(let t=0;t<e.length;t++)this.word(e[t])}digest(){let e=Math.imul(this.h1^this.h1>>>16,0x85ebca6b);e^=Math.imul(this.h2^this.h2>>>13,0xc2b2ae35);let t=Math.imul(this.h2^this.h2>>>16,0x85ebca6b);return t^=Math.imul(e^e>>>13,0xc2b2ae35),4294967296*(2097151&t)+(e>>>0)}},wc=e=>e>>>hc==1?e&_c:0;function Tc(e,t){let n=new Cc,r=e.chunks[t];if(r>>>hc===gc){let t=r&vc;for(let r=t;r<t+yc;r++){let t=e.blocks[r];if(t>>>hc===gc){let r=t&vc;n.word(1),n.words(e.voxels.subarray(r,r+bc))}else n.word(0),n.word(wc(t))}}else n.word(2),n.word(wc(r));let i=e.entities[t]??0,a=(i>>>8)*xc;return n.words(e.records.subarray(a,a+(i&255)*xc)),n.digest()}function Ec(e,t){let n=e.filter(e=>e.id===t).map(e=>[e.lo>>2,e.hi+3>>2]).sort((e,t)=>e[0]-t[0]),r=[];for(let e of n){let t=r[r.length-1];t&&e[0]<=t[1]?t[1]=Math.max(t[1],e[1]):r.push(e)}return r}function Dc(e,t,n){if(n===0||e.length===0)return!1;let r=0,i=e.length;for(;r<i;){let n=r+i>>1;e[n][1]<=t?r=n+1:i=n}return r<e.length&&e[r][0]<t+n}var Oc=class e{prints;constructor(e){let t=Sc(e);this.prints=new Float64Array(t.chunks.length);for(let e=0;e<t.chunks.length;e++)this.prints[e]=Tc(t,e)}update(t,n){let r=Sc(t),i=e=>Ec(n,e);if(r.chunks.length!==this.prints.length||n.some(e=>e.id===4||e.id===6))return this.prints=new e(t).prints,`everything`;let[a,o,s,c,l]=[0,1,2,3,7].map(i);if([a,o,s,c,l].every(e=>e.length===0))return[];let u=e=>{if(Dc(a,e,1)||Dc(o,e,1))return!0;let t=r.entities[e]??0;if(Dc(l,(t>>>8)*xc,(t&255)*xc))return!0;let n=r.chunks[e];if(n>>>hc!==gc)return!1;let i=n&vc;if(Dc(s,i,yc))return!0;if(c.length===0)return!1;for(let e=i;e<i+yc;e++){let t=r.blocks[e];if(t>>>hc===gc&&Dc(c,t&vc,bc))return!0}return!1},d=[];for(let e=0;e<r.chunks.length;e++){if(!u(e))continue;let t=Tc(r,e);t!==this.prints[e]&&(this.prints[e]=t,d.push(e))}return d}},kc=`// Generated by naadf-client (shaders.rs): the world parameters, the constants shared with the
+// Rust code, the world's storage bindings.
+struct WorldInfo {
+    // World size in voxels.
+    size: vec3<u32>,
+    // 1 when some chunk lists entities.
+    has_entities: u32,
+    // World size in chunks.
+    chunks: vec3<u32>,
+    // Cells a ray may visit before it counts as a miss.
+    max_steps: u32,
+}
+@group(0) @binding(0) var<uniform> world_info: WorldInfo;
+struct FrameInfo {
+    // Camera position, integer part (floor).
+    cam_int: vec3<i32>,
+    // Image width in pixels.
+    width: u32,
+    // Camera position, fractional part in [0, 1).
+    cam_frac: vec3<f32>,
+    // Image height in pixels.
+    height: u32,
+    // View direction.
+    forward: vec3<f32>,
+    // The run's seed.
+    seed: u32,
+    // Image right, scaled by a·W/H.
+    right: vec3<f32>,
+    // Number of the sample this dispatch adds.
+    sample: u32,
+    // Image up, scaled by a.
+    up: vec3<f32>,
+    // 1 when a temporal pass has a history to blend with (0 for the path tracer).
+    history: u32,
+}
+struct LightInfo {
+    // Uniform sky: its radiance. Physical sky: the irradiance of the sun lighting it.
+    sky: vec3<f32>,
+    // 1 for the physical sky.
+    sky_physical: u32,
+    // Unit vector toward the sun (the sun lighting the physical sky when it is off).
+    sun_dir: vec3<f32>,
+    // 1 when the sun shines (its disc and its samples).
+    sun_on: u32,
+    // The disc's radiance.
+    sun_disc: f32,
+    // The weight of one disc sample: radiance times solid angle.
+    sun_weight: f32,
+    // 1 − cos of the disc's angular radius.
+    sun_omc: f32,
+    // Scattered rays after the camera ray.
+    bounces: u32,
+}
+struct GiInfo {
+    // Frames rendered in this history before this one.
+    frame: u32,
+    // The long-term TAA slot this frame writes (\`frame % TAA_SLOTS\`).
+    taa_slot: u32,
+    // Earlier frames the TAA may read (at most \`TAA_SLOTS − 1\`).
+    taa_valid: u32,
+    // The first frame rendered after the newest change of the materials, or of more
+    // chunks than are marked one by one (0: none): the near-change rule everywhere.
+    edit_frame: u32,
+    // The first frame rendered after the newest change of any chunk, entity moves
+    // included (0: none): the still path keeps no sample from before it.
+    change_frame: u32,
+    // This frame's jitter in the pixel, x (a point of a 32-point (0, 5, 2)-net).
+    jitter_x: f32,
+    // This frame's jitter in the pixel, y.
+    jitter_y: f32,
+    // 8×8 regions across.
+    regions_x: u32,
+    // 8×8 regions down.
+    regions_y: u32,
+    // Samples the sample ring holds.
+    ring_capacity: u32,
+    // 1 when the bilateral denoiser runs.
+    denoise: u32,
+    // Where each pixel's own secondary sample starts in \`mem\` (tagged with the
+    // frame that traced it).
+    off_own: u32,
+    // Where the atmosphere table starts in \`mem\` (vec4 words; the cameras start at 0).
+    off_lut: u32,
+    // Where the first-hit surfaces start in \`mem\`.
+    off_gbuf: u32,
+    // Where the first-hit materials start in \`mem\`.
+    off_gmat: u32,
+    // Where the first-hit light starts in \`mem\`.
+    off_emitted: u32,
+    // Where the TAA's per-pixel sums and ranges start in \`mem\`.
+    off_taa_info: u32,
+    // Where the incoming light starts in \`mem\`.
+    off_illum: u32,
+    // Where the denoiser's intermediate starts in \`mem\`.
+    off_illum2: u32,
+    // Where the results start in \`mem\`.
+    off_result: u32,
+    // Where the refined samples start in \`mem\`.
+    off_refined: u32,
+    // Where the regions' statistics start in \`mem\`.
+    off_region_info: u32,
+    // Where the sample ring starts in \`mem\`.
+    off_ring: u32,
+    // Where the queued pixels start in \`words\`.
+    off_queue_list: u32,
+}
+const STATE_SHIFT: u32 = 30u;
+const STATE_EMPTY: u32 = 0u;
+const STATE_FULL: u32 = 1u;
+const STATE_MIXED: u32 = 2u;
+const PAYLOAD: u32 = 1073741823u;
+const MAX_MATERIAL: u32 = 32767u;
+const VOXEL_SOLID: u32 = 32768u;
+const CHUNK_FIELD_BITS: u32 = 5u;
+const CELL_FIELD_BITS: u32 = 2u;
+const KIND_DIFFUSE: u32 = 0u;
+const KIND_EMISSIVE: u32 = 1u;
+const KIND_METAL: u32 = 2u;
+const KIND_MIRROR: u32 = 3u;
+const ENTITY_SOLID: u32 = 2147483648u;
+const TYPE_ALIGN: u32 = 64u;
+const RECORD_WORDS: u32 = 5u;
+const NO_ENTITY: u32 = 16383u;
+const SURFACE_OFFSET: f32 = 0.01f;
+const MIN_ALPHA: f32 = 0.001f;
+const PI: f32 = 3.1415927f;
+const PLANET_RADIUS: f32 = 6360000.0f;
+const ATMOSPHERE_HEIGHT: f32 = 60000.0f;
+const EYE_HEIGHT: f32 = 100.0f;
+const VIEW_STEPS: u32 = 24u;
+const LIGHT_STEPS: u32 = 6u;
+const RAYLEIGH: vec3<f32> = vec3<f32>(5.802e-6f, 1.3558e-5f, 3.31e-5f);
+const RAYLEIGH_SCALE: f32 = 8000.0f;
+const MIE_SCATTER: f32 = 3.996e-6f;
+const MIE_EXTINCTION: f32 = 4.44e-6f;
+const MIE_SCALE: f32 = 1200.0f;
+const MIE_G: f32 = 0.8f;
+const OZONE: vec3<f32> = vec3<f32>(6.5e-7f, 1.881e-6f, 8.5e-8f);
+const OZONE_CENTRE: f32 = 25000.0f;
+const OZONE_HALF_WIDTH: f32 = 15000.0f;
+// The first word of each buffer in \`world\`.
+struct WorldOffsets {
+    chunks: u32,
+    chunk_entities: u32,
+    blocks: u32,
+    voxels: u32,
+    materials: u32,
+    entity_types: u32,
+    entity_instances: u32,
+    structure: u32,
+}
+@group(0) @binding(1) var<uniform> world_offsets: WorldOffsets;
+@group(0) @binding(2) var<storage, read> world: array<u32>;
+fn chunk_word(i: u32) -> u32 { return world[world_offsets.chunks + i]; }
+fn chunk_entity_word(i: u32) -> u32 { return world[world_offsets.chunk_entities + i]; }
+fn block_word(i: u32) -> u32 { return world[world_offsets.blocks + i]; }
+fn voxel_word(i: u32) -> u32 { return world[world_offsets.voxels + i]; }
+fn material_word(i: u32) -> u32 { return world[world_offsets.materials + i]; }
+fn entity_type_word(i: u32) -> u32 { return world[world_offsets.entity_types + i]; }
+fn instance_word(i: u32) -> u32 { return world[world_offsets.entity_instances + i]; }
+fn structure_word(i: u32) -> u32 { return world[world_offsets.structure + i]; }
+
+// The world buffers (docs/FORMAT.md §5) and how to read their cells.
+//
+// Generated by naadf-client (client/src/gpu/shaders.rs) from the Rust definitions, in the
+// prelude before this file:
+// - the parameters \`world_info: WorldInfo\` (size in voxels and chunks, whether entities
+//   exist, the step budget);
+// - the constants of the cell layout (STATE_*, PAYLOAD, MAX_MATERIAL, VOXEL_SOLID,
+//   CHUNK_FIELD_BITS, CELL_FIELD_BITS), the material kinds (KIND_*), the entity layout
+//   (ENTITY_SOLID, TYPE_ALIGN, RECORD_WORDS, NO_ENTITY) and the frame modes (MODE_*);
+// - the storage bindings and the accessors \`chunk_word\`, \`chunk_entity_word\`,
+//   \`block_word\`, \`voxel_word\`, \`material_word\`, \`entity_type_word\`, \`instance_word\` (and
+//   \`grid_word\` for the dense-grid variant): a buffer larger than the adapter's
+//   storage-binding limit is split across several bindings, and the accessor picks the
+//   part.
+
+// State of a chunk or block cell: STATE_EMPTY, STATE_FULL or (also for state 3)
+// STATE_MIXED.
+fn cell_state(c: u32) -> u32 {
+    return min(c >> STATE_SHIFT, STATE_MIXED);
+}
+
+// Field \`dir\` (order −x, +x, −y, +y, −z, +z) of a packed AADF.
+fn aadf_field(word: u32, dir: u32, bits: u32) -> u32 {
+    return (word >> (bits * dir)) & ((1u << bits) - 1u);
+}
+
+// The index of chunk \`c\` in a world of \`chunks\` chunks (\`world_info.chunks\`). Loops read
+// \`world_info\` once before they start and pass its fields: it is a storage buffer, and a
+// storage read in every step is a bounds-checked load on lavapipe.
+fn chunk_index(c: vec3<u32>, chunks: vec3<u32>) -> u32 {
+    return c.x + chunks.x * (c.y + chunks.y * c.z);
+}
+
+fn index4(p: vec3<u32>) -> u32 {
+    return p.x + 4u * p.y + 16u * p.z;
+}
+
+// Voxel \`i\` (0..64) of the voxel group starting at word \`ptr\`.
+fn group_voxel(ptr: u32, i: u32) -> u32 {
+    return (voxel_word(ptr + i / 2u) >> (16u * (i & 1u))) & 0xFFFFu;
+}
+
+// A material's entry (docs/FORMAT.md §5.4).
+struct Material {
+    kind: u32,
+    albedo: vec3<f32>,
+    emission: f32,
+    roughness: f32,
+}
+
+fn material(id: u32) -> Material {
+    let w0 = material_word(4u * id);
+    let w1 = material_word(4u * id + 1u);
+    let w2 = material_word(4u * id + 2u);
+    let rg = unpack2x16float(w1);
+    let be = unpack2x16float(w2);
+    return Material(w0 & 3u, vec3<f32>(rg.x, rg.y, be.x), be.y, unpack2x16float(w0).y);
+}
+
+// Rays and the event model every traversal shares (world/src/traverse/ray.rs, in f32).
+//
+// A ray keeps its origin split into an integer part \`o_int\` and a fraction \`o_frac\` in [0, 1)
+// (docs/NAADF.md §9), so precision does not depend on where in the world it starts.
+// The direction \`d\` is kept exactly as given (not renormalised, which would move the line
+// by an f32 rounding): times are in units of |d| and the ray's \`len\` converts them to
+// distances. Every decision compares plane-crossing times from the one function \`t_at\`,
+// so the traversal is a consistent walk of the event order "(t, axis), x before y before
+// z at equal t"; it departs from the CPU's f64 order only where two crossings are within
+// f32 rounding of each other.
+
+// A cell bound beyond any world for unconstrained axes (the CPU walk uses 2^40, which no
+// i32 holds).
+const FAR_CELL: i32 = 1073741824;
+const T_INF: f32 = 3.0e38;
+const NO_AXIS: u32 = 3u;
+
+struct Ray {
+    o_int: vec3<i32>,
+    o_frac: vec3<f32>,
+    d: vec3<f32>,
+    inv: vec3<f32>,
+    len: f32,
+}
+
+fn ray_new(o_int: vec3<i32>, o_frac: vec3<f32>, d: vec3<f32>) -> Ray {
+    // The inverse of a zero component is never read: such axes never cross a plane.
+    let safe = select(vec3<f32>(1.0), d, d != vec3<f32>(0.0));
+    return Ray(o_int, o_frac, d, 1.0 / safe, length(d));
+}
+
+// A ray from an unsplit origin.
+fn ray_from(o: vec3<f32>, d: vec3<f32>) -> Ray {
+    let fl = floor(o);
+    return ray_new(vec3<i32>(fl), min(o - fl, vec3<f32>(0.99999994)), d);
+}
+
+// The ray's point at time \`t\`, relative to its integer origin.
+fn ray_local(r: Ray, t: f32) -> vec3<f32> {
+    return r.o_frac + r.d * t;
+}
+
+// A ray starting at \`p\` (relative to \`r\`'s integer origin) along \`d\`.
+fn ray_at(r: Ray, p: vec3<f32>, d: vec3<f32>) -> Ray {
+    let fl = floor(p);
+    return ray_new(r.o_int + vec3<i32>(fl), min(p - fl, vec3<f32>(0.99999994)), d);
+}
+
+// Time at which the ray crosses plane \`k\` of \`axis\`.
+fn t_at(r: Ray, a: u32, k: i32) -> f32 {
+    return (f32(k - r.o_int[a]) - r.o_frac[a]) * r.inv[a];
+}
+
+// Whether the crossing of plane \`k\` of axis \`b\` comes before the event \`(t, a)\`.
+fn crossed(r: Ray, b: u32, k: i32, t: f32, a: u32) -> bool {
+    let tb = t_at(r, b, k);
+    return tb < t || (tb == t && b < a);
+}
+
+// The cell of axis \`b\` right after event \`(t, a)\`, known to lie in \`lo..=hi\`.
+fn cell_after(r: Ray, b: u32, t: f32, a: u32, lo: i32, hi: i32) -> i32 {
+    let d = r.d[b];
+    if lo == hi || d == 0.0 {
+        return lo;
+    }
+    let p = r.o_frac[b] + d * t;
+    let fl = floor(p);
+    var k = clamp(i32(fl) + r.o_int[b], lo, hi);
+    let f = p - fl;
+    // Far from a plane the floor is certain; near one, decide by crossing times.
+    let tol = 4e-6 * (abs(d * t) + 1.0);
+    if f > tol && f < 1.0 - tol {
+        return k;
+    }
+    if d > 0.0 {
+        while k < hi && crossed(r, b, k + 1, t, a) {
+            k += 1;
+        }
+        while k > lo && !crossed(r, b, k, t, a) {
+            k -= 1;
+        }
+    } else {
+        while k > lo && crossed(r, b, k, t, a) {
+            k -= 1;
+        }
+        while k < hi && !crossed(r, b, k + 1, t, a) {
+            k += 1;
+        }
+    }
+    return k;
+}
+
+// Where a ray begins inside the box [0, size): its first cell, the time it is entered and
+// the axis whose plane it crossed (NO_AXIS when the origin is inside). \`ok\` is false when
+// the ray misses the box.
+struct Entry {
+    cell: vec3<i32>,
+    t: f32,
+    axis: u32,
+    ok: bool,
+}
+
+fn ray_entry(r: Ray, size: vec3<i32>) -> Entry {
+    let start = r.o_int;
+    var miss = Entry(vec3<i32>(0), 0.0, NO_AXIS, false);
+    if all(start >= vec3<i32>(0)) && all(start < size) {
+        return Entry(start, 0.0, NO_AXIS, true);
+    }
+    // The last slab-entry event, in (t, axis) order.
+    var bt = 0.0;
+    var ba = NO_AXIS;
+    for (var a = 0u; a < 3u; a++) {
+        var plane: i32;
+        if start[a] < 0 {
+            if r.d[a] <= 0.0 {
+                return miss;
+            }
+            plane = 0;
+        } else if start[a] >= size[a] {
+            if r.d[a] >= 0.0 {
+                return miss;
+            }
+            plane = size[a];
+        } else {
+            continue;
+        }
+        let t = t_at(r, a, plane);
+        if ba == NO_AXIS || t >= bt {
+            bt = t;
+            ba = a;
+        }
+    }
+    var cell = vec3<i32>(0);
+    for (var b = 0u; b < 3u; b++) {
+        if b == ba {
+            cell[b] = select(size[b] - 1, 0, r.d[b] > 0.0);
+        } else if r.d[b] > 0.0 {
+            cell[b] = cell_after(r, b, bt, ba, start[b], FAR_CELL);
+        } else if r.d[b] < 0.0 {
+            cell[b] = cell_after(r, b, bt, ba, -FAR_CELL, start[b]);
+        } else {
+            cell[b] = start[b];
+        }
+    }
+    if any(cell < vec3<i32>(0)) || any(cell >= size) {
+        return miss;
+    }
+    return Entry(cell, bt, ba, true);
+}
+
+// Leaving the empty cuboid made of \`cell\` extended by \`skip\` cells toward the ray on each
+// axis: the exit event and the cell entered by it.
+struct Exit {
+    t: f32,
+    axis: u32,
+    next: vec3<i32>,
+}
+
+fn ray_exit(r: Ray, cell: vec3<i32>, skip: vec3<i32>) -> Exit {
+    var bound = vec3<i32>(0);
+    var bt = T_INF;
+    var ba = 0u;
+    for (var a = 0u; a < 3u; a++) {
+        if r.d[a] == 0.0 {
+            continue;
+        }
+        bound[a] = select(cell[a] - skip[a], cell[a] + 1 + skip[a], r.d[a] > 0.0);
+        let t = t_at(r, a, bound[a]);
+        if t < bt {
+            bt = t;
+            ba = a;
+        }
+    }
+    var next = cell;
+    for (var b = 0u; b < 3u; b++) {
+        if b == ba {
+            next[b] = select(bound[b] - 1, bound[b], r.d[b] > 0.0);
+        } else if r.d[b] > 0.0 {
+            next[b] = cell_after(r, b, bt, ba, cell[b], cell[b] + skip[b]);
+        } else if r.d[b] < 0.0 {
+            next[b] = cell_after(r, b, bt, ba, cell[b] - skip[b], cell[b]);
+        }
+    }
+    return Exit(bt, ba, next);
+}
+
+// Amanatides–Woo state in the same event order (ties step the lowest axis first).
+struct Dda {
+    cell: vec3<i32>,
+    tmax: vec3<f32>,
+    t: f32,
+    axis: u32,
+}
+
+fn dda_start(r: Ray, e: Entry) -> Dda {
+    var tmax = vec3<f32>(T_INF);
+    for (var a = 0u; a < 3u; a++) {
+        if r.d[a] != 0.0 {
+            tmax[a] = t_at(r, a, select(e.cell[a], e.cell[a] + 1, r.d[a] > 0.0));
+        }
+    }
+    return Dda(e.cell, tmax, e.t, e.axis);
+}
+
+fn dda_advance(r: Ray, s: ptr<function, Dda>) {
+    var a = 0u;
+    if (*s).tmax[1] < (*s).tmax[a] {
+        a = 1u;
+    }
+    if (*s).tmax[2] < (*s).tmax[a] {
+        a = 2u;
+    }
+    (*s).t = (*s).tmax[a];
+    let c = (*s).cell[a] + select(-1, 1, r.d[a] > 0.0);
+    (*s).cell[a] = c;
+    (*s).axis = a;
+    (*s).tmax[a] = t_at(r, a, select(c, c + 1, r.d[a] > 0.0));
+}
+
+// The first solid voxel along a ray (of the world, or of an entity: then voxel and normal
+// are entity-local).
+struct Hit {
+    hit: bool,
+    // The step budget ran out (counts as a miss).
+    exhausted: bool,
+    voxel: vec3<i32>,
+    // Axis of the entry face (NO_AXIS: the origin was inside the voxel).
+    axis: u32,
+    // Entry-face normal (zero when the origin was inside).
+    normal: vec3<i32>,
+    // Time of entry, in units of the ray's |d|.
+    t: f32,
+    material: u32,
+    steps: u32,
+    // Entity id, or NO_ENTITY (generated in the prelude).
+    entity: u32,
+}
+
+fn no_hit(steps: u32) -> Hit {
+    return Hit(false, false, vec3<i32>(0), NO_AXIS, vec3<i32>(0), T_INF, 0u, steps, NO_ENTITY);
+}
+
+fn make_hit(r: Ray, cell: vec3<i32>, t: f32, axis: u32, material: u32, steps: u32) -> Hit {
+    var n = vec3<i32>(0);
+    if axis != NO_AXIS {
+        n[axis] = select(1, -1, r.d[axis] > 0.0);
+    }
+    return Hit(true, false, cell, axis, n, t, material, steps, NO_ENTITY);
+}
+
+// One full trace: the world loop (traverse.wgsl or grid.wgsl), then the entities of the
+// chunks it visited (docs/NAADF.md §11): the GPU twin of world/src/entity/trace.rs.
+//
+// The world loop hands every chunk entity field it meets to \`record_field\`. Fields are
+// kept in a small list; when it fills up, its instances are tested at once, which gives
+// the same answer as testing them all at the end: each instance's first solid voxel
+// entered at or after the world entry is found whatever the limit, and only the nearest
+// (lowest id at equal times) survives, and only if it comes strictly before the world's
+// hit or exit.
+
+// How the world loop ended.
+const END_HIT: u32 = 0u;
+const END_LEFT: u32 = 1u;
+const END_MISSED: u32 = 2u;
+const END_EXHAUSTED: u32 = 3u;
+
+struct WorldTrace {
+    hit: Hit,
+    end: u32,
+    // When the ray entered the world, and when it hit or left it.
+    t_entry: f32,
+    t_end: f32,
+}
+
+// The end of a world loop whose step budget ran out at time \`t\` (entered at \`t_entry\`).
+fn ran_out(t_entry: f32, t: f32) -> WorldTrace {
+    var h = no_hit(world_info.max_steps);
+    h.exhausted = true;
+    return WorldTrace(h, END_EXHAUSTED, t_entry, t);
+}
+
+const MAX_FIELDS: u32 = 16u;
+
+var<private> fields: array<u32, MAX_FIELDS>;
+var<private> field_count: u32;
+var<private> best_entity: Hit;
+// The inverse rotation of \`best_entity\`'s instance.
+var<private> best_rotation: vec4<f32>;
+// Entity-grid cells visited (added to the step count of an entity hit).
+var<private> entity_steps: u32;
+
+fn record_field(r: Ray, field: u32, t_entry: f32) {
+    if field == 0u || (field_count > 0u && fields[field_count - 1u] == field) {
+        return;
+    }
+    if field_count == MAX_FIELDS {
+        flush_fields(r, t_entry);
+    }
+    fields[field_count] = field;
+    field_count += 1u;
+}
+
+fn flush_fields(r: Ray, t_entry: f32) {
+    for (var k = 0u; k < field_count; k++) {
+        let f = fields[k];
+        let first = f >> 8u;
+        for (var j = 0u; j < (f & 0xFFu); j++) {
+            test_instance(r, (first + j) * RECORD_WORDS, t_entry);
+        }
+    }
+    field_count = 0u;
+}
+
+// Decodes a smallest-three quaternion (world/src/entity/pack.rs).
+fn decode_quat(w0: u32, w1: u32) -> vec4<f32> {
+    let s = vec3<f32>(vec3<u32>(w0 & 0x3FFFu, (w0 >> 14u) & 0x3FFFu, (w0 >> 28u) | ((w1 & 0x3FFu) << 4u)));
+    let small = (s - 8192.0) / 8192.0;
+    let rest = sqrt(max(1.0 - dot(small, small), 0.0));
+    let k = (w1 >> 10u) & 3u;
+    if k == 0u {
+        return vec4<f32>(rest, small.x, small.y, small.z);
+    } else if k == 1u {
+        return vec4<f32>(small.x, rest, small.y, small.z);
+    } else if k == 2u {
+        return vec4<f32>(small.x, small.y, rest, small.z);
+    }
+    return vec4<f32>(small, rest);
+}
+
+// Rotates \`v\` by the unit quaternion \`q = (x, y, z, w)\`.
+fn rotate(q: vec4<f32>, v: vec3<f32>) -> vec3<f32> {
+    let t = 2.0 * cross(q.xyz, v);
+    return v + q.w * t + cross(q.xyz, t);
+}
+
+fn conjugate(q: vec4<f32>) -> vec4<f32> {
+    return vec4<f32>(-q.xyz, q.w);
+}
+
+// An instance record's position in 1/128 voxel (record words 0 and 1).
+fn record_position(dx: u32, dy: u32) -> vec3<u32> {
+    return vec3<u32>(dx & 0x1FFFFFu, (dx >> 21u) | (((dy >> 21u) & 0xFFu) << 11u), dy & 0x1FFFFFu);
+}
+
+// An instance record's entity id (record word 4).
+fn record_id(e: u32) -> u32 {
+    return e & 0x3FFFu;
+}
+
+// Tests one chunk-instance record against the ray; keeps the nearest entity hit.
+fn test_instance(r: Ray, at: u32, t_lo: f32) {
+    let dx = instance_word(at);
+    let dy = instance_word(at + 1u);
+    let dz = instance_word(at + 2u);
+    let dw = instance_word(at + 3u);
+    let e = instance_word(at + 4u);
+    let id = record_id(e);
+    let size = vec3<u32>((e >> 14u) & 0x7Fu, (e >> 21u) & 0x7Fu, ((e >> 28u) & 0xFu) | (((dy >> 29u) & 7u) << 4u));
+    let pos = record_position(dx, dy);
+    var limit = T_INF;
+    var equal_ok = false;
+    if best_entity.hit {
+        limit = best_entity.t;
+        equal_ok = id < best_entity.entity;
+    }
+    // The entity lies within |size| of its local-origin corner: reject rays that pass
+    // farther (with slack for f32), before transforming anything.
+    let rel = vec3<f32>(r.o_int - vec3<i32>(pos >> vec3<u32>(7u))) + (r.o_frac - vec3<f32>(pos & vec3<u32>(127u)) / 128.0);
+    let tc = -dot(rel, r.d) / (r.len * r.len);
+    let radius = (length(vec3<f32>(size)) + 0.01) / r.len;
+    let closest = rel + r.d * tc;
+    if dot(closest, closest) > radius * radius * r.len * r.len || tc + radius < t_lo || tc - radius > limit {
+        return;
+    }
+    let q = decode_quat(dz, dw & 0xFFFu);
+    let local = ray_from(rotate(q, rel), rotate(q, r.d));
+    let isize = vec3<i32>(size);
+    let entry = ray_entry(local, isize);
+    if !entry.ok {
+        return;
+    }
+    let base = (dw >> 12u) * TYPE_ALIGN;
+    var s = dda_start(local, entry);
+    loop {
+        entity_steps += 1u;
+        if s.t > limit || (s.t == limit && !equal_ok) {
+            return;
+        }
+        if s.t >= t_lo {
+            let c = vec3<u32>(s.cell);
+            let v = entity_type_word(base + c.x + size.x * (c.y + size.y * c.z));
+            if (v & ENTITY_SOLID) != 0u {
+                var h = make_hit(local, s.cell, s.t, s.axis, v & MAX_MATERIAL, 0u);
+                h.entity = id;
+                best_entity = h;
+                best_rotation = q;
+                return;
+            }
+        }
+        dda_advance(local, &s);
+        if any(s.cell < vec3<i32>(0)) || any(s.cell >= isize) {
+            return;
+        }
+    }
+}
+
+// The world-space normal of the hit the last \`trace\` returned (entity-local normals are
+// rotated back to the world).
+fn world_normal(h: Hit) -> vec3<f32> {
+    let n = vec3<f32>(h.normal);
+    if h.entity == NO_ENTITY {
+        return n;
+    }
+    return rotate(conjugate(best_rotation), n);
+}
+
+// Traces \`r\` through the world and its entities.
+fn trace(r: Ray) -> Hit {
+    field_count = 0u;
+    entity_steps = 0u;
+    best_entity = no_hit(0u);
+    let w = world_loop(r);
+    if w.end == END_MISSED || w.end == END_EXHAUSTED {
+        return w.hit;
+    }
+    flush_fields(r, w.t_entry);
+    if best_entity.hit && best_entity.t < w.t_end {
+        var h = best_entity;
+        h.steps = w.hit.steps + entity_steps;
+        return h;
+    }
+    var h = w.hit;
+    h.steps += entity_steps;
+    return h;
+}
+
+// The world loop over the chunk → block → voxel hierarchy (docs/NAADF.md §9), with
+// AADF jumps (\`USE_AADF\`, the \`naadf\` method) or without (\`nodf\`): the GPU twin of
+// world/src/traverse/hierarchy.rs. Chunks with entities skip only to their own edge and
+// have their entity fields recorded for the entity pass.
+
+override USE_AADF: bool = true;
+
+
+fn to_edge(c: u32, neg: bool, edge: u32) -> i32 {
+    let m = c & (edge - 1u);
+    return i32(select(edge - 1u - m, m, neg));
+}
+
+fn world_loop(r: Ray) -> WorldTrace {
+    let dims = vec3<i32>(world_info.size);
+    let entry = ray_entry(r, dims);
+    if !entry.ok {
+        return WorldTrace(no_hit(0u), END_MISSED, 0.0, 0.0);
+    }
+    var cell = entry.cell;
+    var t = entry.t;
+    var axis = entry.axis;
+    let neg = r.d <= vec3<f32>(0.0);
+    // The AADF field facing the ray on each axis: −a for negative directions, +a otherwise.
+    let facing = vec3<u32>(0u, 2u, 4u) + select(vec3<u32>(0u), vec3<u32>(1u), r.d > vec3<f32>(0.0));
+    // Each chunk's entity field says whether entities are there, read once per chunk
+    // entered, so the loop needs no world-wide flag.
+    var last_chunk = 0xFFFFFFFFu;
+    var last_field = 0u;
+    // The world's parameters, read once (see chunk_index in world.wgsl).
+    let chunks = world_info.chunks;
+    let max_steps = world_info.max_steps;
+    for (var steps = 1u; steps <= max_steps; steps++) {
+        let p = vec3<u32>(cell);
+        let ci = chunk_index(p >> vec3<u32>(4u), chunks);
+        if ci != last_chunk {
+            last_chunk = ci;
+            last_field = chunk_entity_word(ci);
+            record_field(r, last_field, entry.t);
+        }
+        let entities_here = last_field != 0u;
+        let chunk = chunk_word(ci);
+        var skip = vec3<i32>(0);
+        let cs = cell_state(chunk);
+        if cs == STATE_FULL {
+            return WorldTrace(make_hit(r, cell, t, axis, chunk & MAX_MATERIAL, steps), END_HIT, entry.t, t);
+        } else if cs == STATE_EMPTY {
+            for (var a = 0u; a < 3u; a++) {
+                skip[a] = to_edge(p[a], neg[a], 16u);
+                if USE_AADF && !entities_here {
+                    skip[a] += 16 * i32(aadf_field(chunk, facing[a], CHUNK_FIELD_BITS));
+                }
+            }
+        } else {
+            let block = block_word((chunk & PAYLOAD) + index4((p >> vec3<u32>(2u)) & vec3<u32>(3u)));
+            let bs = cell_state(block);
+            if bs == STATE_FULL {
+                return WorldTrace(make_hit(r, cell, t, axis, block & MAX_MATERIAL, steps), END_HIT, entry.t, t);
+            } else if bs == STATE_EMPTY {
+                for (var a = 0u; a < 3u; a++) {
+                    skip[a] = to_edge(p[a], neg[a], 4u);
+                    if USE_AADF {
+                        skip[a] += 4 * i32(aadf_field(block, facing[a], CELL_FIELD_BITS));
+                    }
+                }
+            } else {
+                let v = group_voxel(block & PAYLOAD, index4(p & vec3<u32>(3u)));
+                if (v & VOXEL_SOLID) != 0u {
+                    return WorldTrace(make_hit(r, cell, t, axis, v & MAX_MATERIAL, steps), END_HIT, entry.t, t);
+                }
+                if USE_AADF {
+                    for (var a = 0u; a < 3u; a++) {
+                        skip[a] = i32(aadf_field(v, facing[a], CELL_FIELD_BITS));
+                    }
+                }
+            }
+        }
+        let ex = ray_exit(r, cell, skip);
+        if any(ex.next < vec3<i32>(0)) || any(ex.next >= dims) {
+            var h = no_hit(steps);
+            return WorldTrace(h, END_LEFT, entry.t, ex.t);
+        }
+        cell = ex.next;
+        t = ex.t;
+        axis = ex.axis;
+    }
+    return ran_out(entry.t, t);
+}
+
+// The samples of the lit passes: random streams (client/src/light/rng.rs), one per sample
+// of each pixel, seeded from the run's seed, the pixel's index and the sample's number
+// only; and the jittered camera ray of a sample.
+
+fn pcg_hash(v: u32) -> u32 {
+    let state = v * 747796405u + 2891336453u;
+    let word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+    return (word >> 22u) ^ word;
+}
+
+// The stream of sample \`sample\` of pixel \`pixel\` under \`seed\`.
+fn rng_new(seed: u32, pixel: u32, sample: u32) -> u32 {
+    return pcg_hash(seed ^ pcg_hash(pixel ^ pcg_hash(sample)));
+}
+
+// A uniform number in [0, 1) with 24 random bits.
+fn rng_next(state: ptr<function, u32>) -> f32 {
+    *state = pcg_hash(*state);
+    return f32(*state >> 8u) * (1.0 / 16777216.0);
+}
+
+// The stream of sample \`sample\` of pixel \`pixel\`, after its first two draws: where in the
+// pixel the sample's camera ray goes (uniform in [0, 1)²).
+struct PixelStream {
+    rng: u32,
+    jitter: vec2<f32>,
+}
+
+fn pixel_stream(seed: u32, pixel: u32, sample: u32) -> PixelStream {
+    var rng = rng_new(seed, pixel, sample);
+    let jx = rng_next(&rng);
+    let jy = rng_next(&rng);
+    return PixelStream(rng, vec2<f32>(jx, jy));
+}
+
+// The camera's (unnormalised) direction through point \`jitter\` ([0, 1)²) of pixel \`gid\` of
+// frame \`f\` (docs/CAMERA.md, with \`px + jitter.x\` for \`px + 0.5\`).
+fn camera_dir(f: FrameInfo, gid: vec2<u32>, jitter: vec2<f32>) -> vec3<f32> {
+    let sx = 2.0 * (f32(gid.x) + jitter.x) / f32(f.width) - 1.0;
+    let sy = 1.0 - 2.0 * (f32(gid.y) + jitter.y) / f32(f.height);
+    return f.forward + sx * f.right + sy * f.up;
+}
+
+// The light model of the lit modes (docs/RENDERING.md §3a): the physical sky, the sun,
+// BRDF sampling and one path's radiance. The GPU twin of client/src/light/ (sky.rs,
+// scatter.rs, cpu.rs), written operation by operation like it so that the two path
+// tracers agree up to rounding. Needs random.wgsl before it.
+//
+// The pass binds \`light: LightInfo\` (generated in the prelude from the Rust \`LightInfo\`).
+
+// PI, SURFACE_OFFSET (how far scattered and shadow rays start off the surface),
+// MIN_ALPHA (the smallest GGX α a metal is traced with) and the physical sky's constants
+// (PLANET_RADIUS, VIEW_STEPS, RAYLEIGH, MIE_G, OZONE, …) come from the prelude, generated
+// from their Rust definitions in client/src/light/ (mod.rs, scatter.rs, sky.rs).
+
+// ---- The physical sky (sky.rs) ----
+
+// Distance from height \`h\` along zenith cosine \`mu\` to the sphere at height \`top\`; a
+// negative value when it is not reached going forward.
+fn sphere_distance(h: f32, mu: f32, top: f32) -> f32 {
+    let r = PLANET_RADIUS + h;
+    let disc = (top - h) * (2.0 * PLANET_RADIUS + top + h) + r * r * mu * mu;
+    if disc < 0.0 {
+        return -1.0;
+    }
+    let s = sqrt(disc);
+    let far = -r * mu + s;
+    if far < 0.0 {
+        return -1.0;
+    }
+    let near = -r * mu - s;
+    return select(far, near, near > 0.0);
+}
+
+struct Medium {
+    sigma: vec3<f32>,
+    rayleigh: f32,
+    mie: f32,
+}
+
+fn medium(h: f32) -> Medium {
+    let rayleigh = exp(-h / RAYLEIGH_SCALE);
+    let mie = exp(-h / MIE_SCALE);
+    let ozone = max(1.0 - abs(h - OZONE_CENTRE) / OZONE_HALF_WIDTH, 0.0);
+    return Medium(RAYLEIGH * rayleigh + MIE_EXTINCTION * mie + OZONE * ozone, rayleigh, mie);
+}
+
+fn sun_transmittance(h: f32, mu: f32) -> vec3<f32> {
+    if mu < 0.0 && sphere_distance(h, mu, 0.0) >= 0.0 {
+        return vec3<f32>(0.0);
+    }
+    let length = max(sphere_distance(h, mu, ATMOSPHERE_HEIGHT), 0.0);
+    let dt = length / f32(LIGHT_STEPS);
+    let r = PLANET_RADIUS + h;
+    var depth = vec3<f32>(0.0);
+    for (var i = 0u; i < LIGHT_STEPS; i++) {
+        let t = (f32(i) + 0.5) * dt;
+        let hi = sqrt(t * t + 2.0 * r * mu * t + r * r) - PLANET_RADIUS;
+        depth += medium(hi).sigma * dt;
+    }
+    return exp(-depth);
+}
+
+// Sky radiance along unit \`dir\` for unit sun direction \`sun\`, per unit of irradiance.
+fn sky_physical(dir: vec3<f32>, sun: vec3<f32>) -> vec3<f32> {
+    let mu = dir.y;
+    let nu = dot(dir, sun);
+    let h0 = EYE_HEIGHT;
+    let r0 = PLANET_RADIUS + h0;
+    var length = sphere_distance(h0, mu, 0.0);
+    if !(mu < 0.0 && length >= 0.0) {
+        length = max(sphere_distance(h0, mu, ATMOSPHERE_HEIGHT), 0.0);
+    }
+    let dt = length / f32(VIEW_STEPS);
+    let phase_r = 3.0 / (16.0 * PI) * (1.0 + nu * nu);
+    let g2 = MIE_G * MIE_G;
+    let phase_m = (1.0 - g2) / (4.0 * PI * pow(1.0 + g2 - 2.0 * MIE_G * nu, 1.5));
+    var depth = vec3<f32>(0.0);
+    var inscatter = vec3<f32>(0.0);
+    for (var i = 0u; i < VIEW_STEPS; i++) {
+        let t = (f32(i) + 0.5) * dt;
+        let r = sqrt(t * t + 2.0 * r0 * mu * t + r0 * r0);
+        let h = r - PLANET_RADIUS;
+        let mu_sun = (r0 * sun.y + t * nu) / r;
+        let m = medium(h);
+        let to_sun = sun_transmittance(h, mu_sun);
+        let view = exp(-(depth + 0.5 * m.sigma * dt));
+        let scatter = RAYLEIGH * m.rayleigh * phase_r + MIE_SCATTER * m.mie * phase_m;
+        inscatter += view * to_sun * scatter * dt;
+        depth += m.sigma * dt;
+    }
+    return inscatter;
+}
+
+// The sky along unit \`d\`, evaluated directly (no disc).
+fn sky_direct(d: vec3<f32>) -> vec3<f32> {
+    if light.sky_physical != 0u {
+        return sky_physical(d, light.sun_dir) * light.sky;
+    }
+    return light.sky;
+}
+
+// The sky along unit \`d\`; with \`disc\`, the sun's disc too. \`sky_base(d)\` is the including
+// pass's choice: \`sky_direct\` (the path tracer) or the atmosphere table (\`gi\`).
+fn sky_radiance(d: vec3<f32>, disc: bool) -> vec3<f32> {
+    var l = sky_base(d);
+    if disc {
+        l += sun_disc(d);
+    }
+    return l;
+}
+
+// The sun's disc along unit \`d\` (0 off the disc, or with the sun off).
+fn sun_disc(d: vec3<f32>) -> vec3<f32> {
+    if light.sun_on != 0u && 1.0 - dot(d, light.sun_dir) <= light.sun_omc {
+        return vec3<f32>(light.sun_disc);
+    }
+    return vec3<f32>(0.0);
+}
+
+// ---- Scattering (scatter.rs) ----
+
+struct Basis {
+    t: vec3<f32>,
+    b: vec3<f32>,
+}
+
+fn basis(n: vec3<f32>) -> Basis {
+    let sign = select(-1.0, 1.0, n.z >= 0.0);
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    return Basis(vec3<f32>(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x), vec3<f32>(b, sign + n.y * n.y * a, -n.y));
+}
+
+fn sample_cosine(n: vec3<f32>, u: vec2<f32>) -> vec3<f32> {
+    let f = basis(n);
+    let r = sqrt(u.x);
+    let phi = 2.0 * PI * u.y;
+    return normalize(f.t * (r * cos(phi)) + f.b * (r * sin(phi)) + n * sqrt(max(1.0 - u.x, 0.0)));
+}
+
+fn sample_cone(axis: vec3<f32>, omc: f32, u: vec2<f32>) -> vec3<f32> {
+    let f = basis(axis);
+    let x = u.x * omc;
+    let c = 1.0 - x;
+    let s = sqrt(max(x * (2.0 - x), 0.0));
+    let phi = 2.0 * PI * u.y;
+    return normalize(f.t * (s * cos(phi)) + f.b * (s * sin(phi)) + axis * c);
+}
+
+fn schlick(f0: vec3<f32>, c: f32) -> vec3<f32> {
+    let k = 1.0 - clamp(c, 0.0, 1.0);
+    let k2 = k * k;
+    return f0 + (vec3<f32>(1.0) - f0) * (k2 * k2 * k);
+}
+
+fn smith_lambda(alpha: f32, c: f32) -> f32 {
+    let c2 = max(c * c, 1e-12);
+    let tan2 = max(1.0 - c2, 0.0) / c2;
+    return 0.5 * (-1.0 + sqrt(1.0 + alpha * alpha * tan2));
+}
+
+fn ggx_d(alpha: f32, c: f32) -> f32 {
+    let a2 = alpha * alpha;
+    let k = c * c * (a2 - 1.0) + 1.0;
+    return a2 / (PI * k * k);
+}
+
+fn ggx(n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>, alpha: f32, f0: vec3<f32>) -> vec3<f32> {
+    let co = dot(n, wo);
+    let ci = dot(n, wi);
+    if co <= 0.0 || ci <= 0.0 {
+        return vec3<f32>(0.0);
+    }
+    let h = normalize(wo + wi);
+    let g2 = 1.0 / (1.0 + smith_lambda(alpha, co) + smith_lambda(alpha, ci));
+    return schlick(f0, dot(wo, h)) * (ggx_d(alpha, dot(n, h)) * g2 / (4.0 * co * ci));
+}
+
+struct Scattered {
+    dir: vec3<f32>,
+    weight: vec3<f32>,
+}
+
+fn ggx_sample(n: vec3<f32>, wo: vec3<f32>, alpha: f32, f0: vec3<f32>, u: vec2<f32>) -> Scattered {
+    let f = basis(n);
+    let v = vec3<f32>(dot(wo, f.t), dot(wo, f.b), dot(wo, n));
+    let vh = normalize(vec3<f32>(alpha * v.x, alpha * v.y, v.z));
+    let lensq = vh.x * vh.x + vh.y * vh.y;
+    var t1 = vec3<f32>(1.0, 0.0, 0.0);
+    if lensq > 0.0 {
+        t1 = vec3<f32>(-vh.y, vh.x, 0.0) / sqrt(lensq);
+    }
+    let t2 = cross(vh, t1);
+    let r = sqrt(u.x);
+    let phi = 2.0 * PI * u.y;
+    let p1 = r * cos(phi);
+    let s = 0.5 * (1.0 + vh.z);
+    let p2 = (1.0 - s) * sqrt(max(1.0 - p1 * p1, 0.0)) + s * r * sin(phi);
+    let nh = t1 * p1 + t2 * p2 + vh * sqrt(max(1.0 - p1 * p1 - p2 * p2, 0.0));
+    let m = normalize(vec3<f32>(alpha * nh.x, alpha * nh.y, max(nh.z, 0.0)));
+    let lwi = m * (2.0 * dot(v, m)) - v;
+    let wi = normalize(f.t * lwi.x + f.b * lwi.y + n * lwi.z);
+    let lo = smith_lambda(alpha, v.z);
+    let li = smith_lambda(alpha, lwi.z);
+    return Scattered(wi, schlick(f0, dot(v, m)) * ((1.0 + lo) / (1.0 + lo + li)));
+}
+
+// ---- Paths (cpu.rs) ----
+
+// Whether a shadow ray meets anything before leaving the world (a ray out of cells counts
+// as blocked).
+fn blocked(r: Ray, p: vec3<f32>, dir: vec3<f32>) -> bool {
+    let h = trace(ray_at(r, p, dir));
+    return h.hit || h.exhausted;
+}
+
+// One step of a path: what it adds and whether it goes on.
+struct PathState {
+    r: Ray,
+    radiance: vec3<f32>,
+    throughput: vec3<f32>,
+    sees_disc: bool,
+    alive: bool,
+    // The normal of the first surface met (zero until then).
+    first_normal: vec3<f32>,
+}
+
+// Follows the path in \`s\` to its next surface: adds the light found there and, when
+// \`scatter\`, picks the next ray (or ends the path). Returns the distance to the surface
+// (−1 when the ray found none).
+fn path_step(s: ptr<function, PathState>, scatter: bool, rng: ptr<function, u32>) -> f32 {
+    let r = (*s).r;
+    let h = trace(r);
+    let d = r.d / r.len;
+    (*s).alive = false;
+    if h.exhausted {
+        return -1.0;
+    }
+    if !h.hit {
+        (*s).radiance += (*s).throughput * sky_radiance(d, (*s).sees_disc);
+        return -1.0;
+    }
+    let distance = h.t * r.len;
+    if h.axis == NO_AXIS {
+        return distance;
+    }
+    // Before any other trace: world_normal reads the last trace's entity rotation.
+    let n = world_normal(h);
+    if all((*s).first_normal == vec3<f32>(0.0)) {
+        (*s).first_normal = n;
+    }
+    let m = material(h.material);
+    if m.kind == KIND_EMISSIVE {
+        (*s).radiance += (*s).throughput * m.albedo * m.emission;
+    }
+    if !scatter {
+        return distance;
+    }
+    let p = ray_local(r, h.t) + n * SURFACE_OFFSET;
+    var next: Scattered;
+    if m.kind == KIND_MIRROR {
+        (*s).sees_disc = true;
+        next = Scattered(d - n * (2.0 * dot(d, n)), m.albedo);
+    } else {
+        let wo = -d;
+        let alpha = max(m.roughness, MIN_ALPHA);
+        if light.sun_on != 0u {
+            let u = vec2<f32>(rng_next(rng), rng_next(rng));
+            let wi = sample_cone(light.sun_dir, light.sun_omc, u);
+            let c = dot(n, wi);
+            if c > 0.0 && !blocked(r, p, wi) {
+                var f = m.albedo / PI;
+                if m.kind == KIND_METAL {
+                    f = ggx(n, wo, wi, alpha, m.albedo);
+                }
+                (*s).radiance += (*s).throughput * f * (c * light.sun_weight);
+            }
+        }
+        let u = vec2<f32>(rng_next(rng), rng_next(rng));
+        (*s).sees_disc = false;
+        if m.kind == KIND_METAL {
+            next = ggx_sample(n, wo, alpha, m.albedo, u);
+        } else {
+            next = Scattered(sample_cosine(n, u), m.albedo);
+        }
+    }
+    if dot(next.dir, n) > 0.0 {
+        (*s).throughput *= next.weight;
+        (*s).r = ray_at(r, p, next.dir);
+        (*s).alive = true;
+    }
+    return distance;
+}
+
+// One path: the radiance it brought back, the distance from its origin to the first
+// surface (−1 for the sky) and that surface's normal.
+struct PathSample {
+    radiance: vec3<f32>,
+    distance: f32,
+    normal: vec3<f32>,
+}
+
+// The radiance arriving along \`primary\` when the path may scatter \`bounces\` more times,
+// drawing from \`rng\`. \`sees_disc\`: whether the ray sees the sun's disc (camera and mirror
+// rays do; rays scattered by other surfaces get the sun by next-event estimation instead).
+fn path_radiance(primary: Ray, bounces: u32, sees_disc: bool, rng: ptr<function, u32>) -> PathSample {
+    var s = PathState(primary, vec3<f32>(0.0), vec3<f32>(1.0), sees_disc, true, vec3<f32>(0.0));
+    let distance = path_step(&s, bounces > 0u, rng);
+    for (var bounce = 1u; bounce <= bounces && s.alive; bounce++) {
+        path_step(&s, bounce < bounces, rng);
+    }
+    return PathSample(s.radiance, distance, s.first_normal);
+}
+
+// The first-hit chain shared by \`albedo\` (render.wgsl) and \`gi\` (gi_primary.wgsl): a camera
+// ray followed through up to MAX_SEGMENTS − 1 mirror bounces to the first surface that is
+// not a mirror, with the bounce planes of the reference's first-hit record
+// (docs/RENDERING.md §2, §3c).
+
+// Hit-plane sentinels of the first-hit record (docs/NAADF.md §10).
+const HIT_NOTHING: u32 = 0x1FFFFu;
+const HIT_UNDEFINED: u32 = 0u;
+// Mirror segments a path may follow (the primary segment included).
+const MAX_SEGMENTS: u32 = 4u;
+// Secondary-ray origins start SURFACE_OFFSET off the surface, along its normal
+// (docs/NAADF.md §12; from the prelude).
+
+// How a chain ended.
+const CHAIN_SURFACE: u32 = 0u;
+const CHAIN_SKY: u32 = 1u;
+// The last segment allowed met a mirror too.
+const CHAIN_LIMIT: u32 = 2u;
+
+// The 17-bit hit plane: normal id (1 −x, 2 +x, 3 −y, 4 +y, 5 −z, 6 +z; 7 = origin inside
+// the voxel) in bits 0–2, the plane's integer coordinate in bits 3–16.
+fn encode_plane(h: Hit) -> u32 {
+    if h.axis == NO_AXIS {
+        return 7u;
+    }
+    let positive = h.normal[h.axis] > 0;
+    let id = 2u * h.axis + select(1u, 2u, positive);
+    let coord = u32(h.voxel[h.axis] + select(0, 1, positive)) & 0x3FFFu;
+    return id | (coord << 3u);
+}
+
+struct Chain {
+    // The last segment and what it met (\`h.hit\` is false for the sky).
+    r: Ray,
+    h: Hit,
+    // The final surface's world normal (read right after its trace: world_normal reads the
+    // entity rotation of the last trace).
+    n: vec3<f32>,
+    // The product of the mirror weights along the chain.
+    throughput: vec3<f32>,
+    planes: array<u32, 4>,
+    // Path length to the final surface; −1 for the sky and the mirror limit.
+    distance: f32,
+    end: u32,
+}
+
+// Follows \`primary\` (whose first hit is \`first\`) through mirrors. A mirror weighs the path
+// by Schlick's Fresnel with F0 = albedo when \`schlick\`, by its albedo otherwise (the light
+// model's tinted mirror, docs/RENDERING.md §3a).
+fn first_hit_chain(primary: Ray, first: Hit, schlick: bool) -> Chain {
+    var c = Chain(primary, first, vec3<f32>(0.0), vec3<f32>(1.0),
+        array<u32, 4>(HIT_UNDEFINED, HIT_UNDEFINED, HIT_UNDEFINED, HIT_UNDEFINED), 0.0, CHAIN_SURFACE);
+    for (var seg = 0u; seg < MAX_SEGMENTS; seg++) {
+        if seg > 0u {
+            c.h = trace(c.r);
+        }
+        let dn = c.r.d / c.r.len;
+        if !c.h.hit {
+            c.planes[seg] = HIT_NOTHING;
+            c.distance = -1.0;
+            c.end = CHAIN_SKY;
+            return c;
+        }
+        c.planes[seg] = encode_plane(c.h);
+        c.distance += c.h.t * c.r.len;
+        c.n = world_normal(c.h);
+        let m = material(c.h.material);
+        if m.kind != KIND_MIRROR {
+            return c;
+        }
+        if seg + 1u == MAX_SEGMENTS {
+            c.planes[seg] = HIT_NOTHING;
+            c.distance = -1.0;
+            c.end = CHAIN_LIMIT;
+            return c;
+        }
+        if schlick {
+            let cos_i = clamp(-dot(c.n, dn), 0.0, 1.0);
+            c.throughput *= m.albedo + (1.0 - m.albedo) * pow(1.0 - cos_i, 5.0);
+        } else {
+            c.throughput *= m.albedo;
+        }
+        let p = ray_local(c.r, c.h.t) + c.n * SURFACE_OFFSET;
+        c.r = ray_at(c.r, p, reflect(dn, c.n));
+    }
+    return c;
+}
+
+// The GI pipeline (\`gi\`, docs/RENDERING.md §3c): bindings and helpers shared by its passes
+// (gi_primary.wgsl, gi_samples.wgsl, gi_resample.wgsl). Every pass binds the same group 1;
+// the constants in capitals without a definition here (TAA_SLOTS, CAMERA_HISTORY, CAM_WORDS,
+// the control words CONTROL_*, …) are generated after the GI files from their Rust
+// definitions in client/src/gpu/gi/memory.rs.
+
+@group(1) @binding(0) var<uniform> frame: FrameInfo;
+@group(1) @binding(1) var<uniform> light: LightInfo;
+@group(1) @binding(2) var<uniform> gi: GiInfo;
+// The pipeline's memory (docs/RENDERING.md §3c). The GI's arrays live in four logical
+// buffers, each array at an offset that \`gi\` carries (computed in gi.rs). \`words\` and
+// \`buckets\` are bound here; \`mem\` and \`taa\` can outgrow one binding of the adapter, so the
+// generated declarations after the GI files split each across bindings (from binding 6)
+// and give their accessors: \`mem_get(i)\`, \`mem_set(i, v)\`, \`taa_get(i)\`, \`taa_set(i, v)\`.
+// - \`mem\` (vec4 words; f32 data is stored bitcast):
+//   - cams: CAMERA_HISTORY cameras, newest first (index = frames ago), CAM_WORDS each:
+//     (position relative to this frame's integer camera position, jitter x), (forward,
+//     jitter y), (right, 0), (up, 0), (that frame's integer position minus this one's, 0);
+//   - lut: the atmosphere table, LUT_SIZE² latitude–longitude texels of sky radiance;
+//   - gbuf, per pixel: the final surface of the first-hit chain relative to the integer
+//     camera position, and the chain's length (−1: sky or mirror limit);
+//   - gmat, per pixel: x = kind | class << 4 | normal id << 8 | material << 16;
+//     y = TAA hash (16 bits) | octahedral normal << 16; z, w = the chain's throughput
+//     (f16 r, g | b) with the octahedral outgoing direction in w's high half;
+//   - emitted, per pixel: the light the first-hit chain met (sky, sun disc, emission);
+//   - taa_info, per pixel, 2 vec4: the accepted history samples' colour sum and count;
+//     the least and greatest chain length of the 3×3 neighbourhood (sky: SKY_DIST);
+//   - illum, illum2, per pixel: the surface's incoming light before the chain's
+//     throughput, and the denoiser's guide (illum2: the denoiser's intermediate);
+//   - result, per pixel: the frame's linear radiance after the TAA merge;
+//   - refined, per region: MAX_KEPT refined samples, 2 vec4 each;
+//   - region_info, per region, 3 vec4: the lit ratio per normal id (0–3), (lit ratio of
+//     ids 4 and 5, samples kept, samples projected) and (normal mask, least and greatest
+//     chain length, 0);
+//   - ring: the sample ring, RING_VEC4 vec4 per secondary sample (gi_samples.wgsl).
+// - \`words\`: the control words (indirect arguments at CONTROL_TRACE_ARGS and
+//   CONTROL_PROJECT_ARGS, ring bookkeeping, per-frame sample counts), then per region the
+//   queued count and (at R + region) the queue offset, then per region 64 queued pixels.
+// - \`buckets\`: per region BUCKET_SLOTS priorities, BUCKET_SLOTS ring indices, then the
+//   lit and unlit counts of each normal id (2 × NORMALS words).
+// - \`taa\`: the long-term TAA, TAA_SLOTS frames of 64-bit samples.
+@group(1) @binding(3) var<storage, read_write> words: array<u32>;
+@group(1) @binding(4) var<storage, read_write> buckets: array<atomic<u32>>;
+// Per chunk (\`chunk_index\`): the first frame after its newest change, and after the newest
+// change within CHANGE_REACH chunks of it (0: none); written by gi.rs from the world's
+// changed chunks.
+@group(1) @binding(5) var<storage, read> changes: array<vec2<u32>>;
+
+// The chain length of the sky in the TAA (the largest finite f16).
+const SKY_DIST: f32 = 65504.0;
+// Kinds of final surface (gmat.x bits 4–7).
+const CLASS_DIFFUSE: u32 = 0u;
+const CLASS_GLOSSY: u32 = 1u;
+const CLASS_NONE: u32 = 2u;
+const NO_NORMAL: u32 = 7u;
+// Normal ids of surfaces (0–5).
+const NORMALS: u32 = 6u;
+
+fn pixel_count() -> u32 {
+    return frame.width * frame.height;
+}
+
+fn region_count() -> u32 {
+    return gi.regions_x * gi.regions_y;
+}
+
+fn taa_accum(i: u32) -> vec4<f32> {
+    return bitcast<vec4<f32>>(mem_get(gi.off_taa_info + 2u * i));
+}
+
+fn taa_range(i: u32) -> vec2<f32> {
+    return bitcast<vec4<f32>>(mem_get(gi.off_taa_info + 2u * i + 1u)).xy;
+}
+
+// The unit vector of normal id \`id\`.
+fn normal_of_id(id: u32) -> vec3<f32> {
+    let sign = select(-1.0, 1.0, (id & 1u) == 1u);
+    return vec3<f32>(select(0.0, sign, id / 2u == 0u), select(0.0, sign, id / 2u == 1u), select(0.0, sign, id / 2u == 2u));
+}
+
+// The change marks (\`changes\`) of the chunk holding the solid voxel behind surface point
+// \`p\` (relative to this frame's integer camera position) of normal \`n\`; none outside the
+// world.
+fn changes_at(p: vec3<f32>, n: vec3<f32>) -> vec2<u32> {
+    let v = floor(vec3<f32>(frame.cam_int) + p - 0.5 * n);
+    if any(v < vec3<f32>(0.0)) || any(v >= vec3<f32>(world_info.size)) {
+        return vec2<u32>(0u);
+    }
+    return changes[chunk_index(vec3<u32>(v) / 16u, world_info.chunks)];
+}
+
+fn region_of(x: u32, y: u32) -> u32 {
+    return x / 8u + (y / 8u) * gi.regions_x;
+}
+
+// ---- Cameras of earlier frames ----
+
+struct Cam {
+    pos: vec3<f32>,
+    jitter: vec2<f32>,
+    forward: vec3<f32>,
+    right: vec3<f32>,
+    up: vec3<f32>,
+    origin: vec3<f32>,
+}
+
+// The thread's index in a dispatch of 64-wide groups laid out as x + y · (groups across)
+// (\`dispatch_2d\` on the host, or the queue scan's indirect arguments).
+fn flat_id(wid: vec3<u32>, groups: vec3<u32>, li: u32) -> u32 {
+    return (wid.x + wid.y * groups.x) * 64u + li;
+}
+
+// Earlier frames whose cameras \`cams\` holds: every one, up to CAMERA_HISTORY − 1.
+fn cams_valid() -> u32 {
+    return min(gi.frame, CAMERA_HISTORY - 1u);
+}
+
+fn cam(age: u32) -> Cam {
+    let b = min(age, CAMERA_HISTORY - 1u) * CAM_WORDS;
+    let a = bitcast<vec4<f32>>(mem_get(b));
+    let f = bitcast<vec4<f32>>(mem_get(b + 1u));
+    return Cam(a.xyz, vec2<f32>(a.w, f.w), f.xyz, bitcast<vec4<f32>>(mem_get(b + 2u)).xyz, bitcast<vec4<f32>>(mem_get(b + 3u)).xyz, bitcast<vec4<f32>>(mem_get(b + 4u)).xyz);
+}
+
+// Whether two cameras see exactly the same view (position, orientation and field of view;
+// their jitters may differ).
+fn same_view(a: Cam, b: Cam) -> bool {
+    return all(a.pos == b.pos) && all(a.origin == b.origin) && all(a.forward == b.forward)
+        && all(a.right == b.right) && all(a.up == b.up);
+}
+
+// Where \`v\` (relative to the camera) falls on camera \`c\`'s image, in pixels from its
+// top-left corner; \`z\` ≤ 0 when behind it.
+struct Projection {
+    px: vec2<f32>,
+    z: f32,
+}
+
+fn project(c: Cam, v: vec3<f32>) -> Projection {
+    let z = dot(v, c.forward);
+    if z <= 0.0 {
+        return Projection(vec2<f32>(-1.0), z);
+    }
+    let sx = dot(v, c.right) / (z * dot(c.right, c.right));
+    let sy = dot(v, c.up) / (z * dot(c.up, c.up));
+    return Projection(vec2<f32>((sx + 1.0) * 0.5 * f32(frame.width), (1.0 - sy) * 0.5 * f32(frame.height)), z);
+}
+
+fn on_image(p: vec2<f32>) -> bool {
+    return all(p >= vec2<f32>(0.0)) && p.x < f32(frame.width) && p.y < f32(frame.height);
+}
+
+// The camera ray of pixel \`q\` of camera \`c\` through its jittered point.
+fn cam_dir(c: Cam, q: vec2<u32>) -> vec3<f32> {
+    let sx = 2.0 * (f32(q.x) + c.jitter.x) / f32(frame.width) - 1.0;
+    let sy = 1.0 - 2.0 * (f32(q.y) + c.jitter.y) / f32(frame.height);
+    return c.forward + sx * c.right + sy * c.up;
+}
+
+// ---- Encodings ----
+
+// Normal id: 2·axis + (1 when positive) for the dominant axis.
+fn normal_id(n: vec3<f32>) -> u32 {
+    let a = abs(n);
+    var axis = 2u;
+    if a.x >= a.y && a.x >= a.z {
+        axis = 0u;
+    } else if a.y >= a.z {
+        axis = 1u;
+    }
+    return 2u * axis + select(0u, 1u, n[axis] > 0.0);
+}
+
+// A unit vector in 16 bits (octahedral, 8 bits a component, on 255 levels so that 0 and
+// ±1 are exact: the world's axis normals survive unchanged).
+fn oct_encode(n: vec3<f32>) -> u32 {
+    var p = n.xy / (abs(n.x) + abs(n.y) + abs(n.z));
+    if n.z < 0.0 {
+        p = (vec2<f32>(1.0) - abs(p.yx)) * select(vec2<f32>(-1.0), vec2<f32>(1.0), p >= vec2<f32>(0.0));
+    }
+    let q = vec2<u32>(round(clamp(p * 0.5 + 0.5, vec2<f32>(0.0), vec2<f32>(1.0)) * 254.0));
+    return q.x | (q.y << 8u);
+}
+
+fn oct_decode(e: u32) -> vec3<f32> {
+    let p = vec2<f32>(f32(e & 0xFFu), f32((e >> 8u) & 0xFFu)) / 254.0 * 2.0 - 1.0;
+    var n = vec3<f32>(p, 1.0 - abs(p.x) - abs(p.y));
+    if n.z < 0.0 {
+        let xy = (vec2<f32>(1.0) - abs(n.yx)) * select(vec2<f32>(-1.0), vec2<f32>(1.0), n.xy >= vec2<f32>(0.0));
+        n = vec3<f32>(xy, n.z);
+    }
+    return normalize(n);
+}
+
+// The pixel's final surface: its normal (from gmat.y) and material (gmat.x).
+fn surface_normal(g: vec4<u32>) -> vec3<f32> {
+    return oct_decode(g.y >> 16u);
+}
+
+fn surface_class(g: vec4<u32>) -> u32 {
+    return (g.x >> 4u) & 3u;
+}
+
+fn surface_normal_id(g: vec4<u32>) -> u32 {
+    return (g.x >> 8u) & 7u;
+}
+
+fn luminance(c: vec3<f32>) -> f32 {
+    return dot(c, vec3<f32>(0.2126, 0.7152, 0.0722));
+}
+
+// ---- The atmosphere table ----
+
+// The table is latitude–longitude: columns are azimuth, rows elevation warped as
+// v = sign(e)·sqrt(|e|/(π/2)) to spend rows near the horizon, which lies exactly between
+// rows LUT_SIZE/2 − 1 and LUT_SIZE/2, so that no lookup blends the sky with the ground.
+
+// The table coordinates (continuous, texel centres at +0.5) of unit \`d\`.
+fn lut_coords(d: vec3<f32>) -> vec2<f32> {
+    let e = asin(clamp(d.y, -1.0, 1.0)) / (0.5 * PI);
+    let v = sign(e) * sqrt(abs(e));
+    let a = atan2(d.x, d.z) / (2.0 * PI) + 0.5;
+    return vec2<f32>(a, v * 0.5 + 0.5) * f32(LUT_SIZE);
+}
+
+// The unit direction at the centre of texel \`t\`.
+fn lut_direction(t: vec2<u32>) -> vec3<f32> {
+    let uv = (vec2<f32>(t) + 0.5) / f32(LUT_SIZE);
+    let v = uv.y * 2.0 - 1.0;
+    let e = sign(v) * v * v * 0.5 * PI;
+    let a = (uv.x - 0.5) * 2.0 * PI;
+    return vec3<f32>(cos(e) * sin(a), sin(e), cos(e) * cos(a));
+}
+
+// Texel (x, y) with x wrapping around the azimuth and y clamped to the rows of the
+// hemisphere \`upper\` names.
+fn lut_texel(x: i32, y: i32, upper: bool) -> vec3<f32> {
+    let half = i32(LUT_SIZE) / 2;
+    let cx = u32((x + i32(LUT_SIZE)) % i32(LUT_SIZE));
+    let cy = u32(select(clamp(y, 0, half - 1), clamp(y, half, i32(LUT_SIZE) - 1), upper));
+    return bitcast<vec4<f32>>(mem_get(gi.off_lut + cx + cy * LUT_SIZE)).rgb;
+}
+
+// The sky along unit \`d\` from the table, bilinearly filtered within its hemisphere.
+fn sky_base(d: vec3<f32>) -> vec3<f32> {
+    if light.sky_physical == 0u {
+        return light.sky;
+    }
+    let upper = d.y >= 0.0;
+    let t = lut_coords(d) - 0.5;
+    let b = floor(t);
+    let f = t - b;
+    let x = i32(b.x);
+    let y = i32(b.y);
+    let top = mix(lut_texel(x, y, upper), lut_texel(x + 1, y, upper), f.x);
+    let bottom = mix(lut_texel(x, y + 1, upper), lut_texel(x + 1, y + 1, upper), f.x);
+    return mix(top, bottom, f.y);
+}
+
+// Pass \`gi_atmosphere\`: fills the whole table (when a history starts: the light is part of
+// what a history is of).
+@compute @workgroup_size(8, 8)
+fn gi_atmosphere(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if gid.x >= LUT_SIZE || gid.y >= LUT_SIZE {
+        return;
+    }
+    mem_set(gi.off_lut + gid.x + gid.y * LUT_SIZE, bitcast<vec4<u32>>(vec4<f32>(sky_direct(lut_direction(gid.xy)), 0.0)));
+}
+
+// The entities' poses per frame, so that the long-term TAA follows a moving entity
+// (docs/RENDERING.md §3c, "Entities in the history").
+//
+// \`words\` holds, after the queued pixels, TAA_SLOTS tables of ENTITY_IDS entries: entry
+// \`id\` of slot \`s\` is words 0–3 of entity \`id\`'s instance record (position, rotation and
+// type; world/src/entity/pack.rs) as of the frame that wrote slot \`s\`, or zero where the
+// entity did not exist (no record is all zero: its rotation word would not be a unit
+// quaternion). Two passes per frame fill this frame's slot.
+
+const ENTITY_IDS: u32 = NO_ENTITY;
+
+fn pose_word(slot: u32, id: u32) -> u32 {
+    return gi.off_queue_list + 64u * region_count() + 4u * (slot * ENTITY_IDS + id);
+}
+
+// Entity \`id\`'s record words 0–3 in TAA slot \`slot\` (zero: it did not exist).
+fn pose_words(slot: u32, id: u32) -> vec4<u32> {
+    let at = pose_word(slot, id);
+    return vec4<u32>(words[at], words[at + 1u], words[at + 2u], words[at + 3u]);
+}
+
+// An entity's placement: its local origin (relative to this frame's integer camera
+// position) and the rotation from world to entity axes.
+struct Pose {
+    origin: vec3<f32>,
+    to_local: vec4<f32>,
+}
+
+fn pose_of(w: vec4<u32>) -> Pose {
+    let pos = record_position(w.x, w.y);
+    let origin = vec3<f32>(vec3<i32>(pos >> vec3<u32>(7u)) - frame.cam_int) + vec3<f32>(pos & vec3<u32>(127u)) / 128.0;
+    return Pose(origin, decode_quat(w.z, w.w & 0xFFFu));
+}
+
+// Point \`p\` (relative to this frame's integer camera position) of an entity placed at
+// \`was\`, where it lies when the entity is placed at \`now\`.
+fn carry(p: vec3<f32>, was: Pose, now: Pose) -> vec3<f32> {
+    return now.origin + rotate(conjugate(now.to_local), rotate(was.to_local, p - was.origin));
+}
+
+// ---- Pass gi_poses_clear: this frame's slot starts empty ----
+
+@compute @workgroup_size(64)
+fn gi_poses_clear(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    let id = flat_id(wg, groups, li);
+    if id >= ENTITY_IDS {
+        return;
+    }
+    let at = pose_word(gi.taa_slot, id);
+    for (var k = 0u; k < 4u; k++) {
+        words[at + k] = 0u;
+    }
+}
+
+// ---- Pass gi_poses: one thread per chunk copies the poses of the records it lists ----
+//
+// An entity over several chunks has a record in each, all alike: the threads that write
+// its entry write the same words.
+
+@compute @workgroup_size(64)
+fn gi_poses(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+    let ci = flat_id(wg, groups, li);
+    let c = world_info.chunks;
+    if world_info.has_entities == 0u || ci >= c.x * c.y * c.z {
+        return;
+    }
+    let field = chunk_entity_word(ci);
+    let first = field >> 8u;
+    for (var j = 0u; j < (field & 0xFFu); j++) {
+        let r = (first + j) * RECORD_WORDS;
+        let at = pose_word(gi.taa_slot, record_id(instance_word(r + 4u)));
+        for (var k = 0u; k < 4u; k++) {
+            words[at + k] = instance_word(r + k);
+        }
+    }
+}
+
+// The GI pipeline's per-pixel passes around the samples (docs/RENDERING.md §3c): the first
+// hit, the long-term TAA's reprojection, and the TAA merge that stores this frame's sample.
+
+// ---- The long-term TAA's 64-bit samples ----
+//
+// x: the chain length as f16 without its sign bit (15 bits) | the hash << 16.
+// y: R, G, B in 8 bits each on a log scale (c = 12·log2(x/100 + 2^(−255/12)) + 255,
+//    c = 0 is black, a step is 5.9 %) | normal id << 24 | cls << 27.
+
+const TAA_LOG_FLOOR: f32 = 4.1529e-7; // 2^(−255/12)
+const TAA_MAX: f32 = 100.0;
+// How far (pixels) a history sample may land from this pixel's sample when reprojected back.
+const TAA_RADIUS: f32 = 1.0;
+
+fn taa_read(slot: u32, pixel: u32) -> vec2<u32> {
+    let i = slot * pixel_count() + pixel;
+    return taa_get(i);
+}
+
+fn taa_write(slot: u32, pixel: u32, v: vec2<u32>) {
+    let i = slot * pixel_count() + pixel;
+    taa_set(i, v);
+}
+
+// One channel on the log scale, rounded to the level below or above at random (\`u\`
+// uniform in [0, 1)) with the odds that make the decoded value's mean exactly \`x\`: the
+// TAA's mean is then unbiased in linear light (rounding by the fraction of the log-scale
+// position is unbiased in the log domain only, and the decoding's convexity makes that
+// brighter on average).
+fn taa_channel(x: f32, u: f32) -> u32 {
+    if x <= 0.0 {
+        return 0u;
+    }
+    let c = clamp(12.0 * log2(x / TAA_MAX + TAA_LOG_FLOOR) + 255.0, 0.0, 255.0);
+    let lo = u32(floor(c));
+    if lo >= 255u {
+        return 255u;
+    }
+    let below = taa_decode_channel(lo);
+    let above = taa_decode_channel(lo + 1u);
+    return select(lo, lo + 1u, u * (above - below) < x - below);
+}
+
+fn taa_decode_channel(c: u32) -> f32 {
+    if c == 0u {
+        return 0.0;
+    }
+    return max(TAA_MAX * (exp2((f32(c) - 255.0) / 12.0) - TAA_LOG_FLOOR), 0.0);
+}
+
+fn taa_colour(y: u32) -> vec3<f32> {
+    return vec3<f32>(taa_decode_channel(y & 0xFFu), taa_decode_channel((y >> 8u) & 0xFFu), taa_decode_channel((y >> 16u) & 0xFFu));
+}
+
+fn taa_distance(x: u32) -> f32 {
+    return unpack2x16float(x & 0x7FFFu).x;
+}
+
+// ---- Pass gi_first_hit ----
+
+@compute @workgroup_size(8, 8)
+fn gi_first_hit(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if gid.x >= frame.width || gid.y >= frame.height {
+        return;
+    }
+    let i = gid.x + gid.y * frame.width;
+    let r = ray_new(frame.cam_int, frame.cam_frac, camera_dir(frame, gid.xy, vec2<f32>(gi.jitter_x, gi.jitter_y)));
+    let c = first_hit_chain(r, trace(r), false);
+    let dn = c.r.d / c.r.len;
+    var emit = vec3<f32>(0.0);
+    var thr = c.throughput;
+    var kind = KIND_DIFFUSE;
+    var cls = CLASS_NONE;
+    var nid = NO_NORMAL;
+    var mat_id = 0u;
+    var entity = NO_ENTITY;
+    var p = vec3<f32>(0.0);
+    // A ray that ran out of steps brings no light, as in the path tracer.
+    if c.end == CHAIN_SKY && !c.h.exhausted {
+        // Evaluated directly, not from the table: a camera ray's sky is seen as it is,
+        // and the table's interpolation error would show across every sky pixel.
+        emit = c.throughput * (sky_direct(dn) + sun_disc(dn));
+    } else if c.end == CHAIN_SURFACE {
+        let m = material(c.h.material);
+        kind = m.kind;
+        mat_id = c.h.material;
+        entity = c.h.entity;
+        nid = normal_id(c.n);
+        p = vec3<f32>(c.r.o_int - frame.cam_int) + ray_local(c.r, c.h.t);
+        if m.kind == KIND_EMISSIVE {
+            emit = c.throughput * m.albedo * m.emission;
+        }
+        if m.kind == KIND_METAL {
+            cls = CLASS_GLOSSY;
+        } else {
+            cls = CLASS_DIFFUSE;
+            thr *= m.albedo;
+        }
+    }
+    // The hash of what the pixel sees, for the TAA: its cls, its entity and the normals
+    // of the mirrors on the way (docs/RENDERING.md §3c).
+    var key = cls | (entity << 2u);
+    for (var s = 0u; s < MAX_SEGMENTS - 1u; s++) {
+        let next = c.planes[s + 1u];
+        if next != HIT_UNDEFINED {
+            key = pcg_hash(key ^ ((c.planes[s] & 7u) << (3u * s)));
+        }
+    }
+    let hash = pcg_hash(key ^ nid) & 0xFFFFu;
+    mem_set(gi.off_gbuf + i, bitcast<vec4<u32>>(vec4<f32>(p, c.distance)));
+    let wo = oct_encode(-dn);
+    mem_set(gi.off_gmat + i, vec4<u32>(
+        kind | (cls << 4u) | (nid << 8u) | (mat_id << 16u),
+        hash | (oct_encode(c.n) << 16u),
+        pack2x16float(thr.rg),
+        (pack2x16float(vec2<f32>(thr.b, 0.0)) & 0xFFFFu) | (wo << 16u),
+    ));
+    // The entity the pixel sees directly (not in a mirror), whose poses the TAA follows.
+    var seen = NO_ENTITY;
+    if c.end == CHAIN_SURFACE && c.planes[1] == HIT_UNDEFINED {
+        seen = entity;
+    }
+    mem_set(gi.off_emitted + i, bitcast<vec4<u32>>(vec4<f32>(emit, f32(seen))));
+}
+
+// ---- Pass gi_taa: the long-term TAA's gather ----
+
+fn chain_length(i: u32) -> f32 {
+    let d = bitcast<vec4<f32>>(mem_get(gi.off_gbuf + i)).w;
+    return select(d, SKY_DIST, d < 0.0);
+}
+
+fn hash_at(i: u32) -> u32 {
+    return mem_get(gi.off_gmat + i).y & 0xFFFFu;
+}
+
+@compute @workgroup_size(8, 8)
+fn gi_taa(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if gid.x >= frame.width || gid.y >= frame.height {
+        return;
+    }
+    let i = gid.x + gid.y * frame.width;
+    let d = chain_length(i);
+    var lo = d;
+    var hi = d;
+    var hashes = array<u32, 9>(0u, 0u, 0u, 0u, 0u, 0u, 0u, 0u, 0u);
+    var k = 0u;
+    for (var dy = -1; dy <= 1; dy++) {
+        for (var dx = -1; dx <= 1; dx++) {
+            let x = clamp(i32(gid.x) + dx, 0, i32(frame.width) - 1);
+            let y = clamp(i32(gid.y) + dy, 0, i32(frame.height) - 1);
+            let j = u32(x) + u32(y) * frame.width;
+            lo = min(lo, chain_length(j));
+            hi = max(hi, chain_length(j));
+            hashes[k] = hash_at(j);
+            k++;
+        }
+    }
+    mem_set(gi.off_taa_info + 2u * i + 1u, bitcast<vec4<u32>>(vec4<f32>(lo, hi, 0.0, 0.0)));
+    let sky = d >= SKY_DIST;
+    // The point the pixel sees along its unjittered ray, relative to this frame's integer
+    // camera position like the cameras (the sky: its direction).
+    let dir = normalize(camera_dir(frame, gid.xy, vec2<f32>(0.5)));
+    let here = cam(0u);
+    var point = here.pos + dir * d;
+    if sky {
+        point = dir;
+    }
+    // An entity seen directly: its samples of earlier frames are found where its pose of
+    // that frame put the point.
+    let seen = u32(bitcast<vec4<f32>>(mem_get(gi.off_emitted + i)).w);
+    let follow = seen != NO_ENTITY && !sky;
+    var pose_now = Pose(vec3<f32>(0.0), vec4<f32>(0.0, 0.0, 0.0, 1.0));
+    if follow {
+        pose_now = pose_of(pose_words(gi.taa_slot, seen));
+    }
+    // How recently the pixel's surface changed, or light near it (none for the sky).
+    var marks = vec2<u32>(0u);
+    if !sky {
+        marks = changes_at(bitcast<vec4<f32>>(mem_get(gi.off_gbuf + i)).xyz, surface_normal(mem_get(gi.off_gmat + i)));
+    }
+    let edit = max(gi.edit_frame, marks.y);
+    var sum = vec3<f32>(0.0);
+    var count = 0.0;
+    for (var age = 1u; age <= gi.taa_valid; age++) {
+        let taken = gi.frame - age;
+        // A sample from before the surface's own chunk changed shows what is gone (an
+        // entity's own moves change its chunks: its history follows its poses instead).
+        if taken < marks.x && !follow {
+            break;
+        }
+        // Light from before a world change near the surface (or a change of the
+        // materials) fades out within EDIT_HISTORY_FRAMES frames; so does light resampled
+        // from the ring while it still held samples from before the change (the first
+        // EDIT_HISTORY_FRAMES frames after it).
+        if edit > 0u && taken < edit + EDIT_HISTORY_FRAMES && age > EDIT_HISTORY_FRAMES {
+            break;
+        }
+        let c = cam(age);
+        // Where the point was then: an entity's moves carry it.
+        var then = point;
+        var pose_then = pose_now;
+        if follow {
+            let w = pose_words((gi.taa_slot + TAA_SLOTS - age) % TAA_SLOTS, seen);
+            // The entity did not exist then.
+            if all(w == vec4<u32>(0u)) {
+                break;
+            }
+            pose_then = pose_of(w);
+            then = carry(point, pose_now, pose_then);
+        }
+        // From the same view, with nothing in the world changed since, the pixel's own
+        // sample shows its footprint at that frame's jitter: it counts as it is. A pixel
+        // that spans several voxels (a small model, a far wall) needs every one of its 32
+        // jitters: the tests below would keep only those near the surface this frame's
+        // jitter hit. A change anywhere ends this: a block removed in front of a far wall,
+        // or an entity moved away from a floor, changes no chunk near the surface that
+        // the pixel sees now, and yet its earlier samples show what was there.
+        let still = same_view(c, here) && taken >= gi.change_frame;
+        var qp = gid.xy;
+        if !still {
+            var v = then;
+            if !sky {
+                v = then - c.pos;
+            }
+            let pr = project(c, v);
+            let q = pr.px - c.jitter + 0.5;
+            if pr.z <= 0.0 || !on_image(q) {
+                continue;
+            }
+            qp = vec2<u32>(q);
+        }
+        let s = taa_read((gi.taa_slot + TAA_SLOTS - age) % TAA_SLOTS, qp.x + qp.y * frame.width);
+        if s.y == 0u && s.x == 0u {
+            continue;
+        }
+        if still {
+            sum += taa_colour(s.y);
+            count += 1.0;
+            continue;
+        }
+        let sd = taa_distance(s.x);
+        let shash = s.x >> 16u;
+        // A sample may show any of the 3×3 neighbours' surfaces (the pixel's footprint
+        // straddles an edge across the jitters), except one from before a world change:
+        // an entity that moved in (or a block placed) would take the old surface's
+        // samples where its edge is, so those must show this pixel's own surface.
+        var same = shash == hashes[4];
+        if edit == 0u || taken >= edit {
+            for (var h = 0u; h < 9u; h++) {
+                same = same || shash == hashes[h];
+            }
+        }
+        if !same {
+            continue;
+        }
+        // Where the old sample's surface was (or, for the sky, its direction), seen from
+        // this camera. On a silhouette the sky and the ground each keep their share: a
+        // sample of either kind counts when the 3×3 neighbourhood still holds its kind
+        // and it lands on this pixel.
+        var back: Projection;
+        let old_dir = normalize(cam_dir(c, qp));
+        if sd >= SKY_DIST {
+            if hi < SKY_DIST {
+                continue;
+            }
+            back = project(here, old_dir);
+        } else {
+            var old = c.pos + old_dir * sd;
+            if follow {
+                old = carry(old, pose_then, pose_now);
+            }
+            let dist = length(old - here.pos);
+            if dist < lo * (1022.0 / 1024.0) || dist > hi * (1026.0 / 1024.0) || sd > 2.0 * hi {
+                continue;
+            }
+            back = project(here, old - here.pos);
+        }
+        let off = back.px - (vec2<f32>(gid.xy) + vec2<f32>(gi.jitter_x, gi.jitter_y));
+        if back.z <= 0.0 || dot(off, off) > TAA_RADIUS * TAA_RADIUS {
+            continue;
+        }
+        sum += taa_colour(s.y);
+        count += 1.0;
+    }
+    mem_set(gi.off_taa_info + 2u * i, bitcast<vec4<u32>>(vec4<f32>(sum, count)));
+}
+
+// ---- Pass gi_merge: this frame's colour, its TAA sample and the result ----
+
+@compute @workgroup_size(8, 8)
+fn gi_merge(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if gid.x >= frame.width || gid.y >= frame.height {
+        return;
+    }
+    let i = gid.x + gid.y * frame.width;
+    let g = mem_get(gi.off_gmat + i);
+    let thr = vec3<f32>(unpack2x16float(g.z), unpack2x16float(g.w).x);
+    let colour = bitcast<vec4<f32>>(mem_get(gi.off_emitted + i)).rgb + thr * bitcast<vec4<f32>>(mem_get(gi.off_illum + i)).rgb;
+    var rng = rng_new(frame.seed ^ 0x5A17u, i, gi.frame);
+    var c = colour;
+    let peak = max(c.r, max(c.g, c.b));
+    if peak > TAA_MAX {
+        c *= TAA_MAX / peak;
+    }
+    let y = taa_channel(c.r, rng_next(&rng)) | (taa_channel(c.g, rng_next(&rng)) << 8u)
+        | (taa_channel(c.b, rng_next(&rng)) << 16u) | (((g.x >> 8u) & 7u) << 24u) | (((g.x >> 4u) & 3u) << 27u);
+    let dist = chain_length(i);
+    let x = (pack2x16float(vec2<f32>(dist, 0.0)) & 0x7FFFu) | ((g.y & 0xFFFFu) << 16u);
+    taa_write(gi.taa_slot, i, vec2<u32>(x, y));
+    let a = taa_accum(i);
+    mem_set(gi.off_result + i, bitcast<vec4<u32>>(vec4<f32>((a.rgb + colour) / (a.w + 1.0), dist)));
+}
+
+// The GI pipeline's secondary samples (docs/RENDERING.md §3c): the ray queue, the secondary
+// rays, and the region projection that gathers the samples of earlier frames into this
+// frame's 8×8 regions, then refines each region to at most MAX_KEPT samples.
+//
+// A ring sample is RING_VEC4 = 3 vec4<u32>:
+// 0: the primary surface point (relative to its frame's integer camera position), frame;
+// 1: the sample point (same frame; for the sky: the direction), flags: sky | cls << 1 |
+//    primary normal id << 4 | octahedral normal at the sample point << 16;
+// 2: the radiance that came back along the secondary ray, the pdf it was drawn with.
+
+var<workgroup> wg_flags: array<u32, 64>;
+var<workgroup> wg_offsets: array<u32, 64>;
+var<workgroup> wg_scan: array<u32, 256>;
+
+const NO_PRIORITY: u32 = 0xFFFFFFFFu;
+
+// Offsets in \`buckets\`.
+fn bucket_priority(region: u32, slot: u32) -> u32 {
+    return region * BUCKET_SLOTS + slot;
+}
+
+fn bucket_index(region: u32, slot: u32) -> u32 {
+    return (region_count() + region) * BUCKET_SLOTS + slot;
+}
+
+// The lit and unlit counts of \`region\`, per normal id: lit at + 2·id, unlit at + 2·id + 1.
+fn bucket_counts(region: u32) -> u32 {
+    return 2u * region_count() * BUCKET_SLOTS + 2u * NORMALS * region;
+}
+
+// ---- Pass gi_queue: which pixels trace a secondary ray this frame ----
+//
+// One workgroup per region. A pixel with m − 1 accepted TAA samples (m ≤ QUEUE_PERIOD) is
+// traced one frame in m, on a pattern that rotates every frame for every m:
+// (frame + x + 2y) mod m. A traced pixel's path is also its own light that frame.
+// The region's queued pixels are compacted in pixel order, so the queue is the same on
+// every run. The pass also clears the region's buckets for the projection.
+@compute @workgroup_size(8, 8)
+fn gi_queue(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) li: u32,
+    @builtin(workgroup_id) wid: vec3<u32>) {
+    let region = wid.x + wid.y * gi.regions_x;
+    if li < BUCKET_SLOTS {
+        atomicStore(&buckets[bucket_priority(region, li)], NO_PRIORITY);
+    }
+    if li < 2u * NORMALS {
+        atomicStore(&buckets[bucket_counts(region) + li], 0u);
+    }
+    var queued = 0u;
+    let i = gid.x + gid.y * frame.width;
+    // Only diffuse surfaces share samples; a metal traces its own (gi_resample.wgsl).
+    if gid.x < frame.width && gid.y < frame.height && light.bounces > 0u && surface_class(mem_get(gi.off_gmat + i)) == CLASS_DIFFUSE {
+        let m = u32(min(taa_accum(i).w, f32(QUEUE_PERIOD - 1u))) + 1u;
+        if (gi.frame + gid.x + 2u * gid.y) % m == 0u {
+            queued = 1u;
+        }
+    }
+    wg_flags[li] = queued;
+    workgroupBarrier();
+    if li == 0u {
+        var sum = 0u;
+        for (var k = 0u; k < 64u; k++) {
+            wg_offsets[k] = sum;
+            sum += wg_flags[k];
+        }
+        words[CONTROL_WORDS + region] = sum;
+    }
+    workgroupBarrier();
+    if queued == 1u {
+        words[gi.off_queue_list + region * 64u + wg_offsets[li]] = i;
+    }
+}
+
+// Indirect arguments for \`groups\` workgroups at \`at\`: 2D when over 65,535 (wgpu zeroes a
+// larger 1D indirect dispatch).
+fn write_args(at: u32, groups: u32) {
+    words[at] = min(groups, 65535u);
+    words[at + 1u] = max((groups + 65534u) / 65535u, 1u);
+    words[at + 2u] = 1u;
+}
+
+// ---- Pass gi_queue_scan: one workgroup ----
+//
+// Prefix sums of the regions' queue counts (the queue's layout), this frame's place in the
+// sample ring, how many ring samples the projection reads, and both indirect dispatches.
+@compute @workgroup_size(256)
+fn gi_queue_scan(@builtin(local_invocation_index) li: u32) {
+    let regions = region_count();
+    var carry = 0u;
+    for (var base = 0u; base < regions; base += 256u) {
+        let r = base + li;
+        var v = 0u;
+        if r < regions {
+            v = words[CONTROL_WORDS + r];
+        }
+        wg_scan[li] = v;
+        workgroupBarrier();
+        for (var off = 1u; off < 256u; off <<= 1u) {
+            var add = 0u;
+            if li >= off {
+                add = wg_scan[li - off];
+            }
+            workgroupBarrier();
+            wg_scan[li] += add;
+            workgroupBarrier();
+        }
+        if r < regions {
+            words[CONTROL_WORDS + regions + r] = carry + wg_scan[li] - v;
+        }
+        carry += wg_scan[255];
+        workgroupBarrier();
+    }
+    if li != 0u {
+        return;
+    }
+    let cap = gi.ring_capacity;
+    let total = carry;
+    let stored = min(total, cap);
+    let start = words[CONTROL_HEAD];
+    words[CONTROL_QUEUED] = total;
+    words[CONTROL_START] = start;
+    words[CONTROL_HEAD] = (start + stored) % cap;
+    words[CONTROL_FRAMES + gi.frame % CAMERA_HISTORY] = stored;
+    // The newest frames whose samples all fit in the ring (and are still valid).
+    var valid = 0u;
+    for (var age = 0u; age <= cams_valid(); age++) {
+        if gi.frame - age < gi.edit_frame && age > EDIT_HISTORY_FRAMES {
+            break;
+        }
+        let n = words[CONTROL_FRAMES + (gi.frame - age) % CAMERA_HISTORY];
+        if valid + n > cap {
+            break;
+        }
+        valid += n;
+    }
+    words[CONTROL_VALID] = valid;
+    write_args(CONTROL_TRACE_ARGS, (stored + 63u) / 64u);
+    write_args(CONTROL_PROJECT_ARGS, (valid + 63u) / 64u);
+}
+
+// ---- Pass gi_trace: one secondary path per queued pixel ----
+@compute @workgroup_size(64)
+fn gi_trace(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
+    @builtin(local_invocation_index) li: u32) {
+    let t = flat_id(wid, groups, li);
+    if t >= min(words[CONTROL_QUEUED], gi.ring_capacity) {
+        return;
+    }
+    // The region holding queue entry t: the last one starting at or before it.
+    let regions = region_count();
+    var lo = 0u;
+    var hi = regions - 1u;
+    while lo < hi {
+        let mid = (lo + hi + 1u) / 2u;
+        if words[CONTROL_WORDS + regions + mid] <= t {
+            lo = mid;
+        } else {
+            hi = mid - 1u;
+        }
+    }
+    let pixel = words[gi.off_queue_list + lo * 64u + t - words[CONTROL_WORDS + regions + lo]];
+    // Seeded by the pixel and the frame, never by the queue slot.
+    var rng = rng_new(frame.seed, pixel, gi.frame);
+    let g = mem_get(gi.off_gmat + pixel);
+    let p = bitcast<vec4<f32>>(mem_get(gi.off_gbuf + pixel)).xyz;
+    let n = surface_normal(g);
+    let cls = surface_class(g);
+    let origin = p + n * SURFACE_OFFSET;
+    let dir = sample_cosine(n, vec2<f32>(rng_next(&rng), rng_next(&rng)));
+    let pdf = max(dot(n, dir), 0.0) / PI;
+    var s = PathSample(vec3<f32>(0.0), -1.0, n);
+    if pdf > 0.0 {
+        let base = ray_new(frame.cam_int, vec3<f32>(0.0), dir);
+        s = path_radiance(ray_at(base, origin, dir), light.bounces - 1u, false, &rng);
+    }
+    let sky = s.distance < 0.0;
+    var point = dir;
+    var ns = n;
+    if !sky {
+        point = origin + dir * s.distance;
+        ns = s.normal;
+    }
+    let idx = (words[CONTROL_START] + t) % gi.ring_capacity;
+    mem_set(gi.off_ring + RING_VEC4 * idx, vec4<u32>(bitcast<vec3<u32>>(p), gi.frame));
+    mem_set(gi.off_ring + RING_VEC4 * idx + 1u, vec4<u32>(bitcast<vec3<u32>>(point),
+        select(0u, 1u, sky) | (cls << 1u) | (surface_normal_id(g) << 4u) | (oct_encode(ns) << 16u)));
+    let radiance = bitcast<vec3<u32>>(max(s.radiance, vec3<f32>(0.0)));
+    mem_set(gi.off_ring + RING_VEC4 * idx + 2u, vec4<u32>(radiance, bitcast<u32>(pdf)));
+    // The pixel's own estimate of its incoming light this frame (cosine-weighted, so the
+    // radiance itself), tagged with the frame + 1 (the array starts zeroed).
+    mem_set(gi.off_own + pixel, vec4<u32>(radiance, gi.frame + 1u));
+}
+
+// ---- Passes gi_project and gi_project_store: the ring's samples into this frame's regions ----
+
+struct Projected {
+    ok: bool,
+    region: u32,
+    // The primary surface's normal id.
+    nid: u32,
+    lit: bool,
+    priority: u32,
+    idx: u32,
+}
+
+// Ring sample number \`t\` counting back from the newest, projected into this frame: its
+// primary surface must land on a pixel of the same cls and normal, on the same plane.
+fn project_sample(t: u32) -> Projected {
+    let none = Projected(false, 0u, 0u, false, NO_PRIORITY, 0u);
+    if t >= words[CONTROL_VALID] {
+        return none;
+    }
+    let cap = gi.ring_capacity;
+    let newest = (words[CONTROL_START] + min(words[CONTROL_QUEUED], cap) + cap - 1u) % cap;
+    let idx = (newest + cap - t) % cap;
+    let e0 = mem_get(gi.off_ring + RING_VEC4 * idx);
+    let e1 = mem_get(gi.off_ring + RING_VEC4 * idx + 1u);
+    let age = gi.frame - e0.w;
+    if age > cams_valid() {
+        return none;
+    }
+    let here = cam(0u);
+    let p = bitcast<vec4<f32>>(e0).xyz + cam(age).origin;
+    // Light traced before a change of the sample's surface, or of the surface its path
+    // hit (a removed or added emitter), is dropped; light traced before a change near
+    // either lasts EDIT_HISTORY_FRAMES frames, as after a change of the materials.
+    var marks = changes_at(p, normal_of_id((e1.w >> 4u) & 7u));
+    if (e1.w & 1u) == 0u {
+        marks = max(marks, changes_at(bitcast<vec4<f32>>(e1).xyz + cam(age).origin, oct_decode(e1.w >> 16u)));
+    }
+    let edit = max(gi.edit_frame, marks.y);
+    if e0.w < marks.x || (e0.w < edit && age > EDIT_HISTORY_FRAMES) {
+        return none;
+    }
+    let pr = project(here, p - here.pos);
+    if !on_image(pr.px) || pr.z <= 0.0 {
+        return none;
+    }
+    let q = vec2<u32>(pr.px);
+    let qi = q.x + q.y * frame.width;
+    let g = mem_get(gi.off_gmat + qi);
+    if surface_class(g) != ((e1.w >> 1u) & 3u) || surface_normal_id(g) != ((e1.w >> 4u) & 7u) {
+        return none;
+    }
+    let off = abs(dot(surface_normal(g), p - bitcast<vec4<f32>>(mem_get(gi.off_gbuf + qi)).xyz));
+    if off > 0.05 + 0.002 * length(p - here.pos) {
+        return none;
+    }
+    let rgb = bitcast<vec4<f32>>(mem_get(gi.off_ring + RING_VEC4 * idx + 2u)).xyz;
+    // Drawn anew each frame, so that a region's winners (and the light its pixels
+    // resample) change from frame to frame and the TAA averages independent draws.
+    let priority = min(pcg_hash(pcg_hash(pcg_hash(e0.w) ^ idx) ^ gi.frame), NO_PRIORITY - 1u);
+    return Projected(true, region_of(q.x, q.y), (e1.w >> 4u) & 7u, any(rgb > vec3<f32>(0.0)), priority, idx);
+}
+
+// Counts lit and unlit samples per region; each lit sample bids for one of its region's
+// BUCKET_SLOTS slots with a priority hashed from its frame, its ring index and this frame,
+// so that the winners are a random subset that does not depend on the order threads run in.
+@compute @workgroup_size(64)
+fn gi_project(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
+    @builtin(local_invocation_index) li: u32) {
+    let s = project_sample(flat_id(wid, groups, li));
+    if !s.ok {
+        return;
+    }
+    if s.lit {
+        atomicAdd(&buckets[bucket_counts(s.region) + 2u * s.nid], 1u);
+        atomicMin(&buckets[bucket_priority(s.region, pcg_hash(s.priority) % BUCKET_SLOTS)], s.priority);
+    } else {
+        atomicAdd(&buckets[bucket_counts(s.region) + 2u * s.nid + 1u], 1u);
+    }
+}
+
+// The winners write their ring index into their slot.
+@compute @workgroup_size(64)
+fn gi_project_store(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
+    @builtin(local_invocation_index) li: u32) {
+    let s = project_sample(flat_id(wid, groups, li));
+    if !s.ok || !s.lit {
+        return;
+    }
+    let slot = pcg_hash(s.priority) % BUCKET_SLOTS;
+    if atomicLoad(&buckets[bucket_priority(s.region, slot)]) == s.priority {
+        atomicStore(&buckets[bucket_index(s.region, slot)], s.idx);
+    }
+}
+
+// ---- Pass gi_refine: at most MAX_KEPT samples per region ----
+//
+// Brightness levelling: a sample whose brightest channel is m, in a region whose brightest
+// is M, is kept with probability m/M and then scaled by M/m (unbiased); a removed sample
+// counts as unlit. The region's lit ratio is kept / (slots filled + the unlit count scaled
+// like the lit one).
+@compute @workgroup_size(64)
+fn gi_refine(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let region = gid.x;
+    if region >= region_count() {
+        return;
+    }
+    // What the region's pixels see: their normals and chain lengths.
+    var mask = 0u;
+    var lo = SKY_DIST;
+    var hi = 0.0;
+    let x0 = (region % gi.regions_x) * 8u;
+    let y0 = (region / gi.regions_x) * 8u;
+    for (var k = 0u; k < 64u; k++) {
+        let x = x0 + k % 8u;
+        let y = y0 + k / 8u;
+        if x < frame.width && y < frame.height {
+            let i = x + y * frame.width;
+            let g = mem_get(gi.off_gmat + i);
+            if surface_class(g) != CLASS_NONE {
+                mask |= 1u << surface_normal_id(g);
+                lo = min(lo, bitcast<vec4<f32>>(mem_get(gi.off_gbuf + i)).w);
+                hi = max(hi, bitcast<vec4<f32>>(mem_get(gi.off_gbuf + i)).w);
+            }
+        }
+    }
+    // Per normal id: slots filled and samples that survive levelling.
+    var filled = array<u32, 6>(0u, 0u, 0u, 0u, 0u, 0u);
+    var survivors = array<u32, 6>(0u, 0u, 0u, 0u, 0u, 0u);
+    var peak = 0.0;
+    for (var s = 0u; s < BUCKET_SLOTS; s++) {
+        if atomicLoad(&buckets[bucket_priority(region, s)]) != NO_PRIORITY {
+            let idx = atomicLoad(&buckets[bucket_index(region, s)]);
+            filled[min((mem_get(gi.off_ring + RING_VEC4 * idx + 1u).w >> 4u) & 7u, NORMALS - 1u)]++;
+            let rgb = bitcast<vec4<f32>>(mem_get(gi.off_ring + RING_VEC4 * idx + 2u)).xyz;
+            peak = max(peak, max(rgb.r, max(rgb.g, rgb.b)));
+        }
+    }
+    var rng = rng_new(frame.seed ^ 0x7E71u, region, gi.frame);
+    var kept = 0u;
+    for (var s = 0u; s < BUCKET_SLOTS; s++) {
+        if atomicLoad(&buckets[bucket_priority(region, s)]) == NO_PRIORITY {
+            continue;
+        }
+        let idx = atomicLoad(&buckets[bucket_index(region, s)]);
+        let e0 = mem_get(gi.off_ring + RING_VEC4 * idx);
+        let e1 = mem_get(gi.off_ring + RING_VEC4 * idx + 1u);
+        let e2 = mem_get(gi.off_ring + RING_VEC4 * idx + 2u);
+        let rgb = bitcast<vec4<f32>>(e2).xyz;
+        let m = max(rgb.r, max(rgb.g, rgb.b));
+        if rng_next(&rng) * peak >= m {
+            continue;
+        }
+        survivors[min((e1.w >> 4u) & 7u, NORMALS - 1u)]++;
+        if kept == MAX_KEPT {
+            continue;
+        }
+        let col = min(rgb * (peak / m), vec3<f32>(65000.0));
+        let shift = cam(gi.frame - e0.w).origin;
+        let sky = (e1.w & 1u) != 0u;
+        var point = bitcast<vec4<f32>>(e1).xyz;
+        var jac = 1.0;
+        if !sky {
+            point += shift;
+            let primary = bitcast<vec4<f32>>(e0).xyz + shift;
+            let v = point - primary;
+            let d2 = max(dot(v, v), 1e-8);
+            jac = abs(dot(oct_decode(e1.w >> 16u), v * inverseSqrt(d2))) / d2;
+        }
+        let at = 2u * (region * MAX_KEPT + kept);
+        mem_set(gi.off_refined + at, vec4<u32>(bitcast<vec3<u32>>(point), e1.w & 0xFFFF007Fu));
+        mem_set(gi.off_refined + at + 1u, vec4<u32>(pack2x16float(col.rg), pack2x16float(vec2<f32>(col.b, 0.0)), e2.w, bitcast<u32>(jac)));
+        kept++;
+    }
+    // The lit ratio per normal: the light a surface facing one way gets says nothing of
+    // another's in the same region.
+    var ratio = array<f32, 6>(0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+    var total = 0u;
+    for (var n = 0u; n < NORMALS; n++) {
+        let lit = atomicLoad(&buckets[bucket_counts(region) + 2u * n]);
+        let unlit = atomicLoad(&buckets[bucket_counts(region) + 2u * n + 1u]);
+        total += lit + unlit;
+        let unlit_scaled = f32(unlit) * f32(filled[n]) / max(f32(lit), 1.0);
+        ratio[n] = f32(survivors[n]) / max(f32(filled[n]) + unlit_scaled, 1.0);
+    }
+    let base = gi.off_region_info + 3u * region;
+    mem_set(base, bitcast<vec4<u32>>(vec4<f32>(ratio[0], ratio[1], ratio[2], ratio[3])));
+    mem_set(base + 1u, bitcast<vec4<u32>>(vec4<f32>(ratio[4], ratio[5], f32(kept), f32(total))));
+    mem_set(base + 2u, bitcast<vec4<u32>>(vec4<f32>(f32(mask), lo, hi, 0.0)));
+}
+
+// The GI pipeline's per-pixel shading (docs/RENDERING.md §3c): spatial resampling of the
+// regions' refined samples with one visibility ray, the sun by next-event estimation, and
+// the separable sparse bilateral denoiser.
+
+// Candidates per pixel: half in the small window, half in the large one.
+const CANDIDATES: u32 = 12u;
+// The large window's side as a fraction of the image height; the small one's as a
+// fraction of the large one's.
+const WINDOW: f32 = 0.35;
+const SMALL_WINDOW: f32 = 0.1;
+// The denoiser: taps each side at DENOISE_HEIGHT rows (the paper's 1440p; fewer in
+// proportion on smaller images, so that it covers the same share of the picture), the
+// Gaussian's σ as a share of its reach, the guide's strength, and how much of the
+// filtered value it keeps. The taps are 2 px apart.
+const DENOISE_TAPS: f32 = 10.0;
+const DENOISE_HEIGHT: f32 = 1440.0;
+const DENOISE_SIGMA: f32 = 1.0;
+const DENOISE_GUIDE: f32 = 8.0;
+const DENOISE_BLEND: f32 = 0.92;
+// How much nearer than a surface sample (in voxels, before the 4 % margin) the visibility
+// ray may stop and still see it: a ray toward a voxel face at a grazing angle often clips
+// the neighbouring voxel's edge first.
+const VISIBLE_SLACK: f32 = 1.0;
+
+// A coordinate mirrored back into [0, size).
+fn mirrored(v: i32, size: i32) -> u32 {
+    var x = v;
+    if x < 0 {
+        x = -x;
+    }
+    if x >= size {
+        x = 2 * size - 2 - x;
+    }
+    return u32(clamp(x, 0, size - 1));
+}
+
+struct Candidate {
+    // The integrand (radiance × BRDF × cos) toward the sample, its direction and distance.
+    f: vec3<f32>,
+    dir: vec3<f32>,
+    distance: f32,
+    sky: bool,
+    goal: f32,
+}
+
+// The light a diffuse surface at \`p\` (normal \`n\`, id \`nid\`) of pixel \`gid\` reflects (before
+// its albedo), by resampling the regions' refined samples; w is 0 when no candidate could
+// speak for this surface (no estimate, which is not the same as darkness).
+fn resampled(gid: vec2<u32>, p: vec3<f32>, n: vec3<f32>, nid: u32, dist_here: f32, rng: ptr<function, u32>) -> vec4<f32> {
+    let origin = p + n * (2.0 * SURFACE_OFFSET);
+    let base = ray_new(frame.cam_int, vec3<f32>(0.0), n);
+    let big = WINDOW * f32(frame.height);
+    var wsum = 0.0;
+    var count = 0u;
+    var chosen = Candidate(vec3<f32>(0.0), n, 0.0, true, 0.0);
+    for (var c = 0u; c < CANDIDATES; c++) {
+        let side = select(big, big * SMALL_WINDOW, c < CANDIDATES / 2u);
+        let off = (vec2<f32>(rng_next(rng), rng_next(rng)) - 0.5) * side;
+        let qx = mirrored(i32(gid.x) + i32(round(off.x)), i32(frame.width));
+        let qy = mirrored(i32(gid.y) + i32(round(off.y)), i32(frame.height));
+        let region = region_of(qx, qy);
+        let ratios = bitcast<vec4<f32>>(mem_get(gi.off_region_info + 3u * region));
+        let info = bitcast<vec4<f32>>(mem_get(gi.off_region_info + 3u * region + 1u));
+        let shape = bitcast<vec4<f32>>(mem_get(gi.off_region_info + 3u * region + 2u));
+        let pick = rng_next(rng);
+        // A region with no samples says nothing; one whose surfaces differ from this one
+        // does not speak for it.
+        if info.w == 0.0 || (u32(shape.x) & (1u << nid)) == 0u || dist_here < 0.5 * shape.y || dist_here > 2.0 * shape.z {
+            continue;
+        }
+        let kept = u32(info.z);
+        if kept == 0u {
+            // Every sample of the region was unlit: a zero that counts.
+            count++;
+            continue;
+        }
+        // One of the region's kept samples drawn by a surface facing this way (the others
+        // were drawn from other distributions and do not speak for this surface).
+        var matching = 0u;
+        for (var k = 0u; k < kept; k++) {
+            matching += select(0u, 1u, ((mem_get(gi.off_refined + 2u * (region * MAX_KEPT + k)).w >> 4u) & 7u) == nid);
+        }
+        if matching == 0u {
+            continue;
+        }
+        var want = min(u32(pick * f32(matching)), matching - 1u);
+        var at = 0u;
+        for (var k = 0u; k < kept; k++) {
+            let here_at = 2u * (region * MAX_KEPT + k);
+            if ((mem_get(gi.off_refined + here_at).w >> 4u) & 7u) == nid {
+                if want == 0u {
+                    at = here_at;
+                    break;
+                }
+                want--;
+            }
+        }
+        let r0 = mem_get(gi.off_refined + at);
+        let r1 = mem_get(gi.off_refined + at + 1u);
+        let sky = (r0.w & 1u) != 0u;
+        var dir = bitcast<vec4<f32>>(r0).xyz;
+        var distance = 0.0;
+        var jac = 1.0;
+        if !sky {
+            let v = dir - origin;
+            distance = length(v);
+            dir = v / max(distance, 1e-6);
+            jac = abs(dot(oct_decode(r0.w >> 16u), dir)) / max(distance * distance, 1e-8) / max(bitcast<f32>(r1.w), 1e-12);
+            if jac < 0.3 || jac > 2.5 {
+                continue;
+            }
+        }
+        let cos_now = dot(n, dir);
+        let pdf_then = bitcast<f32>(r1.z);
+        if cos_now <= 1e-4 || pdf_then < 0.01 {
+            continue;
+        }
+        let f = cos_now / PI;
+        let ratio = f / pdf_then;
+        if ratio < 0.25 || ratio > 2.0 {
+            continue;
+        }
+        var lit_ratio = info.x;
+        if nid < 4u {
+            lit_ratio = ratios[nid];
+        } else if nid == 5u {
+            lit_ratio = info.y;
+        }
+        let colour = vec3<f32>(unpack2x16float(r1.x), unpack2x16float(r1.y).x) * lit_ratio;
+        let fc = colour * f;
+        let goal = luminance(fc);
+        if goal <= 0.0 {
+            continue;
+        }
+        count++;
+        let w = goal / pdf_then * jac;
+        wsum += w;
+        if rng_next(rng) * wsum < w {
+            chosen = Candidate(fc, dir, distance, sky, goal);
+        }
+    }
+    if wsum > 0.0 {
+        // One visibility ray toward the chosen sample.
+        let h = trace(ray_at(base, origin, chosen.dir));
+        var visible = !h.hit && !h.exhausted;
+        if !chosen.sky {
+            visible = h.hit && (h.t * length(chosen.dir) + VISIBLE_SLACK) * 1.04 >= chosen.distance;
+        }
+        if visible {
+            return vec4<f32>(chosen.f * (wsum / (f32(count) * chosen.goal)), 1.0);
+        }
+    }
+    return vec4<f32>(0.0, 0.0, 0.0, select(0.0, 1.0, count > 0u));
+}
+
+// ---- Pass gi_resample ----
+@compute @workgroup_size(8, 8)
+fn gi_resample(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if gid.x >= frame.width || gid.y >= frame.height {
+        return;
+    }
+    let i = gid.x + gid.y * frame.width;
+    let g = mem_get(gi.off_gmat + i);
+    let cls = surface_class(g);
+    let a = taa_accum(i);
+    let thr = vec3<f32>(unpack2x16float(g.z), unpack2x16float(g.w).x);
+    if cls == CLASS_NONE || light.bounces == 0u {
+        mem_set(gi.off_illum + i, bitcast<vec4<u32>>(vec4<f32>(0.0)));
+        return;
+    }
+    let p = bitcast<vec4<f32>>(mem_get(gi.off_gbuf + i)).xyz;
+    let dist_here = bitcast<vec4<f32>>(mem_get(gi.off_gbuf + i)).w;
+    let n = surface_normal(g);
+    let nid = surface_normal_id(g);
+    let m = material(g.x >> 16u);
+    let alpha = max(m.roughness, MIN_ALPHA);
+    let wo = oct_decode(g.w >> 16u);
+    let base = ray_new(frame.cam_int, vec3<f32>(0.0), n);
+    var rng = rng_new(frame.seed ^ 0x2E5Au, i, gi.frame);
+    var light_in = vec3<f32>(0.0);
+    // A metal traces its own path every frame: its lobe depends on the view, so its
+    // neighbours' samples rarely serve it. So does a diffuse surface that no candidate
+    // could speak for (rather than count as dark).
+    var own = cls == CLASS_GLOSSY;
+    if !own {
+        let mine = mem_get(gi.off_own + i);
+        if mine.w == gi.frame + 1u {
+            // The pixel traced its own secondary path this frame (gi_queue): an unbiased
+            // estimate of its own light.
+            light_in = bitcast<vec3<f32>>(mine.xyz);
+        } else {
+            let r = resampled(gid.xy, p, n, nid, dist_here, &rng);
+            light_in = r.rgb;
+            own = r.w == 0.0;
+        }
+    }
+    if own {
+        let u = vec2<f32>(rng_next(&rng), rng_next(&rng));
+        var s = Scattered(sample_cosine(n, u), vec3<f32>(1.0));
+        if cls == CLASS_GLOSSY {
+            s = ggx_sample(n, wo, alpha, m.albedo, u);
+        }
+        if dot(s.dir, n) > 0.0 {
+            let r = ray_at(base, p + n * SURFACE_OFFSET, s.dir);
+            light_in = s.weight * path_radiance(r, light.bounces - 1u, false, &rng).radiance;
+        }
+    }
+    // The sun, by next-event estimation over its disc.
+    if light.sun_on != 0u {
+        let u = vec2<f32>(rng_next(&rng), rng_next(&rng));
+        let wi = sample_cone(light.sun_dir, light.sun_omc, u);
+        let c = dot(n, wi);
+        if c > 0.0 && !blocked(base, p + n * SURFACE_OFFSET, wi) {
+            var f = vec3<f32>(1.0 / PI);
+            if cls == CLASS_GLOSSY {
+                f = ggx(n, wo, wi, alpha, m.albedo);
+            }
+            light_in += f * (c * light.sun_weight);
+        }
+    }
+    // The denoiser's guide: the TAA's brightness without the surface's colour.
+    var guide = luminance(light_in);
+    if a.w > 1.0 {
+        guide = luminance(a.rgb / a.w) / (luminance(thr) + 0.01);
+    }
+    mem_set(gi.off_illum + i, bitcast<vec4<u32>>(vec4<f32>(light_in, guide)));
+}
+
+// ---- Passes gi_denoise_x and gi_denoise_y ----
+
+// The weight of tap \`j\` for pixel \`i\`: the same plane and cls, a close guide value, and
+// a Gaussian in \`k\`, the tap's place in the filter's reach (−1 to 1).
+fn denoise_weight(i: u32, j: u32, k: f32, gi_: f32, gj: f32) -> f32 {
+    let a = mem_get(gi.off_gmat + i);
+    let b = mem_get(gi.off_gmat + j);
+    if surface_class(a) != surface_class(b) || surface_normal_id(a) != surface_normal_id(b) {
+        return 0.0;
+    }
+    if abs(dot(surface_normal(a), bitcast<vec4<f32>>(mem_get(gi.off_gbuf + j)).xyz - bitcast<vec4<f32>>(mem_get(gi.off_gbuf + i)).xyz)) > 0.05 {
+        return 0.0;
+    }
+    let kk = k / DENOISE_SIGMA;
+    return exp(-0.5 * kk * kk) / (1.0 + DENOISE_GUIDE * abs(gj - gi_) / (gi_ + gj + 0.01));
+}
+
+// The tap at \`k\` along \`axis\` from \`gid\`, shifted sideways by one pixel half the time.
+fn denoise_tap(gid: vec2<u32>, k: i32, axis: u32, rng: ptr<function, u32>) -> u32 {
+    var q = vec2<i32>(gid);
+    var side = 0;
+    if k != 0 && rng_next(rng) < 0.5 {
+        side = select(-1, 1, rng_next(rng) < 0.5);
+    }
+    q[axis] += 2 * k;
+    q[1u - axis] += side;
+    let x = clamp(q.x, 0, i32(frame.width) - 1);
+    let y = clamp(q.y, 0, i32(frame.height) - 1);
+    return u32(x) + u32(y) * frame.width;
+}
+
+// One denoiser pass along \`axis\` (0: x, 1: y) from the \`mem\` array at \`src\` to the one at
+// \`dst\`: each pixel blended toward the weighted mean of its taps, with the mean guide
+// value; \`salt\` picks the pass's random stream.
+fn denoise_pass(gid: vec3<u32>, axis: u32, src: u32, dst: u32, salt: u32) {
+    if gid.x >= frame.width || gid.y >= frame.height {
+        return;
+    }
+    let i = gid.x + gid.y * frame.width;
+    let here = bitcast<vec4<f32>>(mem_get(src + i));
+    var rng = rng_new(frame.seed ^ salt, i, gi.frame);
+    var sum = vec4<f32>(0.0);
+    var wsum = 0.0;
+    let taps = i32(round(min(DENOISE_TAPS * f32(frame.height) / DENOISE_HEIGHT, DENOISE_TAPS)));
+    // Only diffuse light is denoised: a metal's own path is view-dependent, and spreading
+    // its sun glints would brighten its whole surface.
+    if surface_class(mem_get(gi.off_gmat + i)) == CLASS_DIFFUSE && taps > 0 {
+        for (var k = -taps; k <= taps; k++) {
+            let j = denoise_tap(gid.xy, k, axis, &rng);
+            let v = bitcast<vec4<f32>>(mem_get(src + j));
+            let w = denoise_weight(i, j, f32(k) / f32(taps), here.w, v.w);
+            sum += v * w;
+            wsum += w;
+        }
+    }
+    var out = here;
+    if wsum > 0.0 {
+        out = vec4<f32>(mix(here.rgb, sum.rgb / wsum, DENOISE_BLEND), sum.w / wsum);
+    }
+    mem_set(dst + i, bitcast<vec4<u32>>(out));
+}
+
+@compute @workgroup_size(8, 8)
+fn gi_denoise_x(@builtin(global_invocation_id) gid: vec3<u32>) {
+    denoise_pass(gid, 0u, gi.off_illum, gi.off_illum2, 0xD0E1u);
+}
+
+@compute @workgroup_size(8, 8)
+fn gi_denoise_y(@builtin(global_invocation_id) gid: vec3<u32>) {
+    denoise_pass(gid, 1u, gi.off_illum2, gi.off_illum, 0xD0E2u);
+}
+
+const TAA_SLOTS: u32 = 32u;
+const CONTROL_WORDS: u32 = 144u;
+const CAMERA_HISTORY: u32 = 128u;
+const LUT_SIZE: u32 = 256u;
+const BUCKET_SLOTS: u32 = 32u;
+const MAX_KEPT: u32 = 7u;
+const QUEUE_PERIOD: u32 = 2u;
+const RING_VEC4: u32 = 3u;
+const EDIT_HISTORY_FRAMES: u32 = 8u;
+const CONTROL_TRACE_ARGS: u32 = 0u;
+const CONTROL_PROJECT_ARGS: u32 = 4u;
+const CAM_WORDS: u32 = 5u;
+const CONTROL_QUEUED: u32 = 8u;
+const CONTROL_START: u32 = 9u;
+const CONTROL_VALID: u32 = 10u;
+const CONTROL_HEAD: u32 = 11u;
+const CONTROL_FRAMES: u32 = 16u;
+// Generated by naadf-client (gi/memory.rs): the GI history's split arrays.
+@group(1) @binding(6) var<storage, read_write> mem_0: array<vec4<u32>>;
+fn mem_get(i: u32) -> vec4<u32> { return mem_0[i]; }
+fn mem_set(i: u32, v: vec4<u32>) { mem_0[i] = v; }
+@group(1) @binding(7) var<storage, read_write> taa_0: array<vec2<u32>>;
+fn taa_get(i: u32) -> vec2<u32> { return taa_0[i]; }
+fn taa_set(i: u32, v: vec2<u32>) { taa_0[i] = v; }
+`;function Ac(e,t){let n=e*t,r=Math.ceil(e/8)*Math.ceil(t/8),i=Y.CAMERA_HISTORY*Y.CAM_WORDS,a=e=>{let t=i;return i+=e,t},[o,s,c,l]=[a(Y.LUT_SIZE*Y.LUT_SIZE),a(n),a(n),a(n)],[u,d,f,p]=[a(2*n),a(n),a(n),a(n)],[m,h,g]=[a(r*Y.MAX_KEPT*2),a(3*r),a(n)],_=Y.CONTROL_WORDS+2*r,v={lut:o,gbuf:s,gmat:c,emitted:l,taaInfo:u,illum:d,illum2:f,result:p,refined:m,regionInfo:h,own:g,ringStart:i,queueList:_,words:_+64*r+Y.POSE_TABLE_WORDS},y=n*Y.RING_PER_PIXEL;return{width:e,height:t,pixels:n,regions:r,layout:v,ring:y,memBytes:(v.ringStart+y*Y.RING_VEC4)*16,taaBytes:n*Y.TAA_PIXEL_BYTES}}function jc(e,t,n){let r=Math.min(e.limits.maxStorageBufferBindingSize,e.limits.maxBufferSize),[i,a]=[t,n];for(;;){let e=Ac(i,a);if(Math.max(e.memBytes,e.taaBytes,e.layout.words*4)<=r||i===1&&a===1)return[i,a];[i,a]=[Math.ceil(i/2),Math.ceil(a/2)]}}function Mc(e){let t=e%Y.TAA_SLOTS,n=0;for(let e=0;e<32;e++)t&1<<e&&(n|=1<<31-e);let[r,i,a]=[0,0x80000000,t];for(;a>0;)a&1&&(r=(r^i)>>>0),a>>>=1,i=(i^i>>>1)>>>0;let o=Math.fround(.5/Y.TAA_SLOTS),s=e=>Math.fround(Math.fround(((e^0x80000000)>>>0)/4294967296)+o);return[s(n>>>0),s(r)]}function Nc(e){return e<=65535?[Math.max(1,e),1]:[65535,Math.ceil(e/65535)]}var Pc=class{device;plan;chunks;frames=0;cameras=[];marks;generation;editFrame=0;changeFrame=0;words;args;mem;staging;owned;group;constructor(e,t,n,r,i,a){this.device=e,this.plan=r,this.chunks=i;let o=(t,n,r)=>e.createBuffer({label:t,size:Math.max(16,n),usage:r}),s=GPUBufferUsage.STORAGE;this.words=o(`gi words`,r.layout.words*4,s|GPUBufferUsage.COPY_SRC);let c=o(`gi buckets`,r.regions*(2*Y.BUCKET_SLOTS+12)*4,s),l=i[0]*i[1]*i[2],u=o(`gi chunk changes`,l*8,s|GPUBufferUsage.COPY_DST);this.mem=o(`gi mem`,r.memBytes,s|GPUBufferUsage.COPY_DST|GPUBufferUsage.COPY_SRC);let d=o(`gi taa`,r.taaBytes,s);this.args=o(`gi indirect args`,Y.ARGS_BYTES,GPUBufferUsage.INDIRECT|GPUBufferUsage.COPY_DST),this.staging=o(`gi result`,r.pixels*16,GPUBufferUsage.MAP_READ|GPUBufferUsage.COPY_DST),this.owned=[this.words,c,u,this.mem,d,this.args,this.staging],this.marks=new Uint32Array(l*2),this.generation=a.generation,this.group=e.createBindGroup({layout:t,entries:[...n,this.words,c,u,this.mem,d].map((e,t)=>({binding:t,resource:{buffer:e}}))})}destroy(){this.owned.forEach(e=>e.destroy())}noteChanges(e){if(this.generation===e.generation)return;let t=e.changesSince(this.generation);t===`everything`||t.length>Y.MAX_LOCAL_CHANGES?[this.editFrame,this.changeFrame]=[this.frames,this.frames]:t.length>0&&(this.mark(t),this.changeFrame=this.frames),this.generation=e.generation}mark(e){let[t,n,r]=this.chunks,i=Y.CHANGE_REACH,[a,o]=[1/0,0],s=(e,t)=>{this.marks[2*e+t]=this.frames,[a,o]=[Math.min(a,e),Math.max(o,e+1)]};for(let a of e){let[e,o,c]=[a%t,Math.floor(a/t)%n,Math.floor(a/(t*n))];s(a,0);for(let a=Math.max(0,c-i);a<=Math.min(r-1,c+i);a++)for(let r=Math.max(0,o-i);r<=Math.min(n-1,o+i);r++)for(let o=Math.max(0,e-i);o<=Math.min(t-1,e+i);o++)s(o+t*(r+n*a),1)}if(a<o){let e=this.owned[2];this.device.queue.writeBuffer(e,a*8,this.marks,a*2,(o-a)*2)}}uploadCameras(e,t){let n=Mc(this.frames);this.cameras.unshift({camera:e,jitter:n}),this.cameras.length=Math.min(this.cameras.length,Y.CAMERA_HISTORY);let r=Y.CAM_WORDS*4,i=new Float32Array(Y.CAMERA_HISTORY*r);return this.cameras.forEach((e,n)=>{let a=No({...e.camera,pos:e.camera.pos.map((e,n)=>e-t[n])},this.plan.width,this.plan.height),o=a.int.map((e,t)=>Math.fround(Math.fround(e)+a.frac[t]));i.set([...o,e.jitter[0],...a.forward,e.jitter[1],...a.right,0,...a.up,0,...a.int,0],n*r)}),this.device.queue.writeBuffer(this.mem,0,i),n}info(e){let{plan:t,frames:n}=this,r=t.layout;return oc($s,{frame:n,taa_slot:n%Y.TAA_SLOTS,taa_valid:Math.min(n,Y.TAA_SLOTS-1),edit_frame:this.editFrame,change_frame:this.changeFrame,jitter_x:e[0],jitter_y:e[1],regions_x:Math.ceil(t.width/8),regions_y:Math.ceil(t.height/8),ring_capacity:t.ring,denoise:1,off_own:r.own,off_lut:r.lut,off_gbuf:r.gbuf,off_gmat:r.gmat,off_emitted:r.emitted,off_taa_info:r.taaInfo,off_illum:r.illum,off_illum2:r.illum2,off_result:r.result,off_refined:r.refined,off_region_info:r.regionInfo,off_ring:r.ringStart,off_queue_list:r.queueList})}},Fc=class{device;world;pipelines;group1;params;history;lastView=``;still=0;constructor(e,t){this.device=e,this.world=t;let n=[`uniform`,`uniform`,`uniform`,`storage`,`storage`,`read-only-storage`,`storage`,`storage`];this.group1=e.createBindGroupLayout({entries:n.map((e,t)=>sc(t,e))});let r=e.createPipelineLayout({bindGroupLayouts:[t.layout,this.group1]}),i=e.createShaderModule({label:`gi.wgsl`,code:kc});this.pipelines=ac.map(t=>e.createComputePipelineAsync({layout:r,compute:{module:i,entryPoint:t}}));let a=(t,n)=>e.createBuffer({label:t,size:n,usage:GPUBufferUsage.UNIFORM|GPUBufferUsage.COPY_DST});this.params=[a(`gi frame`,Qs.size),a(`gi light`,tc.length*4),a(`gi state`,$s.size)],e.queue.writeBuffer(this.params[1],0,new Uint32Array(tc))}async render(e,t,n,r){let i=this.device,[a,o]=jc(i,n,r);e.trackChanges();let s=this.history;s&&s.plan.width===a&&s.plan.height===o&&s.chunks.join()===e.chunks.join()||(s?.destroy(),s=this.history=new Pc(i,this.group1,this.params,Ac(a,o),[...e.chunks],e)),s.noteChanges(e);let c=JSON.stringify([t,a,o,e.generation]);this.still=c===this.lastView?this.still+1:1,this.lastView=c;let l=No(t,a,o),u=s.uploadCameras(t,l.int),d=s.frames;i.queue.writeBuffer(this.params[0],0,oc(Qs,{cam_int:l.int,width:a,cam_frac:l.frac,height:o,forward:l.forward,seed:0,right:l.right,sample:d,up:l.up,history:+(d>0)})),i.queue.writeBuffer(this.params[2],0,s.info(u));let f=await Promise.all(this.pipelines),p=e.chunks[0]*e.chunks[1]*e.chunks[2],m=i.createCommandEncoder();ac.forEach((t,n)=>{if(t===`gi_atmosphere`&&d>0)return;t===`gi_trace`&&m.copyBufferToBuffer(s.words,0,s.args,0,Y.ARGS_BYTES);let r=m.beginComputePass({label:t});switch(r.setPipeline(f[n]),r.setBindGroup(0,this.world.of(e)),r.setBindGroup(1,s.group),t){case`gi_atmosphere`:r.dispatchWorkgroups(Y.LUT_SIZE/8,Y.LUT_SIZE/8);break;case`gi_queue_scan`:r.dispatchWorkgroups(1);break;case`gi_trace`:r.dispatchWorkgroupsIndirect(s.args,Y.CONTROL_TRACE_ARGS*4);break;case`gi_project`:case`gi_project_store`:r.dispatchWorkgroupsIndirect(s.args,Y.CONTROL_PROJECT_ARGS*4);break;case`gi_refine`:r.dispatchWorkgroups(Math.ceil(s.plan.regions/64));break;case`gi_poses_clear`:r.dispatchWorkgroups(Math.ceil(Y.NO_ENTITY/64));break;case`gi_poses`:r.dispatchWorkgroups(...Nc(Math.ceil(p/64)));break;default:r.dispatchWorkgroups(Math.ceil(a/8),Math.ceil(o/8))}r.end()}),s.frames+=1;let h=s.plan.layout.result*16;return mc(new Float32Array(await dc(i,m,s.mem,h,s.staging,s.plan.pixels*16)),a,o,1,!1)}},Ic=class extends Error{};async function Lc(){if(!(`gpu`in navigator)||!navigator.gpu)throw new Ic(`this browser has no WebGPU`);let e=await navigator.gpu.requestAdapter();if(!e)throw new Ic(`this browser offers WebGPU but no adapter`);let t=await e.requestDevice({requiredLimits:{maxStorageBufferBindingSize:e.limits.maxStorageBufferBindingSize,maxBufferSize:e.limits.maxBufferSize}});return t.addEventListener(`uncapturederror`,e=>console.error(`WebGPU: ${e.error.message}`)),t.lost.then(e=>console.error(`WebGPU device lost: ${e.message}`)),{device:t,fallback:(e.info?.isFallbackAdapter??!1)||/swiftshader/i.test(e.info?.description??``)}}var Rc=class{device;buffer;info;offsets;regions=[];generation=0;layoutGeneration=0;chunks=[0,0,0];mirror;prints;log=[];logFrom=0;constructor(e){this.device=e;let t=(t,n)=>e.createBuffer({label:t,size:n,usage:GPUBufferUsage.UNIFORM|GPUBufferUsage.COPY_DST});this.info=t(`world_info`,Xs.size),this.offsets=t(`world_offsets`,32)}uploadAll(e){let t=Ys.map(t=>e.bytes(t.id).length),n=0;this.regions=t.map(e=>{let t=Math.ceil((e*1.25+65536)/256)*256,r={at:n,capacity:t};return n+=t,r});let r=this.device.limits.maxStorageBufferBindingSize;if(n>r)throw new Ic(`the world needs ${n} bytes in one binding; this adapter allows ${r}`);this.buffer?.destroy(),this.buffer=this.device.createBuffer({label:`world`,size:Math.max(n,16),usage:GPUBufferUsage.STORAGE|GPUBufferUsage.COPY_DST}),Ys.forEach((t,n)=>this.write(n,0,e.bytes(t.id)));let i=new Uint32Array(8);this.regions.forEach((e,t)=>i[t]=e.at/4),this.device.queue.writeBuffer(this.offsets,0,i),this.writeInfo(e),this.layoutGeneration+=1,this.generation+=1,this.mirror=e,this.prints&&(this.prints=new Oc(e),this.note(`everything`))}update(e,t,n){let r=e=>Ys.findIndex(t=>t.id===e);if(n&&Ys.some((t,n)=>e.bytes(t.id).length>this.regions[n].capacity))this.uploadAll(e);else{for(let n of t){let t=r(n.id);if(t<0)continue;let i=n.lo&-4,a=e.bytes(n.id),o=Math.min(a.length,n.hi+3&-4);this.write(t,i,a.subarray(i,o))}n&&this.writeInfo(e),this.generation+=1,this.prints&&this.note(this.prints.update(e,t))}}trackChanges(){!this.prints&&this.mirror&&(this.prints=new Oc(this.mirror),this.log=[],this.logFrom=this.generation)}changesSince(e){if(e<this.logFrom)return`everything`;let t=new Set;for(let n of this.log)if(!(n.generation<=e)){if(n.changes===`everything`)return`everything`;for(let e of n.changes)t.add(e)}return[...t].sort((e,t)=>e-t)}note(e){this.log.push({generation:this.generation,changes:e}),this.log.length>64&&(this.logFrom=this.log.shift().generation)}write(e,t,n){if(n.length===0)return;let r=n.length%4==0?n:(()=>{let e=new Uint8Array(n.length+3&-4);return e.set(n),e})();this.device.queue.writeBuffer(this.buffer,this.regions[e].at+t,r)}writeInfo(e){let[t,n,r]=e.size,i=+(e.bytes(7).length>0);this.chunks=[Math.ceil(t/16),Math.ceil(n/16),Math.ceil(r/16)],this.device.queue.writeBuffer(this.info,0,oc(Xs,{size:[t,n,r],has_entities:i,chunks:this.chunks,max_steps:ic}))}},zc=class{device;world;compute;group1;view;gbuffer;pixels;staging;width=0;height=0;constructor(e,t){this.device=e,this.world=t,{pipeline:this.compute,layout:this.group1}=lc(e,t,`render.wgsl`,Js,`render`,[`uniform`,`storage`,`storage`]),this.view=e.createBuffer({size:Zs.size,usage:GPUBufferUsage.UNIFORM|GPUBufferUsage.COPY_DST}),this.gbuffer=e.createBuffer({size:16,usage:GPUBufferUsage.STORAGE})}async render(e,t,n,r,i){let a=this.device,o=n*r*4;n===this.width&&r===this.height&&this.pixels||(this.pixels?.destroy(),this.staging?.destroy(),this.pixels=a.createBuffer({label:`pixels`,size:o,usage:GPUBufferUsage.STORAGE|GPUBufferUsage.COPY_SRC}),this.staging=a.createBuffer({label:`frame`,size:o,usage:GPUBufferUsage.MAP_READ|GPUBufferUsage.COPY_DST}),this.width=n,this.height=r);let s=No(t,n,r),c=nc[i];if(c===void 0)throw Error(`the render pass has no mode ${i}`);a.queue.writeBuffer(this.view,0,oc(Zs,{cam_oi:s.int,mode:c,cam_of:s.frac,width:n,forward:s.forward,height:r,right:s.right,flags:0,up:s.up,steps_scale:Math.fround(1/Math.log2(513)),sun:rc}));let l=a.createBindGroup({layout:this.group1,entries:[{binding:0,resource:{buffer:this.view}},{binding:1,resource:{buffer:this.pixels}},{binding:2,resource:{buffer:this.gbuffer}}]}),u=await uc(a,this.compute,this.world.of(e),l,n,r),d=new Uint8ClampedArray(await dc(a,u,this.pixels,0,this.staging,o));return new ImageData(d,n,r)}},Bc=class{device;world;pipeline;group1;frame;light;sums;staging;key=``;samples=0;constructor(e,t){this.device=e,this.world=t,{pipeline:this.pipeline,layout:this.group1}=lc(e,t,`pathtrace.wgsl`,qs,`path_trace`,[`uniform`,`uniform`,`storage`]);let n=t=>e.createBuffer({size:t,usage:GPUBufferUsage.UNIFORM|GPUBufferUsage.COPY_DST});this.frame=n(Qs.size),this.light=n(ec.length*4),e.queue.writeBuffer(this.light,0,new Uint32Array(ec))}async render(e,t,n,r){let i=this.device,a=n*r*16,o=JSON.stringify([t,n,r,e.generation]);o===this.key&&this.sums||(this.sums?.destroy(),this.staging?.destroy(),this.sums=i.createBuffer({label:`path sums`,size:a,usage:GPUBufferUsage.STORAGE|GPUBufferUsage.COPY_SRC}),this.staging=i.createBuffer({label:`path frame`,size:a,usage:GPUBufferUsage.MAP_READ|GPUBufferUsage.COPY_DST}),this.key=o,this.samples=0);let s=No(t,n,r);i.queue.writeBuffer(this.frame,0,oc(Qs,{cam_int:s.int,width:n,cam_frac:s.frac,height:r,forward:s.forward,seed:0,right:s.right,sample:this.samples,up:s.up,history:0}));let c=i.createBindGroup({layout:this.group1,entries:[{binding:0,resource:{buffer:this.frame}},{binding:1,resource:{buffer:this.light}},{binding:2,resource:{buffer:this.sums}}]}),l=await uc(i,this.pipeline,this.world.of(e),c,n,r);return this.samples+=1,mc(new Float32Array(await dc(i,l,this.sums,0,this.staging,a)),n,r,1,!0)}},Vc=class{device;world;frames;paths;gi;last;constructor(e,t){this.device=e,this.world=new cc(e),this.pass(t)}pass(e){return e===`pathtrace`?this.paths??=new Bc(this.device,this.world):e===`gi`?this.gi??=new Fc(this.device,this.world):this.frames??=new zc(this.device,this.world)}static accumulates(e){return e===`pathtrace`||e===`gi`}samples(e){return e===`gi`?this.gi?.still??0:e===`pathtrace`?this.paths?.samples??0:0}async render(e,t,n,r,i){let a=this.pass(i);return this.last=a instanceof zc?await a.render(e,t,n,r,i):await a.render(e,t,n,r),this.last}};function Hc(e,t,n,r){let i=Mo(e),a=r.map((t,n)=>t-e.pos[n]),o=(e,t)=>e[0]*t[0]+e[1]*t[1]+e[2]*t[2],s=o(a,i.forward);if(s<=.001)return;let c=Math.tan(e.fov_y*Math.PI/360),l=o(a,i.right)/(s*c*(t/n)),u=o(a,i.up)/(s*c);return[(l+1)/2*t,(1-u)/2*n]}function Uc(e,t,n,r,i){let a=Mo(e),o=Math.tan(e.fov_y*Math.PI/360),s=(2*r/t-1)*o*(t/n),c=(1-2*i/n)*o;return[0,1,2].map(e=>a.forward[e]+s*a.right[e]+c*a.up[e])}function Wc(e,t,n,r,i){let{width:a,height:o}=e.canvas,s=e=>[e&1?r[0]:n[0],e&2?r[1]:n[1],e&4?r[2]:n[2]];e.strokeStyle=i,e.lineWidth=2,e.beginPath();for(let n=0;n<8;n++)for(let r of[1,2,4]){if(n&r)continue;let i=Hc(t,a,o,s(n)),c=Hc(t,a,o,s(n|r));i&&c&&(e.moveTo(i[0],i[1]),e.lineTo(c[0],c[1]))}e.stroke()}function Gc(e,t,n,r){let{width:i,height:a}=e.canvas;e.clearRect(0,0,i,a),n&&Wc(e,t,n.min,n.max,n.refusal?`#f44`:`#ff0`);let o=[];e.font=`${Math.max(11,Math.round(a/40))}px system-ui, sans-serif`;for(let n of r){let r=n.name||n.user||`anonymous`;if(n.pointer.length===3){let r=n.pointer.map(Number);Wc(e,t,r,[r[0]+1,r[1]+1,r[2]+1],`#0ff`)}if(n.position.length!==3)continue;let s=Hc(t,i,a,n.position);!s||s[0]<0||s[1]<0||s[0]>i||s[1]>a||(e.fillStyle=`#0ff`,e.beginPath(),e.arc(s[0],s[1],5,0,2*Math.PI),e.fill(),e.fillStyle=`#fff`,e.fillText(r,s[0]+8,s[1]-8),o.push({name:r,x:s[0],y:s[1]}))}return o}var Kc=30,qc=0,Jc=1,Yc=32767,Xc=class{chunks;blocks;voxels;size;dims;constructor(e){let t=t=>{let n=e.bytes(t);return new Uint32Array(n.buffer,n.byteOffset,Math.floor(n.length/4))};this.chunks=t(0),this.blocks=t(2),this.voxels=t(3),this.size=e.size,this.dims=[e.size[0]>>4,e.size[1]>>4,e.size[2]>>4]}inside(e,t,n){return e>=0&&t>=0&&n>=0&&e<this.size[0]&&t<this.size[1]&&n<this.size[2]}cell(e,t,n){let[r,i,a]=[e>>4,t>>4,n>>4],o=this.chunks[r+this.dims[0]*(i+this.dims[1]*a)],s=o>>>Kc;if(s===qc)return{material:0,edge:16};if(s===Jc)return{material:o&Yc,edge:16};let c=this.blocks[(o&0x3fffffff)+((e>>2&3)+4*(t>>2&3)+16*(n>>2&3))],l=c>>>Kc;if(l===qc)return{material:0,edge:4};if(l===Jc)return{material:c&Yc,edge:4};let u=(e&3)+4*(t&3)+16*(n&3),d=this.voxels[(c&0x3fffffff)+(u>>1)],f=u&1?d>>>16:d&65535;return{material:f&32768?f&Yc:0,edge:1}}};function Zc(e,t,n,r=4096){let i=0,a=r;for(let r=0;r<3;r++){if(n[r]===0){if(t[r]<0||t[r]>=e.size[r])return;continue}let o=(0-t[r])/n[r],s=(e.size[r]-t[r])/n[r];i=Math.max(i,Math.min(o,s)),a=Math.min(a,Math.max(o,s))}if(i>a)return;let o=1e-7,s;for(;i<=a;){let r=t.map((e,t)=>e+n[t]*(i+o)).map(Math.floor);if(!e.inside(r[0],r[1],r[2]))return;let a=e.cell(r[0],r[1],r[2]);if(a.material!==0)return{voxel:r,before:s??r,material:a.material};s=r;let c=1/0;for(let e=0;e<3;e++){if(n[e]===0)continue;let i=Math.floor(r[e]/a.edge)*a.edge,o=n[e]>0?i+a.edge:i;c=Math.min(c,(o-t[e])/n[e])}s=t.map((e,t)=>e+n[t]*(c-o)).map(Math.floor),i=Math.max(c,i+o)}}function Qc(){try{new Headers}catch{throw Error(`connect-web requires the fetch API. Are you running on an old version of Node.js?`)}}function $c(e,t){let n=ro(e);if(n)throw t.forEach((e,t)=>{n.metadata.append(t,e)}),n;if(!t.has(`Grpc-Status`)&&!e.has(`Grpc-Status`))throw new U(`protocol error: missing status`,H.Internal)}function el(e,t,n,r){let i=new Headers(n??{});i.set(Ka,e?$a:eo),i.set(Qa,`1`);let a=i.get(`User-Agent`)??i.get(`X-User-Agent`)??`connect-es/2.3.0`;return i.set(Za,a),r&&i.set(Xa,a),t!==void 0&&i.set(qa,`${t}m`),i}function tl(e){switch(e){case 400:return H.Internal;case 401:return H.Unauthenticated;case 403:return H.PermissionDenied;case 404:return H.Unimplemented;case 429:case 502:case 503:case 504:return H.Unavailable;default:return H.Unknown}}function nl(e,t){if(e>=200&&e<300)return{foundStatus:t.has(Ja),headerError:ro(t)};throw new U(decodeURIComponent(t.get(`Grpc-Message`)??`HTTP ${e}`),tl(e),t)}var rl=function(e){return this instanceof rl?(this.v=e,this):new rl(e)},il=function(e,t,n){if(!Symbol.asyncIterator)throw TypeError(`Symbol.asyncIterator is not defined.`);var r=n.apply(e,t||[]),i,a=[];return i=Object.create((typeof AsyncIterator==`function`?AsyncIterator:Object).prototype),s(`next`),s(`throw`),s(`return`,o),i[Symbol.asyncIterator]=function(){return this},i;function o(e){return function(t){return Promise.resolve(t).then(e,d)}}function s(e,t){r[e]&&(i[e]=function(t){return new Promise(function(n,r){a.push([e,t,n,r])>1||c(e,t)})},t&&(i[e]=t(i[e])))}function c(e,t){try{l(r[e](t))}catch(e){f(a[0][3],e)}}function l(e){e.value instanceof rl?Promise.resolve(e.value.v).then(u,d):f(a[0][2],e)}function u(e){c(`next`,e)}function d(e){c(`throw`,e)}function f(e,t){e(t),a.shift(),a.length&&c(a[0][0],a[0][1])}},al={redirect:`error`};function ol(e){Qc();let t=e.useBinaryFormat??!0;return{async unary(n,r,i,a,o,s){let{serialize:c,parse:l}=lo(n,t,e.jsonOptions,e.binaryOptions);return i=i===void 0?e.defaultTimeoutMs:i<=0?void 0:i,await po({interceptors:e.interceptors,signal:r,timeoutMs:i,req:{stream:!1,service:n.parent,method:n,requestMethod:`POST`,url:io(e.baseUrl,n),header:el(t,i,a,!1),contextValues:s??Wa(),message:o},next:async t=>{let r=await(e.fetch??globalThis.fetch)(t.url,Object.assign(Object.assign({},al),{method:t.requestMethod,headers:t.header,signal:t.signal,body:Ta(0,c(t.message))})),{headerError:i}=nl(r.status,r.headers);if(!r.body)throw i===void 0?`missing response body`:i;let a=wa(r.body).getReader(),o,s;for(;;){let e=await a.read();if(e.done)break;let{flags:t,data:n}=e.value;if((t&1)==1)throw new U(`protocol error: received unsupported compressed output`,H.Internal);if(t===128){if(o!==void 0)throw`extra trailer`;o=Ga(n)}else{if(s!==void 0)throw new U(`extra message`,H.Unimplemented);s=l(n)}}if(o===void 0)throw i===void 0?new U(`missing trailer`,r.headers.has(`Grpc-Status`)?H.Unimplemented:H.Unknown):i;if($c(o,r.headers),s===void 0)throw new U(`missing message`,o.has(`Grpc-Status`)?H.Unimplemented:H.Unknown);return{stream:!1,service:n.parent,method:n,header:r.headers,message:s,trailer:o}}})},async stream(n,r,i,a,o,s){let{serialize:c,parse:l}=lo(n,t,e.jsonOptions,e.binaryOptions);function u(e,t,n,r,i){return il(this,arguments,function*(){let i=wa(e).getReader();if(t){if(!(yield rl(i.read())).done)throw`extra data for trailers-only`;return yield rl(void 0)}let a=!1;for(;;){let e=yield rl(i.read());if(e.done)break;let{flags:t,data:o}=e.value;if((t&128)==128){if(a)throw`extra trailer`;a=!0;let e=Ga(o);$c(e,r),e.forEach((e,t)=>n.set(t,e))}else{if(a)throw`extra message`;yield yield rl(l(o))}}if(!a)throw`missing trailer`})}async function d(e){if(n.methodKind!=`server_streaming`)throw`The fetch API does not support streaming request bodies`;let t=await e[Symbol.asyncIterator]().next();if(t.done==1)throw`missing request message`;return Ta(0,c(t.value))}return i=i===void 0?e.defaultTimeoutMs:i<=0?void 0:i,mo({interceptors:e.interceptors,signal:r,timeoutMs:i,req:{stream:!0,service:n.parent,method:n,requestMethod:`POST`,url:io(e.baseUrl,n),header:el(t,i,a,!1),contextValues:s??Wa(),message:o},next:async t=>{let n=await(e.fetch??globalThis.fetch)(t.url,Object.assign(Object.assign({},al),{method:t.requestMethod,headers:t.header,signal:t.signal,body:await d(t.message)})),{foundStatus:r,headerError:i}=nl(n.status,n.headers);if(i!=null)throw i;if(!n.body)throw`missing response body`;let a=new Headers;return Object.assign(Object.assign({},t),{header:n.headers,trailer:a,message:u(n.body,r,a,n.headers,t.signal)})}})}}}var sl=`naadf.token`,cl=100,ll=5e3,ul=class e{events;cache;mirror=new Rs;client;bytesReceived=0;snapshotBytes=0;abort;stopped=!1;saving;constructor(e,t){this.events=e,this.cache=t,this.client=Fa(wo,ol({baseUrl:location.origin,useBinaryFormat:!0}))}static token(){return sessionStorage.getItem(sl)}setToken(e){sessionStorage.setItem(sl,e),this.restart()}callOptions(){let t=e.token();return{headers:t?{authorization:`Bearer ${t}`}:{}}}async whoAmI(){return this.client.status({},this.callOptions())}async restore(){return!this.cache||!await this.cache.restore(this.mirror).catch(()=>!1)?!1:(this.events.restored(this.mirror),!0)}saveSoon(){this.cache&&!this.saving&&(this.saving=setTimeout(()=>{this.saving=void 0,this.cache?.save(this.mirror).catch(e=>console.warn(`the page cache: ${e}`))},1e3))}async run(){let e=cl,t=!0;for(;!this.stopped;){this.events.state(t?`connecting`:`reconnecting`),t=!1,this.abort=new AbortController;try{await this.follow(this.abort.signal)&&(e=cl)}catch(e){if(e instanceof J){if(console.warn(e.message),e.fatal){this.events.state(`error`,e.message);return}}else{let t=U.from(e);if(t.code===H.Unauthenticated||t.code===H.PermissionDenied){this.events.state(`need-token`,t.rawMessage);return}if(t.code===H.FailedPrecondition){this.events.state(`error`,t.rawMessage);return}if(t.code===H.Canceled&&this.stopped)return;t.code!==H.Canceled&&console.warn(`the world stream ended: ${t.message}`)}}if(this.stopped)return;this.events.state(`reconnecting`);let n=e*(1+Math.random()/4);e=Math.min(ll,e*2),await new Promise(e=>setTimeout(e,n))}}restart(){this.abort?.abort()}async follow(e){let t=this.mirror,n=P(_o,{protocolVersion:1,cached:t.cached(),resume:t.holdsWorld?{version:t.version,digest:t.digest}:void 0,deltaForm:Co.PATCH,presence:!0}),r=!1;this.events.joined();for await(let i of this.client.join(n,{...this.callOptions(),signal:e})){r=!0;let e=pl(i);this.bytesReceived+=e;let n=i.kind;switch(n.case===`header`&&(this.snapshotBytes=0),(n.case===`header`||n.case===`page`)&&(this.snapshotBytes+=e),n.case){case`header`:this.events.state(`syncing`),t.header(n.value)||this.live(n.value.resume);break;case`page`:t.page(n.value)&&this.live(!1);break;case`delta`:{let{touched:e,resized:r}=t.delta(n.value);this.events.patched(t,e,r),this.saveSoon();break}case`presence`:this.events.presence(n.value.entries)}}return r}live(e){e||this.events.snapshot(this.mirror),this.saveSoon(),this.events.state(`live`)}},dl=e=>e<128?1:e<16384?2:e<2097152?3:e<268435456?4:5,fl=e=>1+dl(e)+e;function pl(e){if(e.kind.case!==`page`)return Er(vo,e).length;let t=e.kind.value,n=t.indices.reduce((e,t)=>e+dl(t),0);return fl((t.buffer?1+dl(t.buffer):0)+(t.indices.length?fl(n):0)+(t.zstd.length?fl(t.zstd.length):0))}var ml=[`voxel`,`erase`,`box`,`sphere`,`paint`,`flood`],hl=65536,gl=(e,t)=>[e[0]+t,e[1]+t,e[2]+t],_l=e=>[e[0]+.5,e[1]+.5,e[2]+.5];function vl(e,t){return{min:e.map(e=>Math.floor(e-t-.5)+1),max:e.map(e=>Math.ceil(e+t-.5))}}function yl(e,t){return{min:e.map((e,n)=>Math.min(e,t[n])),max:e.map((e,n)=>Math.max(e,t[n])+1)}}function bl(e,t,n){let r=e.cell(t[0],t[1],t[2]).material;if(r===n)return{min:t,max:gl(t,1),refusal:`already that material`};let i=new Set,a=t=>t[0]+e.size[0]*(t[1]+e.size[1]*t[2]),o=[t];i.add(a(t));let s=[...t],c=gl(t,1);for(;o.length;){let t=o.pop();for(let e=0;e<3;e++)s[e]=Math.min(s[e],t[e]),c[e]=Math.max(c[e],t[e]+1);for(let[n,l,u]of[[1,0,0],[-1,0,0],[0,1,0],[0,-1,0],[0,0,1],[0,0,-1]]){let d=[t[0]+n,t[1]+l,t[2]+u];if(e.inside(d[0],d[1],d[2])&&!i.has(a(d))&&e.cell(d[0],d[1],d[2]).material===r){if(i.size>=65536)return{min:s,max:c,refusal:`more than ${hl} voxels`};i.add(a(d)),o.push(d)}}}return{min:s,max:c}}function xl(e,t,n){switch(e.tool){case`voxel`:return{min:n.before,max:gl(n.before,1)};case`erase`:return{min:n.voxel,max:gl(n.voxel,1)};case`box`:return yl(e.anchor??n.before,n.before);case`sphere`:return vl(_l(n.before),e.radius);case`paint`:return vl(_l(n.voxel),e.radius);case`flood`:return bl(t,n.voxel,e.material)}}function Sl(e,t){let n=e.material;switch(e.tool){case`voxel`:return JSON.stringify({op:`set`,voxels:[[...t.before,n]]});case`erase`:return JSON.stringify({op:`set`,voxels:[[...t.voxel,0]]});case`box`:{if(!e.anchor){e.anchor=t.before;return}let r=yl(e.anchor,t.before);return e.anchor=void 0,JSON.stringify({op:`box`,min:r.min,max:r.max,material:n})}case`sphere`:return JSON.stringify({op:`sphere`,center:_l(t.before),radius:e.radius,material:n});case`paint`:return JSON.stringify({op:`paint`,center:_l(t.voxel),radius:e.radius,material:n});case`flood`:return JSON.stringify({op:`flood_paint`,start:t.voxel,material:n,limit:hl})}}function Cl(e){let t=e>>10&31,n=e&1023,r=e&32768?-1:1;return t===0?r*n*2**-24:t===31?n?NaN:r*(1/0):r*(1+n/1024)*2**(t-15)}function wl(e){let t=e.bytes(4),n=new Uint32Array(t.buffer,t.byteOffset,Math.floor(t.length/4)),r=[];for(let e=1;4*e+3<n.length;e++){let t=n[4*e+1],i=n[4*e+2],[a,o,s]=[Cl(t&65535),Cl(t>>>16),Cl(i&65535)];r.push({id:e,colour:`rgb(${pc(a)},${pc(o)},${pc(s)})`})}return r}var Tl=[`albedo`,`material`,`normal`,`steps`,`gi`,`pathtrace`],El=4096,Dl=2*Y.TAA_SLOTS,Ol=8192;function kl(e){let t=new URLSearchParams(e),n={camera:void 0,mode:void 0,size:void 0,spp:void 0,problems:[]},r=t.get(`camera`);if(r!==null)try{n.camera=Do(r)}catch(e){n.problems.push(`camera: ${e.message}; using the default view`)}let i=t.get(`mode`);i!==null&&(Tl.includes(i)?n.mode=i:n.problems.push(`mode: '${i}' is not one of ${Tl.join(`, `)}; using the default`));let a=t.get(`size`);if(a!==null){let e=/^(\d{1,5})x(\d{1,5})$/.exec(a),[t,r]=e?[Number(e[1]),Number(e[2])]:[0,0];t>=1&&r>=1&&t<=Ol&&r<=Ol?n.size=[t,r]:n.problems.push(`size: '${a}' is not WxH with edges 1..=${Ol}; using the canvas size`)}let o=t.get(`spp`);if(o!==null){let e=Number(o);Number.isInteger(e)&&e>=1&&e<=El?n.spp=e:n.problems.push(`spp: '${o}' is not a whole number in 1..=${El}; using the mode's default`)}return n}function Al(e,t,n){let r=new URLSearchParams;r.set(`camera`,Oo(e)),r.set(`mode`,t),n.size&&r.set(`size`,`${n.size[0]}x${n.size[1]}`),n.spp&&r.set(`spp`,String(n.spp)),history.replaceState(null,``,`${location.pathname}?${r.toString().replace(/\+/g,`%20`)}`)}function jl(e,t){return t.spp??(e===`gi`?Dl:El)}var X=e=>document.getElementById(e),Z=X(`view`),Ml=X(`overlay`),Nl=X(`hud`),Pl=X(`notice`),Fl=kl(location.search),Q={state:`connecting`,version:0,growthSeq:0,quiescent:!1,digest:``,users:[],mode:Fl.mode??`albedo`,frameMs:0,message:Fl.problems.join(`
+`),role:``,joins:0,snapshots:0,bytesReceived:0,snapshotBytes:0,markers:[],rateLimited:0,timings:{},shownVersion:-1,samples:0,pointer:null,name:``,voxel:()=>0,capture:()=>Promise.reject(Error(`no frame yet`)),redraw:()=>{},generation:()=>0,changedChunks:()=>`everything`,edit:()=>Promise.reject(Error(`not joined`)),undo:()=>Promise.reject(Error(`not joined`)),redo:()=>Promise.reject(Error(`not joined`))};window.naadf=Q;function Il(e){Pl.textContent=e,Pl.hidden=e===``}Il(Q.message);var $=Fl.camera,Ll=0;function Rl(){if(Fl.size)return Fl.size;let e=window.devicePixelRatio||1;return[Math.max(1,Math.round(Z.clientWidth*e)),Math.max(1,Math.round(Z.clientHeight*e))]}function zl(){Nl.textContent=[`${Q.state}${Q.role?` · ${Q.role}`:``}`,`version ${Q.version}${Q.growthSeq?`.${Q.growthSeq}`:``}${Q.quiescent?``:` (settling)`}`,`digest ${Q.digest.slice(0,8)}`,`${Q.users.length} online${Q.users.length?`: ${Q.users.join(`, `)}`:``}`,`rtt ${Ll.toFixed(0)} ms · frame ${Q.frameMs.toFixed(1)} ms · ${Q.mode}`].join(`
+`)}function Bl(e){let[t,n]=[Z.width,Z.height];if(!e||document.pointerLockElement===Z)return[t/2,n/2];let r=Z.getBoundingClientRect(),i=Math.min(r.width/t,r.height/n),[a,o]=[(r.width-t*i)/2,(r.height-n*i)/2];return[(e.clientX-r.left-a)/i,(e.clientY-r.top-o)/i]}async function Vl(){await ss();let e,t;try{({device:e,fallback:t}=await Lc())}catch(e){if(e instanceof Ic){Q.state=`no-webgpu`,Q.message=`${e.message}. Open this page in a browser with WebGPU (https://, or http://localhost), or use the native viewer: naadf view --server <address>`,Il(Q.message),zl();return}throw e}Q.timings.device=performance.now(),Fl.mode||(Q.mode=t?`albedo`:`gi`);let n=Z.getContext(`2d`),r=Ml.getContext(`2d`),i=new Rc(e),a=new Vc(e,Q.mode),o,s=[],c=!0,l=!1,u,d={tool:`voxel`,material:1,radius:4,anchor:void 0},f,p,m,h=BigInt(Math.floor(Math.random()*2**52)),g=e=>{i.uploadAll(e),$??=Po(e.size),O(),v(e)},_=new ul({state(e,t){Q.state=e,Q.bytesReceived=_.bytesReceived,Q.snapshotBytes=_.snapshotBytes,e===`live`&&(Q.timings.live??=performance.now()),t!==void 0&&(Q.message=t,Il(e===`need-token`?`${t}: enter a token`:t),e===`need-token`&&x(t)),zl()},joined(){Q.joins+=1},snapshot(e){Q.snapshots+=1,g(e)},restored:g,patched(e,t,n){i.update(e,t,n),t.some(e=>e.id===4)&&O(),v(e)},presence(e){Q.users=e.map(e=>e.name||e.user||`anonymous`).sort(),s=e.filter(e=>e.session!==h),l=!0,zl()}},await Ks.open());function v(e){o=new Xc(e),Q.version=Number(e.version),Q.growthSeq=e.growthSeq,Q.quiescent=e.quiescent,Q.digest=ls(e.digest),Q.bytesReceived=_.bytesReceived,Q.snapshotBytes=_.snapshotBytes,c=!0,zl()}let y=BigInt(Date.now())*1000n,b=async e=>{let t=y+=1n;for(let n=0;;n++){let r=performance.now();try{let i=await e(t);return Ll=performance.now()-r,n>0&&Il(``),zl(),Number(i.version)}catch(e){let t=U.from(e);if(t.code===H.ResourceExhausted&&n<8){Q.rateLimited+=1,Il(`rate-limited: ${t.rawMessage}; retrying`),await new Promise(e=>setTimeout(e,250*2**n));continue}throw Q.message=t.rawMessage,Il(`refused: ${t.rawMessage}`),t}}};Q.edit=e=>b(t=>_.client.edit(P(xo,{ops:e,clientSeq:t}),_.callOptions())),Q.undo=()=>b(e=>_.client.undo(P(So,{clientSeq:e}),_.callOptions())),Q.redo=()=>b(e=>_.client.redo(P(So,{clientSeq:e}),_.callOptions())),Q.redraw=()=>{c=!0},Q.generation=()=>i.generation,Q.changedChunks=e=>i.changesSince(e),Q.capture=async()=>{let e=a.last;if(!e)throw Error(`no frame yet`);let t=document.createElement(`canvas`);return t.width=e.width,t.height=e.height,t.getContext(`2d`).putImageData(e,0,0),t.toDataURL(`image/png`)};function x(e){let t=X(`token`);t.hidden=!1,X(`token-why`).textContent=e,t.onsubmit=e=>{e.preventDefault(),t.hidden=!0,_.setToken(X(`token-value`).value),_.run(),S()}}async function S(){try{let e=await _.whoAmI();Q.role=e.role;let t=e.role===`viewer`;X(`tools`).classList.toggle(`disabled`,t),t&&Il(`viewer token: editing is disabled (ask for an editor token to edit)`),zl()}catch{}}let C=sessionStorage.getItem(`naadf.name`)??`guest-${Math.floor(Math.random()*1e4)}`;sessionStorage.setItem(`naadf.name`,C),Q.name=C,Q.voxel=(e,t,n)=>o?.inside(e,t,n)?o.cell(e,t,n).material:0;let w=``,T=0;setInterval(()=>{if(Q.state!==`live`||!$)return;let e={session:h,name:C,position:[...$.pos],forward:Mo($).forward,pointer:f?f.voxel.map(BigInt):[],tool:d.tool},t=JSON.stringify(e,(e,t)=>typeof t==`bigint`?String(t):t),n=performance.now();t===w&&n-T<1e3||(w=t,T=n,_.client.publish(P(yo,e),_.callOptions()).catch(()=>{}))},100);let E=X(`tool`);for(let e of ml)E.add(new Option(e,e));E.onchange=()=>{d.tool=E.value,d.anchor=void 0,l=!0};let D=X(`radius`);D.onchange=()=>{d.radius=Math.max(0,Number(D.value)||0),l=!0};function O(){X(`palette`).replaceChildren(...wl(_.mirror).map(e=>{let t=document.createElement(`button`);return t.className=e.id===d.material?`swatch chosen`:`swatch`,t.style.background=e.colour,t.title=`material ${e.id}`,t.onclick=()=>{d.material=e.id,O()},t}))}function k(e){if(!o||Z.width===0)return;let[t,n]=Bl(m);f=Zc(o,[...e.pos],Uc(e,Z.width,Z.height,t,n)),p=f&&Q.role!==`viewer`?xl(d,o,f):void 0,Q.pointer=f?{voxel:f.voxel,before:f.before}:null}Z.addEventListener(`mousemove`,e=>{m=e,l=!0}),Z.addEventListener(`contextmenu`,e=>e.preventDefault()),Z.addEventListener(`mousedown`,e=>{if(e.button===2&&document.pointerLockElement!==Z){Z.requestPointerLock?.();return}if(e.button!==0||Q.role===`viewer`||!u)return;if(m=e,k(u),!f||p?.refusal){p?.refusal&&Il(`${d.tool}: ${p.refusal}`);return}let t=Sl(d,f);l=!0,t&&Q.edit(t).then(()=>Il(``),()=>{})});let A=new Set,j=32;addEventListener(`keydown`,e=>{(e.ctrlKey||e.metaKey)&&e.code===`KeyZ`?(e.preventDefault(),(e.shiftKey?Q.redo():Q.undo()).catch(()=>{})):e.target instanceof HTMLInputElement||A.add(e.code)}),addEventListener(`keyup`,e=>A.delete(e.code)),addEventListener(`mousemove`,e=>{document.pointerLockElement===Z&&$&&($.yaw+=e.movementX*.15,$.pitch=Math.max(-89.9,Math.min(89.9,$.pitch-e.movementY*.15)),c=!0)}),Z.addEventListener(`wheel`,e=>{j=Math.max(1,Math.min(4096,j*(e.deltaY<0?1.25:.8))),e.preventDefault()});let M=[],ee=performance.now(),N=0,te=!1;function ne(e){let t=Math.min(.1,(e-ee)/1e3);if(ee=e,$&&A.size>0){let e=Mo($),n=(e,n)=>e.forEach((e,r)=>$.pos[r]+=e*n*j*t);A.has(`KeyW`)&&n(e.forward,1),A.has(`KeyS`)&&n(e.forward,-1),A.has(`KeyD`)&&n(e.right,1),A.has(`KeyA`)&&n(e.right,-1),A.has(`Space`)&&n([0,1,0],1),A.has(`ShiftLeft`)&&n([0,1,0],-1),c=!0}if(i.buffer&&$&&c&&!te){c=!1,te=!0;let[t,r]=Rl(),o=performance.now(),s=Q.version,d={...$,pos:[...$.pos]};a.render(i,d,t,r,Q.mode).then(e=>{for(let t of[Z,Ml])(t.width!==e.width||t.height!==e.height)&&([t.width,t.height]=[e.width,e.height]);n.putImageData(e,0,0),u=d,l=!0,M.push(performance.now()-o),M.length>30&&M.shift(),Q.frameMs=M.reduce((e,t)=>e+t,0)/M.length,Q.shownVersion=s,Q.timings.firstFrame??=performance.now(),Q.samples=a.samples(Q.mode),Vc.accumulates(Q.mode)&&Q.samples<jl(Q.mode,Fl)&&(c=!0),zl()}).catch(e=>console.error(`frame: ${e}`)).finally(()=>te=!1),e-N>500&&(N=e,Al($,Q.mode,Fl))}l&&u&&(l=!1,k(u),Q.markers=Gc(r,u,p,s)),requestAnimationFrame(ne)}requestAnimationFrame(ne);let re=X(`mode`);for(let e of Tl)re.add(new Option(e,e,!1,e===Q.mode));re.onchange=()=>{Q.mode=re.value,c=!0},X(`undo`).onclick=()=>Q.undo().catch(()=>{}),X(`redo`).onclick=()=>Q.redo().catch(()=>{}),X(`shot`).onclick=async()=>{let e=document.createElement(`a`);e.href=await Q.capture(),e.download=`naadf-${Q.version}.png`,e.click()},addEventListener(`resize`,()=>c=!0),S(),await _.restore()&&(Q.timings.restored=performance.now()),await _.run()}Vl().catch(e=>{Q.state=`error`,Q.message=String(e instanceof Error?e.message:e),Il(Q.message),zl()});
