@@ -140,7 +140,6 @@ export const DEFAULT_MAX_STEPS = 65536;
 /** The protocol version the page speaks (`JoinRequest.protocol_version`). */
 export const PROTOCOL_VERSION = 1;
 
-
 /** The GI passes' entry points in `gi.wgsl`, in frame order. */
 export const GI_PASSES = [
   "gi_atmosphere",
