@@ -6,11 +6,11 @@
 
 mod support;
 
-use naadf_client::{Client, Mirror, Pose};
-use naadf_proto::mirror::Progress;
+use naadf_client::{Client, Pose};
+use naadf_proto::PROTOCOL_VERSION;
 use naadf_proto::v1::world_service_client::WorldServiceClient;
-use naadf_proto::v1::{DeltaForm, Patch, Run, Runs, world_message};
-use naadf_world::digest::{BufferId, Digest, digest_of};
+use naadf_proto::v1::{DeltaForm, Header, JoinRequest, Patch, Run, Runs, world_message};
+use naadf_world::digest::{BufferId, Digest, PAGE_BYTES, digest_of};
 use prost::Message;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -75,52 +75,74 @@ impl PatchMirror {
 }
 
 /// Follows `url` in the patch form until it is quiescent at `version` or later. The
-/// snapshot is assembled by the client library (pages are the same in both forms); from
-/// then on only bytes are copied.
+/// snapshot's pages are written into the buffers as they come (a patch-form snapshot
+/// carries all eight buffers, the entity buffers too); from then on only bytes are copied.
 async fn follow_patches(url: &str, until: impl Fn(&PatchMirror) -> bool) -> PatchMirror {
     let channel = tonic::transport::Endpoint::from_shared(url.to_owned())
         .unwrap()
         .connect()
         .await
         .unwrap();
-    let mut snapshot = Mirror::new(None);
-    let mut request = snapshot.join_request();
-    request.delta_form = DeltaForm::Patch.into();
+    let request = JoinRequest {
+        protocol_version: PROTOCOL_VERSION,
+        delta_form: DeltaForm::Patch.into(),
+        ..Default::default()
+    };
     let mut stream = WorldServiceClient::new(channel)
         .join(request)
         .await
         .unwrap()
         .into_inner();
     let mut mirror = PatchMirror::default();
+    // The header of the snapshot being received, and the page messages still to come.
+    let mut snapshot: Option<(Header, u32)> = None;
     let read = async {
         loop {
             // `until` may turn true while no message comes: look again every 100 ms.
             let Ok(next) = tokio::time::timeout(Duration::from_millis(100), stream.message()).await else {
-                if !mirror.buffers.is_empty() && until(&mirror) {
+                if snapshot.is_none() && !mirror.buffers.is_empty() && until(&mirror) {
                     return;
                 }
                 continue;
             };
             let m = next.unwrap().expect("the stream goes on");
-            match &m.kind {
-                Some(world_message::Kind::Delta(d)) => {
+            match m.kind.expect("a message") {
+                world_message::Kind::Delta(d) => {
                     assert!(d.change.is_empty(), "the patch form carries no record");
                     mirror.apply(d.patch.as_ref().expect("a patch"), d.digest);
                 }
-                _ => {
-                    if snapshot.handle(&m).unwrap() == Progress::Ready {
-                        let w = snapshot.world().unwrap();
-                        mirror.buffers = BufferId::WORLD
-                            .iter()
-                            .map(|&id| w.buffer_bytes(id).into_owned())
-                            .collect();
-                        (mirror.version, mirror.growth_seq, mirror.quiescent) =
-                            (w.version(), snapshot.growth_seq(), snapshot.is_quiescent());
-                        assert_eq!(mirror.digest(), w.digest());
-                    }
+                world_message::Kind::Header(h) => {
+                    assert!(!h.resume, "this mirror announced nothing to resume");
+                    let ids: Vec<u32> = h.buffers.iter().map(|b| b.buffer).collect();
+                    assert_eq!(ids, (0..8).collect::<Vec<u32>>(), "the header lists all eight buffers");
+                    mirror.buffers = h.buffers.iter().map(|b| vec![0; b.bytes as usize]).collect();
+                    snapshot = Some((h.clone(), h.pages));
                 }
+                world_message::Kind::Page(p) => {
+                    let bytes = zstd::decode_all(p.zstd.as_slice()).unwrap();
+                    let buffer = &mut mirror.buffers[p.buffer as usize];
+                    let mut at = 0;
+                    for k in p.indices {
+                        let lo = k as usize * PAGE_BYTES;
+                        let n = PAGE_BYTES.min(buffer.len() - lo);
+                        buffer[lo..lo + n].copy_from_slice(&bytes[at..at + n]);
+                        at += n;
+                    }
+                    assert_eq!(at, bytes.len(), "a page group holds exactly its pages");
+                    snapshot.as_mut().expect("pages follow a header").1 -= 1;
+                }
+                _ => {}
             }
-            if !mirror.buffers.is_empty() && until(&mirror) {
+            if let Some((h, 0)) = &snapshot {
+                assert_eq!(
+                    mirror.digest(),
+                    Digest(h.digest),
+                    "the snapshot's pages give its digest"
+                );
+                (mirror.version, mirror.growth_seq, mirror.quiescent) = (h.version, h.growth_seq, h.quiescent);
+                snapshot = None;
+            }
+            if snapshot.is_none() && !mirror.buffers.is_empty() && until(&mirror) {
                 return;
             }
         }
@@ -190,6 +212,15 @@ async fn a_mirror_of_patches_alone_follows_the_server_and_a_relay_sends_the_same
     last.store(status.version, Ordering::Relaxed);
     let (from_server, from_relay) = (from_server.await.unwrap(), from_relay.await.unwrap());
     assert_eq!(from_server.digest(), status.digest);
+    // A mirror that joins now takes the entity buffers from the snapshot's pages.
+    for url in [&server.url, &relay.url] {
+        let late = follow_patches(url, |m| m.quiescent && m.version >= status.version).await;
+        assert_eq!(late.digest(), status.digest, "{url}");
+        assert!(
+            !late.buffers[BufferId::EntityInstances as usize].is_empty(),
+            "entities remain"
+        );
+    }
     let growth = from_server.patches.iter().filter(|(p, _)| p.growth_seq > 0).count();
     let compressed = from_server.patches.iter().filter(|(p, _)| !p.zstd.is_empty()).count();
     eprintln!(

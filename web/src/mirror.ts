@@ -1,5 +1,5 @@
 // The world as the page holds it: the eight digested buffers, filled from a snapshot's
-// pages and kept current by the patch form's deltas (docs/PROTOCOL.md, "The patch form").
+// pages (a patch-form snapshot carries all eight) and kept current by the patch form's deltas (docs/PROTOCOL.md, "The patch form").
 // Every snapshot and every delta is checked against the server's digest.
 import { fromBinary } from "@bufbuild/protobuf";
 import { decompress } from "fzstd";
@@ -10,8 +10,6 @@ import { PAGE_BYTES, pageHash } from "./digest";
 /** The digested buffers: 0 chunks, 1 chunk entities, 2 blocks, 3 voxels, 4 materials,
  * 5 models, 6 entity types, 7 entity instances. */
 export const BUFFER_COUNT = 8;
-/** The buffers a snapshot sends as pages; 6 and 7 derive from the entity table. */
-export const PAGED_BUFFERS = 6;
 
 /** A byte range of one buffer that a change wrote. */
 export interface Touched {
@@ -20,16 +18,8 @@ export interface Touched {
   hi: number;
 }
 
-/** The mirror diverged from the server, or the server sent something it cannot hold;
- * `fatal` when joining again would not help (a world the page cannot draw). */
-export class MirrorError extends Error {
-  constructor(
-    message: string,
-    readonly fatal = false,
-  ) {
-    super(message);
-  }
-}
+/** The mirror diverged from the server, or the server sent something it cannot hold. */
+export class MirrorError extends Error {}
 
 /** One buffer: its bytes (with room to grow) at its logical length, and its page hashes.
  * A resize leaves the pages it changed stale until `settle`, so that pages about to be
@@ -99,11 +89,11 @@ export class Mirror {
   private expected: Header | undefined;
   private pagesLeft = 0;
 
-  /** The page hashes of the paged buffers, to announce as `JoinRequest.cached`. They hash
+  /** The page hashes of the buffers, to announce as `JoinRequest.cached`. They hash
    * the bytes held, so they are true even of a mirror that diverged: the server then sends
    * only the pages that differ. */
   cached(): { buffer: number; pageHashes: bigint[] }[] {
-    return this.buffers.slice(0, PAGED_BUFFERS).map((b) => {
+    return this.buffers.map((b) => {
       b.settle();
       return { buffer: b.id, pageHashes: [...b.hashes] };
     });
@@ -153,19 +143,13 @@ export class Mirror {
     this.holdsWorld = false;
     this.size = [h.size[0], h.size[1], h.size[2]];
     for (const l of h.buffers) {
-      if (l.buffer >= PAGED_BUFFERS) throw new MirrorError(`the header names buffer ${l.buffer}`);
+      if (l.buffer >= BUFFER_COUNT) throw new MirrorError(`the header names buffer ${l.buffer}`);
     }
-    for (let id = 0; id < PAGED_BUFFERS; id++) {
+    for (let id = 0; id < BUFFER_COUNT; id++) {
       const l = h.buffers.find((b) => b.buffer === id);
-      this.buffers[id].resize(l ? Number(l.bytes) : 0);
+      if (!l) throw new MirrorError(`the header lacks the length of buffer ${id}`);
+      this.buffers[id].resize(Number(l.bytes));
     }
-    const entities = expandEntityTable(h.entityTable);
-    entities.forEach((bytes, k) => {
-      const b = this.buffers[6 + k];
-      b.resize(bytes.length);
-      b.bytes.set(bytes);
-      for (let p = 0; p < b.hashes.length; p++) b.touch(p);
-    });
     this.expected = h;
     this.pagesLeft = h.pages;
     if (this.pagesLeft === 0) this.finishSnapshot();
@@ -176,7 +160,7 @@ export class Mirror {
   page(p: Page): boolean {
     if (!this.expected || this.pagesLeft === 0) throw new MirrorError("a page arrived outside a snapshot");
     const b = this.buffers[p.buffer];
-    if (!b || p.buffer >= PAGED_BUFFERS) throw new MirrorError(`a page of buffer ${p.buffer}`);
+    if (!b) throw new MirrorError(`a page of buffer ${p.buffer}`);
     const bytes = decompress(p.zstd);
     let at = 0;
     for (const index of p.indices) {
@@ -245,15 +229,4 @@ export class Mirror {
     for (const b of this.buffers) d ^= b.digest();
     return d;
   }
-}
-
-/** The entity buffers (6 and 7) of an entity table (docs/FORMAT.md §5.7–5.9). The page
- * holds worlds without entities; a table that lists any is refused with a clear message. */
-function expandEntityTable(table: Uint8Array): [Uint8Array, Uint8Array] {
-  const v = new DataView(table.buffer, table.byteOffset, table.byteLength);
-  const empty = table.byteLength === 8 && v.getUint32(0, true) === 0 && v.getUint32(4, true) === 0;
-  if (table.byteLength !== 0 && !empty) {
-    throw new MirrorError("this world has entities, which the browser page does not draw yet; use `naadf view`", true);
-  }
-  return [new Uint8Array(0), new Uint8Array(0)];
 }

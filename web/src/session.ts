@@ -109,10 +109,6 @@ export class Session {
         if (e instanceof MirrorError) {
           // Diverged or refused data: join again announcing what is held.
           console.warn(e.message);
-          if (e.fatal) {
-            this.events.state("error", e.message);
-            return;
-          }
         } else {
           const err = ConnectError.from(e);
           if (err.code === Code.Unauthenticated || err.code === Code.PermissionDenied) {

@@ -1,5 +1,9 @@
-//! Snapshot pages on the server: the current 64 KiB pages of every transferred buffer,
-//! kept incrementally, and a cache of their zstd frames shared by all joining clients.
+//! Snapshot pages on the server: the current 64 KiB pages of every digested buffer, kept
+//! incrementally, and a cache of their zstd frames shared by all joining clients.
+//!
+//! Record-form clients are sent the [`TRANSFERRED`] buffers (ids 0–5) and derive the
+//! entity buffers from the entity table; patch-form clients, which have no edit engine to
+//! derive them with, are sent all eight ([`paged_buffers`]).
 //!
 //! The actor updates the [`PageStore`] after every change by comparing the world's page
 //! hashes (kept by its incremental digest) with the stored ones, so only changed pages are
@@ -8,7 +12,7 @@
 
 use naadf_proto::snapshot::{GROUP_PAGES, compress_pages};
 use naadf_world::World;
-use naadf_world::digest::{Digest, PAGE_BYTES};
+use naadf_world::digest::{BufferId, Digest, PAGE_BYTES};
 use naadf_world::file::TRANSFERRED;
 use rayon::prelude::*;
 use std::collections::HashMap;
@@ -23,14 +27,25 @@ pub struct StoredPage {
     pub bytes: Arc<[u8]>,
 }
 
-/// A page that changed: `(slot in TRANSFERRED, page index, new hash)`.
+/// A page that changed: `(buffer id, page index, new hash)`.
 pub type PageChange = (u8, u32, u64);
 
-/// The current pages of the transferred buffers.
+/// Buffers a page store keeps: every digested one, by id.
+pub const PAGED: usize = BufferId::WORLD.len();
+
+/// The buffers a snapshot sends a client whose deltas come in `form` (ids, ascending).
+pub fn paged_buffers(form: naadf_proto::v1::DeltaForm) -> &'static [BufferId] {
+    match form {
+        naadf_proto::v1::DeltaForm::Record => &TRANSFERRED,
+        naadf_proto::v1::DeltaForm::Patch => &BufferId::WORLD,
+    }
+}
+
+/// The current pages of the digested buffers, by buffer id.
 #[derive(Debug)]
 pub struct PageStore {
-    pages: [Vec<StoredPage>; 6],
-    lens: [usize; 6],
+    pages: [Vec<StoredPage>; PAGED],
+    lens: [usize; PAGED],
 }
 
 impl PageStore {
@@ -38,7 +53,7 @@ impl PageStore {
     pub fn new(world: &World) -> Self {
         let mut s = Self {
             pages: Default::default(),
-            lens: [0; 6],
+            lens: [0; PAGED],
         };
         s.update(world);
         s
@@ -48,7 +63,7 @@ impl PageStore {
     /// that vanished because a buffer shrank are implied by the new lengths).
     pub fn update(&mut self, world: &World) -> Vec<PageChange> {
         let mut changes = Vec::new();
-        for (slot, &id) in TRANSFERRED.iter().enumerate() {
+        for (slot, &id) in BufferId::WORLD.iter().enumerate() {
             let hashes = world.page_hashes(id);
             self.lens[slot] = world.buffer_len(id);
             let pages = &mut self.pages[slot];
@@ -78,12 +93,12 @@ impl PageStore {
     }
 
     /// The byte lengths of the buffers.
-    pub fn lens(&self) -> [usize; 6] {
+    pub fn lens(&self) -> [usize; PAGED] {
         self.lens
     }
 
     /// A view of the current pages.
-    pub fn pages(&self) -> [Vec<StoredPage>; 6] {
+    pub fn pages(&self) -> [Vec<StoredPage>; PAGED] {
         self.pages.clone()
     }
 }
@@ -101,10 +116,10 @@ pub struct SnapshotView {
     pub quiescent: bool,
     /// The digest.
     pub digest: Digest,
-    /// The transferred buffers' byte lengths.
-    pub lens: [usize; 6],
-    /// The pages.
-    pub pages: [Vec<StoredPage>; 6],
+    /// The buffers' byte lengths, by id.
+    pub lens: [usize; PAGED],
+    /// The pages, by buffer id.
+    pub pages: [Vec<StoredPage>; PAGED],
     /// The entity table's encoding.
     pub entity_table: Vec<u8>,
 }

@@ -12,17 +12,18 @@
 //! upstream could not resume it), the task instead sends, in the same stream, a fresh
 //! header and the pages whose hash differs from what the client holds.
 
-use crate::data::pages::{SnapshotView, StoredPage};
+use crate::data::pages::{PAGED, SnapshotView, StoredPage, paged_buffers};
 use crate::shared::Shared;
 use crate::stream::feed::{Feed, Item, feed};
 use crate::stream::messages::Request;
 use crate::stream::messages::{Event, Subscription};
 use crate::stream::presence::Table;
 use naadf_proto::PROTOCOL_VERSION;
-use naadf_proto::snapshot::{buffer_lengths, group_pages};
-use naadf_proto::v1::{CachedBuffer, DeltaForm, Header, JoinRequest, Page, Presence, WorldMessage, world_message};
+use naadf_proto::snapshot::group_pages;
+use naadf_proto::v1::{
+    BufferLength, CachedBuffer, DeltaForm, Header, JoinRequest, Page, Presence, WorldMessage, world_message,
+};
 use naadf_world::digest::PAGE_BYTES;
-use naadf_world::file::TRANSFERRED;
 use prost::Message;
 use std::collections::VecDeque;
 use std::sync::Arc;
@@ -32,8 +33,8 @@ use tonic::Status;
 /// Most page hashes a join request may announce (far more than the largest world has).
 pub const MAX_CACHED_PAGES: usize = 1 << 22;
 
-/// The page hashes a client holds, per transferred buffer.
-pub type ClientPages = [Vec<u64>; 6];
+/// The page hashes a client holds, by buffer id.
+pub type ClientPages = [Vec<u64>; PAGED];
 
 /// Checks and arranges a join request's cache.
 pub fn client_pages(cached: &[CachedBuffer]) -> Result<ClientPages, Status> {
@@ -45,8 +46,13 @@ pub fn client_pages(cached: &[CachedBuffer]) -> Result<ClientPages, Status> {
         )));
     }
     for c in cached {
-        let slot = naadf_proto::snapshot::slot_of(c.buffer).map_err(|e| Status::invalid_argument(e.to_string()))?;
-        out[slot] = c.page_hashes.clone();
+        let slot = out.get_mut(c.buffer as usize).ok_or_else(|| {
+            Status::invalid_argument(format!(
+                "the cache names buffer {}, which is not a world buffer",
+                c.buffer
+            ))
+        })?;
+        *slot = c.page_hashes.clone();
     }
     Ok(out)
 }
@@ -388,16 +394,18 @@ fn message(kind: world_message::Kind) -> WorldMessage {
     WorldMessage { kind: Some(kind) }
 }
 
-/// Sends the header and the pages of `view` the client lacks; afterwards the client holds
-/// exactly the view's pages.
+/// Sends the header and the pages of `view` the client lacks, of the buffers its form is
+/// sent ([`paged_buffers`]); afterwards the client holds exactly the view's pages of them.
 async fn send_snapshot(
     out: &mut Outbox,
     view: &Arc<SnapshotView>,
     held: &mut ClientPages,
     resync: bool,
 ) -> Result<(), Stop> {
+    let sent = paged_buffers(out.form);
     let mut groups = Vec::new();
-    for (slot, pages) in view.pages.iter().enumerate() {
+    for &id in sent {
+        let (slot, pages) = (id as usize, &view.pages[id as usize]);
         let wanted: Vec<u32> = (0..pages.len())
             .filter(|&k| held[slot].get(k) != Some(&pages[k].hash))
             .map(|k| k as u32)
@@ -411,7 +419,13 @@ async fn send_snapshot(
         growth_seq: view.growth_seq,
         quiescent: view.quiescent,
         digest: view.digest.0,
-        buffers: buffer_lengths(view.lens),
+        buffers: sent
+            .iter()
+            .map(|&id| BufferLength {
+                buffer: id as u32,
+                bytes: view.lens[id as usize] as u64,
+            })
+            .collect(),
         entity_table: view.entity_table.clone(),
         pages: groups.len() as u32,
         resync,
@@ -435,15 +449,15 @@ async fn send_snapshot(
         .map_err(|_| Stop::Gone)?;
         for ((slot, indices), frame) in frames {
             let page = Page {
-                buffer: TRANSFERRED[slot] as u32,
+                buffer: slot as u32,
                 indices,
                 zstd: frame.as_ref().clone(),
             };
             out.send(message(world_message::Kind::Page(page))).await?;
         }
     }
-    for (slot, pages) in view.pages.iter().enumerate() {
-        held[slot] = pages.iter().map(|p| p.hash).collect();
+    for &id in sent {
+        held[id as usize] = view.pages[id as usize].iter().map(|p| p.hash).collect();
     }
     Ok(())
 }

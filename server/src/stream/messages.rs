@@ -5,7 +5,7 @@
 //! task's [`Subscription`], and answers edit requests with an [`EditResult`] once their
 //! batch is durable.
 
-use crate::data::pages::{PageChange, SnapshotView};
+use crate::data::pages::{PAGED, PageChange, SnapshotView};
 use crate::data::state::ServerState;
 use naadf_proto::v1::{Delta, DeltaForm, EditReply, Patch, WorldMessage, world_message};
 use naadf_world::file::WorldParts;
@@ -33,8 +33,8 @@ pub struct Event {
     pub patch: WorldMessage,
     /// The snapshot pages the change altered.
     pub changes: Vec<PageChange>,
-    /// The transferred buffers' lengths after it.
-    pub lens: [usize; 6],
+    /// The buffers' lengths after it, by id.
+    pub lens: [usize; PAGED],
 }
 
 impl Event {
