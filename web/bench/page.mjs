@@ -1,13 +1,15 @@
 // The page's benchmarks (BENCHMARKS.md, "The browser page"), against a running server:
 //
 //   node web/bench/page.mjs --server http://127.0.0.1:50051 --naadf target/release/naadf [--edits 200] [--reps 3]
+//        [--parts open,edits,frames] [--modes albedo,material,normal,steps,gi,pathtrace]
 //
 // - page open to first frame, cold (a new browser profile) and from the page's cache (a
 //   reload), alternated, `--reps` times each;
 // - bytes at join, against `naadf mirror --once --json --no-cache` of the same server;
 // - edit to visible, page to page: page A sends `--edits` one-voxel edits one after another,
 //   and the time from A's call to B showing that version is taken, at 320×180;
-// - frame ms per mode at 640×360.
+// - frame ms per mode at 640×360 (`gi` and `pathtrace`: each frame after the first, which
+//   builds on the ones before).
 //
 // It edits the world (voxels at y = size.y − 2, where terrain seldom reaches). Prints one
 // JSON object.
@@ -25,6 +27,8 @@ const { values: args } = parseArgs({
     naadf: { type: "string", default: "naadf" },
     edits: { type: "string", default: "200" },
     reps: { type: "string", default: "3" },
+    parts: { type: "string", default: "open,edits,frames" },
+    modes: { type: "string", default: "albedo,material,normal,steps,gi,pathtrace" },
   },
 });
 
@@ -57,8 +61,10 @@ const out = { server: args.server };
 const status = JSON.parse(execFileSync(args.naadf, ["status", "--server", args.server, "--json"]).toString());
 out.world = status.size;
 
+const parts = args.parts.split(",");
+
 // Page open to first frame: cold, then a reload from the cache, alternated.
-{
+if (parts.includes("open")) {
   const cold = [];
   const cached = [];
   let bytes;
@@ -88,7 +94,7 @@ out.world = status.size;
 }
 
 // Edit to visible, page to page.
-{
+if (parts.includes("edits")) {
   const b = await launch();
   const a = await b.context.newPage();
   const v = await b.context.newPage();
@@ -112,11 +118,11 @@ out.world = status.size;
 }
 
 // Frame ms per mode at 640×360.
-{
+if (parts.includes("frames")) {
   const b = await launch();
   const page = await b.context.newPage();
   out.frameMs = { size: "640x360" };
-  for (const mode of ["albedo", "material", "normal", "steps", "pathtrace"]) {
+  for (const mode of args.modes.split(",")) {
     await page.goto(url(`mode=${mode}&size=640x360`));
     await until(page, firstFrame);
     const times = [];
