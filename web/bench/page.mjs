@@ -1,10 +1,10 @@
 // The page's benchmarks (BENCHMARKS.md, "The browser page"), against a running server:
 //
 //   node web/bench/page.mjs --server http://127.0.0.1:50051 --naadf target/release/naadf [--edits 200] [--reps 3]
-//        [--parts open,edits,frames] [--modes albedo,material,normal,steps,gi,pathtrace]
+//        [--parts open,edits,frames] [--modes albedo,material,normal,steps,gi,pathtrace] [--open-mode albedo]
 //
-// - page open to first frame, cold (a new browser profile) and from the page's cache (a
-//   reload), alternated, `--reps` times each;
+// - page open to first frame in `--open-mode`, cold (a new browser profile) and from the
+//   page's cache (a reload), alternated, `--reps` times each;
 // - bytes at join, against `naadf mirror --once --json --no-cache` of the same server;
 // - edit to visible, page to page: page A sends `--edits` one-voxel edits one after another,
 //   and the time from A's call to B showing that version is taken, at 320×180;
@@ -29,6 +29,7 @@ const { values: args } = parseArgs({
     reps: { type: "string", default: "3" },
     parts: { type: "string", default: "open,edits,frames" },
     modes: { type: "string", default: "albedo,material,normal,steps,gi,pathtrace" },
+    "open-mode": { type: "string", default: "albedo" },
   },
 });
 
@@ -72,7 +73,7 @@ if (parts.includes("open")) {
     const b = await launch();
     const page = await b.context.newPage();
     let t0 = performance.now();
-    await page.goto(url("mode=albedo"));
+    await page.goto(url(`mode=${args["open-mode"]}`));
     const s = await until(page, firstFrame);
     cold.push(performance.now() - t0);
     bytes = s.snapshotBytes;
