@@ -282,6 +282,47 @@ fn two_pages_edit_together_and_see_each_other() {
             "{id}: A's sphere"
         );
     }
+
+    // Touch: one finger dragged right turns A's view right; two fingers dragged up the
+    // screen fly it forward. The link follows.
+    let touch = r#"
+        const c = document.getElementById("view");
+        const at = (type, id, x, y) => c.dispatchEvent(new PointerEvent(type, { pointerId: id, pointerType: "touch", clientX: x, clientY: y, bubbles: true }));
+        window.linked = () => JSON.parse(new URLSearchParams(location.search).get("camera"));
+        window.drag = (fingers, dx, dy) => {
+            for (let f = 0; f < fingers; f++) at("pointerdown", 10 + f, 300 + 40 * f, 200);
+            for (let k = 1; k <= 10; k++) for (let f = 0; f < fingers; f++) at("pointermove", 10 + f, 300 + 40 * f + k * dx / 10, 200 + k * dy / 10);
+            for (let f = 0; f < fingers; f++) at("pointerup", 10 + f, 300 + 40 * f + dx, 200 + dy);
+        };
+        return window.linked();"#;
+    let before = browser.eval("a", touch);
+    browser.eval("a", "window.drag(1, 100, 0); return 1");
+    let yaw = before["yaw"].as_f64().unwrap() + 15.0;
+    let turned = browser.wait("a", &format!("Math.abs(window.linked().yaw - {yaw}) < 1e-6"), 10_000);
+    assert_eq!(turned["state"], "live");
+    let turned = browser.eval("a", "return window.linked()");
+    assert_eq!(turned["pos"], before["pos"], "one finger only looks");
+    browser.eval("a", "window.drag(2, 0, -100); return 1");
+    let moved = browser.wait(
+        "a",
+        &format!(
+            "JSON.stringify(window.linked().pos) !== {}",
+            json!(turned["pos"].to_string())
+        ),
+        10_000,
+    );
+    assert_eq!(moved["state"], "live");
+    let moved = browser.eval("a", "return window.linked()");
+    assert_eq!(moved["yaw"], turned["yaw"], "two fingers only fly");
+    let (yaw, pitch) = (
+        turned["yaw"].as_f64().unwrap().to_radians(),
+        turned["pitch"].as_f64().unwrap().to_radians(),
+    );
+    let forward = [yaw.sin() * pitch.cos(), pitch.sin(), yaw.cos() * pitch.cos()];
+    let along: f64 = (0..3)
+        .map(|a| (moved["pos"][a].as_f64().unwrap() - turned["pos"][a].as_f64().unwrap()) * forward[a])
+        .sum();
+    assert!(along > 1.0, "flew {along} voxels forward");
     server.stop();
 }
 

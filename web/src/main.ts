@@ -18,6 +18,7 @@ import { Session } from "./session";
 import type { SessionState } from "./session";
 import type { Region, ToolState } from "./tools";
 import { TOOLS, commit, palette, preview } from "./tools";
+import { touchControls } from "./touch";
 import { MODES, accumulationCap, readLink, writeLink } from "./view";
 
 /** The page's state, as `window.naadf` shows it. */
@@ -409,6 +410,22 @@ async function main(): Promise<void> {
     camera.pitch = Math.max(-89.9, Math.min(89.9, camera.pitch - e.movementY * 0.15));
     dirty = true;
   });
+  // Touch: a finger looks round at the mouse's rate per pixel; two fingers fly 1/64 of the
+  // speed (voxels a second) per pixel.
+  touchControls(canvas, {
+    look(dx, dy) {
+      if (!camera) return;
+      camera.yaw += dx * 0.15;
+      camera.pitch = Math.max(-89.9, Math.min(89.9, camera.pitch - dy * 0.15));
+      dirty = true;
+    },
+    fly(forward, right) {
+      if (!camera) return;
+      const b = basis(camera);
+      camera.pos.forEach((_, i) => (camera!.pos[i] += (b.forward[i] * forward + b.right[i] * right) * (speed / 64)));
+      dirty = true;
+    },
+  });
   canvas.addEventListener("wheel", (e) => {
     speed = Math.max(1, Math.min(4096, speed * (e.deltaY < 0 ? 1.25 : 0.8)));
     e.preventDefault();
@@ -416,7 +433,18 @@ async function main(): Promise<void> {
 
   const frameTimes: number[] = [];
   let lastTick = performance.now();
+  // The link follows the view at most twice a second, and always ends on the last view.
   let lastUrl = 0;
+  let linkPending = false;
+  function linkLater(): void {
+    if (linkPending) return;
+    linkPending = true;
+    setTimeout(() => {
+      linkPending = false;
+      lastUrl = performance.now();
+      if (camera) writeLink(camera, naadf.mode, link);
+    }, Math.max(0, 500 - (performance.now() - lastUrl)));
+  }
   let drawing = false;
   function frame(now: number): void {
     const dt = Math.min(0.1, (now - lastTick) / 1000);
@@ -461,10 +489,7 @@ async function main(): Promise<void> {
         })
         .catch((e) => console.error(`frame: ${e}`))
         .finally(() => (drawing = false));
-      if (now - lastUrl > 500) {
-        lastUrl = now;
-        writeLink(camera, naadf.mode, link);
-      }
+      linkLater();
     }
     if (overlayDirty && shownView) {
       overlayDirty = false;
