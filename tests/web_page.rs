@@ -513,26 +513,13 @@ fn the_path_tracer_accumulates_what_naadf_render_traces() {
     );
     let page = browser.wait("a", "n.samples === 8 && n.state === 'live' && n.quiescent", 120_000);
     assert_eq!(page["mode"], "pathtrace");
-    let png = p(dir.path(), "page.png");
-    browser.send(json!({"op": "capture", "id": "a", "path": png}));
-    let native = p(dir.path(), "native.png");
-    ok(
-        &[
-            "render",
-            "--server",
-            &server.url,
-            "--camera",
-            camera,
-            "--size",
-            "64x36",
-            "--mode",
-            "pathtrace",
-            "--spp",
-            "8",
-            "-o",
-            &native,
-        ],
-        None,
+    let (png, native) = page_and_native(
+        &mut browser,
+        "a",
+        &server,
+        camera,
+        &["--size", "64x36", "--mode", "pathtrace", "--spp", "8"],
+        dir.path(),
     );
     let (mean, most) = difference(&png, &native);
     eprintln!("pathtrace: mean channel difference {mean:.4}, largest {most}");
@@ -627,26 +614,13 @@ fn gi_against_native(browser: &mut Browser, id: &str, server: &Server, camera: &
         180_000,
     );
     assert_eq!(page["mode"], "gi");
-    let png = p(dir, &format!("page-{id}-gi.png"));
-    browser.send(json!({"op": "capture", "id": id, "path": png}));
-    let native = p(dir, &format!("native-{id}-gi.png"));
-    ok(
-        &[
-            "render",
-            "--server",
-            &server.url,
-            "--camera",
-            camera,
-            "--size",
-            "64x36",
-            "--mode",
-            "gi",
-            "--frames",
-            frames,
-            "-o",
-            &native,
-        ],
-        None,
+    let (png, native) = page_and_native(
+        browser,
+        id,
+        server,
+        camera,
+        &["--size", "64x36", "--mode", "gi", "--frames", frames],
+        dir,
     );
     let (mean, most) = difference(&png, &native);
     eprintln!("gi ({id}): mean channel difference {mean:.4}, largest {most}");
@@ -655,6 +629,26 @@ fn gi_against_native(browser: &mut Browser, id: &str, server: &Server, camera: &
 
 /// Frames of a still view the GI comparisons let the page draw.
 const GI_FRAMES: &str = "8";
+
+/// Captures page `id`'s frame, and renders `camera` with `naadf render` and `args` (size,
+/// mode and the rest); returns the two PNGs' paths.
+fn page_and_native(
+    browser: &mut Browser,
+    id: &str,
+    server: &Server,
+    camera: &str,
+    args: &[&str],
+    dir: &Path,
+) -> (String, String) {
+    let png = p(dir, &format!("page-{id}.png"));
+    browser.send(json!({"op": "capture", "id": id, "path": png}));
+    let native = p(dir, &format!("native-{id}.png"));
+    let mut command = vec!["render", "--server", &server.url, "--camera", camera];
+    command.extend(args);
+    command.extend(["-o", &native]);
+    ok(&command, None);
+    (png, native)
+}
 
 /// The mean and the largest difference of two equally sized images' channels.
 fn difference(a: &str, b: &str) -> (f64, i32) {
@@ -771,25 +765,7 @@ fn same_frame_as_native(
     mode: &str,
     dir: &Path,
 ) -> image::RgbaImage {
-    let png = p(dir, &format!("page-{id}-{mode}.png"));
-    browser.send(json!({"op": "capture", "id": id, "path": png}));
-    let native = p(dir, &format!("native-{id}-{mode}.png"));
-    ok(
-        &[
-            "render",
-            "--server",
-            &server.url,
-            "--camera",
-            camera,
-            "--size",
-            size,
-            "--mode",
-            mode,
-            "-o",
-            &native,
-        ],
-        None,
-    );
+    let (png, native) = page_and_native(browser, id, server, camera, &["--size", size, "--mode", mode], dir);
     let a = image::open(&png).unwrap().to_rgba8();
     let b = image::open(&native).unwrap().to_rgba8();
     assert_eq!(a.dimensions(), b.dimensions());

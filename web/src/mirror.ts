@@ -10,6 +10,8 @@ import { PAGE_BYTES, pageHash } from "./digest";
 /** The digested buffers: 0 chunks, 1 chunk entities, 2 blocks, 3 voxels, 4 materials,
  * 5 models, 6 entity types, 7 entity instances. */
 export const BUFFER_COUNT = 8;
+/** The first entity buffer: a snapshot header lists 6 and 7 only when they are not empty. */
+const ENTITY_BUFFERS = 6;
 
 /** A byte range of one buffer that a change wrote. */
 export interface Touched {
@@ -147,8 +149,9 @@ export class Mirror {
     }
     for (let id = 0; id < BUFFER_COUNT; id++) {
       const l = h.buffers.find((b) => b.buffer === id);
-      if (!l) throw new MirrorError(`the header lacks the length of buffer ${id}`);
-      this.buffers[id].resize(Number(l.bytes));
+      // The entity buffers (6, 7) are listed only when they hold anything.
+      if (!l && id < ENTITY_BUFFERS) throw new MirrorError(`the header lacks the length of buffer ${id}`);
+      this.buffers[id].resize(l ? Number(l.bytes) : 0);
     }
     this.expected = h;
     this.pagesLeft = h.pages;

@@ -24,6 +24,7 @@ use naadf_proto::v1::{
     BufferLength, CachedBuffer, DeltaForm, Header, JoinRequest, Page, Presence, WorldMessage, world_message,
 };
 use naadf_world::digest::PAGE_BYTES;
+use naadf_world::file::TRANSFERRED;
 use prost::Message;
 use std::collections::VecDeque;
 use std::sync::Arc;
@@ -419,8 +420,11 @@ async fn send_snapshot(
         growth_seq: view.growth_seq,
         quiescent: view.quiescent,
         digest: view.digest.0,
+        // The entity buffers are listed only when they hold anything, so that the snapshot
+        // of a world without entities is the same bytes in both forms.
         buffers: sent
             .iter()
+            .filter(|&&id| view.lens[id as usize] > 0 || TRANSFERRED.contains(&id))
             .map(|&id| BufferLength {
                 buffer: id as u32,
                 bytes: view.lens[id as usize] as u64,
