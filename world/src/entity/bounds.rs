@@ -35,6 +35,11 @@ impl Bounds {
         }
     }
 
+    /// The padded world box.
+    pub fn world_box(&self) -> ([f64; 3], [f64; 3]) {
+        (self.lo, self.hi)
+    }
+
     /// The first time in `[t_lo, t_hi]` at which the ray `o + t·d` (with `inv_d` = 1/d per
     /// axis) is inside both boxes, if any: the world box first (cheap), then the oriented one.
     #[inline]
@@ -57,7 +62,7 @@ impl Bounds {
 /// The first time in `[t_lo, t_hi]` at which the ray `o + t·d` (given `inv_d` = 1/d per
 /// axis) is inside the box `[lo, hi]`, if any.
 #[inline]
-fn slab(o: [f64; 3], inv_d: [f64; 3], lo: [f64; 3], hi: [f64; 3], t_lo: f64, t_hi: f64) -> Option<f64> {
+pub(crate) fn slab(o: [f64; 3], inv_d: [f64; 3], lo: [f64; 3], hi: [f64; 3], t_lo: f64, t_hi: f64) -> Option<f64> {
     let (mut first, mut last) = (t_lo, t_hi);
     for a in 0..3 {
         if inv_d[a].is_infinite() {

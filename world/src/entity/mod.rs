@@ -25,6 +25,7 @@
 //!   and the models.
 
 pub(crate) mod bounds;
+pub mod bvh;
 pub mod pack;
 
 use crate::aadf::grid_aadf;
@@ -175,10 +176,15 @@ pub(crate) struct Entities {
     pub type_starts: Vec<u32>,
     /// The instance buffer: 5-word records.
     pub instances: Vec<u32>,
-    /// Per record of `instances`: the padded world box of its entity. Derived on every
-    /// machine from the records (not mirrored, not in the digest), so that a ray rejects
-    /// most instances without transforming into them.
+    /// Per record of `instances`: which instance it is (an index of `records`).
+    pub listed: Vec<u32>,
+    /// Per instance, in id order: its record (as the instance buffer's lists hold it).
+    pub records: Vec<[u32; RECORD_WORDS]>,
+    /// Per instance: its padded world and oriented boxes, and the hierarchy over the world
+    /// boxes. Derived on every machine from the records (not mirrored, not in the digest),
+    /// so that a ray finds and rejects most instances without transforming into them.
     pub bounds: Vec<bounds::Bounds>,
+    pub bvh: bvh::Bvh,
     /// Chunks with entities and their fields `(pointer << 8) | count`, ascending chunk.
     pub occupied: Vec<(u32, u32)>,
 }
@@ -343,7 +349,7 @@ impl Entities {
         // Per chunk, ascending; within a chunk, ascending id (= ascending k).
         pairs.sort_unstable();
         let mut instances: Vec<u32> = Vec::new();
-        let mut bounds = Vec::new();
+        let mut listed = Vec::new();
         let mut occupied = Vec::new();
         let mut lists: FxHashMap<Vec<u32>, u32> = FxHashMap::default();
         for run in pairs.chunk_by(|a, b| a.0 == b.0) {
@@ -367,7 +373,7 @@ impl Entities {
                     }
                     for &k in &list {
                         instances.extend_from_slice(&records[k as usize]);
-                        bounds.push(record_bounds[k as usize]);
+                        listed.push(k);
                     }
                     lists.insert(list, p);
                     p
@@ -375,12 +381,16 @@ impl Entities {
             };
             occupied.push((chunk, ptr << 8 | run.len() as u32));
         }
+        let boxes: Vec<bvh::Aabb> = record_bounds.iter().map(bounds::Bounds::world_box).collect();
         Ok(Entities {
             table,
             type_voxels,
             type_starts,
             instances,
-            bounds,
+            listed,
+            records,
+            bvh: bvh::Bvh::build(&boxes),
+            bounds: record_bounds,
             occupied,
         })
     }

@@ -16,14 +16,20 @@
 //! leaves the world. The nearest hit wins; among entity hits at the same `t`, the lowest
 //! id. An entity hit reports entity-local voxel and normal.
 //!
-//! Each listed instance is first tested against its padded world box and oriented box
+//! The dense-grid method finds the instances another way: through the hierarchy over their
+//! world boxes ([`Bvh`]), the instances whose box the ray crosses between entering the
+//! world and its end, whatever chunks it passed. The traversal tests compare the methods on
+//! every ray, so the two ways of finding instances check each other.
+//!
+//! Each instance found is first tested against its padded world box and oriented box
 //! ([`Bounds`], derived on every machine from the records), which needs no transform and
-//! rejects most. The rest are tested in the order the ray enters their boxes, so that the first hit usually
-//! ends the search: once a box is entered after the best hit, so is every later one.
-//! Neither the box test nor the order changes the result, only the work.
+//! rejects most. The rest are tested in the order the ray enters their boxes, so that the
+//! first hit usually ends the search: once a box is entered after the best hit, so is every
+//! later one. Neither the box test nor the order changes the result, only the work.
 
 use super::ray::{End, Hit, Ray, Visit, walk};
 use crate::entity::bounds::Bounds;
+use crate::entity::bvh::Bvh;
 use crate::entity::pack::{InstanceRecord, RECORD_WORDS, rotate};
 use crate::entity::{ENTITY_SOLID, TYPE_ALIGN};
 use crate::world::World;
@@ -46,58 +52,52 @@ impl Candidates {
     }
 }
 
-/// The entity buffers a ray test reads, and the instance boxes derived from them.
+/// What a ray test reads: per record of the instance buffer's chunk lists, which instance
+/// it is; per instance, its record and boxes; the hierarchy over the world boxes; and the
+/// entity types' voxels.
 #[derive(Clone, Copy)]
 pub(crate) struct EntityView<'a> {
-    dims: [u32; 3],
-    chunk_entities: &'a [u32],
-    instances: &'a [u32],
+    listed: &'a [u32],
+    records: &'a [[u32; RECORD_WORDS]],
     bounds: &'a [Bounds],
+    bvh: &'a Bvh,
     voxels: &'a [u32],
 }
 
-/// An owned copy of a world's entity buffers (for the dense-grid method).
+/// An owned copy of what the dense-grid method's ray test reads: the instances, their
+/// boxes and hierarchy, and the types' voxels (it finds instances through the hierarchy).
 pub(crate) struct OwnedEntities {
-    dims: [u32; 3],
-    chunk_entities: Vec<u32>,
-    instances: Vec<u32>,
+    records: Vec<[u32; RECORD_WORDS]>,
     bounds: Vec<Bounds>,
+    bvh: Bvh,
     voxels: Vec<u32>,
 }
 
 impl OwnedEntities {
-    /// A copy of `world`'s entity buffers, or `None` if no chunk lists an entity.
+    /// A copy of `world`'s instances, or `None` if it has none.
     pub fn of(world: &World) -> Option<Self> {
         let v = world.entity_view()?;
         Some(OwnedEntities {
-            dims: v.dims,
-            chunk_entities: v.chunk_entities.to_vec(),
-            instances: v.instances.to_vec(),
+            records: v.records.to_vec(),
             bounds: v.bounds.to_vec(),
+            bvh: v.bvh.clone(),
             voxels: v.voxels.to_vec(),
         })
     }
 
-    /// The copy, as the view the ray test reads.
+    /// The copy, as the view the ray test reads (with no chunk lists).
     pub fn view(&self) -> EntityView<'_> {
         EntityView {
-            dims: self.dims,
-            chunk_entities: &self.chunk_entities,
-            instances: &self.instances,
+            listed: &[],
+            records: &self.records,
             bounds: &self.bounds,
+            bvh: &self.bvh,
             voxels: &self.voxels,
         }
     }
 }
 
 impl<'a> EntityView<'a> {
-    /// The entity field of chunk `c` (chunk coordinates inside the world).
-    #[inline]
-    pub fn field(&self, c: [u32; 3]) -> u32 {
-        let d = self.dims.map(|v| v as usize);
-        self.chunk_entities[c[0] as usize + d[0] * (c[1] as usize + d[1] * c[2] as usize)]
-    }
-
     /// The final result of a trace: `world` (the world loop's hit, if any, ending at
     /// `t_end`; else `t_end` is where the ray left the world), or a nearer entity hit among
     /// the instances listed in `fields`. `t_entry` is when the ray entered the world and
@@ -127,31 +127,40 @@ impl<'a> EntityView<'a> {
         world: Option<Hit>,
         t_entry: f64,
         t_end: f64,
-        mut steps: u32,
+        steps: u32,
         fields: &Candidates,
     ) -> Option<Hit> {
-        // The instances whose box the ray crosses before the world's end, as (time it
-        // enters the box, id, record offset), nearest first: a near hit lowers the limit, and
-        // once a box is entered after the limit, so is every later one.
-        let inv_d = ray.dir().map(|d| 1.0 / d);
-        let mut crossed: SmallVec<[(f64, u32, usize); 8]> = SmallVec::new();
+        let mut crossed = Crossed::new(self, ray, t_entry, t_end);
         for &f in &fields.fields {
             let (ptr, count) = ((f >> 8) as usize, (f & 0xFF) as usize);
             for r in ptr..ptr + count {
-                let at = r * RECORD_WORDS;
-                let (Some(w), Some(b)) = (self.instances.get(at..at + RECORD_WORDS), self.bounds.get(r)) else {
-                    continue;
-                };
-                if let Some(t) = b.entry(ray.origin(), ray.dir(), inv_d, t_entry, t_end) {
-                    crossed.push((t, w[4] & 0x3FFF, at));
+                if let Some(&k) = self.listed.get(r) {
+                    crossed.offer(k);
                 }
             }
         }
-        // An instance listed by several chunks has one box: its copies sort together.
+        self.nearest(ray, world, crossed, t_entry, steps)
+    }
+
+    /// As [`Self::resolve`], with the instances found through the hierarchy over their
+    /// world boxes instead of chunk lists (the dense-grid method).
+    pub fn resolve_by_boxes(&self, ray: &Ray, world: Option<Hit>, t_entry: f64, t_end: f64, steps: u32) -> Option<Hit> {
+        let mut crossed = Crossed::new(self, ray, t_entry, t_end);
+        self.bvh
+            .crossing(ray.origin(), crossed.inv_d, t_entry, t_end, |k| crossed.offer(k));
+        self.nearest(ray, world, crossed, t_entry, steps)
+    }
+
+    /// The nearest hit among `world` and the instances `crossed` found.
+    fn nearest(&self, ray: &Ray, world: Option<Hit>, crossed: Crossed, t_entry: f64, mut steps: u32) -> Option<Hit> {
+        let t_end = crossed.t_end;
+        let mut crossed = crossed.list;
+        // An instance found twice (listed by several chunks) has one box: its copies sort
+        // together.
         crossed.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
         crossed.dedup_by_key(|c| c.1);
         let mut best: Option<Hit> = None;
-        for &(t_box, id, at) in &crossed {
+        for &(t_box, id, k) in &crossed {
             // Entity hits must come before the world's end (ties go to the world) and before
             // the best entity hit so far, or at its time with a lower id.
             let (limit, equal_ok) = match &best {
@@ -161,7 +170,7 @@ impl<'a> EntityView<'a> {
             if t_box > limit {
                 break;
             }
-            let rec = InstanceRecord::unpack(&self.instances[at..at + RECORD_WORDS]);
+            let rec = InstanceRecord::unpack(&self.records[k]);
             if let Some(h) = self.test(ray, &rec, t_entry, limit, equal_ok, &mut steps) {
                 best = Some(h);
             }
@@ -216,15 +225,55 @@ impl<'a> EntityView<'a> {
     }
 }
 
+/// The instances whose boxes a ray crosses before the world's end, as (time it enters the
+/// boxes, id, instance), to be tested nearest first: a near hit lowers the limit, and once
+/// a box is entered after the limit, so is every later one.
+struct Crossed<'v, 'a> {
+    view: &'v EntityView<'a>,
+    o: [f64; 3],
+    d: [f64; 3],
+    inv_d: [f64; 3],
+    t_entry: f64,
+    t_end: f64,
+    list: SmallVec<[(f64, u32, usize); 8]>,
+}
+
+impl<'v, 'a> Crossed<'v, 'a> {
+    fn new(view: &'v EntityView<'a>, ray: &Ray, t_entry: f64, t_end: f64) -> Self {
+        let d = ray.dir();
+        Crossed {
+            view,
+            o: ray.origin(),
+            d,
+            inv_d: d.map(|v| 1.0 / v),
+            t_entry,
+            t_end,
+            list: SmallVec::new(),
+        }
+    }
+
+    /// Keeps instance `k` if the ray enters its boxes within the span.
+    #[inline]
+    fn offer(&mut self, k: u32) {
+        let k = k as usize;
+        let (Some(b), Some(r)) = (self.view.bounds.get(k), self.view.records.get(k)) else {
+            return;
+        };
+        if let Some(t) = b.entry(self.o, self.d, self.inv_d, self.t_entry, self.t_end) {
+            self.list.push((t, r[4] & 0x3FFF, k));
+        }
+    }
+}
+
 impl World {
     /// The entity buffers a ray test reads, or `None` when no chunk lists an entity.
     #[inline]
     pub(crate) fn entity_view(&self) -> Option<EntityView<'_>> {
         self.entities.present().then(|| EntityView {
-            dims: self.size.chunks(),
-            chunk_entities: &self.chunk_entities,
-            instances: &self.entities.instances,
+            listed: &self.entities.listed,
+            records: &self.entities.records,
             bounds: &self.entities.bounds,
+            bvh: &self.entities.bvh,
             voxels: &self.entities.type_voxels,
         })
     }

@@ -1,6 +1,6 @@
 //! The dense-grid oracle: Amanatides–Woo over a full decode of the world.
 
-use super::entities::{Candidates, OwnedEntities};
+use super::entities::OwnedEntities;
 use super::ray::{End, Hit, Ray, Visit, walk};
 use crate::error::WorldError;
 use crate::world::World;
@@ -63,20 +63,16 @@ impl DenseGrid {
                 _ => None,
             };
         };
-        let view = ents.view();
-        let mut fields = Candidates::default();
-        let walk = walk(ray, self.size, |cell, _| {
-            let c = cell.map(|v| (v >> 4) as u32);
-            fields.push(view.field(c));
-            match self.get(cell.map(|v| v as u32)) {
-                0 => Visit::Empty,
-                m => Visit::Solid(m),
-            }
+        let walk = walk(ray, self.size, |cell, _| match self.get(cell.map(|v| v as u32)) {
+            0 => Visit::Empty,
+            m => Visit::Solid(m),
         })?;
         let (world, t_end, steps) = match walk.end {
             End::Hit(h) => (Some(h), h.t, h.steps),
             End::Left { t, steps } | End::Stopped { t, steps } => (None, t, steps),
         };
-        view.resolve(ray, world, walk.entry_t, t_end, steps, &fields)
+        // This method finds the instances through their hierarchy, the others through the
+        // chunk lists: the traversal tests compare the two ways on every ray.
+        ents.view().resolve_by_boxes(ray, world, walk.entry_t, t_end, steps)
     }
 }
