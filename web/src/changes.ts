@@ -3,19 +3,13 @@
 // materials and its entity records; distance fields left out, since they change across
 // wide empty areas after any edit but change nothing a ray sees). The GI's history drops
 // or shortens the light on and near the chunks a change touched (docs/RENDERING.md §3c).
+import { BLOCKS, FULL, GROUP_WORDS, MATERIAL_MASK, MIXED, POINTER_MASK, state } from "./cell";
 import type { Mirror, Touched } from "./mirror";
 
 /** What changed between two versions: these chunks (ascending), or everything (the
  * materials, the entity types or the world's size). */
 export type ChunkChanges = number[] | "everything";
 
-const STATE_SHIFT = 30;
-const MIXED = 2;
-const MATERIAL_MASK = 0x7fff;
-const POINTER_MASK = 0x3fffffff;
-/** Blocks per chunk, and words per mixed block's voxel group (docs/FORMAT.md §5.1–5.3). */
-const BLOCKS = 64;
-const GROUP_WORDS = 32;
 /** Words per entity instance record (docs/FORMAT.md §5.8). */
 const RECORD_WORDS = 5;
 
@@ -29,11 +23,7 @@ interface Words {
 }
 
 function wordsOf(m: Mirror): Words {
-  const w = (id: number) => {
-    const b = m.bytes(id);
-    return new Uint32Array(b.buffer, b.byteOffset, b.length >> 2);
-  };
-  return { chunks: w(0), entities: w(1), blocks: w(2), voxels: w(3), records: w(7) };
+  return { chunks: m.words(0), entities: m.words(1), blocks: m.words(2), voxels: m.words(3), records: m.words(7) };
 }
 
 /** A 53-bit hash of a sequence of 32-bit words (cyrb53's mixing), fed a word at a time. */
@@ -60,18 +50,18 @@ class Hasher {
 }
 
 /** The material a ray sees in a uniform cell (0 for an empty one, whatever its fields). */
-const uniform = (cell: number) => (cell >>> STATE_SHIFT === 1 ? cell & MATERIAL_MASK : 0);
+const uniform = (cell: number) => (state(cell) === FULL ? cell & MATERIAL_MASK : 0);
 
 /** The fingerprint of chunk `i`: its blocks' materials, its mixed blocks' voxel groups
  * (whose empty voxels' fields change only with the block's content) and its entity records. */
 function print(w: Words, i: number): number {
   const h = new Hasher();
   const c = w.chunks[i];
-  if (c >>> STATE_SHIFT === MIXED) {
+  if (state(c) === MIXED) {
     const array = c & POINTER_MASK;
     for (let k = array; k < array + BLOCKS; k++) {
       const b = w.blocks[k];
-      if (b >>> STATE_SHIFT === MIXED) {
+      if (state(b) === MIXED) {
         const ptr = b & POINTER_MASK;
         h.word(1);
         h.words(w.voxels.subarray(ptr, ptr + GROUP_WORDS));
@@ -145,13 +135,13 @@ export class ChunkPrints {
       const field = w.entities[i] ?? 0;
       if (touches(records, (field >>> 8) * RECORD_WORDS, (field & 0xff) * RECORD_WORDS)) return true;
       const c = w.chunks[i];
-      if (c >>> STATE_SHIFT !== MIXED) return false;
+      if (state(c) !== MIXED) return false;
       const array = c & POINTER_MASK;
       if (touches(blocks, array, BLOCKS)) return true;
       if (voxels.length === 0) return false;
       for (let k = array; k < array + BLOCKS; k++) {
         const b = w.blocks[k];
-        if (b >>> STATE_SHIFT === MIXED && touches(voxels, b & POINTER_MASK, GROUP_WORDS)) return true;
+        if (state(b) === MIXED && touches(voxels, b & POINTER_MASK, GROUP_WORDS)) return true;
       }
       return false;
     };

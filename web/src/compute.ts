@@ -2,7 +2,14 @@
 // layouts, group 0 (the world), pipelines compiled in the background, dispatches over a
 // frame's pixels and read-backs.
 import type { StructLayout } from "./gen/layout";
+import type { Camera } from "./camera";
 import type { GpuWorld } from "./gpu";
+
+/** What an accumulating pass's samples depend on: the camera, the size and the world's
+ * bytes. Samples taken under another key do not add up. */
+export function viewKey(camera: Camera, width: number, height: number, world: GpuWorld): string {
+  return JSON.stringify([camera, width, height, world.generation]);
+}
 
 /** Writes `values` into `layout`'s fields of a struct's bytes. */
 export function writeStruct(layout: StructLayout, values: Record<string, number | number[]>): ArrayBuffer {

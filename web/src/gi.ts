@@ -9,7 +9,7 @@ import type { Camera } from "./camera";
 import { cameraRays } from "./camera";
 import { toneMapped } from "./colour";
 import type { WorldGroup } from "./compute";
-import { entry, readBack, writeStruct } from "./compute";
+import { entry, readBack, viewKey, writeStruct } from "./compute";
 import type { GpuWorld } from "./gpu";
 
 /** Where each array of `mem` starts (vec4 words): the cameras at 0, the sample ring last;
@@ -135,6 +135,7 @@ class History {
   private editFrame = 0;
   private changeFrame = 0;
   readonly words: GPUBuffer;
+  private readonly changes: GPUBuffer;
   readonly args: GPUBuffer;
   readonly mem: GPUBuffer;
   readonly staging: GPUBuffer;
@@ -154,17 +155,17 @@ class History {
     this.words = buffer("gi words", plan.layout.words * 4, storage | GPUBufferUsage.COPY_SRC);
     const buckets = buffer("gi buckets", plan.regions * (2 * GI.BUCKET_SLOTS + 12) * 4, storage);
     const chunkCount = chunks[0] * chunks[1] * chunks[2];
-    const changes = buffer("gi chunk changes", chunkCount * 8, storage | GPUBufferUsage.COPY_DST);
+    this.changes = buffer("gi chunk changes", chunkCount * 8, storage | GPUBufferUsage.COPY_DST);
     this.mem = buffer("gi mem", plan.memBytes, storage | GPUBufferUsage.COPY_DST | GPUBufferUsage.COPY_SRC);
     const taa = buffer("gi taa", plan.taaBytes, storage);
     this.args = buffer("gi indirect args", GI.ARGS_BYTES, GPUBufferUsage.INDIRECT | GPUBufferUsage.COPY_DST);
     this.staging = buffer("gi result", plan.pixels * 16, GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST);
-    this.owned = [this.words, buckets, changes, this.mem, taa, this.args, this.staging];
+    this.owned = [this.words, buckets, this.changes, this.mem, taa, this.args, this.staging];
     this.marks = new Uint32Array(chunkCount * 2);
     this.generation = world.generation;
     this.group = device.createBindGroup({
       layout,
-      entries: [...params, this.words, buckets, changes, this.mem, taa].map((b, binding) => ({ binding, resource: { buffer: b } })),
+      entries: [...params, this.words, buckets, this.changes, this.mem, taa].map((b, binding) => ({ binding, resource: { buffer: b } })),
     });
   }
 
@@ -205,10 +206,7 @@ class History {
         }
       }
     }
-    if (lo < hi) {
-      const changes = this.owned[2];
-      this.device.queue.writeBuffer(changes, lo * 8, this.marks, lo * 2, (hi - lo) * 2);
-    }
+    if (lo < hi) this.device.queue.writeBuffer(this.changes, lo * 8, this.marks, lo * 2, (hi - lo) * 2);
   }
 
   /** Starts this frame's camera: `camera`, with this frame's jitter, is the newest of the
@@ -302,7 +300,7 @@ export class GiRenderer {
       hist = this.history = new History(device, this.group1, this.params, planOf(w, h), [...world.chunks], world);
     }
     hist.noteChanges(world);
-    const view = JSON.stringify([camera, w, h, world.generation]);
+    const view = viewKey(camera, w, h, world);
     this.still = view === this.lastView ? this.still + 1 : 1;
     this.lastView = view;
 

@@ -19,7 +19,7 @@ import {
   View,
   WorldInfo,
 } from "./gen/layout";
-import { WorldGroup, dispatchPixels, passPipeline, readBack, writeStruct } from "./compute";
+import { WorldGroup, dispatchPixels, passPipeline, readBack, viewKey, writeStruct } from "./compute";
 import type { Camera } from "./camera";
 import { cameraRays } from "./camera";
 import { toneMapped } from "./colour";
@@ -289,7 +289,7 @@ class PathTracer {
   async render(world: GpuWorld, camera: Camera, width: number, height: number): Promise<ImageData> {
     const device = this.device;
     const bytes = width * height * 16;
-    const key = JSON.stringify([camera, width, height, world.generation]);
+    const key = viewKey(camera, width, height, world);
     if (key !== this.key || !this.sums) {
       this.sums?.destroy();
       this.staging?.destroy();

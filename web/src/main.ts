@@ -404,21 +404,20 @@ async function main(): Promise<void> {
     keys.add(e.code);
   });
   addEventListener("keyup", (e) => keys.delete(e.code));
-  addEventListener("mousemove", (e) => {
-    if (document.pointerLockElement !== canvas || !camera) return;
-    camera.yaw += e.movementX * 0.15;
-    camera.pitch = Math.max(-89.9, Math.min(89.9, camera.pitch - e.movementY * 0.15));
+  /** Turns the view by a pointer's move of `dx`, `dy` pixels. */
+  const look = (dx: number, dy: number) => {
+    if (!camera) return;
+    camera.yaw += dx * 0.15;
+    camera.pitch = Math.max(-89.9, Math.min(89.9, camera.pitch - dy * 0.15));
     dirty = true;
+  };
+  addEventListener("mousemove", (e) => {
+    if (document.pointerLockElement === canvas) look(e.movementX, e.movementY);
   });
-  // Touch: a finger looks round at the mouse's rate per pixel; two fingers fly 1/64 of the
-  // speed (voxels a second) per pixel.
+  // Touch: a finger looks round as the mouse does; two fingers fly 1/64 of the speed
+  // (voxels a second) per pixel.
   touchControls(canvas, {
-    look(dx, dy) {
-      if (!camera) return;
-      camera.yaw += dx * 0.15;
-      camera.pitch = Math.max(-89.9, Math.min(89.9, camera.pitch - dy * 0.15));
-      dirty = true;
-    },
+    look,
     fly(forward, right) {
       if (!camera) return;
       const b = basis(camera);

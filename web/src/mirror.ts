@@ -107,6 +107,12 @@ export class Mirror {
     return b.bytes.subarray(0, b.len);
   }
 
+  /** The whole little-endian `u32` words of buffer `id` (a view, not a copy). */
+  words(id: number): Uint32Array {
+    const b = this.bytes(id);
+    return new Uint32Array(b.buffer, b.byteOffset, b.length >> 2);
+  }
+
   /** Takes a state the page cached: the buffers from their pages, checked against the
    * digest. Returns whether the mirror now holds that world. */
   restore(

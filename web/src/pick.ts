@@ -1,14 +1,10 @@
 // What is under the pointer: the voxels of the mirror read through the world's cell layout
 // (docs/FORMAT.md §5.1–5.3), and a ray walked voxel by voxel, empty chunks and blocks
 // skipped whole.
+import { EMPTY, FULL, MATERIAL_MASK, POINTER_MASK, state } from "./cell";
 import type { Mirror } from "./mirror";
 
 type V3 = [number, number, number];
-
-const STATE_SHIFT = 30;
-const EMPTY = 0;
-const FULL = 1;
-const MATERIAL_MASK = 0x7fff;
 
 /** Reads the world's cells from a mirror's buffers. */
 export class Voxels {
@@ -19,13 +15,9 @@ export class Voxels {
   private readonly dims: V3;
 
   constructor(m: Mirror) {
-    const words = (id: number) => {
-      const b = m.bytes(id);
-      return new Uint32Array(b.buffer, b.byteOffset, Math.floor(b.length / 4));
-    };
-    this.chunks = words(0);
-    this.blocks = words(2);
-    this.voxels = words(3);
+    this.chunks = m.words(0);
+    this.blocks = m.words(2);
+    this.voxels = m.words(3);
     this.size = m.size;
     this.dims = [m.size[0] >> 4, m.size[1] >> 4, m.size[2] >> 4];
   }
@@ -39,15 +31,15 @@ export class Voxels {
   cell(x: number, y: number, z: number): { material: number; edge: number } {
     const [cx, cy, cz] = [x >> 4, y >> 4, z >> 4];
     const chunk = this.chunks[cx + this.dims[0] * (cy + this.dims[1] * cz)];
-    const cs = chunk >>> STATE_SHIFT;
+    const cs = state(chunk);
     if (cs === EMPTY) return { material: 0, edge: 16 };
     if (cs === FULL) return { material: chunk & MATERIAL_MASK, edge: 16 };
-    const block = this.blocks[(chunk & 0x3fffffff) + (((x >> 2) & 3) + 4 * ((y >> 2) & 3) + 16 * ((z >> 2) & 3))];
-    const bs = block >>> STATE_SHIFT;
+    const block = this.blocks[(chunk & POINTER_MASK) + (((x >> 2) & 3) + 4 * ((y >> 2) & 3) + 16 * ((z >> 2) & 3))];
+    const bs = state(block);
     if (bs === EMPTY) return { material: 0, edge: 4 };
     if (bs === FULL) return { material: block & MATERIAL_MASK, edge: 4 };
     const i = (x & 3) + 4 * (y & 3) + 16 * (z & 3);
-    const word = this.voxels[(block & 0x3fffffff) + (i >> 1)];
+    const word = this.voxels[(block & POINTER_MASK) + (i >> 1)];
     const v = i & 1 ? word >>> 16 : word & 0xffff;
     return { material: v & 0x8000 ? v & MATERIAL_MASK : 0, edge: 1 };
   }

@@ -136,8 +136,7 @@ function half(h: number): number {
 
 /** The palette: every material of the table but 0 (empty), with its albedo (docs/FORMAT.md §5.4). */
 export function palette(m: Mirror): Swatch[] {
-  const b = m.bytes(4);
-  const words = new Uint32Array(b.buffer, b.byteOffset, Math.floor(b.length / 4));
+  const words = m.words(4);
   const out: Swatch[] = [];
   for (let id = 1; 4 * id + 3 < words.length; id++) {
     const w1 = words[4 * id + 1];

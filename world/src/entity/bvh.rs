@@ -7,10 +7,10 @@
 //! The nodes are a flat array in depth-first order: an inner node's first child follows
 //! it, and it stores where its second child is; a leaf stores a run of `prims`.
 
+use super::bounds::slab;
+
 /// An axis-aligned box `(lo, hi)`.
 pub type Aabb = ([f64; 3], [f64; 3]);
-
-use super::bounds::slab;
 
 /// Bins per axis of the SAH sweep.
 const BINS: usize = 16;
@@ -96,25 +96,22 @@ impl Bvh {
         if n <= 1 {
             return;
         }
-        let Some((axis, cut)) = best_cut(boxes, run) else {
+        let Some(cut) = best_cut(boxes, run) else {
             return;
         };
-        if n <= LEAF_MAX && !worth_splitting(boxes, run, &bounds, axis, cut) {
+        // A small run stays one leaf unless visiting two children and testing their boxes
+        // costs less than testing its own.
+        let split_cost = 2.0 * TRAVERSAL_COST + cut.cost / half_area(&bounds).max(f64::MIN_POSITIVE);
+        if n <= LEAF_MAX && split_cost >= n as f64 {
             return;
         }
-        // Partition by bin; a cut that leaves one side empty (all centres in one bin)
-        // falls back to the median along the axis.
-        let (lo, hi) = centre_range(boxes, run, axis);
-        let bin = |p: u32| bin_of(centre(&boxes[p as usize], axis), lo, hi);
-        self.prims[start..end].sort_by(|&a, &b| {
-            centre(&boxes[a as usize], axis)
-                .total_cmp(&centre(&boxes[b as usize], axis))
-                .then(a.cmp(&b))
-        });
-        let mut mid = start + self.prims[start..end].partition_point(|&p| bin(p) < cut);
-        if mid == start || mid == end {
-            mid = start + n / 2;
-        }
+        // The cut leaves primitives on both sides ([`best_cut`] skips empty ones).
+        let (lower, upper): (Vec<u32>, Vec<u32>) = run
+            .iter()
+            .partition(|&&p| bin_of(centre(&boxes[p as usize], cut.axis), cut.lo, cut.hi) < cut.bin);
+        let mid = start + lower.len();
+        self.prims[start..mid].copy_from_slice(&lower);
+        self.prims[mid..end].copy_from_slice(&upper);
         self.nodes[at].count = 0;
         self.split(boxes, start, mid);
         self.nodes[at].index = self.nodes.len() as u32;
@@ -144,11 +141,6 @@ impl Bvh {
             }
         }
     }
-
-    /// Nodes in the hierarchy.
-    pub fn node_count(&self) -> usize {
-        self.nodes.len()
-    }
 }
 
 /// The range of the primitives' centres along `axis`.
@@ -166,10 +158,22 @@ fn bin_of(c: f64, lo: f64, hi: f64) -> usize {
     (((c - lo) / (hi - lo) * BINS as f64) as usize).min(BINS - 1)
 }
 
-/// The cheapest split of `run` by the binned SAH: the axis and the first bin of the upper
-/// side; `None` when the centres coincide.
-fn best_cut(boxes: &[Aabb], run: &[u32]) -> Option<(usize, usize)> {
-    let mut best: Option<(f64, usize, usize)> = None;
+/// A split of a run of primitives by the binned SAH: the primitives whose centre along
+/// `axis` falls in a bin below `bin` (of `BINS` over the centres' range `lo..hi`) go to the
+/// lower child.
+struct Cut {
+    axis: usize,
+    lo: f64,
+    hi: f64,
+    bin: usize,
+    /// Each side's half area times its primitive count, summed.
+    cost: f64,
+}
+
+/// The cheapest split of `run` by the binned SAH that leaves primitives on both sides;
+/// `None` when the centres coincide.
+fn best_cut(boxes: &[Aabb], run: &[u32]) -> Option<Cut> {
+    let mut best: Option<Cut> = None;
     for axis in 0..3 {
         let (lo, hi) = centre_range(boxes, run, axis);
         if hi <= lo {
@@ -198,32 +202,18 @@ fn best_cut(boxes: &[Aabb], run: &[u32]) -> Option<(usize, usize)> {
                 continue;
             }
             let cost = half_area(&acc) * count as f64 + area_above * count_above as f64;
-            if best.is_none_or(|b| cost < b.0) {
-                best = Some((cost, axis, k));
+            if best.as_ref().is_none_or(|b| cost < b.cost) {
+                best = Some(Cut {
+                    axis,
+                    lo,
+                    hi,
+                    bin: k,
+                    cost,
+                });
             }
         }
     }
-    best.map(|(_, axis, k)| (axis, k))
-}
-
-/// Whether splitting a small run (at most `LEAF_MAX`, whose union is `bounds`) at bin
-/// `cut` of `axis` beats testing its boxes in one leaf.
-fn worth_splitting(boxes: &[Aabb], run: &[u32], bounds: &Aabb, axis: usize, cut: usize) -> bool {
-    let area = half_area(bounds);
-    let (lo, hi) = centre_range(boxes, run, axis);
-    let (mut a, mut b) = ((EMPTY, 0), (EMPTY, 0));
-    for &p in run {
-        let side = if bin_of(centre(&boxes[p as usize], axis), lo, hi) < cut {
-            &mut a
-        } else {
-            &mut b
-        };
-        side.0 = union(&side.0, &boxes[p as usize]);
-        side.1 += 1;
-    }
-    let split = 2.0 * TRAVERSAL_COST
-        + (half_area(&a.0) * a.1 as f64 + half_area(&b.0) * b.1 as f64) / area.max(f64::MIN_POSITIVE);
-    split < run.len() as f64
+    best
 }
 
 #[cfg(test)]
@@ -314,7 +304,7 @@ mod tests {
             })
             .collect();
         let bvh = Bvh::build(&boxes);
-        assert!(bvh.node_count() < 1000, "{} nodes", bvh.node_count());
+        assert!(bvh.nodes.len() < 1000, "{} nodes", bvh.nodes.len());
         let mut met = Vec::new();
         bvh.crossing(
             [1.0, 1.0, -10.0],

@@ -139,7 +139,7 @@ impl<'a> EntityView<'a> {
                 }
             }
         }
-        self.nearest(ray, world, crossed, t_entry, steps)
+        self.nearest(ray, world, crossed, steps)
     }
 
     /// As [`Self::resolve`], with the instances found through the hierarchy over their
@@ -148,12 +148,12 @@ impl<'a> EntityView<'a> {
         let mut crossed = Crossed::new(self, ray, t_entry, t_end);
         self.bvh
             .crossing(ray.origin(), crossed.inv_d, t_entry, t_end, |k| crossed.offer(k));
-        self.nearest(ray, world, crossed, t_entry, steps)
+        self.nearest(ray, world, crossed, steps)
     }
 
     /// The nearest hit among `world` and the instances `crossed` found.
-    fn nearest(&self, ray: &Ray, world: Option<Hit>, crossed: Crossed, t_entry: f64, mut steps: u32) -> Option<Hit> {
-        let t_end = crossed.t_end;
+    fn nearest(&self, ray: &Ray, world: Option<Hit>, crossed: Crossed, mut steps: u32) -> Option<Hit> {
+        let (t_entry, t_end) = (crossed.t_entry, crossed.t_end);
         let mut crossed = crossed.list;
         // An instance found twice (listed by several chunks) has one box: its copies sort
         // together.

@@ -50,23 +50,19 @@ impl DenseGrid {
         self.voxels[p[0] as usize + sx * (p[1] as usize + sy * p[2] as usize)]
     }
 
-    /// Traces `ray` one voxel at a time, then against the entities of the chunks it
-    /// passed (see [`crate::entity`]).
+    /// Traces `ray` one voxel at a time, then against the entities whose boxes it crosses
+    /// (see [`crate::entity`]).
     pub fn trace(&self, ray: &Ray) -> Option<Hit> {
+        let walk = walk(ray, self.size, |cell, _| match self.get(cell.map(|v| v as u32)) {
+            0 => Visit::Empty,
+            m => Visit::Solid(m),
+        })?;
         let Some(ents) = &self.entities else {
-            let walk = walk(ray, self.size, |cell, _| match self.get(cell.map(|v| v as u32)) {
-                0 => Visit::Empty,
-                m => Visit::Solid(m),
-            })?;
             return match walk.end {
                 End::Hit(h) => Some(h),
                 _ => None,
             };
         };
-        let walk = walk(ray, self.size, |cell, _| match self.get(cell.map(|v| v as u32)) {
-            0 => Visit::Empty,
-            m => Visit::Solid(m),
-        })?;
         let (world, t_end, steps) = match walk.end {
             End::Hit(h) => (Some(h), h.t, h.steps),
             End::Left { t, steps } | End::Stopped { t, steps } => (None, t, steps),
