@@ -5,7 +5,7 @@
 // `id` of slot `s` is words 0–3 of entity `id`'s instance record (position, rotation and
 // type; world/src/entity/pack.rs) as of the frame that wrote slot `s`, or zero where the
 // entity did not exist (no record is all zero: its rotation word would not be a unit
-// quaternion). Two passes per frame fill this frame's slot.
+// quaternion). One pass per frame fills this frame's slot.
 
 const ENTITY_IDS: u32 = NO_ENTITY;
 
@@ -38,39 +38,22 @@ fn carry(p: vec3<f32>, was: Pose, now: Pose) -> vec3<f32> {
     return now.origin + rotate(conjugate(now.to_local), rotate(was.to_local, p - was.origin));
 }
 
-// ---- Pass gi_poses_clear: this frame's slot starts empty ----
+// ---- Pass gi_poses: one thread per entity id writes its entry of this frame's slot ----
 
 @compute @workgroup_size(64)
-fn gi_poses_clear(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) li: u32) {
+fn gi_poses(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) li: u32) {
     let id = flat_id(wg, groups, li);
     if id >= ENTITY_IDS {
         return;
     }
+    // The instance buffer holds entity `id`'s record in slot `id` (zero: no such entity).
+    var record = vec4<u32>(0u);
+    if id < world_info.instance_slots && instance_word(id * RECORD_WORDS + 4u) != 0u {
+        let r = id * RECORD_WORDS;
+        record = vec4<u32>(instance_word(r), instance_word(r + 1u), instance_word(r + 2u), instance_word(r + 3u));
+    }
     let at = pose_word(gi.taa_slot, id);
     for (var k = 0u; k < 4u; k++) {
-        words[at + k] = 0u;
-    }
-}
-
-// ---- Pass gi_poses: one thread per chunk copies the poses of the records it lists ----
-//
-// An entity over several chunks has a record in each, all alike: the threads that write
-// its entry write the same words.
-
-@compute @workgroup_size(64)
-fn gi_poses(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) li: u32) {
-    let ci = flat_id(wg, groups, li);
-    let c = world_info.chunks;
-    if world_info.has_entities == 0u || ci >= c.x * c.y * c.z {
-        return;
-    }
-    let field = chunk_entity_word(ci);
-    let first = field >> 8u;
-    for (var j = 0u; j < (field & 0xFFu); j++) {
-        let r = (first + j) * RECORD_WORDS;
-        let at = pose_word(gi.taa_slot, record_id(instance_word(r + 4u)));
-        for (var k = 0u; k < 4u; k++) {
-            words[at + k] = instance_word(r + k);
-        }
+        words[at + k] = record[k];
     }
 }

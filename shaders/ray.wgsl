@@ -148,6 +148,18 @@ fn ray_entry(r: Ray, size: vec3<i32>) -> Entry {
     return Entry(cell, bt, ba, true);
 }
 
+// When a ray inside the box [0, size] leaves it: the first crossing of a far plane it moves
+// toward (world/src/traverse/ray.rs `leave_time`).
+fn leave_time(r: Ray, size: vec3<i32>) -> f32 {
+    var t = T_INF;
+    for (var a = 0u; a < 3u; a++) {
+        if r.d[a] != 0.0 {
+            t = min(t, t_at(r, a, select(0, size[a], r.d[a] > 0.0)));
+        }
+    }
+    return t;
+}
+
 // Leaving the empty cuboid made of `cell` extended by `skip` cells toward the ray on each
 // axis: the exit event and the cell entered by it.
 struct Exit {

@@ -1,12 +1,8 @@
-// One full trace: the world loop (traverse.wgsl or grid.wgsl), then the entities of the
-// chunks it visited (docs/NAADF.md §11): the GPU twin of world/src/entity/trace.rs.
-//
-// The world loop hands every chunk entity field it meets to `record_field`. Fields are
-// kept in a small list; when it fills up, its instances are tested at once, which gives
-// the same answer as testing them all at the end: each instance's first solid voxel
-// entered at or after the world entry is found whatever the limit, and only the nearest
-// (lowest id at equal times) survives, and only if it comes strictly before the world's
-// hit or exit.
+// One full trace: the world loop (traverse.wgsl or grid.wgsl) through the static world,
+// then the instances whose world boxes the ray crosses before the world's hit or exit,
+// found through their hierarchy (docs/NAADF.md §11): the GPU twin of
+// world/src/traverse/entities.rs. Only the nearest entity hit (lowest id at equal times)
+// survives, and only if it comes strictly before the world's hit or exit.
 
 // How the world loop ended.
 const END_HIT: u32 = 0u;
@@ -29,36 +25,62 @@ fn ran_out(t_entry: f32, t: f32) -> WorldTrace {
     return WorldTrace(h, END_EXHAUSTED, t_entry, t);
 }
 
-const MAX_FIELDS: u32 = 16u;
-
-var<private> fields: array<u32, MAX_FIELDS>;
-var<private> field_count: u32;
 var<private> best_entity: Hit;
 // The inverse rotation of `best_entity`'s instance.
 var<private> best_rotation: vec4<f32>;
 // Entity-grid cells visited (added to the step count of an entity hit).
 var<private> entity_steps: u32;
 
-fn record_field(r: Ray, field: u32, t_entry: f32) {
-    if field == 0u || (field_count > 0u && fields[field_count - 1u] == field) {
+// Walks the instance hierarchy (world/src/entity/bvh.rs: four-wide nodes of NODE_WORDS
+// words, the children's f32 boxes axis by axis, then their references) and tests every
+// instance whose box the ray is inside at some t in [t_lo, t_hi] (or up to the best entity
+// hit so far). Boxes are padded and rounded outward, so the f32 test never rejects an
+// instance the ray can hit.
+fn find_instances(r: Ray, t_lo: f32, t_hi: f32) {
+    // The world loop says whether its structure is traced with entities: the comparison
+    // trees hold geometry only.
+    if !TRACES_ENTITIES || world_info.instance_slots == 0u {
         return;
     }
-    if field_count == MAX_FIELDS {
-        flush_fields(r, t_entry);
-    }
-    fields[field_count] = field;
-    field_count += 1u;
-}
-
-fn flush_fields(r: Ray, t_entry: f32) {
-    for (var k = 0u; k < field_count; k++) {
-        let f = fields[k];
-        let first = f >> 8u;
-        for (var j = 0u; j < (f & 0xFFu); j++) {
-            test_instance(r, (first + j) * RECORD_WORDS, t_entry);
+    // 1/d, with ±FAR for axes the ray does not move along.
+    let inv = select(1.0 / r.d, select(vec3<f32>(BVH_FAR), vec3<f32>(-BVH_FAR), r.d < vec3<f32>(0.0)), r.d == vec3<f32>(0.0));
+    let o = vec3<f32>(r.o_int);
+    var stack: array<u32, BVH_STACK>;
+    stack[0] = 0u;
+    var sp = 1u;
+    while sp > 0u {
+        sp -= 1u;
+        let base = stack[sp] * NODE_WORDS;
+        var far_limit = t_hi * 1.000001 + 1e-3;
+        if best_entity.hit {
+            far_limit = min(far_limit, best_entity.t * 1.000001 + 1e-3);
+        }
+        for (var lane = 0u; lane < 4u; lane++) {
+            let c = hierarchy_word(base + 24u + lane);
+            if c == BVH_NONE {
+                continue;
+            }
+            var near = t_lo - 1e-3;
+            var far = far_limit;
+            for (var a = 0u; a < 3u; a++) {
+                let lo = (bitcast<f32>(hierarchy_word(base + 8u * a + lane)) - o[a]) - r.o_frac[a];
+                let hi = (bitcast<f32>(hierarchy_word(base + 8u * a + 4u + lane)) - o[a]) - r.o_frac[a];
+                let t0 = lo * inv[a];
+                let t1 = hi * inv[a];
+                near = max(near, min(t0, t1));
+                far = min(far, max(t0, t1));
+            }
+            if near > far {
+                continue;
+            }
+            if (c & BVH_LEAF) != 0u {
+                test_instance(r, (c & ~BVH_LEAF) * RECORD_WORDS, t_lo);
+            } else if sp < BVH_STACK {
+                stack[sp] = c;
+                sp += 1u;
+            }
         }
     }
-    field_count = 0u;
 }
 
 // Decodes a smallest-three quaternion (world/src/entity/pack.rs).
@@ -97,7 +119,7 @@ fn record_id(e: u32) -> u32 {
     return e & 0x3FFFu;
 }
 
-// Tests one chunk-instance record against the ray; keeps the nearest entity hit.
+// Tests the instance record at word `at` against the ray; keeps the nearest entity hit.
 fn test_instance(r: Ray, at: u32, t_lo: f32) {
     let dx = instance_word(at);
     let dy = instance_word(at + 1u);
@@ -166,14 +188,13 @@ fn world_normal(h: Hit) -> vec3<f32> {
 
 // Traces `r` through the world and its entities.
 fn trace(r: Ray) -> Hit {
-    field_count = 0u;
     entity_steps = 0u;
     best_entity = no_hit(0u);
     let w = world_loop(r);
     if w.end == END_MISSED || w.end == END_EXHAUSTED {
         return w.hit;
     }
-    flush_fields(r, w.t_entry);
+    find_instances(r, w.t_entry, w.t_end);
     if best_entity.hit && best_entity.t < w.t_end {
         var h = best_entity;
         h.steps = w.hit.steps + entity_steps;

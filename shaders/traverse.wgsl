@@ -1,9 +1,11 @@
 // The world loop over the chunk → block → voxel hierarchy (docs/NAADF.md §9), with
 // AADF jumps (`USE_AADF`, the `naadf` method) or without (`nodf`): the GPU twin of
-// world/src/traverse/hierarchy.rs. Chunks with entities skip only to their own edge and
-// have their entity fields recorded for the entity pass.
+// world/src/traverse/hierarchy.rs. It sees the static world alone: entities are found
+// afterwards, through their hierarchy (trace.wgsl).
 
 override USE_AADF: bool = true;
+// Entities are found after the loop (see trace.wgsl).
+const TRACES_ENTITIES: bool = true;
 
 
 fn to_edge(c: u32, neg: bool, edge: u32) -> i32 {
@@ -23,23 +25,12 @@ fn world_loop(r: Ray) -> WorldTrace {
     let neg = r.d <= vec3<f32>(0.0);
     // The AADF field facing the ray on each axis: −a for negative directions, +a otherwise.
     let facing = vec3<u32>(0u, 2u, 4u) + select(vec3<u32>(0u), vec3<u32>(1u), r.d > vec3<f32>(0.0));
-    // Each chunk's entity field says whether entities are there, read once per chunk
-    // entered, so the loop needs no world-wide flag.
-    var last_chunk = 0xFFFFFFFFu;
-    var last_field = 0u;
     // The world's parameters, read once (see chunk_index in world.wgsl).
     let chunks = world_info.chunks;
     let max_steps = world_info.max_steps;
     for (var steps = 1u; steps <= max_steps; steps++) {
         let p = vec3<u32>(cell);
-        let ci = chunk_index(p >> vec3<u32>(4u), chunks);
-        if ci != last_chunk {
-            last_chunk = ci;
-            last_field = chunk_entity_word(ci);
-            record_field(r, last_field, entry.t);
-        }
-        let entities_here = last_field != 0u;
-        let chunk = chunk_word(ci);
+        let chunk = chunk_word(chunk_index(p >> vec3<u32>(4u), chunks));
         var skip = vec3<i32>(0);
         let cs = cell_state(chunk);
         if cs == STATE_FULL {
@@ -47,7 +38,7 @@ fn world_loop(r: Ray) -> WorldTrace {
         } else if cs == STATE_EMPTY {
             for (var a = 0u; a < 3u; a++) {
                 skip[a] = to_edge(p[a], neg[a], 16u);
-                if USE_AADF && !entities_here {
+                if USE_AADF {
                     skip[a] += 16 * i32(aadf_field(chunk, facing[a], CHUNK_FIELD_BITS));
                 }
             }
@@ -77,8 +68,8 @@ fn world_loop(r: Ray) -> WorldTrace {
         }
         let ex = ray_exit(r, cell, skip);
         if any(ex.next < vec3<i32>(0)) || any(ex.next >= dims) {
-            var h = no_hit(steps);
-            return WorldTrace(h, END_LEFT, entry.t, ex.t);
+            // An AADF box may reach beyond the world: the ray left it at the world's edge.
+            return WorldTrace(no_hit(steps), END_LEFT, entry.t, min(ex.t, leave_time(r, dims)));
         }
         cell = ex.next;
         t = ex.t;

@@ -8,6 +8,9 @@
 // cube (left whole, with the event model every method shares) or a solid voxel. The trees
 // hold geometry only: a hit reports material 0, and entities are not traced.
 
+// Entities are not traced (see trace.wgsl).
+const TRACES_ENTITIES: bool = false;
+
 const TREE_HEADER_WORDS: u32 = 4u;
 // Deeper than any cube: the path holds one node per level.
 const TREE_MAX_LEVELS: u32 = 32u;

@@ -36,8 +36,10 @@ pub mod v1 {
 /// The encoded `FileDescriptorSet` of the protocol, for server reflection.
 pub const FILE_DESCRIPTOR_SET: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/naadf_descriptor.bin"));
 
-/// The protocol version this build speaks; `Join` refuses other versions.
-pub const PROTOCOL_VERSION: u32 = 1;
+/// The protocol version this build speaks; `Join` refuses other versions. Version 2: the
+/// instance buffer holds one record per entity id and the chunk entity buffer stays zero
+/// (entities live outside the static world; docs/PROTOCOL.md).
+pub const PROTOCOL_VERSION: u32 = 2;
 
 /// The render modes a `FrameRequest` may name (render nodes advertise a subset); the
 /// server refuses any other with INVALID_ARGUMENT.

@@ -114,3 +114,54 @@ pub fn delta_sizes(change: &ChangeSet, patch: Patch) -> [usize; 2] {
     };
     [record.encoded_len(), patch.encoded_len()]
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use naadf_world::ops::{Batch, Limits, Op};
+    use naadf_world::preset::Preset;
+    use naadf_world::raysets::SplitMix64;
+    use naadf_world::size::WorldSize;
+
+    /// A move of many entities is a few bytes per entity in both forms: at most 16 in the
+    /// record form (plus 32 of header) and at most 20 in the patch form.
+    #[test]
+    fn a_move_of_a_thousand_entities_is_small_in_both_forms() {
+        let size = WorldSize::new(512, 128, 512).unwrap();
+        let mut world = World::build(&*Preset::Test.source(Some(size), 1).unwrap(), &|_| {}).unwrap();
+        let mut rng = SplitMix64(3);
+        let pose = |rng: &mut SplitMix64| {
+            (
+                [rng.unit() * 500.0, rng.unit() * 100.0, rng.unit() * 500.0],
+                [rng.unit() - 0.5, rng.unit() - 0.5, rng.unit() - 0.5, rng.unit() - 0.5],
+            )
+        };
+        let mut ops = vec![Op::DefineModel {
+            name: "crate".into(),
+            size: [8, 8, 8],
+            voxels: vec![[0, 0, 0, 1], [7, 7, 7, 2]],
+        }];
+        for id in 0..1000 {
+            let (pos, rot) = pose(&mut rng);
+            ops.push(Op::SpawnEntity {
+                id,
+                model: "crate".into(),
+                pos,
+                rot,
+            });
+        }
+        world.apply(&Batch { ops }, &Limits::default()).unwrap();
+        let mut maker = PatchMaker::new(&world);
+        let moves = (0..1000)
+            .map(|id| {
+                let (pos, rot) = pose(&mut rng);
+                Op::MoveEntity { id, pos, rot }
+            })
+            .collect();
+        let change = world.apply(&Batch { ops: moves }, &Limits::default()).unwrap().change;
+        let patch = maker.patch(&world, &change);
+        let [record, patch] = delta_sizes(&change, patch);
+        assert!(record <= 1000 * 16 + 32, "record form: {record} bytes");
+        assert!(patch <= 1000 * 20, "patch form: {patch} bytes");
+    }
+}

@@ -1,29 +1,27 @@
 // Which chunks show something else after a change, as the native client works it out
-// (world/src/fingerprint.rs): a fingerprint per chunk of what a ray sees there (its voxels'
-// materials and its entity records; distance fields left out, since they change across
-// wide empty areas after any edit but change nothing a ray sees). The GI's history drops
-// or shortens the light on and near the chunks a change touched (docs/RENDERING.md §3c).
+// (world/src/fingerprint.rs): a fingerprint per chunk of what a ray sees of the static world
+// there (its voxels' materials; distance fields left out, since they change across wide
+// empty areas after any edit but change nothing a ray sees), and, for the entities, which
+// instance records changed: each marks the chunks its world box overlaps, before and after.
+// The GI's history drops or shortens the light on and near the chunks a change touched
+// (docs/RENDERING.md §3c).
 import { BLOCKS, FULL, GROUP_WORDS, MATERIAL_MASK, MIXED, POINTER_MASK, state } from "./cell";
+import { RECORD_WORDS, instanceBox } from "./instances";
 import type { Mirror, Touched } from "./mirror";
 
 /** What changed between two versions: these chunks (ascending), or everything (the
  * materials, the entity types or the world's size). */
 export type ChunkChanges = number[] | "everything";
 
-/** Words per entity instance record (docs/FORMAT.md §5.8). */
-const RECORD_WORDS = 5;
-
 /** The buffers' words, as a chunk's fingerprint reads them. */
 interface Words {
   chunks: Uint32Array;
-  entities: Uint32Array;
   blocks: Uint32Array;
   voxels: Uint32Array;
-  records: Uint32Array;
 }
 
 function wordsOf(m: Mirror): Words {
-  return { chunks: m.words(0), entities: m.words(1), blocks: m.words(2), voxels: m.words(3), records: m.words(7) };
+  return { chunks: m.words(0), blocks: m.words(2), voxels: m.words(3) };
 }
 
 /** A 53-bit hash of a sequence of 32-bit words (cyrb53's mixing), fed a word at a time. */
@@ -52,8 +50,8 @@ class Hasher {
 /** The material a ray sees in a uniform cell (0 for an empty one, whatever its fields). */
 const uniform = (cell: number) => (state(cell) === FULL ? cell & MATERIAL_MASK : 0);
 
-/** The fingerprint of chunk `i`: its blocks' materials, its mixed blocks' voxel groups
- * (whose empty voxels' fields change only with the block's content) and its entity records. */
+/** The fingerprint of chunk `i`: its blocks' materials and its mixed blocks' voxel groups
+ * (whose empty voxels' fields change only with the block's content). */
 function print(w: Words, i: number): number {
   const h = new Hasher();
   const c = w.chunks[i];
@@ -74,9 +72,6 @@ function print(w: Words, i: number): number {
     h.word(2);
     h.word(uniform(c));
   }
-  const field = w.entities[i] ?? 0;
-  const first = (field >>> 8) * RECORD_WORDS;
-  h.words(w.records.subarray(first, first + (field & 0xff) * RECORD_WORDS));
   return h.digest();
 }
 
@@ -108,14 +103,26 @@ function touches(ranges: [number, number][], start: number, len: number): boolea
   return lo < ranges.length && ranges[lo][0] < start + len;
 }
 
-/** The fingerprint of every chunk of the mirrored world. */
+/** The chunks (indices into a world of `chunks` chunks) that `box` overlaps. */
+function overlapped(box: number[][], chunks: number[]): number[] {
+  const lo = [0, 1, 2].map((a) => Math.max(0, Math.floor(box[0][a] / 16)));
+  const hi = [0, 1, 2].map((a) => Math.min(chunks[a] - 1, Math.floor(box[1][a] / 16)));
+  const out: number[] = [];
+  for (let z = lo[2]; z <= hi[2]; z++)
+    for (let y = lo[1]; y <= hi[1]; y++) for (let x = lo[0]; x <= hi[0]; x++) out.push(x + chunks[0] * (y + chunks[1] * z));
+  return out;
+}
+
+/** The fingerprint of every chunk of the mirrored world, and the instance records. */
 export class ChunkPrints {
   private prints: Float64Array;
+  private records: Uint32Array;
 
   constructor(m: Mirror) {
     const w = wordsOf(m);
     this.prints = new Float64Array(w.chunks.length);
     for (let i = 0; i < w.chunks.length; i++) this.prints[i] = print(w, i);
+    this.records = m.words(7).slice();
   }
 
   /** Moves to the mirror's current world, which differs from the version these prints
@@ -125,15 +132,14 @@ export class ChunkPrints {
     const w = wordsOf(m);
     const stale = (id: number) => wordRanges(touched, id);
     if (w.chunks.length !== this.prints.length || touched.some((t) => t.id === 4 || t.id === 6)) {
-      this.prints = new ChunkPrints(m).prints;
+      const fresh = new ChunkPrints(m);
+      this.prints = fresh.prints;
+      this.records = fresh.records;
       return "everything";
     }
-    const [chunks, entities, blocks, voxels, records] = [0, 1, 2, 3, 7].map(stale);
-    if ([chunks, entities, blocks, voxels, records].every((r) => r.length === 0)) return [];
+    const [chunks, blocks, voxels, records] = [0, 2, 3, 7].map(stale);
     const candidate = (i: number): boolean => {
-      if (touches(chunks, i, 1) || touches(entities, i, 1)) return true;
-      const field = w.entities[i] ?? 0;
-      if (touches(records, (field >>> 8) * RECORD_WORDS, (field & 0xff) * RECORD_WORDS)) return true;
+      if (touches(chunks, i, 1)) return true;
       const c = w.chunks[i];
       if (state(c) !== MIXED) return false;
       const array = c & POINTER_MASK;
@@ -145,15 +151,33 @@ export class ChunkPrints {
       }
       return false;
     };
-    const changed: number[] = [];
-    for (let i = 0; i < w.chunks.length; i++) {
-      if (!candidate(i)) continue;
-      const p = print(w, i);
-      if (p !== this.prints[i]) {
-        this.prints[i] = p;
-        changed.push(i);
+    const changed = new Set<number>();
+    if (chunks.length + blocks.length + voxels.length > 0) {
+      for (let i = 0; i < w.chunks.length; i++) {
+        if (!candidate(i)) continue;
+        const p = print(w, i);
+        if (p !== this.prints[i]) {
+          this.prints[i] = p;
+          changed.add(i);
+        }
       }
     }
-    return changed;
+    if (records.length > 0) {
+      const [before, after] = [this.records, m.words(7)];
+      const dims = m.size.map((v) => Math.ceil(v / 16));
+      const slots = Math.max(before.length, after.length) / RECORD_WORDS;
+      for (let slot = 0; slot < slots; slot++) {
+        const r = slot * RECORD_WORDS;
+        let same = true;
+        for (let k = r; k < r + RECORD_WORDS; k++) same &&= (before[k] ?? 0) === (after[k] ?? 0);
+        if (same) continue;
+        for (const words of [before, after]) {
+          const box = slot < words.length / RECORD_WORDS ? instanceBox(words, slot) : undefined;
+          if (box) for (const c of overlapped(box, dims)) changed.add(c);
+        }
+      }
+      this.records = after.slice();
+    }
+    return [...changed].sort((a, b) => a - b);
   }
 }

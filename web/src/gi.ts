@@ -115,11 +115,6 @@ export function jitter(frame: number): [number, number] {
   return [unit(x >>> 0), unit(y)];
 }
 
-/** A dispatch's workgroups in two dimensions when one exceeds WebGPU's 65535. */
-function dispatch2d(groups: number): [number, number] {
-  return groups <= 65535 ? [Math.max(1, groups), 1] : [65535, Math.ceil(groups / 65535)];
-}
-
 /** What the GI keeps from frame to frame (history.rs, `GiHistory`). */
 class History {
   frames = 0;
@@ -326,7 +321,6 @@ export class GiRenderer {
     device.queue.writeBuffer(this.params[2], 0, hist.info(jit));
 
     const pipes = await Promise.all(this.pipelines);
-    const chunkCount = world.chunks[0] * world.chunks[1] * world.chunks[2];
     const enc = device.createCommandEncoder();
     GI_PASSES.forEach((pass, k) => {
       // The atmosphere table is filled when a history starts.
@@ -354,11 +348,8 @@ export class GiRenderer {
         case "gi_refine":
           cp.dispatchWorkgroups(Math.ceil(hist.plan.regions / 64));
           break;
-        case "gi_poses_clear":
-          cp.dispatchWorkgroups(Math.ceil(GI.NO_ENTITY / 64));
-          break;
         case "gi_poses":
-          cp.dispatchWorkgroups(...dispatch2d(Math.ceil(chunkCount / 64)));
+          cp.dispatchWorkgroups(Math.ceil(GI.NO_ENTITY / 64));
           break;
         default:
           cp.dispatchWorkgroups(Math.ceil(w / 8), Math.ceil(h / 8));

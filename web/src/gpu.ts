@@ -25,6 +25,7 @@ import { cameraRays } from "./camera";
 import { toneMapped } from "./colour";
 import type { Mirror, Touched } from "./mirror";
 import { ChunkPrints } from "./changes";
+import { RECORD_WORDS, hierarchyWords } from "./instances";
 import type { ChunkChanges } from "./changes";
 import { GiRenderer } from "./gi";
 
@@ -57,6 +58,8 @@ export class GpuWorld {
   readonly offsets: GPUBuffer;
   /** Each GPU buffer's first byte and capacity in `buffer`. */
   private regions: { at: number; capacity: number }[] = [];
+  /** The instance hierarchy on the GPU, as bytes. */
+  private hierarchy: Uint8Array = new Uint8Array(0);
   /** Bumped whenever the world's bytes change, so that accumulating modes restart. */
   generation = 0;
   /** Bumped when `buffer` is replaced, so bind groups are rebuilt. */
@@ -80,7 +83,9 @@ export class GpuWorld {
 
   /** Uploads everything `mirror` holds, laying the buffer out anew. */
   uploadAll(mirror: Mirror): void {
-    const lens = GPU_BUFFERS.map((b) => mirror.bytes(b.id).length);
+    // The mirrored buffers, then the instance hierarchy derived from the instance buffer.
+    this.hierarchy = hierarchyBytes(mirror);
+    const lens = [...GPU_BUFFERS.map((b) => mirror.bytes(b.id).length), this.hierarchy.length];
     // Room to grow: a quarter more and a page, 256-byte aligned.
     let at = 0;
     this.regions = lens.map((len) => {
@@ -98,6 +103,7 @@ export class GpuWorld {
       usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_DST,
     });
     GPU_BUFFERS.forEach((b, k) => this.write(k, 0, mirror.bytes(b.id)));
+    this.write(HIERARCHY, 0, this.hierarchy);
     const offsets = new Uint32Array(OFFSET_WORDS);
     this.regions.forEach((r, k) => (offsets[k] = r.at / 4));
     this.device.queue.writeBuffer(this.offsets, 0, offsets);
@@ -114,9 +120,18 @@ export class GpuWorld {
   /** Uploads the ranges a patch wrote; lays out anew when a buffer outgrew its room. */
   update(mirror: Mirror, touched: Touched[], resized: boolean): void {
     const k = (id: number) => GPU_BUFFERS.findIndex((b) => b.id === id);
-    if (resized && GPU_BUFFERS.some((b, i) => mirror.bytes(b.id).length > this.regions[i].capacity)) {
+    const moved = touched.some((t) => t.id === INSTANCES);
+    const hierarchy = moved ? hierarchyBytes(mirror) : this.hierarchy;
+    if (
+      (resized && GPU_BUFFERS.some((b, i) => mirror.bytes(b.id).length > this.regions[i].capacity)) ||
+      hierarchy.length > this.regions[HIERARCHY].capacity
+    ) {
       this.uploadAll(mirror);
       return;
+    }
+    if (moved) {
+      this.hierarchy = hierarchy;
+      this.write(HIERARCHY, 0, hierarchy);
     }
     for (const t of touched) {
       const i = k(t.id);
@@ -173,19 +188,30 @@ export class GpuWorld {
 
   private writeInfo(mirror: Mirror): void {
     const [x, y, z] = mirror.size;
-    const hasEntities = mirror.bytes(7).length > 0 ? 1 : 0;
+    const slots = mirror.bytes(INSTANCES).length / 4 / RECORD_WORDS;
     this.chunks = [Math.ceil(x / 16), Math.ceil(y / 16), Math.ceil(z / 16)];
     this.device.queue.writeBuffer(
       this.info,
       0,
       writeStruct(WorldInfo, {
         size: [x, y, z],
-        has_entities: hasEntities,
+        instance_slots: slots,
         chunks: this.chunks,
         max_steps: DEFAULT_MAX_STEPS,
       }),
     );
   }
+}
+
+/** The digest id of the instance buffer. */
+const INSTANCES = 7;
+/** The region of the instance hierarchy: after the mirrored buffers. */
+const HIERARCHY = GPU_BUFFERS.length;
+
+/** The packed instance hierarchy over the mirror's instance buffer, as bytes. */
+function hierarchyBytes(mirror: Mirror): Uint8Array {
+  const words = hierarchyWords(mirror.words(INSTANCES));
+  return new Uint8Array(words.buffer, words.byteOffset, words.byteLength);
 }
 
 /** The render pass (albedo, material, normal, steps) into a pixel buffer, read back. */

@@ -11,7 +11,7 @@
 //! - voxel and block AADFs: 4³ cells, fields 0..=3, the box never leaves the parent
 //!   ([`cell_aadf4`], a bit-sliced implementation of [`grid_aadf`]);
 //! - chunk AADFs: the whole chunk grid, fields 0..=31, outside the world counts as empty,
-//!   chunks with entities block growth ([`build_chunk_aadf`]).
+//!   ([`build_chunk_aadf`]).
 //! - regrowth after edits: the region a change may affect ([`REGROW_RADIUS`]), the resumable
 //!   job that recomputes it ([`GrowthJob`]), and the world's background-growth bookkeeping
 //!   and detached task ([`GrowthTask`]), which `World::start_growth` and
@@ -26,7 +26,7 @@ use rayon::prelude::*;
 pub enum Neighbour {
     /// Outside the grid. Chunk grids treat this as empty; 4³ cells and entity grids as a wall.
     Outside,
-    /// A cell that is not empty (or is a chunk with entities).
+    /// A cell that is not empty.
     Blocked,
     /// An empty cell with its current fields.
     Free(Aadf),
@@ -180,26 +180,22 @@ pub fn cell_aadf4(empty: u64) -> [u16; 64] {
     out
 }
 
-/// Whether a chunk may carry (and grow into) a chunk AADF: empty and without entities.
+/// Whether a chunk may carry (and grow into) a chunk AADF: empty. (Entities do not count:
+/// they live outside the static world.)
 #[inline]
-pub fn chunk_is_free(cell: u32, entities: u32) -> bool {
-    cell::state(cell) == State::Empty && entities == 0
+pub fn chunk_is_free(cell: u32) -> bool {
+    cell::state(cell) == State::Empty
 }
 
 /// Builds all chunk AADFs from scratch, level-major (31 levels × 3 axes), treating the
 /// outside of the world as empty. Deterministic: each phase reads the state before the
 /// phase, whatever the thread count.
-pub fn build_chunk_aadf(size: WorldSize, chunks: &mut Vec<u32>, entities: &[u32]) {
+pub fn build_chunk_aadf(size: WorldSize, chunks: &mut Vec<u32>) {
     let n = size.chunk_count();
-    assert!(
-        chunks.len() == n && entities.len() == n,
-        "chunk buffers do not match {size}"
-    );
-    let region: Vec<u32> = (0..n as u32)
-        .filter(|&i| chunk_is_free(chunks[i as usize], entities[i as usize]))
-        .collect();
+    assert!(chunks.len() == n, "chunk buffers do not match {size}");
+    let region: Vec<u32> = (0..n as u32).filter(|&i| chunk_is_free(chunks[i as usize])).collect();
     let mut job = GrowthJob::new(std::mem::take(chunks), region);
-    while !job.step(size, entities) {}
+    while !job.step(size) {}
     *chunks = job.into_shadow();
 }
 
@@ -270,7 +266,7 @@ pub struct GrowthJob {
 
 impl GrowthJob {
     /// Starts a job recomputing the free chunks within [`REGROW_RADIUS`] of
-    /// `seeds`, on `chunks` (a copy of the cells) with these entity fields.
+    /// `seeds`, on `chunks` (a copy of the cells).
     ///
     /// Warm start: a change influences the lock step one chunk per level, so a chunk at
     /// Chebyshev distance `d` from every seed has, up to level `d − 2`, the same history as
@@ -278,13 +274,11 @@ impl GrowthJob {
     /// joins the lock step at level `d − 2`; directions below that are already final. Only
     /// the work near the seeds remains, and the result is still a from-scratch build. A
     /// chunk whose cell is zero (reset by a clamp, or genuinely boxed in) starts cold.
-    pub fn around(size: WorldSize, seeds: &[u32], chunks: Vec<u32>, entities: &[u32]) -> Self {
+    pub fn around(size: WorldSize, seeds: &[u32], chunks: Vec<u32>) -> Self {
         // The region: the free chunks within REGROW_RADIUS of a seed, ascending.
         let distance = seed_distance(size, seeds, REGROW_RADIUS as u8);
         let region: Vec<u32> = (0..size.chunk_count() as u32)
-            .filter(|&i| {
-                distance[i as usize] <= REGROW_RADIUS as u8 && chunk_is_free(chunks[i as usize], entities[i as usize])
-            })
+            .filter(|&i| distance[i as usize] <= REGROW_RADIUS as u8 && chunk_is_free(chunks[i as usize]))
             .collect();
         let mut shadow = chunks;
         let mut entering: Vec<Vec<u32>> = vec![Vec::new(); usize::from(MAX_CHUNK_FIELD) + 1];
@@ -337,11 +331,11 @@ impl GrowthJob {
     }
 
     /// Runs one (level, axis) phase; returns whether the job has converged.
-    pub fn step(&mut self, size: WorldSize, entities: &[u32]) -> bool {
+    pub fn step(&mut self, size: WorldSize) -> bool {
         if self.is_done() {
             return true;
         }
-        let grown = grow_chunks(size, &self.shadow, entities, &self.active, self.level, self.axis);
+        let grown = grow_chunks(size, &self.shadow, &self.active, self.level, self.axis);
         self.grown.extend(grown.iter().map(|&(i, _)| i));
         for (i, w) in grown {
             self.shadow[i as usize] = w;
@@ -391,14 +385,7 @@ impl GrowthJob {
 }
 
 /// One (level, axis) phase over the `active` chunks: the new words of the chunks that grow.
-fn grow_chunks(
-    size: WorldSize,
-    chunks: &[u32],
-    entities: &[u32],
-    active: &[u32],
-    level: u8,
-    axis: usize,
-) -> Vec<(u32, u32)> {
+fn grow_chunks(size: WorldSize, chunks: &[u32], active: &[u32], level: u8, axis: usize) -> Vec<(u32, u32)> {
     let dims = size.chunks();
     active
         .par_iter()
@@ -425,7 +412,7 @@ fn grow_chunks(
                     Neighbour::Outside
                 } else {
                     let j = size.chunk_index(q);
-                    if chunk_is_free(chunks[j], entities[j]) {
+                    if chunk_is_free(chunks[j]) {
                         Neighbour::Free(Aadf::unpack(chunks[j], CHUNK_FIELD_BITS))
                     } else {
                         Neighbour::Blocked
@@ -474,8 +461,6 @@ pub struct GrowthTask {
     pub(crate) seeds: Vec<u32>,
     /// A copy of the chunk cells as the job started.
     pub(crate) chunks: Vec<u32>,
-    /// A copy of the chunk entity fields (chunks holding entities are not free).
-    pub(crate) entities: Vec<u32>,
     /// The job, once its region is known.
     pub(crate) job: Option<GrowthJob>,
 }
@@ -492,14 +477,14 @@ impl GrowthTask {
     /// task resumes where it stopped, on any thread ([`GrowthTask::run`],
     /// [`crate::World::finish_growth`]).
     pub fn run_until(&mut self, stop: impl Fn() -> bool) -> bool {
-        let job = self.job.get_or_insert_with(|| {
-            GrowthJob::around(self.size, &self.seeds, std::mem::take(&mut self.chunks), &self.entities)
-        });
+        let job = self
+            .job
+            .get_or_insert_with(|| GrowthJob::around(self.size, &self.seeds, std::mem::take(&mut self.chunks)));
         while !job.is_done() {
             if stop() {
                 return false;
             }
-            job.step(self.size, &self.entities);
+            job.step(self.size);
         }
         true
     }
@@ -593,11 +578,8 @@ mod tests {
         let mut chunks: Vec<u32> = (0..n)
             .map(|i| if (i * 2654435761) % 11 == 0 { cell::full(1) } else { 0 })
             .collect();
-        let mut entities = vec![0u32; n];
-        entities[17] = 1 << 8 | 1;
-        chunks[17] = 0;
-        build_chunk_aadf(size, &mut chunks, &entities);
-        let free: Vec<bool> = (0..n).map(|i| chunk_is_free(chunks[i], entities[i])).collect();
+        build_chunk_aadf(size, &mut chunks);
+        let free: Vec<bool> = (0..n).map(|i| chunk_is_free(chunks[i])).collect();
         let d = size.chunks().map(|v| v as usize);
         let expect = grid_aadf(d, &free, 31, true);
         for i in 0..n {
@@ -605,6 +587,5 @@ mod tests {
                 assert_eq!(chunks[i], expect[i].pack(CHUNK_FIELD_BITS), "chunk {i}");
             }
         }
-        assert_eq!(chunks[17], 0, "entity chunk keeps a zero AADF");
     }
 }

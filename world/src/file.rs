@@ -7,7 +7,7 @@
 //!
 //! ```text
 //! header   0  magic            8 bytes  89 4E 41 41 44 46 0D 0A  ("\x89NAADF\r\n")
-//!          8  format version   u32      2 (version 1, without entities, is still read)
+//!          8  format version   u32      3 (versions 1 and 2 are still read)
 //!         12  flags            u32      0 (every bit reserved)
 //!         16  payload length   u64      uncompressed payload bytes
 //!         24  payload xxh3     u64      xxh3_64 of the uncompressed payload
@@ -24,6 +24,12 @@
 //! The entity table section holds the entity types (model names, in order of first use)
 //! and the instances with their quantised poses; the entity-type and instance buffers are
 //! derived from it on load, deterministically, so a loaded world has the same digest.
+//!
+//! Version 3 keeps entities out of the static world: its chunk entity section is all zero
+//! and no chunk AADF is cut around an entity. Versions 1 and 2 are read with their entities
+//! carried over; a version-2 file with entities gets a zero chunk entity buffer and chunk
+//! AADFs rebuilt from scratch on load, so its digest changes (an entity-free file's does
+//! not).
 //!
 //! Reading streams the payload straight into the final buffers: every length is checked
 //! against the header and against what the world size allows before anything is allocated,
@@ -53,10 +59,11 @@ pub use crate::world::WorldParts;
 pub const MAGIC: [u8; 8] = *b"\x89NAADF\r\n";
 
 /// The format version this build writes.
-pub const FORMAT_VERSION: u32 = 2;
+pub const FORMAT_VERSION: u32 = 3;
 
-/// The format versions this build reads: 1 (no entity section) and 2.
-pub const READ_VERSIONS: [u32; 2] = [1, 2];
+/// The format versions this build reads: 1 (no entity section), 2 (entities cut into the
+/// chunk AADFs and listed per chunk) and 3.
+pub const READ_VERSIONS: [u32; 3] = [1, 2, 3];
 
 /// Bytes in the fixed header.
 pub const HEADER_LEN: usize = 40;
@@ -320,7 +327,7 @@ pub fn read_parts(input: &mut dyn Read) -> Result<WorldParts, WorldError> {
     }
     p.dec.finish().trailer()?;
     let (materials, models, entities) = decode_tables(raw.materials, &raw.models, raw.entities.as_deref())?;
-    Ok(WorldParts {
+    let mut parts = WorldParts {
         size: raw.size,
         version: raw.version,
         materials,
@@ -330,7 +337,26 @@ pub fn read_parts(input: &mut dyn Read) -> Result<WorldParts, WorldError> {
         blocks: raw.blocks,
         voxels: raw.voxels,
         entities,
-    })
+    };
+    if header.version < 3 && !parts.entities.is_empty() {
+        lift_entities_out(&mut parts)?;
+    }
+    Ok(parts)
+}
+
+/// Upgrades version-2 parts whose entities were part of the static world: the chunk entity
+/// fields become zero and every chunk AADF is rebuilt without the cuts around entities.
+fn lift_entities_out(parts: &mut WorldParts) -> Result<(), WorldError> {
+    if parts.chunks.len() != parts.size.chunk_count() {
+        return Err(bad(format!(
+            "{} chunk cells for a {} world",
+            parts.chunks.len(),
+            parts.size
+        )));
+    }
+    parts.chunk_entities.fill(0);
+    crate::aadf::build_chunk_aadf(parts.size, &mut parts.chunks);
+    Ok(())
 }
 
 /// The buffers a world is transferred by (a snapshot on the wire): the four cell arrays as
@@ -536,7 +562,7 @@ fn read_header(input: &mut dyn Read) -> Result<Header, WorldError> {
     let version = u32::from_le_bytes(h[8..12].try_into().expect("4 bytes"));
     if got >= 12 && !READ_VERSIONS.contains(&version) {
         return Err(bad(format!(
-            "unsupported format version {version} (this build reads 1 and 2)"
+            "unsupported format version {version} (this build reads 1, 2 and 3)"
         )));
     }
     if got < HEADER_LEN {

@@ -6,15 +6,17 @@
 //! changed is stale (docs/RENDERING.md §3c). Distance fields are left out: they change
 //! across wide empty areas after any edit, but change nothing a ray sees.
 //!
-//! An update looks only at the chunks whose words, block array, voxel groups or entity
-//! records lie in words that may have changed (a mirror knows the 64 KiB pages of the
-//! world's digest that changed: [`stale_words`]), and rehashes those.
+//! An update looks only at the chunks whose words, block array or voxel groups lie in words
+//! that may have changed (a mirror knows the 64 KiB pages of the world's digest that
+//! changed: [`stale_words`]), and rehashes those. Entities live outside the static world,
+//! so their changes come from the instance records instead: every instance whose record
+//! or type changed marks the chunks its world box overlaps, before and after.
 
 use crate::World;
 use crate::cell::{self, State};
 use crate::digest::{BufferId, PAGE_BYTES};
-use crate::entity::ENTITY_SOLID;
-use crate::entity::pack::{InstanceRecord, RECORD_WORDS};
+use crate::entity::pack::{InstanceRecord, RECORD_WORDS, conjugate};
+use crate::entity::{ENTITY_SOLID, chunk_range};
 use crate::hash::Xxh3;
 use rayon::prelude::*;
 use std::collections::HashMap;
@@ -25,10 +27,15 @@ const PAGE_WORDS: usize = PAGE_BYTES / 4;
 /// Blocks per chunk.
 const BLOCKS: usize = cell::CELLS;
 
-/// The fingerprint of every chunk of a world version.
+/// The fingerprint of every chunk of a world version, and of the instances over it.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct ChunkPrints {
+    /// Per chunk: its static content.
     prints: Vec<u64>,
+    /// The instance buffer the prints are of.
+    instances: Vec<u32>,
+    /// The fingerprint of each entity type the instances use, by `voxelStart`.
+    types: HashMap<u32, u64>,
 }
 
 /// What changed between two versions of a world, chunk by chunk.
@@ -58,12 +65,13 @@ pub fn stale_words(before: &[u64], after: &[u64]) -> Vec<Range<usize>> {
 impl ChunkPrints {
     /// The fingerprints of every chunk of `world`.
     pub fn new(world: &World) -> Self {
-        let types = type_prints(world);
         ChunkPrints {
             prints: (0..world.chunks().len())
                 .into_par_iter()
-                .map(|i| print(world, &types, i))
+                .map(|i| print(world, i))
                 .collect(),
+            instances: world.entity_instances().to_vec(),
+            types: type_prints(world),
         }
     }
 
@@ -78,37 +86,17 @@ impl ChunkPrints {
             *self = ChunkPrints::new(world);
             return ChunkChanges::Everything;
         }
-        let stale_in = [
+        let [chunk_pages, block_pages, voxel_pages, type_pages, record_pages] = [
             BufferId::Chunks,
-            BufferId::ChunkEntities,
             BufferId::Blocks,
             BufferId::Voxels,
             BufferId::EntityTypes,
             BufferId::EntityInstances,
         ]
         .map(pages);
-        if stale_in.iter().all(|p| p.is_empty()) {
-            return ChunkChanges::Chunks(Vec::new());
-        }
-        let [
-            chunk_pages,
-            entity_pages,
-            block_pages,
-            voxel_pages,
-            type_pages,
-            record_pages,
-        ] = stale_in;
-        let types = type_prints(world);
-        let (chunks, blocks, entities) = (world.chunks(), world.blocks(), world.chunk_entities());
+        let (chunks, blocks) = (world.chunks(), world.blocks());
         let candidate = |i: usize| {
-            if touches(chunk_pages, i, 1) || touches(entity_pages, i, 1) {
-                return true;
-            }
-            // A redefined model changes its type's voxels (and may move the types after it).
-            let (first, count) = records(entities[i]);
-            if touches(record_pages, first * RECORD_WORDS, count * RECORD_WORDS)
-                || (count > 0 && !type_pages.is_empty())
-            {
+            if touches(chunk_pages, i, 1) {
                 return true;
             }
             let c = chunks[i];
@@ -128,15 +116,53 @@ impl ChunkPrints {
             .into_par_iter()
             .filter(|&i| candidate(i))
             .filter_map(|i| {
-                let p = print(world, &types, i);
+                let p = print(world, i);
                 (p != old[i]).then_some((i as u32, p))
             })
             .collect();
         for &(i, p) in &changed {
             self.prints[i as usize] = p;
         }
-        ChunkChanges::Chunks(changed.into_iter().map(|(i, _)| i).collect())
+        let mut out: Vec<u32> = changed.into_iter().map(|(i, _)| i).collect();
+        if !record_pages.is_empty() || !type_pages.is_empty() {
+            let types = type_prints(world);
+            let (before, after) = (&self.instances, world.entity_instances());
+            let record = |words: &[u32], types: &HashMap<u32, u64>, slot: usize| {
+                let w = words.get(slot * RECORD_WORDS..(slot + 1) * RECORD_WORDS)?;
+                (w[4] != 0).then(|| (InstanceRecord::unpack(w), types[&InstanceRecord::unpack(w).voxel_start]))
+            };
+            for slot in 0..before.len().max(after.len()) / RECORD_WORDS {
+                let (was, is) = (record(before, &self.types, slot), record(after, &types, slot));
+                if was != is {
+                    for (r, _) in [was, is].into_iter().flatten() {
+                        out.extend(overlapped_chunks(world, &r));
+                    }
+                }
+            }
+            self.instances = after.to_vec();
+            self.types = types;
+        }
+        out.sort_unstable();
+        out.dedup();
+        ChunkChanges::Chunks(out)
     }
+}
+
+/// The chunks an instance's world box overlaps (as [`chunk_range`] clips it to the world).
+fn overlapped_chunks(world: &World, r: &InstanceRecord) -> Vec<u32> {
+    let size = world.size();
+    let Some((lo, hi)) = chunk_range(size, r.size, r.position(), conjugate(r.inv_rotation())) else {
+        return Vec::new();
+    };
+    let mut out = Vec::new();
+    for z in lo[2]..=hi[2] {
+        for y in lo[1]..=hi[1] {
+            for x in lo[0]..=hi[0] {
+                out.push(size.chunk_index([x, y, z]) as u32);
+            }
+        }
+    }
+    out
 }
 
 /// Whether the words `start..start + len` of a buffer meet any of `stale` (ascending,
@@ -146,16 +172,14 @@ fn touches(stale: &[Range<usize>], start: usize, len: usize) -> bool {
     len > 0 && stale.get(k).is_some_and(|r| r.start < start + len)
 }
 
-/// The first record and the record count of a chunk entity field.
-fn records(field: u32) -> (usize, usize) {
-    ((field >> 8) as usize, (field & 0xFF) as usize)
-}
-
 /// The fingerprint of each entity type an instance record uses, by `voxelStart`: its
 /// voxels' materials (empty as 0, whatever their fields).
 fn type_prints(world: &World) -> HashMap<u32, u64> {
     let mut out = HashMap::new();
     for words in world.entity_instances().chunks_exact(RECORD_WORDS) {
+        if words[4] == 0 {
+            continue;
+        }
         let r = InstanceRecord::unpack(words);
         out.entry(r.voxel_start).or_insert_with(|| {
             let start = r.voxel_start as usize * 64;
@@ -173,8 +197,8 @@ fn type_prints(world: &World) -> HashMap<u32, u64> {
 }
 
 /// The fingerprint of chunk `i`: its blocks' materials (empty cells as 0, whatever their
-/// distance fields), its entity records and their types' prints.
-fn print(world: &World, types: &HashMap<u32, u64>, i: usize) -> u64 {
+/// distance fields).
+fn print(world: &World, i: usize) -> u64 {
     let mut h = Xxh3::new();
     let c = world.chunks()[i];
     let uniform = |cell: u32| -> u16 {
@@ -200,12 +224,6 @@ fn print(world: &World, types: &HashMap<u32, u64>, i: usize) -> u64 {
     } else {
         h.update(&[2]);
         h.update(&uniform(c).to_le_bytes());
-    }
-    let (first, count) = records(world.chunk_entities()[i]);
-    let words = &world.entity_instances()[first * RECORD_WORDS..(first + count) * RECORD_WORDS];
-    h.update(bytemuck::cast_slice(words));
-    for r in words.chunks_exact(RECORD_WORDS) {
-        h.update(&types[&InstanceRecord::unpack(r).voxel_start].to_le_bytes());
     }
     h.digest()
 }

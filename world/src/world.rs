@@ -144,7 +144,7 @@ impl World {
     /// Recomputes every chunk AADF from scratch (level-major, deterministic), dropping any
     /// queued background growth, and refreshes the digest.
     pub fn rebuild_chunk_aadf(&mut self) {
-        build_chunk_aadf(self.size, &mut self.chunks, &self.chunk_entities);
+        build_chunk_aadf(self.size, &mut self.chunks);
         self.growth = Growth::default();
         self.refresh_digest();
     }
@@ -349,8 +349,7 @@ impl World {
     }
 
     /// Validates the entity table of stored parts and derives its buffers; the stored
-    /// chunk entity fields must equal the derived ones, and an empty chunk with entities
-    /// must hold a zero AADF.
+    /// chunk entity fields must be zero.
     fn entities_from_parts(p: &WorldParts) -> Result<Entities, WorldError> {
         let bad = |m: String| Err(WorldError::BadFile(m));
         let t = &p.entities;
@@ -375,27 +374,13 @@ impl World {
                 Err(e) => return bad(format!("entity {id}: {e}")),
             }
         }
-        let e = Entities::build(t.clone(), &p.models, p.size).or_else(|e| bad(format!("entities: {}", e.0)))?;
-        let mut expect = vec![0u32; p.chunk_entities.len()];
-        for &(c, f) in &e.occupied {
-            expect[c as usize] = f;
-        }
-        if let Some(i) = (0..expect.len()).find(|&i| expect[i] != p.chunk_entities[i]) {
+        let e = Entities::build(t.clone(), &p.models).or_else(|e| bad(format!("entities: {}", e.0)))?;
+        if let Some(i) = p.chunk_entities.iter().position(|&f| f != 0) {
             return bad(format!(
-                "chunk {:?}: entity field {:#x}, but the entity table gives {:#x}",
+                "chunk {:?}: entity field {:#x}; the chunk entity buffer must be zero (entities live \
+                 outside the static world)",
                 p.size.chunk_coords(i),
-                p.chunk_entities[i],
-                expect[i]
-            ));
-        }
-        if let Some(&(c, _)) = e
-            .occupied
-            .iter()
-            .find(|&&(c, _)| cell::state(p.chunks[c as usize]) == State::Empty && p.chunks[c as usize] != 0)
-        {
-            return bad(format!(
-                "chunk {:?} holds entities and a non-zero AADF",
-                p.size.chunk_coords(c as usize)
+                p.chunk_entities[i]
             ));
         }
         Ok(e)
@@ -407,10 +392,10 @@ impl World {
         let size = self.size;
         let blocked = PrefixSum3::new(size.chunks().map(|v| v as usize), |x, y, z| {
             let i = size.chunk_index([x as u32, y as u32, z as u32]);
-            u32::from(!chunk_is_free(self.chunks[i], self.chunk_entities[i]))
+            u32::from(!chunk_is_free(self.chunks[i]))
         });
         (0..self.chunks.len()).into_par_iter().find_first(|&i| {
-            if !chunk_is_free(self.chunks[i], self.chunk_entities[i]) {
+            if !chunk_is_free(self.chunks[i]) {
                 return false;
             }
             let f = Aadf::unpack(self.chunks[i], CHUNK_FIELD_BITS);
@@ -619,14 +604,21 @@ impl World {
         &self.entities.type_starts
     }
 
-    /// The entity instance buffer: the chunk instance lists, 5-word records.
+    /// The entity instance buffer: each instance's 5-word record in the slot of its id.
     pub fn entity_instances(&self) -> &[u32] {
         &self.entities.instances
     }
 
-    /// Whether a chunk is empty and free of entities (it may carry a chunk AADF).
+    /// The hierarchy over the instances' world boxes, packed as the GPU walks it
+    /// ([`crate::entity::bvh`]): derived from the instance buffer, neither mirrored nor
+    /// digested. Empty when there is no instance.
+    pub fn entity_hierarchy_words(&self) -> Vec<u32> {
+        self.entities.set.hierarchy_words()
+    }
+
+    /// Whether a chunk is empty (it may carry a chunk AADF).
     pub fn chunk_is_free(&self, i: usize) -> bool {
-        aadf::chunk_is_free(self.chunks[i], self.chunk_entities[i])
+        aadf::chunk_is_free(self.chunks[i])
     }
 }
 

@@ -1,7 +1,7 @@
 //! Dynamic entities against independent oracles: brute-force ray tests in each entity's
-//! frame, the three traversal methods, chunk lists recomputed from the poses, fresh worlds
-//! holding the same final entities, from-scratch distance fields, mirrors following change
-//! records, undo, and world files.
+//! frame, the three traversal methods, instance records recomputed from the poses, fresh
+//! worlds holding the same final entities, the static buffers of a world without entities,
+//! from-scratch distance fields, mirrors following change records, undo, and world files.
 
 mod common;
 
@@ -11,7 +11,6 @@ use naadf_world::entity::{EntityTable, MAX_ENTITY_ID};
 use naadf_world::ops::{Batch, EditError, Limits, Op};
 use naadf_world::traverse::{DenseGrid, Hit, Ray, same_result, trace_naadf, trace_nodf};
 use naadf_world::{World, WorldSize, file};
-use std::collections::BTreeMap;
 
 /// A model op: random solid voxels, a shell, or a solid block, of materials 1..=9.
 fn random_model(rng: &mut Rng, name: &str, max_edge: u64) -> Op {
@@ -242,6 +241,42 @@ fn rays_through_entity_scenes_match_brute_force_and_the_methods_agree() {
                 entity_hits += usize::from(check_ray(&w, &world_only, &grid, &ray));
             }
         }
+        // Adversarial rays: from inside an instance's grid, and moving within a face plane
+        // of its world box (grazing it), or along one of the box's edges.
+        for (_, pose) in w.entity_table().instances.clone() {
+            let size = w.models().get(&pose.model).unwrap().size().map(f64::from);
+            let corners: Vec<[f64; 3]> = (0..8)
+                .map(|c| {
+                    let p = rotate(pose.rot, [0, 1, 2].map(|a| if c >> a & 1 == 1 { size[a] } else { 0.0 }));
+                    [0, 1, 2].map(|a| pose.pos[a] + p[a])
+                })
+                .collect();
+            let lo = [0, 1, 2].map(|a| corners.iter().map(|c| c[a]).fold(f64::INFINITY, f64::min));
+            let hi = [0, 1, 2].map(|a| corners.iter().map(|c| c[a]).fold(f64::NEG_INFINITY, f64::max));
+            for _ in 0..20 {
+                let local = [0, 1, 2].map(|a| rng.unit() * size[a]);
+                let p = rotate(pose.rot, local);
+                let inside = [0, 1, 2].map(|a| pose.pos[a] + p[a]);
+                let d = [0, 1, 2].map(|_| rng.unit() - 0.5);
+                if let Ok(ray) = Ray::new(inside, d) {
+                    check_ray(&w, &world_only, &grid, &ray);
+                }
+                let axis = rng.below(3) as usize;
+                let mut o = [0, 1, 2].map(|a| lo[a] - 3.0 + rng.unit() * (hi[a] - lo[a] + 6.0));
+                o[axis] = if rng.unit() < 0.5 { lo[axis] } else { hi[axis] };
+                let mut d = [0, 1, 2].map(|_| rng.unit() - 0.5);
+                d[axis] = 0.0;
+                if rng.unit() < 0.3 {
+                    // Along an edge: on two face planes, moving along the third axis.
+                    let b = (axis + 1) % 3;
+                    o[b] = if rng.unit() < 0.5 { lo[b] } else { hi[b] };
+                    d[b] = 0.0;
+                }
+                if let Ok(ray) = Ray::new(o, d) {
+                    check_ray(&w, &world_only, &grid, &ray);
+                }
+            }
+        }
         assert!(entity_hits > 100, "seed {seed}: only {entity_hits} entity hits");
         // After growth, the same again.
         let mut w2 = w.clone();
@@ -320,61 +355,38 @@ fn an_entity_in_front_of_world_geometry_wins() {
     assert_eq!((h.entity, h.voxel), (None, [10, 0, 10]));
 }
 
-/// Independent chunk lists: every chunk overlapping an entity's AABB lists it (and no chunk
-/// beyond a slightly padded AABB does); identical lists share one run of records.
-fn check_chunk_lists(w: &World) {
-    let size = w.size();
-    let mut expect: BTreeMap<usize, (Vec<u32>, Vec<u32>)> = BTreeMap::new();
-    for (&id, pose) in &w.entity_table().instances {
-        let s = w.models().get(&pose.model).unwrap().size().map(f64::from);
-        let mut lo = [f64::INFINITY; 3];
-        let mut hi = [f64::NEG_INFINITY; 3];
-        for c in 0..8 {
-            let p = rotate(pose.rot, [0, 1, 2].map(|a| if c >> a & 1 == 1 { s[a] } else { 0.0 }));
-            for a in 0..3 {
-                lo[a] = lo[a].min(pose.pos[a] + p[a]);
-                hi[a] = hi[a].max(pose.pos[a] + p[a]);
-            }
-        }
-        for i in 0..size.chunk_count() {
-            let c = size.chunk_coords(i).map(f64::from);
-            let overlaps = |pad: f64| (0..3).all(|a| lo[a] - pad <= c[a] * 16.0 + 16.0 && hi[a] + pad >= c[a] * 16.0);
-            let e = expect.entry(i).or_default();
-            if overlaps(-1e-3) {
-                e.0.push(id);
-            }
-            if overlaps(1e-3) {
-                e.1.push(id);
+/// The instance buffer, recomputed from the poses: the record of each entity in the slot of
+/// its id, zero slots between, ending after the highest id.
+fn check_instance_buffer(w: &World) {
+    let table = w.entity_table();
+    let slots = table.instances.keys().last().map_or(0, |&id| id as usize + 1);
+    let buf = w.entity_instances();
+    assert_eq!(buf.len(), slots * RECORD_WORDS);
+    for slot in 0..slots {
+        let words = &buf[slot * RECORD_WORDS..][..RECORD_WORDS];
+        match table.instances.get(&(slot as u32)) {
+            None => assert!(words.iter().all(|&v| v == 0), "slot {slot} is not empty"),
+            Some(pose) => {
+                let r = InstanceRecord::unpack(words);
+                assert_eq!(r.id, slot as u32);
+                assert_eq!(r.size, w.models().get(&pose.model).unwrap().size());
+                assert_eq!(r.position(), pose.pos);
+                assert_eq!(conjugate(naadf_world::entity::pack::decode_quat(r.inv_rot)), pose.rot);
             }
         }
     }
-    let mut by_list: BTreeMap<Vec<u32>, u32> = BTreeMap::new();
-    for i in 0..size.chunk_count() {
-        let f = w.chunk_entities()[i];
-        let (ptr, count) = ((f >> 8) as usize, (f & 0xFF) as usize);
-        let ids: Vec<u32> = (ptr..ptr + count)
-            .map(|r| InstanceRecord::unpack(&w.entity_instances()[r * RECORD_WORDS..][..RECORD_WORDS]).id)
-            .collect();
-        let (must, may) = expect.get(&i).cloned().unwrap_or_default();
-        assert!(ids.windows(2).all(|p| p[0] < p[1]), "chunk {i}: ids not ascending");
-        assert!(
-            must.iter().all(|id| ids.contains(id)),
-            "chunk {i}: {ids:?} lacks some of {must:?}"
-        );
-        assert!(
-            ids.iter().all(|id| may.contains(id)),
-            "chunk {i}: {ids:?} beyond {may:?}"
-        );
-        if count > 0 {
-            assert_eq!(*by_list.entry(ids).or_insert(f), f, "identical lists share a pointer");
-        }
-    }
-    let records = w.entity_instances().len() / RECORD_WORDS;
-    assert_eq!(
-        by_list.keys().map(Vec::len).sum::<usize>(),
-        records,
-        "each distinct list once, nothing else"
+}
+
+/// The static buffers (chunks, chunk entity fields, blocks, voxels) of two worlds are
+/// byte-identical.
+fn assert_same_static(a: &World, b: &World, what: &str) {
+    assert!(a.chunks() == b.chunks(), "{what}: chunk cells differ");
+    assert!(
+        a.chunk_entities() == b.chunk_entities(),
+        "{what}: chunk entity fields differ"
     );
+    assert!(a.blocks() == b.blocks(), "{what}: blocks differ");
+    assert!(a.voxels() == b.voxels(), "{what}: voxels differ");
 }
 
 /// A world built fresh with `table`'s entities (same type order) over the same voxels.
@@ -453,7 +465,7 @@ fn moves_leave_no_stale_fields_and_growth_converges() {
         assert_eq!(applied.change.digest, w.digest());
         assert_aadf_valid(&raw, &w, &what);
         assert_canonical(&w, &what);
-        check_chunk_lists(&w);
+        check_instance_buffer(&w);
         if step % 3 == 0 {
             w.grow_distance_fields(rng.below(60) as usize);
             assert_aadf_valid(&raw, &w, &format!("{what} after growth"));
@@ -462,10 +474,7 @@ fn moves_leave_no_stale_fields_and_growth_converges() {
             // The same entities spawned directly: identical entity buffers.
             let fresh = fresh_with(&raw, &models, w.entity_table());
             assert_eq!(fresh.entity_table(), w.entity_table());
-            assert!(
-                fresh.chunk_entities() == w.chunk_entities(),
-                "{what}: chunk fields differ"
-            );
+            assert_same_static(&fresh, &w, &what);
             assert_eq!(
                 fresh.entity_instances(),
                 w.entity_instances(),
@@ -476,7 +485,7 @@ fn moves_leave_no_stale_fields_and_growth_converges() {
                 w.entity_type_voxels(),
                 "{what}: type buffer"
             );
-            // Converged chunk AADFs equal a from-scratch build that blocks entity chunks.
+            // Converged chunk AADFs equal a from-scratch build.
             let mut converged = w.clone();
             converged.grow_until_quiescent();
             let mut scratch = converged.clone();
@@ -561,24 +570,18 @@ fn entity_op_errors_reject_the_whole_batch() {
             "a rejected batch changed the world"
         );
     }
-    // More than 255 entities in one chunk.
+    // Any number of entities may share a place (the chunk lists' limit of 255 is gone):
+    // the lowest id is hit.
     let mut w = Raw::empty(size, 3).build();
-    let before = (w.to_parts(), w.digest(), w.version());
-    let ops: Vec<Op> = (1000..1256)
-        .map(|id| spawn(id, "tiny", [40.5, 40.5, 40.5], ok_rot))
-        .collect();
     let mut all = vec![Op::DefineModel {
         name: "tiny".into(),
         size: [1, 1, 1],
         voxels: vec![[0, 0, 0, 1]],
     }];
-    all.extend(ops);
-    let e = w.apply(&Batch { ops: all.clone() }, &Limits::default()).unwrap_err();
-    assert!(e.to_string().contains("at most 255"), "{e}");
-    assert!((w.to_parts(), w.digest(), w.version()) == before);
-    all.pop();
+    all.extend((1000..1300).map(|id| spawn(id, "tiny", [40.5, 40.5, 40.5], ok_rot)));
     apply(&mut w, all);
-    assert_eq!(w.chunk_entities()[w.size().chunk_index([2, 2, 2])] & 0xFF, 255);
+    let down = Ray::new([40.7, 60.0, 40.7], [0.0, -1.0, 0.0]).unwrap();
+    assert_eq!(trace_naadf(&w, &down).unwrap().entity, Some(1000));
 }
 
 #[test]
@@ -776,82 +779,61 @@ fn world_files_keep_entities() {
     p.entities.instances.get_mut(&900).unwrap().model = "nope".into();
     assert!(World::from_parts(p).is_err());
     let mut p = good.clone();
-    let first = p.chunk_entities.iter().position(|&f| f != 0).unwrap();
-    p.chunk_entities[first] = 0;
+    p.chunk_entities[3] = 1 << 8 | 1;
     assert!(World::from_parts(p).unwrap_err().to_string().contains("entity field"));
+    // The static world does not depend on the entities: a table without one is another
+    // valid world.
     let mut p = good.clone();
     p.entities.instances.remove(&900);
-    assert!(World::from_parts(p).is_err(), "chunk fields no longer match");
+    let fewer = World::from_parts(p).unwrap();
+    assert_ne!(fewer.digest(), w.digest());
+    assert_same_static(&fewer, &w, "one entity fewer");
 }
 
 #[test]
-fn entity_chunks_hold_zero_aadfs_and_block_growth() {
+fn a_thousand_random_moves_leave_the_static_world_as_without_entities() {
     let size = WorldSize::new(256, 64, 64).unwrap();
-    let raw = Raw::empty(size, 3);
+    let raw = random_world(size, 7);
+    let base = raw.build();
+    let mut rng = Rng(7);
+    let models: Vec<Op> = (0..3).map(|k| random_model(&mut rng, &format!("m{k}"), 12)).collect();
     let mut w = raw.build();
-    // A fresh empty world: every chunk sees far.
-    assert!(w.chunks().iter().all(|&c| c != 0));
-    apply(
-        &mut w,
-        vec![
-            Op::DefineModel {
-                name: "dot".into(),
-                size: [1, 1, 1],
-                voxels: vec![[0, 0, 0, 1]],
-            },
-            Op::SpawnEntity {
-                id: 0,
-                model: "dot".into(),
-                pos: [100.25, 20.5, 30.75],
-                rot: [0.0, 0.0, 0.0, 1.0],
-            },
-        ],
-    );
-    let c = size.chunk_index([6, 1, 1]);
-    assert_ne!(w.chunk_entities()[c], 0);
-    assert_eq!(w.chunks()[c], 0, "an empty chunk with entities holds a zero AADF");
-    assert!(!w.is_quiescent());
-    assert_aadf_valid(&raw, &w, "after spawn");
-    w.grow_until_quiescent();
-    assert_aadf_valid(&raw, &w, "after growth");
-    assert_eq!(w.chunks()[c], 0);
-    let mut scratch = w.clone();
-    scratch.rebuild_chunk_aadf();
-    assert!(scratch.chunks() == w.chunks());
-    // Despawning frees the chunk again; growth brings back the empty world's fields.
-    apply(&mut w, vec![Op::DespawnEntity { id: 0 }]);
-    assert_eq!(w.chunk_entities()[c], 0);
+    apply(&mut w, models);
+    let spawns = (0..50)
+        .map(|id| Op::SpawnEntity {
+            id,
+            model: format!("m{}", id % 3),
+            pos: random_pos(&mut rng, size.voxels()),
+            rot: random_rot(&mut rng),
+        })
+        .collect();
+    let change = apply(&mut w, spawns).change;
+    assert!(change.quiescent && w.is_quiescent(), "spawning queues no growth");
+    assert_same_static(&w, &base, "after spawning");
+    for step in 0..20 {
+        let moves = (0..50)
+            .map(|_| Op::MoveEntity {
+                id: rng.below(50) as u32,
+                pos: random_pos(&mut rng, size.voxels()),
+                rot: random_rot(&mut rng),
+            })
+            .collect();
+        let change = apply(&mut w, moves).change;
+        // A move writes its entities' records and nothing else.
+        assert!(w.is_quiescent() && change.quiescent);
+        assert!(
+            change
+                .writes
+                .ranges()
+                .iter()
+                .all(|(id, _)| *id == naadf_world::digest::BufferId::EntityInstances)
+        );
+        assert_same_static(&w, &base, &format!("after move batch {step}"));
+        check_instance_buffer(&w);
+    }
+    apply(&mut w, (0..50).map(|id| Op::DespawnEntity { id }).collect());
     assert!(w.entity_instances().is_empty());
-    w.grow_until_quiescent();
-    let fresh = raw.build();
-    assert!(fresh.chunks() == w.chunks());
-    // Moves within the same chunks change no chunk AADF and queue no growth.
-    apply(
-        &mut w,
-        vec![Op::SpawnEntity {
-            id: 0,
-            model: "dot".into(),
-            pos: [100.25, 20.5, 30.75],
-            rot: [0.0, 0.0, 0.0, 1.0],
-        }],
-    );
-    w.grow_until_quiescent();
-    let chunks = w.chunks().to_vec();
-    let change = apply(
-        &mut w,
-        vec![Op::MoveEntity {
-            id: 0,
-            pos: [101.0, 21.0, 30.0],
-            rot: [0.0, 0.0, 0.0, 1.0],
-        }],
-    )
-    .change;
-    assert!(w.is_quiescent() && change.quiescent);
-    assert!(w.chunks() == chunks.as_slice());
-    assert_eq!(
-        change.writes.ranges().iter().map(|(id, _)| *id).collect::<Vec<_>>(),
-        vec![naadf_world::digest::BufferId::EntityInstances]
-    );
+    assert_same_static(&w, &base, "after despawning");
 }
 
 #[test]

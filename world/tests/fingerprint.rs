@@ -1,6 +1,6 @@
 //! Chunk fingerprints (`naadf_world::fingerprint`) against brute force: after each random
 //! batch, the chunks an update reports as changed are exactly those whose decoded voxels,
-//! entity records or those records' entity types differ, and the updated prints equal
+//! entity records (of entities over them) or those records' entity types differ, and the updated prints equal
 //! prints built from scratch.
 
 mod common;
@@ -8,18 +8,31 @@ mod common;
 use common::{Rng, random_world};
 use naadf_world::cell::CHUNK_VOXELS;
 use naadf_world::digest::BufferId;
-use naadf_world::entity::ENTITY_SOLID;
 use naadf_world::entity::pack::{InstanceRecord, RECORD_WORDS};
+use naadf_world::entity::{ENTITY_SOLID, chunk_range};
 use naadf_world::fingerprint::{ChunkChanges, ChunkPrints, stale_words};
 use naadf_world::material::MaterialKind;
 use naadf_world::ops::{Batch, Limits, Op};
 use naadf_world::{World, WorldSize};
 use std::ops::Range;
 
-/// What each chunk shows: its decoded materials, and its entity records each followed by
-/// its type's solid voxels.
+/// What each chunk shows: its decoded materials, and the records of the entities whose
+/// world boxes overlap it (found from the entity table's poses), each followed by its
+/// type's solid voxels.
 fn shown(w: &World) -> Vec<(Vec<u16>, Vec<u32>)> {
     let c = w.size().chunks();
+    let mut over: Vec<Vec<u32>> = vec![Vec::new(); w.size().chunk_count()];
+    for (&id, pose) in &w.entity_table().instances {
+        let size = w.models().get(&pose.model).unwrap().size();
+        let (lo, hi) = chunk_range(w.size(), size, pose.pos, pose.rot).unwrap();
+        for z in lo[2]..=hi[2] {
+            for y in lo[1]..=hi[1] {
+                for x in lo[0]..=hi[0] {
+                    over[w.size().chunk_index([x, y, z])].push(id);
+                }
+            }
+        }
+    }
     let mut out = Vec::new();
     for z in 0..c[2] {
         for y in 0..c[1] {
@@ -27,12 +40,9 @@ fn shown(w: &World) -> Vec<(Vec<u16>, Vec<u32>)> {
                 let mut voxels = vec![0u16; CHUNK_VOXELS];
                 w.decode_chunk([x, y, z], (&mut voxels[..]).try_into().unwrap());
                 let i = (x + c[0] * (y + c[1] * z)) as usize;
-                let field = w.chunk_entities()[i];
-                let (first, count) = ((field >> 8) as usize, (field & 0xFF) as usize);
                 let mut records = Vec::new();
-                for r in w.entity_instances()[first * RECORD_WORDS..(first + count) * RECORD_WORDS]
-                    .chunks_exact(RECORD_WORDS)
-                {
+                for &id in &over[i] {
+                    let r = &w.entity_instances()[id as usize * RECORD_WORDS..][..RECORD_WORDS];
                     records.extend_from_slice(r);
                     let t = InstanceRecord::unpack(r);
                     let start = t.voxel_start as usize * 64;

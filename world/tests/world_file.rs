@@ -6,6 +6,7 @@ use naadf_world::file::{self, FORMAT_VERSION, HEADER_LEN, MAGIC, TRAILER_LEN, Wo
 use naadf_world::hash::xxh3_64;
 use naadf_world::material::MaterialKind;
 use naadf_world::model::{Model, ModelTable};
+use naadf_world::ops::{Batch, Limits, Op};
 use naadf_world::{ChunkSource, Material, MaterialTable, World, WorldError, WorldSize};
 use proptest::prelude::*;
 use std::path::PathBuf;
@@ -232,10 +233,10 @@ fn entity_section(p: &WorldParts) -> Vec<u8> {
     out
 }
 
-/// The payload bytes of `p`, as FORMAT.md specifies them (version 2; version 1 has no
-/// entity section).
+/// The payload bytes of `p`, as FORMAT.md specifies them (versions 2 and 3 have the same
+/// sections; version 1 has no entity section).
 fn payload_of(p: &WorldParts) -> Vec<u8> {
-    payload_of_version(p, 2)
+    payload_of_version(p, 3)
 }
 
 fn payload_of_version(p: &WorldParts, version: u32) -> Vec<u8> {
@@ -296,7 +297,7 @@ fn the_file_matches_the_documented_layout() {
     assert_eq!((HEADER_LEN, TRAILER_LEN), (40, 8));
     let u32_at = |at: usize| u32::from_le_bytes(bytes[at..at + 4].try_into().unwrap());
     let u64_at = |at: usize| u64::from_le_bytes(bytes[at..at + 8].try_into().unwrap());
-    assert_eq!(u32_at(8), 2);
+    assert_eq!(u32_at(8), 3);
     assert_eq!(u32_at(12), 0);
     assert_eq!(u64_at(32), xxh3_64(&bytes[..32]));
     let frame = &bytes[40..bytes.len() - 8];
@@ -455,13 +456,13 @@ fn rejects_bad_magic() {
 #[test]
 fn rejects_other_versions() {
     let good = to_bytes(&small_world());
-    for v in [0u32, 3, 7, u32::MAX] {
+    for v in [0u32, 4, 7, u32::MAX] {
         let mut f = good.clone();
         f[8..12].copy_from_slice(&v.to_le_bytes());
         let msg = bad_file(from_bytes(&f));
         assert_eq!(
             msg,
-            format!("unsupported format version {v} (this build reads 1 and 2)")
+            format!("unsupported format version {v} (this build reads 1, 2 and 3)")
         );
         // Also with a header checksum that matches the new version.
         let own = xxh3_64(&f[..32]);
@@ -482,14 +483,59 @@ fn reads_version_1_files() {
     let back = from_bytes(&f).unwrap();
     assert_same(&back, &w);
     assert_eq!(back.digest(), w.digest());
-    // Written back, it is a version-2 file.
+    // Written back, it is a version-3 file.
     assert_eq!(to_bytes(&back), to_bytes(&w));
-    // A version-1 payload in a version-2 file is short by the entity section.
+    // A version-1 payload in a version-3 file is short by the entity section.
     let msg = bad_file(from_bytes(&file_around(&payload)));
     assert!(
         msg.contains("entities section") || msg.contains("declared payload"),
         "{msg}"
     );
+}
+
+/// A file in `version`'s header around `payload`.
+fn file_of_version(version: u32, payload: &[u8]) -> Vec<u8> {
+    let frame = zstd::stream::encode_all(payload, 3).unwrap();
+    let mut f = header(version, 0, payload.len() as u64, xxh3_64(payload));
+    f.extend_from_slice(&frame);
+    f.extend_from_slice(&xxh3_64(&frame).to_le_bytes());
+    f
+}
+
+#[test]
+fn reads_version_2_files_with_their_entities_lifted_out_of_the_static_world() {
+    // Version 2 listed entities per chunk and cut the chunk AADFs around them.
+    let mut w = small_world();
+    let batch = Batch {
+        ops: vec![
+            Op::DefineModel {
+                name: "crate".into(),
+                size: [3, 2, 3],
+                voxels: vec![[0, 0, 0, 1], [2, 1, 2, 2]],
+            },
+            Op::SpawnEntity {
+                id: 4,
+                model: "crate".into(),
+                pos: [20.25, 40.5, 30.0],
+                rot: [0.0, 0.38268343236508984, 0.0, 0.9238795325112867],
+            },
+        ],
+    };
+    w.apply(&batch, &Limits::default()).unwrap();
+    let mut old = w.to_parts();
+    let c = w.size().chunk_index([1, 2, 1]);
+    old.chunk_entities[c] = 1;
+    if old.chunks[c] >> 30 == 0 {
+        old.chunks[c] = 0;
+    }
+    let f = file_of_version(2, &payload_of_version(&old, 2));
+    let back = from_bytes(&f).unwrap();
+    // The entities carried over, the chunk entity buffer zero, the AADFs a fresh build's.
+    assert_same(&back, &w);
+    assert_eq!(back.entity_table(), w.entity_table());
+    assert!(back.chunk_entities().iter().all(|&v| v == 0));
+    // The same bytes in a version-3 file are refused: version 3 keeps the buffer zero.
+    assert!(bad_file(from_bytes(&file_around(&payload_of_version(&old, 3)))).contains("entity field"));
 }
 
 #[test]

@@ -8,12 +8,14 @@
 /// The logical storage buffers of group 0, in binding order, with their accessor names.
 pub const BUFFERS: [(&str, &str); 8] = [
     ("chunks", "chunk_word"),
-    ("chunk_entities", "chunk_entity_word"),
     ("blocks", "block_word"),
     ("voxels", "voxel_word"),
     ("materials", "material_word"),
     ("entity_types", "entity_type_word"),
     ("entity_instances", "instance_word"),
+    // The hierarchy over the instances' world boxes, derived from the instance buffer
+    // (naadf_world::entity::bvh), not mirrored.
+    ("entity_hierarchy", "hierarchy_word"),
     // The structure a comparison traversal walks instead of the world's hierarchy: the
     // dense grid, an SVO, an SVDAG or a hybrid format (whichever was uploaded last).
     ("structure", "structure_word"),

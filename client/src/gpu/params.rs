@@ -106,8 +106,8 @@ wgsl_struct! {
     pub struct WorldInfo {
         /// World size in voxels.
         pub size: [u32; 3],
-        /// 1 when some chunk lists entities.
-        pub has_entities: u32,
+        /// Slots of the instance buffer (records of 5 words; 0: no entity).
+        pub instance_slots: u32,
         /// World size in chunks.
         pub chunks: [u32; 3],
         /// Cells a ray may visit before it counts as a miss.

@@ -21,7 +21,7 @@ use super::bindings::{BUFFERS, Split};
 use super::params::{FrameInfo, GiInfo, LightInfo, WgslStruct, WorldInfo};
 use crate::light::{SURFACE_OFFSET, scatter, sky};
 use naadf_world::cell;
-use naadf_world::entity::{self, MAX_ENTITY_ID, pack};
+use naadf_world::entity::{self, MAX_ENTITY_ID, bvh, pack};
 use naadf_world::material::MaterialKind;
 use std::fmt::Write;
 
@@ -93,7 +93,7 @@ pub fn constants(list: &[(&str, WgslValue)]) -> String {
 
 /// The constants of the prelude by WGSL name, each the value of its Rust counterpart: the
 /// constant of the same name, or an enum's code.
-pub const CONSTANTS: [(&str, WgslValue); 34] = [
+pub const CONSTANTS: [(&str, WgslValue); 39] = [
     // Cells and voxels (naadf_world::cell).
     ("STATE_SHIFT", WgslValue::U32(cell::STATE_SHIFT)),
     ("STATE_EMPTY", WgslValue::U32(cell::STATE_EMPTY)),
@@ -109,11 +109,17 @@ pub const CONSTANTS: [(&str, WgslValue); 34] = [
     ("KIND_EMISSIVE", WgslValue::U32(MaterialKind::Emissive as u32)),
     ("KIND_METAL", WgslValue::U32(MaterialKind::Metal as u32)),
     ("KIND_MIRROR", WgslValue::U32(MaterialKind::Mirror as u32)),
-    // Entity types and chunk-instance records (naadf_world::entity).
+    // Entity types and instance records (naadf_world::entity).
     ("ENTITY_SOLID", WgslValue::U32(entity::ENTITY_SOLID)),
     ("TYPE_ALIGN", WgslValue::U32(entity::TYPE_ALIGN as u32)),
     ("RECORD_WORDS", WgslValue::U32(pack::RECORD_WORDS as u32)),
     ("NO_ENTITY", WgslValue::U32(NO_ENTITY)),
+    // The instance hierarchy (naadf_world::entity::bvh).
+    ("NODE_WORDS", WgslValue::U32(bvh::NODE_WORDS as u32)),
+    ("BVH_STACK", WgslValue::U32(bvh::STACK as u32)),
+    ("BVH_LEAF", WgslValue::U32(bvh::LEAF)),
+    ("BVH_NONE", WgslValue::U32(bvh::NO_CHILD)),
+    ("BVH_FAR", WgslValue::F32(bvh::FAR)),
     // The light model (crate::light): how far a scattered ray starts off its surface, the
     // scattering's smallest roughness, and the physical sky (light/sky.rs).
     ("SURFACE_OFFSET", WgslValue::F32(SURFACE_OFFSET as f32)),

@@ -19,26 +19,31 @@ use super::params::WorldInfo;
 use super::traversal::Traversal;
 use naadf_world::baselines::{Hybrid, Svdag, Svo};
 use naadf_world::digest::{BufferId, Digest, PAGE_BYTES, digest_of};
+use naadf_world::entity::pack::RECORD_WORDS;
 use naadf_world::fingerprint::{ChunkChanges, ChunkPrints, stale_words};
 use naadf_world::traverse::{DEFAULT_MAX_STEPS, Method};
 use naadf_world::{World, WorldError};
 use std::collections::VecDeque;
 
 /// The digested buffers that live on the GPU, in the binding order of the world's buffers
-/// (`BUFFERS`; the model table is not a GPU buffer; the eighth binding, the comparison
-/// structure, is not digested).
-pub const GPU_BUFFERS: [BufferId; 7] = [
+/// (`BUFFERS`). The model table and the chunk entity buffer (all zero: entities live
+/// outside the static world) are not GPU buffers; the last two bindings, the instance
+/// hierarchy and the comparison structure, are derived and not digested.
+pub const GPU_BUFFERS: [BufferId; 6] = [
     BufferId::Chunks,
-    BufferId::ChunkEntities,
     BufferId::Blocks,
     BufferId::Voxels,
     BufferId::Materials,
     BufferId::EntityTypes,
     BufferId::EntityInstances,
 ];
+/// The logical buffer of the instance hierarchy ([`World::entity_hierarchy_words`]).
+const HIERARCHY: usize = 6;
 /// The logical buffer of the comparison structure (dense grid, SVO, SVDAG or hybrid
 /// format).
 const STRUCTURE: usize = 7;
+/// The digested buffers that are not on the GPU: its digest takes them from the world.
+const HOST_BUFFERS: [BufferId; 2] = [BufferId::Models, BufferId::ChunkEntities];
 /// Smallest part (and page) size in words: parts never split a 64 KiB page.
 const MIN_PART_WORDS: u64 = (PAGE_BYTES / 4) as u64;
 /// The most storage buffers a pass other than the GI's binds besides the world's: the TAA
@@ -194,6 +199,7 @@ impl GpuWorld {
     fn sync_pages(&mut self, world: &World) -> Result<Upload, GpuError> {
         let mut up = Upload::default();
         let mut stale = Vec::with_capacity(GPU_BUFFERS.len());
+        let instances_before = self.buffers[GPU_BUFFERS.len() - 1].hashes.clone();
         for (k, &id) in GPU_BUFFERS.iter().enumerate() {
             let len = world.buffer_len(id) as u64;
             up.reallocated |= self.reserve(k, len)?;
@@ -217,10 +223,22 @@ impl GpuWorld {
             b.hashes = hashes.to_vec();
             b.len = len;
         }
+        // The hierarchy follows the instance buffer: rebuilt and uploaded whole when it
+        // changed.
+        if world.page_hashes(BufferId::EntityInstances) != instances_before.as_slice() {
+            let words = world.entity_hierarchy_words();
+            let bytes: &[u8] = bytemuck::cast_slice(&words);
+            up.reallocated |= self.reserve(HIERARCHY, bytes.len() as u64)?;
+            for (i, page) in bytes.chunks(PAGE_BYTES).enumerate() {
+                self.write(HIERARCHY, (i * PAGE_BYTES) as u64, page);
+            }
+            up.bytes += bytes.len() as u64;
+            self.buffers[HIERARCHY].len = bytes.len() as u64;
+        }
         let size = world.size();
         let info = WorldInfo {
             size: size.voxels(),
-            has_entities: u32::from(!world.entity_instances().is_empty()),
+            instance_slots: (world.entity_instances().len() / RECORD_WORDS) as u32,
             chunks: size.chunks(),
             max_steps: self.world_info.max_steps,
         };
@@ -381,10 +399,13 @@ impl GpuWorld {
     }
 
     /// The digest of the device copy: every GPU buffer read back, combined (as
-    /// [`World::digest`] combines them) with `world`'s model table, which is not a GPU
-    /// buffer. Equal to `world.digest()` exactly when the device holds `world`'s buffers.
+    /// [`World::digest`] combines them) with `world`'s model table and chunk entity buffer,
+    /// which are not GPU buffers. Equal to `world.digest()` exactly when the device holds
+    /// `world`'s buffers.
     pub fn digest(&self, gpu: &Gpu, world: &World) -> Result<Digest, GpuError> {
-        let mut d = digest_of(BufferId::Models, &world.buffer_bytes(BufferId::Models));
+        let mut d = HOST_BUFFERS
+            .iter()
+            .fold(Digest::default(), |d, &id| d ^ digest_of(id, &world.buffer_bytes(id)));
         for id in GPU_BUFFERS {
             d = d ^ digest_of(id, &self.read_back(gpu, id)?);
         }

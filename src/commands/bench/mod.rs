@@ -11,6 +11,7 @@ mod flood;
 mod frames;
 mod gi;
 mod gpu;
+mod moves;
 mod paper;
 mod plot;
 mod shared;
@@ -30,6 +31,9 @@ pub enum Bench {
     Edit(edit::EditArgs),
     /// The server under load: join, rejoin, edit latency with many mirrors, wire bytes.
     Stream(stream::StreamArgs),
+    /// Entity moves under load: `MoveEntities` calls of many entities each, latency to many
+    /// mirrors, and the bytes of a move in both delta forms.
+    Moves(moves::MovesArgs),
     /// Fan-out through relays: edit→received latency and the server's cost per client, with
     /// every client, relay and the server a process of its own.
     Fanout(fanout::FanoutArgs),
@@ -57,6 +61,7 @@ pub fn run(b: Bench) -> Result<()> {
         Bench::Build(a) => build::run(a),
         Bench::Edit(a) => edit::run(a),
         Bench::Stream(a) => stream::run(a),
+        Bench::Moves(a) => moves::run(a),
         Bench::Fanout(a) => fanout::run(a),
         Bench::FanoutClient(a) => fanout::client(a),
         Bench::Flood(a) => flood::run(a),

@@ -55,21 +55,22 @@ struct JoinReport {
     rejoin_ratio: f64,
 }
 
+/// One latency run ([`latency_run`]).
 #[derive(Serialize)]
-struct LatencyReport {
+pub(super) struct LatencyReport {
     clients: usize,
     edits: usize,
     rate: u32,
-    p50_ms: f64,
-    p99_ms: f64,
-    max_ms: f64,
+    pub(super) p50_ms: f64,
+    pub(super) p99_ms: f64,
+    pub(super) max_ms: f64,
     /// Edit sent → acknowledged (durable), the server's share of the latency.
-    ack_p50_ms: f64,
-    ack_p99_ms: f64,
-    incomplete: usize,
+    pub(super) ack_p50_ms: f64,
+    pub(super) ack_p99_ms: f64,
+    pub(super) incomplete: usize,
     /// CPU time per edit by thread group, from the first edit sent until every mirror
     /// applied the last (`clients` holds every mirror).
-    cpu_per_edit: BTreeMap<String, UnitUsage>,
+    pub(super) cpu_per_edit: BTreeMap<String, UnitUsage>,
 }
 
 #[derive(Serialize)]
@@ -89,7 +90,7 @@ struct Report {
 /// It runs on a tokio runtime of its own, on its own threads: the in-process mirrors do
 /// milliseconds of CPU work per delta, and on a shared runtime they would hold up the
 /// server's tasks cooperatively, which remote clients never do.
-struct LocalServer {
+pub(super) struct LocalServer {
     bound: Bound,
     stop: Option<oneshot::Sender<()>>,
     thread: std::thread::JoinHandle<Result<()>>,
@@ -97,7 +98,7 @@ struct LocalServer {
 }
 
 impl LocalServer {
-    async fn start(world: World) -> Result<Self> {
+    pub(super) async fn start(world: World) -> Result<Self> {
         let data = tempfile::tempdir()?;
         let mut config = ServerConfig::new(data.path().join("data"));
         config.frontend.grpc = "127.0.0.1:0".parse()?;
@@ -133,11 +134,11 @@ impl LocalServer {
         })
     }
 
-    fn url(&self) -> String {
+    pub(super) fn url(&self) -> String {
         format!("http://{}", self.bound.grpc)
     }
 
-    async fn shutdown(mut self) -> Result<()> {
+    pub(super) async fn shutdown(mut self) -> Result<()> {
         if let Some(s) = self.stop.take() {
             let _ = s.send(());
         }
@@ -276,7 +277,7 @@ async fn edit(c: &Client, ops: String) -> Result<u64> {
 /// is: on the mirrors' runtime its requests and acknowledgements would queue behind their
 /// work on every delta, which a remote editor never does.
 pub(super) struct Editor {
-    client: Client,
+    pub(super) client: Client,
     /// Taken by `Drop`, which must not block inside the benchmark's runtime.
     rt: Option<tokio::runtime::Runtime>,
 }
@@ -395,80 +396,23 @@ pub fn run(a: StreamArgs) -> Result<()> {
         // Latency with N mirrors at a fixed edit rate (spheres of radius ≤ 8).
         let mut latency = Vec::new();
         for (run, &clients) in a.clients.iter().enumerate() {
-            let mut followers = Vec::new();
-            for _ in 0..clients {
-                followers.push(follow(&url, cache.clone()).await?);
-            }
-            for f in &mut followers {
-                f.wait_for(last).await?;
-            }
             let edits = (f64::from(a.rate) * a.seconds) as usize;
-            let cpu_before = Sample::now();
-            let start = tokio::time::Instant::now();
-            let mut sent = Vec::new();
             // Each run edits new places: repeating a run's edits would make them no-ops.
             let first = run * edits;
-            for k in first..first + edits {
-                tokio::time::sleep_until(start + Duration::from_secs_f64(k as f64 / f64::from(a.rate))).await;
-                let p = pts[(k * 7 + 3) % pts.len()];
-                let r = 1 + k % 8;
+            let pts = pts.clone();
+            let r = latency_run(&url, &cache, &editor, clients, a.rate, edits, &mut last, move |c, k| {
+                let p = pts[((first + k) * 7 + 3) % pts.len()];
+                let r = 1 + (first + k) % 8;
                 let ops = format!(
                     r#"{{"op":"sphere","center":[{},{},{}],"radius":{r},"material":{}}}"#,
                     p[0],
                     p[1],
                     p[2],
-                    (k % 3) * 2
+                    ((first + k) % 3) * 2
                 );
-                sent.push(editor.spawn(|c| async move {
-                    let t0 = Instant::now();
-                    edit(&c, ops).await.map(|v| (v, t0, t0.elapsed()))
-                }));
-            }
-            let mut sent_at = HashMap::new();
-            let mut acks = Vec::new();
-            for s in sent {
-                let (v, t0, ack) = s.await??;
-                sent_at.insert(v, t0);
-                acks.push(ack.as_secs_f64() * 1e3);
-                last = last.max(v);
-            }
-            acks.sort_by(f64::total_cmp);
-            for f in &mut followers {
-                f.wait_for(last).await?;
-            }
-            let cpu = Sample::now().per_unit_since(&cpu_before, edits as f64);
-            let mut done: HashMap<u64, Instant> = HashMap::new();
-            let mut incomplete = 0;
-            for f in followers {
-                let (_, times) = f.finish().await?;
-                let seen: HashMap<u64, Instant> = times.into_iter().collect();
-                for &v in sent_at.keys() {
-                    match seen.get(&v) {
-                        Some(&t) => {
-                            let e = done.entry(v).or_insert(t);
-                            *e = (*e).max(t);
-                        }
-                        None => incomplete += 1,
-                    }
-                }
-            }
-            let mut ms: Vec<f64> = sent_at
-                .iter()
-                .filter_map(|(v, t0)| done.get(v).map(|t| t.duration_since(*t0).as_secs_f64() * 1e3))
-                .collect();
-            ms.sort_by(f64::total_cmp);
-            let r = LatencyReport {
-                clients,
-                edits,
-                rate: a.rate,
-                p50_ms: percentile(&ms, 0.5),
-                p99_ms: percentile(&ms, 0.99),
-                max_ms: ms.last().copied().unwrap_or(f64::NAN),
-                ack_p50_ms: percentile(&acks, 0.5),
-                ack_p99_ms: percentile(&acks, 0.99),
-                incomplete,
-                cpu_per_edit: cpu,
-            };
+                async move { edit(&c, ops).await }
+            })
+            .await?;
             eprintln!(
                 "latency, {clients} clients: p50 {:.2} ms, p99 {:.2} ms, max {:.2} ms (acknowledged: p50 {:.2} ms, p99 {:.2} ms)",
                 r.p50_ms, r.p99_ms, r.max_ms, r.ack_p50_ms, r.ack_p99_ms
@@ -525,8 +469,92 @@ pub fn run(a: StreamArgs) -> Result<()> {
     })
 }
 
+/// Edit-to-every-mirror latency: `clients` mirrors join (from `cache`) and catch up to
+/// `last`; then `count` requests go out through `editor` at `rate` a second, request `k`
+/// sent by `request(client, k)`, which returns the version it made. Each version's latency
+/// runs from sending it to the last mirror applying it. `last` becomes the newest version.
+#[allow(clippy::too_many_arguments)]
+pub(super) async fn latency_run<F, Fut>(
+    url: &str,
+    cache: &Option<World>,
+    editor: &Editor,
+    clients: usize,
+    rate: u32,
+    count: usize,
+    last: &mut u64,
+    request: F,
+) -> Result<LatencyReport>
+where
+    F: Fn(Client, usize) -> Fut,
+    Fut: std::future::Future<Output = Result<u64>> + Send + 'static,
+{
+    let mut followers = Vec::new();
+    for _ in 0..clients {
+        followers.push(follow(url, cache.clone()).await?);
+    }
+    for f in &mut followers {
+        f.wait_for(*last).await?;
+    }
+    let cpu_before = Sample::now();
+    let start = tokio::time::Instant::now();
+    let mut sent = Vec::new();
+    for k in 0..count {
+        tokio::time::sleep_until(start + Duration::from_secs_f64(k as f64 / f64::from(rate))).await;
+        let fut = request(editor.client.clone(), k);
+        sent.push(editor.spawn(|_| async move {
+            let t0 = Instant::now();
+            fut.await.map(|v| (v, t0, t0.elapsed()))
+        }));
+    }
+    let mut sent_at = HashMap::new();
+    let mut acks = Vec::new();
+    for s in sent {
+        let (v, t0, ack) = s.await??;
+        sent_at.insert(v, t0);
+        acks.push(ack.as_secs_f64() * 1e3);
+        *last = (*last).max(v);
+    }
+    acks.sort_by(f64::total_cmp);
+    for f in &mut followers {
+        f.wait_for(*last).await?;
+    }
+    let cpu = Sample::now().per_unit_since(&cpu_before, count as f64);
+    let mut done: HashMap<u64, Instant> = HashMap::new();
+    let mut incomplete = 0;
+    for f in followers {
+        let (_, times) = f.finish().await?;
+        let seen: HashMap<u64, Instant> = times.into_iter().collect();
+        for &v in sent_at.keys() {
+            match seen.get(&v) {
+                Some(&t) => {
+                    let e = done.entry(v).or_insert(t);
+                    *e = (*e).max(t);
+                }
+                None => incomplete += 1,
+            }
+        }
+    }
+    let mut ms: Vec<f64> = sent_at
+        .iter()
+        .filter_map(|(v, t0)| done.get(v).map(|t| t.duration_since(*t0).as_secs_f64() * 1e3))
+        .collect();
+    ms.sort_by(f64::total_cmp);
+    Ok(LatencyReport {
+        clients,
+        edits: count,
+        rate,
+        p50_ms: percentile(&ms, 0.5),
+        p99_ms: percentile(&ms, 0.99),
+        max_ms: ms.last().copied().unwrap_or(f64::NAN),
+        ack_p50_ms: percentile(&acks, 0.5),
+        ack_p99_ms: percentile(&acks, 0.99),
+        incomplete,
+        cpu_per_edit: cpu,
+    })
+}
+
 /// "group 0.123 ms (wait 0.010 ms), ..." for a log line.
-fn describe(usage: &BTreeMap<String, UnitUsage>) -> String {
+pub(super) fn describe(usage: &BTreeMap<String, UnitUsage>) -> String {
     usage
         .iter()
         .map(|(g, u)| {

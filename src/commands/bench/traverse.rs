@@ -43,6 +43,9 @@ pub struct TraverseArgs {
     /// the entity cost, per traversal method; each round traces both ray sets.
     #[arg(long, default_value_t = 15)]
     rounds: u32,
+    /// Also write the world with the entities to this file (for `bench gpu` and `render`).
+    #[arg(long)]
+    save_entities: Option<PathBuf>,
     /// Print one JSON object.
     #[arg(long)]
     json: bool,
@@ -99,6 +102,10 @@ pub fn run(a: TraverseArgs) -> Result<()> {
     let with_entities = if a.entities > 0 {
         let mut crowded = world.clone();
         spawn_entities(&mut crowded, a.entities, a.seed, a.placement == "air")?;
+        report_instances(&crowded)?;
+        if let Some(path) = &a.save_entities {
+            naadf_world::file::save(&crowded, path)?;
+        }
         // The same rays as the plain run, so that the difference is the entities' cost.
         let (report, _) = measure(&crowded, &a, Some(secondary.clone()))?;
         let primary = primary_rays(&fixed_cameras(world.size()), a.width, a.height);
@@ -240,6 +247,49 @@ fn print_report(prefix: &str, r: &TraverseReport) {
 
 /// Spawns `n` 8³ entities (a hollow box) at random poses, in one batch: on the ground
 /// (found with a downward ray per column) or, with `air`, at random heights.
+/// What the entities cost outside the ray loop: the hierarchy's size, and the time a batch
+/// moving every entity takes to apply (which rebuilds the instance buffer and the
+/// hierarchy), the median of 5 on a copy.
+fn report_instances(world: &World) -> Result<()> {
+    let words = world.entity_hierarchy_words();
+    let mut copy = world.clone();
+    let mut times = Vec::new();
+    for round in 0..5 {
+        let moves = copy
+            .entity_table()
+            .instances
+            .iter()
+            .map(|(&id, p)| Op::MoveEntity {
+                id,
+                pos: [p.pos[0] + if round % 2 == 0 { 0.5 } else { -0.5 }, p.pos[1], p.pos[2]],
+                rot: p.rot,
+            })
+            .collect::<Vec<_>>();
+        let n = moves.len();
+        let t = std::time::Instant::now();
+        copy.apply(
+            &Batch { ops: moves },
+            &Limits {
+                max_ops: n,
+                ..Limits::default()
+            },
+        )?;
+        times.push(t.elapsed().as_secs_f64() * 1e3);
+    }
+    times.sort_by(f64::total_cmp);
+    eprintln!(
+        "instances: {} in the instance buffer ({} B), hierarchy of {} nodes ({} B); a batch moving all: {:.2} ms (median of 5; {:.2}…{:.2})",
+        world.entity_table().instances.len(),
+        world.entity_instances().len() * 4,
+        words.len() / naadf_world::entity::bvh::NODE_WORDS,
+        words.len() * 4,
+        times[2],
+        times[0],
+        times[4]
+    );
+    Ok(())
+}
+
 fn spawn_entities(world: &mut World, n: u32, seed: u64, air: bool) -> Result<()> {
     let model = entity_model_op();
     let s = world.size().voxels().map(f64::from);

@@ -50,7 +50,7 @@ impl World {
             Some(p) => p.count(a, b) > 0,
             None => local.iter().any(|o| (0..3).all(|k| a[k] <= o[k] && o[k] < b[k])),
         };
-        let (chunks, entities) = (&self.chunks, &self.chunk_entities);
+        let chunks = &self.chunks;
         let layer = |z: u32| {
             let mut out = Vec::new();
             for y in lo[1]..hi[1] {
@@ -58,7 +58,7 @@ impl World {
                     let p = [x, y, z];
                     let i = size.chunk_index(p);
                     let c = chunks[i];
-                    if c == 0 || !chunk_is_free(c, entities[i]) {
+                    if c == 0 || !chunk_is_free(c) {
                         continue;
                     }
                     let f = Aadf::unpack(c, CHUNK_FIELD_BITS);
@@ -101,7 +101,7 @@ mod tests {
     fn brute_force(w: &World, origins: &[usize]) -> Vec<usize> {
         let size = w.size();
         (0..size.chunk_count())
-            .filter(|&i| w.chunks()[i] != 0 && chunk_is_free(w.chunks()[i], w.chunk_entities()[i]))
+            .filter(|&i| w.chunks()[i] != 0 && chunk_is_free(w.chunks()[i]))
             .filter(|&i| {
                 let f = Aadf::unpack(w.chunks()[i], CHUNK_FIELD_BITS);
                 let p = size.chunk_coords(i).map(i64::from);

@@ -28,7 +28,6 @@ pub use writes::Writes;
 
 pub use crate::aadf::GrowthTask;
 use crate::aadf::{Growth, GrowthJob};
-use crate::cell::{self, State};
 use crate::digest::{BufferId, Digest};
 use crate::entity::{self, Entities, EntityTable};
 use crate::ops::{self, Batch, EditError, Limits};
@@ -117,7 +116,7 @@ impl World {
                 .unwrap_or(0);
             let e = self
                 .entities
-                .rebuild(table, &self.models, &models, self.size)
+                .rebuild(table, &self.models, &models)
                 .map_err(|e| EditError::Limit {
                     index,
                     op: batch.ops.get(index).map_or("batch", |o| o.name()),
@@ -142,13 +141,9 @@ impl World {
             self.models = models;
             w.push(BufferId::Models, 0, 0);
         }
-        // Chunks whose entity field changes; with the touched ones, those whose freedom
-        // (empty and without entities) may flip.
-        let fields = entities
-            .as_ref()
-            .map_or_else(Vec::new, |e| field_changes(&self.entities.occupied, &e.occupied));
+        // The touched chunks, whose freedom (empty) may flip. Entities never touch the
+        // static world.
         let mut check: Vec<usize> = touched.iter().map(|t| t.index).collect();
-        check.extend(fields.iter().map(|&(c, _)| c as usize));
         check.sort_unstable();
         check.dedup();
         let was_free: Vec<bool> = check.iter().map(|&i| self.chunk_is_free(i)).collect();
@@ -156,7 +151,7 @@ impl World {
             self.commit_chunk(t, &mut w).expect("validated batches commit");
         }
         if let Some(e) = entities {
-            self.install_entities(e, &fields, &mut w);
+            self.install_entities(e, &mut w);
         }
         let mut blocked = Vec::new();
         let mut changed = Vec::new();
@@ -186,20 +181,9 @@ impl World {
         })
     }
 
-    /// Replaces the entity state with a rebuilt one: the changed chunk entity fields
-    /// (`fields`), the instance and type buffers (only their changed words are recorded).
-    /// An empty chunk that holds entities gets a zero AADF: the traversal stops in it, and
-    /// growth never enters it.
-    fn install_entities(&mut self, e: Entities, fields: &[(u32, u32)], w: &mut Writes) {
-        for &(c, f) in fields {
-            let c = c as usize;
-            self.chunk_entities[c] = f;
-            w.push(BufferId::ChunkEntities, c, 1);
-            if f != 0 && cell::state(self.chunks[c]) == State::Empty && self.chunks[c] != 0 {
-                self.chunks[c] = 0;
-                w.push(BufferId::Chunks, c, 1);
-            }
-        }
+    /// Replaces the entity state with a rebuilt one: the instance and type buffers (only
+    /// their changed words are recorded).
+    fn install_entities(&mut self, e: Entities, w: &mut Writes) {
         diff_buffer(BufferId::EntityInstances, &self.entities.instances, &e.instances, w);
         diff_buffer(BufferId::EntityTypes, &self.entities.type_voxels, &e.type_voxels, w);
         self.entities = e;
@@ -262,7 +246,7 @@ impl World {
             if done {
                 break;
             }
-            done = job.step(size, &self.chunk_entities);
+            done = job.step(size);
         }
         if !done {
             return None;
@@ -284,7 +268,6 @@ impl World {
             size: self.size,
             seeds: self.growth.seeds.clone(),
             chunks: self.chunks.clone(),
-            entities: self.chunk_entities.clone(),
             job: None,
         })
     }
@@ -299,7 +282,7 @@ impl World {
 
     /// A job recomputing the region around the current seeds, on a copy of the chunks.
     fn new_growth_job(&self) -> GrowthJob {
-        GrowthJob::around(self.size, &self.growth.seeds, self.chunks.clone(), &self.chunk_entities)
+        GrowthJob::around(self.size, &self.growth.seeds, self.chunks.clone())
     }
 
     /// Publishes a converged job: its fields where the chunks are still free, clamped
@@ -399,42 +382,34 @@ impl World {
     }
 }
 
-/// The chunks whose entity field differs between two sorted `(chunk, field)` lists, with
-/// the new field (0 where the chunk lost its entities), ascending.
-fn field_changes(old: &[(u32, u32)], new: &[(u32, u32)]) -> Vec<(u32, u32)> {
-    let mut out = Vec::new();
-    let (mut i, mut j) = (0, 0);
-    while i < old.len() || j < new.len() {
-        let a = old.get(i).map_or(u32::MAX, |e| e.0);
-        let b = new.get(j).map_or(u32::MAX, |e| e.0);
-        if a < b {
-            out.push((a, 0));
-            i += 1;
-        } else if b < a {
-            out.push(new[j]);
-            j += 1;
-        } else {
-            if old[i].1 != new[j].1 {
-                out.push(new[j]);
-            }
-            i += 1;
-            j += 1;
-        }
-    }
-    out
-}
-
-/// Records the words of `old` that `new` changes (and a change of length) as one range.
+/// Records the words of `old` that `new` changes, and a change of length, as runs: a run
+/// absorbs a gap of up to [`BRIDGE`] unchanged words, which cost less than a run of its own
+/// (so a move of scattered entities writes just their records).
 fn diff_buffer(id: BufferId, old: &[u32], new: &[u32], w: &mut Writes) {
     if old == new {
         return;
     }
     let common = old.len().min(new.len());
-    let lo = (0..common).find(|&k| old[k] != new[k]).unwrap_or(common);
-    let hi = if old.len() != new.len() {
-        new.len()
-    } else {
-        (lo..common).rev().find(|&k| old[k] != new[k]).map_or(lo, |k| k + 1)
+    let mut run: Option<(usize, usize)> = None;
+    let mut extend = |k: usize, end: usize, w: &mut Writes| match run {
+        Some((s, e)) if k <= e + BRIDGE => run = Some((s, end)),
+        Some((s, e)) => {
+            w.push(id, s, e - s);
+            run = Some((k, end));
+        }
+        None => run = Some((k, end)),
     };
-    w.push(id, lo, hi.max(lo) - lo);
+    for k in (0..common).filter(|&k| old[k] != new[k]) {
+        extend(k, k + 1, w);
+    }
+    if old.len() != new.len() {
+        // The new tail (empty when the buffer shrank: the length alone changed).
+        extend(common, new.len(), w);
+    }
+    if let Some((s, e)) = run {
+        w.push(id, s, e - s);
+    }
 }
+
+/// Unchanged words a run of [`diff_buffer`] bridges.
+const BRIDGE: usize = 3;

@@ -80,9 +80,8 @@ pub(crate) fn slab(o: [f64; 3], inv_d: [f64; 3], lo: [f64; 3], hi: [f64; 3], t_l
     (first <= last).then_some(first)
 }
 
-/// Padding of [`Bounds`], in voxels: far above the rounding of the rotation, far below a
-/// voxel, so that the boxes only ever let more rays through to the exact test.
-const PAD: f64 = 1.0 / 64.0;
+/// Padding of [`Bounds`] ([`super::bvh::BOUNDS_PAD`]).
+const PAD: f64 = super::bvh::BOUNDS_PAD;
 
 /// The world box `(lo, hi)` of a grid of `size` whose origin corner is at `pos`, turned by
 /// the rotation `rot` (entity → world): the bounds of its eight corners.

@@ -1,38 +1,83 @@
-//! [`Bvh`]: a bounding-volume hierarchy over the entity instances' world boxes, built
-//! with binned SAH, so that a ray finds the instances it may hit without looking at the
-//! chunks it passes. Like [`super::bounds::Bounds`], it is derived on every machine from the
-//! instance records: neither mirrored nor digested, and it changes only the work a ray
-//! test takes, never its result.
+//! [`Bvh`]: a four-wide bounding-volume hierarchy over the entity instances' world boxes,
+//! through which every ray finds the instances it may hit (docs/NAADF.md §11). Like
+//! [`super::bounds::Bounds`], it is derived on every machine from the instance records:
+//! neither mirrored nor digested, and it changes only the work a ray test takes, never its
+//! result.
 //!
-//! The nodes are a flat array in depth-first order: an inner node's first child follows
-//! it, and it stores where its second child is; a leaf stores a run of `prims`.
-
-use super::bounds::slab;
+//! It is built in two steps. A binary tree is split top-down by the binned surface-area
+//! heuristic down to one instance per leaf (below [`SAH_DEPTH`] levels, at the median
+//! instead, which bounds the depth). Then every binary node's children and grandchildren
+//! become the children of one four-wide node, so a ray tests four boxes at once (as four
+//! lanes on the CPU) and visits half as many levels.
+//!
+//! The packed form ([`Bvh::words`], docs/FORMAT.md §5.10) is what the GPU walks, node by
+//! node of [`NODE_WORDS`] words: the children's boxes as `f32`, axis by axis (`lo.x` of the
+//! four children, then `hi.x`, `lo.y`, `hi.y`, `lo.z`, `hi.z`), then the four child
+//! references: [`LEAF`]` | slot` for an instance (its slot in the instance buffer), a node
+//! index, or [`NO_CHILD`]. Node 0 is the root. Boxes are rounded outward to `f32` and
+//! padded by [`F32_PAD`], so that a test in `f32` arithmetic never rejects a box the exact
+//! one would enter.
 
 /// An axis-aligned box `(lo, hi)`.
 pub type Aabb = ([f64; 3], [f64; 3]);
 
+/// Children per node.
+pub const WIDTH: usize = 4;
+/// Words of a packed node: six axis rows of four `f32`, then four child references.
+pub const NODE_WORDS: usize = 7 * WIDTH;
+/// A child reference's flag for an instance (the low bits are its slot).
+pub const LEAF: u32 = 0x8000_0000;
+/// An unused child slot (its box is the point [`FAR`] on every axis).
+pub const NO_CHILD: u32 = u32::MAX;
+/// Stack entries a traversal needs at most: each node popped pushes at most three more
+/// than it takes, over at most [`MAX_DEPTH`] levels.
+pub const STACK: usize = 64;
+/// Levels of four-wide nodes below the root at most (half the binary depth bound).
+pub const MAX_DEPTH: usize = (SAH_DEPTH + 14) / 2;
+// A traversal pops one node and pushes at most four, level by level.
+const _: () = assert!(3 * MAX_DEPTH < STACK);
+/// Binary levels split by the SAH; deeper runs are split at the median, so that the
+/// binary depth stays below `SAH_DEPTH + log2(16383)` and the stack bound holds.
+const SAH_DEPTH: usize = 24;
 /// Bins per axis of the SAH sweep.
 const BINS: usize = 16;
-/// Most primitives a leaf holds.
-const LEAF_MAX: usize = 4;
-/// The cost of visiting a node, relative to testing one primitive's box.
-const TRAVERSAL_COST: f64 = 1.0;
+/// Where unused child slots sit (beyond any ray's reach in the world), and the inverse
+/// direction component of an axis a ray does not move along.
+pub const FAR: f32 = 1e30;
+/// Padding of an instance's world and oriented boxes ([`super::bounds::Bounds`]), in voxels:
+/// far above the rounding of the rotation, far below a voxel, so that the boxes only ever
+/// let more rays through to the exact test.
+pub const BOUNDS_PAD: f64 = 1.0 / 64.0;
+/// Outward padding of the `f32` boxes, in voxels: far above what `f32` rounding of a
+/// position below 2^15 moves a plane (2^-9 voxel), so the `f32` test stays conservative.
+pub const F32_PAD: f32 = 1.0 / 64.0;
 
-/// One node: its box, and either its children (`count == 0`: the first child is the next
-/// node, the second is `index`) or its primitives (`prims[index..index + count]`).
+/// One four-wide node: its children's boxes, axis by axis, lane by lane, and references.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Node {
-    bounds: Aabb,
-    index: u32,
-    count: u32,
+    lo: [[f32; WIDTH]; 3],
+    hi: [[f32; WIDTH]; 3],
+    child: [u32; WIDTH],
 }
 
-/// A bounding-volume hierarchy over a list of boxes (primitive `i` is box `i`).
+const EMPTY_NODE: Node = Node {
+    lo: [[FAR; WIDTH]; 3],
+    hi: [[FAR; WIDTH]; 3],
+    child: [NO_CHILD; WIDTH],
+};
+
+/// A four-wide bounding-volume hierarchy over a list of boxes (primitive `i` is box `i`).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Bvh {
     nodes: Vec<Node>,
-    prims: Vec<u32>,
+}
+
+/// A node of the binary tree the four-wide one is made from.
+struct Binary {
+    bounds: Aabb,
+    /// The two children, or `None` for a leaf of one primitive (`prim`).
+    children: Option<(usize, usize)>,
+    prim: u32,
 }
 
 fn union(a: &Aabb, b: &Aabb) -> Aabb {
@@ -54,9 +99,29 @@ fn centre(b: &Aabb, axis: usize) -> f64 {
     0.5 * (b.0[axis] + b.1[axis])
 }
 
+/// The smaller of two lanes (`minps` on x86, unlike `f32::min`'s NaN rule; no NaN arises).
+#[inline(always)]
+fn lane_min(a: f32, b: f32) -> f32 {
+    if a < b { a } else { b }
+}
+
+#[inline(always)]
+fn lane_max(a: f32, b: f32) -> f32 {
+    if a > b { a } else { b }
+}
+
+/// `1/d` in `f32`, kept finite: an axis the ray does not move along gets ±[`FAR`], which
+/// puts every plane of it at ± far beyond the ray's reach unless the origin lies on it.
+#[inline]
+pub fn inverse_direction(d: [f64; 3]) -> [f32; 3] {
+    d.map(|v| {
+        let i = (1.0 / v) as f32;
+        if i.is_finite() { i } else { FAR.copysign(i) }
+    })
+}
+
 impl Bvh {
-    /// The hierarchy over `boxes`: each node split where the binned surface-area heuristic
-    /// says a ray pays least, until a split would cost more than testing the boxes.
+    /// The hierarchy over `boxes`.
     ///
     /// ```
     /// use naadf_world::entity::bvh::Bvh;
@@ -67,80 +132,197 @@ impl Bvh {
     /// }).collect();
     /// let bvh = Bvh::build(&boxes);
     /// let mut met = Vec::new();
-    /// // A ray along +z through the first box: it is found, with at most its leaf's others.
-    /// bvh.crossing([0.5, 0.5, -1.0], [f64::INFINITY, f64::INFINITY, 1.0], 0.0, 100.0, |i| met.push(i));
-    /// assert!(met.contains(&0) && met.len() <= 4);
+    /// // A ray along +z through the first box finds it alone.
+    /// bvh.crossing([0.5, 0.5, -1.0], [0.0, 0.0, 1.0], 0.0, 100.0, |i| met.push(i));
+    /// assert_eq!(met, [0]);
     /// ```
     pub fn build(boxes: &[Aabb]) -> Self {
-        let mut bvh = Bvh {
-            nodes: Vec::with_capacity(2 * boxes.len()),
-            prims: (0..boxes.len() as u32).collect(),
-        };
-        if !boxes.is_empty() {
-            bvh.split(boxes, 0, boxes.len());
+        let mut bvh = Bvh::default();
+        if boxes.is_empty() {
+            return bvh;
         }
+        let mut prims: Vec<u32> = (0..boxes.len() as u32).collect();
+        let mut tree = Vec::with_capacity(2 * boxes.len());
+        let root = split(&mut tree, boxes, &mut prims, 0);
+        bvh.widen(&tree, root);
         bvh
     }
 
-    /// Appends the node over `prims[start..end]` and, below it, its subtree.
-    fn split(&mut self, boxes: &[Aabb], start: usize, end: usize) {
-        let at = self.nodes.len();
-        let run = &self.prims[start..end];
-        let bounds = run.iter().fold(EMPTY, |b, &p| union(&b, &boxes[p as usize]));
-        self.nodes.push(Node {
-            bounds,
-            index: start as u32,
-            count: (end - start) as u32,
-        });
-        let n = end - start;
-        if n <= 1 {
-            return;
+    /// Appends the four-wide node made of binary node `at`'s children and grandchildren
+    /// (a leaf root is the one child of the root), and below it their subtrees; returns
+    /// its index.
+    fn widen(&mut self, tree: &[Binary], at: usize) -> u32 {
+        let index = self.nodes.len();
+        self.nodes.push(EMPTY_NODE);
+        let mut lanes: smallvec::SmallVec<[usize; WIDTH]> = smallvec::SmallVec::new();
+        match tree[at].children {
+            None => lanes.push(at),
+            Some((a, b)) => {
+                for c in [a, b] {
+                    match tree[c].children {
+                        Some((x, y)) => lanes.extend([x, y]),
+                        None => lanes.push(c),
+                    }
+                }
+            }
         }
-        let Some(cut) = best_cut(boxes, run) else {
-            return;
-        };
-        // A small run stays one leaf unless visiting two children and testing their boxes
-        // costs less than testing its own.
-        let split_cost = 2.0 * TRAVERSAL_COST + cut.cost / half_area(&bounds).max(f64::MIN_POSITIVE);
-        if n <= LEAF_MAX && split_cost >= n as f64 {
-            return;
+        for (lane, &c) in lanes.iter().enumerate() {
+            let (lo, hi) = tree[c].bounds;
+            let child = match tree[c].children {
+                None => LEAF | tree[c].prim,
+                Some(_) => self.widen(tree, c),
+            };
+            let node = &mut self.nodes[index];
+            for a in 0..3 {
+                node.lo[a][lane] = outward(lo[a], false);
+                node.hi[a][lane] = outward(hi[a], true);
+            }
+            node.child[lane] = child;
         }
-        // The cut leaves primitives on both sides ([`best_cut`] skips empty ones).
-        let (lower, upper): (Vec<u32>, Vec<u32>) = run
-            .iter()
-            .partition(|&&p| bin_of(centre(&boxes[p as usize], cut.axis), cut.lo, cut.hi) < cut.bin);
-        let mid = start + lower.len();
-        self.prims[start..mid].copy_from_slice(&lower);
-        self.prims[mid..end].copy_from_slice(&upper);
-        self.nodes[at].count = 0;
-        self.split(boxes, start, mid);
-        self.nodes[at].index = self.nodes.len() as u32;
-        self.split(boxes, mid, end);
+        index as u32
     }
 
-    /// Calls `visit` once with every primitive whose box the ray `o + t·d` (`inv_d` = 1/d per
-    /// axis) is inside at some `t` in `[t_lo, t_hi]`, in no particular order, and with the
-    /// others of the leaves those are in (a leaf's boxes are not tested one by one: the
-    /// caller tests each primitive exactly anyway).
-    pub fn crossing(&self, o: [f64; 3], inv_d: [f64; 3], t_lo: f64, t_hi: f64, mut visit: impl FnMut(u32)) {
+    /// Calls `visit` once with every primitive whose box the ray `o + t·d` is inside at
+    /// some `t` in `[t_lo, t_hi]`, in no particular order, and perhaps with a few more
+    /// whose boxes it passes within [`F32_PAD`] (the caller tests each exactly anyway).
+    /// Boxes are tested in `f32`, four at a time.
+    pub fn crossing(&self, o: [f64; 3], d: [f64; 3], t_lo: f64, t_hi: f64, mut visit: impl FnMut(u32)) {
         if self.nodes.is_empty() {
             return;
         }
-        let mut stack: smallvec::SmallVec<[u32; 32]> = smallvec::smallvec![0];
-        while let Some(i) = stack.pop() {
-            let node = &self.nodes[i as usize];
-            if slab(o, inv_d, node.bounds.0, node.bounds.1, t_lo, t_hi).is_none() {
-                continue;
+        let o = o.map(|v| v as f32);
+        let inv = inverse_direction(d);
+        // The window in f32, widened by more than its rounding.
+        let (t_lo, t_hi) = ((t_lo as f32) - 1e-3, (t_hi as f32) * (1.0 + 1e-6) + 1e-3);
+        let mut stack = [0u32; STACK];
+        let mut sp = 1;
+        while sp > 0 {
+            sp -= 1;
+            let n = &self.nodes[stack[sp] as usize];
+            let mut near = [t_lo; WIDTH];
+            let mut far = [t_hi; WIDTH];
+            for a in 0..3 {
+                for l in 0..WIDTH {
+                    let t0 = (n.lo[a][l] - o[a]) * inv[a];
+                    let t1 = (n.hi[a][l] - o[a]) * inv[a];
+                    near[l] = lane_max(near[l], lane_min(t0, t1));
+                    far[l] = lane_min(far[l], lane_max(t0, t1));
+                }
             }
-            if node.count > 0 {
-                let run = &self.prims[node.index as usize..(node.index + node.count) as usize];
-                run.iter().for_each(|&p| visit(p));
-            } else {
-                stack.push(node.index);
-                stack.push(i + 1);
+            for l in 0..WIDTH {
+                let c = n.child[l];
+                if near[l] > far[l] || c == NO_CHILD {
+                    continue;
+                }
+                if c & LEAF != 0 {
+                    visit(c & !LEAF);
+                } else {
+                    stack[sp] = c;
+                    sp += 1;
+                }
             }
         }
     }
+
+    /// The packed nodes (see the module docs), with each leaf's primitive `k` replaced by
+    /// `slot_of[k]`.
+    pub fn words(&self, slot_of: &[u32]) -> Vec<u32> {
+        let mut out = Vec::with_capacity(self.nodes.len() * NODE_WORDS);
+        for n in &self.nodes {
+            for a in 0..3 {
+                out.extend(n.lo[a].map(f32::to_bits));
+                out.extend(n.hi[a].map(f32::to_bits));
+            }
+            out.extend(n.child.map(|c| {
+                if c != NO_CHILD && c & LEAF != 0 {
+                    LEAF | slot_of[(c & !LEAF) as usize]
+                } else {
+                    c
+                }
+            }));
+        }
+        out
+    }
+
+    /// Nodes in the hierarchy.
+    pub fn node_count(&self) -> usize {
+        self.nodes.len()
+    }
+}
+
+/// `v` as `f32`, rounded outward (up for an upper bound) and padded by [`F32_PAD`].
+fn outward(v: f64, up: bool) -> f32 {
+    let p = if up {
+        v + f64::from(F32_PAD)
+    } else {
+        v - f64::from(F32_PAD)
+    };
+    let f = p as f32;
+    if up && f64::from(f) < p {
+        f.next_up()
+    } else if !up && f64::from(f) > p {
+        f.next_down()
+    } else {
+        f
+    }
+}
+
+/// Appends the binary subtree over `prims` (reordering them) and returns its root; `depth`
+/// is the level of that root.
+fn split(tree: &mut Vec<Binary>, boxes: &[Aabb], prims: &mut [u32], depth: usize) -> usize {
+    let bounds = prims.iter().fold(EMPTY, |b, &p| union(&b, &boxes[p as usize]));
+    if let [p] = prims {
+        tree.push(Binary {
+            bounds,
+            children: None,
+            prim: *p,
+        });
+        return tree.len() - 1;
+    }
+    let cut = if depth < SAH_DEPTH {
+        best_cut(boxes, prims)
+    } else {
+        None
+    };
+    let mid = match cut {
+        // The cut leaves primitives on both sides ([`best_cut`] skips empty ones).
+        Some(cut) => {
+            let (lower, upper): (Vec<u32>, Vec<u32>) = prims
+                .iter()
+                .partition(|&&p| bin_of(centre(&boxes[p as usize], cut.axis), cut.lo, cut.hi) < cut.bin);
+            prims[..lower.len()].copy_from_slice(&lower);
+            prims[lower.len()..].copy_from_slice(&upper);
+            lower.len()
+        }
+        None => median(boxes, prims),
+    };
+    let (lower, upper) = prims.split_at_mut(mid);
+    let a = split(tree, boxes, lower, depth + 1);
+    let b = split(tree, boxes, upper, depth + 1);
+    tree.push(Binary {
+        bounds,
+        children: Some((a, b)),
+        prim: 0,
+    });
+    tree.len() - 1
+}
+
+/// Orders `prims` by their centres along the axis where those spread most (ties by
+/// index) and returns the middle.
+fn median(boxes: &[Aabb], prims: &mut [u32]) -> usize {
+    let axis = (0..3)
+        .max_by(|&a, &b| {
+            let (la, ha) = centre_range(boxes, prims, a);
+            let (lb, hb) = centre_range(boxes, prims, b);
+            (ha - la).total_cmp(&(hb - lb))
+        })
+        .unwrap_or(0);
+    prims.sort_unstable_by(|&p, &q| {
+        centre(&boxes[p as usize], axis)
+            .total_cmp(&centre(&boxes[q as usize], axis))
+            .then(p.cmp(&q))
+    });
+    prims.len() / 2
 }
 
 /// The range of the primitives' centres along `axis`.
@@ -219,6 +401,7 @@ fn best_cut(boxes: &[Aabb], run: &[u32]) -> Option<Cut> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::entity::bounds::slab;
     use proptest::prelude::*;
 
     fn boxes_strategy() -> impl Strategy<Value = Vec<Aabb>> {
@@ -244,17 +427,56 @@ mod tests {
             .prop_filter("a direction", |(_, d)| d.iter().any(|&v| v != 0.0))
     }
 
+    /// Every node's subtree: the primitives below it, each lane's box holding its child's.
+    fn check(bvh: &Bvh, boxes: &[Aabb], i: usize, depth: usize, seen: &mut [u32]) -> usize {
+        let n = bvh.nodes[i];
+        let mut deepest = depth;
+        for l in 0..WIDTH {
+            let c = n.child[l];
+            if c == NO_CHILD {
+                continue;
+            }
+            let inner = if c & LEAF != 0 {
+                seen[(c & !LEAF) as usize] += 1;
+                boxes[(c & !LEAF) as usize]
+            } else {
+                deepest = deepest.max(check(bvh, boxes, c as usize, depth + 1, seen));
+                subtree_box(bvh, boxes, c as usize)
+            };
+            for a in 0..3 {
+                assert!(f64::from(n.lo[a][l]) <= inner.0[a] - f64::from(F32_PAD) * 0.99);
+                assert!(f64::from(n.hi[a][l]) >= inner.1[a] + f64::from(F32_PAD) * 0.99);
+            }
+        }
+        deepest
+    }
+
+    fn subtree_box(bvh: &Bvh, boxes: &[Aabb], i: usize) -> Aabb {
+        bvh.nodes[i]
+            .child
+            .iter()
+            .filter(|&&c| c != NO_CHILD)
+            .fold(EMPTY, |b, &c| {
+                let inner = if c & LEAF != 0 {
+                    boxes[(c & !LEAF) as usize]
+                } else {
+                    subtree_box(bvh, boxes, c as usize)
+                };
+                union(&b, &inner)
+            })
+    }
+
     proptest! {
-        /// The hierarchy reports every box a brute-force slab test finds the ray inside
-        /// within the interval (rays parallel to axes and along faces included), each
-        /// primitive at most once.
+        /// The hierarchy reports every box a brute-force slab test in `f64` finds the ray
+        /// inside within the interval (rays parallel to axes and along faces included),
+        /// each primitive at most once.
         #[test]
         fn the_crossed_boxes_include_the_brute_force_ones(boxes in boxes_strategy(), (o, d) in ray_strategy(),
             t_lo in 0.0f64..50.0, len in 0.0f64..200.0) {
             let bvh = Bvh::build(&boxes);
             let inv_d = d.map(|v| 1.0 / v);
             let mut met = Vec::new();
-            bvh.crossing(o, inv_d, t_lo, t_lo + len, |p| met.push(p));
+            bvh.crossing(o, d, t_lo, t_lo + len, |p| met.push(p));
             met.sort_unstable();
             let once = met.windows(2).all(|w| w[0] < w[1]);
             prop_assert!(once, "{:?}", met);
@@ -265,34 +487,38 @@ mod tests {
             }
         }
 
-        /// Every primitive is in exactly one leaf, and every node's box holds its subtree's.
+        /// Every primitive is in exactly one leaf, every lane's box holds its subtree's
+        /// (padded), and the depth stays within the bound the GPU's stack is sized for.
         #[test]
         fn the_hierarchy_is_well_formed(boxes in boxes_strategy()) {
             let bvh = Bvh::build(&boxes);
             let mut seen = vec![0u32; boxes.len()];
-            fn check(bvh: &Bvh, boxes: &[Aabb], i: usize, seen: &mut [u32]) -> Aabb {
-                let n = bvh.nodes[i];
-                let inner = if n.count > 0 {
-                    bvh.prims[n.index as usize..(n.index + n.count) as usize].iter().fold(EMPTY, |b, &p| {
-                        seen[p as usize] += 1;
-                        union(&b, &boxes[p as usize])
-                    })
-                } else {
-                    union(&check(bvh, boxes, i + 1, seen), &check(bvh, boxes, n.index as usize, seen))
-                };
-                assert!((0..3).all(|k| n.bounds.0[k] <= inner.0[k] && inner.1[k] <= n.bounds.1[k]));
-                inner
-            }
             if !boxes.is_empty() {
-                check(&bvh, &boxes, 0, &mut seen);
+                prop_assert!(check(&bvh, &boxes, 0, 0, &mut seen) <= MAX_DEPTH);
             }
             prop_assert!(seen.iter().all(|&s| s == 1));
         }
     }
 
+    /// Degenerate inputs (every box the same, or in one long row) keep the depth bound.
+    #[test]
+    fn degenerate_inputs_keep_the_depth_bound() {
+        for boxes in [
+            vec![([1.0; 3], [2.0; 3]); 16383],
+            (0..16383)
+                .map(|i| ([f64::from(i).powi(2); 3], [f64::from(i).powi(2) + 1.0; 3]))
+                .collect(),
+        ] {
+            let bvh = Bvh::build(&boxes);
+            let mut seen = vec![0u32; boxes.len()];
+            assert!(check(&bvh, &boxes, 0, 0, &mut seen) <= MAX_DEPTH);
+            assert!(seen.iter().all(|&s| s == 1));
+        }
+    }
+
     /// Scattered boxes give a hierarchy that a short ray walks in a few nodes, not all.
     #[test]
-    fn a_ray_visits_few_nodes_among_many_boxes() {
+    fn a_ray_finds_just_the_boxes_it_crosses_among_many() {
         let boxes: Vec<Aabb> = (0..1000)
             .map(|i| {
                 let lo = [
@@ -304,16 +530,25 @@ mod tests {
             })
             .collect();
         let bvh = Bvh::build(&boxes);
-        assert!(bvh.nodes.len() < 1000, "{} nodes", bvh.nodes.len());
+        assert!(bvh.node_count() < 600, "{} nodes", bvh.node_count());
         let mut met = Vec::new();
-        bvh.crossing(
-            [1.0, 1.0, -10.0],
-            [f64::INFINITY, f64::INFINITY, 1.0],
-            0.0,
-            1000.0,
-            |p| met.push(p),
-        );
+        bvh.crossing([1.0, 1.0, -10.0], [0.0, 0.0, 1.0], 0.0, 1000.0, |p| met.push(p));
         met.sort_unstable();
         assert_eq!(met, (0..10).map(|k| k * 100).collect::<Vec<u32>>());
+    }
+
+    /// The packed form is the nodes, word for word, with leaves mapped to slots.
+    #[test]
+    fn packed_nodes_map_leaves_to_slots() {
+        let boxes = vec![([0.0; 3], [1.0; 3]), ([5.0; 3], [6.0; 3])];
+        let bvh = Bvh::build(&boxes);
+        let w = bvh.words(&[7, 9]);
+        assert_eq!(w.len(), NODE_WORDS);
+        let mut refs = w[24..28].to_vec();
+        refs.sort_unstable();
+        assert_eq!(refs, [LEAF | 7, LEAF | 9, NO_CHILD, NO_CHILD]);
+        let lane = w[24..28].iter().position(|&c| c == LEAF | 9).unwrap();
+        assert_eq!(f32::from_bits(w[lane]), outward(5.0, false));
+        assert_eq!(f32::from_bits(w[4 + lane]), outward(6.0, true));
     }
 }

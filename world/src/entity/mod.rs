@@ -14,19 +14,21 @@
 //!   (unit quaternion `[x, y, z, w]`, local → world). The world keeps the **quantised**
 //!   pose, exactly what the packed record decodes to ([`pack::quantise_pose`]), so every CPU
 //!   test and every GPU mirror sees the same entity.
-//! - **Chunk lists**: an instance overlaps the chunks of its world AABB (the 8 rotated
-//!   corners of `[0, size]`, plus `pos`, padded by 1e-6 voxel against rounding), clipped to
-//!   the world. Each chunk with entities lists their ids ascending; identical lists are
-//!   stored once in the **instance buffer** as consecutive 5-word records
-//!   ([`pack::InstanceRecord`]), in ascending chunk order of first occurrence, and the
-//!   chunk's entity field is `(first record << 8) | count`. At most 255 entities per chunk.
-//!   The lists and the buffer are rebuilt from scratch after every batch that changes
-//!   entities or models, so they are a pure function of the entity table, the type order
-//!   and the models.
+//! - The **instance buffer** holds each instance's packed 5-word record
+//!   ([`pack::InstanceRecord`]) in the slot of its id (words `5·id .. 5·id + 5`); slots of
+//!   ids without an entity are zero, and the buffer ends after the highest id's record. It
+//!   is rebuilt after every batch that changes entities or models, so it is a pure
+//!   function of the entity table, the type order and the models; a move rewrites just its
+//!   entity's slot.
+//! - The static world knows nothing of entities (a deviation from the reference, docs/
+//!   NAADF.md §11): the chunk entity buffer stays zero and no distance field is cut around
+//!   an instance. Rays find instances through a hierarchy over their world boxes
+//!   ([`bvh::Bvh`]), which every machine derives from the instance buffer ([`set`]).
 
 pub(crate) mod bounds;
 pub mod bvh;
 pub mod pack;
+pub(crate) mod set;
 
 use crate::aadf::grid_aadf;
 use crate::cell::CHUNK_FIELD_BITS;
@@ -42,8 +44,6 @@ use std::collections::BTreeMap;
 
 /// Largest entity id (14 bits; `0x3FFF` means "no entity" on the GPU).
 pub const MAX_ENTITY_ID: u32 = 0x3FFE;
-/// Most entities listed in one chunk (8-bit count).
-pub const MAX_PER_CHUNK: usize = 255;
 /// Entity-type grids start at multiples of this many voxels.
 pub const TYPE_ALIGN: usize = 64;
 /// Padding of the world AABB of an instance, in voxels: absorbs rounding between the AABB
@@ -174,19 +174,10 @@ pub(crate) struct Entities {
     pub type_voxels: Vec<u32>,
     /// Per type: `voxelStart` (units of 64 voxels).
     pub type_starts: Vec<u32>,
-    /// The instance buffer: 5-word records.
+    /// The instance buffer: each instance's 5-word record in the slot of its id.
     pub instances: Vec<u32>,
-    /// Per record of `instances`: which instance it is (an index of `records`).
-    pub listed: Vec<u32>,
-    /// Per instance, in id order: its record (as the instance buffer's lists hold it).
-    pub records: Vec<[u32; RECORD_WORDS]>,
-    /// Per instance: its padded world and oriented boxes, and the hierarchy over the world
-    /// boxes. Derived on every machine from the records (not mirrored, not in the digest),
-    /// so that a ray finds and rejects most instances without transforming into them.
-    pub bounds: Vec<bounds::Bounds>,
-    pub bvh: bvh::Bvh,
-    /// Chunks with entities and their fields `(pointer << 8) | count`, ascending chunk.
-    pub occupied: Vec<(u32, u32)>,
+    /// What a ray test reads of the instances (derived from `instances`).
+    pub set: set::InstanceSet,
 }
 
 /// The voxels of an entity type made from `model`.
@@ -266,15 +257,15 @@ pub(crate) fn check_model(name: &str, model: &Model, materials: &MaterialTable) 
 }
 
 impl Entities {
-    /// Whether any chunk lists an entity (traversals test entities only then).
+    /// Whether there is any instance (traversals test entities only then).
     #[inline]
     pub fn present(&self) -> bool {
-        !self.instances.is_empty()
+        !self.set.is_empty()
     }
 
     /// Derives every buffer for `table` from scratch (types made from `models`).
-    pub fn build(table: EntityTable, models: &ModelTable, size: WorldSize) -> Result<Self, LayoutError> {
-        Self::default().rebuild(table, &ModelTable::default(), models, size)
+    pub fn build(table: EntityTable, models: &ModelTable) -> Result<Self, LayoutError> {
+        Self::default().rebuild(table, &ModelTable::default(), models)
     }
 
     /// Derives the buffers for `table` and `models`, reusing the grids of this state's
@@ -285,7 +276,6 @@ impl Entities {
         table: EntityTable,
         old_models: &ModelTable,
         models: &ModelTable,
-        size: WorldSize,
     ) -> Result<Self, LayoutError> {
         // Types, in order, each at a multiple of 64 voxels.
         let mut type_voxels = Vec::new();
@@ -317,11 +307,10 @@ impl Entities {
             type_starts.push(start as u32);
             type_of.insert(name, (start as u32, model.size()));
         }
-        // Per instance: its record and the chunks it overlaps.
-        let mut records: Vec<[u32; RECORD_WORDS]> = Vec::with_capacity(table.instances.len());
-        let mut record_bounds = Vec::with_capacity(table.instances.len());
-        let mut pairs: Vec<(u32, u32)> = Vec::new();
-        for (k, (&id, pose)) in table.instances.iter().enumerate() {
+        // Each instance's record, in the slot of its id.
+        let slots = table.instances.last_key_value().map_or(0, |(&id, _)| id as usize + 1);
+        let mut instances = vec![0u32; slots * RECORD_WORDS];
+        for (&id, pose) in &table.instances {
             let &(voxel_start, msize) = type_of
                 .get(pose.model.as_str())
                 .ok_or_else(|| LayoutError(format!("entity {id}: model '{}' has no entity type", pose.model)))?;
@@ -334,64 +323,14 @@ impl Entities {
                 pos: q.fixed,
                 inv_rot: q.inv_rot,
             };
-            records.push(record.pack());
-            record_bounds.push(bounds::Bounds::of(&record));
-            if let Some((lo, hi)) = chunk_range(size, msize, pose.pos, pose.rot) {
-                for z in lo[2]..=hi[2] {
-                    for y in lo[1]..=hi[1] {
-                        for x in lo[0]..=hi[0] {
-                            pairs.push((size.chunk_index([x, y, z]) as u32, k as u32));
-                        }
-                    }
-                }
-            }
+            instances[id as usize * RECORD_WORDS..][..RECORD_WORDS].copy_from_slice(&record.pack());
         }
-        // Per chunk, ascending; within a chunk, ascending id (= ascending k).
-        pairs.sort_unstable();
-        let mut instances: Vec<u32> = Vec::new();
-        let mut listed = Vec::new();
-        let mut occupied = Vec::new();
-        let mut lists: FxHashMap<Vec<u32>, u32> = FxHashMap::default();
-        for run in pairs.chunk_by(|a, b| a.0 == b.0) {
-            let chunk = run[0].0;
-            if run.len() > MAX_PER_CHUNK {
-                return Err(LayoutError(format!(
-                    "chunk {:?} would hold {} entities; at most {MAX_PER_CHUNK} fit in one chunk",
-                    size.chunk_coords(chunk as usize),
-                    run.len()
-                )));
-            }
-            let list: Vec<u32> = run.iter().map(|&(_, k)| k).collect();
-            let ptr = match lists.get(&list) {
-                Some(&p) => p,
-                None => {
-                    let p = (instances.len() / RECORD_WORDS) as u32;
-                    if p + run.len() as u32 > 1 << 24 {
-                        return Err(LayoutError(
-                            "the chunk instance lists need more than 2^24 records (24-bit pointers)".into(),
-                        ));
-                    }
-                    for &k in &list {
-                        instances.extend_from_slice(&records[k as usize]);
-                        listed.push(k);
-                    }
-                    lists.insert(list, p);
-                    p
-                }
-            };
-            occupied.push((chunk, ptr << 8 | run.len() as u32));
-        }
-        let boxes: Vec<bvh::Aabb> = record_bounds.iter().map(bounds::Bounds::world_box).collect();
         Ok(Entities {
             table,
             type_voxels,
             type_starts,
+            set: set::InstanceSet::of_buffer(&instances),
             instances,
-            listed,
-            records,
-            bvh: bvh::Bvh::build(&boxes),
-            bounds: record_bounds,
-            occupied,
         })
     }
 }

@@ -1,14 +1,12 @@
 //! Ray tests against entities (docs/NAADF.md §11), shared by every traversal method.
 //!
-//! The world loop of a method records the entity fields of the chunks it visits, up to
-//! its world hit or to where the ray leaves the world. Every method visits at least one
-//! cell of every non-free chunk the ray passes (chunks with entities are never free, so no
-//! AADF box covers them), so all methods record every instance that could be hit before
-//! the world hit (the hierarchy skips full chunks, where the world hit comes first). Then
-//! each listed instance is tested in its own frame with the decoded record:
+//! Entities live outside the static world: a method's world loop traces the static world
+//! with its full AADF jumps, up to its world hit or to where the ray leaves the world.
+//! Then the ray walks the hierarchy over the instances' world boxes ([`Bvh`], derived on
+//! every machine from the instance records) between the time it entered the world and
+//! that end, and each instance found is tested in its own frame with the decoded record:
 //! `o' = R⁻¹(o − pos)`, `d' = R⁻¹ d` (a rotation, so `t` is the world distance), by the
-//! same event-model DDA as the grid method ([`super::grid`]) over the entity's
-//! dense grid.
+//! same event-model DDA as the grid method ([`super::grid`]) over the entity's dense grid.
 //!
 //! An entity hit counts when the entity voxel is entered inside the world: at `t` no
 //! earlier than where the ray enters the world (parts of an entity outside the world are
@@ -16,60 +14,31 @@
 //! leaves the world. The nearest hit wins; among entity hits at the same `t`, the lowest
 //! id. An entity hit reports entity-local voxel and normal.
 //!
-//! The dense-grid method finds the instances another way: through the hierarchy over their
-//! world boxes ([`Bvh`]), the instances whose box the ray crosses between entering the
-//! world and its end, whatever chunks it passed. The traversal tests compare the methods on
-//! every ray, so the two ways of finding instances check each other.
-//!
 //! Each instance found is first tested against its padded world box and oriented box
-//! ([`Bounds`], derived on every machine from the records), which needs no transform and
-//! rejects most. The rest are tested in the order the ray enters their boxes, so that the
-//! first hit usually ends the search: once a box is entered after the best hit, so is every
-//! later one. Neither the box test nor the order changes the result, only the work.
+//! ([`Bounds`]), which needs no transform and rejects most. The rest are tested in the
+//! order the ray enters their boxes, so that the first hit usually ends the search: once
+//! a box is entered after the best hit, so is every later one. Neither the boxes, the
+//! hierarchy nor the order changes the result, only the work.
 
 use super::ray::{End, Hit, Ray, Visit, walk};
-use crate::entity::bounds::Bounds;
-use crate::entity::bvh::Bvh;
-use crate::entity::pack::{InstanceRecord, RECORD_WORDS, rotate};
+use crate::entity::pack::{InstanceRecord, rotate};
+use crate::entity::set::InstanceSet;
 use crate::entity::{ENTITY_SOLID, TYPE_ALIGN};
 use crate::world::World;
 use smallvec::SmallVec;
 
-/// The entity fields met by a world loop (each run of equal fields once). Most rays meet
-/// a few at most, so they stay on the stack.
-#[derive(Default)]
-pub(crate) struct Candidates {
-    fields: SmallVec<[u32; 8]>,
-}
-
-impl Candidates {
-    /// Records the entity field of a chunk the ray enters (0 = none).
-    #[inline]
-    pub fn push(&mut self, field: u32) {
-        if field != 0 && self.fields.last() != Some(&field) {
-            self.fields.push(field);
-        }
-    }
-}
-
-/// What a ray test reads: per record of the instance buffer's chunk lists, which instance
-/// it is; per instance, its record and boxes; the hierarchy over the world boxes; and the
-/// entity types' voxels.
+/// What a ray test reads: the instances (records, boxes and hierarchy) and the entity
+/// types' voxels.
 #[derive(Clone, Copy)]
 pub(crate) struct EntityView<'a> {
-    listed: &'a [u32],
-    records: &'a [[u32; RECORD_WORDS]],
-    bounds: &'a [Bounds],
-    bvh: &'a Bvh,
+    set: &'a InstanceSet,
     voxels: &'a [u32],
 }
 
-/// An owned copy of what the dense-grid method's ray test reads: the instances, their
-/// boxes and hierarchy, and the types' voxels (it finds instances through the hierarchy).
+/// An owned copy of what the ray test reads (for the dense-grid method, which owns its
+/// decode of the world).
 pub(crate) struct OwnedEntities {
-    records: Vec<[u32; RECORD_WORDS]>,
-    bounds: Vec<Bounds>,
-    bvh: Bvh,
+    set: InstanceSet,
     voxels: Vec<u32>,
 }
 
@@ -78,20 +47,15 @@ impl OwnedEntities {
     pub fn of(world: &World) -> Option<Self> {
         let v = world.entity_view()?;
         Some(OwnedEntities {
-            records: v.records.to_vec(),
-            bounds: v.bounds.to_vec(),
-            bvh: v.bvh.clone(),
+            set: v.set.clone(),
             voxels: v.voxels.to_vec(),
         })
     }
 
-    /// The copy, as the view the ray test reads (with no chunk lists).
+    /// The copy, as the view the ray test reads.
     pub fn view(&self) -> EntityView<'_> {
         EntityView {
-            listed: &[],
-            records: &self.records,
-            bounds: &self.bounds,
-            bvh: &self.bvh,
+            set: &self.set,
             voxels: &self.voxels,
         }
     }
@@ -99,55 +63,17 @@ impl OwnedEntities {
 
 impl<'a> EntityView<'a> {
     /// The final result of a trace: `world` (the world loop's hit, if any, ending at
-    /// `t_end`; else `t_end` is where the ray left the world), or a nearer entity hit among
-    /// the instances listed in `fields`. `t_entry` is when the ray entered the world and
-    /// `steps` the cells the world loop visited; the entity cells visited are added.
-    #[inline(always)]
-    pub fn resolve(
-        &self,
-        ray: &Ray,
-        world: Option<Hit>,
-        t_entry: f64,
-        t_end: f64,
-        steps: u32,
-        fields: &Candidates,
-    ) -> Option<Hit> {
-        // Most rays meet no entity field: they pay no call.
-        if fields.fields.is_empty() {
+    /// `t_end`; else `t_end` is where the ray left the world), or a nearer entity hit.
+    /// `t_entry` is when the ray entered the world and `steps` the cells the world loop
+    /// visited; the entity cells visited are added.
+    pub fn resolve(&self, ray: &Ray, world: Option<Hit>, t_entry: f64, t_end: f64, steps: u32) -> Option<Hit> {
+        let mut crossed = Crossed::new(self, ray, t_entry, t_end);
+        self.set
+            .bvh
+            .crossing(ray.origin(), ray.dir(), t_entry, t_end, |k| crossed.offer(k));
+        if crossed.list.is_empty() {
             return world;
         }
-        self.resolve_listed(ray, world, t_entry, t_end, steps, fields)
-    }
-
-    /// [`Self::resolve`] for a ray that met at least one entity field.
-    #[inline(never)]
-    fn resolve_listed(
-        &self,
-        ray: &Ray,
-        world: Option<Hit>,
-        t_entry: f64,
-        t_end: f64,
-        steps: u32,
-        fields: &Candidates,
-    ) -> Option<Hit> {
-        let mut crossed = Crossed::new(self, ray, t_entry, t_end);
-        for &f in &fields.fields {
-            let (ptr, count) = ((f >> 8) as usize, (f & 0xFF) as usize);
-            for r in ptr..ptr + count {
-                if let Some(&k) = self.listed.get(r) {
-                    crossed.offer(k);
-                }
-            }
-        }
-        self.nearest(ray, world, crossed, steps)
-    }
-
-    /// As [`Self::resolve`], with the instances found through the hierarchy over their
-    /// world boxes instead of chunk lists (the dense-grid method).
-    pub fn resolve_by_boxes(&self, ray: &Ray, world: Option<Hit>, t_entry: f64, t_end: f64, steps: u32) -> Option<Hit> {
-        let mut crossed = Crossed::new(self, ray, t_entry, t_end);
-        self.bvh
-            .crossing(ray.origin(), crossed.inv_d, t_entry, t_end, |k| crossed.offer(k));
         self.nearest(ray, world, crossed, steps)
     }
 
@@ -155,10 +81,7 @@ impl<'a> EntityView<'a> {
     fn nearest(&self, ray: &Ray, world: Option<Hit>, crossed: Crossed, mut steps: u32) -> Option<Hit> {
         let (t_entry, t_end) = (crossed.t_entry, crossed.t_end);
         let mut crossed = crossed.list;
-        // An instance found twice (listed by several chunks) has one box: its copies sort
-        // together.
         crossed.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        crossed.dedup_by_key(|c| c.1);
         let mut best: Option<Hit> = None;
         for &(t_box, id, k) in &crossed {
             // Entity hits must come before the world's end (ties go to the world) and before
@@ -170,7 +93,7 @@ impl<'a> EntityView<'a> {
             if t_box > limit {
                 break;
             }
-            let rec = InstanceRecord::unpack(&self.records[k]);
+            let rec = InstanceRecord::unpack(&self.set.records[k]);
             if let Some(h) = self.test(ray, &rec, t_entry, limit, equal_ok, &mut steps) {
                 best = Some(h);
             }
@@ -256,7 +179,7 @@ impl<'v, 'a> Crossed<'v, 'a> {
     #[inline]
     fn offer(&mut self, k: u32) {
         let k = k as usize;
-        let (Some(b), Some(r)) = (self.view.bounds.get(k), self.view.records.get(k)) else {
+        let (Some(b), Some(r)) = (self.view.set.bounds.get(k), self.view.set.records.get(k)) else {
             return;
         };
         if let Some(t) = b.entry(self.o, self.d, self.inv_d, self.t_entry, self.t_end) {
@@ -266,14 +189,11 @@ impl<'v, 'a> Crossed<'v, 'a> {
 }
 
 impl World {
-    /// The entity buffers a ray test reads, or `None` when no chunk lists an entity.
+    /// What a ray test reads of the entities, or `None` when there is no instance.
     #[inline]
     pub(crate) fn entity_view(&self) -> Option<EntityView<'_>> {
         self.entities.present().then(|| EntityView {
-            listed: &self.entities.listed,
-            records: &self.entities.records,
-            bounds: &self.entities.bounds,
-            bvh: &self.entities.bvh,
+            set: &self.entities.set,
             voxels: &self.entities.type_voxels,
         })
     }

@@ -51,7 +51,7 @@ impl DenseGrid {
     }
 
     /// Traces `ray` one voxel at a time, then against the entities whose boxes it crosses
-    /// (see [`crate::entity`]).
+    /// (as every method does: see [`crate::entity`]).
     pub fn trace(&self, ray: &Ray) -> Option<Hit> {
         let walk = walk(ray, self.size, |cell, _| match self.get(cell.map(|v| v as u32)) {
             0 => Visit::Empty,
@@ -67,8 +67,6 @@ impl DenseGrid {
             End::Hit(h) => (Some(h), h.t, h.steps),
             End::Left { t, steps } | End::Stopped { t, steps } => (None, t, steps),
         };
-        // This method finds the instances through their hierarchy, the others through the
-        // chunk lists: the traversal tests compare the two ways on every ray.
-        ents.view().resolve_by_boxes(ray, world, walk.entry_t, t_end, steps)
+        ents.view().resolve(ray, world, walk.entry_t, t_end, steps)
     }
 }

@@ -1,6 +1,5 @@
 //! Traversal of the chunk → block → voxel hierarchy, with or without AADF jumps.
 
-use super::entities::Candidates;
 use super::ray::{Hit, Ray};
 use crate::cell::{self, Aadf, CELL_FIELD_BITS, CHUNK_FIELD_BITS, State};
 use crate::world::World;
@@ -36,33 +35,26 @@ enum Probe {
 fn trace<const DF: bool>(world: &World, ray: &Ray) -> Option<Hit> {
     // Worlds without entities run a loop with no entity code at all.
     let Some(view) = world.entity_view() else {
-        return world_loop::<DF, false>(world, ray, &mut Candidates::default(), &mut (0.0, 0.0, 0));
+        return world_loop::<DF, false>(world, ray, &mut (0.0, 0.0, 0));
     };
-    let mut fields = Candidates::default();
     let mut span = (f64::NAN, f64::NAN, 0);
-    let hit = world_loop::<DF, true>(world, ray, &mut fields, &mut span);
+    let hit = world_loop::<DF, true>(world, ray, &mut span);
     let (t_entry, t_end, steps) = match hit {
         Some(h) => (span.0, h.t, h.steps),
         // Missed the world, or ran out of steps.
         None if span.1.is_nan() => return None,
         None => span,
     };
-    view.resolve(ray, hit, t_entry, t_end, steps, &fields)
+    view.resolve(ray, hit, t_entry, t_end, steps)
 }
 
-/// The hierarchical DDA through the world: the world hit, if any. With `ENT`, it records
-/// the entity fields of the chunks it visits in `fields` (empty chunks with entities skip
-/// only to their edge), sets `span.0` to the time the ray entered the world and, if it
-/// leaves the world without a hit, `span.1` and `span.2` to the time it left and the cells
-/// visited. (Out-parameters rather than a richer result keep the entity-free instance as
+/// The hierarchical DDA through the static world: the world hit, if any. With `ENT`, it
+/// sets `span.0` to the time the ray entered the world and, if it leaves the world without
+/// a hit, `span.1` and `span.2` to the time it left and the cells visited (what the entity
+/// test needs). (Out-parameters rather than a richer result keep the entity-free instance as
 /// fast as a loop without entity code.)
 #[inline(always)]
-fn world_loop<const DF: bool, const ENT: bool>(
-    world: &World,
-    ray: &Ray,
-    fields: &mut Candidates,
-    span: &mut (f64, f64, u32),
-) -> Option<Hit> {
+fn world_loop<const DF: bool, const ENT: bool>(world: &World, ray: &Ray, span: &mut (f64, f64, u32)) -> Option<Hit> {
     let size = world.size();
     let dims = size.voxels();
     let entry = ray.entry(dims)?;
@@ -83,18 +75,11 @@ fn world_loop<const DF: bool, const ENT: bool>(
     };
     let mut steps = 0u32;
     // One iteration per chunk visited; the inner loop steps through the chunk's blocks and
-    // voxels (an empty chunk is always left in one step), so chunk-level work, the entity
-    // bookkeeping included, happens once per chunk.
+    // voxels (an empty chunk is always left in one step), so chunk-level work happens once
+    // per chunk.
     loop {
         let chunk_at = cell.map(|v| (v >> 4) as u32);
-        let ci = size.chunk_index(chunk_at);
-        let chunk = world.chunks()[ci];
-        // Entities live only in mixed chunks and in empty chunks whose AADF is zero (the
-        // cell word 0). A full chunk ends the ray where it is entered, before any entity
-        // voxel inside it.
-        if ENT && (chunk == 0 || cell::state(chunk) == State::Mixed) {
-            fields.push(world.chunk_entities()[ci]);
-        }
+        let chunk = world.chunks()[size.chunk_index(chunk_at)];
         loop {
             steps += 1;
             if steps > MAX_STEPS {
@@ -106,7 +91,9 @@ fn world_loop<const DF: bool, const ENT: bool>(
                     let (nt, na, next) = ray.exit(cell, skip);
                     if !(0..3).all(|a| next[a] >= 0 && next[a] < i64::from(dims[a])) {
                         if ENT {
-                            (span.1, span.2) = (nt, steps);
+                            // An AADF box may reach beyond the world: the ray left it at
+                            // the world's edge, not where it leaves the box.
+                            (span.1, span.2) = (ray.leave_time(dims).min(nt), steps);
                         }
                         return None;
                     }
@@ -120,9 +107,7 @@ fn world_loop<const DF: bool, const ENT: bool>(
     }
 }
 
-/// Looks up voxel `p` in its chunk's cell `chunk`. An empty chunk with entities skips only
-/// to its own edge: it holds a zero AADF (the safety invariant, checked when a world is
-/// loaded).
+/// Looks up voxel `p` in its chunk's cell `chunk`.
 #[inline(always)]
 fn probe<const DF: bool>(
     world: &World,

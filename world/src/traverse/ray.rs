@@ -221,6 +221,15 @@ impl Ray {
         })
     }
 
+    /// When the ray leaves the box `[0, size]` (a ray inside it): the first crossing of one
+    /// of the far planes it moves toward, where a cell-by-cell walk steps outside.
+    pub(crate) fn leave_time(&self, size: [u32; 3]) -> f64 {
+        (0..3)
+            .filter(|&a| self.d[a] != 0.0)
+            .map(|a| self.t_at(a, if self.d[a] > 0.0 { i64::from(size[a]) } else { 0 }))
+            .fold(f64::INFINITY, f64::min)
+    }
+
     /// Leaves the empty cuboid made of `cell` extended by `skip[a]` cells toward the ray on
     /// each axis: the exit event `(t, axis)` and the cell entered by it.
     #[inline(always)]

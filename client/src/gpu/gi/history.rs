@@ -156,11 +156,6 @@ impl GiHistory {
         h
     }
 
-    /// Chunks in the world the history follows (one change mark each).
-    pub(super) fn chunk_count(&self) -> usize {
-        self.marks.len()
-    }
-
     /// Takes in what changed in `world` since the last frame: the chunks it names are
     /// marked, and a change too large to mark chunk by chunk counts everywhere.
     fn note_changes(&mut self, gpu: &Gpu, world: &GpuWorld) {

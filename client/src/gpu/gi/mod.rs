@@ -25,7 +25,7 @@ pub use passes::GiPass;
 pub(crate) use passes::gi_pass;
 
 use super::context::{Gpu, GpuError};
-use super::pipeline::{PassPipelines, dispatch_2d};
+use super::pipeline::PassPipelines;
 use super::shaders::WgslValue;
 use super::shaders::{Loop, NO_ENTITY};
 use super::shot::{CameraRays, Shot, check_frame_size};
@@ -340,7 +340,6 @@ fn encode(
     let buffers = h.bindings(params);
     let (width, height) = h.shot.size;
     let pixel_groups = (width.div_ceil(8), height.div_ceil(8));
-    let chunk_count = h.chunk_count();
     gpu.checked(|| {
         let mut enc = gpu.device.create_command_encoder(&Default::default());
         for (k, &pass) in GiPass::ALL.iter().enumerate() {
@@ -372,11 +371,7 @@ fn encode(
                     cp.dispatch_workgroups_indirect(&h.args, u64::from(CONTROL_PROJECT_ARGS) * 4)
                 }
                 GiPass::Refine => cp.dispatch_workgroups(plan.regions.div_ceil(64) as u32, 1, 1),
-                GiPass::PosesClear => cp.dispatch_workgroups(NO_ENTITY.div_ceil(64), 1, 1),
-                GiPass::Poses => {
-                    let (x, y) = dispatch_2d(chunk_count.div_ceil(64) as u32);
-                    cp.dispatch_workgroups(x, y, 1)
-                }
+                GiPass::Poses => cp.dispatch_workgroups(NO_ENTITY.div_ceil(64), 1, 1),
                 _ => cp.dispatch_workgroups(pixel_groups.0, pixel_groups.1, 1),
             }
         }

@@ -35,9 +35,7 @@ pub enum GiPass {
     Atmosphere,
     /// The jittered first hit and its mirror chain.
     FirstHit,
-    /// This frame's slot of the entity pose table starts empty.
-    PosesClear,
-    /// The entities' poses into this frame's slot, from the chunks' instance records.
+    /// The entities' poses into this frame's slot, from the instance records.
     Poses,
     /// The long-term TAA's gather of earlier frames' samples.
     Taa,
@@ -65,10 +63,9 @@ pub enum GiPass {
 
 impl GiPass {
     /// Every pass, in frame order.
-    pub const ALL: [GiPass; 15] = [
+    pub const ALL: [GiPass; 14] = [
         GiPass::Atmosphere,
         GiPass::FirstHit,
-        GiPass::PosesClear,
         GiPass::Poses,
         GiPass::Taa,
         GiPass::Queue,
@@ -88,7 +85,6 @@ impl GiPass {
         match self {
             GiPass::Atmosphere => "gi_atmosphere",
             GiPass::FirstHit => "gi_first_hit",
-            GiPass::PosesClear => "gi_poses_clear",
             GiPass::Poses => "gi_poses",
             GiPass::Taa => "gi_taa",
             GiPass::Queue => "gi_queue",
