@@ -85,14 +85,17 @@ impl World {
         // voxel and table ops (which go through the ops layer as in `ops::apply_batch`).
         let mut table: Option<EntityTable> = None;
         let mut last_entity_op = None;
+        // The models checked for entities since the tables last changed.
+        let mut fit = entity::FitModels::default();
         batch.check_size(limits)?;
         for (i, op) in batch.ops.iter().enumerate() {
             if op.is_entity_op() {
                 let t = table.get_or_insert_with(|| self.entities.table.clone());
-                entity::apply_op(i, op, t, &models, &materials, self.size)?;
+                entity::apply_op(i, op, t, &models, &materials, self.size, &mut fit)?;
                 last_entity_op = Some(i);
             } else {
                 op.apply(i, &mut overlay, &mut materials, &mut models, limits)?;
+                fit = entity::FitModels::default();
             }
         }
         let touched = overlay.into_touched();

@@ -5,8 +5,8 @@
 //! result.
 //!
 //! It is built in two steps. A binary tree is split top-down by the binned surface-area
-//! heuristic down to one instance per leaf (below [`SAH_DEPTH`] levels, at the median
-//! instead, which bounds the depth). Then every binary node's children and grandchildren
+//! heuristic down to one instance per leaf (runs of at most [`WIDTH`], and every run below
+//! [`SAH_DEPTH`] levels, at the median instead, which bounds the depth). Then every binary node's children and grandchildren
 //! become the children of one four-wide node, so a ray tests four boxes at once (as four
 //! lanes on the CPU) and visits half as many levels.
 //!
@@ -143,7 +143,11 @@ impl Bvh {
         }
         let mut prims: Vec<u32> = (0..boxes.len() as u32).collect();
         let mut tree = Vec::with_capacity(2 * boxes.len());
-        let root = split(&mut tree, boxes, &mut prims, 0);
+        let input = Input {
+            boxes,
+            centres: boxes.iter().map(|b| [0, 1, 2].map(|a| centre(b, a))).collect(),
+        };
+        let root = split(&mut tree, &input, &mut prims, 0);
         bvh.widen(&tree, root);
         bvh
     }
@@ -267,10 +271,17 @@ fn outward(v: f64, up: bool) -> f32 {
     }
 }
 
+/// What a build splits: each primitive's box and centre.
+struct Input<'a> {
+    boxes: &'a [Aabb],
+    centres: Vec<[f64; 3]>,
+}
+
 /// Appends the binary subtree over `prims` (reordering them) and returns its root; `depth`
-/// is the level of that root.
-fn split(tree: &mut Vec<Binary>, boxes: &[Aabb], prims: &mut [u32], depth: usize) -> usize {
-    let bounds = prims.iter().fold(EMPTY, |b, &p| union(&b, &boxes[p as usize]));
+/// is the level of that root. Runs of at most [`WIDTH`] primitives are split at the median
+/// (any split of them makes one four-wide node).
+fn split(tree: &mut Vec<Binary>, input: &Input, prims: &mut [u32], depth: usize) -> usize {
+    let bounds = prims.iter().fold(EMPTY, |b, &p| union(&b, &input.boxes[p as usize]));
     if let [p] = prims {
         tree.push(Binary {
             bounds,
@@ -279,26 +290,31 @@ fn split(tree: &mut Vec<Binary>, boxes: &[Aabb], prims: &mut [u32], depth: usize
         });
         return tree.len() - 1;
     }
-    let cut = if depth < SAH_DEPTH {
-        best_cut(boxes, prims)
+    let cut = if depth < SAH_DEPTH && prims.len() > WIDTH {
+        best_cut(input, prims)
     } else {
         None
     };
     let mid = match cut {
         // The cut leaves primitives on both sides ([`best_cut`] skips empty ones).
         Some(cut) => {
-            let (lower, upper): (Vec<u32>, Vec<u32>) = prims
-                .iter()
-                .partition(|&&p| bin_of(centre(&boxes[p as usize], cut.axis), cut.lo, cut.hi) < cut.bin);
-            prims[..lower.len()].copy_from_slice(&lower);
-            prims[lower.len()..].copy_from_slice(&upper);
-            lower.len()
+            let lower = |p: u32| bin_of(input.centres[p as usize][cut.axis], cut.lo, cut.hi) < cut.bin;
+            let (mut i, mut j) = (0, prims.len());
+            while i < j {
+                if lower(prims[i]) {
+                    i += 1;
+                } else {
+                    j -= 1;
+                    prims.swap(i, j);
+                }
+            }
+            i
         }
-        None => median(boxes, prims),
+        None => median(input, prims),
     };
     let (lower, upper) = prims.split_at_mut(mid);
-    let a = split(tree, boxes, lower, depth + 1);
-    let b = split(tree, boxes, upper, depth + 1);
+    let a = split(tree, input, lower, depth + 1);
+    let b = split(tree, input, upper, depth + 1);
     tree.push(Binary {
         bounds,
         children: Some((a, b)),
@@ -309,28 +325,26 @@ fn split(tree: &mut Vec<Binary>, boxes: &[Aabb], prims: &mut [u32], depth: usize
 
 /// Orders `prims` by their centres along the axis where those spread most (ties by
 /// index) and returns the middle.
-fn median(boxes: &[Aabb], prims: &mut [u32]) -> usize {
+fn median(input: &Input, prims: &mut [u32]) -> usize {
+    let (lo, hi) = centre_ranges(input, prims);
     let axis = (0..3)
-        .max_by(|&a, &b| {
-            let (la, ha) = centre_range(boxes, prims, a);
-            let (lb, hb) = centre_range(boxes, prims, b);
-            (ha - la).total_cmp(&(hb - lb))
-        })
+        .max_by(|&a, &b| (hi[a] - lo[a]).total_cmp(&(hi[b] - lo[b])))
         .unwrap_or(0);
     prims.sort_unstable_by(|&p, &q| {
-        centre(&boxes[p as usize], axis)
-            .total_cmp(&centre(&boxes[q as usize], axis))
+        input.centres[p as usize][axis]
+            .total_cmp(&input.centres[q as usize][axis])
             .then(p.cmp(&q))
     });
     prims.len() / 2
 }
 
-/// The range of the primitives' centres along `axis`.
-fn centre_range(boxes: &[Aabb], run: &[u32], axis: usize) -> (f64, f64) {
-    run.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &p| {
-        let c = centre(&boxes[p as usize], axis);
-        (lo.min(c), hi.max(c))
-    })
+/// The range of the primitives' centres on each axis.
+fn centre_ranges(input: &Input, run: &[u32]) -> ([f64; 3], [f64; 3]) {
+    run.iter()
+        .fold(([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]), |(lo, hi), &p| {
+            let c = input.centres[p as usize];
+            ([0, 1, 2].map(|a| lo[a].min(c[a])), [0, 1, 2].map(|a| hi[a].max(c[a])))
+        })
 }
 
 fn bin_of(c: f64, lo: f64, hi: f64) -> usize {
@@ -353,19 +367,23 @@ struct Cut {
 }
 
 /// The cheapest split of `run` by the binned SAH that leaves primitives on both sides;
-/// `None` when the centres coincide.
-fn best_cut(boxes: &[Aabb], run: &[u32]) -> Option<Cut> {
-    let mut best: Option<Cut> = None;
-    for axis in 0..3 {
-        let (lo, hi) = centre_range(boxes, run, axis);
-        if hi <= lo {
-            continue;
+/// `None` when the centres coincide. The primitives are binned on all three axes in one
+/// pass.
+fn best_cut(input: &Input, run: &[u32]) -> Option<Cut> {
+    let (lo, hi) = centre_ranges(input, run);
+    let mut bins = [[(EMPTY, 0usize); BINS]; 3];
+    for &p in run {
+        let (c, b) = (input.centres[p as usize], &input.boxes[p as usize]);
+        for axis in 0..3 {
+            let bin = &mut bins[axis][bin_of(c[axis], lo[axis], hi[axis])];
+            bin.0 = union(&bin.0, b);
+            bin.1 += 1;
         }
-        let mut bins = [(EMPTY, 0usize); BINS];
-        for &p in run {
-            let b = &mut bins[bin_of(centre(&boxes[p as usize], axis), lo, hi)];
-            b.0 = union(&b.0, &boxes[p as usize]);
-            b.1 += 1;
+    }
+    let mut best: Option<Cut> = None;
+    for (axis, bins) in bins.iter().enumerate() {
+        if hi[axis] <= lo[axis] {
+            continue;
         }
         // Sweep from above: the area and count of bins `k..` for each cut `k`.
         let mut above = [(0.0, 0usize); BINS];
@@ -387,8 +405,8 @@ fn best_cut(boxes: &[Aabb], run: &[u32]) -> Option<Cut> {
             if best.as_ref().is_none_or(|b| cost < b.cost) {
                 best = Some(Cut {
                     axis,
-                    lo,
-                    hi,
+                    lo: lo[axis],
+                    hi: hi[axis],
                     bin: k,
                     cost,
                 });

@@ -335,6 +335,11 @@ impl Entities {
     }
 }
 
+/// The models a batch has found fit for entities ([`check_model`]) since its model and
+/// material tables last changed: a batch moving a thousand entities checks their model once.
+#[derive(Default)]
+pub(crate) struct FitModels(rustc_hash::FxHashSet<String>);
+
 /// Applies one entity op (spawn, move, despawn) to a batch's working entity table.
 ///
 /// Checks, besides [`Op::validate_entity`]: ids `0..=16382`; spawn needs a free id, move and
@@ -349,6 +354,7 @@ pub(crate) fn apply_op(
     models: &ModelTable,
     materials: &MaterialTable,
     size: WorldSize,
+    fit: &mut FitModels,
 ) -> Result<(), EditError> {
     op.validate_entity(index, models)?;
     let invalid = |reason: String| EditError::Invalid {
@@ -363,11 +369,14 @@ pub(crate) fn apply_op(
             Ok(())
         }
     };
-    let place = |id: u32, model: &str, pos: [f64; 3], rot: [f64; 4]| -> Result<Pose, EditError> {
+    let mut place = |id: u32, model: &str, pos: [f64; 3], rot: [f64; 4]| -> Result<Pose, EditError> {
         let m = models
             .get(model)
             .ok_or_else(|| invalid(format!("model '{model}' is not defined")))?;
-        check_model(model, m, materials).map_err(invalid)?;
+        if !fit.0.contains(model) {
+            check_model(model, m, materials).map_err(invalid)?;
+            fit.0.insert(model.to_owned());
+        }
         let (pos, rot) = checked_pose(pos, rot).map_err(invalid)?;
         if chunk_range(size, m.size(), pos, rot).is_none() {
             return Err(invalid(format!(
