@@ -1,14 +1,14 @@
 //! [`Bvh`]: a four-wide bounding-volume hierarchy over the entity instances' world boxes,
-//! through which every ray finds the instances it may hit (docs/NAADF.md §11). Like
-//! [`super::bounds::Bounds`], it is derived on every machine from the instance records:
+//! through which every ray finds the instances it may hit (docs/NAADF.md §11). Like the
+//! instances' boxes (`entity::bounds`), it is derived on every machine from the records:
 //! neither mirrored nor digested, and it changes only the work a ray test takes, never its
 //! result.
 //!
 //! It is built in two steps. A binary tree is split top-down by the binned surface-area
 //! heuristic down to one instance per leaf (runs of at most [`WIDTH`], and every run below
-//! [`SAH_DEPTH`] levels, at the median instead, which bounds the depth). Then every binary node's children and grandchildren
-//! become the children of one four-wide node, so a ray tests four boxes at once (as four
-//! lanes on the CPU) and visits half as many levels.
+//! 24 levels, at the median instead, which bounds the depth: [`MAX_DEPTH`]). Then every
+//! binary node's children and grandchildren become the children of one four-wide node, so a
+//! ray tests four boxes at once (as four lanes on the CPU) and visits half as many levels.
 //!
 //! The packed form ([`Bvh::words`], docs/FORMAT.md §5.10) is what the GPU walks, node by
 //! node of [`NODE_WORDS`] words: the children's boxes as `f32`, axis by axis (`lo.x` of the
@@ -44,7 +44,7 @@ const BINS: usize = 16;
 /// Where unused child slots sit (beyond any ray's reach in the world), and the inverse
 /// direction component of an axis a ray does not move along.
 pub const FAR: f32 = 1e30;
-/// Padding of an instance's world and oriented boxes ([`super::bounds::Bounds`]), in voxels:
+/// Padding of an instance's world and oriented boxes (`entity::bounds`), in voxels:
 /// far above the rounding of the rotation, far below a voxel, so that the boxes only ever
 /// let more rays through to the exact test.
 pub const BOUNDS_PAD: f64 = 1.0 / 64.0;

@@ -23,7 +23,7 @@
 //! - The static world knows nothing of entities (a deviation from the reference, docs/
 //!   NAADF.md §11): the chunk entity buffer stays zero and no distance field is cut around
 //!   an instance. Rays find instances through a hierarchy over their world boxes
-//!   ([`bvh::Bvh`]), which every machine derives from the instance buffer ([`set`]).
+//!   ([`bvh::Bvh`]), which every machine derives from the instance buffer (`set.rs`).
 
 pub(crate) mod bounds;
 pub mod bvh;
