@@ -33,7 +33,7 @@ pub enum BufferId {
     Models = 5,
     /// The entity-type buffer: every type's dense voxel grid (u32 LE, [`crate::entity`]).
     EntityTypes = 6,
-    /// The entity instance buffer: the deduplicated chunk lists of 5-word records (u32 LE).
+    /// The entity instance buffer: each entity's 5-word record in the slot of its id (u32 LE).
     EntityInstances = 7,
 }
 
