@@ -81,10 +81,11 @@ export class GpuWorld {
     this.offsets = uniform("world_offsets", OFFSET_WORDS * 4);
   }
 
-  /** Uploads everything `mirror` holds, laying the buffer out anew. */
-  uploadAll(mirror: Mirror): void {
+  /** Uploads everything `mirror` holds, laying the buffer out anew (`hierarchy`: the
+   * instance hierarchy of the mirror, when the caller has it already). */
+  uploadAll(mirror: Mirror, hierarchy: Uint8Array = hierarchyBytes(mirror)): void {
     // The mirrored buffers, then the instance hierarchy derived from the instance buffer.
-    this.hierarchy = hierarchyBytes(mirror);
+    this.hierarchy = hierarchy;
     const lens = [...GPU_BUFFERS.map((b) => mirror.bytes(b.id).length), this.hierarchy.length];
     // Room to grow: a quarter more and a page, 256-byte aligned.
     let at = 0;
@@ -126,7 +127,7 @@ export class GpuWorld {
       (resized && GPU_BUFFERS.some((b, i) => mirror.bytes(b.id).length > this.regions[i].capacity)) ||
       hierarchy.length > this.regions[HIERARCHY].capacity
     ) {
-      this.uploadAll(mirror);
+      this.uploadAll(mirror, hierarchy);
       return;
     }
     if (moved) {

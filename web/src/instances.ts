@@ -82,7 +82,8 @@ function split(items: Item[]): Binary {
     const c = items.map((i) => centre(i.box, a));
     return Math.max(...c) - Math.min(...c);
   };
-  const axis = [0, 1, 2].reduce((best, a) => (spread(a) > spread(best) ? a : best), 0);
+  const spreads = [0, 1, 2].map(spread);
+  const axis = spreads.indexOf(Math.max(...spreads));
   const sorted = [...items].sort((p, q) => centre(p.box, axis) - centre(q.box, axis) || p.slot - q.slot);
   const mid = sorted.length >> 1;
   return { box, kids: [split(sorted.slice(0, mid)), split(sorted.slice(mid))], slot: 0 };

@@ -129,7 +129,10 @@ impl ChunkPrints {
             let (before, after) = (&self.instances, world.entity_instances());
             let record = |words: &[u32], types: &HashMap<u32, u64>, slot: usize| {
                 let w = words.get(slot * RECORD_WORDS..(slot + 1) * RECORD_WORDS)?;
-                (w[4] != 0).then(|| (InstanceRecord::unpack(w), types[&InstanceRecord::unpack(w).voxel_start]))
+                (w[4] != 0).then(|| {
+                    let r = InstanceRecord::unpack(w);
+                    (r, types[&r.voxel_start])
+                })
             };
             for slot in 0..before.len().max(after.len()) / RECORD_WORDS {
                 let (was, is) = (record(before, &self.types, slot), record(after, &types, slot));

@@ -369,7 +369,7 @@ impl World {
                 return bad(format!("entity {id}: model '{}' has no entity type", pose.model));
             }
             match crate::entity::checked_pose(pose.pos, pose.rot) {
-                Ok((pos, rot)) if pos == pose.pos && rot == pose.rot => {}
+                Ok(q) if q.pos == pose.pos && q.rot == pose.rot => {}
                 Ok(_) => return bad(format!("entity {id}: pose {pose:?} is not a quantised pose")),
                 Err(e) => return bad(format!("entity {id}: {e}")),
             }

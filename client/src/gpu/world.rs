@@ -199,7 +199,6 @@ impl GpuWorld {
     fn sync_pages(&mut self, world: &World) -> Result<Upload, GpuError> {
         let mut up = Upload::default();
         let mut stale = Vec::with_capacity(GPU_BUFFERS.len());
-        let instances_before = self.buffers[GPU_BUFFERS.len() - 1].hashes.clone();
         for (k, &id) in GPU_BUFFERS.iter().enumerate() {
             let len = world.buffer_len(id) as u64;
             up.reallocated |= self.reserve(k, len)?;
@@ -223,17 +222,15 @@ impl GpuWorld {
             b.hashes = hashes.to_vec();
             b.len = len;
         }
-        // The hierarchy follows the instance buffer: rebuilt and uploaded whole when it
-        // changed.
-        if world.page_hashes(BufferId::EntityInstances) != instances_before.as_slice() {
+        // The hierarchy follows the instance buffer: rebuilt and uploaded whole when any
+        // of its pages changed.
+        if stale
+            .iter()
+            .any(|(id, words)| *id == BufferId::EntityInstances && !words.is_empty())
+        {
             let words = world.entity_hierarchy_words();
-            let bytes: &[u8] = bytemuck::cast_slice(&words);
-            up.reallocated |= self.reserve(HIERARCHY, bytes.len() as u64)?;
-            for (i, page) in bytes.chunks(PAGE_BYTES).enumerate() {
-                self.write(HIERARCHY, (i * PAGE_BYTES) as u64, page);
-            }
-            up.bytes += bytes.len() as u64;
-            self.buffers[HIERARCHY].len = bytes.len() as u64;
+            up.reallocated |= self.replace(HIERARCHY, bytemuck::cast_slice(&words))?;
+            up.bytes += 4 * words.len() as u64;
         }
         let size = world.size();
         let info = WorldInfo {
@@ -372,20 +369,27 @@ impl GpuWorld {
     /// Writes `bytes` to the comparison-structure buffer, page by page, as the data of
     /// `traversal`.
     fn upload_structure(&mut self, traversal: Traversal, bytes: &[u8]) -> Result<(), GpuError> {
-        let len = bytes.len() as u64;
         self.structure = None;
-        if self.reserve(STRUCTURE, len)? {
+        if self.replace(STRUCTURE, bytes)? {
             self.rebind();
         }
-        for (i, chunk) in bytes.chunks(PAGE_BYTES).enumerate() {
-            // A dense grid is u16 pairs: pad an odd tail to a whole word.
-            let mut page = chunk.to_vec();
-            page.resize(page.len().next_multiple_of(4), 0);
-            self.write(STRUCTURE, (i * PAGE_BYTES) as u64, &page);
-        }
-        self.buffers[STRUCTURE].len = len;
         self.structure = Some(traversal);
         Ok(())
+    }
+
+    /// Replaces the whole of derived logical buffer `k` with `bytes`, page by page (an odd
+    /// tail padded to a whole word); returns whether a buffer was reallocated (the caller
+    /// rebinds).
+    fn replace(&mut self, k: usize, bytes: &[u8]) -> Result<bool, GpuError> {
+        let reallocated = self.reserve(k, bytes.len() as u64)?;
+        for (i, chunk) in bytes.chunks(PAGE_BYTES).enumerate() {
+            // A dense grid is u16 pairs.
+            let mut page = chunk.to_vec();
+            page.resize(page.len().next_multiple_of(4), 0);
+            self.write(k, (i * PAGE_BYTES) as u64, &page);
+        }
+        self.buffers[k].len = bytes.len() as u64;
+        Ok(reallocated)
     }
 
     /// Reads buffer `id` back from the device, at its logical length.

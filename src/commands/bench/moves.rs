@@ -11,7 +11,7 @@ use crate::commands::remote::block_on;
 use anyhow::{Result, bail};
 use naadf_client::Pose;
 use naadf_client::patch::{PatchMaker, delta_sizes};
-use naadf_world::World;
+use naadf_world::WorldSize;
 use naadf_world::ops::{Batch, Limits, Op};
 use naadf_world::raysets::SplitMix64;
 use serde::Serialize;
@@ -48,10 +48,10 @@ struct Report {
     threads: usize,
 }
 
-/// The pose of entity `id` in call `call` (0: where it spawns): above the world's middle
-/// layer, anywhere in x and z, at any rotation.
-fn pose(world: &World, id: u32, call: usize) -> Pose {
-    let s = world.size().voxels().map(f64::from);
+/// The pose of entity `id` in call `call` (0: where it spawns) in a world of `size`: above
+/// the middle layer, anywhere in x and z, at any rotation.
+fn pose(size: WorldSize, id: u32, call: usize) -> Pose {
+    let s = size.voxels().map(f64::from);
     let mut rng = SplitMix64((call as u64) << 16 | u64::from(id));
     Pose {
         id,
@@ -75,13 +75,14 @@ fn move_op(p: &Pose) -> Op {
 /// Runs the benchmark.
 pub fn run(a: MovesArgs) -> Result<()> {
     let mut world = a.preset.generate()?;
+    let size = world.size();
     let mut ops = vec![Op::DefineModel {
         name: "crate".into(),
         size: [8, 8, 8],
         voxels: (0..8).map(|k| [k, k, k, 1 + k % 3]).collect(),
     }];
     ops.extend((0..a.entities).map(|id| {
-        let p = pose(&world, id, 0);
+        let p = pose(size, id, 0);
         Op::SpawnEntity {
             id: p.id,
             model: "crate".into(),
@@ -94,7 +95,7 @@ pub fn run(a: MovesArgs) -> Result<()> {
     let (record_bytes, patch_bytes) = {
         let mut copy = world.clone();
         let mut maker = PatchMaker::new(&copy);
-        let moves = (0..a.entities).map(|id| move_op(&pose(&world, id, 1))).collect();
+        let moves = (0..a.entities).map(|id| move_op(&pose(size, id, 1))).collect();
         let change = copy.apply(&Batch { ops: moves }, &Limits::default())?.change;
         let [r, p] = delta_sizes(&change, maker.patch(&copy, &change));
         (r, p)
@@ -108,7 +109,6 @@ pub fn run(a: MovesArgs) -> Result<()> {
     let entities = a.entities;
     block_on(async move {
         let cache = Some(world.clone());
-        let shape = world.clone();
         let server = LocalServer::start(world).await?;
         let url = server.url();
         let editor = Editor::connect(&url).await?;
@@ -121,7 +121,7 @@ pub fn run(a: MovesArgs) -> Result<()> {
             call += count;
             // The poses of every call, made before the run so the editor only sends.
             let calls: Vec<Vec<Pose>> = (0..count)
-                .map(|k| (0..entities).map(|id| pose(&shape, id, first + k)).collect())
+                .map(|k| (0..entities).map(|id| pose(size, id, first + k)).collect())
                 .collect();
             let calls = std::sync::Arc::new(calls);
             let r = latency_run(&url, &cache, &editor, a.clients, rate, count, &mut last, move |c, k| {

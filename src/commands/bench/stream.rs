@@ -277,7 +277,7 @@ async fn edit(c: &Client, ops: String) -> Result<u64> {
 /// is: on the mirrors' runtime its requests and acknowledgements would queue behind their
 /// work on every delta, which a remote editor never does.
 pub(super) struct Editor {
-    pub(super) client: Client,
+    client: Client,
     /// Taken by `Drop`, which must not block inside the benchmark's runtime.
     rt: Option<tokio::runtime::Runtime>,
 }
@@ -500,10 +500,12 @@ where
     let mut sent = Vec::new();
     for k in 0..count {
         tokio::time::sleep_until(start + Duration::from_secs_f64(k as f64 / f64::from(rate))).await;
-        let fut = request(editor.client.clone(), k);
-        sent.push(editor.spawn(|_| async move {
-            let t0 = Instant::now();
-            fut.await.map(|v| (v, t0, t0.elapsed()))
+        sent.push(editor.spawn(|c| {
+            let sent = request(c, k);
+            async move {
+                let t0 = Instant::now();
+                sent.await.map(|v| (v, t0, t0.elapsed()))
+            }
         }));
     }
     let mut sent_at = HashMap::new();

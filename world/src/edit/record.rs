@@ -7,7 +7,7 @@
 //! explicit chunk writes.
 
 use crate::entity::checked_pose;
-use crate::entity::pack::{POS_SCALE, conjugate, decode_quat, quantise_pose};
+use crate::entity::pack::{POS_SCALE, conjugate, decode_quat};
 use crate::ops::{Batch, EditError, Op};
 use serde::{Deserialize, Serialize};
 
@@ -141,8 +141,7 @@ fn pack_moves(ops: &[Op]) -> Option<Vec<u8>> {
         let Op::MoveEntity { id, pos, rot } = op else {
             return None;
         };
-        let (pos, rot) = checked_pose(*pos, *rot).ok()?;
-        let q = quantise_pose(pos, rot)?;
+        let q = checked_pose(*pos, *rot).ok()?;
         if *id > 0x3FFF {
             return None;
         }
@@ -187,6 +186,7 @@ fn unpack_moves(bytes: &[u8]) -> Result<Batch, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::entity::pack::quantise_pose;
 
     #[test]
     fn single_voxel_edit_is_tiny_and_roundtrips() {

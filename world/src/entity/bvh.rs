@@ -110,12 +110,12 @@ fn lane_max(a: f32, b: f32) -> f32 {
     if a > b { a } else { b }
 }
 
-/// `1/d` in `f32`, kept finite: an axis the ray does not move along gets ±[`FAR`], which
+/// `inv_d` in `f32`, kept finite: an axis the ray does not move along gets ±[`FAR`], which
 /// puts every plane of it at ± far beyond the ray's reach unless the origin lies on it.
 #[inline]
-pub fn inverse_direction(d: [f64; 3]) -> [f32; 3] {
-    d.map(|v| {
-        let i = (1.0 / v) as f32;
+fn finite_f32(inv_d: [f64; 3]) -> [f32; 3] {
+    inv_d.map(|v| {
+        let i = v as f32;
         if i.is_finite() { i } else { FAR.copysign(i) }
     })
 }
@@ -133,7 +133,8 @@ impl Bvh {
     /// let bvh = Bvh::build(&boxes);
     /// let mut met = Vec::new();
     /// // A ray along +z through the first box finds it alone.
-    /// bvh.crossing([0.5, 0.5, -1.0], [0.0, 0.0, 1.0], 0.0, 100.0, |i| met.push(i));
+    /// let inv_d = [f64::INFINITY, f64::INFINITY, 1.0];
+    /// bvh.crossing([0.5, 0.5, -1.0], inv_d, 0.0, 100.0, |i| met.push(i));
     /// assert_eq!(met, [0]);
     /// ```
     pub fn build(boxes: &[Aabb]) -> Self {
@@ -186,16 +187,16 @@ impl Bvh {
         index as u32
     }
 
-    /// Calls `visit` once with every primitive whose box the ray `o + t·d` is inside at
-    /// some `t` in `[t_lo, t_hi]`, in no particular order, and perhaps with a few more
-    /// whose boxes it passes within [`F32_PAD`] (the caller tests each exactly anyway).
-    /// Boxes are tested in `f32`, four at a time.
-    pub fn crossing(&self, o: [f64; 3], d: [f64; 3], t_lo: f64, t_hi: f64, mut visit: impl FnMut(u32)) {
+    /// Calls `visit` once with every primitive whose box the ray `o + t·d` (`inv_d` = 1/d
+    /// per axis) is inside at some `t` in `[t_lo, t_hi]`, in no particular order, and
+    /// perhaps with a few more whose boxes it passes within [`F32_PAD`] (the caller tests
+    /// each exactly anyway). Boxes are tested in `f32`, four at a time.
+    pub fn crossing(&self, o: [f64; 3], inv_d: [f64; 3], t_lo: f64, t_hi: f64, mut visit: impl FnMut(u32)) {
         if self.nodes.is_empty() {
             return;
         }
         let o = o.map(|v| v as f32);
-        let inv = inverse_direction(d);
+        let inv = finite_f32(inv_d);
         // The window in f32, widened by more than its rounding.
         let (t_lo, t_hi) = ((t_lo as f32) - 1e-3, (t_hi as f32) * (1.0 + 1e-6) + 1e-3);
         let mut stack = [0u32; STACK];
@@ -494,7 +495,7 @@ mod tests {
             let bvh = Bvh::build(&boxes);
             let inv_d = d.map(|v| 1.0 / v);
             let mut met = Vec::new();
-            bvh.crossing(o, d, t_lo, t_lo + len, |p| met.push(p));
+            bvh.crossing(o, inv_d, t_lo, t_lo + len, |p| met.push(p));
             met.sort_unstable();
             let once = met.windows(2).all(|w| w[0] < w[1]);
             prop_assert!(once, "{:?}", met);
@@ -550,7 +551,13 @@ mod tests {
         let bvh = Bvh::build(&boxes);
         assert!(bvh.node_count() < 600, "{} nodes", bvh.node_count());
         let mut met = Vec::new();
-        bvh.crossing([1.0, 1.0, -10.0], [0.0, 0.0, 1.0], 0.0, 1000.0, |p| met.push(p));
+        bvh.crossing(
+            [1.0, 1.0, -10.0],
+            [f64::INFINITY, f64::INFINITY, 1.0],
+            0.0,
+            1000.0,
+            |p| met.push(p),
+        );
         met.sort_unstable();
         assert_eq!(met, (0..10).map(|k| k * 100).collect::<Vec<u32>>());
     }

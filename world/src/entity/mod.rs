@@ -221,19 +221,18 @@ pub fn chunk_range(world: WorldSize, size: [u32; 3], pos: [f64; 3], rot: [f64; 4
 #[derive(Debug)]
 pub(crate) struct LayoutError(pub String);
 
-/// Validates an op's pose and returns the quantised one.
-pub(crate) fn checked_pose(pos: [f64; 3], rot: [f64; 4]) -> Result<([f64; 3], [f64; 4]), String> {
+/// Validates an op's pose and returns the quantised one (values and packed words).
+pub(crate) fn checked_pose(pos: [f64; 3], rot: [f64; 4]) -> Result<pack::Quantised, String> {
     let n2: f64 = rot.iter().map(|v| v * v).sum();
     if rot.iter().any(|v| !v.is_finite()) || !n2.is_finite() || n2 == 0.0 {
         return Err(format!("rot {rot:?} must be a non-zero finite quaternion [x,y,z,w]"));
     }
-    match quantise_pose(pos, rot) {
-        Some(q) => Ok((q.pos, q.rot)),
-        None => Err(format!(
+    quantise_pose(pos, rot).ok_or_else(|| {
+        format!(
             "pos {pos:?} must lie in [0, 16384) × [0, 4096) × [0, 16384) once rounded to 1/128 voxel \
              (the packed entity position)"
-        )),
-    }
+        )
+    })
 }
 
 /// Checks a model for use as an entity type: edges within 7 bits, materials defined.
@@ -377,7 +376,8 @@ pub(crate) fn apply_op(
             check_model(model, m, materials).map_err(invalid)?;
             fit.0.insert(model.to_owned());
         }
-        let (pos, rot) = checked_pose(pos, rot).map_err(invalid)?;
+        let q = checked_pose(pos, rot).map_err(invalid)?;
+        let (pos, rot) = (q.pos, q.rot);
         if chunk_range(size, m.size(), pos, rot).is_none() {
             return Err(invalid(format!(
                 "entity {id} of model '{model}' at {pos:?} would lie entirely outside the {size} world"

@@ -68,9 +68,10 @@ impl<'a> EntityView<'a> {
     /// visited; the entity cells visited are added.
     pub fn resolve(&self, ray: &Ray, world: Option<Hit>, t_entry: f64, t_end: f64, steps: u32) -> Option<Hit> {
         let mut crossed = Crossed::new(self, ray, t_entry, t_end);
+        let inv_d = crossed.inv_d;
         self.set
             .bvh
-            .crossing(ray.origin(), ray.dir(), t_entry, t_end, |k| crossed.offer(k));
+            .crossing(ray.origin(), inv_d, t_entry, t_end, |k| crossed.offer(k));
         if crossed.list.is_empty() {
             return world;
         }
