@@ -46,9 +46,11 @@ fn gi_poses(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) group
     if id >= ENTITY_IDS {
         return;
     }
-    // The instance buffer holds entity `id`'s record in slot `id` (zero: no such entity).
+    // The instance buffer holds entity `id`'s record in slot `id` (zero: no such entity;
+    // past the world's slots, local instances, whose records carry no entity id).
     var record = vec4<u32>(0u);
-    if id < world_info.instance_slots && instance_word(id * RECORD_WORDS + 4u) != 0u {
+    let e = select(0u, instance_word(id * RECORD_WORDS + 4u), id < world_info.instance_slots);
+    if e != 0u && record_id(e) == id {
         let r = id * RECORD_WORDS;
         record = vec4<u32>(instance_word(r), instance_word(r + 1u), instance_word(r + 2u), instance_word(r + 3u));
     }

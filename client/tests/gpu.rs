@@ -17,6 +17,8 @@ use naadf_client::Mode;
 use naadf_client::gpu::{Gpu, GpuRay, GpuWorld, RayTracer, Renderer, Traversal};
 use naadf_world::baselines::{Hybrid, HybridFormat, Svdag, Svo};
 use naadf_world::camera::Camera;
+use naadf_world::entity::chunk_range;
+use naadf_world::entity::local::LocalInstances;
 use naadf_world::fingerprint::ChunkChanges;
 use naadf_world::material::MaterialKind;
 use naadf_world::ops::{Batch, Limits, Op};
@@ -163,8 +165,14 @@ fn size(x: u32, y: u32, z: u32) -> WorldSize {
 
 /// A random world with a model spawned as entities at odd rotations.
 fn entity_world(seed: u64) -> World {
-    let s = size(64, 64, 64);
-    let mut w = random_world(s, seed).build();
+    let mut w = random_world(size(64, 64, 64), seed).build();
+    w.apply(&Batch { ops: entity_ops(seed) }, &Limits::default())
+        .expect("entities");
+    w
+}
+
+/// A model, "crate", spawned as 24 entities at random positions and odd rotations.
+fn entity_ops(seed: u64) -> Vec<Op> {
     let mut rng = Rng(seed ^ 0x5EED);
     let mut voxels = Vec::new();
     for z in 0..7i64 {
@@ -189,8 +197,7 @@ fn entity_world(seed: u64) -> World {
             rot: [0, 1, 2, 3].map(|_| rng.unit() * 2.0 - 1.0),
         });
     }
-    w.apply(&Batch { ops }, &Limits::default()).expect("entities");
-    w
+    ops
 }
 
 #[test]
@@ -433,4 +440,102 @@ fn a_synced_copy_logs_which_chunks_each_sync_changed() {
     gw.sync(&world).unwrap();
     assert_eq!(gw.changes_since(before), ChunkChanges::Everything);
     assert_eq!(gw.changes_since(start), ChunkChanges::Everything);
+}
+
+/// Local instances (previews, markers) are hit exactly where the same model spawned as
+/// world entities is, only without an entity id, also after the world's own instance and
+/// type buffers grow under them; the mirrored buffers and the digest stay the world's; a
+/// moved local marks its chunks for the light history; and without them the world's hits
+/// come back.
+#[test]
+fn local_instances_are_hit_as_entities_are_but_stay_out_of_the_mirror() {
+    let Some(gpu) = gpu() else { return };
+    let mut world = random_world(size(64, 64, 64), 21).build();
+    let mut oracle = world.clone();
+    oracle
+        .apply(&Batch { ops: entity_ops(21) }, &Limits::default())
+        .unwrap();
+    let mut locals = LocalInstances::default();
+    let model = oracle.models().get("crate").unwrap().clone();
+    locals.define_model("crate", model, world.materials()).unwrap();
+    for (&id, pose) in &oracle.entity_table().instances {
+        locals.place(id, "crate", pose.pos, pose.rot).unwrap();
+    }
+    let mut gw = GpuWorld::new(gpu, &world).unwrap();
+    gw.set_locals(&locals);
+    gw.sync(&world).unwrap();
+    let mut tracer = RayTracer::new(gpu);
+    let mut rng = Rng(3);
+    let (cpu_rays, gpu_rays): (Vec<Ray>, Vec<GpuRay>) = rays(world.size().voxels(), &mut rng, 3000)
+        .iter()
+        .enumerate()
+        .map(|(i, r)| exact_f32(i, r))
+        .unzip();
+    // The GPU's hits against `truth`'s CPU hits, entity ids dropped; returns how many
+    // were hits on an entity.
+    let mut check = |gw: &GpuWorld, truth: &World, what: &str| {
+        let cpu = |r: &Ray| trace_naadf(truth, r).map(|h| Hit { entity: None, ..h });
+        let got = tracer.trace(gpu, gw, &gpu_rays, Method::Naadf).unwrap();
+        let mut on_entities = 0;
+        for (i, g) in got.iter().enumerate() {
+            on_entities += usize::from(trace_naadf(truth, &cpu_rays[i]).is_some_and(|h| h.entity.is_some()));
+            let expected = cpu(&cpu_rays[i]);
+            assert!(
+                same_result(&expected, &g.hit) || near_tie(&cpu, &cpu_rays[i], |h| same_result(h, &g.hit)),
+                "{what}: ray {i}: CPU {expected:?}, GPU {:?}",
+                g.hit
+            );
+        }
+        on_entities
+    };
+    assert!(
+        check(&gw, &oracle, "locals") > 100,
+        "too few rays meet the instances to tell"
+    );
+    assert_mirrors(gpu, &gw, &world, "with locals");
+    assert_eq!(gw.digest(gpu, &world).unwrap(), world.digest());
+    // The world's entity types and records grow under the locals, which move after them.
+    let far = vec![
+        Op::DefineModel {
+            name: "post".into(),
+            size: [1, 3, 1],
+            voxels: (0..3).map(|y| [0, y, 0, 2]).collect(),
+        },
+        Op::SpawnEntity {
+            id: 9000,
+            model: "post".into(),
+            pos: [1.5, 60.0, 1.5],
+            rot: [0.0, 0.0, 0.0, 1.0],
+        },
+    ];
+    for w in [&mut world, &mut oracle] {
+        w.apply(&Batch { ops: far.clone() }, &Limits::default()).unwrap();
+    }
+    gw.sync(&world).unwrap();
+    check(&gw, &oracle, "locals after the world's entities grew");
+    assert_mirrors(gpu, &gw, &world, "with locals, grown");
+    assert_eq!(gw.digest(gpu, &world).unwrap(), world.digest());
+    // A moved local marks the chunks under its old and its new box.
+    let before = gw.generation();
+    let (&key, pose) = oracle.entity_table().instances.iter().next().unwrap();
+    let (from, to, rot) = (pose.pos, [40.0, 40.0, 40.0], pose.rot);
+    locals.place(key, "crate", to, rot).unwrap();
+    gw.set_locals(&locals);
+    gw.sync(&world).unwrap();
+    let ChunkChanges::Chunks(changed) = gw.changes_since(before) else {
+        panic!("a local move changes a few chunks, not everything")
+    };
+    for pos in [from, to] {
+        let (lo, hi) = chunk_range(world.size(), [9, 5, 7], pos, rot).unwrap();
+        for c in [lo, hi] {
+            assert!(
+                changed.contains(&(world.size().chunk_index(c) as u32)),
+                "{pos:?}: {changed:?}"
+            );
+        }
+    }
+    // Without locals, the world's own hits.
+    gw.set_locals(&LocalInstances::default());
+    gw.sync(&world).unwrap();
+    check(&gw, &world, "no locals");
 }

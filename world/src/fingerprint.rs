@@ -18,6 +18,7 @@ use crate::digest::{BufferId, PAGE_BYTES};
 use crate::entity::pack::{InstanceRecord, RECORD_WORDS, conjugate};
 use crate::entity::{ENTITY_SOLID, chunk_range};
 use crate::hash::Xxh3;
+use crate::size::WorldSize;
 use rayon::prelude::*;
 use std::collections::HashMap;
 use std::ops::Range;
@@ -138,7 +139,7 @@ impl ChunkPrints {
                 let (was, is) = (record(before, &self.types, slot), record(after, &types, slot));
                 if was != is {
                     for (r, _) in [was, is].into_iter().flatten() {
-                        out.extend(overlapped_chunks(world, &r));
+                        out.extend(chunks_under(world.size(), &r));
                     }
                 }
             }
@@ -151,9 +152,9 @@ impl ChunkPrints {
     }
 }
 
-/// The chunks an instance's world box overlaps (as [`chunk_range`] clips it to the world).
-fn overlapped_chunks(world: &World, r: &InstanceRecord) -> Vec<u32> {
-    let size = world.size();
+/// The chunks of a `size` world that an instance's world box overlaps (as [`chunk_range`]
+/// clips it to the world): where a change of the record changes what rays see.
+pub fn chunks_under(size: WorldSize, r: &InstanceRecord) -> Vec<u32> {
     let Some((lo, hi)) = chunk_range(size, r.size, r.position(), conjugate(r.inv_rotation())) else {
         return Vec::new();
     };

@@ -106,7 +106,8 @@ wgsl_struct! {
     pub struct WorldInfo {
         /// World size in voxels.
         pub size: [u32; 3],
-        /// Slots of the instance buffer (records of 5 words; 0: no entity).
+        /// Slots of the instance buffer on the device, the world's and then the local
+        /// instances' (records of 5 words; 0: no instance to trace).
         pub instance_slots: u32,
         /// World size in chunks.
         pub chunks: [u32; 3],

@@ -8,6 +8,11 @@
 //! storage-binding limit is split into parts of `2^k` words, each its own binding; the
 //! shaders read it through a generated accessor ([`super::shaders::prelude`]).
 //!
+//! The device may also hold **local instances** ([`LocalInstances`]: previews, markers)
+//! that are not in the world: their type grids and records follow the world's, beyond the
+//! logical lengths that are mirrored, read back and digested, and the instance hierarchy
+//! covers both.
+//!
 //! Each sync also works out which chunks now show something else ([`ChunkPrints`], from
 //! the pages that changed) and logs them by generation, so that renderers with a history
 //! of earlier frames can drop or revalidate just the light those chunks touch
@@ -19,8 +24,10 @@ use super::params::WorldInfo;
 use super::traversal::Traversal;
 use naadf_world::baselines::{Hybrid, Svdag, Svo};
 use naadf_world::digest::{BufferId, Digest, PAGE_BYTES, digest_of};
+use naadf_world::entity::local::{LocalInstances, LocalLayout};
 use naadf_world::entity::pack::RECORD_WORDS;
-use naadf_world::fingerprint::{ChunkChanges, ChunkPrints, stale_words};
+use naadf_world::entity::{TYPE_ALIGN, hierarchy_words};
+use naadf_world::fingerprint::{ChunkChanges, ChunkPrints, chunks_under, stale_words};
 use naadf_world::traverse::{DEFAULT_MAX_STEPS, Method};
 use naadf_world::{World, WorldError};
 use std::collections::VecDeque;
@@ -37,6 +44,9 @@ pub const GPU_BUFFERS: [BufferId; 6] = [
     BufferId::EntityTypes,
     BufferId::EntityInstances,
 ];
+/// The logical buffers of the entity types and instances (indices into `GPU_BUFFERS`).
+const TYPES: usize = 4;
+const INSTANCES: usize = 5;
 /// The logical buffer of the instance hierarchy ([`World::entity_hierarchy_words`]).
 const HIERARCHY: usize = 6;
 /// The logical buffer of the comparison structure (dense grid, SVO, SVDAG or hybrid
@@ -101,6 +111,20 @@ pub struct GpuWorld {
     changes_from: u64,
     /// The traversal the comparison-structure binding holds data for, if any.
     structure: Option<Traversal>,
+    /// The local instances wanted on the device ([`GpuWorld::set_locals`]).
+    locals: LocalInstances,
+    /// The local instances on the device.
+    shown: ShownLocals,
+}
+
+/// The local instances a device holds, and where.
+#[derive(Default)]
+struct ShownLocals {
+    locals: LocalInstances,
+    /// The world's type voxels and instance slots they follow.
+    after: (usize, usize),
+    /// Their records, as on the device.
+    records: Vec<u32>,
 }
 
 impl std::fmt::Debug for GpuWorld {
@@ -169,6 +193,8 @@ impl GpuWorld {
             changes: VecDeque::new(),
             changes_from: 0,
             structure: None,
+            locals: LocalInstances::default(),
+            shown: ShownLocals::default(),
         };
         w.check_bindings(&split)?;
         w.sync(world)?;
@@ -222,27 +248,39 @@ impl GpuWorld {
             b.hashes = hashes.to_vec();
             b.len = len;
         }
-        // The hierarchy follows the instance buffer: rebuilt and uploaded whole when any
-        // of its pages changed.
-        if stale
+        let instances_stale = stale
             .iter()
-            .any(|(id, words)| *id == BufferId::EntityInstances && !words.is_empty())
-        {
-            let words = world.entity_hierarchy_words();
+            .any(|(id, words)| *id == BufferId::EntityInstances && !words.is_empty());
+        let local_changes = self.sync_locals(world, &mut up)?;
+        // The hierarchy follows the instance records, the world's and the local ones:
+        // rebuilt and uploaded whole when any of them changed.
+        if instances_stale || local_changes.is_some() {
+            let words = if self.shown.records.is_empty() {
+                world.entity_hierarchy_words()
+            } else {
+                let mut all = world.entity_instances().to_vec();
+                all.extend_from_slice(&self.shown.records);
+                hierarchy_words(&all)
+            };
             up.reallocated |= self.replace(HIERARCHY, bytemuck::cast_slice(&words))?;
             up.bytes += 4 * words.len() as u64;
         }
         let size = world.size();
         let info = WorldInfo {
             size: size.voxels(),
-            instance_slots: (world.entity_instances().len() / RECORD_WORDS) as u32,
+            instance_slots: ((world.entity_instances().len() + self.shown.records.len()) / RECORD_WORDS) as u32,
             chunks: size.chunks(),
             max_steps: self.world_info.max_steps,
         };
-        if up.pages > 0 || up.reallocated || info != self.world_info {
+        if up.pages > 0 || up.reallocated || info != self.world_info || local_changes.is_some() {
             self.generation += 1;
             if let Some(prints) = &mut self.prints {
-                let changed = prints.update(world, &stale);
+                let mut changed = prints.update(world, &stale);
+                if let (ChunkChanges::Chunks(list), Some(local)) = (&mut changed, local_changes) {
+                    list.extend(local);
+                    list.sort_unstable();
+                    list.dedup();
+                }
                 self.log_changes(changed);
             }
         }
@@ -254,6 +292,70 @@ impl GpuWorld {
             self.rebind();
         }
         Ok(up)
+    }
+
+    /// Asks for `locals` on the device from the next sync on: drawn and hit by rays after
+    /// the world's own instances, but never mirrored, read back or digested.
+    pub fn set_locals(&mut self, locals: &LocalInstances) {
+        if *locals != self.locals {
+            self.locals = locals.clone();
+        }
+    }
+
+    /// The local instances asked for.
+    pub fn locals(&self) -> &LocalInstances {
+        &self.locals
+    }
+
+    /// Writes the local instances' type grids and records after the world's when they
+    /// changed or the world's grew or shrank under them; returns the chunks whose look
+    /// changed, or `None` when nothing was written.
+    fn sync_locals(&mut self, world: &World, up: &mut Upload) -> Result<Option<Vec<u32>>, GpuError> {
+        let after = (
+            world
+                .buffer_len(BufferId::EntityTypes)
+                .div_ceil(4)
+                .next_multiple_of(TYPE_ALIGN),
+            world.entity_instances().len() / RECORD_WORDS,
+        );
+        let unchanged = self.locals == self.shown.locals;
+        if unchanged && (self.shown.records.is_empty() || after == self.shown.after) {
+            return Ok(None);
+        }
+        // A world may redefine a material a local model uses: such locals are not drawn.
+        let layout = self
+            .locals
+            .fits(world.materials())
+            .and_then(|()| self.locals.layout(after.0))
+            .unwrap_or_else(|e| {
+                tracing::warn!("local instances not drawn: {e}");
+                LocalLayout::default()
+            });
+        for (k, base, words) in [
+            (TYPES, after.0, &layout.type_voxels),
+            (INSTANCES, after.1 * RECORD_WORDS, &layout.records),
+        ] {
+            let bytes: &[u8] = bytemuck::cast_slice(words);
+            let offset = 4 * base as u64;
+            up.reallocated |= self.reserve(k, offset + bytes.len() as u64)?;
+            self.write_span(k, offset, bytes);
+            up.bytes += bytes.len() as u64;
+        }
+        let size = world.size();
+        let mut chunks: Vec<u32> = self
+            .locals
+            .changed_since(&self.shown.locals)
+            .iter()
+            .flat_map(|r| chunks_under(size, r))
+            .collect();
+        chunks.sort_unstable();
+        chunks.dedup();
+        self.shown = ShownLocals {
+            locals: self.locals.clone(),
+            after,
+            records: layout.records,
+        };
+        Ok(Some(chunks))
     }
 
     /// How many syncs changed the device's copy: renderers that accumulate over frames
@@ -382,11 +484,13 @@ impl GpuWorld {
     /// rebinds).
     fn replace(&mut self, k: usize, bytes: &[u8]) -> Result<bool, GpuError> {
         let reallocated = self.reserve(k, bytes.len() as u64)?;
-        for (i, chunk) in bytes.chunks(PAGE_BYTES).enumerate() {
-            // A dense grid is u16 pairs.
-            let mut page = chunk.to_vec();
-            page.resize(page.len().next_multiple_of(4), 0);
-            self.write(k, (i * PAGE_BYTES) as u64, &page);
+        let whole = bytes.len() & !3;
+        self.write_span(k, 0, &bytes[..whole]);
+        if whole < bytes.len() {
+            // A dense grid is u16 pairs: its odd tail is padded to a word.
+            let mut tail = bytes[whole..].to_vec();
+            tail.resize(4, 0);
+            self.write(k, whole as u64, &tail);
         }
         self.buffers[k].len = bytes.len() as u64;
         Ok(reallocated)
@@ -440,6 +544,18 @@ impl GpuWorld {
     /// How the buffers are currently split across bindings.
     pub fn split(&self) -> Split {
         self.split
+    }
+
+    /// Writes `bytes` (whole words) at byte `offset` of logical buffer `k`, page by page
+    /// (a write never crosses a part).
+    fn write_span(&self, k: usize, offset: u64, bytes: &[u8]) {
+        let mut at = 0;
+        while at < bytes.len() {
+            let o = offset + at as u64;
+            let n = (PAGE_BYTES - (o % PAGE_BYTES as u64) as usize).min(bytes.len() - at);
+            self.write(k, o, &bytes[at..at + n]);
+            at += n;
+        }
     }
 
     /// Writes `bytes` at byte `offset` of logical buffer `k` (within one page).

@@ -3,7 +3,8 @@
 //!
 //! - `link` ([`Link`]): the connection (world stream, status polls, edits) on a tokio runtime;
 //! - `fly` ([`Fly`]): WASD + mouse-look camera control;
-//! - `pick` ([`edit_for_click`]): which voxel a click edits;
+//! - `pick` ([`edit_for_click`]): which voxel a click edits, and the preview of what a
+//!   right click would place (a local instance, drawn only on this window's GPU);
 //! - `hud` ([`draw_hud`]): the text overlay;
 //! - `markers` ([`draw_markers`]): the other people here, from the presence table;
 //! - `present` ([`Presenter`]): showing frames in the window;
@@ -27,6 +28,7 @@ pub use fly::{Fly, Move};
 pub use hud::draw_hud;
 pub use link::{Event, Link};
 pub use markers::{draw_markers, project};
+use pick::place_preview;
 pub use pick::{Click, edit_for_click};
 pub use present::Presenter;
 
@@ -36,6 +38,7 @@ use crate::gpu::{Baseline, Gi, Gpu, GpuError, GpuWorld, PathTracer, Renderer, Sh
 use crate::light::{DEFAULT_LIT_BOUNCES, DEFAULT_PATHTRACE_BOUNCES, LitOptions};
 use crate::mirror::Mirror;
 use naadf_world::camera::Camera;
+use naadf_world::entity::local::LocalInstances;
 use naadf_world::raysets::fixed_cameras;
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
@@ -420,6 +423,16 @@ impl App {
         }
         self.last_frame = Some(now);
         let size = gfx.presenter.size();
+        // While the window edits, what a right click would place shows where it would go.
+        let preview = if self.grabbed {
+            place_preview(world, &fly.camera, size, self.material)
+        } else {
+            LocalInstances::default()
+        };
+        if let Some(gw) = gfx.world.as_mut().filter(|gw| *gw.locals() != preview) {
+            gw.set_locals(&preview);
+            gw.sync(world)?;
+        }
         let mut frame = match gfx.render(&fly.camera, size, self.opts.mode) {
             // `gi` is the default; an adapter that cannot run it shows albedo instead.
             Err(e) if self.opts.mode == Mode::Gi => {

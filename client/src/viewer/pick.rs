@@ -4,6 +4,8 @@
 
 use naadf_world::World;
 use naadf_world::camera::Camera;
+use naadf_world::entity::local::LocalInstances;
+use naadf_world::model::Model;
 use naadf_world::traverse::{Hit, trace_naadf};
 
 /// What a click does.
@@ -30,6 +32,16 @@ pub enum Click {
 /// assert!(ops.starts_with(r#"{"op":"set","voxels":[["#) && ops.ends_with(",0]]}"));
 /// ```
 pub fn edit_for_click(world: &World, camera: &Camera, size: (u32, u32), click: Click) -> Option<String> {
+    let (target, material) = click_target(world, camera, size, click)?;
+    Some(format!(
+        r#"{{"op":"set","voxels":[[{},{},{},{material}]]}}"#,
+        target[0], target[1], target[2]
+    ))
+}
+
+/// The voxel a click edits and the material it gets: the voxel under the crosshair
+/// (erase) or the empty voxel in front of its face (place).
+fn click_target(world: &World, camera: &Camera, size: (u32, u32), click: Click) -> Option<([i64; 3], u16)> {
     let hit = centre_hit(world, camera, size)?;
     let v = hit.voxel.map(i64::from);
     let (target, material) = match click {
@@ -40,12 +52,26 @@ pub fn edit_for_click(world: &World, camera: &Camera, size: (u32, u32), click: C
     if click != Click::Erase && target == v {
         return None;
     }
-    world.size().contains(target).then(|| {
-        format!(
-            r#"{{"op":"set","voxels":[[{},{},{},{material}]]}}"#,
-            target[0], target[1], target[2]
-        )
-    })
+    world.size().contains(target).then_some((target, material))
+}
+
+/// The local model of the place preview.
+const PREVIEW: &str = "place preview";
+
+/// What a right click with `material` would place, shown before it is placed: a local
+/// instance (drawn and hit by the GPU's rays, unknown to the world and to picking) of one
+/// voxel of `material` where the voxel would go. Empty when a click would place nothing.
+pub(crate) fn place_preview(world: &World, camera: &Camera, size: (u32, u32), material: u16) -> LocalInstances {
+    let mut locals = LocalInstances::default();
+    if let Some((target, m)) = click_target(world, camera, size, Click::Place(material)) {
+        let voxel = Model::new([1, 1, 1], vec![m]).expect("a one-voxel model");
+        // An undefined material places nothing, and shows nothing.
+        if locals.define_model(PREVIEW, voxel, world.materials()).is_ok() {
+            let placed = locals.place(0, PREVIEW, target.map(|v| v as f64), [0.0, 0.0, 0.0, 1.0]);
+            debug_assert!(placed.is_ok(), "a voxel of the world packs");
+        }
+    }
+    locals
 }
 
 /// The voxel of the world under the crosshair of a `width × height` view (`None` for the
@@ -126,5 +152,21 @@ mod tests {
         let (w, mut cam) = floor();
         cam.pitch = 80.0;
         assert_eq!(edit_for_click(&w, &cam, (65, 65), Click::Erase), None);
+    }
+
+    #[test]
+    fn the_preview_sits_where_a_place_click_would_set_its_voxel() {
+        let (w, cam) = floor();
+        let place = edit_for_click(&w, &cam, (65, 65), Click::Place(3)).unwrap();
+        let locals = place_preview(&w, &cam, (65, 65), 3);
+        assert_eq!(locals.len(), 1);
+        let pose = locals.get(0).unwrap();
+        let [x, y, z] = pose.pos;
+        assert_eq!(place, format!(r#"{{"op":"set","voxels":[[{x},{y},{z},3]]}}"#));
+        // Undefined materials and the sky show nothing.
+        assert!(place_preview(&w, &cam, (65, 65), 999).is_empty());
+        let mut up = cam;
+        up.pitch = 80.0;
+        assert!(place_preview(&w, &up, (65, 65), 3).is_empty());
     }
 }

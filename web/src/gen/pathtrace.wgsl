@@ -3,7 +3,8 @@
 struct WorldInfo {
     // World size in voxels.
     size: vec3<u32>,
-    // Slots of the instance buffer (records of 5 words; 0: no entity).
+    // Slots of the instance buffer on the device, the world's and then the local
+    // instances' (records of 5 words; 0: no instance to trace).
     instance_slots: u32,
     // World size in chunks.
     chunks: vec3<u32>,
@@ -491,7 +492,9 @@ fn make_hit(r: Ray, cell: vec3<i32>, t: f32, axis: u32, material: u32, steps: u3
 // then the instances whose world boxes the ray crosses before the world's hit or exit,
 // found through their hierarchy (docs/NAADF.md §11): the GPU twin of
 // world/src/traverse/entities.rs. Only the nearest entity hit (lowest id at equal times)
-// survives, and only if it comes strictly before the world's hit or exit.
+// survives, and only if it comes strictly before the world's hit or exit. Local instances
+// (previews, markers: world/src/entity/local.rs) follow the world's records and carry the id
+// NO_ENTITY, so their hits read as static geometry to everything that follows entity ids.
 
 // How the world loop ended.
 const END_HIT: u32 = 0u;
@@ -519,6 +522,8 @@ var<private> best_entity: Hit;
 var<private> best_rotation: vec4<f32>;
 // Entity-grid cells visited (added to the step count of an entity hit).
 var<private> entity_steps: u32;
+// Whether the last `trace` returned an instance's hit (a local instance's has no entity id).
+var<private> hit_instance: bool;
 
 // Walks the instance hierarchy (world/src/entity/bvh.rs: four-wide nodes of NODE_WORDS
 // words, the children's f32 boxes axis by axis, then their references) and tests every
@@ -669,7 +674,7 @@ fn test_instance(r: Ray, at: u32, t_lo: f32) {
 // rotated back to the world).
 fn world_normal(h: Hit) -> vec3<f32> {
     let n = vec3<f32>(h.normal);
-    if h.entity == NO_ENTITY {
+    if !hit_instance {
         return n;
     }
     return rotate(conjugate(best_rotation), n);
@@ -679,12 +684,14 @@ fn world_normal(h: Hit) -> vec3<f32> {
 fn trace(r: Ray) -> Hit {
     entity_steps = 0u;
     best_entity = no_hit(0u);
+    hit_instance = false;
     let w = world_loop(r);
     if w.end == END_MISSED || w.end == END_EXHAUSTED {
         return w.hit;
     }
     find_instances(r, w.t_entry, w.t_end);
     if best_entity.hit && best_entity.t < w.t_end {
+        hit_instance = true;
         var h = best_entity;
         h.steps = w.hit.steps + entity_steps;
         return h;

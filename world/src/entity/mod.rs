@@ -27,6 +27,7 @@
 
 pub(crate) mod bounds;
 pub mod bvh;
+pub mod local;
 pub mod pack;
 pub(crate) mod set;
 
@@ -197,6 +198,13 @@ pub fn type_grid(model: &Model) -> Vec<u32> {
             }
         })
         .collect()
+}
+
+/// The packed instance hierarchy (docs/FORMAT.md §5.10) over the records of an instance
+/// buffer `words`, whose leaves name the records' slots: what a device walks when its
+/// instance buffer holds more than the world's records (local instances after them).
+pub fn hierarchy_words(words: &[u32]) -> Vec<u32> {
+    set::InstanceSet::of_buffer(words).hierarchy_words()
 }
 
 /// The inclusive chunk range an instance of `size` at `pos`/`rot` overlaps, clipped to the
