@@ -611,7 +611,8 @@ async fn an_incompatible_protocol_version_is_refused() {
 /// `naadf mirror` (following, without --once) outlives its server: killed with -9 and
 /// started again on the same address and data, the server is joined again by the mirror,
 /// which then follows the edits made after the restart to the server's quiescent state
-/// without being sent a page again, and exits cleanly when interrupted.
+/// without being sent a page again, and exits cleanly when interrupted. With
+/// `--log-versions` it also says when it applied each version, in order.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_following_mirror_joins_again_after_the_server_restarts() {
     use std::io::BufRead;
@@ -622,17 +623,23 @@ async fn a_following_mirror_joins_again_after_the_server_restarts() {
     let url = server.url.clone();
     let log = dir.path().join("mirror.log");
     let mut mirror = std::process::Command::new(env!("CARGO_BIN_EXE_naadf"))
-        .args(["mirror", "--server", &url, "--json", "--no-cache"])
+        .args(["mirror", "--server", &url, "--json", "--no-cache", "--log-versions"])
         .stdout(std::process::Stdio::piped())
         .stderr(std::fs::File::create(&log).unwrap())
         .spawn()
         .expect("spawn naadf mirror");
-    // The quiescent points the mirror prints, read on a thread of their own.
+    // The quiescent points the mirror prints, read on a thread of their own, which keeps
+    // the versions it logs as applied.
     let (tx, points) = std::sync::mpsc::channel::<serde_json::Value>();
     let stdout = mirror.stdout.take().unwrap();
+    let applied = std::sync::Arc::new(std::sync::Mutex::new(Vec::<(u64, u64)>::new()));
+    let logged = applied.clone();
     std::thread::spawn(move || {
         for line in std::io::BufReader::new(stdout).lines().map_while(Result::ok) {
-            if tx.send(serde_json::from_str(&line).expect("JSON lines")).is_err() {
+            let v: serde_json::Value = serde_json::from_str(&line).expect("JSON lines");
+            if let (Some(version), Some(at)) = (v["version"].as_u64(), v["applied_unix_ns"].as_u64()) {
+                logged.lock().unwrap().push((version, at));
+            } else if tx.send(v).is_err() {
                 return;
             }
         }
@@ -683,4 +690,10 @@ async fn a_following_mirror_joins_again_after_the_server_restarts() {
     let status = mirror.wait().unwrap();
     assert!(status.success(), "the interrupted mirror exits cleanly: {status}");
     server.stop();
+    let applied = applied.lock().unwrap();
+    assert!(
+        applied.windows(2).all(|w| w[0].0 < w[1].0 && w[0].1 <= w[1].1),
+        "versions logged once each, in order: {applied:?}"
+    );
+    assert_eq!(applied.last().map(|a| a.0), Some(10), "{applied:?}");
 }

@@ -38,6 +38,20 @@ pub struct Args {
     /// Neither read nor write the page cache.
     #[arg(long, conflicts_with = "cache")]
     no_cache: bool,
+    /// Also print a JSON line for every version the mirror applies, with the wall-clock
+    /// time it was applied: `{"version":V,"applied_unix_ns":T}` (what `bench moves
+    /// --mirror-processes` measures latency with).
+    #[arg(long)]
+    log_versions: bool,
+}
+
+/// One line of --log-versions.
+#[derive(serde::Serialize, serde::Deserialize)]
+pub struct Applied {
+    /// The version applied.
+    pub version: u64,
+    /// When, in nanoseconds since the Unix epoch.
+    pub applied_unix_ns: u64,
 }
 
 #[derive(serde::Serialize)]
@@ -159,11 +173,15 @@ async fn follow(a: &Args, session: &mut Session) -> Result<()> {
         Stop::Interrupted => Ok(()),
     };
     let mut last_reported = None;
+    let mut last_logged = None;
     let mut backoff = REJOIN_BACKOFF;
     loop {
         let ended = session
             .follow(stop.as_mut(), |mirror| -> Result<ControlFlow<()>> {
                 backoff.reset();
+                if a.log_versions {
+                    log_version(mirror, &mut last_logged)?;
+                }
                 report(a, mirror, &mut last_reported)
             })
             .await;
@@ -190,6 +208,24 @@ async fn follow(a: &Args, session: &mut Session) -> Result<()> {
             }
         }
     }
+}
+
+/// Prints the --log-versions line of a live mirror's version when it is new.
+fn log_version(mirror: &Mirror, last: &mut Option<u64>) -> Result<()> {
+    let Some(w) = mirror.world().filter(|_| mirror.is_live()) else {
+        return Ok(());
+    };
+    if last.is_none_or(|l| l < w.version()) {
+        *last = Some(w.version());
+        let applied_unix_ns = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)?
+            .as_nanos() as u64;
+        print_json(&Applied {
+            version: w.version(),
+            applied_unix_ns,
+        })?;
+    }
+    Ok(())
 }
 
 /// What follows every message: at each new quiescent point, the --verify checks and the

@@ -11,6 +11,7 @@ mod flood;
 mod frames;
 mod gi;
 mod gpu;
+mod mirror_process;
 mod moves;
 mod paper;
 mod plot;

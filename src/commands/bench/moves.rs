@@ -1,10 +1,11 @@
-//! `naadf bench moves`: entity moves under load, in one process on loopback as `bench
-//! stream` runs the server and its mirrors — `MoveEntities` calls, each moving every one
-//! of `--entities` entities to a new pose (one version each), at each of `--rates` calls a
-//! second with `--clients` CPU mirrors following, and the move-to-every-mirror latency of
-//! each call; plus the bytes a move takes in the record and the patch form.
+//! `naadf bench moves`: entity moves under load on loopback — `MoveEntities` calls, each
+//! moving every one of `--entities` entities to a new pose (one version each), at each of
+//! `--rates` calls a second with `--clients` CPU mirrors following, each a `naadf mirror`
+//! process of its own (or, with `--in-process`, tasks in the server's process as `bench
+//! stream` runs them), and the move-to-every-mirror latency of each call; plus the bytes a
+//! move takes in the record and the patch form.
 
-use super::stream::{Editor, LatencyReport, LocalServer, describe, latency_run};
+use super::stream::{Editor, LatencyReport, LocalServer, Mirrors, describe, latency_run};
 use crate::commands::args::PresetArgs;
 use crate::commands::print_json;
 use crate::commands::remote::block_on;
@@ -33,6 +34,10 @@ pub struct MovesArgs {
     /// Seconds per run.
     #[arg(long, default_value_t = 60.0)]
     seconds: f64,
+    /// Run the mirrors as tasks in this process (from an in-memory copy of the world)
+    /// rather than as `naadf mirror` processes that join over the network.
+    #[arg(long)]
+    in_process: bool,
     /// Print one JSON object.
     #[arg(long)]
     json: bool,
@@ -124,14 +129,24 @@ pub fn run(a: MovesArgs) -> Result<()> {
                 .map(|k| (0..entities).map(|id| pose(size, id, first + k)).collect())
                 .collect();
             let calls = std::sync::Arc::new(calls);
-            let r = latency_run(&url, &cache, &editor, a.clients, rate, count, &mut last, move |c, k| {
+            let mirrors = Mirrors {
+                count: a.clients,
+                processes: !a.in_process,
+            };
+            let r = latency_run(&url, &cache, &editor, mirrors, rate, count, &mut last, move |c, k| {
                 let calls = calls.clone();
                 async move { Ok(c.move_entities(&calls[k], 0).await?.version) }
             })
             .await?;
             eprintln!(
-                "{rate} calls/s × {entities} entities, {} mirrors: p50 {:.2} ms, p99 {:.2} ms, max {:.2} ms (acknowledged: p50 {:.2} ms, p99 {:.2} ms)",
-                a.clients, r.p50_ms, r.p99_ms, r.max_ms, r.ack_p50_ms, r.ack_p99_ms
+                "{rate} calls/s × {entities} entities, {} mirrors{}: p50 {:.2} ms, p99 {:.2} ms, max {:.2} ms (acknowledged: p50 {:.2} ms, p99 {:.2} ms)",
+                a.clients,
+                if a.in_process { " in process" } else { " (processes)" },
+                r.p50_ms,
+                r.p99_ms,
+                r.max_ms,
+                r.ack_p50_ms,
+                r.ack_p99_ms
             );
             eprintln!("  CPU per call: {}", describe(&r.cpu_per_edit));
             if r.incomplete > 0 {

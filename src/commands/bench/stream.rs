@@ -4,6 +4,7 @@
 //! the CPU time of an edit in each group of threads ([`super::cpu`]).
 
 use super::cpu::{Sample, UnitUsage};
+use super::mirror_process::MirrorProcess;
 use super::shared::{percentile, surface};
 use crate::commands::args::PresetArgs;
 use crate::commands::print_json;
@@ -59,6 +60,8 @@ struct JoinReport {
 #[derive(Serialize)]
 pub(super) struct LatencyReport {
     clients: usize,
+    /// Whether each mirror ran in a process of its own.
+    mirror_processes: bool,
     edits: usize,
     rate: u32,
     pub(super) p50_ms: f64,
@@ -149,7 +152,7 @@ impl LocalServer {
 }
 
 /// When each version was applied at one mirror.
-type Applied = Vec<(u64, Instant)>;
+pub(super) type Applied = Vec<(u64, Instant)>;
 
 /// Joins and follows; records when each version was applied. Returns once `stop` is set.
 struct Follower {
@@ -196,18 +199,63 @@ async fn follow(url: &str, cache: Option<World>) -> Result<Follower> {
 
 impl Follower {
     async fn wait_for(&mut self, version: u64) -> Result<()> {
-        tokio::time::timeout(
-            Duration::from_secs(600),
-            self.applied.wait_for(|v| v.is_some_and(|v| v >= version)),
-        )
-        .await
-        .context("mirror did not catch up")??;
-        Ok(())
+        caught_up(&mut self.applied, version).await
     }
 
     async fn finish(self) -> Result<(Mirror, Applied)> {
         let _ = self.stop.send(true);
         self.task.await?
+    }
+}
+
+/// Waits until the version a mirror reports through `applied` reaches `version`.
+pub(super) async fn caught_up(applied: &mut watch::Receiver<Option<u64>>, version: u64) -> Result<()> {
+    tokio::time::timeout(
+        Duration::from_secs(600),
+        applied.wait_for(|v| v.is_some_and(|v| v >= version)),
+    )
+    .await
+    .context("mirror did not catch up")??;
+    Ok(())
+}
+
+/// The mirrors a latency run follows with.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub(super) struct Mirrors {
+    /// How many.
+    pub count: usize,
+    /// Each in a `naadf mirror` process of its own, rather than in this process.
+    pub processes: bool,
+}
+
+/// One mirror of a latency run.
+enum Following {
+    InProcess(Follower),
+    Process(MirrorProcess),
+}
+
+impl Following {
+    /// Starts a mirror of `url`: in this process from `cache`, or in a process of its own.
+    async fn start(url: &str, cache: &Option<World>, process: bool) -> Result<Self> {
+        Ok(if process {
+            Following::Process(MirrorProcess::spawn(url)?)
+        } else {
+            Following::InProcess(follow(url, cache.clone()).await?)
+        })
+    }
+
+    async fn wait_for(&mut self, version: u64) -> Result<()> {
+        match self {
+            Following::InProcess(f) => f.wait_for(version).await,
+            Following::Process(p) => p.wait_for(version).await,
+        }
+    }
+
+    async fn finish(self) -> Result<Applied> {
+        match self {
+            Following::InProcess(f) => Ok(f.finish().await?.1),
+            Following::Process(p) => p.finish().await,
+        }
     }
 }
 
@@ -400,7 +448,11 @@ pub fn run(a: StreamArgs) -> Result<()> {
             // Each run edits new places: repeating a run's edits would make them no-ops.
             let first = run * edits;
             let pts = pts.clone();
-            let r = latency_run(&url, &cache, &editor, clients, a.rate, edits, &mut last, move |c, k| {
+            let mirrors = Mirrors {
+                count: clients,
+                processes: false,
+            };
+            let r = latency_run(&url, &cache, &editor, mirrors, a.rate, edits, &mut last, move |c, k| {
                 let p = pts[((first + k) * 7 + 3) % pts.len()];
                 let r = 1 + (first + k) % 8;
                 let ops = format!(
@@ -469,7 +521,7 @@ pub fn run(a: StreamArgs) -> Result<()> {
     })
 }
 
-/// Edit-to-every-mirror latency: `clients` mirrors join (from `cache`) and catch up to
+/// Edit-to-every-mirror latency: `mirrors` join (in this process from `cache`) and catch up to
 /// `last`; then `count` requests go out through `editor` at `rate` a second, request `k`
 /// sent by `request(client, k)`, which returns the version it made. Each version's latency
 /// runs from sending it to the last mirror applying it. `last` becomes the newest version.
@@ -478,7 +530,7 @@ pub(super) async fn latency_run<F, Fut>(
     url: &str,
     cache: &Option<World>,
     editor: &Editor,
-    clients: usize,
+    mirrors: Mirrors,
     rate: u32,
     count: usize,
     last: &mut u64,
@@ -489,8 +541,8 @@ where
     Fut: std::future::Future<Output = Result<u64>> + Send + 'static,
 {
     let mut followers = Vec::new();
-    for _ in 0..clients {
-        followers.push(follow(url, cache.clone()).await?);
+    for _ in 0..mirrors.count {
+        followers.push(Following::start(url, cache, mirrors.processes).await?);
     }
     for f in &mut followers {
         f.wait_for(*last).await?;
@@ -524,7 +576,7 @@ where
     let mut done: HashMap<u64, Instant> = HashMap::new();
     let mut incomplete = 0;
     for f in followers {
-        let (_, times) = f.finish().await?;
+        let times = f.finish().await?;
         let seen: HashMap<u64, Instant> = times.into_iter().collect();
         for &v in sent_at.keys() {
             match seen.get(&v) {
@@ -542,7 +594,8 @@ where
         .collect();
     ms.sort_by(f64::total_cmp);
     Ok(LatencyReport {
-        clients,
+        clients: mirrors.count,
+        mirror_processes: mirrors.processes,
         edits: count,
         rate,
         p50_ms: percentile(&ms, 0.5),
