@@ -288,6 +288,41 @@ fn rays_through_entity_scenes_match_brute_force_and_the_methods_agree() {
     }
 }
 
+/// Batches of small moves keep the hierarchy's shape and refit its boxes; rays through
+/// the moved instances still match brute force after every batch.
+#[test]
+fn rays_match_brute_force_after_small_moves_refit_the_hierarchy() {
+    let size = WorldSize::new(64, 64, 64).unwrap();
+    let (_, mut w) = scene(size, 3, 3, 24);
+    let world_only = DenseGrid::from_world(&without_entities(&w)).unwrap();
+    let mut rng = Rng(33);
+    for step in 0..6 {
+        let moves = w
+            .entity_table()
+            .instances
+            .iter()
+            .map(|(&id, p)| Op::MoveEntity {
+                id,
+                pos: [0, 1, 2].map(|a| (p.pos[a] + rng.unit() - 0.5).clamp(0.0, 60.0)),
+                rot: p.rot,
+            })
+            .collect();
+        apply(&mut w, moves);
+        let grid = DenseGrid::from_world(&w).unwrap();
+        let mut entity_hits = 0;
+        for (_, pose) in w.entity_table().instances.clone() {
+            for _ in 0..30 {
+                let target = [0, 1, 2].map(|a| pose.pos[a] + rng.unit() * 8.0 - 2.0);
+                let from = [0, 1, 2].map(|a| target[a] + (rng.unit() * 2.0 - 1.0) * 40.0);
+                if let Ok(ray) = Ray::new(from, [0, 1, 2].map(|a| target[a] - from[a])) {
+                    entity_hits += usize::from(check_ray(&w, &world_only, &grid, &ray));
+                }
+            }
+        }
+        assert!(entity_hits > 50, "batch {step}: only {entity_hits} entity hits");
+    }
+}
+
 #[test]
 fn an_entity_in_front_of_world_geometry_wins() {
     let size = WorldSize::new(64, 64, 64).unwrap();

@@ -277,6 +277,8 @@ fn report_instances(world: &World) -> Result<()> {
         times.push(t.elapsed().as_secs_f64() * 1e3);
     }
     times.sort_by(f64::total_cmp);
+    let half_voxel = copy.entity_instances().to_vec();
+    report_refit(world, &half_voxel)?;
     eprintln!(
         "instances: {} in the instance buffer ({} B), hierarchy of {} nodes ({} B); a batch moving all: {:.2} ms (median of 5; {:.2}…{:.2})",
         world.entity_table().instances.len(),
@@ -287,6 +289,66 @@ fn report_instances(world: &World) -> Result<()> {
         times[0],
         times[4]
     );
+    Ok(())
+}
+
+/// Rebuilding the hierarchy against refitting it (keeping its shape, moving its boxes),
+/// after every entity moved by half a voxel (`half_voxel`: that instance buffer) and after
+/// every entity moved anywhere: the time each takes (median of 5) and the nodes a ray is
+/// expected to visit ([`Bvh::expected_visits`]).
+fn report_refit(world: &World, half_voxel: &[u32]) -> Result<()> {
+    use naadf_world::entity::bvh::Bvh;
+    use naadf_world::entity::instance_boxes;
+    let before = instance_boxes(world.entity_instances());
+    let mut anywhere = world.clone();
+    let s = world.size().voxels().map(f64::from);
+    let mut rng = SplitMix64(0x4EF1);
+    let moves = world
+        .entity_table()
+        .instances
+        .iter()
+        .map(|(&id, p)| Op::MoveEntity {
+            id,
+            pos: [0, 1, 2].map(|a| 4.0 + rng.unit() * (s[a] - 24.0)),
+            rot: p.rot,
+        })
+        .collect::<Vec<_>>();
+    let n = moves.len();
+    anywhere.apply(
+        &Batch { ops: moves },
+        &Limits {
+            max_ops: n,
+            ..Limits::default()
+        },
+    )?;
+    let built = Bvh::build(&before);
+    for (what, words) in [("half a voxel", half_voxel), ("anywhere", anywhere.entity_instances())] {
+        let after = instance_boxes(words);
+        let median = |f: &mut dyn FnMut() -> Bvh| {
+            let mut ms: Vec<f64> = (0..5)
+                .map(|_| {
+                    let t = std::time::Instant::now();
+                    std::hint::black_box(f());
+                    t.elapsed().as_secs_f64() * 1e3
+                })
+                .collect();
+            ms.sort_by(f64::total_cmp);
+            ms[2]
+        };
+        let rebuild_ms = median(&mut || Bvh::build(&after));
+        let refit_ms = median(&mut || {
+            let mut b = built.clone();
+            b.refit(&after);
+            b
+        });
+        let mut refit = built.clone();
+        refit.refit(&after);
+        eprintln!(
+            "hierarchy after moving every entity {what}: rebuild {rebuild_ms:.3} ms, {:.1} expected node visits; refit {refit_ms:.3} ms (a clone included), {:.1} expected node visits",
+            Bvh::build(&after).expected_visits(),
+            refit.expected_visits()
+        );
+    }
     Ok(())
 }
 

@@ -207,6 +207,12 @@ pub fn hierarchy_words(words: &[u32]) -> Vec<u32> {
     set::InstanceSet::of_buffer(words).hierarchy_words()
 }
 
+/// The padded world box of every live record of an instance buffer `words`, in slot
+/// order: what the hierarchy is built over ([`bvh::Bvh::build`], or refitted to).
+pub fn instance_boxes(words: &[u32]) -> Vec<bvh::Aabb> {
+    set::InstanceSet::boxes_of(words)
+}
+
 /// The inclusive chunk range an instance of `size` at `pos`/`rot` overlaps, clipped to the
 /// world; `None` if its AABB misses the world.
 pub fn chunk_range(world: WorldSize, size: [u32; 3], pos: [f64; 3], rot: [f64; 4]) -> Option<([u32; 3], [u32; 3])> {
@@ -336,7 +342,7 @@ impl Entities {
             table,
             type_voxels,
             type_starts,
-            set: set::InstanceSet::of_buffer(&instances),
+            set: self.set.moved_to(&instances),
             instances,
         })
     }
