@@ -326,6 +326,81 @@ fn two_pages_edit_together_and_see_each_other() {
     server.stop();
 }
 
+/// The voxel tool previews the voxel it would place as a local instance, drawn by the GPU
+/// where the voxel would go: the frame with the preview differs from the one without and
+/// equals, but for pixels on a tie, the frame after the click placed that voxel for real.
+/// Picking does not see the preview (the click places where the preview stood).
+#[test]
+fn the_voxel_tool_previews_the_voxel_it_would_place() {
+    let Some(Fixture {
+        dir,
+        world,
+        mut browser,
+    }) = fixture()
+    else {
+        return;
+    };
+    let server = serve_world(dir.path(), &world, &[], &[]);
+    // Close to the ground, so that one voxel covers several pixels.
+    let camera = r#"{"pos":[64.5,40.5,55.5],"yaw":0,"pitch":-35,"fov_y":70}"#;
+    browser.open("a", &page_url(&server, camera, "192x108", "material"));
+    browser.wait("a", SETTLED, 120_000);
+    // The pointer at the canvas's centre.
+    browser.eval(
+        "a",
+        r#"const c = document.getElementById("view"); const r = c.getBoundingClientRect();
+           c.dispatchEvent(new MouseEvent("mousemove", { clientX: r.left + r.width / 2, clientY: r.top + r.height / 2, bubbles: true }));
+           return 1"#,
+    );
+    let frame = |browser: &mut Browser, name: &str, tool: &str| {
+        browser.send(json!({"op": "select", "id": "a", "selector": "#tool", "value": tool}));
+        let boxes = usize::from(tool == "voxel");
+        let shown =
+            format!("n.previewInstances === {boxes} && n.shownGeneration === n.generation() && n.pointer !== null");
+        browser.wait("a", &format!("{SETTLED} && {shown}"), 20_000);
+        let png = p(dir.path(), &format!("{name}.png"));
+        browser.send(json!({"op": "capture", "id": "a", "path": png}));
+        image::open(&png).unwrap().to_rgba8()
+    };
+    let plain = frame(&mut browser, "plain", "erase");
+    let aimed = browser.eval("a", "return n.pointer");
+    // A material other than the one under the pointer, so that the preview shows.
+    let material = browser.eval(
+        "a",
+        r##"const under = n.voxel(...n.pointer.voxel);
+           const b = [...document.querySelectorAll("#palette button")].find((b) => b.title !== `material ${under}`);
+           b.click();
+           return Number(b.title.split(" ")[1]);"##,
+    );
+    let previewed = frame(&mut browser, "previewed", "voxel");
+    let changed = plain.pixels().zip(previewed.pixels()).filter(|(a, b)| a != b).count();
+    assert!(changed >= 4, "the preview changed {changed} pixels");
+    // Place it, then look again without a preview.
+    let before = browser.eval("a", "return n.version");
+    browser.send(json!({"op": "click", "id": "a", "x": 0.5, "y": 0.5}));
+    browser.wait("a", &format!("n.version > {before}"), 10_000);
+    let target = &aimed["before"];
+    let placed = browser.eval(
+        "a",
+        &format!("return n.voxel({}, {}, {})", target[0], target[1], target[2]),
+    );
+    assert_eq!(
+        placed, material,
+        "the click placed at {target}, where the preview stood"
+    );
+    let committed = frame(&mut browser, "committed", "erase");
+    let differing = previewed
+        .pixels()
+        .zip(committed.pixels())
+        .filter(|(a, b)| a != b)
+        .count();
+    assert!(
+        differing * 10 <= changed,
+        "{differing} pixels differ between the preview and the placed voxel ({changed} changed)"
+    );
+    server.stop();
+}
+
 /// The server is killed with -9 and restarted on the same data and ports: the page
 /// reconnects, resumes from what it holds without a snapshot, and keeps following; a reload
 /// of the page then takes the world from its cache and downloads none of it.

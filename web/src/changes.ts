@@ -104,7 +104,7 @@ function touches(ranges: [number, number][], start: number, len: number): boolea
 }
 
 /** The chunks (indices into a world of `chunks` chunks) that `box` overlaps. */
-function overlapped(box: number[][], chunks: number[]): number[] {
+export function overlappedChunks(box: number[][], chunks: number[]): number[] {
   const lo = [0, 1, 2].map((a) => Math.max(0, Math.floor(box[0][a] / 16)));
   const hi = [0, 1, 2].map((a) => Math.min(chunks[a] - 1, Math.floor(box[1][a] / 16)));
   const out: number[] = [];
@@ -173,7 +173,7 @@ export class ChunkPrints {
         if (same) continue;
         for (const words of [before, after]) {
           const box = slot < words.length / RECORD_WORDS ? instanceBox(words, slot) : undefined;
-          if (box) for (const c of overlapped(box, dims)) changed.add(c);
+          if (box) for (const c of overlappedChunks(box, dims)) changed.add(c);
         }
       }
       this.records = after.slice();

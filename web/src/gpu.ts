@@ -25,7 +25,10 @@ import { cameraRays } from "./camera";
 import { toneMapped } from "./colour";
 import type { Mirror, Touched } from "./mirror";
 import { ChunkPrints } from "./changes";
-import { RECORD_WORDS, hierarchyWords } from "./instances";
+import { ENTITY } from "./gen/layout";
+import { RECORD_WORDS, hierarchyWords, instanceBox, localLayout } from "./instances";
+import type { LocalBox } from "./instances";
+import { overlappedChunks } from "./changes";
 import type { ChunkChanges } from "./changes";
 import { GiRenderer } from "./gi";
 
@@ -51,7 +54,9 @@ export async function openDevice(): Promise<{ device: GPUDevice; fallback: boole
 }
 
 /** The world buffers on the device, in one storage buffer, each at a word offset with room
- * to grow; an edit uploads only the byte ranges it wrote. */
+ * to grow; an edit uploads only the byte ranges it wrote. The page's local instances (tool
+ * previews, docs/FORMAT.md §5.11) follow the world's entity types and records in their
+ * regions, and the instance hierarchy covers both. */
 export class GpuWorld {
   buffer: GPUBuffer | undefined;
   readonly info: GPUBuffer;
@@ -68,6 +73,9 @@ export class GpuWorld {
   chunks: [number, number, number] = [0, 0, 0];
   /** The mirror last uploaded (the page has one). */
   private mirror: Mirror | undefined;
+  /** The page's local instances, and their records as on the device. */
+  private locals: LocalBox[] = [];
+  private localRecords: Uint32Array = new Uint32Array(0);
   /** The chunks' fingerprints, once a renderer asked which chunks change (`trackChanges`). */
   private prints: ChunkPrints | undefined;
   /** The chunks each generation changed, oldest first, back to just after `logFrom`. */
@@ -81,12 +89,13 @@ export class GpuWorld {
     this.offsets = uniform("world_offsets", OFFSET_WORDS * 4);
   }
 
-  /** Uploads everything `mirror` holds, laying the buffer out anew (`hierarchy`: the
-   * instance hierarchy of the mirror, when the caller has it already). */
-  uploadAll(mirror: Mirror, hierarchy: Uint8Array = hierarchyBytes(mirror)): void {
-    // The mirrored buffers, then the instance hierarchy derived from the instance buffer.
-    this.hierarchy = hierarchy;
-    const lens = [...GPU_BUFFERS.map((b) => mirror.bytes(b.id).length), this.hierarchy.length];
+  /** Uploads everything `mirror` holds, and the local instances, laying the buffer out
+   * anew (`hierarchy`: the instance hierarchy of both, when the caller has it already). */
+  uploadAll(mirror: Mirror, hierarchy?: Uint8Array): void {
+    const local = this.localData(mirror);
+    // The mirrored buffers, then the instance hierarchy derived from the instance records.
+    this.hierarchy = hierarchy ?? this.hierarchyOf(mirror, local.records);
+    const lens = [...GPU_BUFFERS.map((b) => this.usedBytes(mirror, b.id, local)), this.hierarchy.length];
     // Room to grow: a quarter more and a page, 256-byte aligned.
     let at = 0;
     this.regions = lens.map((len) => {
@@ -104,6 +113,7 @@ export class GpuWorld {
       usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_DST,
     });
     GPU_BUFFERS.forEach((b, k) => this.write(k, 0, mirror.bytes(b.id)));
+    this.writeLocals(mirror, local);
     this.write(HIERARCHY, 0, this.hierarchy);
     const offsets = new Uint32Array(OFFSET_WORDS);
     this.regions.forEach((r, k) => (offsets[k] = r.at / 4));
@@ -121,18 +131,18 @@ export class GpuWorld {
   /** Uploads the ranges a patch wrote; lays out anew when a buffer outgrew its room. */
   update(mirror: Mirror, touched: Touched[], resized: boolean): void {
     const k = (id: number) => GPU_BUFFERS.findIndex((b) => b.id === id);
-    const moved = touched.some((t) => t.id === INSTANCES);
-    const hierarchy = moved ? hierarchyBytes(mirror) : this.hierarchy;
+    // Local instances follow the world's entity types and records: written again when those
+    // changed, which may have moved where they end.
+    const relaid = resized || touched.some((t) => t.id === TYPES || t.id === INSTANCES);
+    const local = this.locals.length > 0 && relaid ? this.localData(mirror) : undefined;
+    const moved = touched.some((t) => t.id === INSTANCES) || local !== undefined;
+    const hierarchy = moved ? this.hierarchyOf(mirror, local?.records ?? this.localRecords) : this.hierarchy;
     if (
-      (resized && GPU_BUFFERS.some((b, i) => mirror.bytes(b.id).length > this.regions[i].capacity)) ||
+      ((resized || local) && GPU_BUFFERS.some((b, i) => this.usedBytes(mirror, b.id, local) > this.regions[i].capacity)) ||
       hierarchy.length > this.regions[HIERARCHY].capacity
     ) {
       this.uploadAll(mirror, hierarchy);
       return;
-    }
-    if (moved) {
-      this.hierarchy = hierarchy;
-      this.write(HIERARCHY, 0, hierarchy);
     }
     for (const t of touched) {
       const i = k(t.id);
@@ -143,9 +153,86 @@ export class GpuWorld {
       const hi = Math.min(bytes.length, (t.hi + 3) & ~3);
       this.write(i, lo, bytes.subarray(lo, hi));
     }
-    if (resized) this.writeInfo(mirror);
+    if (local) this.writeLocals(mirror, local);
+    if (moved) {
+      this.hierarchy = hierarchy;
+      this.write(HIERARCHY, 0, hierarchy);
+    }
+    if (resized || local) this.writeInfo(mirror);
     this.generation += 1;
     if (this.prints) this.note(this.prints.update(mirror, touched));
+  }
+
+  /** Shows `boxes` as the page's local instances from now on (an empty list: none): drawn
+   * and hit by the shaders' rays, never part of the mirror, its digest or picking. Their
+   * chunks count as changed, before and after, for the light history. */
+  setLocals(boxes: LocalBox[]): void {
+    if (JSON.stringify(boxes) === JSON.stringify(this.locals)) return;
+    const before = this.localRecords;
+    this.locals = boxes.map((b) => ({ min: [...b.min], size: [...b.size], material: b.material }));
+    const mirror = this.mirror;
+    if (!mirror) return;
+    const local = this.localData(mirror);
+    const hierarchy = this.hierarchyOf(mirror, local.records);
+    if (
+      GPU_BUFFERS.some((b, i) => this.usedBytes(mirror, b.id, local) > this.regions[i].capacity) ||
+      hierarchy.length > this.regions[HIERARCHY].capacity
+    ) {
+      this.uploadAll(mirror, hierarchy);
+      return;
+    }
+    this.writeLocals(mirror, local);
+    this.hierarchy = hierarchy;
+    this.write(HIERARCHY, 0, hierarchy);
+    this.writeInfo(mirror);
+    this.generation += 1;
+    if (this.prints) {
+      const chunks = new Set<number>();
+      for (const words of [before, local.records])
+        for (let slot = 0; slot < words.length / RECORD_WORDS; slot++) {
+          const box = instanceBox(words, slot);
+          if (box) for (const c of overlappedChunks(box, this.chunks)) chunks.add(c);
+        }
+      this.note([...chunks].sort((a, b) => a - b));
+    }
+  }
+
+  /** Where the local instances go in `mirror`'s regions, and what they hold. */
+  private localData(mirror: Mirror): { typeBase: number; types: Uint32Array; records: Uint32Array } {
+    const typeBase = Math.ceil(mirror.bytes(TYPES).length / 4 / ENTITY.TYPE_ALIGN) * ENTITY.TYPE_ALIGN;
+    return { typeBase, ...localLayout(this.locals, typeBase) };
+  }
+
+  /** The bytes buffer `id`'s region holds: the mirror's, then any local instances'. */
+  private usedBytes(mirror: Mirror, id: number, local?: { typeBase: number; types: Uint32Array; records: Uint32Array }): number {
+    const own = mirror.bytes(id).length;
+    if (!local) return own;
+    if (id === TYPES) return local.types.length > 0 ? 4 * local.typeBase + local.types.byteLength : own;
+    if (id === INSTANCES) return own + local.records.byteLength;
+    return own;
+  }
+
+  /** Writes the local instances' type voxels and records after the mirror's. */
+  private writeLocals(mirror: Mirror, local: { typeBase: number; types: Uint32Array; records: Uint32Array }): void {
+    const bytes = (w: Uint32Array) => new Uint8Array(w.buffer, w.byteOffset, w.byteLength);
+    const k = (id: number) => GPU_BUFFERS.findIndex((b) => b.id === id);
+    this.write(k(TYPES), 4 * local.typeBase, bytes(local.types));
+    this.write(k(INSTANCES), mirror.bytes(INSTANCES).length, bytes(local.records));
+    this.localRecords = local.records;
+  }
+
+  /** The packed instance hierarchy over the mirror's instance records and then `local`
+   * ones, as bytes. */
+  private hierarchyOf(mirror: Mirror, local?: Uint32Array): Uint8Array {
+    let records = mirror.words(INSTANCES);
+    if (local && local.length > 0) {
+      const all = new Uint32Array(records.length + local.length);
+      all.set(records);
+      all.set(local, records.length);
+      records = all;
+    }
+    const words = hierarchyWords(records);
+    return new Uint8Array(words.buffer, words.byteOffset, words.byteLength);
   }
 
   /** Starts fingerprinting the chunks, so that `changesSince` can name the chunks each
@@ -189,7 +276,7 @@ export class GpuWorld {
 
   private writeInfo(mirror: Mirror): void {
     const [x, y, z] = mirror.size;
-    const slots = mirror.bytes(INSTANCES).length / 4 / RECORD_WORDS;
+    const slots = (mirror.bytes(INSTANCES).length / 4 + this.localRecords.length) / RECORD_WORDS;
     this.chunks = [Math.ceil(x / 16), Math.ceil(y / 16), Math.ceil(z / 16)];
     this.device.queue.writeBuffer(
       this.info,
@@ -204,16 +291,11 @@ export class GpuWorld {
   }
 }
 
-/** The digest id of the instance buffer. */
+/** The digest ids of the entity-type and instance buffers. */
+const TYPES = 6;
 const INSTANCES = 7;
 /** The region of the instance hierarchy: after the mirrored buffers. */
 const HIERARCHY = GPU_BUFFERS.length;
-
-/** The packed instance hierarchy over the mirror's instance buffer, as bytes. */
-function hierarchyBytes(mirror: Mirror): Uint8Array {
-  const words = hierarchyWords(mirror.words(INSTANCES));
-  return new Uint8Array(words.buffer, words.byteOffset, words.byteLength);
-}
 
 /** The render pass (albedo, material, normal, steps) into a pixel buffer, read back. */
 class FramePass {

@@ -3,11 +3,47 @@
 // four-wide hierarchy over those boxes that the shaders walk (docs/FORMAT.md §5.10). The
 // native client derives the same packed form in Rust (naadf_world::entity::bvh) with a
 // surface-area build; the page splits at the median, which is simpler and only changes how
-// many boxes a ray tests, never what it hits.
-import { BVH } from "./gen/layout";
+// many boxes a ray tests, never what it hits. It also lays out the page's local instances
+// (docs/FORMAT.md §5.11): solid boxes drawn on this page's GPU only, after the world's.
+import { BVH, ENTITY } from "./gen/layout";
 
 /** Words per instance record. */
-export const RECORD_WORDS = 5;
+export const RECORD_WORDS = ENTITY.RECORD_WORDS;
+
+/** A local instance of the page: an unrotated solid box of one material, its corner at a
+ * voxel (a tool's preview). */
+export interface LocalBox {
+  min: number[];
+  size: number[];
+  material: number;
+}
+
+/** The longest edge of a local box (an entity type's). */
+export const MAX_LOCAL_EDGE = 127;
+
+/** The type voxels and records of `boxes` when their types follow the world's first
+ * `typeBase` type voxels (a multiple of `ENTITY.TYPE_ALIGN`): each box gets a type grid of
+ * its material and a record with the local id and the identity rotation. */
+export function localLayout(boxes: LocalBox[], typeBase: number): { types: Uint32Array; records: Uint32Array } {
+  const align = (n: number) => Math.ceil(n / ENTITY.TYPE_ALIGN) * ENTITY.TYPE_ALIGN;
+  const lengths = boxes.map((b) => align(b.size[0] * b.size[1] * b.size[2]));
+  const types = new Uint32Array(lengths.reduce((a, b) => a + b, 0));
+  const records = new Uint32Array(boxes.length * RECORD_WORDS);
+  let at = 0;
+  boxes.forEach((b, k) => {
+    types.fill((ENTITY.SOLID | b.material) >>> 0, at, at + b.size[0] * b.size[1] * b.size[2]);
+    const [px, py, pz] = b.min.map((v) => v * 128);
+    const [sx, sy, sz] = b.size;
+    const r = k * RECORD_WORDS;
+    records[r] = (px & 0x1fffff) | ((py & 0x7ff) << 21);
+    records[r + 1] = (pz & 0x1fffff) | (((py >>> 11) & 0xff) << 21) | (((sz >>> 4) & 7) << 29);
+    records[r + 2] = ENTITY.IDENTITY_ROTATION[0];
+    records[r + 3] = (ENTITY.IDENTITY_ROTATION[1] & 0xfff) | (((typeBase + at) / ENTITY.TYPE_ALIGN) << 12);
+    records[r + 4] = ENTITY.LOCAL_ID | (sx << 14) | (sy << 21) | ((sz & 0xf) << 28);
+    at += lengths[k];
+  });
+  return { types, records };
+}
 
 /** An axis-aligned box `[lo, hi]`. */
 export type Box = [number[], number[]];

@@ -17,7 +17,7 @@ import { Voxels, pick } from "./pick";
 import { Session } from "./session";
 import type { SessionState } from "./session";
 import type { Region, ToolState } from "./tools";
-import { TOOLS, commit, palette, preview } from "./tools";
+import { TOOLS, commit, palette, preview, solidPreview } from "./tools";
 import { touchControls } from "./touch";
 import { MODES, accumulationCap, readLink, writeLink } from "./view";
 
@@ -50,6 +50,10 @@ interface PageState {
   timings: Record<string, number>;
   /** The version the canvas shows. */
   shownVersion: number;
+  /** The GPU world's generation the canvas shows (`generation()`): local instances too. */
+  shownGeneration: number;
+  /** The local instances the active tool's preview shows. */
+  previewInstances: number;
   /** The path tracer's samples per pixel, or the GI's frames, since the view last changed. */
   samples: number;
   /** The voxel under the pointer and the empty voxel before it (where placing tools build). */
@@ -98,6 +102,8 @@ const naadf: PageState = {
   rateLimited: 0,
   timings: {},
   shownVersion: -1,
+  shownGeneration: -1,
+  previewInstances: 0,
   samples: 0,
   pointer: null,
   name: "",
@@ -367,6 +373,12 @@ async function main(): Promise<void> {
     pointer = pick(voxels, [...view.pos], rayThrough(view, canvas.width, canvas.height, x, y));
     region = pointer && naadf.role !== "viewer" ? preview(tool, voxels, pointer) : undefined;
     naadf.pointer = pointer ? { voxel: pointer.voxel, before: pointer.before } : null;
+    // The voxel and box tools show what they would build where it would go.
+    const generation = world.generation;
+    const shown = solidPreview(tool, region);
+    world.setLocals(shown);
+    naadf.previewInstances = shown.length;
+    if (world.generation !== generation) dirty = true;
   }
   canvas.addEventListener("mousemove", (e) => {
     lastMouse = e;
@@ -465,6 +477,7 @@ async function main(): Promise<void> {
       const [w, h] = renderSize();
       const t0 = performance.now();
       const version = naadf.version;
+      const generation = world.generation;
       const view: Camera = { ...camera, pos: [...camera.pos] };
       renderer
         .render(world, view, w, h, naadf.mode)
@@ -480,6 +493,7 @@ async function main(): Promise<void> {
           if (frameTimes.length > 30) frameTimes.shift();
           naadf.frameMs = frameTimes.reduce((a, b) => a + b, 0) / frameTimes.length;
           naadf.shownVersion = version;
+          naadf.shownGeneration = generation;
           naadf.timings.firstFrame ??= performance.now();
           // The path tracer and the GI keep improving while nothing changes.
           naadf.samples = renderer.samples(naadf.mode);

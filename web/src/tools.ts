@@ -3,6 +3,8 @@
 import { srgb8 } from "./colour";
 import type { Mirror } from "./mirror";
 import type { Pick, Voxels } from "./pick";
+import { MAX_LOCAL_EDGE } from "./instances";
+import type { LocalBox } from "./instances";
 
 type V3 = [number, number, number];
 
@@ -88,6 +90,16 @@ export function preview(s: ToolState, w: Voxels, at: Pick): Region {
     case "flood":
       return floodRegion(w, at.voxel, s.material);
   }
+}
+
+/** What a commit of the voxel or box tool would build, as solid local instances for the
+ * GPU to draw in place (the other tools' changes are not solid boxes, and keep the
+ * overlay's outline alone): empty when nothing would change. */
+export function solidPreview(s: ToolState, r: Region | undefined): LocalBox[] {
+  if (!r || r.refusal || (s.tool !== "voxel" && s.tool !== "box")) return [];
+  const size = r.max.map((v, a) => v - r.min[a]);
+  if (size.some((e) => e < 1 || e > MAX_LOCAL_EDGE) || r.min.some((v) => v < 0)) return [];
+  return [{ min: [...r.min], size, material: s.material }];
 }
 
 /** The ops line committing `s` at `at` sends, or `undefined` when the click only set the

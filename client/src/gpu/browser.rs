@@ -16,7 +16,7 @@ use super::shaders::{Loop, WorldBindings, source};
 use super::world::GPU_BUFFERS;
 use crate::frame::Mode;
 use crate::light::{DEFAULT_LIT_BOUNCES, DEFAULT_PATHTRACE_BOUNCES, LitOptions};
-use naadf_world::entity::bvh;
+use naadf_world::entity::{self, bvh, local, pack};
 use naadf_world::traverse::DEFAULT_MAX_STEPS;
 use std::fmt::Write;
 
@@ -137,6 +137,18 @@ fn layout_ts() -> String {
         bvh::NO_CHILD,
         bvh::FAR,
         f64::from(bvh::F32_PAD) + bvh::BOUNDS_PAD,
+    );
+    let identity = pack::encode_quat([0.0, 0.0, 0.0, 1.0]);
+    let _ = writeln!(
+        s,
+        "\n/** Entity types and instance records (naadf_world::entity): a solid type voxel's flag, the\n * alignment of a type's voxels, words per record, the id of a local instance, and the packed\n * (inverse) identity rotation. */\n\
+         export const ENTITY = {{ SOLID: {}, TYPE_ALIGN: {}, RECORD_WORDS: {}, LOCAL_ID: {}, IDENTITY_ROTATION: [{}, {}] }} as const;",
+        entity::ENTITY_SOLID,
+        entity::TYPE_ALIGN,
+        pack::RECORD_WORDS,
+        local::LOCAL_ID,
+        identity[0],
+        identity[1],
     );
     s
 }

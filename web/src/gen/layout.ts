@@ -190,3 +190,8 @@ export const GI = {
  * unused lane, where unused lanes' boxes sit, and the padding of an instance's world box (the
  * record's bounds and the f32 boxes', each 0.015625). */
 export const BVH = { NODE_WORDS: 28, LEAF: 2147483648, NONE: 4294967295, FAR: 1e30, PAD: 0.03125 } as const;
+
+/** Entity types and instance records (naadf_world::entity): a solid type voxel's flag, the
+ * alignment of a type's voxels, words per record, the id of a local instance, and the packed
+ * (inverse) identity rotation. */
+export const ENTITY = { SOLID: 2147483648, TYPE_ALIGN: 64, RECORD_WORDS: 5, LOCAL_ID: 16383, IDENTITY_ROTATION: [134225920, 3584] } as const;
