@@ -2,6 +2,7 @@
 //! for latency runs whose mirrors must not share the server's process and its cores' time
 //! slices the way in-process mirrors do.
 
+use super::cpu::process_ns_of;
 use super::stream::{Applied, caught_up};
 use crate::commands::mirror;
 use anyhow::{Context, Result};
@@ -48,6 +49,11 @@ impl MirrorProcess {
             Ok(times)
         });
         Ok(MirrorProcess { child, applied, reader })
+    }
+
+    /// The CPU time the mirror process has used, in nanoseconds (`None` without `/proc`).
+    pub(super) fn cpu_ns(&self) -> Option<u64> {
+        process_ns_of(&self.child.id()?.to_string())
     }
 
     /// Waits until the mirror applied `version`.

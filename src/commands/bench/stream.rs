@@ -72,7 +72,8 @@ pub(super) struct LatencyReport {
     pub(super) ack_p99_ms: f64,
     pub(super) incomplete: usize,
     /// CPU time per edit by thread group, from the first edit sent until every mirror
-    /// applied the last (`clients` holds every mirror).
+    /// applied the last (`clients` holds the mirrors in this process; mirrors in processes
+    /// of their own count together as `mirror_processes`).
     pub(super) cpu_per_edit: BTreeMap<String, UnitUsage>,
 }
 
@@ -248,6 +249,15 @@ impl Following {
         match self {
             Following::InProcess(f) => f.wait_for(version).await,
             Following::Process(p) => p.wait_for(version).await,
+        }
+    }
+
+    /// The CPU time of a mirror in a process of its own (`None` in this process, where
+    /// [`Sample`] counts it among the threads).
+    fn process_cpu_ns(&self) -> Option<u64> {
+        match self {
+            Following::InProcess(_) => None,
+            Following::Process(p) => p.cpu_ns(),
         }
     }
 
@@ -548,6 +558,8 @@ where
         f.wait_for(*last).await?;
     }
     let cpu_before = Sample::now();
+    let mirrors_cpu = |followers: &[Following]| followers.iter().filter_map(Following::process_cpu_ns).sum::<u64>();
+    let mirrors_before = mirrors_cpu(&followers);
     let start = tokio::time::Instant::now();
     let mut sent = Vec::new();
     for k in 0..count {
@@ -572,7 +584,17 @@ where
     for f in &mut followers {
         f.wait_for(*last).await?;
     }
-    let cpu = Sample::now().per_unit_since(&cpu_before, count as f64);
+    let mut cpu = Sample::now().per_unit_since(&cpu_before, count as f64);
+    if mirrors.processes {
+        let ns = mirrors_cpu(&followers).saturating_sub(mirrors_before);
+        cpu.insert(
+            "mirror_processes".to_owned(),
+            UnitUsage {
+                cpu_ms: ns as f64 / 1e6 / count as f64,
+                wait_ms: f64::NAN,
+            },
+        );
+    }
     let mut done: HashMap<u64, Instant> = HashMap::new();
     let mut incomplete = 0;
     for f in followers {
