@@ -255,26 +255,9 @@ fn report_instances(world: &World) -> Result<()> {
     let mut copy = world.clone();
     let mut times = Vec::new();
     for round in 0..5 {
-        let moves = copy
-            .entity_table()
-            .instances
-            .iter()
-            .map(|(&id, p)| Op::MoveEntity {
-                id,
-                pos: [p.pos[0] + if round % 2 == 0 { 0.5 } else { -0.5 }, p.pos[1], p.pos[2]],
-                rot: p.rot,
-            })
-            .collect::<Vec<_>>();
-        let n = moves.len();
-        let t = std::time::Instant::now();
-        copy.apply(
-            &Batch { ops: moves },
-            &Limits {
-                max_ops: n,
-                ..Limits::default()
-            },
-        )?;
-        times.push(t.elapsed().as_secs_f64() * 1e3);
+        let dx = if round % 2 == 0 { 0.5 } else { -0.5 };
+        let applied = move_all(&mut copy, |p| [p[0] + dx, p[1], p[2]])?;
+        times.push(applied.as_secs_f64() * 1e3);
     }
     times.sort_by(f64::total_cmp);
     let half_voxel = copy.entity_instances().to_vec();
@@ -292,6 +275,29 @@ fn report_instances(world: &World) -> Result<()> {
     Ok(())
 }
 
+/// Moves every entity of `world` to `to(its position)`, rotation kept, in one batch;
+/// returns how long applying the batch took.
+fn move_all(world: &mut World, mut to: impl FnMut([f64; 3]) -> [f64; 3]) -> Result<std::time::Duration> {
+    let moves = world
+        .entity_table()
+        .instances
+        .iter()
+        .map(|(&id, p)| Op::MoveEntity {
+            id,
+            pos: to(p.pos),
+            rot: p.rot,
+        })
+        .collect::<Vec<_>>();
+    let n = moves.len();
+    let limits = Limits {
+        max_ops: n,
+        ..Limits::default()
+    };
+    let t = std::time::Instant::now();
+    world.apply(&Batch { ops: moves }, &limits)?;
+    Ok(t.elapsed())
+}
+
 /// Rebuilding the hierarchy against refitting it (keeping its shape, moving its boxes),
 /// after every entity moved by half a voxel (`half_voxel`: that instance buffer) and after
 /// every entity moved anywhere: the time each takes (median of 5) and the nodes a ray is
@@ -303,24 +309,7 @@ fn report_refit(world: &World, half_voxel: &[u32]) -> Result<()> {
     let mut anywhere = world.clone();
     let s = world.size().voxels().map(f64::from);
     let mut rng = SplitMix64(0x4EF1);
-    let moves = world
-        .entity_table()
-        .instances
-        .iter()
-        .map(|(&id, p)| Op::MoveEntity {
-            id,
-            pos: [0, 1, 2].map(|a| 4.0 + rng.unit() * (s[a] - 24.0)),
-            rot: p.rot,
-        })
-        .collect::<Vec<_>>();
-    let n = moves.len();
-    anywhere.apply(
-        &Batch { ops: moves },
-        &Limits {
-            max_ops: n,
-            ..Limits::default()
-        },
-    )?;
+    move_all(&mut anywhere, |_| [0, 1, 2].map(|a| 4.0 + rng.unit() * (s[a] - 24.0)))?;
     let built = Bvh::build(&before);
     for (what, words) in [("half a voxel", half_voxel), ("anywhere", anywhere.entity_instances())] {
         let after = instance_boxes(words);
