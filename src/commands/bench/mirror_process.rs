@@ -2,8 +2,8 @@
 //! for latency runs whose mirrors must not share the server's process and its cores' time
 //! slices the way in-process mirrors do.
 
+use super::applied::{Applied, caught_up};
 use super::cpu::process_ns_of;
-use super::stream::{Applied, caught_up};
 use crate::commands::mirror;
 use anyhow::{Context, Result};
 use std::process::Stdio;

@@ -3,6 +3,7 @@
 //! Every benchmark measures the compared variants in one run, so that ratios are meaningful
 //! on a shared, noisy machine.
 
+mod applied;
 mod build;
 mod cpu;
 mod edit;

@@ -3,6 +3,7 @@
 //! per single-voxel edit (counted at the TCP level), sustained durable edits per second, and
 //! the CPU time of an edit in each group of threads ([`super::cpu`]).
 
+use super::applied::{Applied, caught_up};
 use super::cpu::{Sample, UnitUsage};
 use super::mirror_process::MirrorProcess;
 use super::shared::{percentile, surface};
@@ -152,9 +153,6 @@ impl LocalServer {
     }
 }
 
-/// When each version was applied at one mirror.
-pub(super) type Applied = Vec<(u64, Instant)>;
-
 /// Joins and follows; records when each version was applied. Returns once `stop` is set.
 struct Follower {
     applied: watch::Receiver<Option<u64>>,
@@ -207,17 +205,6 @@ impl Follower {
         let _ = self.stop.send(true);
         self.task.await?
     }
-}
-
-/// Waits until the version a mirror reports through `applied` reaches `version`.
-pub(super) async fn caught_up(applied: &mut watch::Receiver<Option<u64>>, version: u64) -> Result<()> {
-    tokio::time::timeout(
-        Duration::from_secs(600),
-        applied.wait_for(|v| v.is_some_and(|v| v >= version)),
-    )
-    .await
-    .context("mirror did not catch up")??;
-    Ok(())
 }
 
 /// The mirrors a latency run follows with.
