@@ -375,13 +375,21 @@ async function main(): Promise<void> {
     naadf.pointer = pointer ? { voxel: pointer.voxel, before: pointer.before } : null;
     // The voxel and box tools show what they would build where it would go.
     const generation = world.generation;
-    const shown = solidPreview(tool, region);
+    const shown = hovering ? solidPreview(tool, region) : [];
     world.setLocals(shown);
     naadf.previewInstances = shown.length;
     if (world.generation !== generation) dirty = true;
   }
+  // The solid preview shows only while the mouse is over the view: the frame of a page
+  // nobody points at shows the world alone.
+  let hovering = false;
   canvas.addEventListener("mousemove", (e) => {
     lastMouse = e;
+    hovering = true;
+    overlayDirty = true;
+  });
+  canvas.addEventListener("mouseleave", () => {
+    hovering = false;
     overlayDirty = true;
   });
   canvas.addEventListener("contextmenu", (e) => e.preventDefault());
