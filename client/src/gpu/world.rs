@@ -24,6 +24,7 @@ use super::params::WorldInfo;
 use super::traversal::Traversal;
 use naadf_world::baselines::{Hybrid, Svdag, Svo};
 use naadf_world::digest::{BufferId, Digest, PAGE_BYTES, digest_of};
+use naadf_world::entity::bvh::joined_words;
 use naadf_world::entity::local::{LocalInstances, LocalLayout};
 use naadf_world::entity::pack::RECORD_WORDS;
 use naadf_world::entity::{TYPE_ALIGN, hierarchy_words};
@@ -47,6 +48,10 @@ pub const GPU_BUFFERS: [BufferId; 6] = [
 /// The logical buffers of the entity types and instances (indices into `GPU_BUFFERS`).
 const TYPES: usize = 4;
 const INSTANCES: usize = 5;
+const _: () = assert!(
+    GPU_BUFFERS[TYPES] as u32 == BufferId::EntityTypes as u32
+        && GPU_BUFFERS[INSTANCES] as u32 == BufferId::EntityInstances as u32
+);
 /// The logical buffer of the instance hierarchy ([`World::entity_hierarchy_words`]).
 const HIERARCHY: usize = 6;
 /// The logical buffer of the comparison structure (dense grid, SVO, SVDAG or hybrid
@@ -125,6 +130,8 @@ struct ShownLocals {
     after: (usize, usize),
     /// Their records, as on the device.
     records: Vec<u32>,
+    /// The packed hierarchy over `records` alone (slots from 0).
+    hierarchy: Vec<u32>,
 }
 
 impl std::fmt::Debug for GpuWorld {
@@ -252,16 +259,12 @@ impl GpuWorld {
             .iter()
             .any(|(id, words)| *id == BufferId::EntityInstances && !words.is_empty());
         let local_changes = self.sync_locals(world, &mut up)?;
-        // The hierarchy follows the instance records, the world's and the local ones:
-        // rebuilt and uploaded whole when any of them changed.
+        // The hierarchy follows the instance records, the world's and the local ones: one
+        // root over the world's hierarchy and the local instances' (each derived only when
+        // its own records change), uploaded whole when either changed.
         if instances_stale || local_changes.is_some() {
-            let words = if self.shown.records.is_empty() {
-                world.entity_hierarchy_words()
-            } else {
-                let mut all = world.entity_instances().to_vec();
-                all.extend_from_slice(&self.shown.records);
-                hierarchy_words(&all)
-            };
+            let world_slots = (world.entity_instances().len() / RECORD_WORDS) as u32;
+            let words = joined_words(&world.entity_hierarchy_words(), &self.shown.hierarchy, world_slots);
             up.reallocated |= self.replace(HIERARCHY, bytemuck::cast_slice(&words))?;
             up.bytes += 4 * words.len() as u64;
         }
@@ -353,6 +356,7 @@ impl GpuWorld {
         self.shown = ShownLocals {
             locals: self.locals.clone(),
             after,
+            hierarchy: hierarchy_words(&layout.records),
             records: layout.records,
         };
         Ok(Some(chunks))

@@ -208,7 +208,7 @@ impl Follower {
 }
 
 /// The mirrors a latency run follows with.
-#[derive(Clone, Copy, Debug, Serialize)]
+#[derive(Clone, Copy, Debug)]
 pub(super) struct Mirrors {
     /// How many.
     pub count: usize,

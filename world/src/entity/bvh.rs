@@ -34,8 +34,9 @@ pub const NO_CHILD: u32 = u32::MAX;
 pub const STACK: usize = 64;
 /// Levels of four-wide nodes below the root at most (half the binary depth bound).
 pub const MAX_DEPTH: usize = (SAH_DEPTH + 14) / 2;
-// A traversal pops one node and pushes at most four, level by level.
-const _: () = assert!(3 * MAX_DEPTH < STACK);
+// A traversal pops one node and pushes at most four, level by level, over at most one
+// level more than a build makes: the root that `joined_words` puts above two hierarchies.
+const _: () = assert!(3 * (MAX_DEPTH + 1) < STACK);
 /// Binary levels split by the SAH; deeper runs are split at the median, so that the
 /// binary depth stays below `SAH_DEPTH + log2(16383)` and the stack bound holds.
 const SAH_DEPTH: usize = 24;
@@ -316,6 +317,56 @@ impl Bvh {
     pub fn node_count(&self) -> usize {
         self.nodes.len()
     }
+}
+
+/// The packed form of one hierarchy over the primitives of two packed hierarchies `a` and
+/// `b` (each as [`Bvh::words`] gives it), with `b`'s leaf slots moved up by `b_slots`: a new
+/// root whose first two lanes hold `a`'s and `b`'s roots, then `a`'s nodes and `b`'s. A
+/// device whose instance buffer holds local instances after the world's walks this, so that
+/// a change of either rebuilds only its own hierarchy.
+pub fn joined_words(a: &[u32], b: &[u32], b_slots: u32) -> Vec<u32> {
+    let shift = |words: &[u32], nodes: u32, slots: u32, out: &mut Vec<u32>| {
+        for node in words.chunks_exact(NODE_WORDS) {
+            out.extend_from_slice(&node[..6 * WIDTH]);
+            out.extend(node[6 * WIDTH..].iter().map(|&c| match c {
+                NO_CHILD => c,
+                c if c & LEAF != 0 => c + slots,
+                c => c + nodes,
+            }));
+        }
+    };
+    let mut out = Vec::with_capacity(a.len() + b.len() + NODE_WORDS);
+    if a.is_empty() || b.is_empty() {
+        let (words, slots) = if a.is_empty() { (b, b_slots) } else { (a, 0) };
+        shift(words, 0, slots, &mut out);
+        return out;
+    }
+    // The new root: lane 0 bounds `a`'s root lanes, lane 1 `b`'s.
+    let mut root = [0u32; NODE_WORDS];
+    for (lane, words) in [a, b].into_iter().enumerate() {
+        let used: Vec<usize> = (0..WIDTH).filter(|&l| words[6 * WIDTH + l] != NO_CHILD).collect();
+        for row in 0..6 {
+            let v = used.iter().map(|&l| f32::from_bits(words[row * WIDTH + l]));
+            // Rows alternate lo, hi per axis.
+            let bound = if row % 2 == 0 {
+                v.fold(FAR, f32::min)
+            } else {
+                v.fold(-FAR, f32::max)
+            };
+            root[row * WIDTH + lane] = bound.to_bits();
+        }
+    }
+    for lane in 2..WIDTH {
+        for row in 0..6 {
+            root[row * WIDTH + lane] = FAR.to_bits();
+        }
+    }
+    let a_nodes = (a.len() / NODE_WORDS) as u32;
+    root[6 * WIDTH..].copy_from_slice(&[1, 1 + a_nodes, NO_CHILD, NO_CHILD]);
+    out.extend_from_slice(&root);
+    shift(a, 1, 0, &mut out);
+    shift(b, 1 + a_nodes, b_slots, &mut out);
+    out
 }
 
 /// `v` as `f32`, rounded outward (up for an upper bound) and padded by [`F32_PAD`].
@@ -662,6 +713,29 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn joined_hierarchies_put_both_roots_under_a_new_one() {
+        let a = Bvh::build(&[([0.0; 3], [1.0; 3]), ([5.0; 3], [6.0; 3])]).words(&[0, 1]);
+        let b = Bvh::build(&[([9.0, 2.0, 3.0], [10.0, 4.0, 5.0])]).words(&[0]);
+        let j = joined_words(&a, &b, 7);
+        assert_eq!(j.len(), a.len() + b.len() + NODE_WORDS);
+        // The root's lanes: `a`'s root (node 1) spans both of its boxes, `b`'s (node 2) its one.
+        assert_eq!(&j[24..28], &[1, 2, NO_CHILD, NO_CHILD]);
+        let row = |r: usize, l: usize| f32::from_bits(j[r * WIDTH + l]);
+        assert!(row(0, 0) < 0.0 && row(1, 0) > 6.0, "a's x span");
+        assert!(
+            row(0, 1) < 9.0 && row(1, 1) > 10.0 && row(2, 1) < 2.0 && row(5, 1) > 5.0,
+            "b's box"
+        );
+        assert_eq!(row(0, 2), FAR);
+        // `b`'s leaf moved to slot 7; `a`'s kept theirs.
+        assert_eq!(j[2 * NODE_WORDS + 24], LEAF | 7);
+        assert_eq!(&j[NODE_WORDS + 24..NODE_WORDS + 26], &[LEAF, LEAF | 1]);
+        // One side empty: the other, shifted.
+        assert_eq!(joined_words(&a, &[], 7), a);
+        assert_eq!(joined_words(&[], &b, 7)[24], LEAF | 7);
     }
 
     #[test]

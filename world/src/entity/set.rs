@@ -38,7 +38,7 @@ impl InstanceSet {
     /// holds no instance.
     pub fn of_buffer(words: &[u32]) -> Self {
         let mut set = Self::records_of(words);
-        set.build();
+        set.build(&set.world_boxes());
         set
     }
 
@@ -47,15 +47,16 @@ impl InstanceSet {
     /// within [`REFIT_SLACK`] of its build.
     pub fn moved_to(&self, words: &[u32]) -> Self {
         let mut set = Self::records_of(words);
+        let boxes = set.world_boxes();
         if set.slots != self.slots || self.is_empty() {
-            set.build();
+            set.build(&boxes);
             return set;
         }
         set.bvh = self.bvh.clone();
-        set.bvh.refit(&set.world_boxes());
+        set.bvh.refit(&boxes);
         set.built_visits = self.built_visits;
         if set.bvh.expected_visits() > REFIT_SLACK * self.built_visits {
-            set.build();
+            set.build(&boxes);
         }
         set
     }
@@ -84,9 +85,9 @@ impl InstanceSet {
         Self::records_of(words).world_boxes()
     }
 
-    /// Builds the hierarchy anew.
-    fn build(&mut self) {
-        self.bvh = Bvh::build(&self.world_boxes());
+    /// Builds the hierarchy anew over `boxes` (this set's world boxes).
+    fn build(&mut self, boxes: &[Aabb]) {
+        self.bvh = Bvh::build(boxes);
         self.built_visits = self.bvh.expected_visits();
     }
 
