@@ -4,6 +4,7 @@
 //! device.
 
 use super::rng::Rng;
+use super::roma::Roma;
 use super::scatter::{self, MIN_ALPHA};
 use super::{Light, SURFACE_OFFSET, Sky, Sun, sky};
 use glam::DVec3;
@@ -27,12 +28,29 @@ pub struct CpuPathTracer<'w> {
     world: &'w World,
     light: Light,
     seed: u32,
+    /// The lighting tier of diffuse surfaces, if not the path tracer's own.
+    tier: Option<&'w Roma<'w>>,
 }
 
 impl<'w> CpuPathTracer<'w> {
     /// A tracer of `world` under `light` whose sample streams come from `seed`.
     pub fn new(world: &'w World, light: Light, seed: u32) -> Self {
-        CpuPathTracer { world, light, seed }
+        CpuPathTracer {
+            world,
+            light,
+            seed,
+            tier: None,
+        }
+    }
+
+    /// The same tracer with diffuse (and emissive) surfaces lit by `roma` instead
+    /// (`--mode roma`): a path ends at the first of them with the tier's light, while
+    /// mirrors and metals scatter as the path tracer scatters them.
+    pub fn with_roma(self, roma: &'w Roma<'w>) -> Self {
+        CpuPathTracer {
+            tier: Some(roma),
+            ..self
+        }
     }
 
     /// Samples `samples` of pixel `(px, py)` of a `size` image seen by `camera`.
@@ -108,6 +126,13 @@ impl<'w> CpuPathTracer<'w> {
             let albedo = DVec3::from(m.albedo.map(f64::from));
             if m.kind == MaterialKind::Emissive {
                 light += throughput * albedo * f64::from(m.emission);
+            }
+            let diffuse = !matches!(m.kind, MaterialKind::Mirror | MaterialKind::Metal);
+            if let Some(roma) = self.tier.filter(|_| diffuse) {
+                let surface = DVec3::from(ray.origin()) + d * hit.t;
+                let sky = |w: DVec3| self.sky(w, sun_dir, None);
+                light += throughput * roma.diffuse(surface, n, albedo, &sky, rng);
+                break;
             }
             if bounce == self.light.bounces {
                 break;

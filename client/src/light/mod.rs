@@ -23,6 +23,7 @@ pub mod hdr;
 #[cfg(feature = "gpu")]
 pub mod quality;
 pub mod rng;
+pub mod roma;
 pub mod scatter;
 pub mod sky;
 
