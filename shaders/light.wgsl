@@ -3,7 +3,9 @@
 // scatter.rs, cpu.rs), written operation by operation like it so that the two path
 // tracers agree up to rounding. Needs random.wgsl before it.
 //
-// The pass binds `light: LightInfo` (generated in the prelude from the Rust `LightInfo`).
+// The pass binds `light: LightInfo` (generated in the prelude from the Rust `LightInfo`),
+// and declares `DIFFUSE_TIER` and `diffuse_tier` (no_tier.wgsl, or a lighting tier such as
+// roma.wgsl) for `path_step`.
 
 // PI, SURFACE_OFFSET (how far scattered and shadow rays start off the surface),
 // MIN_ALPHA (the smallest GGX α a metal is traced with) and the physical sky's constants
@@ -250,6 +252,13 @@ fn path_step(s: ptr<function, PathState>, scatter: bool, rng: ptr<function, u32>
     let m = material(h.material);
     if m.kind == KIND_EMISSIVE {
         (*s).radiance += (*s).throughput * m.albedo * m.emission;
+    }
+    // A lighting tier (`roma`) lights diffuse and emissive surfaces itself, and the path
+    // ends there; mirrors and metals scatter on.
+    if DIFFUSE_TIER && m.kind != KIND_MIRROR && m.kind != KIND_METAL {
+        let surface = vec3<f32>(r.o_int) + ray_local(r, h.t);
+        (*s).radiance += (*s).throughput * diffuse_tier(surface, n, m.albedo, rng);
+        return distance;
     }
     if !scatter {
         return distance;

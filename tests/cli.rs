@@ -196,6 +196,43 @@ fn errors_are_clean() {
     let cut = p(dir.path(), "cut.naadf");
     std::fs::write(&cut, &bytes[..bytes.len() / 2]).unwrap();
     fails(&["info", &cut], None, "error:");
+
+    // The ROMA settings: checked, and only for `--mode roma` (refused before any GPU work).
+    let png = p(dir.path(), "x.png");
+    let render = |mode: &'static str, extra: &[&str], why: &str| {
+        let camera = r#"{"pos":[1,1,1],"yaw":0,"pitch":0}"#;
+        let base = [
+            "render", "--world", &world, "--camera", camera, "--mode", mode, "-o", &png,
+        ];
+        fails(&[&base[..], extra].concat(), None, why);
+    };
+    render(
+        "roma",
+        &["--roma-directions", "12"],
+        "12 ROMA directions: give a square number",
+    );
+    render("roma", &["--ao-range", "0"], "AO range 0: must lie in (0, 256]");
+    render("roma", &["--ao-range", "300"], "AO range 300");
+    render(
+        "pathtrace",
+        &["--roma-directions", "4"],
+        "--roma-directions does not apply to --mode pathtrace",
+    );
+    render(
+        "baseline",
+        &["--ao-range", "8"],
+        "--ao-range does not apply to --mode baseline",
+    );
+    render(
+        "gi",
+        &["--roma-directions", "9"],
+        "--roma-directions does not apply to --mode gi",
+    );
+    render(
+        "albedo",
+        &["--ao-range", "8"],
+        "--ao-range applies to the lit modes only",
+    );
 }
 
 /// A `bench traverse` or `bench gpu` JSON report of 32 × 18 rays per camera: every

@@ -5,6 +5,7 @@
 //! Nothing here needs a GPU, so the wire client, the render nodes' connection loop and the
 //! radiance images use these types in a build without the renderer.
 
+use crate::light::roma::{DEFAULT_AO_RANGE, DEFAULT_DIRECTIONS, RomaOptions};
 use crate::light::{DEFAULT_SPP, LitOptions, Sky, Sun};
 use naadf_proto::v1::FrameRequest;
 use naadf_world::camera::Camera;
@@ -31,11 +32,14 @@ pub enum Mode {
     Baseline,
     /// The paper's GI pipeline (the GPU client's `Gi`).
     Gi,
+    /// ROMA visibility (occupancy maps along fixed directions) for ambient occlusion and
+    /// sun shadows of diffuse surfaces; mirrors and metals as `baseline` traces them.
+    Roma,
 }
 
 impl Mode {
     /// Every mode, in CLI order.
-    pub const ALL: [Mode; 7] = [
+    pub const ALL: [Mode; 8] = [
         Mode::Albedo,
         Mode::Material,
         Mode::Normal,
@@ -43,6 +47,7 @@ impl Mode {
         Mode::PathTrace,
         Mode::Baseline,
         Mode::Gi,
+        Mode::Roma,
     ];
 
     /// The CLI name.
@@ -55,6 +60,7 @@ impl Mode {
             Mode::PathTrace => "pathtrace",
             Mode::Baseline => "baseline",
             Mode::Gi => "gi",
+            Mode::Roma => "roma",
         }
     }
 
@@ -63,16 +69,16 @@ impl Mode {
         Mode::ALL.into_iter().find(|m| m.name() == s)
     }
 
-    /// Whether the mode renders the light model (docs/RENDERING.md §3a–c) rather than a
+    /// Whether the mode renders the light model (docs/RENDERING.md §3a–d) rather than a
     /// pass of the GPU client's `Renderer`.
     pub fn is_lit(self) -> bool {
-        matches!(self, Mode::PathTrace | Mode::Baseline | Mode::Gi)
+        matches!(self, Mode::PathTrace | Mode::Baseline | Mode::Gi | Mode::Roma)
     }
 
-    /// Whether each frame builds on the frames before it (`baseline`, `gi`): these take
+    /// Whether each frame builds on the frames before it (`baseline`, `gi`, `roma`): these take
     /// `--frames` and a camera path, and keep a history per camera stream.
     pub fn is_temporal(self) -> bool {
-        matches!(self, Mode::Baseline | Mode::Gi)
+        matches!(self, Mode::Baseline | Mode::Gi | Mode::Roma)
     }
 
     /// The mode's code in the render pass (its `MODE_*` constants); the lit modes have
@@ -83,7 +89,7 @@ impl Mode {
             Mode::Material => 1,
             Mode::Normal => 2,
             Mode::Steps => 3,
-            Mode::PathTrace | Mode::Baseline | Mode::Gi => u32::MAX,
+            Mode::PathTrace | Mode::Baseline | Mode::Gi | Mode::Roma => u32::MAX,
         }
     }
 }
@@ -147,11 +153,20 @@ impl FrameSpec {
             },
             exposure: self.lit.exposure,
             stream: self.lit.stream.clone(),
+            // The defaults travel as absent fields. The AO range crosses as an f32.
+            roma_directions: (self.lit.roma.directions != DEFAULT_DIRECTIONS).then_some(self.lit.roma.directions),
+            ao_range: (self.lit.roma.ao_range != DEFAULT_AO_RANGE).then_some(self.lit.roma.ao_range as f32),
         }
     }
 
-    /// A request from the wire; an error names what this client cannot render.
+    /// A request from the wire; an error names what this client cannot render, or a ROMA
+    /// setting out of its range ([`RomaOptions::check`]).
     pub(crate) fn from_wire(r: &FrameRequest) -> Result<Self, String> {
+        let roma = RomaOptions {
+            directions: r.roma_directions.unwrap_or(DEFAULT_DIRECTIONS),
+            ao_range: r.ao_range.map_or(DEFAULT_AO_RANGE, f64::from),
+        };
+        roma.check()?;
         Ok(Self {
             camera: Camera::from_json(&r.camera).map_err(|e| e.to_string())?,
             size: (r.width, r.height),
@@ -168,6 +183,7 @@ impl FrameSpec {
                 sun: (!r.sun.is_empty()).then(|| Sun::parse(&r.sun)).transpose()?,
                 exposure: if r.exposure == 0.0 { 1.0 } else { r.exposure },
                 stream: r.stream.clone(),
+                roma,
             },
         })
     }
@@ -290,6 +306,7 @@ mod tests {
             sun: Some(Sun::parse("10,20,30").unwrap()),
             exposure: 0.5,
             stream: "me".into(),
+            roma: RomaOptions::default(),
         };
         assert_eq!(FrameSpec::from_wire(&spec.to_wire()), Ok(spec.clone()));
         spec.lit.sun = Some(None);
@@ -297,5 +314,48 @@ mod tests {
         let mut wire = spec.to_wire();
         wire.sky = "cloudy".into();
         assert!(FrameSpec::from_wire(&wire).unwrap_err().contains("sky 'cloudy'"));
+    }
+
+    #[test]
+    fn roma_settings_cross_the_wire() {
+        let camera = Camera::from_json(r#"{"pos":[0,40,0],"yaw":0,"pitch":-20,"fov_y":60}"#).unwrap();
+        let mut spec = FrameSpec::new(camera, (64, 48), Mode::Roma);
+        // The defaults travel as absent fields and come back as the defaults.
+        let wire = spec.to_wire();
+        assert_eq!((wire.roma_directions, wire.ao_range), (None, None));
+        assert_eq!(FrameSpec::from_wire(&wire), Ok(spec.clone()));
+        // Others travel as given (an AO range that an f32 holds exactly comes back unchanged).
+        spec.lit.roma = RomaOptions {
+            directions: 9,
+            ao_range: 48.5,
+        };
+        let wire = spec.to_wire();
+        assert_eq!((wire.roma_directions, wire.ao_range), (Some(9), Some(48.5)));
+        assert_eq!(FrameSpec::from_wire(&wire), Ok(spec.clone()));
+        spec.lit.roma.directions = 1;
+        spec.lit.roma.ao_range = 256.0;
+        assert_eq!(FrameSpec::from_wire(&spec.to_wire()), Ok(spec.clone()));
+    }
+
+    #[test]
+    fn bad_roma_settings_are_refused() {
+        let camera = Camera::from_json(r#"{"pos":[0,40,0],"yaw":0,"pitch":-20,"fov_y":60}"#).unwrap();
+        let wire = FrameSpec::new(camera, (64, 48), Mode::Roma).to_wire();
+        let refused = |directions: Option<u32>, ao_range: Option<f32>| {
+            FrameSpec::from_wire(&FrameRequest {
+                roma_directions: directions,
+                ao_range,
+                ..wire.clone()
+            })
+            .unwrap_err()
+        };
+        for k in [0, 2, 12, 25, u32::MAX] {
+            let e = refused(Some(k), None);
+            assert!(e.contains(&format!("{k} ROMA directions")), "{k}: {e}");
+        }
+        for range in [0.0, -1.0, 256.5, f32::INFINITY, f32::NAN] {
+            let e = refused(None, Some(range));
+            assert!(e.contains("AO range"), "{range}: {e}");
+        }
     }
 }

@@ -8,19 +8,31 @@
 //!   cell centres, moves by up to half a voxel).
 //! - The sun's map casts the shadow a pillar casts.
 //! - The same seed gives the same image.
+//! - With a device: the GPU's first frame agrees with the CPU's pixel for pixel (the same
+//!   random streams; a pixel may differ where f32 and f64 round a walk differently), and
+//!   maps updated after an edit and a camera move equal maps built from scratch, bit for
+//!   bit in the image, while writing only the tiles that changed.
 
 mod scenes;
 
+use naadf_client::gpu::{GpuWorld, Roma, Shot, Temporal};
 use naadf_client::light::cpu::CpuPathTracer;
-use naadf_client::light::roma::{ORIGIN_OFFSET, Roma, RomaOptions};
+use naadf_client::light::roma::{CpuRoma, ORIGIN_OFFSET, RomaOptions};
 use naadf_client::light::{Light, Sky, Sun};
 use naadf_world::World;
 use naadf_world::camera::Camera;
-use scenes::{FLOOR, GREY, camera, world, world_of};
+use scenes::{FLOOR, GREY, apply, camera, gpu, world, world_of};
 
 /// The CPU's ROMA image of `world`: one sample per pixel per frame, `frames` frames averaged.
-fn render(world: &World, cam: &Camera, size: (u32, u32), light: Light, options: RomaOptions, frames: u32) -> Vec<[f64; 3]> {
-    let roma = Roma::new(world, options, light, cam.pos).expect("ROMA maps");
+fn render(
+    world: &World,
+    cam: &Camera,
+    size: (u32, u32),
+    light: Light,
+    options: RomaOptions,
+    frames: u32,
+) -> Vec<[f64; 3]> {
+    let roma = CpuRoma::new(world, options, light, cam.pos).expect("ROMA maps");
     let tracer = CpuPathTracer::new(world, light, 7).with_roma(&roma);
     let mut out = Vec::new();
     for py in 0..size.1 {
@@ -38,7 +50,7 @@ fn uniform(l: f32) -> Light {
 #[test]
 fn an_open_floor_sees_the_whole_sky() {
     let w = world(&[GREY, FLOOR]);
-    let roma = Roma::new(&w, RomaOptions::default(), uniform(1.0), [32.0, 30.0, 32.0]).unwrap();
+    let roma = CpuRoma::new(&w, RomaOptions::default(), uniform(1.0), [32.0, 30.0, 32.0]).unwrap();
     for p in [[32.0, 8.0, 32.0], [5.5, 8.0, 60.25], [63.0, 8.0, 1.0]] {
         assert_eq!(roma.ambient_occlusion(p, [0.0, 1.0, 0.0], 2000, 1), 1.0, "AO at {p:?}");
     }
@@ -77,7 +89,7 @@ fn a_point_under_a_square_roof_has_the_analytic_ao() {
             directions,
             ao_range: 100.0,
         };
-        let roma = Roma::new(&w, options, uniform(1.0), [64.0, 20.0, 64.0]).unwrap();
+        let roma = CpuRoma::new(&w, options, uniform(1.0), [64.0, 20.0, 64.0]).unwrap();
         let ao = roma.ambient_occlusion([64.0, 8.0, 64.0], [0.0, 1.0, 0.0], samples, 3);
         // The ray starts one voxel off the floor.
         let h = f64::from(top - 8) - ORIGIN_OFFSET[0];
@@ -93,7 +105,7 @@ fn a_point_under_a_square_roof_has_the_analytic_ao() {
         directions: 16,
         ao_range: 15.0,
     };
-    let roma = Roma::new(&w, short, uniform(1.0), [64.0, 20.0, 64.0]).unwrap();
+    let roma = CpuRoma::new(&w, short, uniform(1.0), [64.0, 20.0, 64.0]).unwrap();
     assert_eq!(roma.ambient_occlusion([64.0, 8.0, 64.0], [0.0, 1.0, 0.0], 2000, 3), 1.0);
 }
 
@@ -104,7 +116,7 @@ fn the_suns_map_casts_a_pillars_shadow() {
     // The sun from +X at 45°: the pillar's shadow falls toward −X.
     let sun = Sun::parse("90,45,2").unwrap();
     let light = Light::new(Sky::Uniform([0.0; 3]), Some(sun), 3).unwrap();
-    let roma = Roma::new(&w, RomaOptions::default(), light, [32.0, 30.0, 32.0]).unwrap();
+    let roma = CpuRoma::new(&w, RomaOptions::default(), light, [32.0, 30.0, 32.0]).unwrap();
     let tracer = CpuPathTracer::new(&w, light, 0).with_roma(&roma);
     let cam = camera(r#"{"pos":[20,60,32],"yaw":0,"pitch":-89.9,"fov_y":1}"#);
     let shade = tracer.estimate(&cam, (0, 0), (1, 1), 0..16).mean[0];
@@ -112,7 +124,10 @@ fn the_suns_map_casts_a_pillars_shadow() {
     let lit_cam = camera(r#"{"pos":[50,60,32],"yaw":0,"pitch":-89.9,"fov_y":1}"#);
     let lit = tracer.estimate(&lit_cam, (0, 0), (1, 1), 0..16).mean[0];
     let expected = 0.5 / std::f64::consts::PI * 2.0 * 45f64.to_radians().sin();
-    assert!((lit - expected).abs() < 1e-3 * expected, "sunlit floor {lit}, expected {expected}");
+    assert!(
+        (lit - expected).abs() < 1e-3 * expected,
+        "sunlit floor {lit}, expected {expected}"
+    );
 }
 
 #[test]
@@ -125,4 +140,108 @@ fn the_same_seed_gives_the_same_image() {
     let b = render(&w, &cam, (8, 6), light, RomaOptions::default(), 2);
     assert_eq!(a, b);
     assert!(a.iter().any(|p| p[0] > 0.0));
+}
+
+/// A scene with shade from a roof, a pillar's shadow, a metal and a mirror.
+fn courtyard() -> World {
+    world(&[
+        GREY,
+        r#"{"op":"define_material","id":2,"kind":"metal","albedo":[0.9,0.6,0.3],"roughness":0.3}"#,
+        r#"{"op":"define_material","id":4,"kind":"mirror","albedo":[0.8,0.8,0.9]}"#,
+        FLOOR,
+        r#"{"op":"box","min":[20,20,20],"max":[44,22,44],"material":1}"#,
+        r#"{"op":"box","min":[20,8,20],"max":[22,20,22],"material":1}"#,
+        r#"{"op":"sphere","center":[48,14,40],"radius":5,"material":2}"#,
+        r#"{"op":"box","min":[8,8,50],"max":[30,24,51],"material":4}"#,
+    ])
+}
+
+/// The first ROMA frame of `shot` of `gw` (a fresh history), with `roma`'s maps as they are.
+fn first_frame(roma: &mut Roma, gw: &GpuWorld, shot: &Shot) -> Vec<[f32; 3]> {
+    let gpu = gpu().expect("device");
+    roma.swap_history(&mut None);
+    roma.frame(gpu, gw, shot).expect("roma frame");
+    roma.radiance(gpu).expect("radiance").rgb
+}
+
+#[test]
+fn the_gpu_agrees_with_the_cpu() {
+    let Some(gpu) = gpu() else { return };
+    let w = courtyard();
+    let cam = camera(r#"{"pos":[32,30,2],"yaw":0,"pitch":-25,"fov_y":70}"#);
+    let size = (48, 36);
+    let light = Light::new(Sky::Physical, Some(Sun::parse("120,40,3").unwrap()), 3).unwrap();
+    let options = RomaOptions::default();
+    let gw = GpuWorld::new(gpu, &w).unwrap();
+    let mut roma = Roma::new(gpu);
+    roma.set_options(options);
+    let img = first_frame(&mut roma, &gw, &Shot::new(cam, size, light, 5));
+    let cpu_roma = CpuRoma::new(&w, options, light, cam.pos).unwrap();
+    let tracer = CpuPathTracer::new(&w, light, 5).with_roma(&cpu_roma);
+    let (mut differ, mut sum_gpu, mut sum_cpu) = (0, 0.0, 0.0);
+    for py in 0..size.1 {
+        for px in 0..size.0 {
+            let c = tracer.sample(&cam, (px, py), size, 0);
+            let g = img[(px + py * size.0) as usize];
+            for k in 0..3 {
+                sum_gpu += f64::from(g[k]);
+                sum_cpu += c[k];
+            }
+            if (0..3).any(|k| (f64::from(g[k]) - c[k]).abs() > 2e-3 * c[k].abs().max(1.0)) {
+                differ += 1;
+            }
+        }
+    }
+    let pixels = size.0 * size.1;
+    assert!(differ * 50 <= pixels, "{differ} of {pixels} pixels differ");
+    assert!(
+        (sum_gpu - sum_cpu).abs() <= 0.01 * sum_cpu,
+        "mean GPU {sum_gpu} vs CPU {sum_cpu}"
+    );
+}
+
+#[test]
+fn updated_maps_equal_maps_built_afresh() {
+    let Some(gpu) = gpu() else { return };
+    let mut w = courtyard();
+    let light = Light::new(Sky::Physical, None, 3).unwrap();
+    let cam = camera(r#"{"pos":[32,30,2],"yaw":0,"pitch":-25,"fov_y":70}"#);
+    let shot = Shot::new(cam, (32, 24), light, 1);
+    let mut gw = GpuWorld::new(gpu, &w).unwrap();
+    let mut kept = Roma::new(gpu);
+    kept.set_options(RomaOptions {
+        directions: 4,
+        ao_range: 24.0,
+    });
+    first_frame(&mut kept, &gw, &shot);
+    let all = kept.tiles_written();
+    // Nothing changed: nothing is written.
+    first_frame(&mut kept, &gw, &shot);
+    assert_eq!(kept.tiles_written(), 0);
+    // An edit under the roof, then a camera 40 voxels on (a level-0 window moves).
+    apply(
+        &mut w,
+        &[r#"{"op":"box","min":[30,8,30],"max":[36,16,36],"material":1}"#],
+    );
+    gw.sync(&w).unwrap();
+    let moved = Shot::new(
+        camera(r#"{"pos":[72,30,2],"yaw":0,"pitch":-25,"fov_y":70}"#),
+        (32, 24),
+        light,
+        1,
+    );
+    for shot in [shot, moved] {
+        let updated = first_frame(&mut kept, &gw, &shot);
+        assert!(
+            kept.tiles_written() < all / 4,
+            "{} of {all} tiles rewritten",
+            kept.tiles_written()
+        );
+        let mut fresh = Roma::new(gpu);
+        fresh.set_options(RomaOptions {
+            directions: 4,
+            ao_range: 24.0,
+        });
+        assert_eq!(updated, first_frame(&mut fresh, &gw, &shot));
+    }
 }

@@ -43,7 +43,16 @@ pub const PROTOCOL_VERSION: u32 = 2;
 
 /// The render modes a `FrameRequest` may name (render nodes advertise a subset); the
 /// server refuses any other with INVALID_ARGUMENT.
-pub const FRAME_MODES: [&str; 7] = ["albedo", "material", "normal", "steps", "pathtrace", "baseline", "gi"];
+pub const FRAME_MODES: [&str; 8] = [
+    "albedo",
+    "material",
+    "normal",
+    "steps",
+    "pathtrace",
+    "baseline",
+    "gi",
+    "roma",
+];
 
 /// Most samples per pixel a `FrameRequest` may ask for.
 pub const MAX_FRAME_SPP: u32 = 4096;

@@ -6,6 +6,7 @@
 use super::BuildLimit;
 use anyhow::{Context, Result};
 use naadf_client::Mode;
+use naadf_client::light::roma::RomaOptions;
 use naadf_client::light::{LitOptions, Sky, Sun};
 use naadf_server::net::frontend::{Frontend, Reflection};
 use naadf_world::camera::Camera;
@@ -132,7 +133,7 @@ pub struct LightArgs {
     /// Seed of the random samples: the same seed, device and inputs give the same image.
     #[arg(long)]
     seed: Option<u32>,
-    /// Scattered rays after the camera ray (default 8 for pathtrace, 3 for baseline and gi).
+    /// Scattered rays after the camera ray (default 8 for pathtrace, 3 for baseline, gi and roma).
     #[arg(long, value_parser = clap::value_parser!(u32).range(0..=i64::from(naadf_client::light::MAX_BOUNCES)))]
     bounces: Option<u32>,
     /// The sky: `physical` (default) or `uniform:L` / `uniform:R,G,B` (linear radiance).
@@ -145,6 +146,13 @@ pub struct LightArgs {
     /// Exposure: the PNG holds sRGB(ACES(radiance · exposure)).
     #[arg(long)]
     exposure: Option<f32>,
+    /// Candidate directions of `--mode roma`'s occupancy maps: 1, 4, 9 or 16 (default 16).
+    #[arg(long, value_name = "K")]
+    roma_directions: Option<u32>,
+    /// How far `--mode roma` looks for occluders of ambient occlusion, in voxels (up to 256;
+    /// default 32).
+    #[arg(long, value_name = "VOXELS")]
+    ao_range: Option<f64>,
 }
 
 /// A parsed `--sun` (`off` is a value, so it is not an `Option` itself).
@@ -167,6 +175,18 @@ impl LightArgs {
             ("--sun", self.sun.is_some()),
             ("--exposure", self.exposure.is_some()),
         ];
+        let mut given: Vec<_> = flags.iter().filter(|f| f.1).map(|f| f.0).collect();
+        given.extend(self.roma_given());
+        given
+    }
+
+    /// The options of `--mode roma` alone given, by name (for a lit mode that takes none).
+    #[cfg(feature = "gpu")]
+    pub fn roma_given(&self) -> Vec<&'static str> {
+        let flags = [
+            ("--roma-directions", self.roma_directions.is_some()),
+            ("--ao-range", self.ao_range.is_some()),
+        ];
         flags.iter().filter(|f| f.1).map(|f| f.0).collect()
     }
 
@@ -180,6 +200,10 @@ impl LightArgs {
             sky: self.sky,
             sun: self.sun.map(|s| s.0),
             exposure: self.exposure.unwrap_or(d.exposure),
+            roma: RomaOptions {
+                directions: self.roma_directions.unwrap_or(d.roma.directions),
+                ao_range: self.ao_range.unwrap_or(d.roma.ao_range),
+            },
             ..d
         };
         options.check().map_err(anyhow::Error::msg)?;

@@ -21,17 +21,17 @@ pub struct Args {
     /// Image size `WxH`.
     #[arg(long, default_value = "1280x720", value_parser = parse_image_size)]
     size: (u32, u32),
-    /// What to show: albedo, material, normal, steps, pathtrace, baseline or gi.
+    /// What to show: albedo, material, normal, steps, pathtrace, baseline, gi or roma.
     #[arg(long, default_value = "albedo", value_parser = parse_mode)]
     mode: naadf_client::Mode,
     #[command(flatten)]
     light: LightArgs,
-    /// Frames of a temporal mode (baseline, gi) the node renders before answering,
+    /// Frames of a temporal mode (baseline, gi, roma) the node renders before answering,
     /// continuing the stream's history.
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
     frames: u32,
     /// Names this requester's camera stream: its frames go to one node, which keeps the
-    /// stream's histories (baseline, gi) and sums (pathtrace) between requests.
+    /// stream's histories (baseline, gi, roma) and sums (pathtrace) between requests.
     #[arg(long, default_value = "")]
     stream: String,
     /// The oldest world version the frame may show.

@@ -76,8 +76,16 @@ pub(crate) fn taa_pass() -> PassSource {
 impl Baseline {
     /// Prepares the passes (pipelines are built on first use).
     pub fn new(gpu: &Gpu) -> Self {
+        Self::with_sample_pass(gpu, path_pass("path_sample"), &[])
+    }
+
+    /// The same renderer with another sample pass (`path_sample` with a lighting tier)
+    /// whose group 1 has storage buffers of `extra` read-only flags after the baseline's
+    /// own (the frame, the light, the samples).
+    pub(crate) fn with_sample_pass(gpu: &Gpu, sample: PassSource, extra: &[bool]) -> Self {
+        let storage: Vec<bool> = [false].into_iter().chain(extra.iter().copied()).collect();
         Baseline {
-            sample: PassPipelines::new(gpu, path_pass("path_sample"), 2, &[false]),
+            sample: PassPipelines::new(gpu, sample, 2, &storage),
             taa: PassPipelines::new(gpu, taa_pass(), 2, &[true, true, false]),
             history: None,
         }
@@ -100,6 +108,36 @@ impl Temporal for Baseline {
     /// size, light or seed starts a new history; a new camera or world does not: the
     /// history is reprojected and clamped, as the baseline does.
     fn frame(&mut self, gpu: &Gpu, world: &GpuWorld, shot: &Shot) -> Result<(), GpuError> {
+        self.frame_with(gpu, world, shot, &[])
+    }
+
+    /// The newest result as linear radiance; an error before the first frame.
+    fn radiance(&self, gpu: &Gpu) -> Result<Radiance, GpuError> {
+        let h = self
+            .history
+            .as_ref()
+            .ok_or_else(|| GpuError::Readback("no baseline frame was rendered".into()))?;
+        let (w, ht) = h.shot.size;
+        let bytes = gpu.read_buffer(&h.results[h.latest], u64::from(w) * u64::from(ht) * PIXEL_BYTES)?;
+        let px: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&bytes);
+        Ok(Radiance {
+            width: w,
+            height: ht,
+            rgb: px.iter().map(|p| [p[0], p[1], p[2]]).collect(),
+        })
+    }
+}
+
+impl Baseline {
+    /// [`Temporal::frame`] with the sample pass's `extra` storage buffers bound after its
+    /// own.
+    pub(crate) fn frame_with(
+        &mut self,
+        gpu: &Gpu,
+        world: &GpuWorld,
+        shot: &Shot,
+        extra: &[&wgpu::Buffer],
+    ) -> Result<(), GpuError> {
         let (camera, size, seed) = (&shot.camera, shot.size, shot.seed);
         let pixels = check_frame_size(gpu, size, PIXEL_BYTES)?;
         // Validates the camera before any state changes.
@@ -135,7 +173,9 @@ impl Temporal for Baseline {
         let (old, new) = (&h.results[h.latest], &h.results[1 - h.latest]);
         let groups = (size.0.div_ceil(8), size.1.div_ceil(8));
         gpu.checked(|| {
-            let sample_group = self.sample.group1(gpu, &[&now, &light, &h.samples]);
+            let own = [&now, &light, &h.samples];
+            let sample_buffers: Vec<&wgpu::Buffer> = own.into_iter().chain(extra.iter().copied()).collect();
+            let sample_group = self.sample.group1(gpu, &sample_buffers);
             let taa_group = self.taa.group1(gpu, &[&now, &before, &h.samples, old, new]);
             let mut enc = gpu.device.create_command_encoder(&Default::default());
             {
@@ -154,21 +194,5 @@ impl Temporal for Baseline {
         h.frames += 1;
         h.shot = *shot;
         Ok(())
-    }
-
-    /// The newest result as linear radiance; an error before the first frame.
-    fn radiance(&self, gpu: &Gpu) -> Result<Radiance, GpuError> {
-        let h = self
-            .history
-            .as_ref()
-            .ok_or_else(|| GpuError::Readback("no baseline frame was rendered".into()))?;
-        let (w, ht) = h.shot.size;
-        let bytes = gpu.read_buffer(&h.results[h.latest], u64::from(w) * u64::from(ht) * PIXEL_BYTES)?;
-        let px: Vec<[f32; 4]> = bytemuck::pod_collect_to_vec(&bytes);
-        Ok(Radiance {
-            width: w,
-            height: ht,
-            rgb: px.iter().map(|p| [p[0], p[1], p[2]]).collect(),
-        })
     }
 }

@@ -1,12 +1,13 @@
 //! [`Headless`]: frames of a changing world without a window — a device, a renderer, the
-//! lit renderers (path tracer, baseline, GI) and a GPU copy of the world that follows it
-//! (`naadf render`, `naadf replay`, render nodes).
+//! lit renderers (path tracer, baseline, GI, ROMA) and a GPU copy of the world that follows
+//! it (`naadf render`, `naadf replay`, render nodes).
 
 use super::baseline::{Baseline, History};
 use super::context::{Gpu, GpuError};
 use super::gi::{Gi, GiHistory};
 use super::pathtrace::{Accumulation, PathTracer};
 use super::render::Renderer;
+use super::roma::Roma;
 use super::shot::Shot;
 use super::temporal::Temporal;
 use super::world::GpuWorld;
@@ -24,6 +25,7 @@ pub struct Headless {
     path_tracer: PathTracer,
     baseline: Baseline,
     gi: Gi,
+    roma: Roma,
     world: Option<GpuWorld>,
     /// The camera streams of [`Headless::render_spec`], least recently used first.
     streams: Vec<Stream>,
@@ -39,6 +41,7 @@ struct Stream {
     sums: Option<Accumulation>,
     history: Option<History>,
     gi: Option<GiHistory>,
+    roma: Option<History>,
 }
 
 impl Headless {
@@ -49,12 +52,14 @@ impl Headless {
         let path_tracer = PathTracer::new(&gpu);
         let baseline = Baseline::new(&gpu);
         let gi = Gi::new(&gpu);
+        let roma = Roma::new(&gpu);
         Ok(Headless {
             gpu,
             renderer,
             path_tracer,
             baseline,
             gi,
+            roma,
             world: None,
             streams: Vec::new(),
         })
@@ -87,12 +92,14 @@ impl Headless {
     }
 
     /// Renders the next frame of `shot` of `world` in a temporal mode
-    /// ([`Mode::is_temporal`]: `baseline` with [`Baseline`], `gi` with [`Gi`]).
+    /// ([`Mode::is_temporal`]: `baseline` with [`Baseline`], `gi` with [`Gi`], `roma` with
+    /// [`Roma`]).
     pub fn temporal_frame(&mut self, mode: Mode, world: &World, shot: &Shot) -> Result<(), GpuError> {
         let gw = GpuWorld::follow(&mut self.world, &self.gpu, world)?;
         let renderer: &mut dyn Temporal = match mode {
             Mode::Baseline => &mut self.baseline,
             Mode::Gi => &mut self.gi,
+            Mode::Roma => &mut self.roma,
             _ => return Err(not_temporal(mode)),
         };
         renderer.frame(&self.gpu, gw, shot)
@@ -103,6 +110,7 @@ impl Headless {
         let renderer: &dyn Temporal = match mode {
             Mode::Baseline => &self.baseline,
             Mode::Gi => &self.gi,
+            Mode::Roma => &self.roma,
             _ => return Err(not_temporal(mode)),
         };
         renderer.radiance(&self.gpu)
@@ -111,6 +119,11 @@ impl Headless {
     /// The GI renderer (its options, such as the denoiser).
     pub fn gi_mut(&mut self) -> &mut Gi {
         &mut self.gi
+    }
+
+    /// The ROMA renderer (its directions and AO range).
+    pub fn roma_mut(&mut self) -> &mut Roma {
+        &mut self.roma
     }
 
     /// Renders the frame `spec` asks for, in any mode: the lit modes continue the state of
@@ -134,6 +147,7 @@ impl Headless {
             sums: None,
             history: None,
             gi: None,
+            roma: None,
         };
         let mut stream = match self.streams.iter().position(|s| s.name == lit.stream) {
             Some(at) if !lit.stream.is_empty() => self.streams.remove(at),
@@ -143,6 +157,7 @@ impl Headless {
             h.path_tracer.swap_sums(&mut s.sums);
             h.baseline.swap_history(&mut s.history);
             h.gi.swap_history(&mut s.gi);
+            h.roma.swap_history(&mut s.roma);
         };
         swap(self, &mut stream);
         let radiance = self.render_lit(world, spec, &light);
@@ -163,6 +178,7 @@ impl Headless {
         if spec.mode == Mode::PathTrace {
             return self.path_trace(world, &shot, lit.spp, &mut |_| {});
         }
+        self.roma.set_options(lit.roma);
         for _ in 0..lit.frames {
             self.temporal_frame(spec.mode, world, &shot)?;
         }
@@ -171,5 +187,5 @@ impl Headless {
 }
 
 fn not_temporal(mode: Mode) -> GpuError {
-    GpuError::Unsupported(format!("{} is not a temporal mode (baseline, gi)", mode.name()))
+    GpuError::Unsupported(format!("{} is not a temporal mode (baseline, gi, roma)", mode.name()))
 }

@@ -43,6 +43,7 @@ mod pathtrace;
 mod pipeline;
 mod rays;
 mod render;
+mod roma;
 pub mod shaders;
 mod shot;
 mod temporal;
@@ -61,6 +62,7 @@ pub use params::{FrameInfo, GiInfo, LightInfo, Member, RayIn, View, WgslStruct, 
 pub use pathtrace::PathTracer;
 pub use rays::{GpuHit, GpuRay, RayBatch, RayTracer};
 pub use render::{DEFAULT_SUN, Renderer, STEPS_FULL_SCALE};
+pub use roma::Roma;
 pub use shot::{MAX_EDGE, Shot};
 pub use temporal::Temporal;
 pub use traversal::Traversal;

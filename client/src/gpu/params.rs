@@ -295,3 +295,66 @@ wgsl_struct! {
 }
 
 const _: () = assert!(size_of::<View>() == 96 && size_of::<RayCount>() == 16 && size_of::<RayIn>() == 48);
+
+wgsl_struct! {
+    /// What the ROMA sample pass knows of its maps, `roma` (group 1, binding 3 of `roma`'s
+    /// sample pass).
+    pub struct RomaInfo {
+        /// The camera the windows are centred on, in voxels.
+        pub camera: [f32; 3],
+        /// How far ambient occlusion looks, in voxels.
+        pub ao_range: f32,
+        /// Candidate directions per axis of the concentric square.
+        pub side: u32,
+        /// Candidate directions (`side²`); the sun's map follows them.
+        pub directions: u32,
+        /// Padding to 16 bytes.
+        pub _pad0: u32,
+        /// Padding to 16 bytes.
+        pub _pad1: u32,
+    }
+}
+
+wgsl_struct! {
+    /// One window of one ROMA map at one level, `roma_windows[map · ROMA_LEVELS + level]`:
+    /// the map's frame, the level's cell, where its tiles are kept and which tiles it
+    /// holds.
+    pub struct RomaWindow {
+        /// The frame's first row.
+        pub t: [f32; 3],
+        /// The level's cell edge, in voxels.
+        pub cell: f32,
+        /// The frame's second row.
+        pub b: [f32; 3],
+        /// The window's first tile in `roma_bits` (in tiles).
+        pub first_tile: u32,
+        /// The frame's third row: the map's direction.
+        pub w: [f32; 3],
+        /// How far off a surface a ray starts, in cells of this level.
+        pub offset: f32,
+        /// The window's lowest tile, per map axis.
+        pub base: [i32; 3],
+        /// Padding to 16 bytes.
+        pub _pad: u32,
+    }
+}
+
+wgsl_struct! {
+    /// One tile for `roma_build` to write, `roma_jobs[i]`.
+    pub struct RomaJob {
+        /// The tile's coordinates in its map, in tiles.
+        pub tile: [i32; 3],
+        /// Its window (`map · ROMA_LEVELS + level`).
+        pub window: u32,
+        /// 1: the tile lies outside the world, so it is cleared without sampling.
+        pub clear: u32,
+        /// Padding to 16 bytes.
+        pub _pad0: u32,
+        /// Padding to 16 bytes.
+        pub _pad1: u32,
+        /// Padding to 16 bytes.
+        pub _pad2: u32,
+    }
+}
+
+const _: () = assert!(size_of::<RomaInfo>() == 32 && size_of::<RomaWindow>() == 64 && size_of::<RomaJob>() == 32);

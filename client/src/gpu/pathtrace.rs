@@ -9,14 +9,14 @@
 use super::context::{Gpu, GpuError};
 use super::params::{FrameInfo, LightInfo};
 use super::pipeline::PassPipelines;
-use super::shaders::{LIGHT, Loop, PassSource, SAMPLE};
+use super::shaders::{LIGHT, Loop, NO_TIER, PassSource, SAMPLE};
 use super::shot::{CameraRays, Shot, check_frame_size};
 use super::world::GpuWorld;
 use crate::light::hdr::Radiance;
 use wgpu::util::DeviceExt;
 
 /// `shaders/pathtrace.wgsl`: path-traced samples (progressive sums, or one per frame).
-const PATHTRACE: &str = include_str!("../../../shaders/pathtrace.wgsl");
+pub(crate) const PATHTRACE: &str = include_str!("../../../shaders/pathtrace.wgsl");
 
 /// Pixel-samples one submission traces at most (one dispatch per sample): keeps each
 /// submission short (a real GPU's watchdog) and the progress reports frequent.
@@ -30,7 +30,7 @@ const SUM_BYTES: u64 = 16;
 pub(crate) fn path_pass(entry: &'static str) -> PassSource {
     PassSource {
         entry,
-        files: &[SAMPLE, LIGHT, PATHTRACE],
+        files: &[SAMPLE, LIGHT, NO_TIER, PATHTRACE],
         generated: String::new(),
     }
 }

@@ -49,6 +49,9 @@ pub const HYBRID: &str = include_str!("../../../shaders/hybrid.wgsl");
 pub const SAMPLE: &str = include_str!("../../../shaders/sample.wgsl");
 /// `shaders/light.wgsl`: the light model of the lit passes (sky, sun, scattering, paths).
 pub const LIGHT: &str = include_str!("../../../shaders/light.wgsl");
+/// `shaders/no_tier.wgsl`: no lighting tier, for the passes that trace paths as the light
+/// model does (after [`LIGHT`]).
+pub const NO_TIER: &str = include_str!("../../../shaders/no_tier.wgsl");
 /// `shaders/first_hit.wgsl`: the first-hit chain through mirrors (`albedo` and `gi`).
 pub const FIRST_HIT: &str = include_str!("../../../shaders/first_hit.wgsl");
 
@@ -61,6 +64,8 @@ pub const NO_ENTITY: u32 = MAX_ENTITY_ID + 1;
 pub enum WgslValue {
     /// A `u32`.
     U32(u32),
+    /// An `i32`.
+    I32(i32),
     /// An `f32`.
     F32(f32),
     /// A `vec3<f32>`.
@@ -80,6 +85,7 @@ impl WgslValue {
         let f = |v: f32| format!("{v:?}f");
         match self {
             WgslValue::U32(v) => format!("const {name}: u32 = {v}u;\n"),
+            WgslValue::I32(v) => format!("const {name}: i32 = {v}i;\n"),
             WgslValue::F32(v) => format!("const {name}: f32 = {};\n", f(v)),
             WgslValue::Vec3(x, y, z) => format!("const {name}: vec3<f32> = vec3<f32>({}, {}, {});\n", f(x), f(y), f(z)),
         }

@@ -6,10 +6,13 @@
 use super::baseline::taa_pass;
 use super::bindings::Split;
 use super::gi::{GiPass, GiSplit, gi_pass};
-use super::params::{FrameInfo, GiInfo, LightInfo, RayCount, RayIn, View, WgslStruct, WorldInfo};
+use super::params::{
+    FrameInfo, GiInfo, LightInfo, RayCount, RayIn, RomaInfo, RomaJob, RomaWindow, View, WgslStruct, WorldInfo,
+};
 use super::pathtrace::path_pass;
 use super::rays::rays_pass;
 use super::render::render_pass;
+use super::roma::{roma_build_pass, roma_sample_pass};
 use super::shaders::{CONSTANTS, Loop, PassSource, WgslValue, WorldBindings, prelude, source};
 
 fn validate(src: &str) -> Result<(), String> {
@@ -36,7 +39,7 @@ fn whole() -> Split {
 }
 
 /// Every pass: the ray list, the frame, the two path-tracing entry points, the TAA
-/// resolve, and the GI passes over `gi_split`.
+/// resolve, ROMA's sample and build passes, and the GI passes over `gi_split`.
 fn every_pass(gi_split: GiSplit) -> Vec<PassSource> {
     let mut passes = vec![
         rays_pass(),
@@ -44,6 +47,8 @@ fn every_pass(gi_split: GiSplit) -> Vec<PassSource> {
         path_pass("path_trace"),
         path_pass("path_sample"),
         taa_pass(),
+        roma_sample_pass(),
+        roma_build_pass(),
     ];
     passes.extend(GiPass::ALL.map(|p| gi_pass(p, gi_split)));
     passes
@@ -163,6 +168,14 @@ fn the_shared_structs_are_laid_out_at_the_rust_offsets() {
     let rays = parse(&source(&rays_pass(), Loop::Hierarchy, WorldBindings::Split(&whole())));
     assert_rust_layout::<RayCount>(&rays);
     assert_rust_layout::<RayIn>(&rays);
+    let roma = parse(&source(
+        &roma_build_pass(),
+        Loop::Hierarchy,
+        WorldBindings::Split(&whole()),
+    ));
+    assert_rust_layout::<RomaInfo>(&roma);
+    assert_rust_layout::<RomaWindow>(&roma);
+    assert_rust_layout::<RomaJob>(&roma);
 }
 
 /// The value naga reads for a constant's initialiser.
@@ -173,6 +186,7 @@ fn value(module: &naga::Module, e: naga::Handle<naga::Expression>) -> WgslValue 
     };
     match module.global_expressions[e] {
         naga::Expression::Literal(naga::Literal::U32(v)) => WgslValue::U32(v),
+        naga::Expression::Literal(naga::Literal::I32(v)) => WgslValue::I32(v),
         naga::Expression::Literal(naga::Literal::F32(v)) => WgslValue::F32(v),
         naga::Expression::Compose { ref components, .. } if components.len() == 3 => {
             WgslValue::Vec3(scalar(components[0]), scalar(components[1]), scalar(components[2]))
@@ -192,6 +206,7 @@ fn the_prelude_constants_have_their_rust_values_bit_for_bit() {
         .collect();
     let bits = |v: WgslValue| match v {
         WgslValue::U32(v) => vec![v],
+        WgslValue::I32(v) => vec![v as u32],
         WgslValue::F32(v) => vec![v.to_bits()],
         WgslValue::Vec3(x, y, z) => vec![x.to_bits(), y.to_bits(), z.to_bits()],
     };

@@ -4,7 +4,7 @@
 //! device.
 
 use super::rng::Rng;
-use super::roma::Roma;
+use super::roma::CpuRoma;
 use super::scatter::{self, MIN_ALPHA};
 use super::{Light, SURFACE_OFFSET, Sky, Sun, sky};
 use glam::DVec3;
@@ -29,7 +29,7 @@ pub struct CpuPathTracer<'w> {
     light: Light,
     seed: u32,
     /// The lighting tier of diffuse surfaces, if not the path tracer's own.
-    tier: Option<&'w Roma<'w>>,
+    tier: Option<&'w CpuRoma<'w>>,
 }
 
 impl<'w> CpuPathTracer<'w> {
@@ -46,7 +46,7 @@ impl<'w> CpuPathTracer<'w> {
     /// The same tracer with diffuse (and emissive) surfaces lit by `roma` instead
     /// (`--mode roma`): a path ends at the first of them with the tier's light, while
     /// mirrors and metals scatter as the path tracer scatters them.
-    pub fn with_roma(self, roma: &'w Roma<'w>) -> Self {
+    pub fn with_roma(self, roma: &'w CpuRoma<'w>) -> Self {
         CpuPathTracer {
             tier: Some(roma),
             ..self

@@ -27,6 +27,7 @@ pub mod roma;
 pub mod scatter;
 pub mod sky;
 
+use roma::RomaOptions;
 use std::f64::consts::PI;
 
 /// Angular radius of the sun disc, in degrees.
@@ -229,6 +230,8 @@ pub struct LitOptions {
     /// The requester's camera stream: frames of one stream continue one history ("" for
     /// none).
     pub stream: String,
+    /// The settings of `roma`: its candidate directions and AO range.
+    pub roma: RomaOptions,
 }
 
 impl Default for LitOptions {
@@ -242,6 +245,7 @@ impl Default for LitOptions {
             sun: None,
             exposure: 1.0,
             stream: String::new(),
+            roma: RomaOptions::default(),
         }
     }
 }
@@ -256,7 +260,8 @@ impl LitOptions {
         )
     }
 
-    /// Checks the numbers: at least one sample and frame, a positive finite exposure.
+    /// Checks the numbers: at least one sample and frame, a positive finite exposure, and
+    /// the ROMA settings ([`RomaOptions::check`]).
     pub fn check(&self) -> Result<(), String> {
         if self.spp == 0 || self.frames == 0 {
             return Err("a lit frame needs at least one sample per pixel and one frame".into());
@@ -264,7 +269,7 @@ impl LitOptions {
         if !(self.exposure.is_finite() && self.exposure > 0.0) {
             return Err(format!("exposure {}: must be a positive finite number", self.exposure));
         }
-        Ok(())
+        self.roma.check()
     }
 }
 

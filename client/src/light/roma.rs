@@ -28,7 +28,7 @@
 //! - **Lighting** of a diffuse surface: a cosine-distributed direction `ω` visible within
 //!   the AO range adds `albedo · sky(ω)` (its mean is albedo × sky irradiance × AO / π
 //!   under a uniform sky), and a sample of the sun's disc visible through the sun's map
-//!   adds `albedo / π · E · cos θ` ([`Roma::diffuse`]).
+//!   adds `albedo / π · E · cos θ` ([`CpuRoma::diffuse`]).
 
 use super::rng::Rng;
 use super::scatter::{basis, cone, cosine};
@@ -102,7 +102,7 @@ impl RomaOptions {
     /// ```
     pub fn check(&self) -> Result<(), String> {
         let side = self.side();
-        if side * side != self.directions || !(1..=MAX_SIDE).contains(&side) {
+        if !(1..=MAX_SIDE).contains(&side) || side * side != self.directions {
             return Err(format!(
                 "{} ROMA directions: give a square number from 1 to {}",
                 self.directions,
@@ -110,7 +110,10 @@ impl RomaOptions {
             ));
         }
         if !(self.ao_range > 0.0 && self.ao_range <= MAX_AO_RANGE) {
-            return Err(format!("AO range {}: must lie in (0, {MAX_AO_RANGE}] voxels", self.ao_range));
+            return Err(format!(
+                "AO range {}: must lie in (0, {MAX_AO_RANGE}] voxels",
+                self.ao_range
+            ));
         }
         Ok(())
     }
@@ -207,12 +210,12 @@ impl MapFrame {
     }
 
     /// `p` in the map's coordinates, in voxels.
-    fn to_map(&self, p: DVec3) -> DVec3 {
+    fn to_map(self, p: DVec3) -> DVec3 {
         DVec3::new(self.rows[0].dot(p), self.rows[1].dot(p), self.rows[2].dot(p))
     }
 
     /// The world point of map coordinates `m` (in voxels).
-    fn to_world(&self, m: DVec3) -> DVec3 {
+    fn to_world(self, m: DVec3) -> DVec3 {
         self.rows[0] * m.x + self.rows[1] * m.y + self.rows[2] * m.z
     }
 }
@@ -271,7 +274,13 @@ pub fn occupied(world: &World, level: usize, p: DVec3) -> bool {
 
 /// The words of tile `tile` of map `frame` at `level`: bit `z` of word `x + 32y` is the
 /// occupancy of cell `tile·32 + (x, y, z)`.
-pub fn tile_words(world: &World, boxes: &[([f64; 3], [f64; 3])], frame: &MapFrame, level: usize, tile: IVec3) -> Vec<u32> {
+pub fn tile_words(
+    world: &World,
+    boxes: &[([f64; 3], [f64; 3])],
+    frame: &MapFrame,
+    level: usize,
+    tile: IVec3,
+) -> Vec<u32> {
     let cell = CELL[level];
     let corner = tile * TILE;
     let inside = |p: DVec3, b: &([f64; 3], [f64; 3])| (0..3).all(|a| p[a] >= b.0[a] && p[a] <= b.1[a]);
@@ -292,6 +301,9 @@ pub fn tile_words(world: &World, boxes: &[([f64; 3], [f64; 3])], frame: &MapFram
     words
 }
 
+/// The tiles a [`CpuRoma`] built so far, by level, map and tile coordinates.
+type TileCache = Mutex<HashMap<(usize, usize, IVec3), Arc<Vec<u32>>>>;
+
 /// How a ray through one level's window ended.
 enum Walk {
     /// It met an occupied cell.
@@ -302,7 +314,7 @@ enum Walk {
 
 /// ROMA maps of one world for one camera and sun: the CPU's, with tiles built when a ray
 /// first needs them.
-pub struct Roma<'w> {
+pub struct CpuRoma<'w> {
     world: &'w World,
     options: RomaOptions,
     light: Light,
@@ -311,10 +323,10 @@ pub struct Roma<'w> {
     /// The window base of each map at each level.
     bases: Vec<[IVec3; LEVELS]>,
     boxes: Vec<([f64; 3], [f64; 3])>,
-    tiles: Mutex<HashMap<(usize, usize, IVec3), Arc<Vec<u32>>>>,
+    tiles: TileCache,
 }
 
-impl<'w> Roma<'w> {
+impl<'w> CpuRoma<'w> {
     /// The maps of `world` for a camera at `camera` under `light`.
     pub fn new(world: &'w World, options: RomaOptions, light: Light, camera: [f64; 3]) -> Result<Self, String> {
         options.check()?;
@@ -324,7 +336,7 @@ impl<'w> Roma<'w> {
             .iter()
             .map(|f| std::array::from_fn(|l| window_base(f, l, camera)))
             .collect();
-        Ok(Roma {
+        Ok(CpuRoma {
             world,
             options,
             light,
@@ -425,12 +437,16 @@ impl<'w> Roma<'w> {
     }
 
     /// Whether the ray from surface point `p` (normal `n`) along unit `d` is clear for
-    /// `range` voxels through map `map`, starting at `level`.
-    fn clear(&self, map: usize, p: DVec3, n: DVec3, d: DVec3, level: usize, range: f64) -> bool {
+    /// `range` voxels through map `map`, starting at the level that serves `p` (beyond
+    /// them all: clear).
+    fn clear(&self, map: usize, p: DVec3, n: DVec3, d: DVec3, range: f64) -> bool {
+        let Some(level) = level_of(p, self.camera) else {
+            return true;
+        };
         let o = p + n * (ORIGIN_OFFSET[level] * CELL[level]);
         let mut t = 0.0f64;
-        for l in level..LEVELS {
-            let start = if l == level { 0.0 } else { t.max(2.0 * CELL[l]) };
+        for (l, cell) in CELL.iter().enumerate().skip(level) {
+            let start = if l == level { 0.0 } else { t.max(2.0 * cell) };
             if start >= range {
                 return true;
             }
@@ -446,11 +462,8 @@ impl<'w> Roma<'w> {
     /// The visibility of direction `d` (unit) from surface point `p` with normal `n`
     /// within the AO range: 1 clear, 0 blocked.
     pub fn sky_visibility(&self, p: DVec3, n: DVec3, d: DVec3) -> f64 {
-        let Some(level) = level_of(p, self.camera) else {
-            return 1.0;
-        };
         let map = stratum(self.options.side(), d) as usize;
-        f64::from(u8::from(self.clear(map, p, n, d, level, self.options.ao_range)))
+        f64::from(u8::from(self.clear(map, p, n, d, self.options.ao_range)))
     }
 
     /// The ambient occlusion of surface point `p` with normal `n`: the mean visibility of
@@ -473,20 +486,17 @@ impl<'w> Roma<'w> {
     pub fn diffuse(&self, p: DVec3, n: DVec3, albedo: DVec3, sky: &dyn Fn(DVec3) -> DVec3, rng: &mut Rng) -> DVec3 {
         let u = [f64::from(rng.next_f32()), f64::from(rng.next_f32())];
         let us = [f64::from(rng.next_f32()), f64::from(rng.next_f32())];
-        let Some(level) = level_of(p, self.camera) else {
-            return DVec3::ZERO;
-        };
         let w = cosine(n, u);
         let map = stratum(self.options.side(), w) as usize;
         let mut l = DVec3::ZERO;
-        if self.clear(map, p, n, w, level, self.options.ao_range) {
+        if self.clear(map, p, n, w, self.options.ao_range) {
             l += albedo * sky(w);
         }
         if let Some(sun) = self.light.sun {
             let ws = cone(DVec3::from(sun.direction()), Sun::one_minus_cos(), us);
             let cos = n.dot(ws);
             let sun_map = sun_map(self.options.directions);
-            if cos > 0.0 && self.clear(sun_map, p, n, ws, level, f64::INFINITY) {
+            if cos > 0.0 && self.clear(sun_map, p, n, ws, f64::INFINITY) {
                 l += albedo / PI * (cos * sun.sample_weight());
             }
         }
@@ -505,7 +515,10 @@ mod tests {
                 let (a, b) = (f64::from(i) / 19.5 - 1.0 + 0.01, f64::from(j) / 19.5 - 1.0 + 0.013);
                 let (x, y) = concentric(a, b);
                 let (a2, b2) = inverse_concentric(x, y);
-                assert!((a - a2).abs() < 1e-9 && (b - b2).abs() < 1e-9, "({a}, {b}) → ({a2}, {b2})");
+                assert!(
+                    (a - a2).abs() < 1e-9 && (b - b2).abs() < 1e-9,
+                    "({a}, {b}) → ({a2}, {b2})"
+                );
             }
         }
     }

@@ -34,7 +34,7 @@ pub use present::Presenter;
 
 use crate::client::{PresenceUpdate, ServerAddress};
 use crate::frame::{Frame, Mode};
-use crate::gpu::{Baseline, Gi, Gpu, GpuError, GpuWorld, PathTracer, Renderer, Shot, Temporal};
+use crate::gpu::{Baseline, Gi, Gpu, GpuError, GpuWorld, PathTracer, Renderer, Roma, Shot, Temporal};
 use crate::light::{DEFAULT_LIT_BOUNCES, DEFAULT_PATHTRACE_BOUNCES, LitOptions};
 use crate::mirror::Mirror;
 use naadf_world::camera::Camera;
@@ -164,6 +164,7 @@ struct Graphics {
     path_tracer: PathTracer,
     baseline: Baseline,
     gi: Gi,
+    roma: Roma,
     world: Option<GpuWorld>,
 }
 
@@ -178,6 +179,7 @@ impl Graphics {
             path_tracer,
             baseline,
             gi,
+            roma,
             world,
             ..
         } = self;
@@ -192,8 +194,12 @@ impl Graphics {
                 gw,
                 &Shot::new(*camera, size, light(DEFAULT_PATHTRACE_BOUNCES)?, lit.seed),
             )?,
-            Mode::Baseline | Mode::Gi => {
-                let r: &mut dyn Temporal = if mode == Mode::Gi { gi } else { baseline };
+            Mode::Baseline | Mode::Gi | Mode::Roma => {
+                let r: &mut dyn Temporal = match mode {
+                    Mode::Gi => gi,
+                    Mode::Roma => roma,
+                    _ => baseline,
+                };
                 r.frame(
                     gpu,
                     gw,
@@ -276,6 +282,7 @@ impl App {
         let baseline = Baseline::new(&gpu);
         let mut gi = Gi::new(&gpu);
         gi.profile = true;
+        let roma = Roma::new(&gpu);
         self.gfx = Some(Graphics {
             gpu,
             presenter,
@@ -283,6 +290,7 @@ impl App {
             path_tracer,
             baseline,
             gi,
+            roma,
             world: None,
         });
         self.window = Some(window);
@@ -434,9 +442,10 @@ impl App {
             gw.sync(world)?;
         }
         let mut frame = match gfx.render(&fly.camera, size, self.opts.mode) {
-            // `gi` is the default; an adapter that cannot run it shows albedo instead.
-            Err(e) if self.opts.mode == Mode::Gi => {
-                self.notice = format!("gi is not available here ({e}); showing albedo");
+            // `gi` is the default; an adapter that cannot run it (or `roma`, whose maps
+            // need a large binding) shows albedo instead.
+            Err(e) if matches!(self.opts.mode, Mode::Gi | Mode::Roma) => {
+                self.notice = format!("{} is not available here ({e}); showing albedo", self.opts.mode.name());
                 self.opts.mode = Mode::Albedo;
                 gfx.render(&fly.camera, size, Mode::Albedo)?
             }

@@ -173,6 +173,33 @@ struct FrameQuery {
     sun: Option<String>,
     exposure: Option<f32>,
     stream: Option<String>,
+    roma_directions: Option<u32>,
+    ao_range: Option<f32>,
+}
+
+impl FrameQuery {
+    /// The `RenderFrame` request of the query, with its size parsed.
+    fn request(self, (width, height): (u32, u32)) -> FrameRequest {
+        FrameRequest {
+            camera: self.camera,
+            width,
+            height,
+            mode: self.mode.unwrap_or_else(|| "albedo".into()),
+            min_version: self.min_version.unwrap_or(0),
+            raw: false,
+            timeout_ms: 0,
+            spp: self.spp.unwrap_or(0),
+            frames: self.frames.unwrap_or(0),
+            seed: self.seed.unwrap_or(0),
+            bounces: self.bounces,
+            sky: self.sky.unwrap_or_default(),
+            sun: self.sun.unwrap_or_default(),
+            exposure: self.exposure.unwrap_or(0.0),
+            stream: self.stream.unwrap_or_default(),
+            roma_directions: self.roma_directions,
+            ao_range: self.ao_range,
+        }
+    }
 }
 
 /// A gRPC status as an HTTP status and message.
@@ -192,8 +219,9 @@ fn http_error(s: &Status) -> Response {
 }
 
 /// `GET /frame.png?camera=<json>&size=WxH&mode=M[&min_version=n][&token=T]`, plus the lit
-/// modes' `spp`, `frames`, `seed`, `bounces`, `sky`, `sun`, `exposure` and `stream`: the
-/// same request, roles and errors as `RenderFrame`. The token comes from `Authorization: Bearer`
+/// modes' `spp`, `frames`, `seed`, `bounces`, `sky`, `sun`, `exposure` and `stream`, and
+/// `roma`'s `roma_directions` and `ao_range`: the same request, roles and errors as
+/// `RenderFrame`. The token comes from `Authorization: Bearer`
 /// or the query; a request without one from another machine is refused even in open mode.
 /// Authentication comes first: a caller without a valid token learns nothing about the
 /// other parameters.
@@ -233,23 +261,7 @@ async fn frame_png(
             clip_input(size, MAX_QUOTED_CHARS)
         )));
     };
-    let req = FrameRequest {
-        camera: q.camera,
-        width: w,
-        height: h,
-        mode: q.mode.unwrap_or_else(|| "albedo".into()),
-        min_version: q.min_version.unwrap_or(0),
-        raw: false,
-        timeout_ms: 0,
-        spp: q.spp.unwrap_or(0),
-        frames: q.frames.unwrap_or(0),
-        seed: q.seed.unwrap_or(0),
-        bounces: q.bounces,
-        sky: q.sky.unwrap_or_default(),
-        sun: q.sun.unwrap_or_default(),
-        exposure: q.exposure.unwrap_or(0.0),
-        stream: q.stream.unwrap_or_default(),
-    };
+    let req = q.request((w, h));
     if let Err(s) = crate::net::service::check_frame(&req) {
         return http_error(&s);
     }
@@ -374,4 +386,31 @@ async fn status_page(
         app.shared.activity.clients().len(),
     ))
     .into_response()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::FrameQuery;
+    use axum::extract::Query;
+    use axum::http::Uri;
+
+    fn request(query: &str) -> naadf_proto::v1::FrameRequest {
+        let uri: Uri = format!("/frame.png?{query}").parse().unwrap();
+        let Query(q) = Query::<FrameQuery>::try_from_uri(&uri).unwrap();
+        q.request((8, 6))
+    }
+
+    #[test]
+    fn the_frame_query_carries_the_lit_options() {
+        let r = request("camera=%7B%7D&mode=roma&bounces=2&exposure=0.5&roma_directions=9&ao_range=48.5");
+        assert_eq!((r.camera.as_str(), r.mode.as_str()), ("{}", "roma"));
+        assert_eq!((r.width, r.height, r.bounces, r.exposure), (8, 6, Some(2), 0.5));
+        assert_eq!((r.roma_directions, r.ao_range), (Some(9), Some(48.5)));
+        // Absent, they stay absent: the render node takes its defaults.
+        let r = request("camera=%7B%7D");
+        assert_eq!((r.mode.as_str(), r.roma_directions, r.ao_range), ("albedo", None, None));
+        // A value that is not a number is a bad query, not a request.
+        let uri: Uri = "/frame.png?camera=%7B%7D&roma_directions=many".parse().unwrap();
+        assert!(Query::<FrameQuery>::try_from_uri(&uri).is_err());
+    }
 }

@@ -829,7 +829,9 @@ fn camera_dir(f: FrameInfo, gid: vec2<u32>, jitter: vec2<f32>) -> vec3<f32> {
 // scatter.rs, cpu.rs), written operation by operation like it so that the two path
 // tracers agree up to rounding. Needs random.wgsl before it.
 //
-// The pass binds `light: LightInfo` (generated in the prelude from the Rust `LightInfo`).
+// The pass binds `light: LightInfo` (generated in the prelude from the Rust `LightInfo`),
+// and declares `DIFFUSE_TIER` and `diffuse_tier` (no_tier.wgsl, or a lighting tier such as
+// roma.wgsl) for `path_step`.
 
 // PI, SURFACE_OFFSET (how far scattered and shadow rays start off the surface),
 // MIN_ALPHA (the smallest GGX α a metal is traced with) and the physical sky's constants
@@ -1077,6 +1079,13 @@ fn path_step(s: ptr<function, PathState>, scatter: bool, rng: ptr<function, u32>
     if m.kind == KIND_EMISSIVE {
         (*s).radiance += (*s).throughput * m.albedo * m.emission;
     }
+    // A lighting tier (`roma`) lights diffuse and emissive surfaces itself, and the path
+    // ends there; mirrors and metals scatter on.
+    if DIFFUSE_TIER && m.kind != KIND_MIRROR && m.kind != KIND_METAL {
+        let surface = vec3<f32>(r.o_int) + ray_local(r, h.t);
+        (*s).radiance += (*s).throughput * diffuse_tier(surface, n, m.albedo, rng);
+        return distance;
+    }
     if !scatter {
         return distance;
     }
@@ -1134,6 +1143,15 @@ fn path_radiance(primary: Ray, bounces: u32, sees_disc: bool, rng: ptr<function,
         path_step(&s, bounce < bounces, rng);
     }
     return PathSample(s.radiance, distance, s.first_normal);
+}
+
+// No lighting tier: `path_step` (light.wgsl) traces diffuse surfaces as the light model
+// does. Included by the path tracer and the GI passes; `roma` includes roma.wgsl instead.
+
+const DIFFUSE_TIER: bool = false;
+
+fn diffuse_tier(p: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, rng: ptr<function, u32>) -> vec3<f32> {
+    return vec3<f32>(0.0);
 }
 
 // The first-hit chain shared by `albedo` (render.wgsl) and `gi` (gi_primary.wgsl): a camera

@@ -2,7 +2,7 @@
 //! from ([`gi_pass`]).
 
 use super::memory::{GI_CONSTANTS, GiSplit, gi_parts};
-use crate::gpu::shaders::{FIRST_HIT, LIGHT, PassSource, SAMPLE, constants};
+use crate::gpu::shaders::{FIRST_HIT, LIGHT, NO_TIER, PassSource, SAMPLE, constants};
 
 /// `shaders/gi_common.wgsl`: the GI passes' bindings, encodings and atmosphere table.
 const GI_COMMON: &str = include_str!("../../../../shaders/gi_common.wgsl");
@@ -15,11 +15,12 @@ const GI_SAMPLES: &str = include_str!("../../../../shaders/gi_samples.wgsl");
 /// `shaders/gi_resample.wgsl`: spatial resampling and the denoiser.
 const GI_RESAMPLE: &str = include_str!("../../../../shaders/gi_resample.wgsl");
 
-/// Every GI pass's files after the shared ones: the sample streams, the light model, the
-/// first-hit chain and the `gi_*` files.
+/// Every GI pass's files after the shared ones: the sample streams, the light model (with
+/// no lighting tier), the first-hit chain and the `gi_*` files.
 const GI_FILES: &[&str] = &[
     SAMPLE,
     LIGHT,
+    NO_TIER,
     FIRST_HIT,
     GI_COMMON,
     GI_ENTITIES,
