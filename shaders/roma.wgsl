@@ -52,6 +52,23 @@ struct RomaWalk {
     t: f32,
 }
 
+// One axis of the column walk: when it first leaves column `i` (from map coordinate `p`,
+// moving `v` cells per voxel), the time between its crossings, and its step.
+struct RomaAxis {
+    next: f32,
+    delta: f32,
+    step: i32,
+}
+
+fn roma_axis(p: f32, i: i32, v: f32) -> RomaAxis {
+    if v > 0.0 {
+        return RomaAxis((f32(i + 1) - p) / v, 1.0 / v, 1);
+    } else if v < 0.0 {
+        return RomaAxis((f32(i) - p) / v, -1.0 / v, -1);
+    }
+    return RomaAxis(ROMA_FAR, ROMA_FAR, 0);
+}
+
 // Walks `o + t·d` for t in [t0, t1] across the texel columns of window `win`.
 fn roma_walk(win: u32, o: vec3<f32>, d: vec3<f32>, t0: f32, t1: f32) -> RomaWalk {
     let w = roma_windows[win];
@@ -79,27 +96,11 @@ fn roma_walk(win: u32, o: vec3<f32>, d: vec3<f32>, t0: f32, t1: f32) -> RomaWalk
     let start = q + e * ta;
     var x = i32(floor(start.x));
     var y = i32(floor(start.y));
-    var next = vec2<f32>(ROMA_FAR);
-    var delta = vec2<f32>(ROMA_FAR);
-    var step = vec2<i32>(0);
-    if e.x > 0.0 {
-        next.x = (f32(x + 1) - q.x) / e.x;
-        delta.x = 1.0 / e.x;
-        step.x = 1;
-    } else if e.x < 0.0 {
-        next.x = (f32(x) - q.x) / e.x;
-        delta.x = -1.0 / e.x;
-        step.x = -1;
-    }
-    if e.y > 0.0 {
-        next.y = (f32(y + 1) - q.y) / e.y;
-        delta.y = 1.0 / e.y;
-        step.y = 1;
-    } else if e.y < 0.0 {
-        next.y = (f32(y) - q.y) / e.y;
-        delta.y = -1.0 / e.y;
-        step.y = -1;
-    }
+    let ax = roma_axis(q.x, x, e.x);
+    let ay = roma_axis(q.y, y, e.y);
+    var next = vec2<f32>(ax.next, ay.next);
+    let delta = vec2<f32>(ax.delta, ay.delta);
+    let step = vec2<i32>(ax.step, ay.step);
     var t_in = ta;
     for (var i = 0u; i < ROMA_MAX_COLUMNS; i++) {
         let t_out = min(min(next.x, next.y), tb);
