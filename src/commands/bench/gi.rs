@@ -1,12 +1,15 @@
 //! `naadf bench gi WORLD`: the lit modes measured against the path tracer
-//! (docs/RENDERING.md §3a–c, BENCHMARKS.md "Global illumination"):
-//! - **static quality**: `baseline` and `gi` after `--frames` frames, FLIP, relative MSE and
-//!   mean-luminance bias against a `--reference-spp` path-traced image; the noise floor is
-//!   the same figures between two references of different seeds; the temporal flicker of
-//!   each mode over the frames after the last;
-//! - **cost**: milliseconds per frame of `albedo`, `baseline` and `gi`, timed in
+//! (docs/RENDERING.md §3a–d, BENCHMARKS.md "Global illumination" and "Lit modes"):
+//! - **static quality**: `baseline`, `gi` and `roma` after `--frames` frames, FLIP,
+//!   relative MSE and mean-luminance bias against a `--reference-spp` path-traced image;
+//!   the noise floor is the same figures between two references of different seeds; the
+//!   temporal flicker of each mode over the frames after the last;
+//! - **cost**: milliseconds per frame of `albedo`, `baseline`, `gi` and `roma`, timed in
 //!   alternating rounds, with the ratios per round (median and range), GI's per-pass GPU
-//!   times from timestamp queries where the adapter has them, and GI's memory by array;
+//!   times from timestamp queries where the adapter has them, GI's memory by array and
+//!   ROMA's maps;
+//! - **matched time**: each lit mode's quality after the frames it renders in the time 32
+//!   `gi` frames take (by the timed medians);
 //! - **motion**: a camera path (strafe plus yaw), FLIP against per-pose references at three
 //!   poses;
 //! - **edit response**: an emitter added in front of the camera, then removed; the frames
@@ -18,9 +21,10 @@ use crate::commands::print_json;
 use crate::commands::progress;
 use anyhow::{Context, Result, bail};
 use naadf_client::Mode;
-use naadf_client::gpu::{Baseline, Gi, GiPass, Gpu, GpuWorld, PathTracer, Renderer, Shot, Temporal};
+use naadf_client::gpu::{Baseline, Gi, GiPass, Gpu, GpuWorld, PathTracer, Renderer, Roma, Shot, Temporal};
 use naadf_client::light::hdr::Radiance;
 use naadf_client::light::quality::{Quality, flicker, mean_luminance};
+use naadf_client::light::roma::RomaOptions;
 use naadf_client::light::{DEFAULT_LIT_BOUNCES, Light};
 use naadf_world::World;
 use naadf_world::camera::Camera;
@@ -105,8 +109,13 @@ struct Report {
     flicker: BTreeMap<&'static str, f64>,
     /// Mode → milliseconds per frame, over the timing rounds.
     frame_ms: BTreeMap<&'static str, Spread>,
-    /// gi / albedo and gi / baseline frame time, per round.
+    /// gi / albedo, gi / baseline, roma / albedo and roma / gi frame time, per round.
     ratios: BTreeMap<&'static str, Spread>,
+    /// Mode → the frames it renders in the time of [`MATCHED_GI_FRAMES`] `gi` frames, and
+    /// its quality after them.
+    matched_time: BTreeMap<&'static str, (u32, Quality)>,
+    /// Bytes of ROMA's maps.
+    roma_map_bytes: u64,
     /// GI pass → GPU milliseconds (median over the timed frames); empty without timestamps.
     gi_pass_ms: Vec<(&'static str, f64)>,
     /// GI array → bytes.
@@ -126,6 +135,7 @@ struct Bench {
     seed: u32,
     exposure: f32,
     size: (u32, u32),
+    roma: RomaOptions,
 }
 
 impl Bench {
@@ -150,17 +160,38 @@ impl Bench {
     fn measure(&self, img: &Radiance, reference: &Radiance) -> Result<Quality> {
         Quality::measure(img, reference, self.exposure).context("image sizes differ")
     }
-}
 
-/// A fresh renderer of a temporal mode.
-fn temporal(gpu: &Gpu, mode: Mode) -> Box<dyn Temporal> {
-    match mode {
-        Mode::Gi => Box::new(Gi::new(gpu)),
-        _ => Box::new(Baseline::new(gpu)),
+    /// A fresh renderer of a temporal mode.
+    fn temporal(&self, mode: Mode) -> Box<dyn Temporal> {
+        match mode {
+            Mode::Gi => Box::new(Gi::new(&self.gpu)),
+            Mode::Roma => Box::new(self.roma()),
+            _ => Box::new(Baseline::new(&self.gpu)),
+        }
+    }
+
+    /// A fresh ROMA renderer with the benchmark's settings.
+    fn roma(&self) -> Roma {
+        let mut roma = Roma::new(&self.gpu);
+        roma.set_options(self.roma);
+        roma
+    }
+
+    /// The quality of a fresh `mode` after `frames` frames.
+    fn quality_after(&self, mode: Mode, camera: &Camera, frames: u32, reference: &Radiance) -> Result<Quality> {
+        let mut r = self.temporal(mode);
+        for _ in 0..frames {
+            self.frame(r.as_mut(), camera)?;
+        }
+        self.measure(&r.radiance(&self.gpu)?, reference)
     }
 }
 
-const COMPARED: [Mode; 2] = [Mode::Baseline, Mode::Gi];
+const COMPARED: [Mode; 3] = [Mode::Baseline, Mode::Gi, Mode::Roma];
+/// The `gi` frames whose time the matched-time comparison gives every mode.
+const MATCHED_GI_FRAMES: f64 = 32.0;
+/// The most frames a mode runs in the matched-time comparison.
+const MATCHED_LIMIT: u32 = 1024;
 /// Frames the edit response may take before it counts as not settled.
 const EDIT_LIMIT: u32 = 64;
 /// Frames over which the flicker is averaged.
@@ -191,6 +222,7 @@ pub fn run(a: GiArgs) -> Result<()> {
         seed: options.seed,
         exposure: options.exposure,
         size: a.size,
+        roma: options.roma,
     };
     let last = *a.frames.last().expect("checked above");
     let motion_poses = if a.motion_spp > 0 { 3 } else { 0 };
@@ -211,7 +243,7 @@ pub fn run(a: GiArgs) -> Result<()> {
     let mut flickers = BTreeMap::new();
     for mode in COMPARED {
         bar.set_message(format!("bench gi: {} frames", mode.name()));
-        let mut r = temporal(&b.gpu, mode);
+        let mut r = b.temporal(mode);
         let mut by_frames = BTreeMap::new();
         for frame in 1..=last {
             b.frame(r.as_mut(), &camera)?;
@@ -233,7 +265,17 @@ pub fn run(a: GiArgs) -> Result<()> {
 
     // Cost.
     bar.set_message("bench gi: timing");
-    let (frame_ms, ratios, gi_pass_ms, gi_memory) = timing(&b, &camera, &a)?;
+    let (frame_ms, ratios, gi_pass_ms, gi_memory, roma_map_bytes) = timing(&b, &camera, &a)?;
+
+    // Matched time.
+    bar.set_message("bench gi: matched time");
+    let gi_ms = frame_ms["gi"].median;
+    let mut matched_time = BTreeMap::new();
+    for mode in COMPARED {
+        let frames = (MATCHED_GI_FRAMES * gi_ms / frame_ms[mode.name()].median).round() as u32;
+        let frames = frames.clamp(1, MATCHED_LIMIT);
+        matched_time.insert(mode.name(), (frames, b.quality_after(mode, &camera, frames, &ref_a)?));
+    }
 
     // Motion.
     let mut motion = BTreeMap::new();
@@ -252,7 +294,7 @@ pub fn run(a: GiArgs) -> Result<()> {
             references.insert(f, img);
         }
         for mode in COMPARED {
-            let mut r = temporal(&b.gpu, mode);
+            let mut r = b.temporal(mode);
             for (i, cam) in path.iter().enumerate() {
                 b.frame(r.as_mut(), cam)?;
                 if let Some(reference) = references.get(&(i as u32 + 1)) {
@@ -288,6 +330,8 @@ pub fn run(a: GiArgs) -> Result<()> {
         flicker: flickers,
         frame_ms,
         ratios,
+        matched_time,
+        roma_map_bytes,
         gi_pass_ms,
         gi_memory,
         motion,
@@ -305,22 +349,25 @@ type Timing = (
     BTreeMap<&'static str, Spread>,
     Vec<(&'static str, f64)>,
     Vec<(&'static str, u64)>,
+    u64,
 );
 
-/// Times `albedo`, `baseline` and `gi` in `--rounds` rounds of `--timing-frames` frames,
-/// rotating the order each round (each frame read back, as a client does).
+/// Times `albedo`, `baseline`, `gi` and `roma` in `--rounds` rounds of `--timing-frames`
+/// frames, rotating the order each round (each frame read back, as a client does).
 fn timing(b: &Bench, camera: &Camera, a: &GiArgs) -> Result<Timing> {
     let mut renderer = Renderer::new(&b.gpu);
     let mut baseline = Baseline::new(&b.gpu);
     let mut gi = Gi::new(&b.gpu);
+    let mut roma = b.roma();
     gi.profile = true;
-    let order = [Mode::Albedo, Mode::Baseline, Mode::Gi];
+    let order = [Mode::Albedo, Mode::Baseline, Mode::Gi, Mode::Roma];
     let mut ms: BTreeMap<&'static str, Vec<f64>> = BTreeMap::new();
     let mut pass_ms: BTreeMap<&'static str, Vec<f64>> = BTreeMap::new();
     // Warm up: pipelines built, histories past their first frame.
     renderer.render(&b.gpu, &b.gw, camera, b.size, Mode::Albedo, false)?;
     b.frame(&mut baseline, camera)?;
     b.frame(&mut gi, camera)?;
+    b.frame(&mut roma, camera)?;
     for round in 0..a.rounds as usize {
         for k in 0..order.len() {
             let mode = order[(round + k) % order.len()];
@@ -331,6 +378,10 @@ fn timing(b: &Bench, camera: &Camera, a: &GiArgs) -> Result<Timing> {
                     Mode::Baseline => {
                         b.frame(&mut baseline, camera)?;
                         baseline.radiance(&b.gpu)?;
+                    }
+                    Mode::Roma => {
+                        b.frame(&mut roma, camera)?;
+                        roma.radiance(&b.gpu)?;
                     }
                     _ => {
                         b.frame(&mut gi, camera)?;
@@ -350,6 +401,8 @@ fn timing(b: &Bench, camera: &Camera, a: &GiArgs) -> Result<Timing> {
     let ratios = BTreeMap::from([
         ("gi/albedo", per_round("gi", "albedo")),
         ("gi/baseline", per_round("gi", "baseline")),
+        ("roma/albedo", per_round("roma", "albedo")),
+        ("roma/gi", per_round("roma", "gi")),
     ]);
     let passes = GiPass::ALL
         .iter()
@@ -361,6 +414,7 @@ fn timing(b: &Bench, camera: &Camera, a: &GiArgs) -> Result<Timing> {
         ratios,
         passes,
         memory,
+        roma.map_bytes(),
     ))
 }
 
@@ -417,11 +471,11 @@ fn edit_frames(b: &mut Bench, mode: Mode, camera: &Camera, add: &Batch, remove: 
         Ok(())
     };
     // Converged values without and with the emitter, from fresh histories.
-    let without = settle(b, temporal(&b.gpu, mode).as_mut(), camera, 64)?;
+    let without = settle(b, b.temporal(mode).as_mut(), camera, 64)?;
     apply(b, add)?;
-    let with = settle(b, temporal(&b.gpu, mode).as_mut(), camera, 64)?;
+    let with = settle(b, b.temporal(mode).as_mut(), camera, 64)?;
     apply(b, remove)?;
-    let mut r = temporal(&b.gpu, mode);
+    let mut r = b.temporal(mode);
     settle(b, r.as_mut(), camera, 32)?;
     let mut out = [EDIT_LIMIT + 1; 2];
     for (k, (batch, from, to)) in [(add, without, with), (remove, with, without)].into_iter().enumerate() {
@@ -464,6 +518,10 @@ fn print_report(r: &Report) {
     for (name, s) in &r.ratios {
         println!("{name:<24} ×{:.2} ({:.2}–{:.2})", s.median, s.min, s.max);
     }
+    for (mode, (frames, q)) in &r.matched_time {
+        row(&format!("{mode} {frames} fr, matched"), q);
+    }
+    println!("{:<24} {:.2} MB", "roma maps", r.roma_map_bytes as f64 / 1e6);
     for (pass, ms) in &r.gi_pass_ms {
         println!("  {pass:<22} {ms:.3} ms");
     }
