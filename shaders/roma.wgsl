@@ -1,5 +1,5 @@
 // ROMA visibility for the diffuse surfaces of `roma` (docs/RENDERING.md §3d): the GPU twin
-// of client/src/light/roma.rs, which states the rules (directions, maps, windows, levels,
+// of client/src/light/roma/, which states the rules (directions, maps, windows, levels,
 // the walk). Included by the ROMA sample pass before light.wgsl's paths, whose
 // `path_step` hands every diffuse and emissive surface to `diffuse_tier`.
 //
@@ -193,7 +193,7 @@ fn roma_stratum(d: vec3<f32>) -> u32 {
 }
 
 // The light a diffuse surface of `albedo` at world point `p` (normal `n`) reflects: sky
-// through the AO range, and the sun's disc through the sun's map (roma.rs `diffuse`, the
+// through the AO range, and the sun's disc through the sun's map (CpuRoma::diffuse, the
 // same four numbers drawn in the same order).
 fn diffuse_tier(p: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, rng: ptr<function, u32>) -> vec3<f32> {
     let u = vec2<f32>(rng_next(rng), rng_next(rng));

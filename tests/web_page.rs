@@ -602,6 +602,51 @@ fn the_path_tracer_accumulates_what_naadf_render_traces() {
     server.stop();
 }
 
+/// `roma` runs the native ROMA passes with maps kept as the native renderer keeps them:
+/// the page's first sample is `naadf render --mode roma --frames 1` of the same view (the
+/// same random streams, and a first frame is its sample). A sample's visibility is all or
+/// nothing, so where SwiftShader and lavapipe round a column boundary differently a pixel
+/// flips: the test bounds the mean difference and the share of channels that differ.
+#[test]
+fn the_roma_mode_draws_what_naadf_render_draws() {
+    let Some(Fixture {
+        dir,
+        world,
+        mut browser,
+    }) = fixture()
+    else {
+        return;
+    };
+    let server = serve_world(dir.path(), &world, &[], &[]);
+    let camera = r#"{"pos":[64.5,50.25,-20],"yaw":10,"pitch":-25,"fov_y":70}"#;
+    browser.open("a", &format!("{}&spp=1", page_url(&server, camera, "64x36", "roma")));
+    let page = browser.wait("a", "n.samples === 1 && n.state === 'live' && n.quiescent", 120_000);
+    assert_eq!(page["mode"], "roma");
+    let (png, native) = page_and_native(
+        &mut browser,
+        "a",
+        &server,
+        camera,
+        &["--size", "64x36", "--mode", "roma", "--frames", "1"],
+        dir.path(),
+    );
+    let (mean, most) = difference(&png, &native);
+    let (a, b) = (
+        image::open(&png).unwrap().to_rgba8(),
+        image::open(&native).unwrap().to_rgba8(),
+    );
+    let off = a
+        .as_raw()
+        .iter()
+        .zip(b.as_raw())
+        .filter(|(x, y)| x.abs_diff(**y) > 2)
+        .count();
+    let share = off as f64 / a.as_raw().len() as f64;
+    eprintln!("roma: mean channel difference {mean:.4}, largest {most}, {share:.4} of channels off by more than 2");
+    assert!(mean < 0.5 && share < 0.01, "mean {mean}, share {share}");
+    server.stop();
+}
+
 /// `gi` runs the native GI pipeline's passes; after N frames of a still view (`spp=N`),
 /// the page's frame is `naadf render --mode gi --frames N` of the same view (within the
 /// bound `gi_against_native` explains).

@@ -31,6 +31,7 @@ import type { LocalBox } from "./instances";
 import { overlappedChunks } from "./changes";
 import type { ChunkChanges } from "./changes";
 import { GiRenderer } from "./gi";
+import { RomaRenderer } from "./roma";
 
 /** Why the page cannot draw: shown to the person, with the native viewer as the way out. */
 export class NoWebGpu extends Error {}
@@ -440,12 +441,13 @@ class PathTracer {
   }
 }
 
-/** Every mode the page draws: the frame pass's, the GI and the path tracer. */
+/** Every mode the page draws: the frame pass's, the GI, ROMA and the path tracer. */
 export class Renderer {
   private readonly world: WorldGroup;
   private frames: FramePass | undefined;
   private paths: PathTracer | undefined;
   private gi: GiRenderer | undefined;
+  private roma: RomaRenderer | undefined;
   /** The last frame drawn. */
   last: ImageData | undefined;
 
@@ -459,22 +461,24 @@ export class Renderer {
   }
 
   /** The pass that draws `mode`, made on first use. */
-  private pass(mode: string): FramePass | PathTracer | GiRenderer {
+  private pass(mode: string): FramePass | PathTracer | GiRenderer | RomaRenderer {
     if (mode === "pathtrace") return (this.paths ??= new PathTracer(this.device, this.world));
     if (mode === "gi") return (this.gi ??= new GiRenderer(this.device, this.world));
+    if (mode === "roma") return (this.roma ??= new RomaRenderer(this.device, this.world));
     return (this.frames ??= new FramePass(this.device, this.world));
   }
 
-  /** Whether `mode` keeps improving while nothing changes (the path tracer's samples, the
-   * GI's history). */
+  /** Whether `mode` keeps improving while nothing changes (the path tracer's and ROMA's
+   * samples, the GI's history). */
   static accumulates(mode: string): boolean {
-    return mode === "pathtrace" || mode === "gi";
+    return mode === "pathtrace" || mode === "gi" || mode === "roma";
   }
 
-  /** How far `mode` has come with the current view: the path tracer's samples per pixel,
-   * or the GI's frames since the view or the world last changed. */
+  /** How far `mode` has come with the current view: the path tracer's or ROMA's samples
+   * per pixel, or the GI's frames since the view or the world last changed. */
   samples(mode: string): number {
     if (mode === "gi") return this.gi?.still ?? 0;
+    if (mode === "roma") return this.roma?.samples ?? 0;
     return mode === "pathtrace" ? (this.paths?.samples ?? 0) : 0;
   }
 

@@ -8,13 +8,15 @@
 
 use super::bindings::BUFFERS;
 use super::gi::{GiPass, GiSplit, gi_pass, host_constants};
-use super::params::{FrameInfo, GiInfo, LightInfo, View, WgslStruct, WorldInfo};
+use super::params::{FrameInfo, GiInfo, LightInfo, RomaInfo, RomaJob, RomaWindow, View, WgslStruct, WorldInfo};
 use super::pathtrace::path_pass;
 use super::render::render_pass;
 use super::render::{DEFAULT_SUN, STEPS_FULL_SCALE};
+use super::roma::{roma_build_pass, roma_sample_pass};
 use super::shaders::{Loop, WorldBindings, source};
 use super::world::GPU_BUFFERS;
 use crate::frame::Mode;
+use crate::light::roma::{self, RomaOptions, map_frames};
 use crate::light::{DEFAULT_LIT_BOUNCES, DEFAULT_PATHTRACE_BOUNCES, LitOptions};
 use naadf_world::entity::{self, bvh, local, pack};
 use naadf_world::traverse::DEFAULT_MAX_STEPS;
@@ -48,6 +50,15 @@ pub fn generated_files() -> Vec<(&'static str, String)> {
             "pathtrace.wgsl",
             source(&path_pass("path_trace"), Loop::Hierarchy, WorldBindings::Single),
         ),
+        // `roma`'s sample pass (the page uses its `path_trace` entry) and tile writer.
+        (
+            "roma.wgsl",
+            source(&roma_sample_pass(), Loop::Hierarchy, WorldBindings::Single),
+        ),
+        (
+            "roma_build.wgsl",
+            source(&roma_build_pass(), Loop::Hierarchy, WorldBindings::Single),
+        ),
         ("layout.ts", layout_ts()),
     ]
 }
@@ -78,6 +89,9 @@ fn layout_ts() -> String {
     struct_ts::<FrameInfo>(&mut s);
     struct_ts::<LightInfo>(&mut s);
     struct_ts::<GiInfo>(&mut s);
+    struct_ts::<RomaInfo>(&mut s);
+    struct_ts::<RomaWindow>(&mut s);
+    struct_ts::<RomaJob>(&mut s);
     let lit = LitOptions::default();
     let light_words = |bounces: u32| -> String {
         let light = lit.light(bounces).expect("the default light is valid");
@@ -150,7 +164,44 @@ fn layout_ts() -> String {
         identity[0],
         identity[1],
     );
+    roma_ts(&mut s, &lit);
     s
+}
+
+/// `roma`'s constants for `layout.ts`, with its default settings under the default light:
+/// the maps' frames are computed here, so the page only places their windows.
+fn roma_ts(s: &mut String, lit: &LitOptions) {
+    let options = RomaOptions::default();
+    let light = lit.light(DEFAULT_LIT_BOUNCES).expect("the default light is valid");
+    let frames: Vec<String> = map_frames(&options, light.sun.as_ref())
+        .iter()
+        .map(|f| {
+            let v: Vec<String> = f
+                .rows
+                .iter()
+                .flat_map(|r| r.to_array())
+                .map(|x| format!("{x:?}"))
+                .collect();
+            format!("    [{}],", v.join(", "))
+        })
+        .collect();
+    let list = |v: &[f64]| v.iter().map(|x| format!("{x:?}")).collect::<Vec<_>>().join(", ");
+    let _ = writeln!(
+        s,
+        "\n/** `roma` (client/src/light/roma/) with its default settings under the default light: levels, tile\n * and window edges, each level's cell and ray offset, reach, directions, AO range, and each map's\n * frame (rows t, b, w; the candidates, then the sun's). */\n\
+         export const ROMA = {{\n  LEVELS: {},\n  TILE: {},\n  TILE_WORDS: {},\n  WINDOW_TILES: {},\n  CELL: [{}],\n  OFFSET: [{}],\n  REACH: {:?},\n  DIRECTIONS: {},\n  SIDE: {},\n  AO_RANGE: {:?},\n  FRAMES: [\n{}\n  ],\n}} as const;",
+        roma::LEVELS,
+        roma::TILE,
+        roma::TILE_WORDS,
+        roma::WINDOW_TILES,
+        list(&roma::CELL),
+        list(&roma::ORIGIN_OFFSET),
+        roma::REACH,
+        options.directions,
+        options.side(),
+        options.ao_range,
+        frames.join("\n"),
+    );
 }
 
 /// `T`'s [`StructLayout`] declaration for `layout.ts`.

@@ -27,7 +27,7 @@ pub mod roma;
 pub mod scatter;
 pub mod sky;
 
-use roma::RomaOptions;
+use roma::options::RomaOptions;
 use std::f64::consts::PI;
 
 /// Angular radius of the sun disc, in degrees.

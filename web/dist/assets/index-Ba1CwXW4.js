@@ -2236,7 +2236,7 @@ const MODE_ALBEDO: u32 = 0u;
 const MODE_MATERIAL: u32 = 1u;
 const MODE_NORMAL: u32 = 2u;
 const MODE_STEPS: u32 = 3u;
-`,Xs=[{name:`chunks`,id:0},{name:`blocks`,id:2},{name:`voxels`,id:3},{name:`materials`,id:4},{name:`entity_types`,id:6},{name:`entity_instances`,id:7}],Zs={size:32,fields:{size:{offset:0,type:`vec3<u32>`},instance_slots:{offset:12,type:`u32`},chunks:{offset:16,type:`vec3<u32>`},max_steps:{offset:28,type:`u32`}}},Qs={size:96,fields:{cam_oi:{offset:0,type:`vec3<i32>`},mode:{offset:12,type:`u32`},cam_of:{offset:16,type:`vec3<f32>`},width:{offset:28,type:`u32`},forward:{offset:32,type:`vec3<f32>`},height:{offset:44,type:`u32`},right:{offset:48,type:`vec3<f32>`},flags:{offset:60,type:`u32`},up:{offset:64,type:`vec3<f32>`},steps_scale:{offset:76,type:`f32`},sun:{offset:80,type:`vec3<f32>`},_pad:{offset:92,type:`u32`}}},$s={size:80,fields:{cam_int:{offset:0,type:`vec3<i32>`},width:{offset:12,type:`u32`},cam_frac:{offset:16,type:`vec3<f32>`},height:{offset:28,type:`u32`},forward:{offset:32,type:`vec3<f32>`},seed:{offset:44,type:`u32`},right:{offset:48,type:`vec3<f32>`},sample:{offset:60,type:`u32`},up:{offset:64,type:`vec3<f32>`},history:{offset:76,type:`u32`}}},ec={size:96,fields:{frame:{offset:0,type:`u32`},taa_slot:{offset:4,type:`u32`},taa_valid:{offset:8,type:`u32`},edit_frame:{offset:12,type:`u32`},change_frame:{offset:16,type:`u32`},jitter_x:{offset:20,type:`f32`},jitter_y:{offset:24,type:`f32`},regions_x:{offset:28,type:`u32`},regions_y:{offset:32,type:`u32`},ring_capacity:{offset:36,type:`u32`},denoise:{offset:40,type:`u32`},off_own:{offset:44,type:`u32`},off_lut:{offset:48,type:`u32`},off_gbuf:{offset:52,type:`u32`},off_gmat:{offset:56,type:`u32`},off_emitted:{offset:60,type:`u32`},off_taa_info:{offset:64,type:`u32`},off_illum:{offset:68,type:`u32`},off_illum2:{offset:72,type:`u32`},off_result:{offset:76,type:`u32`},off_refined:{offset:80,type:`u32`},off_region_info:{offset:84,type:`u32`},off_ring:{offset:88,type:`u32`},off_queue_list:{offset:92,type:`u32`}}},tc=[0x40400000,0x40400000,0x40400000,1,0xbf400000,0x3f000000,0x3eddb3d7,1,0x4727fa5d,0x40400046,926566462,8],nc=[0x40400000,0x40400000,0x40400000,1,0xbf400000,0x3f000000,0x3eddb3d7,1,0x4727fa5d,0x40400046,926566462,3],rc={albedo:0,material:1,normal:2,steps:3},ic=[-.75,.5,.4330127],ac=65536,oc=[`gi_atmosphere`,`gi_first_hit`,`gi_poses`,`gi_taa`,`gi_queue`,`gi_queue_scan`,`gi_trace`,`gi_project`,`gi_project_store`,`gi_refine`,`gi_resample`,`gi_denoise_x`,`gi_denoise_y`,`gi_merge`],J={TAA_SLOTS:32,CONTROL_WORDS:144,CAMERA_HISTORY:128,LUT_SIZE:256,BUCKET_SLOTS:32,MAX_KEPT:7,QUEUE_PERIOD:2,RING_VEC4:3,EDIT_HISTORY_FRAMES:8,CONTROL_TRACE_ARGS:0,CONTROL_PROJECT_ARGS:4,CAM_WORDS:5,CONTROL_QUEUED:8,CONTROL_START:9,CONTROL_VALID:10,CONTROL_HEAD:11,CONTROL_FRAMES:16,TAA_PIXEL_BYTES:256,RING_PER_PIXEL:2,POSE_TABLE_WORDS:2097024,CHANGE_REACH:2,MAX_LOCAL_CHANGES:4096,ARGS_BYTES:32,NO_ENTITY:16383},sc={NODE_WORDS:28,LEAF:0x80000000,NONE:0xffffffff,FAR:1e30,PAD:.03125},Y={SOLID:0x80000000,TYPE_ALIGN:64,RECORD_WORDS:5,LOCAL_ID:16383,IDENTITY_ROTATION:[0x8002000,3584]};function cc(e,t,n,r){return JSON.stringify([e,t,n,r.generation])}function lc(e,t){let n=new ArrayBuffer(e.size),r=new DataView(n);for(let[n,i]of Object.entries(t)){let t=e.fields[n];if(!t)throw Error(`no field ${n}`);(Array.isArray(i)?i:[i]).forEach((e,n)=>{let i=t.offset+4*n;t.type.includes(`f32`)?r.setFloat32(i,e,!0):t.type.includes(`i32`)?r.setInt32(i,e,!0):r.setUint32(i,e,!0)})}return n}var uc=(e,t)=>({binding:e,visibility:GPUShaderStage.COMPUTE,buffer:{type:t}}),dc=class{device;layout;group;layoutGeneration=-1;constructor(e){this.device=e,this.layout=e.createBindGroupLayout({entries:[uc(0,`uniform`),uc(1,`uniform`),uc(2,`read-only-storage`)]})}of(e){return this.group&&this.layoutGeneration===e.layoutGeneration||(this.group=this.device.createBindGroup({layout:this.layout,entries:[{binding:0,resource:{buffer:e.info}},{binding:1,resource:{buffer:e.offsets}},{binding:2,resource:{buffer:e.buffer}}]}),this.layoutGeneration=e.layoutGeneration),this.group}};function fc(e,t,n,r,i,a){let o=e.createBindGroupLayout({entries:a.map((e,t)=>uc(t,e))});return{pipeline:e.createComputePipelineAsync({layout:e.createPipelineLayout({bindGroupLayouts:[t.layout,o]}),compute:{module:e.createShaderModule({label:n,code:r}),entryPoint:i}}),layout:o}}async function pc(e,t,n,r,i,a){let o=e.createCommandEncoder(),s=o.beginComputePass();return s.setPipeline(await t),s.setBindGroup(0,n),s.setBindGroup(1,r),s.dispatchWorkgroups(Math.ceil(i/8),Math.ceil(a/8)),s.end(),o}async function mc(e,t,n,r,i,a){t.copyBufferToBuffer(n,r,i,0,a),e.queue.submit([t.finish()]),await i.mapAsync(GPUMapMode.READ);let o=i.getMappedRange().slice(0);return i.unmap(),o}var hc=e=>Math.min(1,Math.max(0,e*(2.51*e+.03)/(e*(2.43*e+.59)+.14))),gc=e=>Math.min(255,Math.max(0,Math.floor((e<=.0031308?12.92*e:1.055*e**(1/2.4)-.055)*255+.5)));function _c(e,t,n,r,i){let a=new Uint8ClampedArray(t*n*4);for(let o=0;o<t*n;o++){let t=i&&e[4*o+3]||1;for(let n=0;n<3;n++)a[4*o+n]=gc(hc(Math.max(0,e[4*o+n]/t)*r));a[4*o+3]=255}return new ImageData(a,t,n)}var vc=32767,yc=0x3fffffff,bc=e=>e>>>30,xc=Y.RECORD_WORDS;function Sc(e,t){let n=e=>Math.ceil(e/Y.TYPE_ALIGN)*Y.TYPE_ALIGN,r=e.map(e=>n(e.size[0]*e.size[1]*e.size[2])),i=new Uint32Array(r.reduce((e,t)=>e+t,0)),a=new Uint32Array(e.length*xc),o=0;return e.forEach((e,n)=>{i.fill((Y.SOLID|e.material)>>>0,o,o+e.size[0]*e.size[1]*e.size[2]);let[s,c,l]=e.min.map(e=>e*128),[u,d,f]=e.size,p=n*xc;a[p]=s&2097151|(c&2047)<<21,a[p+1]=l&2097151|(c>>>11&255)<<21|(f>>>4&7)<<29,a[p+2]=Y.IDENTITY_ROTATION[0],a[p+3]=Y.IDENTITY_ROTATION[1]&4095|(t+o)/Y.TYPE_ALIGN<<12,a[p+4]=Y.LOCAL_ID|u<<14|d<<21|(f&15)<<28,o+=r[n]}),{types:i,records:a}}function Cc(e,t){let n=[e&16383,e>>>14&16383,e>>>28|(t&1023)<<4].map(e=>(e-8192)/8192),r=Math.sqrt(Math.max(0,1-n[0]**2-n[1]**2-n[2]**2));return n.splice(t>>>10&3,0,r),n}function wc(e,t){let n=(e,t)=>[e[1]*t[2]-e[2]*t[1],e[2]*t[0]-e[0]*t[2],e[0]*t[1]-e[1]*t[0]],r=n(e,t).map(e=>2*e),i=n(e,r);return[0,1,2].map(n=>t[n]+e[3]*r[n]+i[n])}function Tc(e,t){let n=t*xc,r=e[n+4];if(!r)return;let[i,a,o,s]=[e[n],e[n+1],e[n+2],e[n+3]],c=[r>>>14&127,r>>>21&127,r>>>28&15|(a>>>29&7)<<4],l=[i&2097151,i>>>21|(a>>>21&255)<<11,a&2097151].map(e=>e/128),u=Cc(o,s&4095),d=[-u[0],-u[1],-u[2],u[3]],f=[1/0,1/0,1/0],p=[-1/0,-1/0,-1/0];for(let e=0;e<8;e++){let t=wc(d,[0,1,2].map(t=>e>>t&1?c[t]:0));for(let e=0;e<3;e++)f[e]=Math.min(f[e],l[e]+t[e]-sc.PAD),p[e]=Math.max(p[e],l[e]+t[e]+sc.PAD)}return[f,p]}function Ec(e,t){let n=new Float32Array([e]),r=new Int32Array(n.buffer);return t&&n[0]<e&&(r[0]+=n[0]>=0?1:-1),!t&&n[0]>e&&(r[0]+=n[0]>0?-1:1),n[0]}var Dc=(e,t)=>(e[0][t]+e[1][t])/2;function Oc(e){let t=[[0,1,2].map(t=>Math.min(...e.map(e=>e.box[0][t]))),[0,1,2].map(t=>Math.max(...e.map(e=>e.box[1][t])))];if(e.length===1)return{box:t,slot:e[0].slot};let n=[0,1,2].map(t=>{let n=e.map(e=>Dc(e.box,t));return Math.max(...n)-Math.min(...n)}),r=n.indexOf(Math.max(...n)),i=[...e].sort((e,t)=>Dc(e.box,r)-Dc(t.box,r)||e.slot-t.slot),a=i.length>>1;return{box:t,kids:[Oc(i.slice(0,a)),Oc(i.slice(a))],slot:0}}function kc(e){let t=[];for(let n=0;n<e.length/xc;n++){let r=Tc(e,n);r&&t.push({slot:n,box:r})}if(t.length===0)return new Uint32Array;let n=[],r=e=>{let t=n.length,i=new Uint32Array(sc.NODE_WORDS),a=new Float32Array(i.buffer,0,24);return a.fill(sc.FAR),i.fill(sc.NONE,24),n.push(i),(e.kids?e.kids.flatMap(e=>e.kids?e.kids:[e]):[e]).forEach((e,t)=>{for(let n=0;n<3;n++)a[8*n+t]=Ec(e.box[0][n],!1),a[8*n+4+t]=Ec(e.box[1][n],!0);i[24+t]=e.kids?r(e):(sc.LEAF|e.slot)>>>0}),t};r(Oc(t));let i=new Uint32Array(n.length*sc.NODE_WORDS);return n.forEach((e,t)=>i.set(e,t*sc.NODE_WORDS)),i}function Ac(e){return{chunks:e.words(0),blocks:e.words(2),voxels:e.words(3)}}var jc=class{h1=0xdeadbeef;h2=0x41c6ce57;word(e){this.h1=Math.imul(this.h1^e,0x9e3779b1),this.h2=Math.imul(this.h2^e,0x5f356495)}words(e){for(let t=0;t<e.length;t++)this.word(e[t])}digest(){let e=Math.imul(this.h1^this.h1>>>16,0x85ebca6b);e^=Math.imul(this.h2^this.h2>>>13,0xc2b2ae35);let t=Math.imul(this.h2^this.h2>>>16,0x85ebca6b);return t^=Math.imul(e^e>>>13,0xc2b2ae35),4294967296*(2097151&t)+(e>>>0)}},Mc=e=>bc(e)===1?e&vc:0;function Nc(e,t){let n=new jc,r=e.chunks[t];if(bc(r)===2){let t=r&yc;for(let r=t;r<t+64;r++){let t=e.blocks[r];if(bc(t)===2){let r=t&yc;n.word(1),n.words(e.voxels.subarray(r,r+32))}else n.word(0),n.word(Mc(t))}}else n.word(2),n.word(Mc(r));return n.digest()}function Pc(e,t){let n=e.filter(e=>e.id===t).map(e=>[e.lo>>2,e.hi+3>>2]).sort((e,t)=>e[0]-t[0]),r=[];for(let e of n){let t=r[r.length-1];t&&e[0]<=t[1]?t[1]=Math.max(t[1],e[1]):r.push(e)}return r}function Fc(e,t,n){if(n===0||e.length===0)return!1;let r=0,i=e.length;for(;r<i;){let n=r+i>>1;e[n][1]<=t?r=n+1:i=n}return r<e.length&&e[r][0]<t+n}function Ic(e,t){let n=[0,1,2].map(t=>Math.max(0,Math.floor(e[0][t]/16))),r=[0,1,2].map(n=>Math.min(t[n]-1,Math.floor(e[1][n]/16))),i=[];for(let e=n[2];e<=r[2];e++)for(let a=n[1];a<=r[1];a++)for(let o=n[0];o<=r[0];o++)i.push(o+t[0]*(a+t[1]*e));return i}var Lc=class e{prints;records;constructor(e){let t=Ac(e);this.prints=new Float64Array(t.chunks.length);for(let e=0;e<t.chunks.length;e++)this.prints[e]=Nc(t,e);this.records=e.words(7).slice()}update(t,n){let r=Ac(t),i=e=>Pc(n,e);if(r.chunks.length!==this.prints.length||n.some(e=>e.id===4||e.id===6)){let n=new e(t);return this.prints=n.prints,this.records=n.records,`everything`}let[a,o,s,c]=[0,2,3,7].map(i),l=e=>{if(Fc(a,e,1))return!0;let t=r.chunks[e];if(bc(t)!==2)return!1;let n=t&yc;if(Fc(o,n,64))return!0;if(s.length===0)return!1;for(let e=n;e<n+64;e++){let t=r.blocks[e];if(bc(t)===2&&Fc(s,t&0x3fffffff,32))return!0}return!1},u=new Set;if(a.length+o.length+s.length>0)for(let e=0;e<r.chunks.length;e++){if(!l(e))continue;let t=Nc(r,e);t!==this.prints[e]&&(this.prints[e]=t,u.add(e))}if(c.length>0){let[e,n]=[this.records,t.words(7)],r=t.size.map(e=>Math.ceil(e/16)),i=Math.max(e.length,n.length)/xc;for(let t=0;t<i;t++){let i=t*xc,a=!0;for(let t=i;t<i+xc;t++)a&&=(e[t]??0)===(n[t]??0);if(!a)for(let i of[e,n]){let e=t<i.length/xc?Tc(i,t):void 0;if(e)for(let t of Ic(e,r))u.add(t)}}this.records=n.slice()}return[...u].sort((e,t)=>e-t)}},Rc=`// Generated by naadf-client (shaders.rs): the world parameters, the constants shared with the
+`,Xs=[{name:`chunks`,id:0},{name:`blocks`,id:2},{name:`voxels`,id:3},{name:`materials`,id:4},{name:`entity_types`,id:6},{name:`entity_instances`,id:7}],Zs={size:32,fields:{size:{offset:0,type:`vec3<u32>`},instance_slots:{offset:12,type:`u32`},chunks:{offset:16,type:`vec3<u32>`},max_steps:{offset:28,type:`u32`}}},Qs={size:96,fields:{cam_oi:{offset:0,type:`vec3<i32>`},mode:{offset:12,type:`u32`},cam_of:{offset:16,type:`vec3<f32>`},width:{offset:28,type:`u32`},forward:{offset:32,type:`vec3<f32>`},height:{offset:44,type:`u32`},right:{offset:48,type:`vec3<f32>`},flags:{offset:60,type:`u32`},up:{offset:64,type:`vec3<f32>`},steps_scale:{offset:76,type:`f32`},sun:{offset:80,type:`vec3<f32>`},_pad:{offset:92,type:`u32`}}},$s={size:80,fields:{cam_int:{offset:0,type:`vec3<i32>`},width:{offset:12,type:`u32`},cam_frac:{offset:16,type:`vec3<f32>`},height:{offset:28,type:`u32`},forward:{offset:32,type:`vec3<f32>`},seed:{offset:44,type:`u32`},right:{offset:48,type:`vec3<f32>`},sample:{offset:60,type:`u32`},up:{offset:64,type:`vec3<f32>`},history:{offset:76,type:`u32`}}},ec={size:96,fields:{frame:{offset:0,type:`u32`},taa_slot:{offset:4,type:`u32`},taa_valid:{offset:8,type:`u32`},edit_frame:{offset:12,type:`u32`},change_frame:{offset:16,type:`u32`},jitter_x:{offset:20,type:`f32`},jitter_y:{offset:24,type:`f32`},regions_x:{offset:28,type:`u32`},regions_y:{offset:32,type:`u32`},ring_capacity:{offset:36,type:`u32`},denoise:{offset:40,type:`u32`},off_own:{offset:44,type:`u32`},off_lut:{offset:48,type:`u32`},off_gbuf:{offset:52,type:`u32`},off_gmat:{offset:56,type:`u32`},off_emitted:{offset:60,type:`u32`},off_taa_info:{offset:64,type:`u32`},off_illum:{offset:68,type:`u32`},off_illum2:{offset:72,type:`u32`},off_result:{offset:76,type:`u32`},off_refined:{offset:80,type:`u32`},off_region_info:{offset:84,type:`u32`},off_ring:{offset:88,type:`u32`},off_queue_list:{offset:92,type:`u32`}}},tc={size:32,fields:{camera:{offset:0,type:`vec3<f32>`},ao_range:{offset:12,type:`f32`},side:{offset:16,type:`u32`},directions:{offset:20,type:`u32`},_pad0:{offset:24,type:`u32`},_pad1:{offset:28,type:`u32`}}},nc={size:64,fields:{t:{offset:0,type:`vec3<f32>`},cell:{offset:12,type:`f32`},b:{offset:16,type:`vec3<f32>`},first_tile:{offset:28,type:`u32`},w:{offset:32,type:`vec3<f32>`},offset:{offset:44,type:`f32`},base:{offset:48,type:`vec3<i32>`},_pad:{offset:60,type:`u32`}}},rc={size:32,fields:{tile:{offset:0,type:`vec3<i32>`},window:{offset:12,type:`u32`},clear:{offset:16,type:`u32`},_pad0:{offset:20,type:`u32`},_pad1:{offset:24,type:`u32`},_pad2:{offset:28,type:`u32`}}},ic=[0x40400000,0x40400000,0x40400000,1,0xbf400000,0x3f000000,0x3eddb3d7,1,0x4727fa5d,0x40400046,926566462,8],ac=[0x40400000,0x40400000,0x40400000,1,0xbf400000,0x3f000000,0x3eddb3d7,1,0x4727fa5d,0x40400046,926566462,3],oc={albedo:0,material:1,normal:2,steps:3},sc=[-.75,.5,.4330127],cc=65536,lc=[`gi_atmosphere`,`gi_first_hit`,`gi_poses`,`gi_taa`,`gi_queue`,`gi_queue_scan`,`gi_trace`,`gi_project`,`gi_project_store`,`gi_refine`,`gi_resample`,`gi_denoise_x`,`gi_denoise_y`,`gi_merge`],J={TAA_SLOTS:32,CONTROL_WORDS:144,CAMERA_HISTORY:128,LUT_SIZE:256,BUCKET_SLOTS:32,MAX_KEPT:7,QUEUE_PERIOD:2,RING_VEC4:3,EDIT_HISTORY_FRAMES:8,CONTROL_TRACE_ARGS:0,CONTROL_PROJECT_ARGS:4,CAM_WORDS:5,CONTROL_QUEUED:8,CONTROL_START:9,CONTROL_VALID:10,CONTROL_HEAD:11,CONTROL_FRAMES:16,TAA_PIXEL_BYTES:256,RING_PER_PIXEL:2,POSE_TABLE_WORDS:2097024,CHANGE_REACH:2,MAX_LOCAL_CHANGES:4096,ARGS_BYTES:32,NO_ENTITY:16383},uc={NODE_WORDS:28,LEAF:0x80000000,NONE:0xffffffff,FAR:1e30,PAD:.03125},dc={SOLID:0x80000000,TYPE_ALIGN:64,RECORD_WORDS:5,LOCAL_ID:16383,IDENTITY_ROTATION:[0x8002000,3584]},Y={LEVELS:3,TILE:32,TILE_WORDS:1024,WINDOW_TILES:8,CELL:[1,4,16],OFFSET:[1,2,2],REACH:94,DIRECTIONS:16,SIDE:4,AO_RANGE:32,FRAMES:[[.8162161205656171,.22921877001854332,-.5303300858899107,-.22921877001854332,-.7141139653242934,-.6614378277661477,-.5303300858899107,.6614378277661477,-.5303300858899106],[.9781492776181497,.07445559421202184,-.19411428382689055,-.07445559421202184,-.7462950920986515,-.6614378277661476,-.19411428382689055,.6614378277661476,-.7244443697168013],[.9781492776181497,-.07445559421202182,.19411428382689047,.07445559421202182,-.7462950920986515,-.6614378277661476,.19411428382689047,.6614378277661476,-.7244443697168013],[.8162161205656173,-.2292187700185432,.5303300858899106,.2292187700185432,-.7141139653242936,-.6614378277661476,.5303300858899106,.6614378277661476,-.5303300858899107],[.5604946260818231,.4012806116909011,-.7244443697168013,-.4012806116909011,-.6336196577450675,-.6614378277661476,-.7244443697168013,.6614378277661476,-.19411428382689055],[.973444409525698,.14545095930644542,-.1767766952966369,-.14545095930644542,-.20333228577093887,-.9682458365518543,-.1767766952966369,.9682458365518543,-.17677669529663687],[.973444409525698,-.1454509593064454,.17677669529663687,.1454509593064454,-.20333228577093887,-.9682458365518543,.17677669529663687,.9682458365518543,-.1767766952966369],[.5604946260818231,-.4012806116909011,.7244443697168013,.4012806116909011,-.6336196577450675,-.6614378277661476,.7244443697168013,.6614378277661476,-.19411428382689055],[.5604946260818231,.4012806116909011,.7244443697168013,.4012806116909011,.6336196577450675,-.6614378277661476,-.7244443697168013,.6614378277661476,.19411428382689055],[.973444409525698,.1454509593064454,.17677669529663687,.1454509593064454,.20333228577093887,-.9682458365518543,-.17677669529663687,.9682458365518543,.1767766952966369],[.973444409525698,-.14545095930644542,-.1767766952966369,-.14545095930644542,.20333228577093887,-.9682458365518543,.1767766952966369,.9682458365518543,.17677669529663687],[.5604946260818231,-.4012806116909011,-.7244443697168013,-.4012806116909011,.6336196577450675,-.6614378277661476,.7244443697168013,.6614378277661476,.19411428382689055],[.8162161205656173,.2292187700185432,.5303300858899106,.2292187700185432,.7141139653242936,-.6614378277661476,-.5303300858899106,.6614378277661476,.5303300858899107],[.9781492776181497,.07445559421202182,.19411428382689047,.07445559421202182,.7462950920986515,-.6614378277661476,-.19411428382689047,.6614378277661476,.7244443697168013],[.9781492776181497,-.07445559421202184,-.19411428382689055,-.07445559421202184,.7462950920986515,-.6614378277661476,.19411428382689055,.6614378277661476,.7244443697168013],[.8162161205656171,-.22921877001854332,-.5303300858899107,-.22921877001854332,.7141139653242934,-.6614378277661477,.5303300858899107,.6614378277661477,.5303300858899106],[.6074703320792287,.2616864452805141,.75,.2616864452805141,.8255423698129906,-.49999999999999994,-.75,.49999999999999994,.43301270189221946]]};function fc(e,t,n,r){return JSON.stringify([e,t,n,r.generation])}function pc(e,t){let n=new ArrayBuffer(e.size),r=new DataView(n);for(let[n,i]of Object.entries(t)){let t=e.fields[n];if(!t)throw Error(`no field ${n}`);(Array.isArray(i)?i:[i]).forEach((e,n)=>{let i=t.offset+4*n;t.type.includes(`f32`)?r.setFloat32(i,e,!0):t.type.includes(`i32`)?r.setInt32(i,e,!0):r.setUint32(i,e,!0)})}return n}var mc=(e,t)=>({binding:e,visibility:GPUShaderStage.COMPUTE,buffer:{type:t}}),hc=class{device;layout;group;layoutGeneration=-1;constructor(e){this.device=e,this.layout=e.createBindGroupLayout({entries:[mc(0,`uniform`),mc(1,`uniform`),mc(2,`read-only-storage`)]})}of(e){return this.group&&this.layoutGeneration===e.layoutGeneration||(this.group=this.device.createBindGroup({layout:this.layout,entries:[{binding:0,resource:{buffer:e.info}},{binding:1,resource:{buffer:e.offsets}},{binding:2,resource:{buffer:e.buffer}}]}),this.layoutGeneration=e.layoutGeneration),this.group}};function gc(e,t,n,r,i,a){let o=e.createBindGroupLayout({entries:a.map((e,t)=>mc(t,e))});return{pipeline:e.createComputePipelineAsync({layout:e.createPipelineLayout({bindGroupLayouts:[t.layout,o]}),compute:{module:e.createShaderModule({label:n,code:r}),entryPoint:i}}),layout:o}}async function _c(e,t,n,r,i,a){let o=e.createCommandEncoder(),s=o.beginComputePass();return s.setPipeline(await t),s.setBindGroup(0,n),s.setBindGroup(1,r),s.dispatchWorkgroups(Math.ceil(i/8),Math.ceil(a/8)),s.end(),o}async function vc(e,t,n,r,i,a){t.copyBufferToBuffer(n,r,i,0,a),e.queue.submit([t.finish()]),await i.mapAsync(GPUMapMode.READ);let o=i.getMappedRange().slice(0);return i.unmap(),o}var yc=e=>Math.min(1,Math.max(0,e*(2.51*e+.03)/(e*(2.43*e+.59)+.14))),bc=e=>Math.min(255,Math.max(0,Math.floor((e<=.0031308?12.92*e:1.055*e**(1/2.4)-.055)*255+.5)));function xc(e,t,n,r,i){let a=new Uint8ClampedArray(t*n*4);for(let o=0;o<t*n;o++){let t=i&&e[4*o+3]||1;for(let n=0;n<3;n++)a[4*o+n]=bc(yc(Math.max(0,e[4*o+n]/t)*r));a[4*o+3]=255}return new ImageData(a,t,n)}var Sc=32767,Cc=0x3fffffff,wc=e=>e>>>30,Tc=dc.RECORD_WORDS;function Ec(e,t){let n=e=>Math.ceil(e/dc.TYPE_ALIGN)*dc.TYPE_ALIGN,r=e.map(e=>n(e.size[0]*e.size[1]*e.size[2])),i=new Uint32Array(r.reduce((e,t)=>e+t,0)),a=new Uint32Array(e.length*Tc),o=0;return e.forEach((e,n)=>{i.fill((dc.SOLID|e.material)>>>0,o,o+e.size[0]*e.size[1]*e.size[2]);let[s,c,l]=e.min.map(e=>e*128),[u,d,f]=e.size,p=n*Tc;a[p]=s&2097151|(c&2047)<<21,a[p+1]=l&2097151|(c>>>11&255)<<21|(f>>>4&7)<<29,a[p+2]=dc.IDENTITY_ROTATION[0],a[p+3]=dc.IDENTITY_ROTATION[1]&4095|(t+o)/dc.TYPE_ALIGN<<12,a[p+4]=dc.LOCAL_ID|u<<14|d<<21|(f&15)<<28,o+=r[n]}),{types:i,records:a}}function Dc(e,t){let n=[e&16383,e>>>14&16383,e>>>28|(t&1023)<<4].map(e=>(e-8192)/8192),r=Math.sqrt(Math.max(0,1-n[0]**2-n[1]**2-n[2]**2));return n.splice(t>>>10&3,0,r),n}function Oc(e,t){let n=(e,t)=>[e[1]*t[2]-e[2]*t[1],e[2]*t[0]-e[0]*t[2],e[0]*t[1]-e[1]*t[0]],r=n(e,t).map(e=>2*e),i=n(e,r);return[0,1,2].map(n=>t[n]+e[3]*r[n]+i[n])}function kc(e,t){let n=t*Tc,r=e[n+4];if(!r)return;let[i,a,o,s]=[e[n],e[n+1],e[n+2],e[n+3]],c=[r>>>14&127,r>>>21&127,r>>>28&15|(a>>>29&7)<<4],l=[i&2097151,i>>>21|(a>>>21&255)<<11,a&2097151].map(e=>e/128),u=Dc(o,s&4095),d=[-u[0],-u[1],-u[2],u[3]],f=[1/0,1/0,1/0],p=[-1/0,-1/0,-1/0];for(let e=0;e<8;e++){let t=Oc(d,[0,1,2].map(t=>e>>t&1?c[t]:0));for(let e=0;e<3;e++)f[e]=Math.min(f[e],l[e]+t[e]-uc.PAD),p[e]=Math.max(p[e],l[e]+t[e]+uc.PAD)}return[f,p]}function Ac(e,t){let n=new Float32Array([e]),r=new Int32Array(n.buffer);return t&&n[0]<e&&(r[0]+=n[0]>=0?1:-1),!t&&n[0]>e&&(r[0]+=n[0]>0?-1:1),n[0]}var jc=(e,t)=>(e[0][t]+e[1][t])/2;function Mc(e){let t=[[0,1,2].map(t=>Math.min(...e.map(e=>e.box[0][t]))),[0,1,2].map(t=>Math.max(...e.map(e=>e.box[1][t])))];if(e.length===1)return{box:t,slot:e[0].slot};let n=[0,1,2].map(t=>{let n=e.map(e=>jc(e.box,t));return Math.max(...n)-Math.min(...n)}),r=n.indexOf(Math.max(...n)),i=[...e].sort((e,t)=>jc(e.box,r)-jc(t.box,r)||e.slot-t.slot),a=i.length>>1;return{box:t,kids:[Mc(i.slice(0,a)),Mc(i.slice(a))],slot:0}}function Nc(e){let t=[];for(let n=0;n<e.length/Tc;n++){let r=kc(e,n);r&&t.push({slot:n,box:r})}if(t.length===0)return new Uint32Array;let n=[],r=e=>{let t=n.length,i=new Uint32Array(uc.NODE_WORDS),a=new Float32Array(i.buffer,0,24);return a.fill(uc.FAR),i.fill(uc.NONE,24),n.push(i),(e.kids?e.kids.flatMap(e=>e.kids?e.kids:[e]):[e]).forEach((e,t)=>{for(let n=0;n<3;n++)a[8*n+t]=Ac(e.box[0][n],!1),a[8*n+4+t]=Ac(e.box[1][n],!0);i[24+t]=e.kids?r(e):(uc.LEAF|e.slot)>>>0}),t};r(Mc(t));let i=new Uint32Array(n.length*uc.NODE_WORDS);return n.forEach((e,t)=>i.set(e,t*uc.NODE_WORDS)),i}function Pc(e){return{chunks:e.words(0),blocks:e.words(2),voxels:e.words(3)}}var Fc=class{h1=0xdeadbeef;h2=0x41c6ce57;word(e){this.h1=Math.imul(this.h1^e,0x9e3779b1),this.h2=Math.imul(this.h2^e,0x5f356495)}words(e){for(let t=0;t<e.length;t++)this.word(e[t])}digest(){let e=Math.imul(this.h1^this.h1>>>16,0x85ebca6b);e^=Math.imul(this.h2^this.h2>>>13,0xc2b2ae35);let t=Math.imul(this.h2^this.h2>>>16,0x85ebca6b);return t^=Math.imul(e^e>>>13,0xc2b2ae35),4294967296*(2097151&t)+(e>>>0)}},Ic=e=>wc(e)===1?e&Sc:0;function Lc(e,t){let n=new Fc,r=e.chunks[t];if(wc(r)===2){let t=r&Cc;for(let r=t;r<t+64;r++){let t=e.blocks[r];if(wc(t)===2){let r=t&Cc;n.word(1),n.words(e.voxels.subarray(r,r+32))}else n.word(0),n.word(Ic(t))}}else n.word(2),n.word(Ic(r));return n.digest()}function Rc(e,t){let n=e.filter(e=>e.id===t).map(e=>[e.lo>>2,e.hi+3>>2]).sort((e,t)=>e[0]-t[0]),r=[];for(let e of n){let t=r[r.length-1];t&&e[0]<=t[1]?t[1]=Math.max(t[1],e[1]):r.push(e)}return r}function zc(e,t,n){if(n===0||e.length===0)return!1;let r=0,i=e.length;for(;r<i;){let n=r+i>>1;e[n][1]<=t?r=n+1:i=n}return r<e.length&&e[r][0]<t+n}function Bc(e,t){let n=[0,1,2].map(t=>Math.max(0,Math.floor(e[0][t]/16))),r=[0,1,2].map(n=>Math.min(t[n]-1,Math.floor(e[1][n]/16))),i=[];for(let e=n[2];e<=r[2];e++)for(let a=n[1];a<=r[1];a++)for(let o=n[0];o<=r[0];o++)i.push(o+t[0]*(a+t[1]*e));return i}var Vc=class e{prints;records;constructor(e){let t=Pc(e);this.prints=new Float64Array(t.chunks.length);for(let e=0;e<t.chunks.length;e++)this.prints[e]=Lc(t,e);this.records=e.words(7).slice()}update(t,n){let r=Pc(t),i=e=>Rc(n,e);if(r.chunks.length!==this.prints.length||n.some(e=>e.id===4||e.id===6)){let n=new e(t);return this.prints=n.prints,this.records=n.records,`everything`}let[a,o,s,c]=[0,2,3,7].map(i),l=e=>{if(zc(a,e,1))return!0;let t=r.chunks[e];if(wc(t)!==2)return!1;let n=t&Cc;if(zc(o,n,64))return!0;if(s.length===0)return!1;for(let e=n;e<n+64;e++){let t=r.blocks[e];if(wc(t)===2&&zc(s,t&0x3fffffff,32))return!0}return!1},u=new Set;if(a.length+o.length+s.length>0)for(let e=0;e<r.chunks.length;e++){if(!l(e))continue;let t=Lc(r,e);t!==this.prints[e]&&(this.prints[e]=t,u.add(e))}if(c.length>0){let[e,n]=[this.records,t.words(7)],r=t.size.map(e=>Math.ceil(e/16)),i=Math.max(e.length,n.length)/Tc;for(let t=0;t<i;t++){let i=t*Tc,a=!0;for(let t=i;t<i+Tc;t++)a&&=(e[t]??0)===(n[t]??0);if(!a)for(let i of[e,n]){let e=t<i.length/Tc?kc(i,t):void 0;if(e)for(let t of Bc(e,r))u.add(t)}}this.records=n.slice()}return[...u].sort((e,t)=>e-t)}},Hc=`// Generated by naadf-client (shaders.rs): the world parameters, the constants shared with the
 // Rust code, the world's storage bindings.
 struct WorldInfo {
     // World size in voxels.
@@ -4831,6 +4831,2415 @@ fn mem_set(i: u32, v: vec4<u32>) { mem_0[i] = v; }
 @group(1) @binding(7) var<storage, read_write> taa_0: array<vec2<u32>>;
 fn taa_get(i: u32) -> vec2<u32> { return taa_0[i]; }
 fn taa_set(i: u32, v: vec2<u32>) { taa_0[i] = v; }
-`;function zc(e,t){let n=e*t,r=Math.ceil(e/8)*Math.ceil(t/8),i=J.CAMERA_HISTORY*J.CAM_WORDS,a=e=>{let t=i;return i+=e,t},[o,s,c,l]=[a(J.LUT_SIZE*J.LUT_SIZE),a(n),a(n),a(n)],[u,d,f,p]=[a(2*n),a(n),a(n),a(n)],[m,h,g]=[a(r*J.MAX_KEPT*2),a(3*r),a(n)],_=J.CONTROL_WORDS+2*r,v={lut:o,gbuf:s,gmat:c,emitted:l,taaInfo:u,illum:d,illum2:f,result:p,refined:m,regionInfo:h,own:g,ringStart:i,queueList:_,words:_+64*r+J.POSE_TABLE_WORDS},y=n*J.RING_PER_PIXEL;return{width:e,height:t,pixels:n,regions:r,layout:v,ring:y,memBytes:(v.ringStart+y*J.RING_VEC4)*16,taaBytes:n*J.TAA_PIXEL_BYTES}}function Bc(e,t,n){let r=Math.min(e.limits.maxStorageBufferBindingSize,e.limits.maxBufferSize),[i,a]=[t,n];for(;;){let e=zc(i,a);if(Math.max(e.memBytes,e.taaBytes,e.layout.words*4)<=r||i===1&&a===1)return[i,a];[i,a]=[Math.ceil(i/2),Math.ceil(a/2)]}}function Vc(e){let t=e%J.TAA_SLOTS,n=0;for(let e=0;e<32;e++)t&1<<e&&(n|=1<<31-e);let[r,i,a]=[0,0x80000000,t];for(;a>0;)a&1&&(r=(r^i)>>>0),a>>>=1,i=(i^i>>>1)>>>0;let o=Math.fround(.5/J.TAA_SLOTS),s=e=>Math.fround(Math.fround(((e^0x80000000)>>>0)/4294967296)+o);return[s(n>>>0),s(r)]}var Hc=class{device;plan;chunks;frames=0;cameras=[];marks;generation;editFrame=0;changeFrame=0;words;changes;args;mem;staging;owned;group;constructor(e,t,n,r,i,a){this.device=e,this.plan=r,this.chunks=i;let o=(t,n,r)=>e.createBuffer({label:t,size:Math.max(16,n),usage:r}),s=GPUBufferUsage.STORAGE;this.words=o(`gi words`,r.layout.words*4,s|GPUBufferUsage.COPY_SRC);let c=o(`gi buckets`,r.regions*(2*J.BUCKET_SLOTS+12)*4,s),l=i[0]*i[1]*i[2];this.changes=o(`gi chunk changes`,l*8,s|GPUBufferUsage.COPY_DST),this.mem=o(`gi mem`,r.memBytes,s|GPUBufferUsage.COPY_DST|GPUBufferUsage.COPY_SRC);let u=o(`gi taa`,r.taaBytes,s);this.args=o(`gi indirect args`,J.ARGS_BYTES,GPUBufferUsage.INDIRECT|GPUBufferUsage.COPY_DST),this.staging=o(`gi result`,r.pixels*16,GPUBufferUsage.MAP_READ|GPUBufferUsage.COPY_DST),this.owned=[this.words,c,this.changes,this.mem,u,this.args,this.staging],this.marks=new Uint32Array(l*2),this.generation=a.generation,this.group=e.createBindGroup({layout:t,entries:[...n,this.words,c,this.changes,this.mem,u].map((e,t)=>({binding:t,resource:{buffer:e}}))})}destroy(){this.owned.forEach(e=>e.destroy())}noteChanges(e){if(this.generation===e.generation)return;let t=e.changesSince(this.generation);t===`everything`||t.length>J.MAX_LOCAL_CHANGES?[this.editFrame,this.changeFrame]=[this.frames,this.frames]:t.length>0&&(this.mark(t),this.changeFrame=this.frames),this.generation=e.generation}mark(e){let[t,n,r]=this.chunks,i=J.CHANGE_REACH,[a,o]=[1/0,0],s=(e,t)=>{this.marks[2*e+t]=this.frames,[a,o]=[Math.min(a,e),Math.max(o,e+1)]};for(let a of e){let[e,o,c]=[a%t,Math.floor(a/t)%n,Math.floor(a/(t*n))];s(a,0);for(let a=Math.max(0,c-i);a<=Math.min(r-1,c+i);a++)for(let r=Math.max(0,o-i);r<=Math.min(n-1,o+i);r++)for(let o=Math.max(0,e-i);o<=Math.min(t-1,e+i);o++)s(o+t*(r+n*a),1)}a<o&&this.device.queue.writeBuffer(this.changes,a*8,this.marks,a*2,(o-a)*2)}uploadCameras(e,t){let n=Vc(this.frames);this.cameras.unshift({camera:e,jitter:n}),this.cameras.length=Math.min(this.cameras.length,J.CAMERA_HISTORY);let r=J.CAM_WORDS*4,i=new Float32Array(J.CAMERA_HISTORY*r);return this.cameras.forEach((e,n)=>{let a=Po({...e.camera,pos:e.camera.pos.map((e,n)=>e-t[n])},this.plan.width,this.plan.height),o=a.int.map((e,t)=>Math.fround(Math.fround(e)+a.frac[t]));i.set([...o,e.jitter[0],...a.forward,e.jitter[1],...a.right,0,...a.up,0,...a.int,0],n*r)}),this.device.queue.writeBuffer(this.mem,0,i),n}info(e){let{plan:t,frames:n}=this,r=t.layout;return lc(ec,{frame:n,taa_slot:n%J.TAA_SLOTS,taa_valid:Math.min(n,J.TAA_SLOTS-1),edit_frame:this.editFrame,change_frame:this.changeFrame,jitter_x:e[0],jitter_y:e[1],regions_x:Math.ceil(t.width/8),regions_y:Math.ceil(t.height/8),ring_capacity:t.ring,denoise:1,off_own:r.own,off_lut:r.lut,off_gbuf:r.gbuf,off_gmat:r.gmat,off_emitted:r.emitted,off_taa_info:r.taaInfo,off_illum:r.illum,off_illum2:r.illum2,off_result:r.result,off_refined:r.refined,off_region_info:r.regionInfo,off_ring:r.ringStart,off_queue_list:r.queueList})}},Uc=class{device;world;pipelines;group1;params;history;lastView=``;still=0;constructor(e,t){this.device=e,this.world=t;let n=[`uniform`,`uniform`,`uniform`,`storage`,`storage`,`read-only-storage`,`storage`,`storage`];this.group1=e.createBindGroupLayout({entries:n.map((e,t)=>uc(t,e))});let r=e.createPipelineLayout({bindGroupLayouts:[t.layout,this.group1]}),i=e.createShaderModule({label:`gi.wgsl`,code:Rc});this.pipelines=oc.map(t=>e.createComputePipelineAsync({layout:r,compute:{module:i,entryPoint:t}}));let a=(t,n)=>e.createBuffer({label:t,size:n,usage:GPUBufferUsage.UNIFORM|GPUBufferUsage.COPY_DST});this.params=[a(`gi frame`,$s.size),a(`gi light`,nc.length*4),a(`gi state`,ec.size)],e.queue.writeBuffer(this.params[1],0,new Uint32Array(nc))}async render(e,t,n,r){let i=this.device,[a,o]=Bc(i,n,r);e.trackChanges();let s=this.history;s&&s.plan.width===a&&s.plan.height===o&&s.chunks.join()===e.chunks.join()||(s?.destroy(),s=this.history=new Hc(i,this.group1,this.params,zc(a,o),[...e.chunks],e)),s.noteChanges(e);let c=cc(t,a,o,e);this.still=c===this.lastView?this.still+1:1,this.lastView=c;let l=Po(t,a,o),u=s.uploadCameras(t,l.int),d=s.frames;i.queue.writeBuffer(this.params[0],0,lc($s,{cam_int:l.int,width:a,cam_frac:l.frac,height:o,forward:l.forward,seed:0,right:l.right,sample:d,up:l.up,history:+(d>0)})),i.queue.writeBuffer(this.params[2],0,s.info(u));let f=await Promise.all(this.pipelines),p=i.createCommandEncoder();oc.forEach((t,n)=>{if(t===`gi_atmosphere`&&d>0)return;t===`gi_trace`&&p.copyBufferToBuffer(s.words,0,s.args,0,J.ARGS_BYTES);let r=p.beginComputePass({label:t});switch(r.setPipeline(f[n]),r.setBindGroup(0,this.world.of(e)),r.setBindGroup(1,s.group),t){case`gi_atmosphere`:r.dispatchWorkgroups(J.LUT_SIZE/8,J.LUT_SIZE/8);break;case`gi_queue_scan`:r.dispatchWorkgroups(1);break;case`gi_trace`:r.dispatchWorkgroupsIndirect(s.args,J.CONTROL_TRACE_ARGS*4);break;case`gi_project`:case`gi_project_store`:r.dispatchWorkgroupsIndirect(s.args,J.CONTROL_PROJECT_ARGS*4);break;case`gi_refine`:r.dispatchWorkgroups(Math.ceil(s.plan.regions/64));break;case`gi_poses`:r.dispatchWorkgroups(Math.ceil(J.NO_ENTITY/64));break;default:r.dispatchWorkgroups(Math.ceil(a/8),Math.ceil(o/8))}r.end()}),s.frames+=1;let m=s.plan.layout.result*16;return _c(new Float32Array(await mc(i,p,s.mem,m,s.staging,s.plan.pixels*16)),a,o,1,!1)}},Wc=class extends Error{};async function Gc(){if(!(`gpu`in navigator)||!navigator.gpu)throw new Wc(`this browser has no WebGPU`);let e=await navigator.gpu.requestAdapter();if(!e)throw new Wc(`this browser offers WebGPU but no adapter`);let t=await e.requestDevice({requiredLimits:{maxStorageBufferBindingSize:e.limits.maxStorageBufferBindingSize,maxBufferSize:e.limits.maxBufferSize}});return t.addEventListener(`uncapturederror`,e=>console.error(`WebGPU: ${e.error.message}`)),t.lost.then(e=>console.error(`WebGPU device lost: ${e.message}`)),{device:t,fallback:(e.info?.isFallbackAdapter??!1)||/swiftshader/i.test(e.info?.description??``)}}var Kc=class{device;buffer;info;offsets;regions=[];hierarchy=new Uint8Array;generation=0;layoutGeneration=0;chunks=[0,0,0];mirror;locals=[];localRecords=new Uint32Array;prints;log=[];logFrom=0;constructor(e){this.device=e;let t=(t,n)=>e.createBuffer({label:t,size:n,usage:GPUBufferUsage.UNIFORM|GPUBufferUsage.COPY_DST});this.info=t(`world_info`,Zs.size),this.offsets=t(`world_offsets`,32)}uploadAll(e,t){let n=this.localData(e);this.hierarchy=t??this.hierarchyOf(e,n.records);let r=[...Xs.map(t=>this.usedBytes(e,t.id,n)),this.hierarchy.length],i=0;this.regions=r.map(e=>{let t=Math.ceil((e*1.25+65536)/256)*256,n={at:i,capacity:t};return i+=t,n});let a=this.device.limits.maxStorageBufferBindingSize;if(i>a)throw new Wc(`the world needs ${i} bytes in one binding; this adapter allows ${a}`);this.buffer?.destroy(),this.buffer=this.device.createBuffer({label:`world`,size:Math.max(i,16),usage:GPUBufferUsage.STORAGE|GPUBufferUsage.COPY_DST}),Xs.forEach((t,n)=>this.write(n,0,e.bytes(t.id))),this.writeLocals(e,n),this.write(Yc,0,this.hierarchy);let o=new Uint32Array(8);this.regions.forEach((e,t)=>o[t]=e.at/4),this.device.queue.writeBuffer(this.offsets,0,o),this.writeInfo(e),this.layoutGeneration+=1,this.generation+=1,this.mirror=e,this.prints&&(this.prints=new Lc(e),this.note(`everything`))}update(e,t,n){let r=e=>Xs.findIndex(t=>t.id===e),i=n||t.some(e=>e.id===qc||e.id===Jc),a=this.locals.length>0&&i?this.localData(e):void 0,o=t.some(e=>e.id===Jc)||a!==void 0,s=o?this.hierarchyOf(e,a?.records??this.localRecords):this.hierarchy;if((n||a)&&Xs.some((t,n)=>this.usedBytes(e,t.id,a)>this.regions[n].capacity)||s.length>this.regions[Yc].capacity)this.uploadAll(e,s);else{for(let n of t){let t=r(n.id);if(t<0)continue;let i=n.lo&-4,a=e.bytes(n.id),o=Math.min(a.length,n.hi+3&-4);this.write(t,i,a.subarray(i,o))}a&&this.writeLocals(e,a),o&&(this.hierarchy=s,this.write(Yc,0,s)),(n||a)&&this.writeInfo(e),this.generation+=1,this.prints&&this.note(this.prints.update(e,t))}}setLocals(e){if(JSON.stringify(e)===JSON.stringify(this.locals))return;let t=this.localRecords;this.locals=e.map(e=>({min:[...e.min],size:[...e.size],material:e.material}));let n=this.mirror;if(!n)return;let r=this.localData(n),i=this.hierarchyOf(n,r.records);if(Xs.some((e,t)=>this.usedBytes(n,e.id,r)>this.regions[t].capacity)||i.length>this.regions[Yc].capacity)this.uploadAll(n,i);else if(this.writeLocals(n,r),this.hierarchy=i,this.write(Yc,0,i),this.writeInfo(n),this.generation+=1,this.prints){let e=new Set;for(let n of[t,r.records])for(let t=0;t<n.length/xc;t++){let r=Tc(n,t);if(r)for(let t of Ic(r,this.chunks))e.add(t)}this.note([...e].sort((e,t)=>e-t))}}localData(e){let t=Math.ceil(e.bytes(qc).length/4/Y.TYPE_ALIGN)*Y.TYPE_ALIGN;return{typeBase:t,...Sc(this.locals,t)}}usedBytes(e,t,n){let r=e.bytes(t).length;return n?t===qc?n.types.length>0?4*n.typeBase+n.types.byteLength:r:t===Jc?r+n.records.byteLength:r:r}writeLocals(e,t){let n=e=>new Uint8Array(e.buffer,e.byteOffset,e.byteLength),r=e=>Xs.findIndex(t=>t.id===e);this.write(r(qc),4*t.typeBase,n(t.types)),this.write(r(Jc),e.bytes(Jc).length,n(t.records)),this.localRecords=t.records}hierarchyOf(e,t){let n=e.words(Jc);if(t&&t.length>0){let e=new Uint32Array(n.length+t.length);e.set(n),e.set(t,n.length),n=e}let r=kc(n);return new Uint8Array(r.buffer,r.byteOffset,r.byteLength)}trackChanges(){!this.prints&&this.mirror&&(this.prints=new Lc(this.mirror),this.log=[],this.logFrom=this.generation)}changesSince(e){if(e<this.logFrom)return`everything`;let t=new Set;for(let n of this.log)if(!(n.generation<=e)){if(n.changes===`everything`)return`everything`;for(let e of n.changes)t.add(e)}return[...t].sort((e,t)=>e-t)}note(e){this.log.push({generation:this.generation,changes:e}),this.log.length>64&&(this.logFrom=this.log.shift().generation)}write(e,t,n){if(n.length===0)return;let r=n.length%4==0?n:(()=>{let e=new Uint8Array(n.length+3&-4);return e.set(n),e})();this.device.queue.writeBuffer(this.buffer,this.regions[e].at+t,r)}writeInfo(e){let[t,n,r]=e.size,i=(e.bytes(Jc).length/4+this.localRecords.length)/xc;this.chunks=[Math.ceil(t/16),Math.ceil(n/16),Math.ceil(r/16)],this.device.queue.writeBuffer(this.info,0,lc(Zs,{size:[t,n,r],instance_slots:i,chunks:this.chunks,max_steps:ac}))}},qc=6,Jc=7,Yc=Xs.length,Xc=class{device;world;compute;group1;view;gbuffer;pixels;staging;width=0;height=0;constructor(e,t){this.device=e,this.world=t,{pipeline:this.compute,layout:this.group1}=fc(e,t,`render.wgsl`,Ys,`render`,[`uniform`,`storage`,`storage`]),this.view=e.createBuffer({size:Qs.size,usage:GPUBufferUsage.UNIFORM|GPUBufferUsage.COPY_DST}),this.gbuffer=e.createBuffer({size:16,usage:GPUBufferUsage.STORAGE})}async render(e,t,n,r,i){let a=this.device,o=n*r*4;n===this.width&&r===this.height&&this.pixels||(this.pixels?.destroy(),this.staging?.destroy(),this.pixels=a.createBuffer({label:`pixels`,size:o,usage:GPUBufferUsage.STORAGE|GPUBufferUsage.COPY_SRC}),this.staging=a.createBuffer({label:`frame`,size:o,usage:GPUBufferUsage.MAP_READ|GPUBufferUsage.COPY_DST}),this.width=n,this.height=r);let s=Po(t,n,r),c=rc[i];if(c===void 0)throw Error(`the render pass has no mode ${i}`);a.queue.writeBuffer(this.view,0,lc(Qs,{cam_oi:s.int,mode:c,cam_of:s.frac,width:n,forward:s.forward,height:r,right:s.right,flags:0,up:s.up,steps_scale:Math.fround(1/Math.log2(513)),sun:ic}));let l=a.createBindGroup({layout:this.group1,entries:[{binding:0,resource:{buffer:this.view}},{binding:1,resource:{buffer:this.pixels}},{binding:2,resource:{buffer:this.gbuffer}}]}),u=await pc(a,this.compute,this.world.of(e),l,n,r),d=new Uint8ClampedArray(await mc(a,u,this.pixels,0,this.staging,o));return new ImageData(d,n,r)}},Zc=class{device;world;pipeline;group1;frame;light;sums;staging;key=``;samples=0;constructor(e,t){this.device=e,this.world=t,{pipeline:this.pipeline,layout:this.group1}=fc(e,t,`pathtrace.wgsl`,Js,`path_trace`,[`uniform`,`uniform`,`storage`]);let n=t=>e.createBuffer({size:t,usage:GPUBufferUsage.UNIFORM|GPUBufferUsage.COPY_DST});this.frame=n($s.size),this.light=n(tc.length*4),e.queue.writeBuffer(this.light,0,new Uint32Array(tc))}async render(e,t,n,r){let i=this.device,a=n*r*16,o=cc(t,n,r,e);o===this.key&&this.sums||(this.sums?.destroy(),this.staging?.destroy(),this.sums=i.createBuffer({label:`path sums`,size:a,usage:GPUBufferUsage.STORAGE|GPUBufferUsage.COPY_SRC}),this.staging=i.createBuffer({label:`path frame`,size:a,usage:GPUBufferUsage.MAP_READ|GPUBufferUsage.COPY_DST}),this.key=o,this.samples=0);let s=Po(t,n,r);i.queue.writeBuffer(this.frame,0,lc($s,{cam_int:s.int,width:n,cam_frac:s.frac,height:r,forward:s.forward,seed:0,right:s.right,sample:this.samples,up:s.up,history:0}));let c=i.createBindGroup({layout:this.group1,entries:[{binding:0,resource:{buffer:this.frame}},{binding:1,resource:{buffer:this.light}},{binding:2,resource:{buffer:this.sums}}]}),l=await pc(i,this.pipeline,this.world.of(e),c,n,r);return this.samples+=1,_c(new Float32Array(await mc(i,l,this.sums,0,this.staging,a)),n,r,1,!0)}},Qc=class{device;world;frames;paths;gi;last;constructor(e,t){this.device=e,this.world=new dc(e),this.pass(t)}pass(e){return e===`pathtrace`?this.paths??=new Zc(this.device,this.world):e===`gi`?this.gi??=new Uc(this.device,this.world):this.frames??=new Xc(this.device,this.world)}static accumulates(e){return e===`pathtrace`||e===`gi`}samples(e){return e===`gi`?this.gi?.still??0:e===`pathtrace`?this.paths?.samples??0:0}async render(e,t,n,r,i){let a=this.pass(i);return this.last=a instanceof Xc?await a.render(e,t,n,r,i):await a.render(e,t,n,r),this.last}};function $c(e,t,n,r){let i=No(e),a=r.map((t,n)=>t-e.pos[n]),o=(e,t)=>e[0]*t[0]+e[1]*t[1]+e[2]*t[2],s=o(a,i.forward);if(s<=.001)return;let c=Math.tan(e.fov_y*Math.PI/360),l=o(a,i.right)/(s*c*(t/n)),u=o(a,i.up)/(s*c);return[(l+1)/2*t,(1-u)/2*n]}function el(e,t,n,r,i){let a=No(e),o=Math.tan(e.fov_y*Math.PI/360),s=(2*r/t-1)*o*(t/n),c=(1-2*i/n)*o;return[0,1,2].map(e=>a.forward[e]+s*a.right[e]+c*a.up[e])}function tl(e,t,n,r,i){let{width:a,height:o}=e.canvas,s=e=>[e&1?r[0]:n[0],e&2?r[1]:n[1],e&4?r[2]:n[2]];e.strokeStyle=i,e.lineWidth=2,e.beginPath();for(let n=0;n<8;n++)for(let r of[1,2,4]){if(n&r)continue;let i=$c(t,a,o,s(n)),c=$c(t,a,o,s(n|r));i&&c&&(e.moveTo(i[0],i[1]),e.lineTo(c[0],c[1]))}e.stroke()}function nl(e,t,n,r){let{width:i,height:a}=e.canvas;e.clearRect(0,0,i,a),n&&tl(e,t,n.min,n.max,n.refusal?`#f44`:`#ff0`);let o=[];e.font=`${Math.max(11,Math.round(a/40))}px system-ui, sans-serif`;for(let n of r){let r=n.name||n.user||`anonymous`;if(n.pointer.length===3){let r=n.pointer.map(Number);tl(e,t,r,[r[0]+1,r[1]+1,r[2]+1],`#0ff`)}if(n.position.length!==3)continue;let s=$c(t,i,a,n.position);!s||s[0]<0||s[1]<0||s[0]>i||s[1]>a||(e.fillStyle=`#0ff`,e.beginPath(),e.arc(s[0],s[1],5,0,2*Math.PI),e.fill(),e.fillStyle=`#fff`,e.fillText(r,s[0]+8,s[1]-8),o.push({name:r,x:s[0],y:s[1]}))}return o}var rl=class{chunks;blocks;voxels;size;dims;constructor(e){this.chunks=e.words(0),this.blocks=e.words(2),this.voxels=e.words(3),this.size=e.size,this.dims=[e.size[0]>>4,e.size[1]>>4,e.size[2]>>4]}inside(e,t,n){return e>=0&&t>=0&&n>=0&&e<this.size[0]&&t<this.size[1]&&n<this.size[2]}cell(e,t,n){let[r,i,a]=[e>>4,t>>4,n>>4],o=this.chunks[r+this.dims[0]*(i+this.dims[1]*a)],s=bc(o);if(s===0)return{material:0,edge:16};if(s===1)return{material:o&vc,edge:16};let c=this.blocks[(o&yc)+((e>>2&3)+4*(t>>2&3)+16*(n>>2&3))],l=bc(c);if(l===0)return{material:0,edge:4};if(l===1)return{material:c&vc,edge:4};let u=(e&3)+4*(t&3)+16*(n&3),d=this.voxels[(c&yc)+(u>>1)],f=u&1?d>>>16:d&65535;return{material:f&32768?f&vc:0,edge:1}}};function il(e,t,n,r=4096){let i=0,a=r;for(let r=0;r<3;r++){if(n[r]===0){if(t[r]<0||t[r]>=e.size[r])return;continue}let o=(0-t[r])/n[r],s=(e.size[r]-t[r])/n[r];i=Math.max(i,Math.min(o,s)),a=Math.min(a,Math.max(o,s))}if(i>a)return;let o=1e-7,s;for(;i<=a;){let r=t.map((e,t)=>e+n[t]*(i+o)).map(Math.floor);if(!e.inside(r[0],r[1],r[2]))return;let a=e.cell(r[0],r[1],r[2]);if(a.material!==0)return{voxel:r,before:s??r,material:a.material};s=r;let c=1/0;for(let e=0;e<3;e++){if(n[e]===0)continue;let i=Math.floor(r[e]/a.edge)*a.edge,o=n[e]>0?i+a.edge:i;c=Math.min(c,(o-t[e])/n[e])}s=t.map((e,t)=>e+n[t]*(c-o)).map(Math.floor),i=Math.max(c,i+o)}}function al(){try{new Headers}catch{throw Error(`connect-web requires the fetch API. Are you running on an old version of Node.js?`)}}function ol(e,t){let n=io(e);if(n)throw t.forEach((e,t)=>{n.metadata.append(t,e)}),n;if(!t.has(`Grpc-Status`)&&!e.has(`Grpc-Status`))throw new H(`protocol error: missing status`,V.Internal)}function sl(e,t,n,r){let i=new Headers(n??{});i.set(qa,e?eo:to),i.set($a,`1`);let a=i.get(`User-Agent`)??i.get(`X-User-Agent`)??`connect-es/2.3.0`;return i.set(Qa,a),r&&i.set(Za,a),t!==void 0&&i.set(Ja,`${t}m`),i}function cl(e){switch(e){case 400:return V.Internal;case 401:return V.Unauthenticated;case 403:return V.PermissionDenied;case 404:return V.Unimplemented;case 429:case 502:case 503:case 504:return V.Unavailable;default:return V.Unknown}}function ll(e,t){if(e>=200&&e<300)return{foundStatus:t.has(Ya),headerError:io(t)};throw new H(decodeURIComponent(t.get(`Grpc-Message`)??`HTTP ${e}`),cl(e),t)}var ul=function(e){return this instanceof ul?(this.v=e,this):new ul(e)},dl=function(e,t,n){if(!Symbol.asyncIterator)throw TypeError(`Symbol.asyncIterator is not defined.`);var r=n.apply(e,t||[]),i,a=[];return i=Object.create((typeof AsyncIterator==`function`?AsyncIterator:Object).prototype),s(`next`),s(`throw`),s(`return`,o),i[Symbol.asyncIterator]=function(){return this},i;function o(e){return function(t){return Promise.resolve(t).then(e,d)}}function s(e,t){r[e]&&(i[e]=function(t){return new Promise(function(n,r){a.push([e,t,n,r])>1||c(e,t)})},t&&(i[e]=t(i[e])))}function c(e,t){try{l(r[e](t))}catch(e){f(a[0][3],e)}}function l(e){e.value instanceof ul?Promise.resolve(e.value.v).then(u,d):f(a[0][2],e)}function u(e){c(`next`,e)}function d(e){c(`throw`,e)}function f(e,t){e(t),a.shift(),a.length&&c(a[0][0],a[0][1])}},fl={redirect:`error`};function pl(e){al();let t=e.useBinaryFormat??!0;return{async unary(n,r,i,a,o,s){let{serialize:c,parse:l}=uo(n,t,e.jsonOptions,e.binaryOptions);return i=i===void 0?e.defaultTimeoutMs:i<=0?void 0:i,await mo({interceptors:e.interceptors,signal:r,timeoutMs:i,req:{stream:!1,service:n.parent,method:n,requestMethod:`POST`,url:ao(e.baseUrl,n),header:sl(t,i,a,!1),contextValues:s??Ga(),message:o},next:async t=>{let r=await(e.fetch??globalThis.fetch)(t.url,Object.assign(Object.assign({},fl),{method:t.requestMethod,headers:t.header,signal:t.signal,body:Ea(0,c(t.message))})),{headerError:i}=ll(r.status,r.headers);if(!r.body)throw i===void 0?`missing response body`:i;let a=Ta(r.body).getReader(),o,s;for(;;){let e=await a.read();if(e.done)break;let{flags:t,data:n}=e.value;if((t&1)==1)throw new H(`protocol error: received unsupported compressed output`,V.Internal);if(t===128){if(o!==void 0)throw`extra trailer`;o=Ka(n)}else{if(s!==void 0)throw new H(`extra message`,V.Unimplemented);s=l(n)}}if(o===void 0)throw i===void 0?new H(`missing trailer`,r.headers.has(`Grpc-Status`)?V.Unimplemented:V.Unknown):i;if(ol(o,r.headers),s===void 0)throw new H(`missing message`,o.has(`Grpc-Status`)?V.Unimplemented:V.Unknown);return{stream:!1,service:n.parent,method:n,header:r.headers,message:s,trailer:o}}})},async stream(n,r,i,a,o,s){let{serialize:c,parse:l}=uo(n,t,e.jsonOptions,e.binaryOptions);function u(e,t,n,r,i){return dl(this,arguments,function*(){let i=Ta(e).getReader();if(t){if(!(yield ul(i.read())).done)throw`extra data for trailers-only`;return yield ul(void 0)}let a=!1;for(;;){let e=yield ul(i.read());if(e.done)break;let{flags:t,data:o}=e.value;if((t&128)==128){if(a)throw`extra trailer`;a=!0;let e=Ka(o);ol(e,r),e.forEach((e,t)=>n.set(t,e))}else{if(a)throw`extra message`;yield yield ul(l(o))}}if(!a)throw`missing trailer`})}async function d(e){if(n.methodKind!=`server_streaming`)throw`The fetch API does not support streaming request bodies`;let t=await e[Symbol.asyncIterator]().next();if(t.done==1)throw`missing request message`;return Ea(0,c(t.value))}return i=i===void 0?e.defaultTimeoutMs:i<=0?void 0:i,ho({interceptors:e.interceptors,signal:r,timeoutMs:i,req:{stream:!0,service:n.parent,method:n,requestMethod:`POST`,url:ao(e.baseUrl,n),header:sl(t,i,a,!1),contextValues:s??Ga(),message:o},next:async t=>{let n=await(e.fetch??globalThis.fetch)(t.url,Object.assign(Object.assign({},fl),{method:t.requestMethod,headers:t.header,signal:t.signal,body:await d(t.message)})),{foundStatus:r,headerError:i}=ll(n.status,n.headers);if(i!=null)throw i;if(!n.body)throw`missing response body`;let a=new Headers;return Object.assign(Object.assign({},t),{header:n.headers,trailer:a,message:u(n.body,r,a,n.headers,t.signal)})}})}}}var ml=`naadf.token`,hl=100,gl=5e3,_l=class e{events;cache;mirror=new Bs;client;bytesReceived=0;snapshotBytes=0;abort;stopped=!1;saving;constructor(e,t){this.events=e,this.cache=t,this.client=Ia(To,pl({baseUrl:location.origin,useBinaryFormat:!0}))}static token(){return sessionStorage.getItem(ml)}setToken(e){sessionStorage.setItem(ml,e),this.restart()}callOptions(){let t=e.token();return{headers:t?{authorization:`Bearer ${t}`}:{}}}async whoAmI(){return this.client.status({},this.callOptions())}async restore(){return!this.cache||!await this.cache.restore(this.mirror).catch(()=>!1)?!1:(this.events.restored(this.mirror),!0)}saveSoon(){this.cache&&!this.saving&&(this.saving=setTimeout(()=>{this.saving=void 0,this.cache?.save(this.mirror).catch(e=>console.warn(`the page cache: ${e}`))},1e3))}async run(){let e=hl,t=!0;for(;!this.stopped;){this.events.state(t?`connecting`:`reconnecting`),t=!1,this.abort=new AbortController;try{await this.follow(this.abort.signal)&&(e=hl)}catch(e){if(e instanceof q)console.warn(e.message);else{let t=H.from(e);if(t.code===V.Unauthenticated||t.code===V.PermissionDenied){this.events.state(`need-token`,t.rawMessage);return}if(t.code===V.FailedPrecondition){this.events.state(`error`,t.rawMessage);return}if(t.code===V.Canceled&&this.stopped)return;t.code!==V.Canceled&&console.warn(`the world stream ended: ${t.message}`)}}if(this.stopped)return;this.events.state(`reconnecting`);let n=e*(1+Math.random()/4);e=Math.min(gl,e*2),await new Promise(e=>setTimeout(e,n))}}restart(){this.abort?.abort()}async follow(e){let t=this.mirror,n=P(vo,{protocolVersion:2,cached:t.cached(),resume:t.holdsWorld?{version:t.version,digest:t.digest}:void 0,deltaForm:wo.PATCH,presence:!0}),r=!1;this.events.joined();for await(let i of this.client.join(n,{...this.callOptions(),signal:e})){r=!0;let e=bl(i);this.bytesReceived+=e;let n=i.kind;switch(n.case===`header`&&(this.snapshotBytes=0),(n.case===`header`||n.case===`page`)&&(this.snapshotBytes+=e),n.case){case`header`:this.events.state(`syncing`),t.header(n.value)||this.live(n.value.resume);break;case`page`:t.page(n.value)&&this.live(!1);break;case`delta`:{let{touched:e,resized:r}=t.delta(n.value);this.events.patched(t,e,r),this.saveSoon();break}case`presence`:this.events.presence(n.value.entries)}}return r}live(e){e||this.events.snapshot(this.mirror),this.saveSoon(),this.events.state(`live`)}},vl=e=>e<128?1:e<16384?2:e<2097152?3:e<268435456?4:5,yl=e=>1+vl(e)+e;function bl(e){if(e.kind.case!==`page`)return Dr(yo,e).length;let t=e.kind.value,n=t.indices.reduce((e,t)=>e+vl(t),0);return yl((t.buffer?1+vl(t.buffer):0)+(t.indices.length?yl(n):0)+(t.zstd.length?yl(t.zstd.length):0))}var xl=[`voxel`,`erase`,`box`,`sphere`,`paint`,`flood`],Sl=65536,Cl=(e,t)=>[e[0]+t,e[1]+t,e[2]+t],wl=e=>[e[0]+.5,e[1]+.5,e[2]+.5];function Tl(e,t){return{min:e.map(e=>Math.floor(e-t-.5)+1),max:e.map(e=>Math.ceil(e+t-.5))}}function El(e,t){return{min:e.map((e,n)=>Math.min(e,t[n])),max:e.map((e,n)=>Math.max(e,t[n])+1)}}function Dl(e,t,n){let r=e.cell(t[0],t[1],t[2]).material;if(r===n)return{min:t,max:Cl(t,1),refusal:`already that material`};let i=new Set,a=t=>t[0]+e.size[0]*(t[1]+e.size[1]*t[2]),o=[t];i.add(a(t));let s=[...t],c=Cl(t,1);for(;o.length;){let t=o.pop();for(let e=0;e<3;e++)s[e]=Math.min(s[e],t[e]),c[e]=Math.max(c[e],t[e]+1);for(let[n,l,u]of[[1,0,0],[-1,0,0],[0,1,0],[0,-1,0],[0,0,1],[0,0,-1]]){let d=[t[0]+n,t[1]+l,t[2]+u];if(e.inside(d[0],d[1],d[2])&&!i.has(a(d))&&e.cell(d[0],d[1],d[2]).material===r){if(i.size>=65536)return{min:s,max:c,refusal:`more than ${Sl} voxels`};i.add(a(d)),o.push(d)}}}return{min:s,max:c}}function Ol(e,t,n){switch(e.tool){case`voxel`:return{min:n.before,max:Cl(n.before,1)};case`erase`:return{min:n.voxel,max:Cl(n.voxel,1)};case`box`:return El(e.anchor??n.before,n.before);case`sphere`:return Tl(wl(n.before),e.radius);case`paint`:return Tl(wl(n.voxel),e.radius);case`flood`:return Dl(t,n.voxel,e.material)}}function kl(e,t){if(!t||t.refusal||e.tool!==`voxel`&&e.tool!==`box`)return[];let n=t.max.map((e,n)=>e-t.min[n]);return n.some(e=>e<1||e>127)||t.min.some(e=>e<0)?[]:[{min:[...t.min],size:n,material:e.material}]}function Al(e,t){let n=e.material;switch(e.tool){case`voxel`:return JSON.stringify({op:`set`,voxels:[[...t.before,n]]});case`erase`:return JSON.stringify({op:`set`,voxels:[[...t.voxel,0]]});case`box`:{if(!e.anchor){e.anchor=t.before;return}let r=El(e.anchor,t.before);return e.anchor=void 0,JSON.stringify({op:`box`,min:r.min,max:r.max,material:n})}case`sphere`:return JSON.stringify({op:`sphere`,center:wl(t.before),radius:e.radius,material:n});case`paint`:return JSON.stringify({op:`paint`,center:wl(t.voxel),radius:e.radius,material:n});case`flood`:return JSON.stringify({op:`flood_paint`,start:t.voxel,material:n,limit:Sl})}}function jl(e){let t=e>>10&31,n=e&1023,r=e&32768?-1:1;return t===0?r*n*2**-24:t===31?n?NaN:r*(1/0):r*(1+n/1024)*2**(t-15)}function Ml(e){let t=e.words(4),n=[];for(let e=1;4*e+3<t.length;e++){let r=t[4*e+1],i=t[4*e+2],[a,o,s]=[jl(r&65535),jl(r>>>16),jl(i&65535)];n.push({id:e,colour:`rgb(${gc(a)},${gc(o)},${gc(s)})`})}return n}function Nl(e,t){let n=new Map;e.addEventListener(`pointerdown`,e=>{e.pointerType===`touch`&&n.set(e.pointerId,{x:e.clientX,y:e.clientY})}),e.addEventListener(`pointermove`,e=>{let r=n.get(e.pointerId);if(e.pointerType!==`touch`||!r)return;let[i,a]=[e.clientX-r.x,e.clientY-r.y];n.set(e.pointerId,{x:e.clientX,y:e.clientY}),n.size===1?t.look(i,a):n.size===2&&t.fly(-a/2,i/2)});for(let t of[`pointerup`,`pointercancel`])e.addEventListener(t,e=>n.delete(e.pointerId))}var Pl=[`albedo`,`material`,`normal`,`steps`,`gi`,`pathtrace`],Fl=4096,Il=2*J.TAA_SLOTS,Ll=8192;function Rl(e){let t=new URLSearchParams(e),n={camera:void 0,mode:void 0,size:void 0,spp:void 0,problems:[]},r=t.get(`camera`);if(r!==null)try{n.camera=Oo(r)}catch(e){n.problems.push(`camera: ${e.message}; using the default view`)}let i=t.get(`mode`);i!==null&&(Pl.includes(i)?n.mode=i:n.problems.push(`mode: '${i}' is not one of ${Pl.join(`, `)}; using the default`));let a=t.get(`size`);if(a!==null){let e=/^(\d{1,5})x(\d{1,5})$/.exec(a),[t,r]=e?[Number(e[1]),Number(e[2])]:[0,0];t>=1&&r>=1&&t<=Ll&&r<=Ll?n.size=[t,r]:n.problems.push(`size: '${a}' is not WxH with edges 1..=${Ll}; using the canvas size`)}let o=t.get(`spp`);if(o!==null){let e=Number(o);Number.isInteger(e)&&e>=1&&e<=Fl?n.spp=e:n.problems.push(`spp: '${o}' is not a whole number in 1..=${Fl}; using the mode's default`)}return n}function zl(e,t,n){let r=new URLSearchParams;r.set(`camera`,ko(e)),r.set(`mode`,t),n.size&&r.set(`size`,`${n.size[0]}x${n.size[1]}`),n.spp&&r.set(`spp`,String(n.spp)),history.replaceState(null,``,`${location.pathname}?${r.toString().replace(/\+/g,`%20`)}`)}function Bl(e,t){return t.spp??(e===`gi`?Il:Fl)}var X=e=>document.getElementById(e),Z=X(`view`),Vl=X(`overlay`),Hl=X(`hud`),Ul=X(`notice`),Wl=Rl(location.search),Q={state:`connecting`,version:0,growthSeq:0,quiescent:!1,digest:``,users:[],mode:Wl.mode??`albedo`,frameMs:0,message:Wl.problems.join(`
-`),role:``,joins:0,snapshots:0,bytesReceived:0,snapshotBytes:0,markers:[],rateLimited:0,timings:{},shownVersion:-1,shownGeneration:-1,previewInstances:0,samples:0,pointer:null,name:``,voxel:()=>0,capture:()=>Promise.reject(Error(`no frame yet`)),redraw:()=>{},generation:()=>0,changedChunks:()=>`everything`,edit:()=>Promise.reject(Error(`not joined`)),undo:()=>Promise.reject(Error(`not joined`)),redo:()=>Promise.reject(Error(`not joined`))};window.naadf=Q;function Gl(e){Ul.textContent=e,Ul.hidden=e===``}Gl(Q.message);var $=Wl.camera,Kl=0;function ql(){if(Wl.size)return Wl.size;let e=window.devicePixelRatio||1;return[Math.max(1,Math.round(Z.clientWidth*e)),Math.max(1,Math.round(Z.clientHeight*e))]}function Jl(){Hl.textContent=[`${Q.state}${Q.role?` · ${Q.role}`:``}`,`version ${Q.version}${Q.growthSeq?`.${Q.growthSeq}`:``}${Q.quiescent?``:` (settling)`}`,`digest ${Q.digest.slice(0,8)}`,`${Q.users.length} online${Q.users.length?`: ${Q.users.join(`, `)}`:``}`,`rtt ${Kl.toFixed(0)} ms · frame ${Q.frameMs.toFixed(1)} ms · ${Q.mode}`].join(`
-`)}function Yl(e){let[t,n]=[Z.width,Z.height];if(!e||document.pointerLockElement===Z)return[t/2,n/2];let r=Z.getBoundingClientRect(),i=Math.min(r.width/t,r.height/n),[a,o]=[(r.width-t*i)/2,(r.height-n*i)/2];return[(e.clientX-r.left-a)/i,(e.clientY-r.top-o)/i]}async function Xl(){await cs();let e,t;try{({device:e,fallback:t}=await Gc())}catch(e){if(e instanceof Wc){Q.state=`no-webgpu`,Q.message=`${e.message}. Open this page in a browser with WebGPU (https://, or http://localhost), or use the native viewer: naadf view --server <address>`,Gl(Q.message),Jl();return}throw e}Q.timings.device=performance.now(),Wl.mode||(Q.mode=t?`albedo`:`gi`);let n=Z.getContext(`2d`),r=Vl.getContext(`2d`),i=new Kc(e),a=new Qc(e,Q.mode),o,s=[],c=!0,l=!1,u,d={tool:`voxel`,material:1,radius:4,anchor:void 0},f,p,m,h=BigInt(Math.floor(Math.random()*2**52)),g=e=>{i.uploadAll(e),$??=Fo(e.size),O(),v(e)},_=new _l({state(e,t){Q.state=e,Q.bytesReceived=_.bytesReceived,Q.snapshotBytes=_.snapshotBytes,e===`live`&&(Q.timings.live??=performance.now()),t!==void 0&&(Q.message=t,Gl(e===`need-token`?`${t}: enter a token`:t),e===`need-token`&&x(t)),Jl()},joined(){Q.joins+=1},snapshot(e){Q.snapshots+=1,g(e)},restored:g,patched(e,t,n){i.update(e,t,n),t.some(e=>e.id===4)&&O(),v(e)},presence(e){Q.users=e.map(e=>e.name||e.user||`anonymous`).sort(),s=e.filter(e=>e.session!==h),l=!0,Jl()}},await qs.open());function v(e){o=new rl(e),Q.version=Number(e.version),Q.growthSeq=e.growthSeq,Q.quiescent=e.quiescent,Q.digest=us(e.digest),Q.bytesReceived=_.bytesReceived,Q.snapshotBytes=_.snapshotBytes,c=!0,Jl()}let y=BigInt(Date.now())*1000n,b=async e=>{let t=y+=1n;for(let n=0;;n++){let r=performance.now();try{let i=await e(t);return Kl=performance.now()-r,n>0&&Gl(``),Jl(),Number(i.version)}catch(e){let t=H.from(e);if(t.code===V.ResourceExhausted&&n<8){Q.rateLimited+=1,Gl(`rate-limited: ${t.rawMessage}; retrying`),await new Promise(e=>setTimeout(e,250*2**n));continue}throw Q.message=t.rawMessage,Gl(`refused: ${t.rawMessage}`),t}}};Q.edit=e=>b(t=>_.client.edit(P(So,{ops:e,clientSeq:t}),_.callOptions())),Q.undo=()=>b(e=>_.client.undo(P(Co,{clientSeq:e}),_.callOptions())),Q.redo=()=>b(e=>_.client.redo(P(Co,{clientSeq:e}),_.callOptions())),Q.redraw=()=>{c=!0},Q.generation=()=>i.generation,Q.changedChunks=e=>i.changesSince(e),Q.capture=async()=>{let e=a.last;if(!e)throw Error(`no frame yet`);let t=document.createElement(`canvas`);return t.width=e.width,t.height=e.height,t.getContext(`2d`).putImageData(e,0,0),t.toDataURL(`image/png`)};function x(e){let t=X(`token`);t.hidden=!1,X(`token-why`).textContent=e,t.onsubmit=e=>{e.preventDefault(),t.hidden=!0,_.setToken(X(`token-value`).value),_.run(),S()}}async function S(){try{let e=await _.whoAmI();Q.role=e.role;let t=e.role===`viewer`;X(`tools`).classList.toggle(`disabled`,t),t&&Gl(`viewer token: editing is disabled (ask for an editor token to edit)`),Jl()}catch{}}let C=sessionStorage.getItem(`naadf.name`)??`guest-${Math.floor(Math.random()*1e4)}`;sessionStorage.setItem(`naadf.name`,C),Q.name=C,Q.voxel=(e,t,n)=>o?.inside(e,t,n)?o.cell(e,t,n).material:0;let w=``,T=0;setInterval(()=>{if(Q.state!==`live`||!$)return;let e={session:h,name:C,position:[...$.pos],forward:No($).forward,pointer:f?f.voxel.map(BigInt):[],tool:d.tool},t=JSON.stringify(e,(e,t)=>typeof t==`bigint`?String(t):t),n=performance.now();t===w&&n-T<1e3||(w=t,T=n,_.client.publish(P(bo,e),_.callOptions()).catch(()=>{}))},100);let E=X(`tool`);for(let e of xl)E.add(new Option(e,e));E.onchange=()=>{d.tool=E.value,d.anchor=void 0,l=!0};let D=X(`radius`);D.onchange=()=>{d.radius=Math.max(0,Number(D.value)||0),l=!0};function O(){X(`palette`).replaceChildren(...Ml(_.mirror).map(e=>{let t=document.createElement(`button`);return t.className=e.id===d.material?`swatch chosen`:`swatch`,t.style.background=e.colour,t.title=`material ${e.id}`,t.onclick=()=>{d.material=e.id,O()},t}))}function k(e){if(!o||Z.width===0)return;let[t,n]=Yl(m);f=il(o,[...e.pos],el(e,Z.width,Z.height,t,n)),p=f&&Q.role!==`viewer`?Ol(d,o,f):void 0,Q.pointer=f?{voxel:f.voxel,before:f.before}:null;let r=i.generation,a=A?kl(d,p):[];i.setLocals(a),Q.previewInstances=a.length,i.generation!==r&&(c=!0)}let A=!1;Z.addEventListener(`mousemove`,e=>{m=e,A=!0,l=!0}),Z.addEventListener(`mouseleave`,()=>{A=!1,l=!0}),Z.addEventListener(`contextmenu`,e=>e.preventDefault()),Z.addEventListener(`mousedown`,e=>{if(e.button===2&&document.pointerLockElement!==Z){Z.requestPointerLock?.();return}if(e.button!==0||Q.role===`viewer`||!u)return;if(m=e,k(u),!f||p?.refusal){p?.refusal&&Gl(`${d.tool}: ${p.refusal}`);return}let t=Al(d,f);l=!0,t&&Q.edit(t).then(()=>Gl(``),()=>{})});let j=new Set,M=32;addEventListener(`keydown`,e=>{(e.ctrlKey||e.metaKey)&&e.code===`KeyZ`?(e.preventDefault(),(e.shiftKey?Q.redo():Q.undo()).catch(()=>{})):e.target instanceof HTMLInputElement||j.add(e.code)}),addEventListener(`keyup`,e=>j.delete(e.code));let ee=(e,t)=>{$&&($.yaw+=e*.15,$.pitch=Math.max(-89.9,Math.min(89.9,$.pitch-t*.15)),c=!0)};addEventListener(`mousemove`,e=>{document.pointerLockElement===Z&&ee(e.movementX,e.movementY)}),Nl(Z,{look:ee,fly(e,t){if(!$)return;let n=No($);$.pos.forEach((r,i)=>$.pos[i]+=(n.forward[i]*e+n.right[i]*t)*(M/64)),c=!0}}),Z.addEventListener(`wheel`,e=>{M=Math.max(1,Math.min(4096,M*(e.deltaY<0?1.25:.8))),e.preventDefault()});let N=[],te=performance.now(),ne=0,re=!1;function ie(){re||(re=!0,setTimeout(()=>{re=!1,ne=performance.now(),$&&zl($,Q.mode,Wl)},Math.max(0,500-(performance.now()-ne))))}let ae=!1;function oe(e){let t=Math.min(.1,(e-te)/1e3);if(te=e,$&&j.size>0){let e=No($),n=(e,n)=>e.forEach((e,r)=>$.pos[r]+=e*n*M*t);j.has(`KeyW`)&&n(e.forward,1),j.has(`KeyS`)&&n(e.forward,-1),j.has(`KeyD`)&&n(e.right,1),j.has(`KeyA`)&&n(e.right,-1),j.has(`Space`)&&n([0,1,0],1),j.has(`ShiftLeft`)&&n([0,1,0],-1),c=!0}if(i.buffer&&$&&c&&!ae){c=!1,ae=!0;let[e,t]=ql(),r=performance.now(),o=Q.version,s=i.generation,d={...$,pos:[...$.pos]};a.render(i,d,e,t,Q.mode).then(e=>{for(let t of[Z,Vl])(t.width!==e.width||t.height!==e.height)&&([t.width,t.height]=[e.width,e.height]);n.putImageData(e,0,0),u=d,l=!0,N.push(performance.now()-r),N.length>30&&N.shift(),Q.frameMs=N.reduce((e,t)=>e+t,0)/N.length,Q.shownVersion=o,Q.shownGeneration=s,Q.timings.firstFrame??=performance.now(),Q.samples=a.samples(Q.mode),Qc.accumulates(Q.mode)&&Q.samples<Bl(Q.mode,Wl)&&(c=!0),Jl()}).catch(e=>console.error(`frame: ${e}`)).finally(()=>ae=!1),ie()}l&&u&&(l=!1,k(u),Q.markers=nl(r,u,p,s)),requestAnimationFrame(oe)}requestAnimationFrame(oe);let se=X(`mode`);for(let e of Pl)se.add(new Option(e,e,!1,e===Q.mode));se.onchange=()=>{Q.mode=se.value,c=!0},X(`undo`).onclick=()=>Q.undo().catch(()=>{}),X(`redo`).onclick=()=>Q.redo().catch(()=>{}),X(`shot`).onclick=async()=>{let e=document.createElement(`a`);e.href=await Q.capture(),e.download=`naadf-${Q.version}.png`,e.click()},addEventListener(`resize`,()=>c=!0),S(),await _.restore()&&(Q.timings.restored=performance.now()),await _.run()}Xl().catch(e=>{Q.state=`error`,Q.message=String(e instanceof Error?e.message:e),Gl(Q.message),Jl()});
+`;function Uc(e,t){let n=e*t,r=Math.ceil(e/8)*Math.ceil(t/8),i=J.CAMERA_HISTORY*J.CAM_WORDS,a=e=>{let t=i;return i+=e,t},[o,s,c,l]=[a(J.LUT_SIZE*J.LUT_SIZE),a(n),a(n),a(n)],[u,d,f,p]=[a(2*n),a(n),a(n),a(n)],[m,h,g]=[a(r*J.MAX_KEPT*2),a(3*r),a(n)],_=J.CONTROL_WORDS+2*r,v={lut:o,gbuf:s,gmat:c,emitted:l,taaInfo:u,illum:d,illum2:f,result:p,refined:m,regionInfo:h,own:g,ringStart:i,queueList:_,words:_+64*r+J.POSE_TABLE_WORDS},y=n*J.RING_PER_PIXEL;return{width:e,height:t,pixels:n,regions:r,layout:v,ring:y,memBytes:(v.ringStart+y*J.RING_VEC4)*16,taaBytes:n*J.TAA_PIXEL_BYTES}}function Wc(e,t,n){let r=Math.min(e.limits.maxStorageBufferBindingSize,e.limits.maxBufferSize),[i,a]=[t,n];for(;;){let e=Uc(i,a);if(Math.max(e.memBytes,e.taaBytes,e.layout.words*4)<=r||i===1&&a===1)return[i,a];[i,a]=[Math.ceil(i/2),Math.ceil(a/2)]}}function Gc(e){let t=e%J.TAA_SLOTS,n=0;for(let e=0;e<32;e++)t&1<<e&&(n|=1<<31-e);let[r,i,a]=[0,0x80000000,t];for(;a>0;)a&1&&(r=(r^i)>>>0),a>>>=1,i=(i^i>>>1)>>>0;let o=Math.fround(.5/J.TAA_SLOTS),s=e=>Math.fround(Math.fround(((e^0x80000000)>>>0)/4294967296)+o);return[s(n>>>0),s(r)]}var Kc=class{device;plan;chunks;frames=0;cameras=[];marks;generation;editFrame=0;changeFrame=0;words;changes;args;mem;staging;owned;group;constructor(e,t,n,r,i,a){this.device=e,this.plan=r,this.chunks=i;let o=(t,n,r)=>e.createBuffer({label:t,size:Math.max(16,n),usage:r}),s=GPUBufferUsage.STORAGE;this.words=o(`gi words`,r.layout.words*4,s|GPUBufferUsage.COPY_SRC);let c=o(`gi buckets`,r.regions*(2*J.BUCKET_SLOTS+12)*4,s),l=i[0]*i[1]*i[2];this.changes=o(`gi chunk changes`,l*8,s|GPUBufferUsage.COPY_DST),this.mem=o(`gi mem`,r.memBytes,s|GPUBufferUsage.COPY_DST|GPUBufferUsage.COPY_SRC);let u=o(`gi taa`,r.taaBytes,s);this.args=o(`gi indirect args`,J.ARGS_BYTES,GPUBufferUsage.INDIRECT|GPUBufferUsage.COPY_DST),this.staging=o(`gi result`,r.pixels*16,GPUBufferUsage.MAP_READ|GPUBufferUsage.COPY_DST),this.owned=[this.words,c,this.changes,this.mem,u,this.args,this.staging],this.marks=new Uint32Array(l*2),this.generation=a.generation,this.group=e.createBindGroup({layout:t,entries:[...n,this.words,c,this.changes,this.mem,u].map((e,t)=>({binding:t,resource:{buffer:e}}))})}destroy(){this.owned.forEach(e=>e.destroy())}noteChanges(e){if(this.generation===e.generation)return;let t=e.changesSince(this.generation);t===`everything`||t.length>J.MAX_LOCAL_CHANGES?[this.editFrame,this.changeFrame]=[this.frames,this.frames]:t.length>0&&(this.mark(t),this.changeFrame=this.frames),this.generation=e.generation}mark(e){let[t,n,r]=this.chunks,i=J.CHANGE_REACH,[a,o]=[1/0,0],s=(e,t)=>{this.marks[2*e+t]=this.frames,[a,o]=[Math.min(a,e),Math.max(o,e+1)]};for(let a of e){let[e,o,c]=[a%t,Math.floor(a/t)%n,Math.floor(a/(t*n))];s(a,0);for(let a=Math.max(0,c-i);a<=Math.min(r-1,c+i);a++)for(let r=Math.max(0,o-i);r<=Math.min(n-1,o+i);r++)for(let o=Math.max(0,e-i);o<=Math.min(t-1,e+i);o++)s(o+t*(r+n*a),1)}a<o&&this.device.queue.writeBuffer(this.changes,a*8,this.marks,a*2,(o-a)*2)}uploadCameras(e,t){let n=Gc(this.frames);this.cameras.unshift({camera:e,jitter:n}),this.cameras.length=Math.min(this.cameras.length,J.CAMERA_HISTORY);let r=J.CAM_WORDS*4,i=new Float32Array(J.CAMERA_HISTORY*r);return this.cameras.forEach((e,n)=>{let a=Po({...e.camera,pos:e.camera.pos.map((e,n)=>e-t[n])},this.plan.width,this.plan.height),o=a.int.map((e,t)=>Math.fround(Math.fround(e)+a.frac[t]));i.set([...o,e.jitter[0],...a.forward,e.jitter[1],...a.right,0,...a.up,0,...a.int,0],n*r)}),this.device.queue.writeBuffer(this.mem,0,i),n}info(e){let{plan:t,frames:n}=this,r=t.layout;return pc(ec,{frame:n,taa_slot:n%J.TAA_SLOTS,taa_valid:Math.min(n,J.TAA_SLOTS-1),edit_frame:this.editFrame,change_frame:this.changeFrame,jitter_x:e[0],jitter_y:e[1],regions_x:Math.ceil(t.width/8),regions_y:Math.ceil(t.height/8),ring_capacity:t.ring,denoise:1,off_own:r.own,off_lut:r.lut,off_gbuf:r.gbuf,off_gmat:r.gmat,off_emitted:r.emitted,off_taa_info:r.taaInfo,off_illum:r.illum,off_illum2:r.illum2,off_result:r.result,off_refined:r.refined,off_region_info:r.regionInfo,off_ring:r.ringStart,off_queue_list:r.queueList})}},qc=class{device;world;pipelines;group1;params;history;lastView=``;still=0;constructor(e,t){this.device=e,this.world=t;let n=[`uniform`,`uniform`,`uniform`,`storage`,`storage`,`read-only-storage`,`storage`,`storage`];this.group1=e.createBindGroupLayout({entries:n.map((e,t)=>mc(t,e))});let r=e.createPipelineLayout({bindGroupLayouts:[t.layout,this.group1]}),i=e.createShaderModule({label:`gi.wgsl`,code:Hc});this.pipelines=lc.map(t=>e.createComputePipelineAsync({layout:r,compute:{module:i,entryPoint:t}}));let a=(t,n)=>e.createBuffer({label:t,size:n,usage:GPUBufferUsage.UNIFORM|GPUBufferUsage.COPY_DST});this.params=[a(`gi frame`,$s.size),a(`gi light`,ac.length*4),a(`gi state`,ec.size)],e.queue.writeBuffer(this.params[1],0,new Uint32Array(ac))}async render(e,t,n,r){let i=this.device,[a,o]=Wc(i,n,r);e.trackChanges();let s=this.history;s&&s.plan.width===a&&s.plan.height===o&&s.chunks.join()===e.chunks.join()||(s?.destroy(),s=this.history=new Kc(i,this.group1,this.params,Uc(a,o),[...e.chunks],e)),s.noteChanges(e);let c=fc(t,a,o,e);this.still=c===this.lastView?this.still+1:1,this.lastView=c;let l=Po(t,a,o),u=s.uploadCameras(t,l.int),d=s.frames;i.queue.writeBuffer(this.params[0],0,pc($s,{cam_int:l.int,width:a,cam_frac:l.frac,height:o,forward:l.forward,seed:0,right:l.right,sample:d,up:l.up,history:+(d>0)})),i.queue.writeBuffer(this.params[2],0,s.info(u));let f=await Promise.all(this.pipelines),p=i.createCommandEncoder();lc.forEach((t,n)=>{if(t===`gi_atmosphere`&&d>0)return;t===`gi_trace`&&p.copyBufferToBuffer(s.words,0,s.args,0,J.ARGS_BYTES);let r=p.beginComputePass({label:t});switch(r.setPipeline(f[n]),r.setBindGroup(0,this.world.of(e)),r.setBindGroup(1,s.group),t){case`gi_atmosphere`:r.dispatchWorkgroups(J.LUT_SIZE/8,J.LUT_SIZE/8);break;case`gi_queue_scan`:r.dispatchWorkgroups(1);break;case`gi_trace`:r.dispatchWorkgroupsIndirect(s.args,J.CONTROL_TRACE_ARGS*4);break;case`gi_project`:case`gi_project_store`:r.dispatchWorkgroupsIndirect(s.args,J.CONTROL_PROJECT_ARGS*4);break;case`gi_refine`:r.dispatchWorkgroups(Math.ceil(s.plan.regions/64));break;case`gi_poses`:r.dispatchWorkgroups(Math.ceil(J.NO_ENTITY/64));break;default:r.dispatchWorkgroups(Math.ceil(a/8),Math.ceil(o/8))}r.end()}),s.frames+=1;let m=s.plan.layout.result*16;return xc(new Float32Array(await vc(i,p,s.mem,m,s.staging,s.plan.pixels*16)),a,o,1,!1)}},Jc=`// Generated by naadf-client (shaders.rs): the world parameters, the constants shared with the
+// Rust code, the world's storage bindings.
+struct WorldInfo {
+    // World size in voxels.
+    size: vec3<u32>,
+    // Slots of the instance buffer on the device, the world's and then the local
+    // instances' (records of 5 words; 0: no instance to trace).
+    instance_slots: u32,
+    // World size in chunks.
+    chunks: vec3<u32>,
+    // Cells a ray may visit before it counts as a miss.
+    max_steps: u32,
+}
+@group(0) @binding(0) var<uniform> world_info: WorldInfo;
+struct FrameInfo {
+    // Camera position, integer part (floor).
+    cam_int: vec3<i32>,
+    // Image width in pixels.
+    width: u32,
+    // Camera position, fractional part in [0, 1).
+    cam_frac: vec3<f32>,
+    // Image height in pixels.
+    height: u32,
+    // View direction.
+    forward: vec3<f32>,
+    // The run's seed.
+    seed: u32,
+    // Image right, scaled by a·W/H.
+    right: vec3<f32>,
+    // Number of the sample this dispatch adds.
+    sample: u32,
+    // Image up, scaled by a.
+    up: vec3<f32>,
+    // 1 when a temporal pass has a history to blend with (0 for the path tracer).
+    history: u32,
+}
+struct LightInfo {
+    // Uniform sky: its radiance. Physical sky: the irradiance of the sun lighting it.
+    sky: vec3<f32>,
+    // 1 for the physical sky.
+    sky_physical: u32,
+    // Unit vector toward the sun (the sun lighting the physical sky when it is off).
+    sun_dir: vec3<f32>,
+    // 1 when the sun shines (its disc and its samples).
+    sun_on: u32,
+    // The disc's radiance.
+    sun_disc: f32,
+    // The weight of one disc sample: radiance times solid angle.
+    sun_weight: f32,
+    // 1 − cos of the disc's angular radius.
+    sun_omc: f32,
+    // Scattered rays after the camera ray.
+    bounces: u32,
+}
+struct GiInfo {
+    // Frames rendered in this history before this one.
+    frame: u32,
+    // The long-term TAA slot this frame writes (\`frame % TAA_SLOTS\`).
+    taa_slot: u32,
+    // Earlier frames the TAA may read (at most \`TAA_SLOTS − 1\`).
+    taa_valid: u32,
+    // The first frame rendered after the newest change of the materials, or of more
+    // chunks than are marked one by one (0: none): the near-change rule everywhere.
+    edit_frame: u32,
+    // The first frame rendered after the newest change of any chunk, entity moves
+    // included (0: none): the still path keeps no sample from before it.
+    change_frame: u32,
+    // This frame's jitter in the pixel, x (a point of a 32-point (0, 5, 2)-net).
+    jitter_x: f32,
+    // This frame's jitter in the pixel, y.
+    jitter_y: f32,
+    // 8×8 regions across.
+    regions_x: u32,
+    // 8×8 regions down.
+    regions_y: u32,
+    // Samples the sample ring holds.
+    ring_capacity: u32,
+    // 1 when the bilateral denoiser runs.
+    denoise: u32,
+    // Where each pixel's own secondary sample starts in \`mem\` (tagged with the
+    // frame that traced it).
+    off_own: u32,
+    // Where the atmosphere table starts in \`mem\` (vec4 words; the cameras start at 0).
+    off_lut: u32,
+    // Where the first-hit surfaces start in \`mem\`.
+    off_gbuf: u32,
+    // Where the first-hit materials start in \`mem\`.
+    off_gmat: u32,
+    // Where the first-hit light starts in \`mem\`.
+    off_emitted: u32,
+    // Where the TAA's per-pixel sums and ranges start in \`mem\`.
+    off_taa_info: u32,
+    // Where the incoming light starts in \`mem\`.
+    off_illum: u32,
+    // Where the denoiser's intermediate starts in \`mem\`.
+    off_illum2: u32,
+    // Where the results start in \`mem\`.
+    off_result: u32,
+    // Where the refined samples start in \`mem\`.
+    off_refined: u32,
+    // Where the regions' statistics start in \`mem\`.
+    off_region_info: u32,
+    // Where the sample ring starts in \`mem\`.
+    off_ring: u32,
+    // Where the queued pixels start in \`words\`.
+    off_queue_list: u32,
+}
+const STATE_SHIFT: u32 = 30u;
+const STATE_EMPTY: u32 = 0u;
+const STATE_FULL: u32 = 1u;
+const STATE_MIXED: u32 = 2u;
+const PAYLOAD: u32 = 1073741823u;
+const MAX_MATERIAL: u32 = 32767u;
+const VOXEL_SOLID: u32 = 32768u;
+const CHUNK_FIELD_BITS: u32 = 5u;
+const CELL_FIELD_BITS: u32 = 2u;
+const KIND_DIFFUSE: u32 = 0u;
+const KIND_EMISSIVE: u32 = 1u;
+const KIND_METAL: u32 = 2u;
+const KIND_MIRROR: u32 = 3u;
+const ENTITY_SOLID: u32 = 2147483648u;
+const TYPE_ALIGN: u32 = 64u;
+const RECORD_WORDS: u32 = 5u;
+const NO_ENTITY: u32 = 16383u;
+const NODE_WORDS: u32 = 28u;
+const BVH_STACK: u32 = 64u;
+const BVH_LEAF: u32 = 2147483648u;
+const BVH_NONE: u32 = 4294967295u;
+const BVH_FAR: f32 = 1e30f;
+const SURFACE_OFFSET: f32 = 0.01f;
+const MIN_ALPHA: f32 = 0.001f;
+const PI: f32 = 3.1415927f;
+const PLANET_RADIUS: f32 = 6360000.0f;
+const ATMOSPHERE_HEIGHT: f32 = 60000.0f;
+const EYE_HEIGHT: f32 = 100.0f;
+const VIEW_STEPS: u32 = 24u;
+const LIGHT_STEPS: u32 = 6u;
+const RAYLEIGH: vec3<f32> = vec3<f32>(5.802e-6f, 1.3558e-5f, 3.31e-5f);
+const RAYLEIGH_SCALE: f32 = 8000.0f;
+const MIE_SCATTER: f32 = 3.996e-6f;
+const MIE_EXTINCTION: f32 = 4.44e-6f;
+const MIE_SCALE: f32 = 1200.0f;
+const MIE_G: f32 = 0.8f;
+const OZONE: vec3<f32> = vec3<f32>(6.5e-7f, 1.881e-6f, 8.5e-8f);
+const OZONE_CENTRE: f32 = 25000.0f;
+const OZONE_HALF_WIDTH: f32 = 15000.0f;
+// The first word of each buffer in \`world\`.
+struct WorldOffsets {
+    chunks: u32,
+    blocks: u32,
+    voxels: u32,
+    materials: u32,
+    entity_types: u32,
+    entity_instances: u32,
+    entity_hierarchy: u32,
+    structure: u32,
+}
+@group(0) @binding(1) var<uniform> world_offsets: WorldOffsets;
+@group(0) @binding(2) var<storage, read> world: array<u32>;
+fn chunk_word(i: u32) -> u32 { return world[world_offsets.chunks + i]; }
+fn block_word(i: u32) -> u32 { return world[world_offsets.blocks + i]; }
+fn voxel_word(i: u32) -> u32 { return world[world_offsets.voxels + i]; }
+fn material_word(i: u32) -> u32 { return world[world_offsets.materials + i]; }
+fn entity_type_word(i: u32) -> u32 { return world[world_offsets.entity_types + i]; }
+fn instance_word(i: u32) -> u32 { return world[world_offsets.entity_instances + i]; }
+fn hierarchy_word(i: u32) -> u32 { return world[world_offsets.entity_hierarchy + i]; }
+fn structure_word(i: u32) -> u32 { return world[world_offsets.structure + i]; }
+
+// The world buffers (docs/FORMAT.md §5) and how to read their cells.
+//
+// Generated by naadf-client (client/src/gpu/shaders.rs) from the Rust definitions, in the
+// prelude before this file:
+// - the parameters \`world_info: WorldInfo\` (size in voxels and chunks, the instance
+//   buffer's slots, the step budget);
+// - the constants of the cell layout (STATE_*, PAYLOAD, MAX_MATERIAL, VOXEL_SOLID,
+//   CHUNK_FIELD_BITS, CELL_FIELD_BITS), the material kinds (KIND_*), the entity layout
+//   (ENTITY_SOLID, TYPE_ALIGN, RECORD_WORDS, NO_ENTITY), the instance hierarchy's (NODE_WORDS,
+//   BVH_*) and the frame modes (MODE_*);
+// - the storage bindings and the accessors \`chunk_word\`, \`block_word\`, \`voxel_word\`,
+//   \`material_word\`, \`entity_type_word\`, \`instance_word\`, \`hierarchy_word\` (and
+//   \`structure_word\` for the comparison traversals): a buffer larger than the adapter's
+//   storage-binding limit is split across several bindings, and the accessor picks the
+//   part.
+
+// State of a chunk or block cell: STATE_EMPTY, STATE_FULL or (also for state 3)
+// STATE_MIXED.
+fn cell_state(c: u32) -> u32 {
+    return min(c >> STATE_SHIFT, STATE_MIXED);
+}
+
+// Field \`dir\` (order −x, +x, −y, +y, −z, +z) of a packed AADF.
+fn aadf_field(word: u32, dir: u32, bits: u32) -> u32 {
+    return (word >> (bits * dir)) & ((1u << bits) - 1u);
+}
+
+// The index of chunk \`c\` in a world of \`chunks\` chunks (\`world_info.chunks\`). Loops read
+// \`world_info\` once before they start and pass its fields: it is a storage buffer, and a
+// storage read in every step is a bounds-checked load on lavapipe.
+fn chunk_index(c: vec3<u32>, chunks: vec3<u32>) -> u32 {
+    return c.x + chunks.x * (c.y + chunks.y * c.z);
+}
+
+fn index4(p: vec3<u32>) -> u32 {
+    return p.x + 4u * p.y + 16u * p.z;
+}
+
+// Voxel \`i\` (0..64) of the voxel group starting at word \`ptr\`.
+fn group_voxel(ptr: u32, i: u32) -> u32 {
+    return (voxel_word(ptr + i / 2u) >> (16u * (i & 1u))) & 0xFFFFu;
+}
+
+// A material's entry (docs/FORMAT.md §5.4).
+struct Material {
+    kind: u32,
+    albedo: vec3<f32>,
+    emission: f32,
+    roughness: f32,
+}
+
+fn material(id: u32) -> Material {
+    let w0 = material_word(4u * id);
+    let w1 = material_word(4u * id + 1u);
+    let w2 = material_word(4u * id + 2u);
+    let rg = unpack2x16float(w1);
+    let be = unpack2x16float(w2);
+    return Material(w0 & 3u, vec3<f32>(rg.x, rg.y, be.x), be.y, unpack2x16float(w0).y);
+}
+
+// Rays and the event model every traversal shares (world/src/traverse/ray.rs, in f32).
+//
+// A ray keeps its origin split into an integer part \`o_int\` and a fraction \`o_frac\` in [0, 1)
+// (docs/NAADF.md §9), so precision does not depend on where in the world it starts.
+// The direction \`d\` is kept exactly as given (not renormalised, which would move the line
+// by an f32 rounding): times are in units of |d| and the ray's \`len\` converts them to
+// distances. Every decision compares plane-crossing times from the one function \`t_at\`,
+// so the traversal is a consistent walk of the event order "(t, axis), x before y before
+// z at equal t"; it departs from the CPU's f64 order only where two crossings are within
+// f32 rounding of each other.
+
+// A cell bound beyond any world for unconstrained axes (the CPU walk uses 2^40, which no
+// i32 holds).
+const FAR_CELL: i32 = 1073741824;
+const T_INF: f32 = 3.0e38;
+const NO_AXIS: u32 = 3u;
+
+struct Ray {
+    o_int: vec3<i32>,
+    o_frac: vec3<f32>,
+    d: vec3<f32>,
+    inv: vec3<f32>,
+    len: f32,
+}
+
+fn ray_new(o_int: vec3<i32>, o_frac: vec3<f32>, d: vec3<f32>) -> Ray {
+    // The inverse of a zero component is never read: such axes never cross a plane.
+    let safe = select(vec3<f32>(1.0), d, d != vec3<f32>(0.0));
+    return Ray(o_int, o_frac, d, 1.0 / safe, length(d));
+}
+
+// A ray from an unsplit origin.
+fn ray_from(o: vec3<f32>, d: vec3<f32>) -> Ray {
+    let fl = floor(o);
+    return ray_new(vec3<i32>(fl), min(o - fl, vec3<f32>(0.99999994)), d);
+}
+
+// The ray's point at time \`t\`, relative to its integer origin.
+fn ray_local(r: Ray, t: f32) -> vec3<f32> {
+    return r.o_frac + r.d * t;
+}
+
+// A ray starting at \`p\` (relative to \`r\`'s integer origin) along \`d\`.
+fn ray_at(r: Ray, p: vec3<f32>, d: vec3<f32>) -> Ray {
+    let fl = floor(p);
+    return ray_new(r.o_int + vec3<i32>(fl), min(p - fl, vec3<f32>(0.99999994)), d);
+}
+
+// Time at which the ray crosses plane \`k\` of \`axis\`.
+fn t_at(r: Ray, a: u32, k: i32) -> f32 {
+    return (f32(k - r.o_int[a]) - r.o_frac[a]) * r.inv[a];
+}
+
+// Whether the crossing of plane \`k\` of axis \`b\` comes before the event \`(t, a)\`.
+fn crossed(r: Ray, b: u32, k: i32, t: f32, a: u32) -> bool {
+    let tb = t_at(r, b, k);
+    return tb < t || (tb == t && b < a);
+}
+
+// The cell of axis \`b\` right after event \`(t, a)\`, known to lie in \`lo..=hi\`.
+fn cell_after(r: Ray, b: u32, t: f32, a: u32, lo: i32, hi: i32) -> i32 {
+    let d = r.d[b];
+    if lo == hi || d == 0.0 {
+        return lo;
+    }
+    let p = r.o_frac[b] + d * t;
+    let fl = floor(p);
+    var k = clamp(i32(fl) + r.o_int[b], lo, hi);
+    let f = p - fl;
+    // Far from a plane the floor is certain; near one, decide by crossing times.
+    let tol = 4e-6 * (abs(d * t) + 1.0);
+    if f > tol && f < 1.0 - tol {
+        return k;
+    }
+    if d > 0.0 {
+        while k < hi && crossed(r, b, k + 1, t, a) {
+            k += 1;
+        }
+        while k > lo && !crossed(r, b, k, t, a) {
+            k -= 1;
+        }
+    } else {
+        while k > lo && crossed(r, b, k, t, a) {
+            k -= 1;
+        }
+        while k < hi && !crossed(r, b, k + 1, t, a) {
+            k += 1;
+        }
+    }
+    return k;
+}
+
+// Where a ray begins inside the box [0, size): its first cell, the time it is entered and
+// the axis whose plane it crossed (NO_AXIS when the origin is inside). \`ok\` is false when
+// the ray misses the box.
+struct Entry {
+    cell: vec3<i32>,
+    t: f32,
+    axis: u32,
+    ok: bool,
+}
+
+fn ray_entry(r: Ray, size: vec3<i32>) -> Entry {
+    let start = r.o_int;
+    var miss = Entry(vec3<i32>(0), 0.0, NO_AXIS, false);
+    if all(start >= vec3<i32>(0)) && all(start < size) {
+        return Entry(start, 0.0, NO_AXIS, true);
+    }
+    // The last slab-entry event, in (t, axis) order.
+    var bt = 0.0;
+    var ba = NO_AXIS;
+    for (var a = 0u; a < 3u; a++) {
+        var plane: i32;
+        if start[a] < 0 {
+            if r.d[a] <= 0.0 {
+                return miss;
+            }
+            plane = 0;
+        } else if start[a] >= size[a] {
+            if r.d[a] >= 0.0 {
+                return miss;
+            }
+            plane = size[a];
+        } else {
+            continue;
+        }
+        let t = t_at(r, a, plane);
+        if ba == NO_AXIS || t >= bt {
+            bt = t;
+            ba = a;
+        }
+    }
+    var cell = vec3<i32>(0);
+    for (var b = 0u; b < 3u; b++) {
+        if b == ba {
+            cell[b] = select(size[b] - 1, 0, r.d[b] > 0.0);
+        } else if r.d[b] > 0.0 {
+            cell[b] = cell_after(r, b, bt, ba, start[b], FAR_CELL);
+        } else if r.d[b] < 0.0 {
+            cell[b] = cell_after(r, b, bt, ba, -FAR_CELL, start[b]);
+        } else {
+            cell[b] = start[b];
+        }
+    }
+    if any(cell < vec3<i32>(0)) || any(cell >= size) {
+        return miss;
+    }
+    return Entry(cell, bt, ba, true);
+}
+
+// When a ray inside the box [0, size] leaves it: the first crossing of a far plane it moves
+// toward (world/src/traverse/ray.rs \`leave_time\`).
+fn leave_time(r: Ray, size: vec3<i32>) -> f32 {
+    var t = T_INF;
+    for (var a = 0u; a < 3u; a++) {
+        if r.d[a] != 0.0 {
+            t = min(t, t_at(r, a, select(0, size[a], r.d[a] > 0.0)));
+        }
+    }
+    return t;
+}
+
+// Leaving the empty cuboid made of \`cell\` extended by \`skip\` cells toward the ray on each
+// axis: the exit event and the cell entered by it.
+struct Exit {
+    t: f32,
+    axis: u32,
+    next: vec3<i32>,
+}
+
+fn ray_exit(r: Ray, cell: vec3<i32>, skip: vec3<i32>) -> Exit {
+    var bound = vec3<i32>(0);
+    var bt = T_INF;
+    var ba = 0u;
+    for (var a = 0u; a < 3u; a++) {
+        if r.d[a] == 0.0 {
+            continue;
+        }
+        bound[a] = select(cell[a] - skip[a], cell[a] + 1 + skip[a], r.d[a] > 0.0);
+        let t = t_at(r, a, bound[a]);
+        if t < bt {
+            bt = t;
+            ba = a;
+        }
+    }
+    var next = cell;
+    for (var b = 0u; b < 3u; b++) {
+        if b == ba {
+            next[b] = select(bound[b] - 1, bound[b], r.d[b] > 0.0);
+        } else if r.d[b] > 0.0 {
+            next[b] = cell_after(r, b, bt, ba, cell[b], cell[b] + skip[b]);
+        } else if r.d[b] < 0.0 {
+            next[b] = cell_after(r, b, bt, ba, cell[b] - skip[b], cell[b]);
+        }
+    }
+    return Exit(bt, ba, next);
+}
+
+// Amanatides–Woo state in the same event order (ties step the lowest axis first).
+struct Dda {
+    cell: vec3<i32>,
+    tmax: vec3<f32>,
+    t: f32,
+    axis: u32,
+}
+
+fn dda_start(r: Ray, e: Entry) -> Dda {
+    var tmax = vec3<f32>(T_INF);
+    for (var a = 0u; a < 3u; a++) {
+        if r.d[a] != 0.0 {
+            tmax[a] = t_at(r, a, select(e.cell[a], e.cell[a] + 1, r.d[a] > 0.0));
+        }
+    }
+    return Dda(e.cell, tmax, e.t, e.axis);
+}
+
+fn dda_advance(r: Ray, s: ptr<function, Dda>) {
+    var a = 0u;
+    if (*s).tmax[1] < (*s).tmax[a] {
+        a = 1u;
+    }
+    if (*s).tmax[2] < (*s).tmax[a] {
+        a = 2u;
+    }
+    (*s).t = (*s).tmax[a];
+    let c = (*s).cell[a] + select(-1, 1, r.d[a] > 0.0);
+    (*s).cell[a] = c;
+    (*s).axis = a;
+    (*s).tmax[a] = t_at(r, a, select(c, c + 1, r.d[a] > 0.0));
+}
+
+// The first solid voxel along a ray (of the world, or of an entity: then voxel and normal
+// are entity-local).
+struct Hit {
+    hit: bool,
+    // The step budget ran out (counts as a miss).
+    exhausted: bool,
+    voxel: vec3<i32>,
+    // Axis of the entry face (NO_AXIS: the origin was inside the voxel).
+    axis: u32,
+    // Entry-face normal (zero when the origin was inside).
+    normal: vec3<i32>,
+    // Time of entry, in units of the ray's |d|.
+    t: f32,
+    material: u32,
+    steps: u32,
+    // Entity id, or NO_ENTITY (generated in the prelude).
+    entity: u32,
+}
+
+fn no_hit(steps: u32) -> Hit {
+    return Hit(false, false, vec3<i32>(0), NO_AXIS, vec3<i32>(0), T_INF, 0u, steps, NO_ENTITY);
+}
+
+fn make_hit(r: Ray, cell: vec3<i32>, t: f32, axis: u32, material: u32, steps: u32) -> Hit {
+    var n = vec3<i32>(0);
+    if axis != NO_AXIS {
+        n[axis] = select(1, -1, r.d[axis] > 0.0);
+    }
+    return Hit(true, false, cell, axis, n, t, material, steps, NO_ENTITY);
+}
+
+// One full trace: the world loop (traverse.wgsl or grid.wgsl) through the static world,
+// then the instances whose world boxes the ray crosses before the world's hit or exit,
+// found through their hierarchy (docs/NAADF.md §11): the GPU twin of
+// world/src/traverse/entities.rs. Only the nearest entity hit (lowest id at equal times)
+// survives, and only if it comes strictly before the world's hit or exit. Local instances
+// (previews, markers: world/src/entity/local.rs) follow the world's records and carry the id
+// NO_ENTITY, so their hits read as static geometry to everything that follows entity ids.
+
+// How the world loop ended.
+const END_HIT: u32 = 0u;
+const END_LEFT: u32 = 1u;
+const END_MISSED: u32 = 2u;
+const END_EXHAUSTED: u32 = 3u;
+
+struct WorldTrace {
+    hit: Hit,
+    end: u32,
+    // When the ray entered the world, and when it hit or left it.
+    t_entry: f32,
+    t_end: f32,
+}
+
+// The end of a world loop whose step budget ran out at time \`t\` (entered at \`t_entry\`).
+fn ran_out(t_entry: f32, t: f32) -> WorldTrace {
+    var h = no_hit(world_info.max_steps);
+    h.exhausted = true;
+    return WorldTrace(h, END_EXHAUSTED, t_entry, t);
+}
+
+var<private> best_entity: Hit;
+// The inverse rotation of \`best_entity\`'s instance.
+var<private> best_rotation: vec4<f32>;
+// Entity-grid cells visited (added to the step count of an entity hit).
+var<private> entity_steps: u32;
+// Whether the last \`trace\` returned an instance's hit (a local instance's has no entity id).
+var<private> hit_instance: bool;
+
+// Walks the instance hierarchy (world/src/entity/bvh.rs: four-wide nodes of NODE_WORDS
+// words, the children's f32 boxes axis by axis, then their references) and tests every
+// instance whose box the ray is inside at some t in [t_lo, t_hi] (or up to the best entity
+// hit so far). Boxes are padded and rounded outward, so the f32 test never rejects an
+// instance the ray can hit.
+fn find_instances(r: Ray, t_lo: f32, t_hi: f32) {
+    // The world loop says whether its structure is traced with entities: the comparison
+    // trees hold geometry only.
+    if !TRACES_ENTITIES || world_info.instance_slots == 0u {
+        return;
+    }
+    // 1/d, with ±FAR for axes the ray does not move along.
+    let inv = select(1.0 / r.d, select(vec3<f32>(BVH_FAR), vec3<f32>(-BVH_FAR), r.d < vec3<f32>(0.0)), r.d == vec3<f32>(0.0));
+    let o = vec3<f32>(r.o_int);
+    var stack: array<u32, BVH_STACK>;
+    stack[0] = 0u;
+    var sp = 1u;
+    while sp > 0u {
+        sp -= 1u;
+        let base = stack[sp] * NODE_WORDS;
+        var far_limit = t_hi * 1.000001 + 1e-3;
+        if best_entity.hit {
+            far_limit = min(far_limit, best_entity.t * 1.000001 + 1e-3);
+        }
+        for (var lane = 0u; lane < 4u; lane++) {
+            let c = hierarchy_word(base + 24u + lane);
+            if c == BVH_NONE {
+                continue;
+            }
+            var near = t_lo - 1e-3;
+            var far = far_limit;
+            for (var a = 0u; a < 3u; a++) {
+                let lo = (bitcast<f32>(hierarchy_word(base + 8u * a + lane)) - o[a]) - r.o_frac[a];
+                let hi = (bitcast<f32>(hierarchy_word(base + 8u * a + 4u + lane)) - o[a]) - r.o_frac[a];
+                let t0 = lo * inv[a];
+                let t1 = hi * inv[a];
+                near = max(near, min(t0, t1));
+                far = min(far, max(t0, t1));
+            }
+            if near > far {
+                continue;
+            }
+            if (c & BVH_LEAF) != 0u {
+                test_instance(r, (c & ~BVH_LEAF) * RECORD_WORDS, t_lo);
+            } else if sp < BVH_STACK {
+                stack[sp] = c;
+                sp += 1u;
+            }
+        }
+    }
+}
+
+// Decodes a smallest-three quaternion (world/src/entity/pack.rs).
+fn decode_quat(w0: u32, w1: u32) -> vec4<f32> {
+    let s = vec3<f32>(vec3<u32>(w0 & 0x3FFFu, (w0 >> 14u) & 0x3FFFu, (w0 >> 28u) | ((w1 & 0x3FFu) << 4u)));
+    let small = (s - 8192.0) / 8192.0;
+    let rest = sqrt(max(1.0 - dot(small, small), 0.0));
+    let k = (w1 >> 10u) & 3u;
+    if k == 0u {
+        return vec4<f32>(rest, small.x, small.y, small.z);
+    } else if k == 1u {
+        return vec4<f32>(small.x, rest, small.y, small.z);
+    } else if k == 2u {
+        return vec4<f32>(small.x, small.y, rest, small.z);
+    }
+    return vec4<f32>(small, rest);
+}
+
+// Rotates \`v\` by the unit quaternion \`q = (x, y, z, w)\`.
+fn rotate(q: vec4<f32>, v: vec3<f32>) -> vec3<f32> {
+    let t = 2.0 * cross(q.xyz, v);
+    return v + q.w * t + cross(q.xyz, t);
+}
+
+fn conjugate(q: vec4<f32>) -> vec4<f32> {
+    return vec4<f32>(-q.xyz, q.w);
+}
+
+// An instance record's position in 1/128 voxel (record words 0 and 1).
+fn record_position(dx: u32, dy: u32) -> vec3<u32> {
+    return vec3<u32>(dx & 0x1FFFFFu, (dx >> 21u) | (((dy >> 21u) & 0xFFu) << 11u), dy & 0x1FFFFFu);
+}
+
+// An instance record's entity id (record word 4).
+fn record_id(e: u32) -> u32 {
+    return e & 0x3FFFu;
+}
+
+// Tests the instance record at word \`at\` against the ray; keeps the nearest entity hit.
+fn test_instance(r: Ray, at: u32, t_lo: f32) {
+    let dx = instance_word(at);
+    let dy = instance_word(at + 1u);
+    let dz = instance_word(at + 2u);
+    let dw = instance_word(at + 3u);
+    let e = instance_word(at + 4u);
+    let id = record_id(e);
+    let size = vec3<u32>((e >> 14u) & 0x7Fu, (e >> 21u) & 0x7Fu, ((e >> 28u) & 0xFu) | (((dy >> 29u) & 7u) << 4u));
+    let pos = record_position(dx, dy);
+    var limit = T_INF;
+    var equal_ok = false;
+    if best_entity.hit {
+        limit = best_entity.t;
+        equal_ok = id < best_entity.entity;
+    }
+    // The entity lies within |size| of its local-origin corner: reject rays that pass
+    // farther (with slack for f32), before transforming anything.
+    let rel = vec3<f32>(r.o_int - vec3<i32>(pos >> vec3<u32>(7u))) + (r.o_frac - vec3<f32>(pos & vec3<u32>(127u)) / 128.0);
+    let tc = -dot(rel, r.d) / (r.len * r.len);
+    let radius = (length(vec3<f32>(size)) + 0.01) / r.len;
+    let closest = rel + r.d * tc;
+    if dot(closest, closest) > radius * radius * r.len * r.len || tc + radius < t_lo || tc - radius > limit {
+        return;
+    }
+    let q = decode_quat(dz, dw & 0xFFFu);
+    let local = ray_from(rotate(q, rel), rotate(q, r.d));
+    let isize = vec3<i32>(size);
+    let entry = ray_entry(local, isize);
+    if !entry.ok {
+        return;
+    }
+    let base = (dw >> 12u) * TYPE_ALIGN;
+    var s = dda_start(local, entry);
+    loop {
+        entity_steps += 1u;
+        if s.t > limit || (s.t == limit && !equal_ok) {
+            return;
+        }
+        if s.t >= t_lo {
+            let c = vec3<u32>(s.cell);
+            let v = entity_type_word(base + c.x + size.x * (c.y + size.y * c.z));
+            if (v & ENTITY_SOLID) != 0u {
+                var h = make_hit(local, s.cell, s.t, s.axis, v & MAX_MATERIAL, 0u);
+                h.entity = id;
+                best_entity = h;
+                best_rotation = q;
+                return;
+            }
+        }
+        dda_advance(local, &s);
+        if any(s.cell < vec3<i32>(0)) || any(s.cell >= isize) {
+            return;
+        }
+    }
+}
+
+// The world-space normal of the hit the last \`trace\` returned (entity-local normals are
+// rotated back to the world).
+fn world_normal(h: Hit) -> vec3<f32> {
+    let n = vec3<f32>(h.normal);
+    if !hit_instance {
+        return n;
+    }
+    return rotate(conjugate(best_rotation), n);
+}
+
+// Traces \`r\` through the world and its entities.
+fn trace(r: Ray) -> Hit {
+    entity_steps = 0u;
+    best_entity = no_hit(0u);
+    hit_instance = false;
+    let w = world_loop(r);
+    if w.end == END_MISSED || w.end == END_EXHAUSTED {
+        return w.hit;
+    }
+    find_instances(r, w.t_entry, w.t_end);
+    if best_entity.hit && best_entity.t < w.t_end {
+        hit_instance = true;
+        var h = best_entity;
+        h.steps = w.hit.steps + entity_steps;
+        return h;
+    }
+    var h = w.hit;
+    h.steps += entity_steps;
+    return h;
+}
+
+// The world loop over the chunk → block → voxel hierarchy (docs/NAADF.md §9), with
+// AADF jumps (\`USE_AADF\`, the \`naadf\` method) or without (\`nodf\`): the GPU twin of
+// world/src/traverse/hierarchy.rs. It sees the static world alone: entities are found
+// afterwards, through their hierarchy (trace.wgsl).
+
+override USE_AADF: bool = true;
+// Entities are found after the loop (see trace.wgsl).
+const TRACES_ENTITIES: bool = true;
+
+
+fn to_edge(c: u32, neg: bool, edge: u32) -> i32 {
+    let m = c & (edge - 1u);
+    return i32(select(edge - 1u - m, m, neg));
+}
+
+fn world_loop(r: Ray) -> WorldTrace {
+    let dims = vec3<i32>(world_info.size);
+    let entry = ray_entry(r, dims);
+    if !entry.ok {
+        return WorldTrace(no_hit(0u), END_MISSED, 0.0, 0.0);
+    }
+    var cell = entry.cell;
+    var t = entry.t;
+    var axis = entry.axis;
+    let neg = r.d <= vec3<f32>(0.0);
+    // The AADF field facing the ray on each axis: −a for negative directions, +a otherwise.
+    let facing = vec3<u32>(0u, 2u, 4u) + select(vec3<u32>(0u), vec3<u32>(1u), r.d > vec3<f32>(0.0));
+    // The world's parameters, read once (see chunk_index in world.wgsl).
+    let chunks = world_info.chunks;
+    let max_steps = world_info.max_steps;
+    for (var steps = 1u; steps <= max_steps; steps++) {
+        let p = vec3<u32>(cell);
+        let chunk = chunk_word(chunk_index(p >> vec3<u32>(4u), chunks));
+        var skip = vec3<i32>(0);
+        let cs = cell_state(chunk);
+        if cs == STATE_FULL {
+            return WorldTrace(make_hit(r, cell, t, axis, chunk & MAX_MATERIAL, steps), END_HIT, entry.t, t);
+        } else if cs == STATE_EMPTY {
+            for (var a = 0u; a < 3u; a++) {
+                skip[a] = to_edge(p[a], neg[a], 16u);
+                if USE_AADF {
+                    skip[a] += 16 * i32(aadf_field(chunk, facing[a], CHUNK_FIELD_BITS));
+                }
+            }
+        } else {
+            let block = block_word((chunk & PAYLOAD) + index4((p >> vec3<u32>(2u)) & vec3<u32>(3u)));
+            let bs = cell_state(block);
+            if bs == STATE_FULL {
+                return WorldTrace(make_hit(r, cell, t, axis, block & MAX_MATERIAL, steps), END_HIT, entry.t, t);
+            } else if bs == STATE_EMPTY {
+                for (var a = 0u; a < 3u; a++) {
+                    skip[a] = to_edge(p[a], neg[a], 4u);
+                    if USE_AADF {
+                        skip[a] += 4 * i32(aadf_field(block, facing[a], CELL_FIELD_BITS));
+                    }
+                }
+            } else {
+                let v = group_voxel(block & PAYLOAD, index4(p & vec3<u32>(3u)));
+                if (v & VOXEL_SOLID) != 0u {
+                    return WorldTrace(make_hit(r, cell, t, axis, v & MAX_MATERIAL, steps), END_HIT, entry.t, t);
+                }
+                if USE_AADF {
+                    for (var a = 0u; a < 3u; a++) {
+                        skip[a] = i32(aadf_field(v, facing[a], CELL_FIELD_BITS));
+                    }
+                }
+            }
+        }
+        let ex = ray_exit(r, cell, skip);
+        if any(ex.next < vec3<i32>(0)) || any(ex.next >= dims) {
+            // An AADF box may reach beyond the world: the ray left it at the world's edge.
+            return WorldTrace(no_hit(steps), END_LEFT, entry.t, min(ex.t, leave_time(r, dims)));
+        }
+        cell = ex.next;
+        t = ex.t;
+        axis = ex.axis;
+    }
+    return ran_out(entry.t, t);
+}
+
+// The samples of the lit passes: random streams (client/src/light/rng.rs), one per sample
+// of each pixel, seeded from the run's seed, the pixel's index and the sample's number
+// only; and the jittered camera ray of a sample.
+
+fn pcg_hash(v: u32) -> u32 {
+    let state = v * 747796405u + 2891336453u;
+    let word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+    return (word >> 22u) ^ word;
+}
+
+// The stream of sample \`sample\` of pixel \`pixel\` under \`seed\`.
+fn rng_new(seed: u32, pixel: u32, sample: u32) -> u32 {
+    return pcg_hash(seed ^ pcg_hash(pixel ^ pcg_hash(sample)));
+}
+
+// A uniform number in [0, 1) with 24 random bits.
+fn rng_next(state: ptr<function, u32>) -> f32 {
+    *state = pcg_hash(*state);
+    return f32(*state >> 8u) * (1.0 / 16777216.0);
+}
+
+// The stream of sample \`sample\` of pixel \`pixel\`, after its first two draws: where in the
+// pixel the sample's camera ray goes (uniform in [0, 1)²).
+struct PixelStream {
+    rng: u32,
+    jitter: vec2<f32>,
+}
+
+fn pixel_stream(seed: u32, pixel: u32, sample: u32) -> PixelStream {
+    var rng = rng_new(seed, pixel, sample);
+    let jx = rng_next(&rng);
+    let jy = rng_next(&rng);
+    return PixelStream(rng, vec2<f32>(jx, jy));
+}
+
+// The camera's (unnormalised) direction through point \`jitter\` ([0, 1)²) of pixel \`gid\` of
+// frame \`f\` (docs/CAMERA.md, with \`px + jitter.x\` for \`px + 0.5\`).
+fn camera_dir(f: FrameInfo, gid: vec2<u32>, jitter: vec2<f32>) -> vec3<f32> {
+    let sx = 2.0 * (f32(gid.x) + jitter.x) / f32(f.width) - 1.0;
+    let sy = 1.0 - 2.0 * (f32(gid.y) + jitter.y) / f32(f.height);
+    return f.forward + sx * f.right + sy * f.up;
+}
+
+// The light model of the lit modes (docs/RENDERING.md §3a): the physical sky, the sun,
+// BRDF sampling and one path's radiance. The GPU twin of client/src/light/ (sky.rs,
+// scatter.rs, cpu.rs), written operation by operation like it so that the two path
+// tracers agree up to rounding. Needs random.wgsl before it.
+//
+// The pass binds \`light: LightInfo\` (generated in the prelude from the Rust \`LightInfo\`),
+// and declares \`DIFFUSE_TIER\` and \`diffuse_tier\` (no_tier.wgsl, or a lighting tier such as
+// roma.wgsl) for \`path_step\`.
+
+// PI, SURFACE_OFFSET (how far scattered and shadow rays start off the surface),
+// MIN_ALPHA (the smallest GGX α a metal is traced with) and the physical sky's constants
+// (PLANET_RADIUS, VIEW_STEPS, RAYLEIGH, MIE_G, OZONE, …) come from the prelude, generated
+// from their Rust definitions in client/src/light/ (mod.rs, scatter.rs, sky.rs).
+
+// ---- The physical sky (sky.rs) ----
+
+// Distance from height \`h\` along zenith cosine \`mu\` to the sphere at height \`top\`; a
+// negative value when it is not reached going forward.
+fn sphere_distance(h: f32, mu: f32, top: f32) -> f32 {
+    let r = PLANET_RADIUS + h;
+    let disc = (top - h) * (2.0 * PLANET_RADIUS + top + h) + r * r * mu * mu;
+    if disc < 0.0 {
+        return -1.0;
+    }
+    let s = sqrt(disc);
+    let far = -r * mu + s;
+    if far < 0.0 {
+        return -1.0;
+    }
+    let near = -r * mu - s;
+    return select(far, near, near > 0.0);
+}
+
+struct Medium {
+    sigma: vec3<f32>,
+    rayleigh: f32,
+    mie: f32,
+}
+
+fn medium(h: f32) -> Medium {
+    let rayleigh = exp(-h / RAYLEIGH_SCALE);
+    let mie = exp(-h / MIE_SCALE);
+    let ozone = max(1.0 - abs(h - OZONE_CENTRE) / OZONE_HALF_WIDTH, 0.0);
+    return Medium(RAYLEIGH * rayleigh + MIE_EXTINCTION * mie + OZONE * ozone, rayleigh, mie);
+}
+
+fn sun_transmittance(h: f32, mu: f32) -> vec3<f32> {
+    if mu < 0.0 && sphere_distance(h, mu, 0.0) >= 0.0 {
+        return vec3<f32>(0.0);
+    }
+    let length = max(sphere_distance(h, mu, ATMOSPHERE_HEIGHT), 0.0);
+    let dt = length / f32(LIGHT_STEPS);
+    let r = PLANET_RADIUS + h;
+    var depth = vec3<f32>(0.0);
+    for (var i = 0u; i < LIGHT_STEPS; i++) {
+        let t = (f32(i) + 0.5) * dt;
+        let hi = sqrt(t * t + 2.0 * r * mu * t + r * r) - PLANET_RADIUS;
+        depth += medium(hi).sigma * dt;
+    }
+    return exp(-depth);
+}
+
+// Sky radiance along unit \`dir\` for unit sun direction \`sun\`, per unit of irradiance.
+fn sky_physical(dir: vec3<f32>, sun: vec3<f32>) -> vec3<f32> {
+    let mu = dir.y;
+    let nu = dot(dir, sun);
+    let h0 = EYE_HEIGHT;
+    let r0 = PLANET_RADIUS + h0;
+    var length = sphere_distance(h0, mu, 0.0);
+    if !(mu < 0.0 && length >= 0.0) {
+        length = max(sphere_distance(h0, mu, ATMOSPHERE_HEIGHT), 0.0);
+    }
+    let dt = length / f32(VIEW_STEPS);
+    let phase_r = 3.0 / (16.0 * PI) * (1.0 + nu * nu);
+    let g2 = MIE_G * MIE_G;
+    let phase_m = (1.0 - g2) / (4.0 * PI * pow(1.0 + g2 - 2.0 * MIE_G * nu, 1.5));
+    var depth = vec3<f32>(0.0);
+    var inscatter = vec3<f32>(0.0);
+    for (var i = 0u; i < VIEW_STEPS; i++) {
+        let t = (f32(i) + 0.5) * dt;
+        let r = sqrt(t * t + 2.0 * r0 * mu * t + r0 * r0);
+        let h = r - PLANET_RADIUS;
+        let mu_sun = (r0 * sun.y + t * nu) / r;
+        let m = medium(h);
+        let to_sun = sun_transmittance(h, mu_sun);
+        let view = exp(-(depth + 0.5 * m.sigma * dt));
+        let scatter = RAYLEIGH * m.rayleigh * phase_r + MIE_SCATTER * m.mie * phase_m;
+        inscatter += view * to_sun * scatter * dt;
+        depth += m.sigma * dt;
+    }
+    return inscatter;
+}
+
+// The sky along unit \`d\`, evaluated directly (no disc).
+fn sky_direct(d: vec3<f32>) -> vec3<f32> {
+    if light.sky_physical != 0u {
+        return sky_physical(d, light.sun_dir) * light.sky;
+    }
+    return light.sky;
+}
+
+// The sky along unit \`d\`; with \`disc\`, the sun's disc too. \`sky_base(d)\` is the including
+// pass's choice: \`sky_direct\` (the path tracer) or the atmosphere table (\`gi\`).
+fn sky_radiance(d: vec3<f32>, disc: bool) -> vec3<f32> {
+    var l = sky_base(d);
+    if disc {
+        l += sun_disc(d);
+    }
+    return l;
+}
+
+// The sun's disc along unit \`d\` (0 off the disc, or with the sun off).
+fn sun_disc(d: vec3<f32>) -> vec3<f32> {
+    if light.sun_on != 0u && 1.0 - dot(d, light.sun_dir) <= light.sun_omc {
+        return vec3<f32>(light.sun_disc);
+    }
+    return vec3<f32>(0.0);
+}
+
+// ---- Scattering (scatter.rs) ----
+
+struct Basis {
+    t: vec3<f32>,
+    b: vec3<f32>,
+}
+
+fn basis(n: vec3<f32>) -> Basis {
+    let sign = select(-1.0, 1.0, n.z >= 0.0);
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    return Basis(vec3<f32>(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x), vec3<f32>(b, sign + n.y * n.y * a, -n.y));
+}
+
+fn sample_cosine(n: vec3<f32>, u: vec2<f32>) -> vec3<f32> {
+    let f = basis(n);
+    let r = sqrt(u.x);
+    let phi = 2.0 * PI * u.y;
+    return normalize(f.t * (r * cos(phi)) + f.b * (r * sin(phi)) + n * sqrt(max(1.0 - u.x, 0.0)));
+}
+
+fn sample_cone(axis: vec3<f32>, omc: f32, u: vec2<f32>) -> vec3<f32> {
+    let f = basis(axis);
+    let x = u.x * omc;
+    let c = 1.0 - x;
+    let s = sqrt(max(x * (2.0 - x), 0.0));
+    let phi = 2.0 * PI * u.y;
+    return normalize(f.t * (s * cos(phi)) + f.b * (s * sin(phi)) + axis * c);
+}
+
+fn schlick(f0: vec3<f32>, c: f32) -> vec3<f32> {
+    let k = 1.0 - clamp(c, 0.0, 1.0);
+    let k2 = k * k;
+    return f0 + (vec3<f32>(1.0) - f0) * (k2 * k2 * k);
+}
+
+fn smith_lambda(alpha: f32, c: f32) -> f32 {
+    let c2 = max(c * c, 1e-12);
+    let tan2 = max(1.0 - c2, 0.0) / c2;
+    return 0.5 * (-1.0 + sqrt(1.0 + alpha * alpha * tan2));
+}
+
+fn ggx_d(alpha: f32, c: f32) -> f32 {
+    let a2 = alpha * alpha;
+    let k = c * c * (a2 - 1.0) + 1.0;
+    return a2 / (PI * k * k);
+}
+
+fn ggx(n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>, alpha: f32, f0: vec3<f32>) -> vec3<f32> {
+    let co = dot(n, wo);
+    let ci = dot(n, wi);
+    if co <= 0.0 || ci <= 0.0 {
+        return vec3<f32>(0.0);
+    }
+    let h = normalize(wo + wi);
+    let g2 = 1.0 / (1.0 + smith_lambda(alpha, co) + smith_lambda(alpha, ci));
+    return schlick(f0, dot(wo, h)) * (ggx_d(alpha, dot(n, h)) * g2 / (4.0 * co * ci));
+}
+
+struct Scattered {
+    dir: vec3<f32>,
+    weight: vec3<f32>,
+}
+
+fn ggx_sample(n: vec3<f32>, wo: vec3<f32>, alpha: f32, f0: vec3<f32>, u: vec2<f32>) -> Scattered {
+    let f = basis(n);
+    let v = vec3<f32>(dot(wo, f.t), dot(wo, f.b), dot(wo, n));
+    let vh = normalize(vec3<f32>(alpha * v.x, alpha * v.y, v.z));
+    let lensq = vh.x * vh.x + vh.y * vh.y;
+    var t1 = vec3<f32>(1.0, 0.0, 0.0);
+    if lensq > 0.0 {
+        t1 = vec3<f32>(-vh.y, vh.x, 0.0) / sqrt(lensq);
+    }
+    let t2 = cross(vh, t1);
+    let r = sqrt(u.x);
+    let phi = 2.0 * PI * u.y;
+    let p1 = r * cos(phi);
+    let s = 0.5 * (1.0 + vh.z);
+    let p2 = (1.0 - s) * sqrt(max(1.0 - p1 * p1, 0.0)) + s * r * sin(phi);
+    let nh = t1 * p1 + t2 * p2 + vh * sqrt(max(1.0 - p1 * p1 - p2 * p2, 0.0));
+    let m = normalize(vec3<f32>(alpha * nh.x, alpha * nh.y, max(nh.z, 0.0)));
+    let lwi = m * (2.0 * dot(v, m)) - v;
+    let wi = normalize(f.t * lwi.x + f.b * lwi.y + n * lwi.z);
+    let lo = smith_lambda(alpha, v.z);
+    let li = smith_lambda(alpha, lwi.z);
+    return Scattered(wi, schlick(f0, dot(v, m)) * ((1.0 + lo) / (1.0 + lo + li)));
+}
+
+// ---- Paths (cpu.rs) ----
+
+// Whether a shadow ray meets anything before leaving the world (a ray out of cells counts
+// as blocked).
+fn blocked(r: Ray, p: vec3<f32>, dir: vec3<f32>) -> bool {
+    let h = trace(ray_at(r, p, dir));
+    return h.hit || h.exhausted;
+}
+
+// One step of a path: what it adds and whether it goes on.
+struct PathState {
+    r: Ray,
+    radiance: vec3<f32>,
+    throughput: vec3<f32>,
+    sees_disc: bool,
+    alive: bool,
+    // The normal of the first surface met (zero until then).
+    first_normal: vec3<f32>,
+}
+
+// Follows the path in \`s\` to its next surface: adds the light found there and, when
+// \`scatter\`, picks the next ray (or ends the path). Returns the distance to the surface
+// (−1 when the ray found none).
+fn path_step(s: ptr<function, PathState>, scatter: bool, rng: ptr<function, u32>) -> f32 {
+    let r = (*s).r;
+    let h = trace(r);
+    let d = r.d / r.len;
+    (*s).alive = false;
+    if h.exhausted {
+        return -1.0;
+    }
+    if !h.hit {
+        (*s).radiance += (*s).throughput * sky_radiance(d, (*s).sees_disc);
+        return -1.0;
+    }
+    let distance = h.t * r.len;
+    if h.axis == NO_AXIS {
+        return distance;
+    }
+    // Before any other trace: world_normal reads the last trace's entity rotation.
+    let n = world_normal(h);
+    if all((*s).first_normal == vec3<f32>(0.0)) {
+        (*s).first_normal = n;
+    }
+    let m = material(h.material);
+    if m.kind == KIND_EMISSIVE {
+        (*s).radiance += (*s).throughput * m.albedo * m.emission;
+    }
+    // A lighting tier (\`roma\`) lights diffuse and emissive surfaces itself, and the path
+    // ends there; mirrors and metals scatter on.
+    if DIFFUSE_TIER && m.kind != KIND_MIRROR && m.kind != KIND_METAL {
+        let surface = vec3<f32>(r.o_int) + ray_local(r, h.t);
+        (*s).radiance += (*s).throughput * diffuse_tier(surface, n, m.albedo, rng);
+        return distance;
+    }
+    if !scatter {
+        return distance;
+    }
+    let p = ray_local(r, h.t) + n * SURFACE_OFFSET;
+    var next: Scattered;
+    if m.kind == KIND_MIRROR {
+        (*s).sees_disc = true;
+        next = Scattered(d - n * (2.0 * dot(d, n)), m.albedo);
+    } else {
+        let wo = -d;
+        let alpha = max(m.roughness, MIN_ALPHA);
+        if light.sun_on != 0u {
+            let u = vec2<f32>(rng_next(rng), rng_next(rng));
+            let wi = sample_cone(light.sun_dir, light.sun_omc, u);
+            let c = dot(n, wi);
+            if c > 0.0 && !blocked(r, p, wi) {
+                var f = m.albedo / PI;
+                if m.kind == KIND_METAL {
+                    f = ggx(n, wo, wi, alpha, m.albedo);
+                }
+                (*s).radiance += (*s).throughput * f * (c * light.sun_weight);
+            }
+        }
+        let u = vec2<f32>(rng_next(rng), rng_next(rng));
+        (*s).sees_disc = false;
+        if m.kind == KIND_METAL {
+            next = ggx_sample(n, wo, alpha, m.albedo, u);
+        } else {
+            next = Scattered(sample_cosine(n, u), m.albedo);
+        }
+    }
+    if dot(next.dir, n) > 0.0 {
+        (*s).throughput *= next.weight;
+        (*s).r = ray_at(r, p, next.dir);
+        (*s).alive = true;
+    }
+    return distance;
+}
+
+// One path: the radiance it brought back, the distance from its origin to the first
+// surface (−1 for the sky) and that surface's normal.
+struct PathSample {
+    radiance: vec3<f32>,
+    distance: f32,
+    normal: vec3<f32>,
+}
+
+// The radiance arriving along \`primary\` when the path may scatter \`bounces\` more times,
+// drawing from \`rng\`. \`sees_disc\`: whether the ray sees the sun's disc (camera and mirror
+// rays do; rays scattered by other surfaces get the sun by next-event estimation instead).
+fn path_radiance(primary: Ray, bounces: u32, sees_disc: bool, rng: ptr<function, u32>) -> PathSample {
+    var s = PathState(primary, vec3<f32>(0.0), vec3<f32>(1.0), sees_disc, true, vec3<f32>(0.0));
+    let distance = path_step(&s, bounces > 0u, rng);
+    for (var bounce = 1u; bounce <= bounces && s.alive; bounce++) {
+        path_step(&s, bounce < bounces, rng);
+    }
+    return PathSample(s.radiance, distance, s.first_normal);
+}
+
+// ROMA visibility for the diffuse surfaces of \`roma\` (docs/RENDERING.md §3d): the GPU twin
+// of client/src/light/roma/, which states the rules (directions, maps, windows, levels,
+// the walk). Included by the ROMA sample pass before light.wgsl's paths, whose
+// \`path_step\` hands every diffuse and emissive surface to \`diffuse_tier\`.
+//
+// \`RomaInfo\`, \`RomaWindow\` and the ROMA_* constants are generated by client/src/gpu/roma.rs.
+// Windows are indexed \`map * ROMA_LEVELS + level\`; a window's tiles lie at
+// \`first_tile + slot\`, slot being the tile's coordinates modulo ROMA_WINDOW_TILES (the
+// window moves with the camera by rebuilding only the tiles it gains).
+
+@group(1) @binding(3) var<uniform> roma: RomaInfo;
+@group(1) @binding(4) var<storage, read> roma_windows: array<RomaWindow>;
+@group(1) @binding(5) var<storage, read> roma_bits: array<u32>;
+
+const DIFFUSE_TIER: bool = true;
+
+// Column (x, y) of window \`win\` in tile row \`tz\` (0 outside the window).
+fn roma_column(win: u32, x: i32, y: i32, tz: i32) -> u32 {
+    let w = roma_windows[win];
+    let tile = vec3<i32>(x >> ROMA_TILE_SHIFT, y >> ROMA_TILE_SHIFT, tz);
+    let rel = tile - w.base;
+    if any(rel < vec3<i32>(0)) || any(rel >= vec3<i32>(i32(ROMA_WINDOW_TILES))) {
+        return 0u;
+    }
+    let m = vec3<u32>(tile & vec3<i32>(i32(ROMA_WINDOW_TILES) - 1));
+    let slot = m.x + ROMA_WINDOW_TILES * (m.y + ROMA_WINDOW_TILES * m.z);
+    let col = u32(x & (ROMA_TILE - 1)) + u32(ROMA_TILE) * u32(y & (ROMA_TILE - 1));
+    return roma_bits[(w.first_tile + slot) * ROMA_TILE_WORDS + col];
+}
+
+// Whether column (x, y) of window \`win\` has an occupied cell from depth \`lo\` to \`hi\`.
+fn roma_column_any(win: u32, x: i32, y: i32, lo: i32, hi: i32) -> bool {
+    for (var tz = lo >> ROMA_TILE_SHIFT; tz <= (hi >> ROMA_TILE_SHIFT); tz++) {
+        let first = max(lo - tz * ROMA_TILE, 0);
+        let last = min(hi - tz * ROMA_TILE, ROMA_TILE - 1);
+        let mask = (0xFFFFFFFFu >> u32(31 - last + first)) << u32(first);
+        if (roma_column(win, x, y, tz) & mask) != 0u {
+            return true;
+        }
+    }
+    return false;
+}
+
+// Map coordinates of world vector \`p\` in window \`w\`, in its cells.
+fn roma_to_map(w: RomaWindow, p: vec3<f32>) -> vec3<f32> {
+    return vec3<f32>(dot(w.t, p), dot(w.b, p), dot(w.w, p)) / w.cell;
+}
+
+// How a walk through one window ended: \`hit\`, or clear up to \`t\`.
+struct RomaWalk {
+    hit: bool,
+    t: f32,
+}
+
+// One axis of the column walk: when it first leaves column \`i\` (from map coordinate \`p\`,
+// moving \`v\` cells per voxel), the time between its crossings, and its step.
+struct RomaAxis {
+    next: f32,
+    delta: f32,
+    step: i32,
+}
+
+fn roma_axis(p: f32, i: i32, v: f32) -> RomaAxis {
+    if v > 0.0 {
+        return RomaAxis((f32(i + 1) - p) / v, 1.0 / v, 1);
+    } else if v < 0.0 {
+        return RomaAxis((f32(i) - p) / v, -1.0 / v, -1);
+    }
+    return RomaAxis(ROMA_FAR, ROMA_FAR, 0);
+}
+
+// Walks \`o + t·d\` for t in [t0, t1] across the texel columns of window \`win\`.
+fn roma_walk(win: u32, o: vec3<f32>, d: vec3<f32>, t0: f32, t1: f32) -> RomaWalk {
+    let w = roma_windows[win];
+    let q = roma_to_map(w, o);
+    let e = roma_to_map(w, d);
+    let lo = vec3<f32>(w.base * ROMA_TILE);
+    let hi = lo + f32(i32(ROMA_WINDOW_TILES) * ROMA_TILE);
+    var ta = t0;
+    var tb = t1;
+    for (var a = 0u; a < 3u; a++) {
+        if e[a] == 0.0 {
+            if q[a] < lo[a] || q[a] >= hi[a] {
+                return RomaWalk(false, t0);
+            }
+            continue;
+        }
+        let s0 = (lo[a] - q[a]) / e[a];
+        let s1 = (hi[a] - q[a]) / e[a];
+        ta = max(ta, min(s0, s1));
+        tb = min(tb, max(s0, s1));
+    }
+    if ta >= tb {
+        return RomaWalk(false, t0);
+    }
+    let start = q + e * ta;
+    var x = i32(floor(start.x));
+    var y = i32(floor(start.y));
+    let ax = roma_axis(q.x, x, e.x);
+    let ay = roma_axis(q.y, y, e.y);
+    var next = vec2<f32>(ax.next, ay.next);
+    let delta = vec2<f32>(ax.delta, ay.delta);
+    let step = vec2<i32>(ax.step, ay.step);
+    var t_in = ta;
+    for (var i = 0u; i < ROMA_MAX_COLUMNS; i++) {
+        let t_out = min(min(next.x, next.y), tb);
+        let wa = q.z + e.z * t_in;
+        let wb = q.z + e.z * t_out;
+        if roma_column_any(win, x, y, i32(floor(min(wa, wb))), i32(floor(max(wa, wb)))) {
+            return RomaWalk(true, t_in);
+        }
+        if t_out >= tb {
+            break;
+        }
+        if next.x <= next.y {
+            x += step.x;
+            next.x += delta.x;
+        } else {
+            y += step.y;
+            next.y += delta.y;
+        }
+        t_in = t_out;
+    }
+    return RomaWalk(false, tb);
+}
+
+// The finest level that serves world point \`p\` (ROMA_LEVELS beyond them all).
+fn roma_level(p: vec3<f32>) -> u32 {
+    let d = abs(p - roma.camera);
+    let m = max(d.x, max(d.y, d.z));
+    for (var l = 0u; l < ROMA_LEVELS; l++) {
+        if m < ROMA_REACH * roma_windows[l].cell {
+            return l;
+        }
+    }
+    return ROMA_LEVELS;
+}
+
+// Whether the ray from surface point \`p\` (normal \`n\`) along unit \`d\` is clear for \`range\`
+// voxels through map \`map\`.
+fn roma_clear(map: u32, p: vec3<f32>, n: vec3<f32>, d: vec3<f32>, range: f32) -> bool {
+    let level = roma_level(p);
+    if level >= ROMA_LEVELS {
+        return true;
+    }
+    let o = p + n * (roma_windows[level].offset * roma_windows[level].cell);
+    var t = 0.0;
+    for (var l = level; l < ROMA_LEVELS; l++) {
+        var start = 0.0;
+        if l != level {
+            start = max(t, 2.0 * roma_windows[l].cell);
+        }
+        if start >= range {
+            return true;
+        }
+        let walk = roma_walk(map * ROMA_LEVELS + l, o, d, start, range);
+        if walk.hit {
+            return false;
+        }
+        if walk.t >= range {
+            return true;
+        }
+        t = walk.t;
+    }
+    return true;
+}
+
+// The Shirley–Chiu square point of disc point (x, y).
+fn roma_inverse_concentric(x: f32, y: f32) -> vec2<f32> {
+    let r = sqrt(x * x + y * y);
+    var phi = atan2(y, x);
+    let q = 0.25 * PI;
+    if phi < -q {
+        phi += 2.0 * PI;
+    }
+    if phi < q {
+        return vec2<f32>(r, phi * r / q);
+    } else if phi < 3.0 * q {
+        return vec2<f32>(-(phi - 2.0 * q) * r / q, r);
+    } else if phi < 5.0 * q {
+        return vec2<f32>(-r, -(phi - 4.0 * q) * r / q);
+    }
+    return vec2<f32>((phi - 6.0 * q) * r / q, -r);
+}
+
+// The candidate map of unit direction \`d\` (of its reverse when it points down).
+fn roma_stratum(d: vec3<f32>) -> u32 {
+    let u = select(d, -d, d.y < 0.0);
+    let ab = roma_inverse_concentric(u.x, u.z);
+    let s = f32(roma.side);
+    let c = min(vec2<u32>(max(floor((ab + 1.0) * 0.5 * s), vec2<f32>(0.0))), vec2<u32>(roma.side - 1u));
+    return c.x + roma.side * c.y;
+}
+
+// The light a diffuse surface of \`albedo\` at world point \`p\` (normal \`n\`) reflects: sky
+// through the AO range, and the sun's disc through the sun's map (CpuRoma::diffuse, the
+// same four numbers drawn in the same order).
+fn diffuse_tier(p: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, rng: ptr<function, u32>) -> vec3<f32> {
+    let u = vec2<f32>(rng_next(rng), rng_next(rng));
+    let us = vec2<f32>(rng_next(rng), rng_next(rng));
+    let w = sample_cosine(n, u);
+    var l = vec3<f32>(0.0);
+    if roma_clear(roma_stratum(w), p, n, w, roma.ao_range) {
+        l += albedo * sky_base(w);
+    }
+    if light.sun_on != 0u {
+        let ws = sample_cone(light.sun_dir, light.sun_omc, us);
+        let c = dot(n, ws);
+        if c > 0.0 && roma_clear(roma.directions, p, n, ws, ROMA_FAR) {
+            l += albedo / PI * (c * light.sun_weight);
+        }
+    }
+    return l;
+}
+
+// Passes \`path_trace\` (progressive path tracing, \`pathtrace\`) and \`path_sample\` (one sample
+// per pixel per frame, \`baseline\`), one invocation per pixel (docs/RENDERING.md §3a, §3b).
+//
+// \`path_trace\`: each dispatch adds sample number \`frame.sample\` to every pixel's running
+// sum; the host divides by the count. A sample's random stream depends only on (seed, pixel, sample
+// number), and every pixel adds its samples in number order, so the sums are the same bit
+// for bit however the dispatches are grouped into submissions.
+//
+// One sample per dispatch, not a loop over samples: lavapipe (Mesa 22.3) miscompiles a
+// sample loop around the bounce loop around the traversal loop, and pixels silently lose
+// samples.
+//
+// \`FrameInfo\` and \`LightInfo\` are generated in the prelude from their Rust twins.
+
+@group(1) @binding(0) var<uniform> frame: FrameInfo;
+@group(1) @binding(1) var<uniform> light: LightInfo;
+// \`path_trace\`: running sums (RGB, count). \`path_sample\`: this frame's sample (RGB, and
+// the distance to the first surface, −1 for the sky).
+@group(1) @binding(2) var<storage, read_write> radiance: array<vec4<f32>>;
+
+// The path tracer sees the sky as the light model defines it, direction by direction.
+fn sky_base(d: vec3<f32>) -> vec3<f32> {
+    return sky_direct(d);
+}
+
+// Sample \`frame.sample\` of pixel \`gid\`.
+fn pixel_sample(gid: vec2<u32>) -> PathSample {
+    let stream = pixel_stream(frame.seed, gid.x + gid.y * frame.width, frame.sample);
+    var rng = stream.rng;
+    let r = ray_new(frame.cam_int, frame.cam_frac, camera_dir(frame, gid, stream.jitter));
+    return path_radiance(r, light.bounces, true, &rng);
+}
+
+@compute @workgroup_size(8, 8)
+fn path_trace(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if gid.x >= frame.width || gid.y >= frame.height {
+        return;
+    }
+    let s = pixel_sample(gid.xy);
+    radiance[gid.x + gid.y * frame.width] += vec4<f32>(s.radiance, 1.0);
+}
+
+@compute @workgroup_size(8, 8)
+fn path_sample(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if gid.x >= frame.width || gid.y >= frame.height {
+        return;
+    }
+    let s = pixel_sample(gid.xy);
+    radiance[gid.x + gid.y * frame.width] = vec4<f32>(s.radiance, s.distance);
+}
+
+const ROMA_LEVELS: u32 = 3u;
+const ROMA_TILE: i32 = 32i;
+const ROMA_TILE_SHIFT: u32 = 5u;
+const ROMA_TILE_WORDS: u32 = 1024u;
+const ROMA_WINDOW_TILES: u32 = 8u;
+const ROMA_REACH: f32 = 94.0f;
+const ROMA_MAX_COLUMNS: u32 = 1024u;
+const ROMA_FAR: f32 = 1e30f;
+struct RomaInfo {
+    // The camera the windows are centred on, in voxels.
+    camera: vec3<f32>,
+    // How far ambient occlusion looks, in voxels.
+    ao_range: f32,
+    // Candidate directions per axis of the concentric square.
+    side: u32,
+    // Candidate directions (\`side²\`); the sun's map follows them.
+    directions: u32,
+    // Padding to 16 bytes.
+    _pad0: u32,
+    // Padding to 16 bytes.
+    _pad1: u32,
+}
+struct RomaWindow {
+    // The frame's first row.
+    t: vec3<f32>,
+    // The level's cell edge, in voxels.
+    cell: f32,
+    // The frame's second row.
+    b: vec3<f32>,
+    // The window's first tile in \`roma_bits\` (in tiles).
+    first_tile: u32,
+    // The frame's third row: the map's direction.
+    w: vec3<f32>,
+    // How far off a surface a ray starts, in cells of this level.
+    offset: f32,
+    // The window's lowest tile, per map axis.
+    base: vec3<i32>,
+    // Padding to 16 bytes.
+    _pad: u32,
+}
+struct RomaJob {
+    // The tile's coordinates in its map, in tiles.
+    tile: vec3<i32>,
+    // Its window (\`map · ROMA_LEVELS + level\`).
+    window: u32,
+    // 1: the tile lies outside the world, so it is cleared without sampling.
+    clear: u32,
+    // Padding to 16 bytes.
+    _pad0: u32,
+    // Padding to 16 bytes.
+    _pad1: u32,
+    // Padding to 16 bytes.
+    _pad2: u32,
+}
+`,Yc=`// Generated by naadf-client (shaders.rs): the world parameters, the constants shared with the
+// Rust code, the world's storage bindings.
+struct WorldInfo {
+    // World size in voxels.
+    size: vec3<u32>,
+    // Slots of the instance buffer on the device, the world's and then the local
+    // instances' (records of 5 words; 0: no instance to trace).
+    instance_slots: u32,
+    // World size in chunks.
+    chunks: vec3<u32>,
+    // Cells a ray may visit before it counts as a miss.
+    max_steps: u32,
+}
+@group(0) @binding(0) var<uniform> world_info: WorldInfo;
+struct FrameInfo {
+    // Camera position, integer part (floor).
+    cam_int: vec3<i32>,
+    // Image width in pixels.
+    width: u32,
+    // Camera position, fractional part in [0, 1).
+    cam_frac: vec3<f32>,
+    // Image height in pixels.
+    height: u32,
+    // View direction.
+    forward: vec3<f32>,
+    // The run's seed.
+    seed: u32,
+    // Image right, scaled by a·W/H.
+    right: vec3<f32>,
+    // Number of the sample this dispatch adds.
+    sample: u32,
+    // Image up, scaled by a.
+    up: vec3<f32>,
+    // 1 when a temporal pass has a history to blend with (0 for the path tracer).
+    history: u32,
+}
+struct LightInfo {
+    // Uniform sky: its radiance. Physical sky: the irradiance of the sun lighting it.
+    sky: vec3<f32>,
+    // 1 for the physical sky.
+    sky_physical: u32,
+    // Unit vector toward the sun (the sun lighting the physical sky when it is off).
+    sun_dir: vec3<f32>,
+    // 1 when the sun shines (its disc and its samples).
+    sun_on: u32,
+    // The disc's radiance.
+    sun_disc: f32,
+    // The weight of one disc sample: radiance times solid angle.
+    sun_weight: f32,
+    // 1 − cos of the disc's angular radius.
+    sun_omc: f32,
+    // Scattered rays after the camera ray.
+    bounces: u32,
+}
+struct GiInfo {
+    // Frames rendered in this history before this one.
+    frame: u32,
+    // The long-term TAA slot this frame writes (\`frame % TAA_SLOTS\`).
+    taa_slot: u32,
+    // Earlier frames the TAA may read (at most \`TAA_SLOTS − 1\`).
+    taa_valid: u32,
+    // The first frame rendered after the newest change of the materials, or of more
+    // chunks than are marked one by one (0: none): the near-change rule everywhere.
+    edit_frame: u32,
+    // The first frame rendered after the newest change of any chunk, entity moves
+    // included (0: none): the still path keeps no sample from before it.
+    change_frame: u32,
+    // This frame's jitter in the pixel, x (a point of a 32-point (0, 5, 2)-net).
+    jitter_x: f32,
+    // This frame's jitter in the pixel, y.
+    jitter_y: f32,
+    // 8×8 regions across.
+    regions_x: u32,
+    // 8×8 regions down.
+    regions_y: u32,
+    // Samples the sample ring holds.
+    ring_capacity: u32,
+    // 1 when the bilateral denoiser runs.
+    denoise: u32,
+    // Where each pixel's own secondary sample starts in \`mem\` (tagged with the
+    // frame that traced it).
+    off_own: u32,
+    // Where the atmosphere table starts in \`mem\` (vec4 words; the cameras start at 0).
+    off_lut: u32,
+    // Where the first-hit surfaces start in \`mem\`.
+    off_gbuf: u32,
+    // Where the first-hit materials start in \`mem\`.
+    off_gmat: u32,
+    // Where the first-hit light starts in \`mem\`.
+    off_emitted: u32,
+    // Where the TAA's per-pixel sums and ranges start in \`mem\`.
+    off_taa_info: u32,
+    // Where the incoming light starts in \`mem\`.
+    off_illum: u32,
+    // Where the denoiser's intermediate starts in \`mem\`.
+    off_illum2: u32,
+    // Where the results start in \`mem\`.
+    off_result: u32,
+    // Where the refined samples start in \`mem\`.
+    off_refined: u32,
+    // Where the regions' statistics start in \`mem\`.
+    off_region_info: u32,
+    // Where the sample ring starts in \`mem\`.
+    off_ring: u32,
+    // Where the queued pixels start in \`words\`.
+    off_queue_list: u32,
+}
+const STATE_SHIFT: u32 = 30u;
+const STATE_EMPTY: u32 = 0u;
+const STATE_FULL: u32 = 1u;
+const STATE_MIXED: u32 = 2u;
+const PAYLOAD: u32 = 1073741823u;
+const MAX_MATERIAL: u32 = 32767u;
+const VOXEL_SOLID: u32 = 32768u;
+const CHUNK_FIELD_BITS: u32 = 5u;
+const CELL_FIELD_BITS: u32 = 2u;
+const KIND_DIFFUSE: u32 = 0u;
+const KIND_EMISSIVE: u32 = 1u;
+const KIND_METAL: u32 = 2u;
+const KIND_MIRROR: u32 = 3u;
+const ENTITY_SOLID: u32 = 2147483648u;
+const TYPE_ALIGN: u32 = 64u;
+const RECORD_WORDS: u32 = 5u;
+const NO_ENTITY: u32 = 16383u;
+const NODE_WORDS: u32 = 28u;
+const BVH_STACK: u32 = 64u;
+const BVH_LEAF: u32 = 2147483648u;
+const BVH_NONE: u32 = 4294967295u;
+const BVH_FAR: f32 = 1e30f;
+const SURFACE_OFFSET: f32 = 0.01f;
+const MIN_ALPHA: f32 = 0.001f;
+const PI: f32 = 3.1415927f;
+const PLANET_RADIUS: f32 = 6360000.0f;
+const ATMOSPHERE_HEIGHT: f32 = 60000.0f;
+const EYE_HEIGHT: f32 = 100.0f;
+const VIEW_STEPS: u32 = 24u;
+const LIGHT_STEPS: u32 = 6u;
+const RAYLEIGH: vec3<f32> = vec3<f32>(5.802e-6f, 1.3558e-5f, 3.31e-5f);
+const RAYLEIGH_SCALE: f32 = 8000.0f;
+const MIE_SCATTER: f32 = 3.996e-6f;
+const MIE_EXTINCTION: f32 = 4.44e-6f;
+const MIE_SCALE: f32 = 1200.0f;
+const MIE_G: f32 = 0.8f;
+const OZONE: vec3<f32> = vec3<f32>(6.5e-7f, 1.881e-6f, 8.5e-8f);
+const OZONE_CENTRE: f32 = 25000.0f;
+const OZONE_HALF_WIDTH: f32 = 15000.0f;
+// The first word of each buffer in \`world\`.
+struct WorldOffsets {
+    chunks: u32,
+    blocks: u32,
+    voxels: u32,
+    materials: u32,
+    entity_types: u32,
+    entity_instances: u32,
+    entity_hierarchy: u32,
+    structure: u32,
+}
+@group(0) @binding(1) var<uniform> world_offsets: WorldOffsets;
+@group(0) @binding(2) var<storage, read> world: array<u32>;
+fn chunk_word(i: u32) -> u32 { return world[world_offsets.chunks + i]; }
+fn block_word(i: u32) -> u32 { return world[world_offsets.blocks + i]; }
+fn voxel_word(i: u32) -> u32 { return world[world_offsets.voxels + i]; }
+fn material_word(i: u32) -> u32 { return world[world_offsets.materials + i]; }
+fn entity_type_word(i: u32) -> u32 { return world[world_offsets.entity_types + i]; }
+fn instance_word(i: u32) -> u32 { return world[world_offsets.entity_instances + i]; }
+fn hierarchy_word(i: u32) -> u32 { return world[world_offsets.entity_hierarchy + i]; }
+fn structure_word(i: u32) -> u32 { return world[world_offsets.structure + i]; }
+
+// The world buffers (docs/FORMAT.md §5) and how to read their cells.
+//
+// Generated by naadf-client (client/src/gpu/shaders.rs) from the Rust definitions, in the
+// prelude before this file:
+// - the parameters \`world_info: WorldInfo\` (size in voxels and chunks, the instance
+//   buffer's slots, the step budget);
+// - the constants of the cell layout (STATE_*, PAYLOAD, MAX_MATERIAL, VOXEL_SOLID,
+//   CHUNK_FIELD_BITS, CELL_FIELD_BITS), the material kinds (KIND_*), the entity layout
+//   (ENTITY_SOLID, TYPE_ALIGN, RECORD_WORDS, NO_ENTITY), the instance hierarchy's (NODE_WORDS,
+//   BVH_*) and the frame modes (MODE_*);
+// - the storage bindings and the accessors \`chunk_word\`, \`block_word\`, \`voxel_word\`,
+//   \`material_word\`, \`entity_type_word\`, \`instance_word\`, \`hierarchy_word\` (and
+//   \`structure_word\` for the comparison traversals): a buffer larger than the adapter's
+//   storage-binding limit is split across several bindings, and the accessor picks the
+//   part.
+
+// State of a chunk or block cell: STATE_EMPTY, STATE_FULL or (also for state 3)
+// STATE_MIXED.
+fn cell_state(c: u32) -> u32 {
+    return min(c >> STATE_SHIFT, STATE_MIXED);
+}
+
+// Field \`dir\` (order −x, +x, −y, +y, −z, +z) of a packed AADF.
+fn aadf_field(word: u32, dir: u32, bits: u32) -> u32 {
+    return (word >> (bits * dir)) & ((1u << bits) - 1u);
+}
+
+// The index of chunk \`c\` in a world of \`chunks\` chunks (\`world_info.chunks\`). Loops read
+// \`world_info\` once before they start and pass its fields: it is a storage buffer, and a
+// storage read in every step is a bounds-checked load on lavapipe.
+fn chunk_index(c: vec3<u32>, chunks: vec3<u32>) -> u32 {
+    return c.x + chunks.x * (c.y + chunks.y * c.z);
+}
+
+fn index4(p: vec3<u32>) -> u32 {
+    return p.x + 4u * p.y + 16u * p.z;
+}
+
+// Voxel \`i\` (0..64) of the voxel group starting at word \`ptr\`.
+fn group_voxel(ptr: u32, i: u32) -> u32 {
+    return (voxel_word(ptr + i / 2u) >> (16u * (i & 1u))) & 0xFFFFu;
+}
+
+// A material's entry (docs/FORMAT.md §5.4).
+struct Material {
+    kind: u32,
+    albedo: vec3<f32>,
+    emission: f32,
+    roughness: f32,
+}
+
+fn material(id: u32) -> Material {
+    let w0 = material_word(4u * id);
+    let w1 = material_word(4u * id + 1u);
+    let w2 = material_word(4u * id + 2u);
+    let rg = unpack2x16float(w1);
+    let be = unpack2x16float(w2);
+    return Material(w0 & 3u, vec3<f32>(rg.x, rg.y, be.x), be.y, unpack2x16float(w0).y);
+}
+
+// Rays and the event model every traversal shares (world/src/traverse/ray.rs, in f32).
+//
+// A ray keeps its origin split into an integer part \`o_int\` and a fraction \`o_frac\` in [0, 1)
+// (docs/NAADF.md §9), so precision does not depend on where in the world it starts.
+// The direction \`d\` is kept exactly as given (not renormalised, which would move the line
+// by an f32 rounding): times are in units of |d| and the ray's \`len\` converts them to
+// distances. Every decision compares plane-crossing times from the one function \`t_at\`,
+// so the traversal is a consistent walk of the event order "(t, axis), x before y before
+// z at equal t"; it departs from the CPU's f64 order only where two crossings are within
+// f32 rounding of each other.
+
+// A cell bound beyond any world for unconstrained axes (the CPU walk uses 2^40, which no
+// i32 holds).
+const FAR_CELL: i32 = 1073741824;
+const T_INF: f32 = 3.0e38;
+const NO_AXIS: u32 = 3u;
+
+struct Ray {
+    o_int: vec3<i32>,
+    o_frac: vec3<f32>,
+    d: vec3<f32>,
+    inv: vec3<f32>,
+    len: f32,
+}
+
+fn ray_new(o_int: vec3<i32>, o_frac: vec3<f32>, d: vec3<f32>) -> Ray {
+    // The inverse of a zero component is never read: such axes never cross a plane.
+    let safe = select(vec3<f32>(1.0), d, d != vec3<f32>(0.0));
+    return Ray(o_int, o_frac, d, 1.0 / safe, length(d));
+}
+
+// A ray from an unsplit origin.
+fn ray_from(o: vec3<f32>, d: vec3<f32>) -> Ray {
+    let fl = floor(o);
+    return ray_new(vec3<i32>(fl), min(o - fl, vec3<f32>(0.99999994)), d);
+}
+
+// The ray's point at time \`t\`, relative to its integer origin.
+fn ray_local(r: Ray, t: f32) -> vec3<f32> {
+    return r.o_frac + r.d * t;
+}
+
+// A ray starting at \`p\` (relative to \`r\`'s integer origin) along \`d\`.
+fn ray_at(r: Ray, p: vec3<f32>, d: vec3<f32>) -> Ray {
+    let fl = floor(p);
+    return ray_new(r.o_int + vec3<i32>(fl), min(p - fl, vec3<f32>(0.99999994)), d);
+}
+
+// Time at which the ray crosses plane \`k\` of \`axis\`.
+fn t_at(r: Ray, a: u32, k: i32) -> f32 {
+    return (f32(k - r.o_int[a]) - r.o_frac[a]) * r.inv[a];
+}
+
+// Whether the crossing of plane \`k\` of axis \`b\` comes before the event \`(t, a)\`.
+fn crossed(r: Ray, b: u32, k: i32, t: f32, a: u32) -> bool {
+    let tb = t_at(r, b, k);
+    return tb < t || (tb == t && b < a);
+}
+
+// The cell of axis \`b\` right after event \`(t, a)\`, known to lie in \`lo..=hi\`.
+fn cell_after(r: Ray, b: u32, t: f32, a: u32, lo: i32, hi: i32) -> i32 {
+    let d = r.d[b];
+    if lo == hi || d == 0.0 {
+        return lo;
+    }
+    let p = r.o_frac[b] + d * t;
+    let fl = floor(p);
+    var k = clamp(i32(fl) + r.o_int[b], lo, hi);
+    let f = p - fl;
+    // Far from a plane the floor is certain; near one, decide by crossing times.
+    let tol = 4e-6 * (abs(d * t) + 1.0);
+    if f > tol && f < 1.0 - tol {
+        return k;
+    }
+    if d > 0.0 {
+        while k < hi && crossed(r, b, k + 1, t, a) {
+            k += 1;
+        }
+        while k > lo && !crossed(r, b, k, t, a) {
+            k -= 1;
+        }
+    } else {
+        while k > lo && crossed(r, b, k, t, a) {
+            k -= 1;
+        }
+        while k < hi && !crossed(r, b, k + 1, t, a) {
+            k += 1;
+        }
+    }
+    return k;
+}
+
+// Where a ray begins inside the box [0, size): its first cell, the time it is entered and
+// the axis whose plane it crossed (NO_AXIS when the origin is inside). \`ok\` is false when
+// the ray misses the box.
+struct Entry {
+    cell: vec3<i32>,
+    t: f32,
+    axis: u32,
+    ok: bool,
+}
+
+fn ray_entry(r: Ray, size: vec3<i32>) -> Entry {
+    let start = r.o_int;
+    var miss = Entry(vec3<i32>(0), 0.0, NO_AXIS, false);
+    if all(start >= vec3<i32>(0)) && all(start < size) {
+        return Entry(start, 0.0, NO_AXIS, true);
+    }
+    // The last slab-entry event, in (t, axis) order.
+    var bt = 0.0;
+    var ba = NO_AXIS;
+    for (var a = 0u; a < 3u; a++) {
+        var plane: i32;
+        if start[a] < 0 {
+            if r.d[a] <= 0.0 {
+                return miss;
+            }
+            plane = 0;
+        } else if start[a] >= size[a] {
+            if r.d[a] >= 0.0 {
+                return miss;
+            }
+            plane = size[a];
+        } else {
+            continue;
+        }
+        let t = t_at(r, a, plane);
+        if ba == NO_AXIS || t >= bt {
+            bt = t;
+            ba = a;
+        }
+    }
+    var cell = vec3<i32>(0);
+    for (var b = 0u; b < 3u; b++) {
+        if b == ba {
+            cell[b] = select(size[b] - 1, 0, r.d[b] > 0.0);
+        } else if r.d[b] > 0.0 {
+            cell[b] = cell_after(r, b, bt, ba, start[b], FAR_CELL);
+        } else if r.d[b] < 0.0 {
+            cell[b] = cell_after(r, b, bt, ba, -FAR_CELL, start[b]);
+        } else {
+            cell[b] = start[b];
+        }
+    }
+    if any(cell < vec3<i32>(0)) || any(cell >= size) {
+        return miss;
+    }
+    return Entry(cell, bt, ba, true);
+}
+
+// When a ray inside the box [0, size] leaves it: the first crossing of a far plane it moves
+// toward (world/src/traverse/ray.rs \`leave_time\`).
+fn leave_time(r: Ray, size: vec3<i32>) -> f32 {
+    var t = T_INF;
+    for (var a = 0u; a < 3u; a++) {
+        if r.d[a] != 0.0 {
+            t = min(t, t_at(r, a, select(0, size[a], r.d[a] > 0.0)));
+        }
+    }
+    return t;
+}
+
+// Leaving the empty cuboid made of \`cell\` extended by \`skip\` cells toward the ray on each
+// axis: the exit event and the cell entered by it.
+struct Exit {
+    t: f32,
+    axis: u32,
+    next: vec3<i32>,
+}
+
+fn ray_exit(r: Ray, cell: vec3<i32>, skip: vec3<i32>) -> Exit {
+    var bound = vec3<i32>(0);
+    var bt = T_INF;
+    var ba = 0u;
+    for (var a = 0u; a < 3u; a++) {
+        if r.d[a] == 0.0 {
+            continue;
+        }
+        bound[a] = select(cell[a] - skip[a], cell[a] + 1 + skip[a], r.d[a] > 0.0);
+        let t = t_at(r, a, bound[a]);
+        if t < bt {
+            bt = t;
+            ba = a;
+        }
+    }
+    var next = cell;
+    for (var b = 0u; b < 3u; b++) {
+        if b == ba {
+            next[b] = select(bound[b] - 1, bound[b], r.d[b] > 0.0);
+        } else if r.d[b] > 0.0 {
+            next[b] = cell_after(r, b, bt, ba, cell[b], cell[b] + skip[b]);
+        } else if r.d[b] < 0.0 {
+            next[b] = cell_after(r, b, bt, ba, cell[b] - skip[b], cell[b]);
+        }
+    }
+    return Exit(bt, ba, next);
+}
+
+// Amanatides–Woo state in the same event order (ties step the lowest axis first).
+struct Dda {
+    cell: vec3<i32>,
+    tmax: vec3<f32>,
+    t: f32,
+    axis: u32,
+}
+
+fn dda_start(r: Ray, e: Entry) -> Dda {
+    var tmax = vec3<f32>(T_INF);
+    for (var a = 0u; a < 3u; a++) {
+        if r.d[a] != 0.0 {
+            tmax[a] = t_at(r, a, select(e.cell[a], e.cell[a] + 1, r.d[a] > 0.0));
+        }
+    }
+    return Dda(e.cell, tmax, e.t, e.axis);
+}
+
+fn dda_advance(r: Ray, s: ptr<function, Dda>) {
+    var a = 0u;
+    if (*s).tmax[1] < (*s).tmax[a] {
+        a = 1u;
+    }
+    if (*s).tmax[2] < (*s).tmax[a] {
+        a = 2u;
+    }
+    (*s).t = (*s).tmax[a];
+    let c = (*s).cell[a] + select(-1, 1, r.d[a] > 0.0);
+    (*s).cell[a] = c;
+    (*s).axis = a;
+    (*s).tmax[a] = t_at(r, a, select(c, c + 1, r.d[a] > 0.0));
+}
+
+// The first solid voxel along a ray (of the world, or of an entity: then voxel and normal
+// are entity-local).
+struct Hit {
+    hit: bool,
+    // The step budget ran out (counts as a miss).
+    exhausted: bool,
+    voxel: vec3<i32>,
+    // Axis of the entry face (NO_AXIS: the origin was inside the voxel).
+    axis: u32,
+    // Entry-face normal (zero when the origin was inside).
+    normal: vec3<i32>,
+    // Time of entry, in units of the ray's |d|.
+    t: f32,
+    material: u32,
+    steps: u32,
+    // Entity id, or NO_ENTITY (generated in the prelude).
+    entity: u32,
+}
+
+fn no_hit(steps: u32) -> Hit {
+    return Hit(false, false, vec3<i32>(0), NO_AXIS, vec3<i32>(0), T_INF, 0u, steps, NO_ENTITY);
+}
+
+fn make_hit(r: Ray, cell: vec3<i32>, t: f32, axis: u32, material: u32, steps: u32) -> Hit {
+    var n = vec3<i32>(0);
+    if axis != NO_AXIS {
+        n[axis] = select(1, -1, r.d[axis] > 0.0);
+    }
+    return Hit(true, false, cell, axis, n, t, material, steps, NO_ENTITY);
+}
+
+// One full trace: the world loop (traverse.wgsl or grid.wgsl) through the static world,
+// then the instances whose world boxes the ray crosses before the world's hit or exit,
+// found through their hierarchy (docs/NAADF.md §11): the GPU twin of
+// world/src/traverse/entities.rs. Only the nearest entity hit (lowest id at equal times)
+// survives, and only if it comes strictly before the world's hit or exit. Local instances
+// (previews, markers: world/src/entity/local.rs) follow the world's records and carry the id
+// NO_ENTITY, so their hits read as static geometry to everything that follows entity ids.
+
+// How the world loop ended.
+const END_HIT: u32 = 0u;
+const END_LEFT: u32 = 1u;
+const END_MISSED: u32 = 2u;
+const END_EXHAUSTED: u32 = 3u;
+
+struct WorldTrace {
+    hit: Hit,
+    end: u32,
+    // When the ray entered the world, and when it hit or left it.
+    t_entry: f32,
+    t_end: f32,
+}
+
+// The end of a world loop whose step budget ran out at time \`t\` (entered at \`t_entry\`).
+fn ran_out(t_entry: f32, t: f32) -> WorldTrace {
+    var h = no_hit(world_info.max_steps);
+    h.exhausted = true;
+    return WorldTrace(h, END_EXHAUSTED, t_entry, t);
+}
+
+var<private> best_entity: Hit;
+// The inverse rotation of \`best_entity\`'s instance.
+var<private> best_rotation: vec4<f32>;
+// Entity-grid cells visited (added to the step count of an entity hit).
+var<private> entity_steps: u32;
+// Whether the last \`trace\` returned an instance's hit (a local instance's has no entity id).
+var<private> hit_instance: bool;
+
+// Walks the instance hierarchy (world/src/entity/bvh.rs: four-wide nodes of NODE_WORDS
+// words, the children's f32 boxes axis by axis, then their references) and tests every
+// instance whose box the ray is inside at some t in [t_lo, t_hi] (or up to the best entity
+// hit so far). Boxes are padded and rounded outward, so the f32 test never rejects an
+// instance the ray can hit.
+fn find_instances(r: Ray, t_lo: f32, t_hi: f32) {
+    // The world loop says whether its structure is traced with entities: the comparison
+    // trees hold geometry only.
+    if !TRACES_ENTITIES || world_info.instance_slots == 0u {
+        return;
+    }
+    // 1/d, with ±FAR for axes the ray does not move along.
+    let inv = select(1.0 / r.d, select(vec3<f32>(BVH_FAR), vec3<f32>(-BVH_FAR), r.d < vec3<f32>(0.0)), r.d == vec3<f32>(0.0));
+    let o = vec3<f32>(r.o_int);
+    var stack: array<u32, BVH_STACK>;
+    stack[0] = 0u;
+    var sp = 1u;
+    while sp > 0u {
+        sp -= 1u;
+        let base = stack[sp] * NODE_WORDS;
+        var far_limit = t_hi * 1.000001 + 1e-3;
+        if best_entity.hit {
+            far_limit = min(far_limit, best_entity.t * 1.000001 + 1e-3);
+        }
+        for (var lane = 0u; lane < 4u; lane++) {
+            let c = hierarchy_word(base + 24u + lane);
+            if c == BVH_NONE {
+                continue;
+            }
+            var near = t_lo - 1e-3;
+            var far = far_limit;
+            for (var a = 0u; a < 3u; a++) {
+                let lo = (bitcast<f32>(hierarchy_word(base + 8u * a + lane)) - o[a]) - r.o_frac[a];
+                let hi = (bitcast<f32>(hierarchy_word(base + 8u * a + 4u + lane)) - o[a]) - r.o_frac[a];
+                let t0 = lo * inv[a];
+                let t1 = hi * inv[a];
+                near = max(near, min(t0, t1));
+                far = min(far, max(t0, t1));
+            }
+            if near > far {
+                continue;
+            }
+            if (c & BVH_LEAF) != 0u {
+                test_instance(r, (c & ~BVH_LEAF) * RECORD_WORDS, t_lo);
+            } else if sp < BVH_STACK {
+                stack[sp] = c;
+                sp += 1u;
+            }
+        }
+    }
+}
+
+// Decodes a smallest-three quaternion (world/src/entity/pack.rs).
+fn decode_quat(w0: u32, w1: u32) -> vec4<f32> {
+    let s = vec3<f32>(vec3<u32>(w0 & 0x3FFFu, (w0 >> 14u) & 0x3FFFu, (w0 >> 28u) | ((w1 & 0x3FFu) << 4u)));
+    let small = (s - 8192.0) / 8192.0;
+    let rest = sqrt(max(1.0 - dot(small, small), 0.0));
+    let k = (w1 >> 10u) & 3u;
+    if k == 0u {
+        return vec4<f32>(rest, small.x, small.y, small.z);
+    } else if k == 1u {
+        return vec4<f32>(small.x, rest, small.y, small.z);
+    } else if k == 2u {
+        return vec4<f32>(small.x, small.y, rest, small.z);
+    }
+    return vec4<f32>(small, rest);
+}
+
+// Rotates \`v\` by the unit quaternion \`q = (x, y, z, w)\`.
+fn rotate(q: vec4<f32>, v: vec3<f32>) -> vec3<f32> {
+    let t = 2.0 * cross(q.xyz, v);
+    return v + q.w * t + cross(q.xyz, t);
+}
+
+fn conjugate(q: vec4<f32>) -> vec4<f32> {
+    return vec4<f32>(-q.xyz, q.w);
+}
+
+// An instance record's position in 1/128 voxel (record words 0 and 1).
+fn record_position(dx: u32, dy: u32) -> vec3<u32> {
+    return vec3<u32>(dx & 0x1FFFFFu, (dx >> 21u) | (((dy >> 21u) & 0xFFu) << 11u), dy & 0x1FFFFFu);
+}
+
+// An instance record's entity id (record word 4).
+fn record_id(e: u32) -> u32 {
+    return e & 0x3FFFu;
+}
+
+// Tests the instance record at word \`at\` against the ray; keeps the nearest entity hit.
+fn test_instance(r: Ray, at: u32, t_lo: f32) {
+    let dx = instance_word(at);
+    let dy = instance_word(at + 1u);
+    let dz = instance_word(at + 2u);
+    let dw = instance_word(at + 3u);
+    let e = instance_word(at + 4u);
+    let id = record_id(e);
+    let size = vec3<u32>((e >> 14u) & 0x7Fu, (e >> 21u) & 0x7Fu, ((e >> 28u) & 0xFu) | (((dy >> 29u) & 7u) << 4u));
+    let pos = record_position(dx, dy);
+    var limit = T_INF;
+    var equal_ok = false;
+    if best_entity.hit {
+        limit = best_entity.t;
+        equal_ok = id < best_entity.entity;
+    }
+    // The entity lies within |size| of its local-origin corner: reject rays that pass
+    // farther (with slack for f32), before transforming anything.
+    let rel = vec3<f32>(r.o_int - vec3<i32>(pos >> vec3<u32>(7u))) + (r.o_frac - vec3<f32>(pos & vec3<u32>(127u)) / 128.0);
+    let tc = -dot(rel, r.d) / (r.len * r.len);
+    let radius = (length(vec3<f32>(size)) + 0.01) / r.len;
+    let closest = rel + r.d * tc;
+    if dot(closest, closest) > radius * radius * r.len * r.len || tc + radius < t_lo || tc - radius > limit {
+        return;
+    }
+    let q = decode_quat(dz, dw & 0xFFFu);
+    let local = ray_from(rotate(q, rel), rotate(q, r.d));
+    let isize = vec3<i32>(size);
+    let entry = ray_entry(local, isize);
+    if !entry.ok {
+        return;
+    }
+    let base = (dw >> 12u) * TYPE_ALIGN;
+    var s = dda_start(local, entry);
+    loop {
+        entity_steps += 1u;
+        if s.t > limit || (s.t == limit && !equal_ok) {
+            return;
+        }
+        if s.t >= t_lo {
+            let c = vec3<u32>(s.cell);
+            let v = entity_type_word(base + c.x + size.x * (c.y + size.y * c.z));
+            if (v & ENTITY_SOLID) != 0u {
+                var h = make_hit(local, s.cell, s.t, s.axis, v & MAX_MATERIAL, 0u);
+                h.entity = id;
+                best_entity = h;
+                best_rotation = q;
+                return;
+            }
+        }
+        dda_advance(local, &s);
+        if any(s.cell < vec3<i32>(0)) || any(s.cell >= isize) {
+            return;
+        }
+    }
+}
+
+// The world-space normal of the hit the last \`trace\` returned (entity-local normals are
+// rotated back to the world).
+fn world_normal(h: Hit) -> vec3<f32> {
+    let n = vec3<f32>(h.normal);
+    if !hit_instance {
+        return n;
+    }
+    return rotate(conjugate(best_rotation), n);
+}
+
+// Traces \`r\` through the world and its entities.
+fn trace(r: Ray) -> Hit {
+    entity_steps = 0u;
+    best_entity = no_hit(0u);
+    hit_instance = false;
+    let w = world_loop(r);
+    if w.end == END_MISSED || w.end == END_EXHAUSTED {
+        return w.hit;
+    }
+    find_instances(r, w.t_entry, w.t_end);
+    if best_entity.hit && best_entity.t < w.t_end {
+        hit_instance = true;
+        var h = best_entity;
+        h.steps = w.hit.steps + entity_steps;
+        return h;
+    }
+    var h = w.hit;
+    h.steps += entity_steps;
+    return h;
+}
+
+// The world loop over the chunk → block → voxel hierarchy (docs/NAADF.md §9), with
+// AADF jumps (\`USE_AADF\`, the \`naadf\` method) or without (\`nodf\`): the GPU twin of
+// world/src/traverse/hierarchy.rs. It sees the static world alone: entities are found
+// afterwards, through their hierarchy (trace.wgsl).
+
+override USE_AADF: bool = true;
+// Entities are found after the loop (see trace.wgsl).
+const TRACES_ENTITIES: bool = true;
+
+
+fn to_edge(c: u32, neg: bool, edge: u32) -> i32 {
+    let m = c & (edge - 1u);
+    return i32(select(edge - 1u - m, m, neg));
+}
+
+fn world_loop(r: Ray) -> WorldTrace {
+    let dims = vec3<i32>(world_info.size);
+    let entry = ray_entry(r, dims);
+    if !entry.ok {
+        return WorldTrace(no_hit(0u), END_MISSED, 0.0, 0.0);
+    }
+    var cell = entry.cell;
+    var t = entry.t;
+    var axis = entry.axis;
+    let neg = r.d <= vec3<f32>(0.0);
+    // The AADF field facing the ray on each axis: −a for negative directions, +a otherwise.
+    let facing = vec3<u32>(0u, 2u, 4u) + select(vec3<u32>(0u), vec3<u32>(1u), r.d > vec3<f32>(0.0));
+    // The world's parameters, read once (see chunk_index in world.wgsl).
+    let chunks = world_info.chunks;
+    let max_steps = world_info.max_steps;
+    for (var steps = 1u; steps <= max_steps; steps++) {
+        let p = vec3<u32>(cell);
+        let chunk = chunk_word(chunk_index(p >> vec3<u32>(4u), chunks));
+        var skip = vec3<i32>(0);
+        let cs = cell_state(chunk);
+        if cs == STATE_FULL {
+            return WorldTrace(make_hit(r, cell, t, axis, chunk & MAX_MATERIAL, steps), END_HIT, entry.t, t);
+        } else if cs == STATE_EMPTY {
+            for (var a = 0u; a < 3u; a++) {
+                skip[a] = to_edge(p[a], neg[a], 16u);
+                if USE_AADF {
+                    skip[a] += 16 * i32(aadf_field(chunk, facing[a], CHUNK_FIELD_BITS));
+                }
+            }
+        } else {
+            let block = block_word((chunk & PAYLOAD) + index4((p >> vec3<u32>(2u)) & vec3<u32>(3u)));
+            let bs = cell_state(block);
+            if bs == STATE_FULL {
+                return WorldTrace(make_hit(r, cell, t, axis, block & MAX_MATERIAL, steps), END_HIT, entry.t, t);
+            } else if bs == STATE_EMPTY {
+                for (var a = 0u; a < 3u; a++) {
+                    skip[a] = to_edge(p[a], neg[a], 4u);
+                    if USE_AADF {
+                        skip[a] += 4 * i32(aadf_field(block, facing[a], CELL_FIELD_BITS));
+                    }
+                }
+            } else {
+                let v = group_voxel(block & PAYLOAD, index4(p & vec3<u32>(3u)));
+                if (v & VOXEL_SOLID) != 0u {
+                    return WorldTrace(make_hit(r, cell, t, axis, v & MAX_MATERIAL, steps), END_HIT, entry.t, t);
+                }
+                if USE_AADF {
+                    for (var a = 0u; a < 3u; a++) {
+                        skip[a] = i32(aadf_field(v, facing[a], CELL_FIELD_BITS));
+                    }
+                }
+            }
+        }
+        let ex = ray_exit(r, cell, skip);
+        if any(ex.next < vec3<i32>(0)) || any(ex.next >= dims) {
+            // An AADF box may reach beyond the world: the ray left it at the world's edge.
+            return WorldTrace(no_hit(steps), END_LEFT, entry.t, min(ex.t, leave_time(r, dims)));
+        }
+        cell = ex.next;
+        t = ex.t;
+        axis = ex.axis;
+    }
+    return ran_out(entry.t, t);
+}
+
+// Pass \`roma_build\`: writes ROMA tiles (docs/RENDERING.md §3d), one workgroup per job.
+// A job names a tile of one window; its 1024 column words are written from the world's
+// cells of the window's level at the cells' centres, and the instances' boxes (found
+// through the instance hierarchy), or cleared (a tile wholly outside the world). The GPU
+// twin of \`tile_words\` and \`occupied\` in client/src/light/roma/.
+//
+// \`RomaWindow\`, \`RomaJob\` and the ROMA_* constants are generated by client/src/gpu/roma.rs.
+
+@group(1) @binding(0) var<storage, read> roma_windows: array<RomaWindow>;
+@group(1) @binding(1) var<storage, read> roma_jobs: array<RomaJob>;
+@group(1) @binding(2) var<storage, read_write> roma_bits: array<u32>;
+
+// Whether the world's cell of \`level\` holding world point \`p\` is not empty.
+fn roma_occupied(level: u32, p: vec3<f32>) -> bool {
+    let size = vec3<f32>(world_info.size);
+    if any(p < vec3<f32>(0.0)) || any(p >= size) {
+        return false;
+    }
+    let v = vec3<u32>(p);
+    let c = chunk_word(chunk_index(v / 16u, world_info.chunks));
+    let cs = cell_state(c);
+    if cs == STATE_EMPTY {
+        return false;
+    }
+    if cs == STATE_FULL || level >= 2u {
+        return true;
+    }
+    let b = block_word((c & PAYLOAD) + index4((v / 4u) % 4u));
+    let bs = cell_state(b);
+    if level == 1u || bs != STATE_MIXED {
+        return bs != STATE_EMPTY;
+    }
+    return (group_voxel(b & PAYLOAD, index4(v % 4u)) & VOXEL_SOLID) != 0u;
+}
+
+// Whether world point \`p\` lies in the box of an instance (the hierarchy's leaf boxes).
+fn roma_in_instance(p: vec3<f32>) -> bool {
+    if world_info.instance_slots == 0u {
+        return false;
+    }
+    var stack: array<u32, BVH_STACK>;
+    stack[0] = 0u;
+    var sp = 1u;
+    while sp > 0u {
+        sp -= 1u;
+        let base = stack[sp] * NODE_WORDS;
+        for (var lane = 0u; lane < 4u; lane++) {
+            let c = hierarchy_word(base + 24u + lane);
+            if c == BVH_NONE {
+                continue;
+            }
+            var inside = true;
+            for (var a = 0u; a < 3u; a++) {
+                let lo = bitcast<f32>(hierarchy_word(base + 8u * a + lane));
+                let hi = bitcast<f32>(hierarchy_word(base + 8u * a + 4u + lane));
+                inside = inside && p[a] >= lo && p[a] <= hi;
+            }
+            if !inside {
+                continue;
+            }
+            if (c & BVH_LEAF) != 0u {
+                return true;
+            }
+            if sp < BVH_STACK {
+                stack[sp] = c;
+                sp += 1u;
+            }
+        }
+    }
+    return false;
+}
+
+@compute @workgroup_size(64)
+fn roma_build(
+    @builtin(workgroup_id) wg: vec3<u32>,
+    @builtin(num_workgroups) groups: vec3<u32>,
+    @builtin(local_invocation_index) lane: u32,
+) {
+    let j = wg.x + wg.y * groups.x;
+    if j >= arrayLength(&roma_jobs) {
+        return;
+    }
+    let job = roma_jobs[j];
+    let w = roma_windows[job.window];
+    let level = job.window % ROMA_LEVELS;
+    let m = vec3<u32>(job.tile & vec3<i32>(i32(ROMA_WINDOW_TILES) - 1));
+    let slot = m.x + ROMA_WINDOW_TILES * (m.y + ROMA_WINDOW_TILES * m.z);
+    let first = (w.first_tile + slot) * ROMA_TILE_WORDS;
+    for (var k = 0u; k < ROMA_TILE_WORDS / 64u; k++) {
+        let col = lane + 64u * k;
+        var word = 0u;
+        if job.clear == 0u {
+            let corner = job.tile * ROMA_TILE + vec3<i32>(i32(col % u32(ROMA_TILE)), i32(col / u32(ROMA_TILE)), 0);
+            for (var z = 0; z < ROMA_TILE; z++) {
+                let c = (vec3<f32>(corner + vec3<i32>(0, 0, z)) + 0.5) * w.cell;
+                let p = w.t * c.x + w.b * c.y + w.w * c.z;
+                if roma_occupied(level, p) || roma_in_instance(p) {
+                    word |= 1u << u32(z);
+                }
+            }
+        }
+        roma_bits[first + col] = word;
+    }
+}
+
+const ROMA_LEVELS: u32 = 3u;
+const ROMA_TILE: i32 = 32i;
+const ROMA_TILE_SHIFT: u32 = 5u;
+const ROMA_TILE_WORDS: u32 = 1024u;
+const ROMA_WINDOW_TILES: u32 = 8u;
+const ROMA_REACH: f32 = 94.0f;
+const ROMA_MAX_COLUMNS: u32 = 1024u;
+const ROMA_FAR: f32 = 1e30f;
+struct RomaInfo {
+    // The camera the windows are centred on, in voxels.
+    camera: vec3<f32>,
+    // How far ambient occlusion looks, in voxels.
+    ao_range: f32,
+    // Candidate directions per axis of the concentric square.
+    side: u32,
+    // Candidate directions (\`side²\`); the sun's map follows them.
+    directions: u32,
+    // Padding to 16 bytes.
+    _pad0: u32,
+    // Padding to 16 bytes.
+    _pad1: u32,
+}
+struct RomaWindow {
+    // The frame's first row.
+    t: vec3<f32>,
+    // The level's cell edge, in voxels.
+    cell: f32,
+    // The frame's second row.
+    b: vec3<f32>,
+    // The window's first tile in \`roma_bits\` (in tiles).
+    first_tile: u32,
+    // The frame's third row: the map's direction.
+    w: vec3<f32>,
+    // How far off a surface a ray starts, in cells of this level.
+    offset: f32,
+    // The window's lowest tile, per map axis.
+    base: vec3<i32>,
+    // Padding to 16 bytes.
+    _pad: u32,
+}
+struct RomaJob {
+    // The tile's coordinates in its map, in tiles.
+    tile: vec3<i32>,
+    // Its window (\`map · ROMA_LEVELS + level\`).
+    window: u32,
+    // 1: the tile lies outside the world, so it is cleared without sampling.
+    clear: u32,
+    // Padding to 16 bytes.
+    _pad0: u32,
+    // Padding to 16 bytes.
+    _pad1: u32,
+    // Padding to 16 bytes.
+    _pad2: u32,
+}
+`,Xc=(Y.DIRECTIONS+1)*Y.LEVELS,Zc=Y.WINDOW_TILES**3,Qc=Y.TILE_WORDS*4;function $c(e,t){let n=Y.FRAMES[e];return[n[3*t],n[3*t+1],n[3*t+2]]}var el=(e,t)=>e[0]*t[0]+e[1]*t[1]+e[2]*t[2];function tl(e,t){return[el($c(e,0),t),el($c(e,1),t),el($c(e,2),t)]}function nl(e,t,n){return tl(e,n).map(e=>e/Y.CELL[t]).map(e=>Math.floor(e/Y.TILE)-Y.WINDOW_TILES/2)}function rl(e,t,n,r){let i=[1/0,1/0,1/0],a=[-1/0,-1/0,-1/0];for(let t=0;t<8;t++){let o=tl(e,[t&1?r[0]:n[0],t&2?r[1]:n[1],t&4?r[2]:n[2]]);for(let e=0;e<3;e++)i[e]=Math.min(i[e],o[e]),a[e]=Math.max(a[e],o[e])}let o=Y.CELL[t]*Y.TILE;return[i.map(e=>Math.floor(e/o)),a.map(e=>Math.floor(e/o))]}var il=(e,t,n)=>e.every((e,r)=>e>=t[r]&&e<=n[r]),al=class{device;world;sample;sampleLayout;build;buildLayout;frame;light;info;windows;bits;bases=Array(Xc).fill(null);generation=-1;size=``;sums;staging;key=``;samples=0;constructor(e,t){this.device=e,this.world=t,{pipeline:this.sample,layout:this.sampleLayout}=gc(e,t,`roma.wgsl`,Jc,`path_trace`,[`uniform`,`uniform`,`storage`,`uniform`,`read-only-storage`,`read-only-storage`]),{pipeline:this.build,layout:this.buildLayout}=gc(e,t,`roma_build.wgsl`,Yc,`roma_build`,[`read-only-storage`,`read-only-storage`,`storage`]);let n=t=>e.createBuffer({size:t,usage:GPUBufferUsage.UNIFORM|GPUBufferUsage.COPY_DST});this.frame=n($s.size),this.light=n(ac.length*4),e.queue.writeBuffer(this.light,0,new Uint32Array(ac)),this.info=n(tc.size),this.windows=e.createBuffer({label:`roma windows`,size:Xc*nc.size,usage:GPUBufferUsage.STORAGE|GPUBufferUsage.COPY_DST}),this.bits=e.createBuffer({label:`roma maps`,size:Xc*Zc*Qc,usage:GPUBufferUsage.STORAGE})}async update(e,t){let n=JSON.stringify(e.chunks),r=this.generation<0||n!==this.size?`everything`:e.changesSince(this.generation),i=r===`everything`,a=new Map,o=(e,t)=>a.set(`${e}:${t}`,{tile:t,window:e}),s=new Uint8Array(Xc*nc.size),c=Y.WINDOW_TILES;for(let e=0;e<Xc;e++){let[n,r]=[Math.floor(e/Y.LEVELS),e%Y.LEVELS],a=nl(n,r,t.pos),l=i?null:this.bases[e];if(!l||l.some((e,t)=>e!==a[t]))for(let t=0;t<c*c*c;t++){let n=[a[0]+t%c,a[1]+Math.floor(t/c)%c,a[2]+Math.floor(t/(c*c))];l&&n.every((e,t)=>e-l[t]>=0&&e-l[t]<c)||o(e,n)}this.bases[e]=a;let u=pc(nc,{t:$c(n,0),cell:Y.CELL[r],b:$c(n,1),first_tile:e*Zc,w:$c(n,2),offset:Y.OFFSET[r],base:a});s.set(new Uint8Array(u),e*nc.size)}if(!i){let[t,n]=e.chunks;for(let e of r){let r=[e%t*16,Math.floor(e/t)%n*16,Math.floor(e/(t*n))*16],i=[r[0]+16,r[1]+16,r[2]+16];for(let e=0;e<Xc;e++){let[t,n]=rl(Math.floor(e/Y.LEVELS),e%Y.LEVELS,r,i),a=this.bases[e],s=t.map((e,t)=>Math.max(e,a[t])),l=n.map((e,t)=>Math.min(e,a[t]+c-1));for(let t=s[2];t<=l[2];t++)for(let n=s[1];n<=l[1];n++)for(let r=s[0];r<=l[0];r++)o(e,[r,n,t])}}}if(this.generation=e.generation,this.size=n,this.device.queue.writeBuffer(this.windows,0,s),a.size===0)return;let l=e.chunks.map(e=>e*16),u=new Uint8Array(a.size*rc.size),d=0;for(let{tile:e,window:t}of a.values()){let[n,r]=rl(Math.floor(t/Y.LEVELS),t%Y.LEVELS,[0,0,0],l);u.set(new Uint8Array(pc(rc,{tile:e,window:t,clear:+!il(e,n,r)})),d*rc.size),d+=1}let f=this.device.createBuffer({label:`roma jobs`,size:u.byteLength,usage:GPUBufferUsage.STORAGE|GPUBufferUsage.COPY_DST});this.device.queue.writeBuffer(f,0,u);let p=this.device.createBindGroup({layout:this.buildLayout,entries:[{binding:0,resource:{buffer:this.windows}},{binding:1,resource:{buffer:f}},{binding:2,resource:{buffer:this.bits}}]}),m=this.device.createCommandEncoder(),h=m.beginComputePass();h.setPipeline(await this.build),h.setBindGroup(0,this.world.of(e)),h.setBindGroup(1,p);let g=this.device.limits.maxComputeWorkgroupsPerDimension;h.dispatchWorkgroups(Math.min(a.size,g),Math.ceil(a.size/g)),h.end(),this.device.queue.submit([m.finish()]),f.destroy()}async render(e,t,n,r){let i=this.device;e.trackChanges(),await this.update(e,t);let a=n*r*16,o=fc(t,n,r,e);o===this.key&&this.sums||(this.sums?.destroy(),this.staging?.destroy(),this.sums=i.createBuffer({label:`roma sums`,size:a,usage:GPUBufferUsage.STORAGE|GPUBufferUsage.COPY_SRC}),this.staging=i.createBuffer({label:`roma frame`,size:a,usage:GPUBufferUsage.MAP_READ|GPUBufferUsage.COPY_DST}),this.key=o,this.samples=0);let s=Po(t,n,r);i.queue.writeBuffer(this.frame,0,pc($s,{cam_int:s.int,width:n,cam_frac:s.frac,height:r,forward:s.forward,seed:0,right:s.right,sample:this.samples,up:s.up,history:0})),i.queue.writeBuffer(this.info,0,pc(tc,{camera:t.pos,ao_range:Y.AO_RANGE,side:Y.SIDE,directions:Y.DIRECTIONS}));let c=i.createBindGroup({layout:this.sampleLayout,entries:[{binding:0,resource:{buffer:this.frame}},{binding:1,resource:{buffer:this.light}},{binding:2,resource:{buffer:this.sums}},{binding:3,resource:{buffer:this.info}},{binding:4,resource:{buffer:this.windows}},{binding:5,resource:{buffer:this.bits}}]}),l=await _c(i,this.sample,this.world.of(e),c,n,r);return this.samples+=1,xc(new Float32Array(await vc(i,l,this.sums,0,this.staging,a)),n,r,1,!0)}},ol=class extends Error{};async function sl(){if(!(`gpu`in navigator)||!navigator.gpu)throw new ol(`this browser has no WebGPU`);let e=await navigator.gpu.requestAdapter();if(!e)throw new ol(`this browser offers WebGPU but no adapter`);let t=await e.requestDevice({requiredLimits:{maxStorageBufferBindingSize:e.limits.maxStorageBufferBindingSize,maxBufferSize:e.limits.maxBufferSize}});return t.addEventListener(`uncapturederror`,e=>console.error(`WebGPU: ${e.error.message}`)),t.lost.then(e=>console.error(`WebGPU device lost: ${e.message}`)),{device:t,fallback:(e.info?.isFallbackAdapter??!1)||/swiftshader/i.test(e.info?.description??``)}}var cl=class{device;buffer;info;offsets;regions=[];hierarchy=new Uint8Array;generation=0;layoutGeneration=0;chunks=[0,0,0];mirror;locals=[];localRecords=new Uint32Array;prints;log=[];logFrom=0;constructor(e){this.device=e;let t=(t,n)=>e.createBuffer({label:t,size:n,usage:GPUBufferUsage.UNIFORM|GPUBufferUsage.COPY_DST});this.info=t(`world_info`,Zs.size),this.offsets=t(`world_offsets`,32)}uploadAll(e,t){let n=this.localData(e);this.hierarchy=t??this.hierarchyOf(e,n.records);let r=[...Xs.map(t=>this.usedBytes(e,t.id,n)),this.hierarchy.length],i=0;this.regions=r.map(e=>{let t=Math.ceil((e*1.25+65536)/256)*256,n={at:i,capacity:t};return i+=t,n});let a=this.device.limits.maxStorageBufferBindingSize;if(i>a)throw new ol(`the world needs ${i} bytes in one binding; this adapter allows ${a}`);this.buffer?.destroy(),this.buffer=this.device.createBuffer({label:`world`,size:Math.max(i,16),usage:GPUBufferUsage.STORAGE|GPUBufferUsage.COPY_DST}),Xs.forEach((t,n)=>this.write(n,0,e.bytes(t.id))),this.writeLocals(e,n),this.write(dl,0,this.hierarchy);let o=new Uint32Array(8);this.regions.forEach((e,t)=>o[t]=e.at/4),this.device.queue.writeBuffer(this.offsets,0,o),this.writeInfo(e),this.layoutGeneration+=1,this.generation+=1,this.mirror=e,this.prints&&(this.prints=new Vc(e),this.note(`everything`))}update(e,t,n){let r=e=>Xs.findIndex(t=>t.id===e),i=n||t.some(e=>e.id===ll||e.id===ul),a=this.locals.length>0&&i?this.localData(e):void 0,o=t.some(e=>e.id===ul)||a!==void 0,s=o?this.hierarchyOf(e,a?.records??this.localRecords):this.hierarchy;if((n||a)&&Xs.some((t,n)=>this.usedBytes(e,t.id,a)>this.regions[n].capacity)||s.length>this.regions[dl].capacity)this.uploadAll(e,s);else{for(let n of t){let t=r(n.id);if(t<0)continue;let i=n.lo&-4,a=e.bytes(n.id),o=Math.min(a.length,n.hi+3&-4);this.write(t,i,a.subarray(i,o))}a&&this.writeLocals(e,a),o&&(this.hierarchy=s,this.write(dl,0,s)),(n||a)&&this.writeInfo(e),this.generation+=1,this.prints&&this.note(this.prints.update(e,t))}}setLocals(e){if(JSON.stringify(e)===JSON.stringify(this.locals))return;let t=this.localRecords;this.locals=e.map(e=>({min:[...e.min],size:[...e.size],material:e.material}));let n=this.mirror;if(!n)return;let r=this.localData(n),i=this.hierarchyOf(n,r.records);if(Xs.some((e,t)=>this.usedBytes(n,e.id,r)>this.regions[t].capacity)||i.length>this.regions[dl].capacity)this.uploadAll(n,i);else if(this.writeLocals(n,r),this.hierarchy=i,this.write(dl,0,i),this.writeInfo(n),this.generation+=1,this.prints){let e=new Set;for(let n of[t,r.records])for(let t=0;t<n.length/Tc;t++){let r=kc(n,t);if(r)for(let t of Bc(r,this.chunks))e.add(t)}this.note([...e].sort((e,t)=>e-t))}}localData(e){let t=Math.ceil(e.bytes(ll).length/4/dc.TYPE_ALIGN)*dc.TYPE_ALIGN;return{typeBase:t,...Ec(this.locals,t)}}usedBytes(e,t,n){let r=e.bytes(t).length;return n?t===ll?n.types.length>0?4*n.typeBase+n.types.byteLength:r:t===ul?r+n.records.byteLength:r:r}writeLocals(e,t){let n=e=>new Uint8Array(e.buffer,e.byteOffset,e.byteLength),r=e=>Xs.findIndex(t=>t.id===e);this.write(r(ll),4*t.typeBase,n(t.types)),this.write(r(ul),e.bytes(ul).length,n(t.records)),this.localRecords=t.records}hierarchyOf(e,t){let n=e.words(ul);if(t&&t.length>0){let e=new Uint32Array(n.length+t.length);e.set(n),e.set(t,n.length),n=e}let r=Nc(n);return new Uint8Array(r.buffer,r.byteOffset,r.byteLength)}trackChanges(){!this.prints&&this.mirror&&(this.prints=new Vc(this.mirror),this.log=[],this.logFrom=this.generation)}changesSince(e){if(e<this.logFrom)return`everything`;let t=new Set;for(let n of this.log)if(!(n.generation<=e)){if(n.changes===`everything`)return`everything`;for(let e of n.changes)t.add(e)}return[...t].sort((e,t)=>e-t)}note(e){this.log.push({generation:this.generation,changes:e}),this.log.length>64&&(this.logFrom=this.log.shift().generation)}write(e,t,n){if(n.length===0)return;let r=n.length%4==0?n:(()=>{let e=new Uint8Array(n.length+3&-4);return e.set(n),e})();this.device.queue.writeBuffer(this.buffer,this.regions[e].at+t,r)}writeInfo(e){let[t,n,r]=e.size,i=(e.bytes(ul).length/4+this.localRecords.length)/Tc;this.chunks=[Math.ceil(t/16),Math.ceil(n/16),Math.ceil(r/16)],this.device.queue.writeBuffer(this.info,0,pc(Zs,{size:[t,n,r],instance_slots:i,chunks:this.chunks,max_steps:cc}))}},ll=6,ul=7,dl=Xs.length,fl=class{device;world;compute;group1;view;gbuffer;pixels;staging;width=0;height=0;constructor(e,t){this.device=e,this.world=t,{pipeline:this.compute,layout:this.group1}=gc(e,t,`render.wgsl`,Ys,`render`,[`uniform`,`storage`,`storage`]),this.view=e.createBuffer({size:Qs.size,usage:GPUBufferUsage.UNIFORM|GPUBufferUsage.COPY_DST}),this.gbuffer=e.createBuffer({size:16,usage:GPUBufferUsage.STORAGE})}async render(e,t,n,r,i){let a=this.device,o=n*r*4;n===this.width&&r===this.height&&this.pixels||(this.pixels?.destroy(),this.staging?.destroy(),this.pixels=a.createBuffer({label:`pixels`,size:o,usage:GPUBufferUsage.STORAGE|GPUBufferUsage.COPY_SRC}),this.staging=a.createBuffer({label:`frame`,size:o,usage:GPUBufferUsage.MAP_READ|GPUBufferUsage.COPY_DST}),this.width=n,this.height=r);let s=Po(t,n,r),c=oc[i];if(c===void 0)throw Error(`the render pass has no mode ${i}`);a.queue.writeBuffer(this.view,0,pc(Qs,{cam_oi:s.int,mode:c,cam_of:s.frac,width:n,forward:s.forward,height:r,right:s.right,flags:0,up:s.up,steps_scale:Math.fround(1/Math.log2(513)),sun:sc}));let l=a.createBindGroup({layout:this.group1,entries:[{binding:0,resource:{buffer:this.view}},{binding:1,resource:{buffer:this.pixels}},{binding:2,resource:{buffer:this.gbuffer}}]}),u=await _c(a,this.compute,this.world.of(e),l,n,r),d=new Uint8ClampedArray(await vc(a,u,this.pixels,0,this.staging,o));return new ImageData(d,n,r)}},pl=class{device;world;pipeline;group1;frame;light;sums;staging;key=``;samples=0;constructor(e,t){this.device=e,this.world=t,{pipeline:this.pipeline,layout:this.group1}=gc(e,t,`pathtrace.wgsl`,Js,`path_trace`,[`uniform`,`uniform`,`storage`]);let n=t=>e.createBuffer({size:t,usage:GPUBufferUsage.UNIFORM|GPUBufferUsage.COPY_DST});this.frame=n($s.size),this.light=n(ic.length*4),e.queue.writeBuffer(this.light,0,new Uint32Array(ic))}async render(e,t,n,r){let i=this.device,a=n*r*16,o=fc(t,n,r,e);o===this.key&&this.sums||(this.sums?.destroy(),this.staging?.destroy(),this.sums=i.createBuffer({label:`path sums`,size:a,usage:GPUBufferUsage.STORAGE|GPUBufferUsage.COPY_SRC}),this.staging=i.createBuffer({label:`path frame`,size:a,usage:GPUBufferUsage.MAP_READ|GPUBufferUsage.COPY_DST}),this.key=o,this.samples=0);let s=Po(t,n,r);i.queue.writeBuffer(this.frame,0,pc($s,{cam_int:s.int,width:n,cam_frac:s.frac,height:r,forward:s.forward,seed:0,right:s.right,sample:this.samples,up:s.up,history:0}));let c=i.createBindGroup({layout:this.group1,entries:[{binding:0,resource:{buffer:this.frame}},{binding:1,resource:{buffer:this.light}},{binding:2,resource:{buffer:this.sums}}]}),l=await _c(i,this.pipeline,this.world.of(e),c,n,r);return this.samples+=1,xc(new Float32Array(await vc(i,l,this.sums,0,this.staging,a)),n,r,1,!0)}},ml=class{device;world;frames;paths;gi;roma;last;constructor(e,t){this.device=e,this.world=new hc(e),this.pass(t)}pass(e){return e===`pathtrace`?this.paths??=new pl(this.device,this.world):e===`gi`?this.gi??=new qc(this.device,this.world):e===`roma`?this.roma??=new al(this.device,this.world):this.frames??=new fl(this.device,this.world)}static accumulates(e){return e===`pathtrace`||e===`gi`||e===`roma`}samples(e){return e===`gi`?this.gi?.still??0:e===`roma`?this.roma?.samples??0:e===`pathtrace`?this.paths?.samples??0:0}async render(e,t,n,r,i){let a=this.pass(i);return this.last=a instanceof fl?await a.render(e,t,n,r,i):await a.render(e,t,n,r),this.last}};function hl(e,t,n,r){let i=No(e),a=r.map((t,n)=>t-e.pos[n]),o=(e,t)=>e[0]*t[0]+e[1]*t[1]+e[2]*t[2],s=o(a,i.forward);if(s<=.001)return;let c=Math.tan(e.fov_y*Math.PI/360),l=o(a,i.right)/(s*c*(t/n)),u=o(a,i.up)/(s*c);return[(l+1)/2*t,(1-u)/2*n]}function gl(e,t,n,r,i){let a=No(e),o=Math.tan(e.fov_y*Math.PI/360),s=(2*r/t-1)*o*(t/n),c=(1-2*i/n)*o;return[0,1,2].map(e=>a.forward[e]+s*a.right[e]+c*a.up[e])}function _l(e,t,n,r,i){let{width:a,height:o}=e.canvas,s=e=>[e&1?r[0]:n[0],e&2?r[1]:n[1],e&4?r[2]:n[2]];e.strokeStyle=i,e.lineWidth=2,e.beginPath();for(let n=0;n<8;n++)for(let r of[1,2,4]){if(n&r)continue;let i=hl(t,a,o,s(n)),c=hl(t,a,o,s(n|r));i&&c&&(e.moveTo(i[0],i[1]),e.lineTo(c[0],c[1]))}e.stroke()}function vl(e,t,n,r){let{width:i,height:a}=e.canvas;e.clearRect(0,0,i,a),n&&_l(e,t,n.min,n.max,n.refusal?`#f44`:`#ff0`);let o=[];e.font=`${Math.max(11,Math.round(a/40))}px system-ui, sans-serif`;for(let n of r){let r=n.name||n.user||`anonymous`;if(n.pointer.length===3){let r=n.pointer.map(Number);_l(e,t,r,[r[0]+1,r[1]+1,r[2]+1],`#0ff`)}if(n.position.length!==3)continue;let s=hl(t,i,a,n.position);!s||s[0]<0||s[1]<0||s[0]>i||s[1]>a||(e.fillStyle=`#0ff`,e.beginPath(),e.arc(s[0],s[1],5,0,2*Math.PI),e.fill(),e.fillStyle=`#fff`,e.fillText(r,s[0]+8,s[1]-8),o.push({name:r,x:s[0],y:s[1]}))}return o}var yl=class{chunks;blocks;voxels;size;dims;constructor(e){this.chunks=e.words(0),this.blocks=e.words(2),this.voxels=e.words(3),this.size=e.size,this.dims=[e.size[0]>>4,e.size[1]>>4,e.size[2]>>4]}inside(e,t,n){return e>=0&&t>=0&&n>=0&&e<this.size[0]&&t<this.size[1]&&n<this.size[2]}cell(e,t,n){let[r,i,a]=[e>>4,t>>4,n>>4],o=this.chunks[r+this.dims[0]*(i+this.dims[1]*a)],s=wc(o);if(s===0)return{material:0,edge:16};if(s===1)return{material:o&Sc,edge:16};let c=this.blocks[(o&Cc)+((e>>2&3)+4*(t>>2&3)+16*(n>>2&3))],l=wc(c);if(l===0)return{material:0,edge:4};if(l===1)return{material:c&Sc,edge:4};let u=(e&3)+4*(t&3)+16*(n&3),d=this.voxels[(c&Cc)+(u>>1)],f=u&1?d>>>16:d&65535;return{material:f&32768?f&Sc:0,edge:1}}};function bl(e,t,n,r=4096){let i=0,a=r;for(let r=0;r<3;r++){if(n[r]===0){if(t[r]<0||t[r]>=e.size[r])return;continue}let o=(0-t[r])/n[r],s=(e.size[r]-t[r])/n[r];i=Math.max(i,Math.min(o,s)),a=Math.min(a,Math.max(o,s))}if(i>a)return;let o=1e-7,s;for(;i<=a;){let r=t.map((e,t)=>e+n[t]*(i+o)).map(Math.floor);if(!e.inside(r[0],r[1],r[2]))return;let a=e.cell(r[0],r[1],r[2]);if(a.material!==0)return{voxel:r,before:s??r,material:a.material};s=r;let c=1/0;for(let e=0;e<3;e++){if(n[e]===0)continue;let i=Math.floor(r[e]/a.edge)*a.edge,o=n[e]>0?i+a.edge:i;c=Math.min(c,(o-t[e])/n[e])}s=t.map((e,t)=>e+n[t]*(c-o)).map(Math.floor),i=Math.max(c,i+o)}}function xl(){try{new Headers}catch{throw Error(`connect-web requires the fetch API. Are you running on an old version of Node.js?`)}}function Sl(e,t){let n=io(e);if(n)throw t.forEach((e,t)=>{n.metadata.append(t,e)}),n;if(!t.has(`Grpc-Status`)&&!e.has(`Grpc-Status`))throw new H(`protocol error: missing status`,V.Internal)}function Cl(e,t,n,r){let i=new Headers(n??{});i.set(qa,e?eo:to),i.set($a,`1`);let a=i.get(`User-Agent`)??i.get(`X-User-Agent`)??`connect-es/2.3.0`;return i.set(Qa,a),r&&i.set(Za,a),t!==void 0&&i.set(Ja,`${t}m`),i}function wl(e){switch(e){case 400:return V.Internal;case 401:return V.Unauthenticated;case 403:return V.PermissionDenied;case 404:return V.Unimplemented;case 429:case 502:case 503:case 504:return V.Unavailable;default:return V.Unknown}}function Tl(e,t){if(e>=200&&e<300)return{foundStatus:t.has(Ya),headerError:io(t)};throw new H(decodeURIComponent(t.get(`Grpc-Message`)??`HTTP ${e}`),wl(e),t)}var El=function(e){return this instanceof El?(this.v=e,this):new El(e)},Dl=function(e,t,n){if(!Symbol.asyncIterator)throw TypeError(`Symbol.asyncIterator is not defined.`);var r=n.apply(e,t||[]),i,a=[];return i=Object.create((typeof AsyncIterator==`function`?AsyncIterator:Object).prototype),s(`next`),s(`throw`),s(`return`,o),i[Symbol.asyncIterator]=function(){return this},i;function o(e){return function(t){return Promise.resolve(t).then(e,d)}}function s(e,t){r[e]&&(i[e]=function(t){return new Promise(function(n,r){a.push([e,t,n,r])>1||c(e,t)})},t&&(i[e]=t(i[e])))}function c(e,t){try{l(r[e](t))}catch(e){f(a[0][3],e)}}function l(e){e.value instanceof El?Promise.resolve(e.value.v).then(u,d):f(a[0][2],e)}function u(e){c(`next`,e)}function d(e){c(`throw`,e)}function f(e,t){e(t),a.shift(),a.length&&c(a[0][0],a[0][1])}},Ol={redirect:`error`};function kl(e){xl();let t=e.useBinaryFormat??!0;return{async unary(n,r,i,a,o,s){let{serialize:c,parse:l}=uo(n,t,e.jsonOptions,e.binaryOptions);return i=i===void 0?e.defaultTimeoutMs:i<=0?void 0:i,await mo({interceptors:e.interceptors,signal:r,timeoutMs:i,req:{stream:!1,service:n.parent,method:n,requestMethod:`POST`,url:ao(e.baseUrl,n),header:Cl(t,i,a,!1),contextValues:s??Ga(),message:o},next:async t=>{let r=await(e.fetch??globalThis.fetch)(t.url,Object.assign(Object.assign({},Ol),{method:t.requestMethod,headers:t.header,signal:t.signal,body:Ea(0,c(t.message))})),{headerError:i}=Tl(r.status,r.headers);if(!r.body)throw i===void 0?`missing response body`:i;let a=Ta(r.body).getReader(),o,s;for(;;){let e=await a.read();if(e.done)break;let{flags:t,data:n}=e.value;if((t&1)==1)throw new H(`protocol error: received unsupported compressed output`,V.Internal);if(t===128){if(o!==void 0)throw`extra trailer`;o=Ka(n)}else{if(s!==void 0)throw new H(`extra message`,V.Unimplemented);s=l(n)}}if(o===void 0)throw i===void 0?new H(`missing trailer`,r.headers.has(`Grpc-Status`)?V.Unimplemented:V.Unknown):i;if(Sl(o,r.headers),s===void 0)throw new H(`missing message`,o.has(`Grpc-Status`)?V.Unimplemented:V.Unknown);return{stream:!1,service:n.parent,method:n,header:r.headers,message:s,trailer:o}}})},async stream(n,r,i,a,o,s){let{serialize:c,parse:l}=uo(n,t,e.jsonOptions,e.binaryOptions);function u(e,t,n,r,i){return Dl(this,arguments,function*(){let i=Ta(e).getReader();if(t){if(!(yield El(i.read())).done)throw`extra data for trailers-only`;return yield El(void 0)}let a=!1;for(;;){let e=yield El(i.read());if(e.done)break;let{flags:t,data:o}=e.value;if((t&128)==128){if(a)throw`extra trailer`;a=!0;let e=Ka(o);Sl(e,r),e.forEach((e,t)=>n.set(t,e))}else{if(a)throw`extra message`;yield yield El(l(o))}}if(!a)throw`missing trailer`})}async function d(e){if(n.methodKind!=`server_streaming`)throw`The fetch API does not support streaming request bodies`;let t=await e[Symbol.asyncIterator]().next();if(t.done==1)throw`missing request message`;return Ea(0,c(t.value))}return i=i===void 0?e.defaultTimeoutMs:i<=0?void 0:i,ho({interceptors:e.interceptors,signal:r,timeoutMs:i,req:{stream:!0,service:n.parent,method:n,requestMethod:`POST`,url:ao(e.baseUrl,n),header:Cl(t,i,a,!1),contextValues:s??Ga(),message:o},next:async t=>{let n=await(e.fetch??globalThis.fetch)(t.url,Object.assign(Object.assign({},Ol),{method:t.requestMethod,headers:t.header,signal:t.signal,body:await d(t.message)})),{foundStatus:r,headerError:i}=Tl(n.status,n.headers);if(i!=null)throw i;if(!n.body)throw`missing response body`;let a=new Headers;return Object.assign(Object.assign({},t),{header:n.headers,trailer:a,message:u(n.body,r,a,n.headers,t.signal)})}})}}}var Al=`naadf.token`,jl=100,Ml=5e3,Nl=class e{events;cache;mirror=new Bs;client;bytesReceived=0;snapshotBytes=0;abort;stopped=!1;saving;constructor(e,t){this.events=e,this.cache=t,this.client=Ia(To,kl({baseUrl:location.origin,useBinaryFormat:!0}))}static token(){return sessionStorage.getItem(Al)}setToken(e){sessionStorage.setItem(Al,e),this.restart()}callOptions(){let t=e.token();return{headers:t?{authorization:`Bearer ${t}`}:{}}}async whoAmI(){return this.client.status({},this.callOptions())}async restore(){return!this.cache||!await this.cache.restore(this.mirror).catch(()=>!1)?!1:(this.events.restored(this.mirror),!0)}saveSoon(){this.cache&&!this.saving&&(this.saving=setTimeout(()=>{this.saving=void 0,this.cache?.save(this.mirror).catch(e=>console.warn(`the page cache: ${e}`))},1e3))}async run(){let e=jl,t=!0;for(;!this.stopped;){this.events.state(t?`connecting`:`reconnecting`),t=!1,this.abort=new AbortController;try{await this.follow(this.abort.signal)&&(e=jl)}catch(e){if(e instanceof q)console.warn(e.message);else{let t=H.from(e);if(t.code===V.Unauthenticated||t.code===V.PermissionDenied){this.events.state(`need-token`,t.rawMessage);return}if(t.code===V.FailedPrecondition){this.events.state(`error`,t.rawMessage);return}if(t.code===V.Canceled&&this.stopped)return;t.code!==V.Canceled&&console.warn(`the world stream ended: ${t.message}`)}}if(this.stopped)return;this.events.state(`reconnecting`);let n=e*(1+Math.random()/4);e=Math.min(Ml,e*2),await new Promise(e=>setTimeout(e,n))}}restart(){this.abort?.abort()}async follow(e){let t=this.mirror,n=P(vo,{protocolVersion:2,cached:t.cached(),resume:t.holdsWorld?{version:t.version,digest:t.digest}:void 0,deltaForm:wo.PATCH,presence:!0}),r=!1;this.events.joined();for await(let i of this.client.join(n,{...this.callOptions(),signal:e})){r=!0;let e=Il(i);this.bytesReceived+=e;let n=i.kind;switch(n.case===`header`&&(this.snapshotBytes=0),(n.case===`header`||n.case===`page`)&&(this.snapshotBytes+=e),n.case){case`header`:this.events.state(`syncing`),t.header(n.value)||this.live(n.value.resume);break;case`page`:t.page(n.value)&&this.live(!1);break;case`delta`:{let{touched:e,resized:r}=t.delta(n.value);this.events.patched(t,e,r),this.saveSoon();break}case`presence`:this.events.presence(n.value.entries)}}return r}live(e){e||this.events.snapshot(this.mirror),this.saveSoon(),this.events.state(`live`)}},Pl=e=>e<128?1:e<16384?2:e<2097152?3:e<268435456?4:5,Fl=e=>1+Pl(e)+e;function Il(e){if(e.kind.case!==`page`)return Dr(yo,e).length;let t=e.kind.value,n=t.indices.reduce((e,t)=>e+Pl(t),0);return Fl((t.buffer?1+Pl(t.buffer):0)+(t.indices.length?Fl(n):0)+(t.zstd.length?Fl(t.zstd.length):0))}var Ll=[`voxel`,`erase`,`box`,`sphere`,`paint`,`flood`],Rl=65536,zl=(e,t)=>[e[0]+t,e[1]+t,e[2]+t],Bl=e=>[e[0]+.5,e[1]+.5,e[2]+.5];function Vl(e,t){return{min:e.map(e=>Math.floor(e-t-.5)+1),max:e.map(e=>Math.ceil(e+t-.5))}}function Hl(e,t){return{min:e.map((e,n)=>Math.min(e,t[n])),max:e.map((e,n)=>Math.max(e,t[n])+1)}}function Ul(e,t,n){let r=e.cell(t[0],t[1],t[2]).material;if(r===n)return{min:t,max:zl(t,1),refusal:`already that material`};let i=new Set,a=t=>t[0]+e.size[0]*(t[1]+e.size[1]*t[2]),o=[t];i.add(a(t));let s=[...t],c=zl(t,1);for(;o.length;){let t=o.pop();for(let e=0;e<3;e++)s[e]=Math.min(s[e],t[e]),c[e]=Math.max(c[e],t[e]+1);for(let[n,l,u]of[[1,0,0],[-1,0,0],[0,1,0],[0,-1,0],[0,0,1],[0,0,-1]]){let d=[t[0]+n,t[1]+l,t[2]+u];if(e.inside(d[0],d[1],d[2])&&!i.has(a(d))&&e.cell(d[0],d[1],d[2]).material===r){if(i.size>=65536)return{min:s,max:c,refusal:`more than ${Rl} voxels`};i.add(a(d)),o.push(d)}}}return{min:s,max:c}}function Wl(e,t,n){switch(e.tool){case`voxel`:return{min:n.before,max:zl(n.before,1)};case`erase`:return{min:n.voxel,max:zl(n.voxel,1)};case`box`:return Hl(e.anchor??n.before,n.before);case`sphere`:return Vl(Bl(n.before),e.radius);case`paint`:return Vl(Bl(n.voxel),e.radius);case`flood`:return Ul(t,n.voxel,e.material)}}function Gl(e,t){if(!t||t.refusal||e.tool!==`voxel`&&e.tool!==`box`)return[];let n=t.max.map((e,n)=>e-t.min[n]);return n.some(e=>e<1||e>127)||t.min.some(e=>e<0)?[]:[{min:[...t.min],size:n,material:e.material}]}function Kl(e,t){let n=e.material;switch(e.tool){case`voxel`:return JSON.stringify({op:`set`,voxels:[[...t.before,n]]});case`erase`:return JSON.stringify({op:`set`,voxels:[[...t.voxel,0]]});case`box`:{if(!e.anchor){e.anchor=t.before;return}let r=Hl(e.anchor,t.before);return e.anchor=void 0,JSON.stringify({op:`box`,min:r.min,max:r.max,material:n})}case`sphere`:return JSON.stringify({op:`sphere`,center:Bl(t.before),radius:e.radius,material:n});case`paint`:return JSON.stringify({op:`paint`,center:Bl(t.voxel),radius:e.radius,material:n});case`flood`:return JSON.stringify({op:`flood_paint`,start:t.voxel,material:n,limit:Rl})}}function ql(e){let t=e>>10&31,n=e&1023,r=e&32768?-1:1;return t===0?r*n*2**-24:t===31?n?NaN:r*(1/0):r*(1+n/1024)*2**(t-15)}function Jl(e){let t=e.words(4),n=[];for(let e=1;4*e+3<t.length;e++){let r=t[4*e+1],i=t[4*e+2],[a,o,s]=[ql(r&65535),ql(r>>>16),ql(i&65535)];n.push({id:e,colour:`rgb(${bc(a)},${bc(o)},${bc(s)})`})}return n}function Yl(e,t){let n=new Map;e.addEventListener(`pointerdown`,e=>{e.pointerType===`touch`&&n.set(e.pointerId,{x:e.clientX,y:e.clientY})}),e.addEventListener(`pointermove`,e=>{let r=n.get(e.pointerId);if(e.pointerType!==`touch`||!r)return;let[i,a]=[e.clientX-r.x,e.clientY-r.y];n.set(e.pointerId,{x:e.clientX,y:e.clientY}),n.size===1?t.look(i,a):n.size===2&&t.fly(-a/2,i/2)});for(let t of[`pointerup`,`pointercancel`])e.addEventListener(t,e=>n.delete(e.pointerId))}var Xl=[`albedo`,`material`,`normal`,`steps`,`gi`,`roma`,`pathtrace`],Zl=4096,Ql=2*J.TAA_SLOTS,$l=8192;function eu(e){let t=new URLSearchParams(e),n={camera:void 0,mode:void 0,size:void 0,spp:void 0,problems:[]},r=t.get(`camera`);if(r!==null)try{n.camera=Oo(r)}catch(e){n.problems.push(`camera: ${e.message}; using the default view`)}let i=t.get(`mode`);i!==null&&(Xl.includes(i)?n.mode=i:n.problems.push(`mode: '${i}' is not one of ${Xl.join(`, `)}; using the default`));let a=t.get(`size`);if(a!==null){let e=/^(\d{1,5})x(\d{1,5})$/.exec(a),[t,r]=e?[Number(e[1]),Number(e[2])]:[0,0];t>=1&&r>=1&&t<=$l&&r<=$l?n.size=[t,r]:n.problems.push(`size: '${a}' is not WxH with edges 1..=${$l}; using the canvas size`)}let o=t.get(`spp`);if(o!==null){let e=Number(o);Number.isInteger(e)&&e>=1&&e<=Zl?n.spp=e:n.problems.push(`spp: '${o}' is not a whole number in 1..=${Zl}; using the mode's default`)}return n}function tu(e,t,n){let r=new URLSearchParams;r.set(`camera`,ko(e)),r.set(`mode`,t),n.size&&r.set(`size`,`${n.size[0]}x${n.size[1]}`),n.spp&&r.set(`spp`,String(n.spp)),history.replaceState(null,``,`${location.pathname}?${r.toString().replace(/\+/g,`%20`)}`)}function nu(e,t){return t.spp??(e===`gi`?Ql:Zl)}var X=e=>document.getElementById(e),Z=X(`view`),ru=X(`overlay`),iu=X(`hud`),au=X(`notice`),ou=eu(location.search),Q={state:`connecting`,version:0,growthSeq:0,quiescent:!1,digest:``,users:[],mode:ou.mode??`albedo`,frameMs:0,message:ou.problems.join(`
+`),role:``,joins:0,snapshots:0,bytesReceived:0,snapshotBytes:0,markers:[],rateLimited:0,timings:{},shownVersion:-1,shownGeneration:-1,previewInstances:0,samples:0,pointer:null,name:``,voxel:()=>0,capture:()=>Promise.reject(Error(`no frame yet`)),redraw:()=>{},generation:()=>0,changedChunks:()=>`everything`,edit:()=>Promise.reject(Error(`not joined`)),undo:()=>Promise.reject(Error(`not joined`)),redo:()=>Promise.reject(Error(`not joined`))};window.naadf=Q;function su(e){au.textContent=e,au.hidden=e===``}su(Q.message);var $=ou.camera,cu=0;function lu(){if(ou.size)return ou.size;let e=window.devicePixelRatio||1;return[Math.max(1,Math.round(Z.clientWidth*e)),Math.max(1,Math.round(Z.clientHeight*e))]}function uu(){iu.textContent=[`${Q.state}${Q.role?` · ${Q.role}`:``}`,`version ${Q.version}${Q.growthSeq?`.${Q.growthSeq}`:``}${Q.quiescent?``:` (settling)`}`,`digest ${Q.digest.slice(0,8)}`,`${Q.users.length} online${Q.users.length?`: ${Q.users.join(`, `)}`:``}`,`rtt ${cu.toFixed(0)} ms · frame ${Q.frameMs.toFixed(1)} ms · ${Q.mode}`].join(`
+`)}function du(e){let[t,n]=[Z.width,Z.height];if(!e||document.pointerLockElement===Z)return[t/2,n/2];let r=Z.getBoundingClientRect(),i=Math.min(r.width/t,r.height/n),[a,o]=[(r.width-t*i)/2,(r.height-n*i)/2];return[(e.clientX-r.left-a)/i,(e.clientY-r.top-o)/i]}async function fu(){await cs();let e,t;try{({device:e,fallback:t}=await sl())}catch(e){if(e instanceof ol){Q.state=`no-webgpu`,Q.message=`${e.message}. Open this page in a browser with WebGPU (https://, or http://localhost), or use the native viewer: naadf view --server <address>`,su(Q.message),uu();return}throw e}Q.timings.device=performance.now(),ou.mode||(Q.mode=t?`albedo`:`gi`);let n=Z.getContext(`2d`),r=ru.getContext(`2d`),i=new cl(e),a=new ml(e,Q.mode),o,s=[],c=!0,l=!1,u,d={tool:`voxel`,material:1,radius:4,anchor:void 0},f,p,m,h=BigInt(Math.floor(Math.random()*2**52)),g=e=>{i.uploadAll(e),$??=Fo(e.size),O(),v(e)},_=new Nl({state(e,t){Q.state=e,Q.bytesReceived=_.bytesReceived,Q.snapshotBytes=_.snapshotBytes,e===`live`&&(Q.timings.live??=performance.now()),t!==void 0&&(Q.message=t,su(e===`need-token`?`${t}: enter a token`:t),e===`need-token`&&x(t)),uu()},joined(){Q.joins+=1},snapshot(e){Q.snapshots+=1,g(e)},restored:g,patched(e,t,n){i.update(e,t,n),t.some(e=>e.id===4)&&O(),v(e)},presence(e){Q.users=e.map(e=>e.name||e.user||`anonymous`).sort(),s=e.filter(e=>e.session!==h),l=!0,uu()}},await qs.open());function v(e){o=new yl(e),Q.version=Number(e.version),Q.growthSeq=e.growthSeq,Q.quiescent=e.quiescent,Q.digest=us(e.digest),Q.bytesReceived=_.bytesReceived,Q.snapshotBytes=_.snapshotBytes,c=!0,uu()}let y=BigInt(Date.now())*1000n,b=async e=>{let t=y+=1n;for(let n=0;;n++){let r=performance.now();try{let i=await e(t);return cu=performance.now()-r,n>0&&su(``),uu(),Number(i.version)}catch(e){let t=H.from(e);if(t.code===V.ResourceExhausted&&n<8){Q.rateLimited+=1,su(`rate-limited: ${t.rawMessage}; retrying`),await new Promise(e=>setTimeout(e,250*2**n));continue}throw Q.message=t.rawMessage,su(`refused: ${t.rawMessage}`),t}}};Q.edit=e=>b(t=>_.client.edit(P(So,{ops:e,clientSeq:t}),_.callOptions())),Q.undo=()=>b(e=>_.client.undo(P(Co,{clientSeq:e}),_.callOptions())),Q.redo=()=>b(e=>_.client.redo(P(Co,{clientSeq:e}),_.callOptions())),Q.redraw=()=>{c=!0},Q.generation=()=>i.generation,Q.changedChunks=e=>i.changesSince(e),Q.capture=async()=>{let e=a.last;if(!e)throw Error(`no frame yet`);let t=document.createElement(`canvas`);return t.width=e.width,t.height=e.height,t.getContext(`2d`).putImageData(e,0,0),t.toDataURL(`image/png`)};function x(e){let t=X(`token`);t.hidden=!1,X(`token-why`).textContent=e,t.onsubmit=e=>{e.preventDefault(),t.hidden=!0,_.setToken(X(`token-value`).value),_.run(),S()}}async function S(){try{let e=await _.whoAmI();Q.role=e.role;let t=e.role===`viewer`;X(`tools`).classList.toggle(`disabled`,t),t&&su(`viewer token: editing is disabled (ask for an editor token to edit)`),uu()}catch{}}let C=sessionStorage.getItem(`naadf.name`)??`guest-${Math.floor(Math.random()*1e4)}`;sessionStorage.setItem(`naadf.name`,C),Q.name=C,Q.voxel=(e,t,n)=>o?.inside(e,t,n)?o.cell(e,t,n).material:0;let w=``,T=0;setInterval(()=>{if(Q.state!==`live`||!$)return;let e={session:h,name:C,position:[...$.pos],forward:No($).forward,pointer:f?f.voxel.map(BigInt):[],tool:d.tool},t=JSON.stringify(e,(e,t)=>typeof t==`bigint`?String(t):t),n=performance.now();t===w&&n-T<1e3||(w=t,T=n,_.client.publish(P(bo,e),_.callOptions()).catch(()=>{}))},100);let E=X(`tool`);for(let e of Ll)E.add(new Option(e,e));E.onchange=()=>{d.tool=E.value,d.anchor=void 0,l=!0};let D=X(`radius`);D.onchange=()=>{d.radius=Math.max(0,Number(D.value)||0),l=!0};function O(){X(`palette`).replaceChildren(...Jl(_.mirror).map(e=>{let t=document.createElement(`button`);return t.className=e.id===d.material?`swatch chosen`:`swatch`,t.style.background=e.colour,t.title=`material ${e.id}`,t.onclick=()=>{d.material=e.id,O()},t}))}function k(e){if(!o||Z.width===0)return;let[t,n]=du(m);f=bl(o,[...e.pos],gl(e,Z.width,Z.height,t,n)),p=f&&Q.role!==`viewer`?Wl(d,o,f):void 0,Q.pointer=f?{voxel:f.voxel,before:f.before}:null;let r=i.generation,a=A?Gl(d,p):[];i.setLocals(a),Q.previewInstances=a.length,i.generation!==r&&(c=!0)}let A=!1;Z.addEventListener(`mousemove`,e=>{m=e,A=!0,l=!0}),Z.addEventListener(`mouseleave`,()=>{A=!1,l=!0}),Z.addEventListener(`contextmenu`,e=>e.preventDefault()),Z.addEventListener(`mousedown`,e=>{if(e.button===2&&document.pointerLockElement!==Z){Z.requestPointerLock?.();return}if(e.button!==0||Q.role===`viewer`||!u)return;if(m=e,k(u),!f||p?.refusal){p?.refusal&&su(`${d.tool}: ${p.refusal}`);return}let t=Kl(d,f);l=!0,t&&Q.edit(t).then(()=>su(``),()=>{})});let j=new Set,M=32;addEventListener(`keydown`,e=>{(e.ctrlKey||e.metaKey)&&e.code===`KeyZ`?(e.preventDefault(),(e.shiftKey?Q.redo():Q.undo()).catch(()=>{})):e.target instanceof HTMLInputElement||j.add(e.code)}),addEventListener(`keyup`,e=>j.delete(e.code));let ee=(e,t)=>{$&&($.yaw+=e*.15,$.pitch=Math.max(-89.9,Math.min(89.9,$.pitch-t*.15)),c=!0)};addEventListener(`mousemove`,e=>{document.pointerLockElement===Z&&ee(e.movementX,e.movementY)}),Yl(Z,{look:ee,fly(e,t){if(!$)return;let n=No($);$.pos.forEach((r,i)=>$.pos[i]+=(n.forward[i]*e+n.right[i]*t)*(M/64)),c=!0}}),Z.addEventListener(`wheel`,e=>{M=Math.max(1,Math.min(4096,M*(e.deltaY<0?1.25:.8))),e.preventDefault()});let N=[],te=performance.now(),ne=0,re=!1;function ie(){re||(re=!0,setTimeout(()=>{re=!1,ne=performance.now(),$&&tu($,Q.mode,ou)},Math.max(0,500-(performance.now()-ne))))}let ae=!1;function oe(e){let t=Math.min(.1,(e-te)/1e3);if(te=e,$&&j.size>0){let e=No($),n=(e,n)=>e.forEach((e,r)=>$.pos[r]+=e*n*M*t);j.has(`KeyW`)&&n(e.forward,1),j.has(`KeyS`)&&n(e.forward,-1),j.has(`KeyD`)&&n(e.right,1),j.has(`KeyA`)&&n(e.right,-1),j.has(`Space`)&&n([0,1,0],1),j.has(`ShiftLeft`)&&n([0,1,0],-1),c=!0}if(i.buffer&&$&&c&&!ae){c=!1,ae=!0;let[e,t]=lu(),r=performance.now(),o=Q.version,s=i.generation,d={...$,pos:[...$.pos]};a.render(i,d,e,t,Q.mode).then(e=>{for(let t of[Z,ru])(t.width!==e.width||t.height!==e.height)&&([t.width,t.height]=[e.width,e.height]);n.putImageData(e,0,0),u=d,l=!0,N.push(performance.now()-r),N.length>30&&N.shift(),Q.frameMs=N.reduce((e,t)=>e+t,0)/N.length,Q.shownVersion=o,Q.shownGeneration=s,Q.timings.firstFrame??=performance.now(),Q.samples=a.samples(Q.mode),ml.accumulates(Q.mode)&&Q.samples<nu(Q.mode,ou)&&(c=!0),uu()}).catch(e=>console.error(`frame: ${e}`)).finally(()=>ae=!1),ie()}l&&u&&(l=!1,k(u),Q.markers=vl(r,u,p,s)),requestAnimationFrame(oe)}requestAnimationFrame(oe);let se=X(`mode`);for(let e of Xl)se.add(new Option(e,e,!1,e===Q.mode));se.onchange=()=>{Q.mode=se.value,c=!0},X(`undo`).onclick=()=>Q.undo().catch(()=>{}),X(`redo`).onclick=()=>Q.redo().catch(()=>{}),X(`shot`).onclick=async()=>{let e=document.createElement(`a`);e.href=await Q.capture(),e.download=`naadf-${Q.version}.png`,e.click()},addEventListener(`resize`,()=>c=!0),S(),await _.restore()&&(Q.timings.restored=performance.now()),await _.run()}fu().catch(e=>{Q.state=`error`,Q.message=String(e instanceof Error?e.message:e),su(Q.message),uu()});
