@@ -118,6 +118,12 @@ impl Roma {
         self.options = options;
     }
 
+    /// Forgets the maps: the next frame allocates them again and writes every tile (what a
+    /// benchmark times as a whole build).
+    pub fn forget_maps(&mut self) {
+        self.maps = None;
+    }
+
     /// The tiles the last frame wrote.
     pub fn tiles_written(&self) -> usize {
         self.last_jobs

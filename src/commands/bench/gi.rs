@@ -114,8 +114,8 @@ struct Report {
     /// Mode → the frames it renders in the time of [`MATCHED_GI_FRAMES`] `gi` frames, and
     /// its quality after them.
     matched_time: BTreeMap<&'static str, (u32, Quality)>,
-    /// Bytes of ROMA's maps.
-    roma_map_bytes: u64,
+    /// ROMA's maps: their bytes, and a frame that writes every tile.
+    roma_maps: RomaMaps,
     /// GI pass → GPU milliseconds (median over the timed frames); empty without timestamps.
     gi_pass_ms: Vec<(&'static str, f64)>,
     /// GI array → bytes.
@@ -124,6 +124,16 @@ struct Report {
     motion: BTreeMap<u32, BTreeMap<&'static str, Quality>>,
     /// Mode → (frames after adding, frames after removing) an emitter.
     edit_response: BTreeMap<&'static str, [u32; 2]>,
+}
+
+/// What ROMA's maps cost.
+#[derive(Serialize)]
+struct RomaMaps {
+    bytes: u64,
+    /// Tiles a frame without maps writes.
+    first_tiles: usize,
+    /// Milliseconds of that frame, read back (its pipelines built before).
+    first_frame_ms: f64,
 }
 
 /// What every section shares.
@@ -265,7 +275,7 @@ pub fn run(a: GiArgs) -> Result<()> {
 
     // Cost.
     bar.set_message("bench gi: timing");
-    let (frame_ms, ratios, gi_pass_ms, gi_memory, roma_map_bytes) = timing(&b, &camera, &a)?;
+    let (frame_ms, ratios, gi_pass_ms, gi_memory, roma_maps) = timing(&b, &camera, &a)?;
 
     // Matched time.
     bar.set_message("bench gi: matched time");
@@ -331,7 +341,7 @@ pub fn run(a: GiArgs) -> Result<()> {
         frame_ms,
         ratios,
         matched_time,
-        roma_map_bytes,
+        roma_maps,
         gi_pass_ms,
         gi_memory,
         motion,
@@ -349,7 +359,7 @@ type Timing = (
     BTreeMap<&'static str, Spread>,
     Vec<(&'static str, f64)>,
     Vec<(&'static str, u64)>,
-    u64,
+    RomaMaps,
 );
 
 /// Times `albedo`, `baseline`, `gi` and `roma` in `--rounds` rounds of `--timing-frames`
@@ -367,7 +377,17 @@ fn timing(b: &Bench, camera: &Camera, a: &GiArgs) -> Result<Timing> {
     renderer.render(&b.gpu, &b.gw, camera, b.size, Mode::Albedo, false)?;
     b.frame(&mut baseline, camera)?;
     b.frame(&mut gi, camera)?;
+    // ROMA's first frame after the warm-up's: its pipelines are built, every tile is written.
     b.frame(&mut roma, camera)?;
+    roma.forget_maps();
+    let t0 = Instant::now();
+    b.frame(&mut roma, camera)?;
+    roma.radiance(&b.gpu)?;
+    let roma_maps = RomaMaps {
+        bytes: roma.map_bytes(),
+        first_tiles: roma.tiles_written(),
+        first_frame_ms: t0.elapsed().as_secs_f64() * 1e3,
+    };
     for round in 0..a.rounds as usize {
         for k in 0..order.len() {
             let mode = order[(round + k) % order.len()];
@@ -414,7 +434,7 @@ fn timing(b: &Bench, camera: &Camera, a: &GiArgs) -> Result<Timing> {
         ratios,
         passes,
         memory,
-        roma.map_bytes(),
+        roma_maps,
     ))
 }
 
@@ -521,7 +541,14 @@ fn print_report(r: &Report) {
     for (mode, (frames, q)) in &r.matched_time {
         row(&format!("{mode} {frames} fr, matched"), q);
     }
-    println!("{:<24} {:.2} MB", "roma maps", r.roma_map_bytes as f64 / 1e6);
+    let m = &r.roma_maps;
+    println!(
+        "{:<24} {:.2} MB; first frame {:.1} ms ({} tiles written)",
+        "roma maps",
+        m.bytes as f64 / 1e6,
+        m.first_frame_ms,
+        m.first_tiles
+    );
     for (pass, ms) in &r.gi_pass_ms {
         println!("  {pass:<22} {ms:.3} ms");
     }
