@@ -581,21 +581,7 @@ fn the_path_tracer_accumulates_what_naadf_render_traces() {
         return;
     };
     let server = serve_world(dir.path(), &world, &[], &[]);
-    let camera = r#"{"pos":[64.5,50.25,-20],"yaw":10,"pitch":-25,"fov_y":70}"#;
-    browser.open(
-        "a",
-        &format!("{}&spp=8", page_url(&server, camera, "64x36", "pathtrace")),
-    );
-    let page = browser.wait("a", "n.samples === 8 && n.state === 'live' && n.quiescent", 120_000);
-    assert_eq!(page["mode"], "pathtrace");
-    let (png, native) = page_and_native(
-        &mut browser,
-        "a",
-        &server,
-        camera,
-        &["--size", "64x36", "--mode", "pathtrace", "--spp", "8"],
-        dir.path(),
-    );
+    let (png, native) = progressive_page_and_native(&mut browser, &server, "pathtrace", 8, &["--spp", "8"], dir.path());
     let (mean, most) = difference(&png, &native);
     eprintln!("pathtrace: mean channel difference {mean:.4}, largest {most}");
     assert!(mean < 0.01 && most <= 2, "mean {mean}, largest {most}");
@@ -618,18 +604,7 @@ fn the_roma_mode_draws_what_naadf_render_draws() {
         return;
     };
     let server = serve_world(dir.path(), &world, &[], &[]);
-    let camera = r#"{"pos":[64.5,50.25,-20],"yaw":10,"pitch":-25,"fov_y":70}"#;
-    browser.open("a", &format!("{}&spp=1", page_url(&server, camera, "64x36", "roma")));
-    let page = browser.wait("a", "n.samples === 1 && n.state === 'live' && n.quiescent", 120_000);
-    assert_eq!(page["mode"], "roma");
-    let (png, native) = page_and_native(
-        &mut browser,
-        "a",
-        &server,
-        camera,
-        &["--size", "64x36", "--mode", "roma", "--frames", "1"],
-        dir.path(),
-    );
+    let (png, native) = progressive_page_and_native(&mut browser, &server, "roma", 1, &["--frames", "1"], dir.path());
     let (mean, most) = difference(&png, &native);
     let (a, b) = (
         image::open(&png).unwrap().to_rgba8(),
@@ -745,6 +720,27 @@ fn gi_against_native(browser: &mut Browser, id: &str, server: &Server, camera: &
     let (mean, most) = difference(&png, &native);
     eprintln!("gi ({id}): mean channel difference {mean:.4}, largest {most}");
     assert!(mean < 0.02 && most <= 8, "mean {mean}, largest {most}");
+}
+
+/// Opens a 64 × 36 page in progressive `mode` (`pathtrace`, `roma`) with `spp` samples of
+/// a still view, waits for them, and renders the same view with `naadf render --mode mode`
+/// and `args`; returns the two PNGs' paths.
+fn progressive_page_and_native(
+    browser: &mut Browser,
+    server: &Server,
+    mode: &str,
+    spp: u32,
+    args: &[&str],
+    dir: &Path,
+) -> (String, String) {
+    let camera = r#"{"pos":[64.5,50.25,-20],"yaw":10,"pitch":-25,"fov_y":70}"#;
+    browser.open("a", &format!("{}&spp={spp}", page_url(server, camera, "64x36", mode)));
+    let until = format!("n.samples === {spp} && n.state === 'live' && n.quiescent");
+    let page = browser.wait("a", &until, 120_000);
+    assert_eq!(page["mode"], mode);
+    let mut native_args = vec!["--size", "64x36", "--mode", mode];
+    native_args.extend(args);
+    page_and_native(browser, "a", server, camera, &native_args, dir)
 }
 
 /// Frames of a still view the GI comparisons let the page draw.

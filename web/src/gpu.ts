@@ -6,11 +6,8 @@
 import pathtraceWgsl from "./gen/pathtrace.wgsl?raw";
 import renderWgsl from "./gen/render.wgsl?raw";
 import {
-  DEFAULT_EXPOSURE,
   DEFAULT_MAX_STEPS,
-  DEFAULT_SEED,
   DEFAULT_SUN,
-  FrameInfo,
   GPU_BUFFERS,
   OFFSET_WORDS,
   PATHTRACE_LIGHT_WORDS,
@@ -19,10 +16,9 @@ import {
   View,
   WorldInfo,
 } from "./gen/layout";
-import { WorldGroup, dispatchPixels, passPipeline, readBack, viewKey, writeStruct } from "./compute";
+import { WorldGroup, dispatchPixels, passPipeline, readBack, writeStruct } from "./compute";
 import type { Camera } from "./camera";
 import { cameraRays } from "./camera";
-import { toneMapped } from "./colour";
 import type { Mirror, Touched } from "./mirror";
 import { ChunkPrints } from "./changes";
 import { ENTITY } from "./gen/layout";
@@ -32,6 +28,7 @@ import { overlappedChunks } from "./changes";
 import type { ChunkChanges } from "./changes";
 import { GiRenderer } from "./gi";
 import { RomaRenderer } from "./roma";
+import { ProgressiveSums } from "./progressive";
 
 /** Why the page cannot draw: shown to the person, with the native viewer as the way out. */
 export class NoWebGpu extends Error {}
@@ -374,12 +371,8 @@ class FramePass {
 class PathTracer {
   private readonly pipeline: Promise<GPUComputePipeline>;
   private readonly group1: GPUBindGroupLayout;
-  private readonly frame: GPUBuffer;
   private readonly light: GPUBuffer;
-  private sums: GPUBuffer | undefined;
-  private staging: GPUBuffer | undefined;
-  private key = "";
-  samples = 0;
+  private readonly sums: ProgressiveSums;
 
   constructor(
     readonly device: GPUDevice,
@@ -390,54 +383,28 @@ class PathTracer {
       "uniform",
       "storage",
     ]));
-    const uniform = (size: number) => device.createBuffer({ size, usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST });
-    this.frame = uniform(FrameInfo.size);
-    this.light = uniform(PATHTRACE_LIGHT_WORDS.length * 4);
+    this.light = device.createBuffer({ size: PATHTRACE_LIGHT_WORDS.length * 4, usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST });
     device.queue.writeBuffer(this.light, 0, new Uint32Array(PATHTRACE_LIGHT_WORDS));
+    this.sums = new ProgressiveSums(device, "path");
+  }
+
+  /** Samples per pixel in the current view's sums. */
+  get samples(): number {
+    return this.sums.samples;
   }
 
   async render(world: GpuWorld, camera: Camera, width: number, height: number): Promise<ImageData> {
-    const device = this.device;
-    const bytes = width * height * 16;
-    const key = viewKey(camera, width, height, world);
-    if (key !== this.key || !this.sums) {
-      this.sums?.destroy();
-      this.staging?.destroy();
-      // New buffers are zeroed: the sums start over.
-      this.sums = device.createBuffer({ label: "path sums", size: bytes, usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_SRC });
-      this.staging = device.createBuffer({ label: "path frame", size: bytes, usage: GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST });
-      this.key = key;
-      this.samples = 0;
-    }
-    const rays = cameraRays(camera, width, height);
-    device.queue.writeBuffer(
-      this.frame,
-      0,
-      writeStruct(FrameInfo, {
-        cam_int: rays.int,
-        width,
-        cam_frac: rays.frac,
-        height,
-        forward: rays.forward,
-        seed: DEFAULT_SEED,
-        right: rays.right,
-        sample: this.samples,
-        up: rays.up,
-        history: 0,
-      }),
-    );
-    const group = device.createBindGroup({
+    const sums = this.sums.next(world, camera, width, height);
+    const group = this.device.createBindGroup({
       layout: this.group1,
       entries: [
-        { binding: 0, resource: { buffer: this.frame } },
+        { binding: 0, resource: { buffer: this.sums.frame } },
         { binding: 1, resource: { buffer: this.light } },
-        { binding: 2, resource: { buffer: this.sums } },
+        { binding: 2, resource: { buffer: sums } },
       ],
     });
-    const enc = await dispatchPixels(device, this.pipeline, this.world.of(world), group, width, height);
-    this.samples += 1;
-    const sums = new Float32Array(await readBack(device, enc, this.sums, 0, this.staging!, bytes));
-    return toneMapped(sums, width, height, DEFAULT_EXPOSURE, true);
+    const enc = await dispatchPixels(this.device, this.pipeline, this.world.of(world), group, width, height);
+    return this.sums.finish(enc, width, height);
   }
 }
 

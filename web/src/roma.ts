@@ -5,12 +5,11 @@
 // samples then add up as the path tracer's do while the view and the world stay the same.
 import romaWgsl from "./gen/roma.wgsl?raw";
 import romaBuildWgsl from "./gen/roma_build.wgsl?raw";
-import { DEFAULT_EXPOSURE, DEFAULT_SEED, FrameInfo, GI_LIGHT_WORDS, ROMA, RomaInfo, RomaJob, RomaWindow } from "./gen/layout";
-import { WorldGroup, dispatchPixels, passPipeline, readBack, viewKey, writeStruct } from "./compute";
+import { GI_LIGHT_WORDS, ROMA, RomaInfo, RomaJob, RomaWindow } from "./gen/layout";
+import { WorldGroup, dispatchPixels, passPipeline, writeStruct } from "./compute";
 import type { Camera } from "./camera";
-import { cameraRays } from "./camera";
-import { toneMapped } from "./colour";
 import type { GpuWorld } from "./gpu";
+import { ProgressiveSums } from "./progressive";
 
 type Vec3 = [number, number, number];
 
@@ -62,7 +61,6 @@ export class RomaRenderer {
   private readonly sampleLayout: GPUBindGroupLayout;
   private readonly build: Promise<GPUComputePipeline>;
   private readonly buildLayout: GPUBindGroupLayout;
-  private readonly frame: GPUBuffer;
   private readonly light: GPUBuffer;
   private readonly info: GPUBuffer;
   private readonly windows: GPUBuffer;
@@ -72,10 +70,7 @@ export class RomaRenderer {
   /** The world's generation and size the tiles show. */
   private generation = -1;
   private size = "";
-  private sums: GPUBuffer | undefined;
-  private staging: GPUBuffer | undefined;
-  private key = "";
-  samples = 0;
+  private readonly sums: ProgressiveSums;
 
   constructor(
     readonly device: GPUDevice,
@@ -95,7 +90,6 @@ export class RomaRenderer {
       "storage",
     ]));
     const uniform = (size: number) => device.createBuffer({ size, usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST });
-    this.frame = uniform(FrameInfo.size);
     this.light = uniform(GI_LIGHT_WORDS.length * 4);
     device.queue.writeBuffer(this.light, 0, new Uint32Array(GI_LIGHT_WORDS));
     this.info = uniform(RomaInfo.size);
@@ -105,6 +99,7 @@ export class RomaRenderer {
       usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_DST,
     });
     this.bits = device.createBuffer({ label: "roma maps", size: WINDOWS * WINDOW_TILE_COUNT * TILE_BYTES, usage: GPUBufferUsage.STORAGE });
+    this.sums = new ProgressiveSums(device, "roma");
   }
 
   /** Writes the tiles `camera`'s windows gained and those over the chunks `world` changed
@@ -189,58 +184,34 @@ export class RomaRenderer {
     jobBuffer.destroy();
   }
 
+  /** Samples per pixel in the current view's sums. */
+  get samples(): number {
+    return this.sums.samples;
+  }
+
   /** Adds one sample per pixel of `camera`'s view of `world` (the first, if the view or
    * the world changed) and returns the tone-mapped mean. */
   async render(world: GpuWorld, camera: Camera, width: number, height: number): Promise<ImageData> {
-    const device = this.device;
     world.trackChanges();
     await this.update(world, camera);
-    const bytes = width * height * 16;
-    const key = viewKey(camera, width, height, world);
-    if (key !== this.key || !this.sums) {
-      this.sums?.destroy();
-      this.staging?.destroy();
-      this.sums = device.createBuffer({ label: "roma sums", size: bytes, usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_SRC });
-      this.staging = device.createBuffer({ label: "roma frame", size: bytes, usage: GPUBufferUsage.MAP_READ | GPUBufferUsage.COPY_DST });
-      this.key = key;
-      this.samples = 0;
-    }
-    const rays = cameraRays(camera, width, height);
-    device.queue.writeBuffer(
-      this.frame,
-      0,
-      writeStruct(FrameInfo, {
-        cam_int: rays.int,
-        width,
-        cam_frac: rays.frac,
-        height,
-        forward: rays.forward,
-        seed: DEFAULT_SEED,
-        right: rays.right,
-        sample: this.samples,
-        up: rays.up,
-        history: 0,
-      }),
-    );
-    device.queue.writeBuffer(
+    const sums = this.sums.next(world, camera, width, height);
+    this.device.queue.writeBuffer(
       this.info,
       0,
       writeStruct(RomaInfo, { camera: camera.pos, ao_range: ROMA.AO_RANGE, side: ROMA.SIDE, directions: ROMA.DIRECTIONS }),
     );
-    const group = device.createBindGroup({
+    const group = this.device.createBindGroup({
       layout: this.sampleLayout,
       entries: [
-        { binding: 0, resource: { buffer: this.frame } },
+        { binding: 0, resource: { buffer: this.sums.frame } },
         { binding: 1, resource: { buffer: this.light } },
-        { binding: 2, resource: { buffer: this.sums } },
+        { binding: 2, resource: { buffer: sums } },
         { binding: 3, resource: { buffer: this.info } },
         { binding: 4, resource: { buffer: this.windows } },
         { binding: 5, resource: { buffer: this.bits } },
       ],
     });
-    const enc = await dispatchPixels(device, this.sample, this.world.of(world), group, width, height);
-    this.samples += 1;
-    const sums = new Float32Array(await readBack(device, enc, this.sums, 0, this.staging!, bytes));
-    return toneMapped(sums, width, height, DEFAULT_EXPOSURE, true);
+    const enc = await dispatchPixels(this.device, this.sample, this.world.of(world), group, width, height);
+    return this.sums.finish(enc, width, height);
   }
 }
