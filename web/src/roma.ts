@@ -154,11 +154,14 @@ export class RomaRenderer {
     this.size = size;
     this.device.queue.writeBuffer(this.windows, 0, records);
     if (jobs.size === 0) return;
+    // Per window, the tiles that may hold a point of the world: a tile outside is cleared
+    // without sampling.
     const worldHi: Vec3 = world.chunks.map((c) => c * 16) as Vec3;
+    const worldTiles = Array.from({ length: WINDOWS }, (_, i) => tileRange(Math.floor(i / ROMA.LEVELS), i % ROMA.LEVELS, [0, 0, 0], worldHi));
     const list = new Uint8Array(jobs.size * RomaJob.size);
     let k = 0;
     for (const { tile, window } of jobs.values()) {
-      const [a, b] = tileRange(Math.floor(window / ROMA.LEVELS), window % ROMA.LEVELS, [0, 0, 0], worldHi);
+      const [a, b] = worldTiles[window];
       list.set(new Uint8Array(writeStruct(RomaJob, { tile, window, clear: within(tile, a, b) ? 0 : 1 })), k * RomaJob.size);
       k += 1;
     }

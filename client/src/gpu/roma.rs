@@ -160,9 +160,9 @@ impl Roma {
             maps.sun = shot.light.sun;
             maps.frames = map_frames(&maps.options, shot.light.sun.as_ref());
         }
-        let everything = fresh
-            || matches!(world.changes_since(maps.generation), ChunkChanges::Everything)
-            || maps.generation > world.generation();
+        // The chunks changed since the tiles were written (read once: it walks the log).
+        let changes = world.changes_since(maps.generation);
+        let everything = fresh || changes == ChunkChanges::Everything || maps.generation > world.generation();
         let sun_map = maps.options.maps() - 1;
         for map in 0..maps.options.maps() {
             for level in 0..LEVELS {
@@ -182,7 +182,7 @@ impl Roma {
                 }
             }
         }
-        if !everything && let ChunkChanges::Chunks(chunks) = world.changes_since(maps.generation) {
+        if !everything && let ChunkChanges::Chunks(chunks) = changes {
             let dims = world.chunk_dims();
             for c in chunks {
                 let (x, y, z) = (c % dims[0], c / dims[0] % dims[1], c / (dims[0] * dims[1]));
@@ -196,11 +196,18 @@ impl Roma {
             }
         }
         maps.generation = world.generation();
+        // Per window, the tiles that may hold a point of the world: a tile outside is
+        // cleared without sampling.
+        let world_hi = DVec3::from(size.map(f64::from));
+        let world_tiles: Vec<(IVec3, IVec3)> = (0..maps.windows.len())
+            .map(|i| tile_range(&maps.frames[i / LEVELS], i % LEVELS, DVec3::ZERO, world_hi))
+            .collect();
         let jobs: Vec<RomaJob> = jobs
             .into_iter()
             .map(|(i, tile)| {
                 let tile = IVec3::from(tile);
-                let outside = !tile_meets_world(&maps.frames[i / LEVELS], i % LEVELS, tile, size);
+                let (lo, hi) = world_tiles[i];
+                let outside = !(tile.cmpge(lo).all() && tile.cmple(hi).all());
                 RomaJob {
                     tile: tile.to_array(),
                     window: i as u32,
@@ -363,12 +370,4 @@ fn tiles_over(frame: &MapFrame, level: usize, lo: DVec3, hi: DVec3, base: IVec3)
     let (a, b) = tile_range(frame, level, lo, hi);
     let (a, b) = (a.max(base), b.min(base + IVec3::splat(WINDOW_TILES - 1)));
     (a.z..=b.z).flat_map(move |z| (a.y..=b.y).flat_map(move |y| (a.x..=b.x).map(move |x| IVec3::new(x, y, z))))
-}
-
-/// Whether the map-space box of `tile` may hold a point of the world's box.
-fn tile_meets_world(frame: &MapFrame, level: usize, tile: IVec3, size: [u32; 3]) -> bool {
-    // The world's box in map space, conservatively: its tile range.
-    let hi = DVec3::new(f64::from(size[0]), f64::from(size[1]), f64::from(size[2]));
-    let (a, b) = tile_range(frame, level, DVec3::ZERO, hi);
-    tile.cmpge(a).all() && tile.cmple(b).all()
 }
