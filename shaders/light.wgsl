@@ -253,11 +253,11 @@ fn path_step(s: ptr<function, PathState>, scatter: bool, rng: ptr<function, u32>
     if m.kind == KIND_EMISSIVE {
         (*s).radiance += (*s).throughput * m.albedo * m.emission;
     }
-    // A lighting tier (`roma`) lights diffuse and emissive surfaces itself, and the path
-    // ends there; mirrors and metals scatter on.
+    // A lighting tier (`roma`, `irradiance`) lights diffuse and emissive surfaces itself,
+    // and the path ends there; mirrors and metals scatter on.
     if DIFFUSE_TIER && m.kind != KIND_MIRROR && m.kind != KIND_METAL {
         let surface = vec3<f32>(r.o_int) + ray_local(r, h.t);
-        (*s).radiance += (*s).throughput * diffuse_tier(surface, n, m.albedo, rng);
+        (*s).radiance += (*s).throughput * diffuse_tier(h, surface, n, m.albedo, rng);
         return distance;
     }
     if !scatter {

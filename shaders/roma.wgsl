@@ -195,7 +195,7 @@ fn roma_stratum(d: vec3<f32>) -> u32 {
 // The light a diffuse surface of `albedo` at world point `p` (normal `n`) reflects: sky
 // through the AO range, and the sun's disc through the sun's map (CpuRoma::diffuse, the
 // same four numbers drawn in the same order).
-fn diffuse_tier(p: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, rng: ptr<function, u32>) -> vec3<f32> {
+fn diffuse_tier(h: Hit, p: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, rng: ptr<function, u32>) -> vec3<f32> {
     let u = vec2<f32>(rng_next(rng), rng_next(rng));
     let us = vec2<f32>(rng_next(rng), rng_next(rng));
     let w = sample_cosine(n, u);

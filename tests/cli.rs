@@ -233,6 +233,43 @@ fn errors_are_clean() {
         &["--ao-range", "8"],
         "--ao-range applies to the lit modes only",
     );
+    render(
+        "irradiance",
+        &["--ao-range", "8"],
+        "--ao-range does not apply to --mode irradiance",
+    );
+
+    // The irradiance cache's ray budget: checked, and only for `--mode irradiance`.
+    render(
+        "irradiance",
+        &["--irradiance-rays", "2"],
+        "2 irradiance rays per frame: must lie in 4..=67108864",
+    );
+    render(
+        "irradiance",
+        &["--irradiance-rays", "67108865"],
+        "67108865 irradiance rays",
+    );
+    render(
+        "pathtrace",
+        &["--irradiance-rays", "4096"],
+        "--irradiance-rays does not apply to --mode pathtrace",
+    );
+    render(
+        "roma",
+        &["--irradiance-rays", "4096"],
+        "--irradiance-rays does not apply to --mode roma",
+    );
+    render(
+        "gi",
+        &["--irradiance-rays", "4096"],
+        "--irradiance-rays does not apply to --mode gi",
+    );
+    render(
+        "albedo",
+        &["--irradiance-rays", "4096"],
+        "--irradiance-rays applies to the lit modes only",
+    );
 }
 
 /// A `bench traverse` or `bench gpu` JSON report of 32 × 18 rays per camera: every

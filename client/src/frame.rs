@@ -5,6 +5,7 @@
 //! Nothing here needs a GPU, so the wire client, the render nodes' connection loop and the
 //! radiance images use these types in a build without the renderer.
 
+use crate::light::irradiance::{DEFAULT_RAYS, IrradianceOptions};
 use crate::light::roma::{DEFAULT_AO_RANGE, DEFAULT_DIRECTIONS, RomaOptions};
 use crate::light::{DEFAULT_SPP, LitOptions, Sky, Sun};
 use naadf_proto::v1::FrameRequest;
@@ -35,11 +36,14 @@ pub enum Mode {
     /// ROMA visibility (occupancy maps along fixed directions) for ambient occlusion and
     /// sun shadows of diffuse surfaces; mirrors and metals as `baseline` traces them.
     Roma,
+    /// A world-space irradiance cache lighting diffuse surfaces, refreshed by a ray budget
+    /// per frame (the GPU client's `Irradiance`).
+    Irradiance,
 }
 
 impl Mode {
     /// Every mode, in CLI order.
-    pub const ALL: [Mode; 8] = [
+    pub const ALL: [Mode; 9] = [
         Mode::Albedo,
         Mode::Material,
         Mode::Normal,
@@ -48,6 +52,7 @@ impl Mode {
         Mode::Baseline,
         Mode::Gi,
         Mode::Roma,
+        Mode::Irradiance,
     ];
 
     /// The CLI name.
@@ -61,6 +66,7 @@ impl Mode {
             Mode::Baseline => "baseline",
             Mode::Gi => "gi",
             Mode::Roma => "roma",
+            Mode::Irradiance => "irradiance",
         }
     }
 
@@ -69,16 +75,20 @@ impl Mode {
         Mode::ALL.into_iter().find(|m| m.name() == s)
     }
 
-    /// Whether the mode renders the light model (docs/RENDERING.md §3a–d) rather than a
+    /// Whether the mode renders the light model (docs/RENDERING.md §3a–e) rather than a
     /// pass of the GPU client's `Renderer`.
     pub fn is_lit(self) -> bool {
-        matches!(self, Mode::PathTrace | Mode::Baseline | Mode::Gi | Mode::Roma)
+        matches!(
+            self,
+            Mode::PathTrace | Mode::Baseline | Mode::Gi | Mode::Roma | Mode::Irradiance
+        )
     }
 
-    /// Whether each frame builds on the frames before it (`baseline`, `gi`, `roma`): these take
-    /// `--frames` and a camera path, and keep a history per camera stream.
+    /// Whether each frame builds on the frames before it (`baseline`, `gi`, `roma`,
+    /// `irradiance`): these take `--frames` and a camera path, and keep a history per camera
+    /// stream.
     pub fn is_temporal(self) -> bool {
-        matches!(self, Mode::Baseline | Mode::Gi | Mode::Roma)
+        matches!(self, Mode::Baseline | Mode::Gi | Mode::Roma | Mode::Irradiance)
     }
 
     /// The mode's code in the render pass (its `MODE_*` constants); the lit modes have
@@ -89,7 +99,7 @@ impl Mode {
             Mode::Material => 1,
             Mode::Normal => 2,
             Mode::Steps => 3,
-            Mode::PathTrace | Mode::Baseline | Mode::Gi | Mode::Roma => u32::MAX,
+            Mode::PathTrace | Mode::Baseline | Mode::Gi | Mode::Roma | Mode::Irradiance => u32::MAX,
         }
     }
 }
@@ -156,17 +166,23 @@ impl FrameSpec {
             // The defaults travel as absent fields. The AO range crosses as an f32.
             roma_directions: (self.lit.roma.directions != DEFAULT_DIRECTIONS).then_some(self.lit.roma.directions),
             ao_range: (self.lit.roma.ao_range != DEFAULT_AO_RANGE).then_some(self.lit.roma.ao_range as f32),
+            irradiance_rays: (self.lit.irradiance.rays != DEFAULT_RAYS).then_some(self.lit.irradiance.rays),
         }
     }
 
     /// A request from the wire; an error names what this client cannot render, or a ROMA
-    /// setting out of its range ([`RomaOptions::check`]).
+    /// or irradiance setting out of its range ([`RomaOptions::check`],
+    /// [`IrradianceOptions::check`]).
     pub(crate) fn from_wire(r: &FrameRequest) -> Result<Self, String> {
         let roma = RomaOptions {
             directions: r.roma_directions.unwrap_or(DEFAULT_DIRECTIONS),
             ao_range: r.ao_range.map_or(DEFAULT_AO_RANGE, f64::from),
         };
         roma.check()?;
+        let irradiance = IrradianceOptions {
+            rays: r.irradiance_rays.unwrap_or(DEFAULT_RAYS),
+        };
+        irradiance.check()?;
         Ok(Self {
             camera: Camera::from_json(&r.camera).map_err(|e| e.to_string())?,
             size: (r.width, r.height),
@@ -184,6 +200,7 @@ impl FrameSpec {
                 exposure: if r.exposure == 0.0 { 1.0 } else { r.exposure },
                 stream: r.stream.clone(),
                 roma,
+                irradiance,
             },
         })
     }
@@ -275,6 +292,7 @@ pub enum FrameError {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::light::irradiance::{MAX_RAYS, MIN_RAYS};
 
     /// The server refuses modes outside the protocol's list: every mode a node can render
     /// must be on it.
@@ -306,7 +324,7 @@ mod tests {
             sun: Some(Sun::parse("10,20,30").unwrap()),
             exposure: 0.5,
             stream: "me".into(),
-            roma: RomaOptions::default(),
+            ..LitOptions::default()
         };
         assert_eq!(FrameSpec::from_wire(&spec.to_wire()), Ok(spec.clone()));
         spec.lit.sun = Some(None);
@@ -356,6 +374,37 @@ mod tests {
         for range in [0.0, -1.0, 256.5, f32::INFINITY, f32::NAN] {
             let e = refused(None, Some(range));
             assert!(e.contains("AO range"), "{range}: {e}");
+        }
+    }
+
+    #[test]
+    fn irradiance_settings_cross_the_wire() {
+        let camera = Camera::from_json(r#"{"pos":[0,40,0],"yaw":0,"pitch":-20,"fov_y":60}"#).unwrap();
+        let mut spec = FrameSpec::new(camera, (64, 48), Mode::Irradiance);
+        // The default travels as an absent field and comes back as the default.
+        let wire = spec.to_wire();
+        assert_eq!(wire.irradiance_rays, None);
+        assert_eq!(FrameSpec::from_wire(&wire), Ok(spec.clone()));
+        // Others travel as given, the ends of the range included.
+        for rays in [MIN_RAYS, 1000, MAX_RAYS] {
+            spec.lit.irradiance = IrradianceOptions { rays };
+            let wire = spec.to_wire();
+            assert_eq!(wire.irradiance_rays, Some(rays));
+            assert_eq!(FrameSpec::from_wire(&wire), Ok(spec.clone()));
+        }
+    }
+
+    #[test]
+    fn bad_irradiance_settings_are_refused() {
+        let camera = Camera::from_json(r#"{"pos":[0,40,0],"yaw":0,"pitch":-20,"fov_y":60}"#).unwrap();
+        let wire = FrameSpec::new(camera, (64, 48), Mode::Irradiance).to_wire();
+        for rays in [0, MIN_RAYS - 1, MAX_RAYS + 1, u32::MAX] {
+            let e = FrameSpec::from_wire(&FrameRequest {
+                irradiance_rays: Some(rays),
+                ..wire.clone()
+            })
+            .unwrap_err();
+            assert!(e.contains(&format!("{rays} irradiance rays")), "{rays}: {e}");
         }
     }
 }

@@ -43,7 +43,7 @@ pub const PROTOCOL_VERSION: u32 = 2;
 
 /// The render modes a `FrameRequest` may name (render nodes advertise a subset); the
 /// server refuses any other with INVALID_ARGUMENT.
-pub const FRAME_MODES: [&str; 8] = [
+pub const FRAME_MODES: [&str; 9] = [
     "albedo",
     "material",
     "normal",
@@ -52,6 +52,7 @@ pub const FRAME_MODES: [&str; 8] = [
     "baseline",
     "gi",
     "roma",
+    "irradiance",
 ];
 
 /// Most samples per pixel a `FrameRequest` may ask for.

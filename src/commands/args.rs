@@ -6,6 +6,7 @@
 use super::BuildLimit;
 use anyhow::{Context, Result};
 use naadf_client::Mode;
+use naadf_client::light::irradiance::IrradianceOptions;
 use naadf_client::light::roma::RomaOptions;
 use naadf_client::light::{LitOptions, Sky, Sun};
 use naadf_server::net::frontend::{Frontend, Reflection};
@@ -124,7 +125,7 @@ impl ListenArgs {
     }
 }
 
-/// The options of the lit modes (docs/RENDERING.md §3a–c; `render`, `frame`).
+/// The options of the lit modes (docs/RENDERING.md §3a–e; `render`, `frame`).
 #[derive(clap::Args)]
 pub struct LightArgs {
     /// Samples per pixel in total (pathtrace; default 64).
@@ -133,7 +134,8 @@ pub struct LightArgs {
     /// Seed of the random samples: the same seed, device and inputs give the same image.
     #[arg(long)]
     seed: Option<u32>,
-    /// Scattered rays after the camera ray (default 8 for pathtrace, 3 for baseline, gi and roma).
+    /// Scattered rays after the camera ray (default 8 for pathtrace, 3 for baseline, gi, roma
+    /// and irradiance).
     #[arg(long, value_parser = clap::value_parser!(u32).range(0..=i64::from(naadf_client::light::MAX_BOUNCES)))]
     bounces: Option<u32>,
     /// The sky: `physical` (default) or `uniform:L` / `uniform:R,G,B` (linear radiance).
@@ -153,6 +155,9 @@ pub struct LightArgs {
     /// default 32).
     #[arg(long, value_name = "VOXELS")]
     ao_range: Option<f64>,
+    /// Rays per frame `--mode irradiance` spends refreshing its cache (default 262144).
+    #[arg(long, value_name = "N")]
+    irradiance_rays: Option<u32>,
 }
 
 /// A parsed `--sun` (`off` is a value, so it is not an `Option` itself).
@@ -177,6 +182,7 @@ impl LightArgs {
         ];
         let mut given: Vec<_> = flags.iter().filter(|f| f.1).map(|f| f.0).collect();
         given.extend(self.roma_given());
+        given.extend(self.irradiance_given());
         given
     }
 
@@ -188,6 +194,13 @@ impl LightArgs {
             ("--ao-range", self.ao_range.is_some()),
         ];
         flags.iter().filter(|f| f.1).map(|f| f.0).collect()
+    }
+
+    /// The options of `--mode irradiance` alone given, by name (for a lit mode that takes
+    /// none).
+    #[cfg(feature = "gpu")]
+    pub fn irradiance_given(&self) -> Vec<&'static str> {
+        self.irradiance_rays.map(|_| "--irradiance-rays").into_iter().collect()
     }
 
     /// The options given, over the defaults of docs/RENDERING.md.
@@ -203,6 +216,9 @@ impl LightArgs {
             roma: RomaOptions {
                 directions: self.roma_directions.unwrap_or(d.roma.directions),
                 ao_range: self.ao_range.unwrap_or(d.roma.ao_range),
+            },
+            irradiance: IrradianceOptions {
+                rays: self.irradiance_rays.unwrap_or(d.irradiance.rays),
             },
             ..d
         };

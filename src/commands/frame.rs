@@ -21,17 +21,19 @@ pub struct Args {
     /// Image size `WxH`.
     #[arg(long, default_value = "1280x720", value_parser = parse_image_size)]
     size: (u32, u32),
-    /// What to show: albedo, material, normal, steps, pathtrace, baseline, gi or roma.
+    /// What to show: albedo, material, normal, steps, pathtrace, baseline, gi, roma or
+    /// irradiance.
     #[arg(long, default_value = "albedo", value_parser = parse_mode)]
     mode: naadf_client::Mode,
     #[command(flatten)]
     light: LightArgs,
-    /// Frames of a temporal mode (baseline, gi, roma) the node renders before answering,
-    /// continuing the stream's history.
+    /// Frames of a temporal mode (baseline, gi, roma, irradiance) the node renders before
+    /// answering, continuing the stream's history.
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
     frames: u32,
     /// Names this requester's camera stream: its frames go to one node, which keeps the
-    /// stream's histories (baseline, gi, roma) and sums (pathtrace) between requests.
+    /// stream's histories (baseline, gi, roma, irradiance) and sums (pathtrace) between
+    /// requests.
     #[arg(long, default_value = "")]
     stream: String,
     /// The oldest world version the frame may show.

@@ -1,9 +1,10 @@
 //! `naadf render (--world FILE | --server URL) --camera JSON --size WxH --mode M
 //! [--frames N] -o OUT.png [--gbuffer OUT.bin]`; for `--mode pathtrace`
 //! `[--spp N] [--seed S] [--bounces B] [--sky SKY] [--sun SUN] [--exposure X] [--hdr OUT.pfm]`;
-//! for `--mode baseline`, `--mode gi` and `--mode roma` the same without `--spp`, with
-//! `--frames N` and `[--camera-path FILE.jsonl]`; for `--mode roma` also
-//! `[--roma-directions K] [--ao-range VOXELS]`.
+//! for `--mode baseline`, `--mode gi`, `--mode roma` and `--mode irradiance` the same
+//! without `--spp`, with `--frames N` and `[--camera-path FILE.jsonl]`; for `--mode roma`
+//! also `[--roma-directions K] [--ao-range VOXELS]`, for `--mode irradiance` also
+//! `[--irradiance-rays N]`.
 
 use super::args::{LightArgs, parse_image_size, parse_mode, read_camera};
 use super::remote::{ServerArgs, block_on, quiescent_world};
@@ -31,7 +32,8 @@ pub struct Args {
     /// Camera JSON `{"pos":[x,y,z],"yaw":deg,"pitch":deg,"fov_y":deg}`, or a file holding it.
     #[arg(long, required_unless_present = "camera_path")]
     camera: Option<String>,
-    /// A camera per line (JSON Lines); frame i uses line min(i, last) (baseline, gi, roma).
+    /// A camera per line (JSON Lines); frame i uses line min(i, last) (baseline, gi, roma,
+    /// irradiance).
     #[arg(long, conflicts_with = "camera")]
     camera_path: Option<PathBuf>,
     /// Image size `WxH`.
@@ -39,11 +41,13 @@ pub struct Args {
     size: (u32, u32),
     /// What to show: albedo, material, normal, steps, pathtrace (the light model,
     /// path-traced), baseline (1-spp path tracing with an exponential TAA), gi (the
-    /// paper's GI pipeline) or roma (ROMA visibility for ambient occlusion and sun shadows).
+    /// paper's GI pipeline), roma (ROMA visibility for ambient occlusion and sun shadows) or
+    /// irradiance (a world-space irradiance cache).
     #[arg(long, default_value = "albedo", value_parser = parse_mode)]
     mode: Mode,
     /// Frames to render; the last is written. All identical in the render-pass modes; for
-    /// baseline, gi and roma, each builds on the history. Not for pathtrace, which takes --spp.
+    /// baseline, gi, roma and irradiance, each builds on the history. Not for pathtrace, which
+    /// takes --spp.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     frames: Option<u32>,
     #[command(flatten)]
@@ -116,7 +120,16 @@ pub fn run(a: Args) -> Result<()> {
             if a.frames.is_some() {
                 bail!("--frames does not apply to pathtrace: give the samples per pixel with --spp");
             }
-            refuse_for(&a, &["--gbuffer", "--camera-path", "--roma-directions", "--ao-range"])?;
+            refuse_for(
+                &a,
+                &[
+                    "--gbuffer",
+                    "--camera-path",
+                    "--roma-directions",
+                    "--ao-range",
+                    "--irradiance-rays",
+                ],
+            )?;
             let options = a.light.options()?;
             let light = options.light(DEFAULT_PATHTRACE_BOUNCES).map_err(anyhow::Error::msg)?;
             Job::Lit(options, light)
@@ -125,6 +138,9 @@ pub fn run(a: Args) -> Result<()> {
             refuse_for(&a, &["--gbuffer", "--spp"])?;
             if mode != Mode::Roma {
                 refuse_for(&a, &["--roma-directions", "--ao-range"])?;
+            }
+            if mode != Mode::Irradiance {
+                refuse_for(&a, &["--irradiance-rays"])?;
             }
             let options = LitOptions {
                 frames: a.frames.unwrap_or(1),
@@ -169,12 +185,13 @@ pub fn run(a: Args) -> Result<()> {
 }
 
 /// Fails if one of `flags` (among `--gbuffer`, `--spp`, `--roma-directions`, `--ao-range`,
-/// `--camera-path`) was given.
+/// `--irradiance-rays`, `--camera-path`) was given.
 fn refuse_for(a: &Args, flags: &[&str]) -> Result<()> {
     let given = |f: &str| match f {
         "--gbuffer" => a.gbuffer.is_some(),
         "--spp" => a.light.given().contains(&"--spp"),
         "--roma-directions" | "--ao-range" => a.light.roma_given().contains(&f),
+        "--irradiance-rays" => a.light.irradiance_given().contains(&f),
         _ => a.camera_path.is_some(),
     };
     match flags.iter().find(|f| given(f)) {
@@ -239,8 +256,8 @@ fn path_trace(
     Ok((frame, summary))
 }
 
-/// Renders `--frames` frames of a temporal mode (`baseline`, `gi`, `roma`) along the camera path;
-/// writes the last.
+/// Renders `--frames` frames of a temporal mode (`baseline`, `gi`, `roma`, `irradiance`) along
+/// the camera path; writes the last.
 fn temporal(
     headless: &mut Headless,
     world: &World,

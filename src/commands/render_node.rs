@@ -30,7 +30,7 @@ pub struct Args {
     #[arg(
         long,
         value_delimiter = ',',
-        default_value = "albedo,material,normal,steps,pathtrace,baseline,gi,roma"
+        default_value = "albedo,material,normal,steps,pathtrace,baseline,gi,roma,irradiance"
     )]
     modes: Vec<String>,
     /// Seconds between reconnection attempts.

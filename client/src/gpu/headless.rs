@@ -1,10 +1,11 @@
 //! [`Headless`]: frames of a changing world without a window — a device, a renderer, the
-//! lit renderers (path tracer, baseline, GI, ROMA) and a GPU copy of the world that follows
-//! it (`naadf render`, `naadf replay`, render nodes).
+//! lit renderers (path tracer, baseline, GI, ROMA, irradiance cache) and a GPU copy of the
+//! world that follows it (`naadf render`, `naadf replay`, render nodes).
 
 use super::baseline::{Baseline, History};
 use super::context::{Gpu, GpuError};
 use super::gi::{Gi, GiHistory};
+use super::irradiance::Irradiance;
 use super::pathtrace::{Accumulation, PathTracer};
 use super::render::Renderer;
 use super::roma::Roma;
@@ -26,6 +27,7 @@ pub struct Headless {
     baseline: Baseline,
     gi: Gi,
     roma: Roma,
+    irradiance: Irradiance,
     world: Option<GpuWorld>,
     /// The camera streams of [`Headless::render_spec`], least recently used first.
     streams: Vec<Stream>,
@@ -42,6 +44,7 @@ struct Stream {
     history: Option<History>,
     gi: Option<GiHistory>,
     roma: Option<History>,
+    irradiance: Option<History>,
 }
 
 impl Headless {
@@ -53,6 +56,7 @@ impl Headless {
         let baseline = Baseline::new(&gpu);
         let gi = Gi::new(&gpu);
         let roma = Roma::new(&gpu);
+        let irradiance = Irradiance::new(&gpu);
         Ok(Headless {
             gpu,
             renderer,
@@ -60,6 +64,7 @@ impl Headless {
             baseline,
             gi,
             roma,
+            irradiance,
             world: None,
             streams: Vec::new(),
         })
@@ -93,13 +98,14 @@ impl Headless {
 
     /// Renders the next frame of `shot` of `world` in a temporal mode
     /// ([`Mode::is_temporal`]: `baseline` with [`Baseline`], `gi` with [`Gi`], `roma` with
-    /// [`Roma`]).
+    /// [`Roma`], `irradiance` with [`Irradiance`]).
     pub fn temporal_frame(&mut self, mode: Mode, world: &World, shot: &Shot) -> Result<(), GpuError> {
         let gw = GpuWorld::follow(&mut self.world, &self.gpu, world)?;
         let renderer: &mut dyn Temporal = match mode {
             Mode::Baseline => &mut self.baseline,
             Mode::Gi => &mut self.gi,
             Mode::Roma => &mut self.roma,
+            Mode::Irradiance => &mut self.irradiance,
             _ => return Err(not_temporal(mode)),
         };
         renderer.frame(&self.gpu, gw, shot)
@@ -111,6 +117,7 @@ impl Headless {
             Mode::Baseline => &self.baseline,
             Mode::Gi => &self.gi,
             Mode::Roma => &self.roma,
+            Mode::Irradiance => &self.irradiance,
             _ => return Err(not_temporal(mode)),
         };
         renderer.radiance(&self.gpu)
@@ -126,9 +133,15 @@ impl Headless {
         &mut self.roma
     }
 
+    /// The irradiance-cache renderer (its ray budget).
+    pub fn irradiance_mut(&mut self) -> &mut Irradiance {
+        &mut self.irradiance
+    }
+
     /// Renders the frame `spec` asks for, in any mode: the lit modes continue the state of
-    /// `spec.lit.stream` (its path-tracer sums and its baseline and GI histories; a request without
-    /// a stream starts afresh) and are tone-mapped with its exposure.
+    /// `spec.lit.stream` (its path-tracer sums and its baseline, GI, ROMA and irradiance
+    /// histories; a request without a stream starts afresh) and are tone-mapped with its
+    /// exposure.
     pub fn render_spec(&mut self, world: &World, spec: &FrameSpec) -> Result<Frame, GpuError> {
         if !spec.mode.is_lit() {
             return self.frame(world, &spec.camera, spec.size, spec.mode, false);
@@ -148,6 +161,7 @@ impl Headless {
             history: None,
             gi: None,
             roma: None,
+            irradiance: None,
         };
         let mut stream = match self.streams.iter().position(|s| s.name == lit.stream) {
             Some(at) if !lit.stream.is_empty() => self.streams.remove(at),
@@ -158,6 +172,7 @@ impl Headless {
             h.baseline.swap_history(&mut s.history);
             h.gi.swap_history(&mut s.gi);
             h.roma.swap_history(&mut s.roma);
+            h.irradiance.swap_history(&mut s.irradiance);
         };
         swap(self, &mut stream);
         let radiance = self.render_lit(world, spec, &light);
@@ -179,6 +194,7 @@ impl Headless {
             return self.path_trace(world, &shot, lit.spp, &mut |_| {});
         }
         self.roma.set_options(lit.roma);
+        self.irradiance.set_options(lit.irradiance);
         for _ in 0..lit.frames {
             self.temporal_frame(spec.mode, world, &shot)?;
         }
@@ -187,5 +203,8 @@ impl Headless {
 }
 
 fn not_temporal(mode: Mode) -> GpuError {
-    GpuError::Unsupported(format!("{} is not a temporal mode (baseline, gi, roma)", mode.name()))
+    GpuError::Unsupported(format!(
+        "{} is not a temporal mode (baseline, gi, roma, irradiance)",
+        mode.name()
+    ))
 }

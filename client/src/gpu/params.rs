@@ -357,4 +357,28 @@ wgsl_struct! {
     }
 }
 
+wgsl_struct! {
+    /// What the irradiance passes know of the cache, `irr` (`--mode irradiance`).
+    pub struct IrradianceInfo {
+        /// This frame's stamp (from 1): an entry requested this frame holds it.
+        pub stamp: u32,
+        /// Slots of the table less one (a power of two less one).
+        pub mask: u32,
+        /// Room in the request list, in slots.
+        pub max_requests: u32,
+        /// Entry samples the frame's ray budget pays for.
+        pub budget: u32,
+        /// Seed of the entries' sample streams.
+        pub seed: u32,
+        /// Boxes in the invalidation list.
+        pub boxes: u32,
+        /// Padding to 16 bytes.
+        pub _pad0: u32,
+        /// Padding to 16 bytes.
+        pub _pad1: u32,
+    }
+}
+
+const _: () = assert!(size_of::<IrradianceInfo>() == 32);
+
 const _: () = assert!(size_of::<RomaInfo>() == 32 && size_of::<RomaWindow>() == 64 && size_of::<RomaJob>() == 32);

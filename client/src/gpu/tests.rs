@@ -6,8 +6,10 @@
 use super::baseline::taa_pass;
 use super::bindings::Split;
 use super::gi::{GiPass, GiSplit, gi_pass};
+use super::irradiance::{irradiance_sample_pass, irradiance_update_pass};
 use super::params::{
-    FrameInfo, GiInfo, LightInfo, RayCount, RayIn, RomaInfo, RomaJob, RomaWindow, View, WgslStruct, WorldInfo,
+    FrameInfo, GiInfo, IrradianceInfo, LightInfo, RayCount, RayIn, RomaInfo, RomaJob, RomaWindow, View, WgslStruct,
+    WorldInfo,
 };
 use super::pathtrace::path_pass;
 use super::rays::rays_pass;
@@ -39,7 +41,8 @@ fn whole() -> Split {
 }
 
 /// Every pass: the ray list, the frame, the two path-tracing entry points, the TAA
-/// resolve, ROMA's sample and build passes, and the GI passes over `gi_split`.
+/// resolve, ROMA's sample and build passes, the irradiance cache's sample and update
+/// passes, and the GI passes over `gi_split`.
 fn every_pass(gi_split: GiSplit) -> Vec<PassSource> {
     let mut passes = vec![
         rays_pass(),
@@ -49,6 +52,10 @@ fn every_pass(gi_split: GiSplit) -> Vec<PassSource> {
         taa_pass(),
         roma_sample_pass(),
         roma_build_pass(),
+        irradiance_sample_pass(),
+        irradiance_update_pass("irradiance_invalidate"),
+        irradiance_update_pass("irradiance_args"),
+        irradiance_update_pass("irradiance_update"),
     ];
     passes.extend(GiPass::ALL.map(|p| gi_pass(p, gi_split)));
     passes
@@ -176,6 +183,12 @@ fn the_shared_structs_are_laid_out_at_the_rust_offsets() {
     assert_rust_layout::<RomaInfo>(&roma);
     assert_rust_layout::<RomaWindow>(&roma);
     assert_rust_layout::<RomaJob>(&roma);
+    let irradiance = parse(&source(
+        &irradiance_update_pass("irradiance_update"),
+        Loop::Hierarchy,
+        WorldBindings::Split(&whole()),
+    ));
+    assert_rust_layout::<IrradianceInfo>(&irradiance);
 }
 
 /// The value naga reads for a constant's initialiser.

@@ -3,6 +3,7 @@
 //! must fall within the CPU estimate's confidence interval) and a reference that needs no
 //! device.
 
+use super::irradiance::CpuIrradiance;
 use super::rng::Rng;
 use super::roma::CpuRoma;
 use super::scatter::{self, MIN_ALPHA};
@@ -12,7 +13,7 @@ use naadf_world::World;
 use naadf_world::camera::Camera;
 use naadf_world::entity::pack::rotate;
 use naadf_world::material::MaterialKind;
-use naadf_world::traverse::{DEFAULT_MAX_STEPS, Ray, trace_naadf};
+use naadf_world::traverse::{DEFAULT_MAX_STEPS, Hit, Ray, trace_naadf};
 
 /// A Monte Carlo estimate: the mean and the standard error of the mean, per channel.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -23,13 +24,20 @@ pub struct Estimate {
     pub standard_error: [f64; 3],
 }
 
+/// A lighting tier: what lights diffuse (and emissive) surfaces instead of the path.
+#[derive(Clone, Copy)]
+enum Tier<'w> {
+    Roma(&'w CpuRoma<'w>),
+    Irradiance(&'w CpuIrradiance<'w>),
+}
+
 /// A path tracer of one world under one light.
 pub struct CpuPathTracer<'w> {
     world: &'w World,
     light: Light,
     seed: u32,
     /// The lighting tier of diffuse surfaces, if not the path tracer's own.
-    tier: Option<&'w CpuRoma<'w>>,
+    tier: Option<Tier<'w>>,
 }
 
 impl<'w> CpuPathTracer<'w> {
@@ -48,9 +56,23 @@ impl<'w> CpuPathTracer<'w> {
     /// mirrors and metals scatter as the path tracer scatters them.
     pub fn with_roma(self, roma: &'w CpuRoma<'w>) -> Self {
         CpuPathTracer {
-            tier: Some(roma),
+            tier: Some(Tier::Roma(roma)),
             ..self
         }
+    }
+
+    /// The same tracer with diffuse (and emissive) surfaces lit by the irradiance cache
+    /// `cache` instead (`--mode irradiance`), as [`CpuPathTracer::with_roma`] does.
+    pub fn with_irradiance(self, cache: &'w CpuIrradiance<'w>) -> Self {
+        CpuPathTracer {
+            tier: Some(Tier::Irradiance(cache)),
+            ..self
+        }
+    }
+
+    /// The world traced.
+    pub(crate) fn world(&self) -> &'w World {
+        self.world
     }
 
     /// Samples `samples` of pixel `(px, py)` of a `size` image seen by `camera`.
@@ -93,19 +115,18 @@ impl<'w> CpuPathTracer<'w> {
         let jx = f64::from(rng.next_f32());
         let jy = f64::from(rng.next_f32());
         match camera.ray_through(&camera.basis(), f64::from(px) + jx, f64::from(py) + jy, w, h) {
-            Ok(ray) => self.radiance(ray, &mut rng),
+            Ok(ray) => self.radiance(ray, true, &mut rng),
             Err(_) => DVec3::ZERO,
         }
     }
 
-    /// The radiance arriving along `ray` (docs/RENDERING.md §3a).
-    fn radiance(&self, mut ray: Ray, rng: &mut Rng) -> DVec3 {
+    /// The radiance arriving along `ray` (docs/RENDERING.md §3a); `sees_disc`: whether the
+    /// ray sees the sun's disc (camera rays and rays leaving a mirror do).
+    pub(crate) fn radiance(&self, mut ray: Ray, mut sees_disc: bool, rng: &mut Rng) -> DVec3 {
         let sun = self.light.sun;
         let sun_dir = DVec3::from(self.light.sky_sun().direction());
         let mut light = DVec3::ZERO;
         let mut throughput = DVec3::ONE;
-        // Camera rays and rays leaving a mirror see the sun's disc.
-        let mut sees_disc = true;
         for bounce in 0..=self.light.bounces {
             let d = DVec3::from(ray.dir());
             let Some(hit) = trace_naadf(self.world, &ray) else {
@@ -128,10 +149,9 @@ impl<'w> CpuPathTracer<'w> {
                 light += throughput * albedo * f64::from(m.emission);
             }
             let diffuse = !matches!(m.kind, MaterialKind::Mirror | MaterialKind::Metal);
-            if let Some(roma) = self.tier.filter(|_| diffuse) {
+            if let Some(tier) = self.tier.filter(|_| diffuse) {
                 let surface = DVec3::from(ray.origin()) + d * hit.t;
-                let sky = |w: DVec3| self.sky(w, sun_dir, None);
-                light += throughput * roma.diffuse(surface, n, albedo, &sky, rng);
+                light += throughput * self.tier_light(tier, &hit, surface, n, albedo, rng);
                 break;
             }
             if bounce == self.light.bounces {
@@ -176,6 +196,35 @@ impl<'w> CpuPathTracer<'w> {
             ray = next;
         }
         light
+    }
+
+    /// The light a tier gives the diffuse surface of `hit` at `surface`.
+    fn tier_light(&self, tier: Tier, hit: &Hit, surface: DVec3, n: DVec3, albedo: DVec3, rng: &mut Rng) -> DVec3 {
+        match tier {
+            Tier::Roma(roma) => roma.diffuse(surface, n, albedo, &|w| self.sky_seen(w), rng),
+            Tier::Irradiance(cache) => cache.diffuse(hit, surface, n, albedo, rng),
+        }
+    }
+
+    /// The sun's irradiance at `p` (just off a surface of normal `n`) by one sample of its
+    /// disc: `E·cosθ`-weighted when the disc sample is above the surface and unblocked.
+    pub(crate) fn sun_irradiance(&self, p: DVec3, n: DVec3, rng: &mut Rng) -> f64 {
+        let Some(sun) = self.light.sun else {
+            return 0.0;
+        };
+        let u = [f64::from(rng.next_f32()), f64::from(rng.next_f32())];
+        let wi = scatter::cone(DVec3::from(sun.direction()), Sun::one_minus_cos(), u);
+        let cos = n.dot(wi);
+        if cos > 0.0 && !self.blocked(p, wi) {
+            cos * sun.sample_weight()
+        } else {
+            0.0
+        }
+    }
+
+    /// The sky along `d` as a ray leaving a diffuse surface sees it (no disc).
+    pub(crate) fn sky_seen(&self, d: DVec3) -> DVec3 {
+        self.sky(d, DVec3::from(self.light.sky_sun().direction()), None)
     }
 
     /// Whether a shadow ray from `p` along `dir` meets anything (or runs out of cells).

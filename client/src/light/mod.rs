@@ -20,6 +20,7 @@
 
 pub mod cpu;
 pub mod hdr;
+pub mod irradiance;
 #[cfg(feature = "gpu")]
 pub mod quality;
 pub mod rng;
@@ -27,6 +28,7 @@ pub mod roma;
 pub mod scatter;
 pub mod sky;
 
+use irradiance::options::IrradianceOptions;
 use roma::options::RomaOptions;
 use std::f64::consts::PI;
 
@@ -232,6 +234,8 @@ pub struct LitOptions {
     pub stream: String,
     /// The settings of `roma`: its candidate directions and AO range.
     pub roma: RomaOptions,
+    /// The settings of `irradiance`: its ray budget per frame.
+    pub irradiance: IrradianceOptions,
 }
 
 impl Default for LitOptions {
@@ -246,6 +250,7 @@ impl Default for LitOptions {
             exposure: 1.0,
             stream: String::new(),
             roma: RomaOptions::default(),
+            irradiance: IrradianceOptions::default(),
         }
     }
 }
@@ -261,7 +266,8 @@ impl LitOptions {
     }
 
     /// Checks the numbers: at least one sample and frame, a positive finite exposure, and
-    /// the ROMA settings ([`RomaOptions::check`]).
+    /// the ROMA and irradiance settings ([`RomaOptions::check`],
+    /// [`IrradianceOptions::check`]).
     pub fn check(&self) -> Result<(), String> {
         if self.spp == 0 || self.frames == 0 {
             return Err("a lit frame needs at least one sample per pixel and one frame".into());
@@ -269,7 +275,8 @@ impl LitOptions {
         if !(self.exposure.is_finite() && self.exposure > 0.0) {
             return Err(format!("exposure {}: must be a positive finite number", self.exposure));
         }
-        self.roma.check()
+        self.roma.check()?;
+        self.irradiance.check()
     }
 }
 

@@ -34,7 +34,7 @@ pub use present::Presenter;
 
 use crate::client::{PresenceUpdate, ServerAddress};
 use crate::frame::{Frame, Mode};
-use crate::gpu::{Baseline, Gi, Gpu, GpuError, GpuWorld, PathTracer, Renderer, Roma, Shot, Temporal};
+use crate::gpu::{Baseline, Gi, Gpu, GpuError, GpuWorld, Irradiance, PathTracer, Renderer, Roma, Shot, Temporal};
 use crate::light::{DEFAULT_LIT_BOUNCES, DEFAULT_PATHTRACE_BOUNCES, LitOptions};
 use crate::mirror::Mirror;
 use naadf_world::camera::Camera;
@@ -165,12 +165,13 @@ struct Graphics {
     baseline: Baseline,
     gi: Gi,
     roma: Roma,
+    irradiance: Irradiance,
     world: Option<GpuWorld>,
 }
 
 impl Graphics {
     /// One frame of `mode` of the synced world: the lit modes with their defaults
-    /// (docs/RENDERING.md §3a–c), the path tracer adding one sample per frame while the view
+    /// (docs/RENDERING.md §3a–e), the path tracer adding one sample per frame while the view
     /// and the world stay the same.
     fn render(&mut self, camera: &Camera, size: (u32, u32), mode: Mode) -> Result<Frame, GpuError> {
         let Graphics {
@@ -180,6 +181,7 @@ impl Graphics {
             baseline,
             gi,
             roma,
+            irradiance,
             world,
             ..
         } = self;
@@ -194,10 +196,11 @@ impl Graphics {
                 gw,
                 &Shot::new(*camera, size, light(DEFAULT_PATHTRACE_BOUNCES)?, lit.seed),
             )?,
-            Mode::Baseline | Mode::Gi | Mode::Roma => {
+            Mode::Baseline | Mode::Gi | Mode::Roma | Mode::Irradiance => {
                 let r: &mut dyn Temporal = match mode {
                     Mode::Gi => gi,
                     Mode::Roma => roma,
+                    Mode::Irradiance => irradiance,
                     _ => baseline,
                 };
                 r.frame(
@@ -283,6 +286,7 @@ impl App {
         let mut gi = Gi::new(&gpu);
         gi.profile = true;
         let roma = Roma::new(&gpu);
+        let irradiance = Irradiance::new(&gpu);
         self.gfx = Some(Graphics {
             gpu,
             presenter,
@@ -291,6 +295,7 @@ impl App {
             baseline,
             gi,
             roma,
+            irradiance,
             world: None,
         });
         self.window = Some(window);
@@ -443,8 +448,8 @@ impl App {
         }
         let mut frame = match gfx.render(&fly.camera, size, self.opts.mode) {
             // `gi` is the default; an adapter that cannot run it (or `roma`, whose maps
-            // need a large binding) shows albedo instead.
-            Err(e) if matches!(self.opts.mode, Mode::Gi | Mode::Roma) => {
+            // need a large binding, or `irradiance`) shows albedo instead.
+            Err(e) if matches!(self.opts.mode, Mode::Gi | Mode::Roma | Mode::Irradiance) => {
                 self.notice = format!("{} is not available here ({e}); showing albedo", self.opts.mode.name());
                 self.opts.mode = Mode::Albedo;
                 gfx.render(&fly.camera, size, Mode::Albedo)?

@@ -175,6 +175,7 @@ struct FrameQuery {
     stream: Option<String>,
     roma_directions: Option<u32>,
     ao_range: Option<f32>,
+    irradiance_rays: Option<u32>,
 }
 
 impl FrameQuery {
@@ -198,6 +199,7 @@ impl FrameQuery {
             stream: self.stream.unwrap_or_default(),
             roma_directions: self.roma_directions,
             ao_range: self.ao_range,
+            irradiance_rays: self.irradiance_rays,
         }
     }
 }
@@ -219,9 +221,9 @@ fn http_error(s: &Status) -> Response {
 }
 
 /// `GET /frame.png?camera=<json>&size=WxH&mode=M[&min_version=n][&token=T]`, plus the lit
-/// modes' `spp`, `frames`, `seed`, `bounces`, `sky`, `sun`, `exposure` and `stream`, and
-/// `roma`'s `roma_directions` and `ao_range`: the same request, roles and errors as
-/// `RenderFrame`. The token comes from `Authorization: Bearer`
+/// modes' `spp`, `frames`, `seed`, `bounces`, `sky`, `sun`, `exposure` and `stream`,
+/// `roma`'s `roma_directions` and `ao_range`, and `irradiance`'s `irradiance_rays`: the same
+/// request, roles and errors as `RenderFrame`. The token comes from `Authorization: Bearer`
 /// or the query; a request without one from another machine is refused even in open mode.
 /// Authentication comes first: a caller without a valid token learns nothing about the
 /// other parameters.
@@ -406,11 +408,16 @@ mod tests {
         assert_eq!((r.camera.as_str(), r.mode.as_str()), ("{}", "roma"));
         assert_eq!((r.width, r.height, r.bounces, r.exposure), (8, 6, Some(2), 0.5));
         assert_eq!((r.roma_directions, r.ao_range), (Some(9), Some(48.5)));
+        let r = request("camera=%7B%7D&mode=irradiance&irradiance_rays=4096");
+        assert_eq!((r.mode.as_str(), r.irradiance_rays), ("irradiance", Some(4096)));
         // Absent, they stay absent: the render node takes its defaults.
         let r = request("camera=%7B%7D");
         assert_eq!((r.mode.as_str(), r.roma_directions, r.ao_range), ("albedo", None, None));
+        assert_eq!(r.irradiance_rays, None);
         // A value that is not a number is a bad query, not a request.
-        let uri: Uri = "/frame.png?camera=%7B%7D&roma_directions=many".parse().unwrap();
-        assert!(Query::<FrameQuery>::try_from_uri(&uri).is_err());
+        for bad in ["roma_directions=many", "irradiance_rays=many", "irradiance_rays=-1"] {
+            let uri: Uri = format!("/frame.png?camera=%7B%7D&{bad}").parse().unwrap();
+            assert!(Query::<FrameQuery>::try_from_uri(&uri).is_err(), "{bad}");
+        }
     }
 }

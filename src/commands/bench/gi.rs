@@ -1,13 +1,13 @@
 //! `naadf bench gi WORLD`: the lit modes measured against the path tracer
-//! (docs/RENDERING.md §3a–d, BENCHMARKS.md "Global illumination" and "Lit modes"):
-//! - **static quality**: `baseline`, `gi` and `roma` after `--frames` frames, FLIP,
-//!   relative MSE and mean-luminance bias against a `--reference-spp` path-traced image;
-//!   the noise floor is the same figures between two references of different seeds; the
-//!   temporal flicker of each mode over the frames after the last;
-//! - **cost**: milliseconds per frame of `albedo`, `baseline`, `gi` and `roma`, timed in
-//!   alternating rounds, with the ratios per round (median and range), GI's per-pass GPU
-//!   times from timestamp queries where the adapter has them, GI's memory by array and
-//!   ROMA's maps;
+//! (docs/RENDERING.md §3a–e, BENCHMARKS.md "Global illumination" and "Lit modes"):
+//! - **static quality**: `baseline`, `gi`, `roma` and `irradiance` after `--frames`
+//!   frames, FLIP, relative MSE and mean-luminance bias against a `--reference-spp`
+//!   path-traced image; the noise floor is the same figures between two references of
+//!   different seeds; the temporal flicker of each mode over the frames after the last;
+//! - **cost**: milliseconds per frame of `albedo`, `baseline`, `gi`, `roma` and
+//!   `irradiance`, timed in alternating rounds, with the ratios per round (median and
+//!   range), GI's per-pass GPU times from timestamp queries where the adapter has them,
+//!   GI's memory by array, ROMA's maps and the irradiance cache;
 //! - **matched time**: each lit mode's quality after the frames it renders in the time 32
 //!   `gi` frames take (by the timed medians);
 //! - **motion**: a camera path (strafe plus yaw), FLIP against per-pose references at three
@@ -19,10 +19,12 @@ use crate::commands::args::{LightArgs, parse_image_size, read_camera};
 use crate::commands::load_world;
 use crate::commands::print_json;
 use crate::commands::progress;
+use super::face_granularity::{self, FaceGranularity};
 use anyhow::{Context, Result, bail};
 use naadf_client::Mode;
-use naadf_client::gpu::{Baseline, Gi, GiPass, Gpu, GpuWorld, PathTracer, Renderer, Roma, Shot, Temporal};
+use naadf_client::gpu::{Baseline, Gi, GiPass, Gpu, GpuWorld, Irradiance, PathTracer, Renderer, Roma, Shot, Temporal};
 use naadf_client::light::hdr::Radiance;
+use naadf_client::light::irradiance::IrradianceOptions;
 use naadf_client::light::quality::{Quality, flicker, mean_luminance};
 use naadf_client::light::roma::RomaOptions;
 use naadf_client::light::{DEFAULT_LIT_BOUNCES, Light};
@@ -65,6 +67,10 @@ pub struct GiArgs {
     /// Skip the edit-response section.
     #[arg(long)]
     no_edit: bool,
+    /// Samples per face of the irradiance cache's face-granularity measurement, on the CPU
+    /// (0 skips it).
+    #[arg(long, default_value_t = 0)]
+    face_samples: u32,
     /// The light (not `--spp`: the references take `--reference-spp`). Bounces default to
     /// 3, as in the compared modes.
     #[command(flatten)]
@@ -109,13 +115,19 @@ struct Report {
     flicker: BTreeMap<&'static str, f64>,
     /// Mode → milliseconds per frame, over the timing rounds.
     frame_ms: BTreeMap<&'static str, Spread>,
-    /// gi / albedo, gi / baseline, roma / albedo and roma / gi frame time, per round.
+    /// gi / albedo, gi / baseline, roma / albedo, roma / gi, irradiance / albedo and
+    /// irradiance / gi frame time, per round.
     ratios: BTreeMap<&'static str, Spread>,
     /// Mode → the frames it renders in the time of [`MATCHED_GI_FRAMES`] `gi` frames, and
     /// its quality after them.
     matched_time: BTreeMap<&'static str, (u32, Quality)>,
     /// ROMA's maps: their bytes, and a frame that writes every tile.
     roma_maps: RomaMaps,
+    /// The irradiance cache: its bytes, a frame that starts from an empty cache, and the
+    /// entry samples a frame takes.
+    irradiance_cache: IrradianceCache,
+    /// Voxel faces against block faces as the cache's keys (`--face-samples`).
+    face_granularity: Option<FaceGranularity>,
     /// GI pass → GPU milliseconds (median over the timed frames); empty without timestamps.
     gi_pass_ms: Vec<(&'static str, f64)>,
     /// GI array → bytes.
@@ -136,6 +148,18 @@ struct RomaMaps {
     first_frame_ms: f64,
 }
 
+/// What the irradiance cache costs.
+#[derive(Serialize)]
+struct IrradianceCache {
+    bytes: u64,
+    /// Entry samples a frame that starts from an empty cache takes.
+    first_samples: u32,
+    /// Milliseconds of that frame, read back (its pipelines built before).
+    first_frame_ms: f64,
+    /// Entry samples the last timed frame took.
+    samples: u32,
+}
+
 /// What every section shares.
 struct Bench {
     gpu: Gpu,
@@ -146,6 +170,7 @@ struct Bench {
     exposure: f32,
     size: (u32, u32),
     roma: RomaOptions,
+    irradiance: IrradianceOptions,
 }
 
 impl Bench {
@@ -176,6 +201,7 @@ impl Bench {
         match mode {
             Mode::Gi => Box::new(Gi::new(&self.gpu)),
             Mode::Roma => Box::new(self.roma()),
+            Mode::Irradiance => Box::new(self.irradiance()),
             _ => Box::new(Baseline::new(&self.gpu)),
         }
     }
@@ -185,6 +211,13 @@ impl Bench {
         let mut roma = Roma::new(&self.gpu);
         roma.set_options(self.roma);
         roma
+    }
+
+    /// A fresh irradiance-cache renderer with the benchmark's settings.
+    fn irradiance(&self) -> Irradiance {
+        let mut irradiance = Irradiance::new(&self.gpu);
+        irradiance.set_options(self.irradiance);
+        irradiance
     }
 
     /// The quality of a fresh `mode` after `frames` frames.
@@ -197,7 +230,7 @@ impl Bench {
     }
 }
 
-const COMPARED: [Mode; 3] = [Mode::Baseline, Mode::Gi, Mode::Roma];
+const COMPARED: [Mode; 4] = [Mode::Baseline, Mode::Gi, Mode::Roma, Mode::Irradiance];
 /// The `gi` frames whose time the matched-time comparison gives every mode.
 const MATCHED_GI_FRAMES: f64 = 32.0;
 /// The most frames a mode runs in the matched-time comparison.
@@ -233,6 +266,7 @@ pub fn run(a: GiArgs) -> Result<()> {
         exposure: options.exposure,
         size: a.size,
         roma: options.roma,
+        irradiance: options.irradiance,
     };
     let last = *a.frames.last().expect("checked above");
     let motion_poses = if a.motion_spp > 0 { 3 } else { 0 };
@@ -275,7 +309,7 @@ pub fn run(a: GiArgs) -> Result<()> {
 
     // Cost.
     bar.set_message("bench gi: timing");
-    let (frame_ms, ratios, gi_pass_ms, gi_memory, roma_maps) = timing(&b, &camera, &a)?;
+    let (frame_ms, ratios, gi_pass_ms, gi_memory, roma_maps, irradiance_cache) = timing(&b, &camera, &a)?;
 
     // Matched time.
     bar.set_message("bench gi: matched time");
@@ -329,6 +363,10 @@ pub fn run(a: GiArgs) -> Result<()> {
     }
     bar.finish_and_clear();
 
+    let face_granularity = (a.face_samples > 0).then(|| {
+        bar.set_message("bench gi: face granularity");
+        face_granularity::measure(&b.world, b.light, &camera, a.size, a.face_samples)
+    });
     let report = Report {
         adapter: b.gpu.describe(),
         size: [a.size.0, a.size.1],
@@ -342,6 +380,8 @@ pub fn run(a: GiArgs) -> Result<()> {
         ratios,
         matched_time,
         roma_maps,
+        irradiance_cache,
+        face_granularity,
         gi_pass_ms,
         gi_memory,
         motion,
@@ -360,23 +400,27 @@ type Timing = (
     Vec<(&'static str, f64)>,
     Vec<(&'static str, u64)>,
     RomaMaps,
+    IrradianceCache,
 );
 
-/// Times `albedo`, `baseline`, `gi` and `roma` in `--rounds` rounds of `--timing-frames`
-/// frames, rotating the order each round (each frame read back, as a client does).
+/// Times `albedo`, `baseline`, `gi`, `roma` and `irradiance` in `--rounds` rounds of
+/// `--timing-frames` frames, rotating the order each round (each frame read back, as a
+/// client does).
 fn timing(b: &Bench, camera: &Camera, a: &GiArgs) -> Result<Timing> {
     let mut renderer = Renderer::new(&b.gpu);
     let mut baseline = Baseline::new(&b.gpu);
     let mut gi = Gi::new(&b.gpu);
     let mut roma = b.roma();
+    let mut irradiance = b.irradiance();
     gi.profile = true;
-    let order = [Mode::Albedo, Mode::Baseline, Mode::Gi, Mode::Roma];
+    let order = [Mode::Albedo, Mode::Baseline, Mode::Gi, Mode::Roma, Mode::Irradiance];
     let mut ms: BTreeMap<&'static str, Vec<f64>> = BTreeMap::new();
     let mut pass_ms: BTreeMap<&'static str, Vec<f64>> = BTreeMap::new();
     // Warm up: pipelines built, histories past their first frame.
     renderer.render(&b.gpu, &b.gw, camera, b.size, Mode::Albedo, false)?;
     b.frame(&mut baseline, camera)?;
     b.frame(&mut gi, camera)?;
+    b.frame(&mut irradiance, camera)?;
     // ROMA's first frame after the warm-up's: its pipelines are built, every tile is written.
     b.frame(&mut roma, camera)?;
     roma.forget_maps();
@@ -388,6 +432,14 @@ fn timing(b: &Bench, camera: &Camera, a: &GiArgs) -> Result<Timing> {
         first_tiles: roma.tiles_written(),
         first_frame_ms: t0.elapsed().as_secs_f64() * 1e3,
     };
+    // The irradiance cache's first frame after the warm-up's: its pipelines are built, the
+    // cache starts empty.
+    irradiance.forget_cache();
+    let t0 = Instant::now();
+    b.frame(&mut irradiance, camera)?;
+    irradiance.radiance(&b.gpu)?;
+    let first_frame_ms = t0.elapsed().as_secs_f64() * 1e3;
+    let first_samples = irradiance.stats(&b.gpu)?.samples;
     for round in 0..a.rounds as usize {
         for k in 0..order.len() {
             let mode = order[(round + k) % order.len()];
@@ -402,6 +454,10 @@ fn timing(b: &Bench, camera: &Camera, a: &GiArgs) -> Result<Timing> {
                     Mode::Roma => {
                         b.frame(&mut roma, camera)?;
                         roma.radiance(&b.gpu)?;
+                    }
+                    Mode::Irradiance => {
+                        b.frame(&mut irradiance, camera)?;
+                        irradiance.radiance(&b.gpu)?;
                     }
                     _ => {
                         b.frame(&mut gi, camera)?;
@@ -423,7 +479,15 @@ fn timing(b: &Bench, camera: &Camera, a: &GiArgs) -> Result<Timing> {
         ("gi/baseline", per_round("gi", "baseline")),
         ("roma/albedo", per_round("roma", "albedo")),
         ("roma/gi", per_round("roma", "gi")),
+        ("irradiance/albedo", per_round("irradiance", "albedo")),
+        ("irradiance/gi", per_round("irradiance", "gi")),
     ]);
+    let irradiance_cache = IrradianceCache {
+        bytes: irradiance.cache_bytes(),
+        first_samples,
+        first_frame_ms,
+        samples: irradiance.stats(&b.gpu)?.samples,
+    };
     let passes = GiPass::ALL
         .iter()
         .filter_map(|p| pass_ms.remove(p.entry()).map(|v| (p.entry(), Spread::of(v).median)))
@@ -435,6 +499,7 @@ fn timing(b: &Bench, camera: &Camera, a: &GiArgs) -> Result<Timing> {
         passes,
         memory,
         roma_maps,
+        irradiance_cache,
     ))
 }
 
@@ -549,6 +614,27 @@ fn print_report(r: &Report) {
         m.first_frame_ms,
         m.first_tiles
     );
+    let c = &r.irradiance_cache;
+    println!(
+        "{:<24} {:.2} MB; first frame {:.1} ms ({} samples taken); {} samples a frame after",
+        "irradiance cache",
+        c.bytes as f64 / 1e6,
+        c.first_frame_ms,
+        c.first_samples,
+        c.samples
+    );
+    if let Some(f) = &r.face_granularity {
+        println!(
+            "{:<24} {} voxel faces, {} block faces over {} pixels; a block-face key adds {:.2} % error, each {}-sample estimate carries {:.2} % noise",
+            "irradiance face keys",
+            f.voxel_faces,
+            f.block_faces,
+            f.pixels,
+            100.0 * f.block_error,
+            f.samples,
+            100.0 * f.noise
+        );
+    }
     for (pass, ms) in &r.gi_pass_ms {
         println!("  {pass:<22} {ms:.3} ms");
     }

@@ -7,6 +7,7 @@ mod applied;
 mod build;
 mod cpu;
 mod edit;
+mod face_granularity;
 mod fanout;
 mod flood;
 mod frames;

@@ -1079,11 +1079,11 @@ fn path_step(s: ptr<function, PathState>, scatter: bool, rng: ptr<function, u32>
     if m.kind == KIND_EMISSIVE {
         (*s).radiance += (*s).throughput * m.albedo * m.emission;
     }
-    // A lighting tier (`roma`) lights diffuse and emissive surfaces itself, and the path
-    // ends there; mirrors and metals scatter on.
+    // A lighting tier (`roma`, `irradiance`) lights diffuse and emissive surfaces itself,
+    // and the path ends there; mirrors and metals scatter on.
     if DIFFUSE_TIER && m.kind != KIND_MIRROR && m.kind != KIND_METAL {
         let surface = vec3<f32>(r.o_int) + ray_local(r, h.t);
-        (*s).radiance += (*s).throughput * diffuse_tier(surface, n, m.albedo, rng);
+        (*s).radiance += (*s).throughput * diffuse_tier(h, surface, n, m.albedo, rng);
         return distance;
     }
     if !scatter {
@@ -1146,11 +1146,12 @@ fn path_radiance(primary: Ray, bounces: u32, sees_disc: bool, rng: ptr<function,
 }
 
 // No lighting tier: `path_step` (light.wgsl) traces diffuse surfaces as the light model
-// does. Included by the path tracer and the GI passes; `roma` includes roma.wgsl instead.
+// does. Included by the path tracer, the GI passes and the irradiance cache's updates;
+// `roma` and `irradiance` include roma.wgsl and irradiance.wgsl instead.
 
 const DIFFUSE_TIER: bool = false;
 
-fn diffuse_tier(p: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, rng: ptr<function, u32>) -> vec3<f32> {
+fn diffuse_tier(h: Hit, p: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, rng: ptr<function, u32>) -> vec3<f32> {
     return vec3<f32>(0.0);
 }
 

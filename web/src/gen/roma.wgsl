@@ -1079,11 +1079,11 @@ fn path_step(s: ptr<function, PathState>, scatter: bool, rng: ptr<function, u32>
     if m.kind == KIND_EMISSIVE {
         (*s).radiance += (*s).throughput * m.albedo * m.emission;
     }
-    // A lighting tier (`roma`) lights diffuse and emissive surfaces itself, and the path
-    // ends there; mirrors and metals scatter on.
+    // A lighting tier (`roma`, `irradiance`) lights diffuse and emissive surfaces itself,
+    // and the path ends there; mirrors and metals scatter on.
     if DIFFUSE_TIER && m.kind != KIND_MIRROR && m.kind != KIND_METAL {
         let surface = vec3<f32>(r.o_int) + ray_local(r, h.t);
-        (*s).radiance += (*s).throughput * diffuse_tier(surface, n, m.albedo, rng);
+        (*s).radiance += (*s).throughput * diffuse_tier(h, surface, n, m.albedo, rng);
         return distance;
     }
     if !scatter {
@@ -1342,7 +1342,7 @@ fn roma_stratum(d: vec3<f32>) -> u32 {
 // The light a diffuse surface of `albedo` at world point `p` (normal `n`) reflects: sky
 // through the AO range, and the sun's disc through the sun's map (CpuRoma::diffuse, the
 // same four numbers drawn in the same order).
-fn diffuse_tier(p: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, rng: ptr<function, u32>) -> vec3<f32> {
+fn diffuse_tier(h: Hit, p: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, rng: ptr<function, u32>) -> vec3<f32> {
     let u = vec2<f32>(rng_next(rng), rng_next(rng));
     let us = vec2<f32>(rng_next(rng), rng_next(rng));
     let w = sample_cosine(n, u);

@@ -1,0 +1,338 @@
+//! `--mode irradiance` against the path tracer and against itself (docs/RENDERING.md §3e).
+//!
+//! - An open floor under a uniform sky of radiance 1 has radiance equal to its albedo, on
+//!   the CPU and on the GPU, where it equals `pathtrace --bounces 1` within 4 of the path
+//!   tracer's standard errors; beside a black wall (which bounces nothing), the image mean
+//!   does too.
+//! - With a device: every entry the GPU keeps holds the mean of the samples the CPU takes
+//!   for its face (the same random streams; an entry may differ where f32 and f64 round a
+//!   ray differently); the same seed gives the same image; the ray budget bounds the
+//!   samples of a frame; an edit clears the entries within the bounce distance and no
+//!   others; an emitter removed, and an emitting entity moved away, leave the floor they
+//!   lit dark (at most 1 % of its lit value) within 32 frames.
+
+mod scenes;
+
+use naadf_client::gpu::{GpuWorld, Irradiance, Shot, Temporal};
+use naadf_client::light::cpu::CpuPathTracer;
+use naadf_client::light::hdr::Radiance;
+use naadf_client::light::irradiance::{BOUNCE_DISTANCE, CpuIrradiance, FaceKey, IrradianceOptions};
+use naadf_client::light::{Light, Sky, Sun};
+use naadf_world::World;
+use scenes::{FLOOR, GREY, apply, camera, gpu, world, world_of};
+use std::collections::HashMap;
+
+fn uniform(l: f32) -> Light {
+    Light::new(Sky::Uniform([l; 3]), None, 3).unwrap()
+}
+
+/// The camera looking straight down at the 64³ test worlds.
+const DOWN: &str = r#"{"pos":[32,40,32],"yaw":0,"pitch":-89.9,"fov_y":70}"#;
+
+/// `frames` GPU frames of `shot` of `w` with `renderer` (a fresh history); the last one.
+fn frames(renderer: &mut Irradiance, gw: &GpuWorld, shot: &Shot, frames: u32) -> Radiance {
+    let gpu = gpu().expect("device");
+    for _ in 0..frames {
+        renderer.frame(gpu, gw, shot).expect("irradiance frame");
+    }
+    renderer.radiance(gpu).expect("radiance")
+}
+
+/// The mean of every channel of every pixel.
+fn mean(img: &[[f32; 3]]) -> f64 {
+    img.iter().flatten().map(|&c| f64::from(c)).sum::<f64>() / (3 * img.len()) as f64
+}
+
+#[test]
+fn an_open_floor_under_a_uniform_sky_has_its_albedo() {
+    let w = world(&[GREY, FLOOR]);
+    let cam = camera(DOWN);
+    let light = uniform(1.0);
+    let cache = CpuIrradiance::new(&w, light, 3, 8);
+    let tracer = CpuPathTracer::new(&w, light, 3).with_irradiance(&cache);
+    for py in 0..6 {
+        for px in 0..8 {
+            for c in tracer.estimate(&cam, (px, py), (8, 6), 0..2).mean {
+                assert!((c - 0.5).abs() < 1e-6, "floor radiance {c}, albedo 0.5");
+            }
+        }
+    }
+    let Some(gpu) = gpu() else { return };
+    let size = (24, 18);
+    let img = frames(
+        &mut Irradiance::new(gpu),
+        &GpuWorld::new(gpu, &w).unwrap(),
+        &Shot::new(cam, size, light, 3),
+        4,
+    );
+    let reference = CpuPathTracer::new(&w, Light { bounces: 1, ..light }, 3);
+    for py in 0..size.1 {
+        for px in 0..size.0 {
+            let e = reference.estimate(&cam, (px, py), size, 0..16);
+            let g = img.rgb[(px + py * size.0) as usize];
+            for ((&got, want), se) in g.iter().zip(e.mean).zip(e.standard_error) {
+                assert!(
+                    (f64::from(got) - want).abs() <= 4.0 * se + 1e-4,
+                    "pixel ({px}, {py}): {got} vs pathtrace {want} ± {se}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn beside_a_black_wall_the_floor_matches_one_bounce_path_tracing() {
+    let Some(gpu) = gpu() else { return };
+    let w = world(&[
+        GREY,
+        r#"{"op":"define_material","id":2,"kind":"diffuse","albedo":[0,0,0]}"#,
+        FLOOR,
+        r#"{"op":"box","min":[42,8,0],"max":[46,40,64],"material":2}"#,
+    ]);
+    let cam = camera(DOWN);
+    let size = (32, 24);
+    let light = uniform(1.0);
+    let img = frames(
+        &mut Irradiance::new(gpu),
+        &GpuWorld::new(gpu, &w).unwrap(),
+        &Shot::new(cam, size, light, 1),
+        48,
+    );
+    let reference = CpuPathTracer::new(&w, Light { bounces: 1, ..light }, 1);
+    let (mut sum, mut var) = (0.0, 0.0);
+    let n = f64::from(size.0 * size.1);
+    for py in 0..size.1 {
+        for px in 0..size.0 {
+            let e = reference.estimate(&cam, (px, py), size, 0..32);
+            sum += e.mean[0];
+            var += e.standard_error[0].powi(2);
+        }
+    }
+    let (path, se) = (sum / n, var.sqrt() / n);
+    let got = img.rgb.iter().map(|p| f64::from(p[0])).sum::<f64>() / n;
+    eprintln!("floor beside a black wall: irradiance {got:.5}, pathtrace --bounces 1 {path:.5} ± {se:.5}");
+    assert!(path > 0.1 && path < 0.45, "the wall shades the floor ({path})");
+    assert!(
+        (got - path).abs() <= 4.0 * se,
+        "irradiance {got} vs pathtrace {path} ± {se}"
+    );
+}
+
+/// A scene with shade from a roof, a pillar's shadow, an emitter, a metal and a mirror.
+fn courtyard() -> World {
+    world(&[
+        GREY,
+        r#"{"op":"define_material","id":2,"kind":"metal","albedo":[0.9,0.6,0.3],"roughness":0.3}"#,
+        r#"{"op":"define_material","id":3,"kind":"emissive","albedo":[1,0.8,0.5],"emission":4}"#,
+        r#"{"op":"define_material","id":4,"kind":"mirror","albedo":[0.8,0.8,0.9]}"#,
+        FLOOR,
+        r#"{"op":"box","min":[20,20,20],"max":[44,22,44],"material":1}"#,
+        r#"{"op":"box","min":[20,8,20],"max":[22,20,22],"material":1}"#,
+        r#"{"op":"box","min":[36,8,36],"max":[40,12,40],"material":3}"#,
+        r#"{"op":"sphere","center":[48,14,40],"radius":5,"material":2}"#,
+        r#"{"op":"box","min":[8,8,50],"max":[30,24,51],"material":4}"#,
+    ])
+}
+
+const COURTYARD_CAMERA: &str = r#"{"pos":[32,30,2],"yaw":0,"pitch":-25,"fov_y":70}"#;
+
+#[test]
+fn the_gpus_entries_hold_the_cpus_samples() {
+    let Some(gpu) = gpu() else { return };
+    let w = courtyard();
+    let light = Light::new(Sky::Physical, Some(Sun::parse("120,40,3").unwrap()), 3).unwrap();
+    let shot = Shot::new(camera(COURTYARD_CAMERA), (32, 24), light, 5);
+    let mut renderer = Irradiance::new(gpu);
+    frames(&mut renderer, &GpuWorld::new(gpu, &w).unwrap(), &shot, 6);
+    let entries = renderer.entries(gpu).unwrap();
+    assert!(entries.len() > 100, "{} entries", entries.len());
+    let mut caches: HashMap<u32, CpuIrradiance> = HashMap::new();
+    let (mut differ, mut sum_gpu, mut sum_cpu) = (0, 0.0, 0.0);
+    for (key, got, count) in &entries {
+        assert!((1..=6).contains(count), "{key:?}: {count} samples in 6 frames");
+        let cache = caches
+            .entry(*count)
+            .or_insert_with(|| CpuIrradiance::new(&w, light, 5, *count));
+        let want = cache.irradiance(*key);
+        for k in 0..3 {
+            sum_gpu += f64::from(got[k]);
+            sum_cpu += want[k];
+        }
+        if (0..3).any(|k| (f64::from(got[k]) - want[k]).abs() > 2e-3 * want[k].abs().max(1.0)) {
+            differ += 1;
+        }
+    }
+    eprintln!(
+        "{differ} of {} entries differ; sums GPU {sum_gpu:.4}, CPU {sum_cpu:.4}",
+        entries.len()
+    );
+    assert!(
+        differ * 50 <= entries.len(),
+        "{differ} of {} entries differ",
+        entries.len()
+    );
+    assert!(
+        (sum_gpu - sum_cpu).abs() <= 0.01 * sum_cpu,
+        "sums GPU {sum_gpu} vs CPU {sum_cpu}"
+    );
+}
+
+#[test]
+fn the_same_seed_gives_the_same_image() {
+    let w = courtyard();
+    let light = Light::new(Sky::Physical, None, 3).unwrap();
+    let cam = camera(COURTYARD_CAMERA);
+    let cpu = |seed| {
+        let cache = CpuIrradiance::new(&w, light, seed, 2);
+        let tracer = CpuPathTracer::new(&w, light, seed).with_irradiance(&cache);
+        (0..12)
+            .map(|i| tracer.estimate(&cam, (i % 4, i / 4), (4, 3), 0..2).mean)
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(cpu(2), cpu(2));
+    let Some(gpu) = gpu() else { return };
+    let gw = GpuWorld::new(gpu, &w).unwrap();
+    let run = |seed| {
+        frames(
+            &mut Irradiance::new(gpu),
+            &gw,
+            &Shot::new(cam, (32, 24), light, seed),
+            5,
+        )
+        .rgb
+    };
+    let a = run(2);
+    assert_eq!(a, run(2));
+    assert_ne!(a, run(3));
+}
+
+#[test]
+fn the_budget_bounds_the_samples_of_a_frame() {
+    let Some(gpu) = gpu() else { return };
+    let w = courtyard();
+    let light = Light::new(Sky::Physical, None, 3).unwrap();
+    let shot = Shot::new(camera(COURTYARD_CAMERA), (32, 24), light, 1);
+    let gw = GpuWorld::new(gpu, &w).unwrap();
+    // The default budget refreshes every requested entry.
+    let mut full = Irradiance::new(gpu);
+    frames(&mut full, &gw, &shot, 2);
+    let s = full.stats(gpu).unwrap();
+    assert!(s.requested > 100 && s.samples == s.requested, "{s:?}");
+    // 400 rays are 100 samples with the sun: the entries with none come first.
+    let mut thin = Irradiance::new(gpu);
+    thin.set_options(IrradianceOptions { rays: 400 });
+    frames(&mut thin, &gw, &shot, 1);
+    let first = thin.stats(gpu).unwrap();
+    assert_eq!(first.fresh, first.requested, "{first:?}");
+    assert!(first.samples <= 130 && first.samples >= 70, "{first:?}");
+    for _ in 0..3 {
+        frames(&mut thin, &gw, &shot, 1);
+        let s = thin.stats(gpu).unwrap();
+        assert!(s.samples <= 130 && s.fresh < first.fresh, "{s:?}");
+    }
+}
+
+#[test]
+fn an_edit_clears_the_entries_within_the_bounce_distance() {
+    let Some(gpu) = gpu() else { return };
+    let mut w = world_of(
+        [192, 64, 64],
+        &[GREY, r#"{"op":"box","min":[0,0,0],"max":[192,8,64],"material":1}"#],
+    );
+    let light = uniform(1.0);
+    let cam = camera(r#"{"pos":[96,63,32],"yaw":0,"pitch":-89.9,"fov_y":70}"#);
+    let shot = Shot::new(cam, (192, 64), light, 1);
+    let mut gw = GpuWorld::new(gpu, &w).unwrap();
+    let mut renderer = Irradiance::new(gpu);
+    frames(&mut renderer, &gw, &shot, 3);
+    let before: HashMap<FaceKey, u32> = renderer
+        .entries(gpu)
+        .unwrap()
+        .into_iter()
+        .map(|(k, _, n)| (k, n))
+        .collect();
+    // A pillar in chunk (0, 0, 0): entries up to x, y, z = 15 + 32 are cleared, none
+    // past x = 47.
+    apply(&mut w, &[r#"{"op":"box","min":[4,8,4],"max":[6,12,6],"material":1}"#]);
+    gw.sync(&w).unwrap();
+    frames(&mut renderer, &gw, &shot, 1);
+    let reach = 15 + BOUNCE_DISTANCE as u32;
+    let (mut cleared, mut kept) = (0, 0);
+    // Entries seen in each of the 3 frames (a face at the image's edge may drop out of
+    // a frame as the camera's rays are jittered).
+    for (key, _, n) in renderer.entries(gpu).unwrap() {
+        if before.get(&key) != Some(&3) {
+            continue;
+        }
+        if key.voxel.iter().all(|&c| c <= reach) {
+            assert!(n <= 1, "{key:?} near the edit kept {n} samples");
+            cleared += 1;
+        } else if key.voxel[0] > reach {
+            assert!(n >= 3, "{key:?} far from the edit lost samples ({n})");
+            kept += 1;
+        }
+    }
+    eprintln!("the edit cleared {cleared} entries seen in every frame and kept {kept}");
+    assert!(cleared > 20 && kept > 20, "cleared {cleared}, kept {kept}");
+}
+
+/// The mean of the floor pixels (those that are not `emitter`-coloured) of `img`.
+fn floor_mean(img: &Radiance) -> f64 {
+    mean(&img.rgb)
+}
+
+#[test]
+fn an_emitter_removed_is_dark_within_32_frames() {
+    let Some(gpu) = gpu() else { return };
+    let emissive = r#"{"op":"define_material","id":3,"kind":"emissive","albedo":[1,1,1],"emission":8}"#;
+    let lamp = r#"{"op":"box","min":[28,24,28],"max":[36,26,36],"material":3}"#;
+    let mut w = world(&[GREY, emissive, FLOOR, lamp]);
+    // The camera under the lamp, looking down: it sees only the lit floor.
+    let cam = camera(r#"{"pos":[32,20,32],"yaw":0,"pitch":-89.9,"fov_y":70}"#);
+    let shot = Shot::new(cam, (24, 18), uniform(0.0), 1);
+    let mut gw = GpuWorld::new(gpu, &w).unwrap();
+    let mut renderer = Irradiance::new(gpu);
+    let lit = floor_mean(&frames(&mut renderer, &gw, &shot, 16));
+    assert!(lit > 0.05, "the lamp lights the floor ({lit})");
+    apply(
+        &mut w,
+        &[r#"{"op":"box","min":[28,24,28],"max":[36,26,36],"material":0}"#],
+    );
+    gw.sync(&w).unwrap();
+    let dark = floor_mean(&frames(&mut renderer, &gw, &shot, 32));
+    eprintln!("floor {lit:.4} lit, {dark:.6} 32 frames after the lamp went");
+    assert!(dark <= 0.01 * lit, "floor {dark} after removal, {lit} lit");
+}
+
+#[test]
+fn an_emitting_entity_moved_away_leaves_no_light_behind() {
+    let Some(gpu) = gpu() else { return };
+    let emissive = r#"{"op":"define_material","id":3,"kind":"emissive","albedo":[1,1,1],"emission":8}"#;
+    let mut voxels = Vec::new();
+    for z in 0..6 {
+        for x in 0..6 {
+            voxels.push(format!("[{x},0,{z},3]"));
+        }
+    }
+    let model = format!(
+        r#"{{"op":"define_model","name":"lamp","size":[6,1,6],"voxels":[{}]}}"#,
+        voxels.join(",")
+    );
+    let spawn = r#"{"op":"spawn_entity","id":1,"model":"lamp","pos":[29,24,29],"rot":[0,0,0,1]}"#;
+    let floor = r#"{"op":"box","min":[0,0,0],"max":[192,8,64],"material":1}"#;
+    let mut w = world_of([192, 64, 64], &[GREY, emissive, floor, &model, spawn]);
+    let cam = camera(r#"{"pos":[32,20,32],"yaw":0,"pitch":-89.9,"fov_y":70}"#);
+    let shot = Shot::new(cam, (24, 18), uniform(0.0), 1);
+    let mut gw = GpuWorld::new(gpu, &w).unwrap();
+    let mut renderer = Irradiance::new(gpu);
+    let lit = floor_mean(&frames(&mut renderer, &gw, &shot, 16));
+    assert!(lit > 0.05, "the entity lights the floor ({lit})");
+    apply(
+        &mut w,
+        &[r#"{"op":"move_entity","id":1,"pos":[160,24,29],"rot":[0,0,0,1]}"#],
+    );
+    gw.sync(&w).unwrap();
+    let dark = floor_mean(&frames(&mut renderer, &gw, &shot, 32));
+    eprintln!("floor {lit:.4} lit by the entity, {dark:.6} 32 frames after it moved away");
+    assert!(dark <= 0.01 * lit, "floor {dark} after the move, {lit} lit");
+}
