@@ -49,7 +49,7 @@ fn an_open_floor_under_a_uniform_sky_has_its_albedo() {
     let cam = camera(DOWN);
     let light = uniform(1.0);
     let cache = CpuIrradiance::new(&w, light, 3, 8);
-    let tracer = CpuPathTracer::new(&w, light, 3).with_irradiance(&cache);
+    let tracer = CpuPathTracer::new(&w, light, 3).with_tier(&cache);
     for py in 0..6 {
         for px in 0..8 {
             for c in tracer.estimate(&cam, (px, py), (8, 6), 0..2).mean {
@@ -184,7 +184,7 @@ fn the_same_seed_gives_the_same_image() {
     let cam = camera(COURTYARD_CAMERA);
     let cpu = |seed| {
         let cache = CpuIrradiance::new(&w, light, seed, 2);
-        let tracer = CpuPathTracer::new(&w, light, seed).with_irradiance(&cache);
+        let tracer = CpuPathTracer::new(&w, light, seed).with_tier(&cache);
         (0..12)
             .map(|i| tracer.estimate(&cam, (i % 4, i / 4), (4, 3), 0..2).mean)
             .collect::<Vec<_>>()

@@ -33,7 +33,7 @@ fn render(
     frames: u32,
 ) -> Vec<[f64; 3]> {
     let roma = CpuRoma::new(world, options, light, cam.pos).expect("ROMA maps");
-    let tracer = CpuPathTracer::new(world, light, 7).with_roma(&roma);
+    let tracer = CpuPathTracer::new(world, light, 7).with_tier(&roma);
     let mut out = Vec::new();
     for py in 0..size.1 {
         for px in 0..size.0 {
@@ -117,7 +117,7 @@ fn the_suns_map_casts_a_pillars_shadow() {
     let sun = Sun::parse("90,45,2").unwrap();
     let light = Light::new(Sky::Uniform([0.0; 3]), Some(sun), 3).unwrap();
     let roma = CpuRoma::new(&w, RomaOptions::default(), light, [32.0, 30.0, 32.0]).unwrap();
-    let tracer = CpuPathTracer::new(&w, light, 0).with_roma(&roma);
+    let tracer = CpuPathTracer::new(&w, light, 0).with_tier(&roma);
     let cam = camera(r#"{"pos":[20,60,32],"yaw":0,"pitch":-89.9,"fov_y":1}"#);
     let shade = tracer.estimate(&cam, (0, 0), (1, 1), 0..16).mean[0];
     assert_eq!(shade, 0.0, "the floor at x = 20 lies in the pillar's shadow");
@@ -177,7 +177,7 @@ fn the_gpu_agrees_with_the_cpu() {
     roma.set_options(options);
     let img = first_frame(&mut roma, &gw, &Shot::new(cam, size, light, 5));
     let cpu_roma = CpuRoma::new(&w, options, light, cam.pos).unwrap();
-    let tracer = CpuPathTracer::new(&w, light, 5).with_roma(&cpu_roma);
+    let tracer = CpuPathTracer::new(&w, light, 5).with_tier(&cpu_roma);
     let (mut differ, mut sum_gpu, mut sum_cpu) = (0, 0.0, 0.0);
     for py in 0..size.1 {
         for px in 0..size.0 {

@@ -3,9 +3,7 @@
 //! must fall within the CPU estimate's confidence interval) and a reference that needs no
 //! device.
 
-use super::irradiance::CpuIrradiance;
 use super::rng::Rng;
-use super::roma::CpuRoma;
 use super::scatter::{self, MIN_ALPHA};
 use super::{Light, SURFACE_OFFSET, Sky, Sun, sky};
 use glam::DVec3;
@@ -24,11 +22,23 @@ pub struct Estimate {
     pub standard_error: [f64; 3],
 }
 
-/// A lighting tier: what lights diffuse (and emissive) surfaces instead of the path.
-#[derive(Clone, Copy)]
-enum Tier<'w> {
-    Roma(&'w CpuRoma<'w>),
-    Irradiance(&'w CpuIrradiance<'w>),
+/// A lighting tier: what lights diffuse (and emissive) surfaces instead of the rest of
+/// the path (`roma`'s [`super::roma::CpuRoma`], `irradiance`'s
+/// [`super::irradiance::CpuIrradiance`]). `Sync`: one tier serves every thread that
+/// traces pixels.
+pub trait DiffuseTier: Sync {
+    /// The light leaving the diffuse surface of `hit` at `surface` with world normal `n`
+    /// and `albedo` toward the path (its emission excluded: the path adds it), for a path
+    /// of `tracer`.
+    fn diffuse(
+        &self,
+        tracer: &CpuPathTracer,
+        hit: &Hit,
+        surface: DVec3,
+        n: DVec3,
+        albedo: DVec3,
+        rng: &mut Rng,
+    ) -> DVec3;
 }
 
 /// A path tracer of one world under one light.
@@ -37,7 +47,7 @@ pub struct CpuPathTracer<'w> {
     light: Light,
     seed: u32,
     /// The lighting tier of diffuse surfaces, if not the path tracer's own.
-    tier: Option<Tier<'w>>,
+    tier: Option<&'w dyn DiffuseTier>,
 }
 
 impl<'w> CpuPathTracer<'w> {
@@ -51,21 +61,12 @@ impl<'w> CpuPathTracer<'w> {
         }
     }
 
-    /// The same tracer with diffuse (and emissive) surfaces lit by `roma` instead
-    /// (`--mode roma`): a path ends at the first of them with the tier's light, while
-    /// mirrors and metals scatter as the path tracer scatters them.
-    pub fn with_roma(self, roma: &'w CpuRoma<'w>) -> Self {
+    /// The same tracer with diffuse (and emissive) surfaces lit by `tier` instead
+    /// (`--mode roma`, `--mode irradiance`): a path ends at the first of them with the
+    /// tier's light, while mirrors and metals scatter as the path tracer scatters them.
+    pub fn with_tier(self, tier: &'w dyn DiffuseTier) -> Self {
         CpuPathTracer {
-            tier: Some(Tier::Roma(roma)),
-            ..self
-        }
-    }
-
-    /// The same tracer with diffuse (and emissive) surfaces lit by the irradiance cache
-    /// `cache` instead (`--mode irradiance`), as [`CpuPathTracer::with_roma`] does.
-    pub fn with_irradiance(self, cache: &'w CpuIrradiance<'w>) -> Self {
-        CpuPathTracer {
-            tier: Some(Tier::Irradiance(cache)),
+            tier: Some(tier),
             ..self
         }
     }
@@ -151,7 +152,7 @@ impl<'w> CpuPathTracer<'w> {
             let diffuse = !matches!(m.kind, MaterialKind::Mirror | MaterialKind::Metal);
             if let Some(tier) = self.tier.filter(|_| diffuse) {
                 let surface = DVec3::from(ray.origin()) + d * hit.t;
-                light += throughput * self.tier_light(tier, &hit, surface, n, albedo, rng);
+                light += throughput * tier.diffuse(self, &hit, surface, n, albedo, rng);
                 break;
             }
             if bounce == self.light.bounces {
@@ -196,14 +197,6 @@ impl<'w> CpuPathTracer<'w> {
             ray = next;
         }
         light
-    }
-
-    /// The light a tier gives the diffuse surface of `hit` at `surface`.
-    fn tier_light(&self, tier: Tier, hit: &Hit, surface: DVec3, n: DVec3, albedo: DVec3, rng: &mut Rng) -> DVec3 {
-        match tier {
-            Tier::Roma(roma) => roma.diffuse(surface, n, albedo, &|w| self.sky_seen(w), rng),
-            Tier::Irradiance(cache) => cache.diffuse(hit, surface, n, albedo, rng),
-        }
     }
 
     /// The sun's irradiance at `p` (just off a surface of normal `n`) by one sample of its

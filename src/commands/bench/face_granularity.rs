@@ -62,7 +62,10 @@ pub fn measure(world: &World, light: Light, camera: &Camera, size: (u32, u32), s
     faces.dedup();
     let estimate = |seed: u32| -> HashMap<FaceKey, f64> {
         let cache = CpuIrradiance::new(world, light, seed, samples);
-        faces.par_iter().map(|&k| (k, luminance(cache.irradiance(k).to_array()))).collect()
+        faces
+            .par_iter()
+            .map(|&k| (k, luminance(cache.irradiance(k).to_array())))
+            .collect()
     };
     let (first, second) = (estimate(0), estimate(1));
     let block = |k: &FaceKey| (k.voxel.map(|v| v / 4), k.face);

@@ -15,11 +15,11 @@
 //! - **edit response**: an emitter added in front of the camera, then removed; the frames
 //!   until the image mean is within 10 % of the change of its converged value.
 
+use super::face_granularity::{self, FaceGranularity};
 use crate::commands::args::{LightArgs, parse_image_size, read_camera};
 use crate::commands::load_world;
 use crate::commands::print_json;
 use crate::commands::progress;
-use super::face_granularity::{self, FaceGranularity};
 use anyhow::{Context, Result, bail};
 use naadf_client::Mode;
 use naadf_client::gpu::{Baseline, Gi, GiPass, Gpu, GpuWorld, Irradiance, PathTracer, Renderer, Roma, Shot, Temporal};

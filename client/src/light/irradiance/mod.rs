@@ -30,7 +30,7 @@ pub(crate) mod options;
 
 pub use options::{DEFAULT_RAYS, IrradianceOptions, MAX_RAYS, MIN_RAYS};
 
-use super::cpu::CpuPathTracer;
+use super::cpu::{CpuPathTracer, DiffuseTier};
 use super::rng::{Rng, pcg_hash};
 use super::scatter::cosine;
 use super::{Light, SURFACE_OFFSET};
@@ -165,15 +165,6 @@ impl<'w> CpuIrradiance<'w> {
         e
     }
 
-    /// The light of the diffuse surface of `hit` at `surface` with normal `n` (its
-    /// emission excluded: the path adds it).
-    pub fn diffuse(&self, hit: &Hit, surface: DVec3, n: DVec3, albedo: DVec3, rng: &mut Rng) -> DVec3 {
-        match FaceKey::of(hit.voxel, hit.normal).filter(|_| hit.entity.is_none()) {
-            Some(key) => albedo / PI * self.irradiance(key),
-            None => albedo / PI * self.gather(surface + n * SURFACE_OFFSET, n, rng),
-        }
-    }
-
     /// The irradiance at `p` (normal `n`) by gathering: one sun sample, and π times the
     /// radiance of one cosine ray, which is the sky's or that of the surface it meets (its
     /// emission, and for a world face the entry's light).
@@ -205,6 +196,17 @@ impl<'w> CpuIrradiance<'w> {
         }
         e += PI * l;
         e
+    }
+}
+
+impl DiffuseTier for CpuIrradiance<'_> {
+    /// `albedo / π` times the entry of the face of `hit`, or, on an entity, what gathering
+    /// finds.
+    fn diffuse(&self, _: &CpuPathTracer, hit: &Hit, surface: DVec3, n: DVec3, albedo: DVec3, rng: &mut Rng) -> DVec3 {
+        match FaceKey::of(hit.voxel, hit.normal).filter(|_| hit.entity.is_none()) {
+            Some(key) => albedo / PI * self.irradiance(key),
+            None => albedo / PI * self.gather(surface + n * SURFACE_OFFSET, n, rng),
+        }
     }
 }
 

@@ -34,12 +34,14 @@ pub(crate) mod options;
 
 pub use options::{DEFAULT_AO_RANGE, DEFAULT_DIRECTIONS, MAX_AO_RANGE, MAX_SIDE, RomaOptions};
 
+use super::cpu::{CpuPathTracer, DiffuseTier};
 use super::rng::Rng;
 use super::scatter::{basis, cone, cosine};
 use super::{Light, Sun};
 use glam::{DVec3, IVec3};
 use naadf_world::World;
 use naadf_world::cell::{self, State};
+use naadf_world::traverse::Hit;
 use std::collections::HashMap;
 use std::f64::consts::{FRAC_PI_4, PI};
 use std::sync::{Arc, Mutex};
@@ -439,6 +441,21 @@ impl<'w> CpuRoma<'w> {
             }
         }
         l
+    }
+}
+
+impl DiffuseTier for CpuRoma<'_> {
+    /// [`CpuRoma::diffuse`] under the tracer's sky.
+    fn diffuse(
+        &self,
+        tracer: &CpuPathTracer,
+        _: &Hit,
+        surface: DVec3,
+        n: DVec3,
+        albedo: DVec3,
+        rng: &mut Rng,
+    ) -> DVec3 {
+        CpuRoma::diffuse(self, surface, n, albedo, &|w| tracer.sky_seen(w), rng)
     }
 }
 
