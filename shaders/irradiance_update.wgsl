@@ -78,6 +78,9 @@ fn irradiance_update(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let taken = irr_table[at + 7u];
+    // The direction's R2 offsets, drawn once per entry (CpuIrradiance::sample).
+    let offsets = rng_new(irr.seed, stream, 0xFFFFFFFFu);
+    let offset = vec2<u32>(pcg_hash(offsets), pcg_hash(pcg_hash(offsets)));
     var rng = rng_new(irr.seed, stream, taken);
     // A point uniform on the face, just off it (FaceKey::point).
     let face = (key.y >> 16u) & 7u;
@@ -91,7 +94,8 @@ fn irradiance_update(@builtin(global_invocation_id) gid: vec3<u32>) {
     p[(axis + 2u) % 3u] = rng_next(&rng);
     let base = ray_new(irr_voxel(at), vec3<f32>(0.0), normal);
     var e = vec3<f32>(irr_sun(base, p, normal, &rng));
-    let w = sample_cosine(normal, vec2<f32>(rng_next(&rng), rng_next(&rng)));
+    let u = vec2<f32>((taken * IRR_R2 + offset) >> vec2<u32>(8u)) * (1.0 / 16777216.0);
+    let w = sample_cosine(normal, u);
     e += PI * path_radiance(ray_at(base, p, w), 1u, false, &rng).radiance;
     var sum = vec3<f32>(bitcast<f32>(irr_table[at + 4u]), bitcast<f32>(irr_table[at + 5u]), bitcast<f32>(irr_table[at + 6u])) + e;
     var c = count + 1u;

@@ -20,7 +20,7 @@ use super::shot::Shot;
 use super::temporal::Temporal;
 use super::world::GpuWorld;
 use crate::light::hdr::Radiance;
-use crate::light::irradiance::{BOUNCE_DISTANCE, FaceKey, HISTORY, IrradianceOptions};
+use crate::light::irradiance::{BOUNCE_DISTANCE, FaceKey, HISTORY, IrradianceOptions, R2};
 use crate::light::{Sky, Sun};
 use naadf_world::fingerprint::ChunkChanges;
 use std::collections::BTreeSet;
@@ -68,7 +68,7 @@ fn generated() -> String {
         ("IRR_OCCUPIED", WgslValue::U32(OCCUPIED)),
         ("IRR_LIST", WgslValue::U32(LIST)),
     ];
-    constants(&list) + &IrradianceInfo::wgsl()
+    constants(&list) + &format!("const IRR_R2 = vec2<u32>({}u, {}u);\n", R2[0], R2[1]) + &IrradianceInfo::wgsl()
 }
 
 /// The irradiance sample pass: the path tracer's `path_sample` with [`TIER`] as its

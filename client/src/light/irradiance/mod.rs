@@ -9,11 +9,15 @@
 //! - **Entries.** One per face of a world voxel ([`FaceKey`]): the voxel and the face's
 //!   outward axis. Entity surfaces have none: they are the dynamic part, lit every frame
 //!   (below), so a moving entity never writes its light into an entry.
-//! - **A sample of an entry** ([`CpuIrradiance::sample`]) draws from the stream
-//!   `(seed, key's stream, sample number)`: a point uniform on the face, lifted
-//!   [`SURFACE_OFFSET`] off it; one sample of the sun's disc (its irradiance when clear);
-//!   and one cosine-distributed ray whose radiance is the path tracer's with one more
-//!   bounce (`pathtrace --bounces 1` from that point, without the disc), times π. So an
+//! - **A sample of an entry** ([`CpuIrradiance::sample`]): a point uniform on the face,
+//!   lifted [`SURFACE_OFFSET`] off it; one sample of the sun's disc (its irradiance when
+//!   clear); and one cosine-distributed ray whose radiance is the path tracer's with one
+//!   more bounce (`pathtrace --bounces 1` from that point, without the disc), times π.
+//!   The ray's direction is sample `n` of Roberts' R2 sequence ([`qmc`]), shifted by two
+//!   offsets drawn once per entry (from the stream `(seed, key's stream, u32::MAX)`), so
+//!   that consecutive samples of an entry spread evenly over the hemisphere; the point, the
+//!   sun's sample and the rest of the path draw from the stream `(seed, key's stream, n)`.
+//!   So an
 //!   entry's mean is the face's irradiance from the sun, the sky and the light that
 //!   bounced once, and a diffuse surface shaded with it matches `pathtrace --bounces 2`.
 //! - **Shading** of a diffuse surface of the world: `albedo / π · E` with `E` the mean of
@@ -48,6 +52,17 @@ pub const BOUNCE_DISTANCE: f64 = 32.0;
 /// The most samples an entry's mean keeps: when full, its sums are halved, so a change
 /// that clears nothing still fades.
 pub const HISTORY: u32 = 64;
+
+/// The additive recurrence of Roberts' R2 sequence in 32-bit fixed point: `2³² / g` and
+/// `2³² / g²`, g the plastic number (the real root of x³ = x + 1).
+pub const R2: [u32; 2] = [3_242_174_889, 2_447_445_414];
+
+/// Coordinate `d` of sample `n` of the R2 sequence shifted by `offset` (a Cranley–Patterson
+/// rotation), in [0, 1) with 24 bits, as [`Rng::next_f32`] gives them. Integer arithmetic,
+/// so the GPU's is the same bit for bit.
+pub fn qmc(n: u32, d: usize, offset: u32) -> f32 {
+    (n.wrapping_mul(R2[d]).wrapping_add(offset) >> 8) as f32 * (1.0 / 16_777_216.0)
+}
 
 /// A face of a world voxel: the key of one entry.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -142,12 +157,13 @@ impl<'w> CpuIrradiance<'w> {
 
     /// Sample `n` of the irradiance of face `key` (module docs).
     pub fn sample(&self, key: FaceKey, n: u32) -> DVec3 {
+        let mut offsets = Rng::new(self.seed, key.stream(), u32::MAX);
+        let offsets = [offsets.next_u32(), offsets.next_u32()];
         let mut rng = Rng::new(self.seed, key.stream(), n);
-        let u = [f64::from(rng.next_f32()), f64::from(rng.next_f32())];
-        let p = key.point(u);
+        let p = key.point([f64::from(rng.next_f32()), f64::from(rng.next_f32())]);
         let normal = key.normal();
         let mut e = DVec3::splat(self.tracer.sun_irradiance(p, normal, &mut rng));
-        let u = [f64::from(rng.next_f32()), f64::from(rng.next_f32())];
+        let u = [0, 1].map(|d| f64::from(qmc(n, d, offsets[d])));
         if let Ok(ray) = Ray::new(p.to_array(), cosine(normal, u).to_array()) {
             e += PI * self.tracer.radiance(ray, false, &mut rng);
         }
@@ -213,6 +229,20 @@ impl DiffuseTier for CpuIrradiance<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_r2_sequence_fills_the_unit_square_evenly() {
+        // 64 consecutive points from any start put 2 to 6 points in each cell of a 4×4 grid
+        // (64 random points leave a cell with fewer than 2 or more than 6 in most draws).
+        for start in [0u32, 37, 1 << 20, 12_345_678] {
+            let mut cells = [0u32; 16];
+            for n in start..start + 64 {
+                let (x, y) = (qmc(n, 0, 12345), qmc(n, 1, 999));
+                cells[(x * 4.0) as usize + 4 * (y * 4.0) as usize] += 1;
+            }
+            assert!(cells.iter().all(|&c| (2..=6).contains(&c)), "{cells:?}");
+        }
+    }
 
     #[test]
     fn keys_round_trip_through_the_gpus_words() {
