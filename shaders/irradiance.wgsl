@@ -25,13 +25,11 @@ fn irr_key(voxel: vec3<i32>, normal: vec3<i32>) -> vec2<u32> {
 // Sets word `at` to `value` if it is zero; returns what it held before (zero: this
 // invocation wrote it). The weak exchange may fail spuriously, finding zero: it is retried.
 fn irr_claim(at: u32, value: u32) -> u32 {
-    loop {
-        let r = atomicCompareExchangeWeak(&irr_table[at], 0u, value);
-        if r.exchanged || r.old_value != 0u {
-            return r.old_value;
-        }
+    var r = atomicCompareExchangeWeak(&irr_table[at], 0u, value);
+    while !r.exchanged && r.old_value == 0u {
+        r = atomicCompareExchangeWeak(&irr_table[at], 0u, value);
     }
-    return 0u;
+    return r.old_value;
 }
 
 // The slot of `key`, keyed there when absent and `insert`; IRR_NONE when absent (or when

@@ -28,6 +28,8 @@ import { overlappedChunks } from "./changes";
 import type { ChunkChanges } from "./changes";
 import { GiRenderer } from "./gi";
 import { RomaRenderer } from "./roma";
+import { IrradianceRenderer } from "./irradiance";
+import type { IrradianceStats } from "./irradiance";
 import { ProgressiveSums } from "./progressive";
 
 /** Why the page cannot draw: shown to the person, with the native viewer as the way out. */
@@ -408,13 +410,15 @@ class PathTracer {
   }
 }
 
-/** Every mode the page draws: the frame pass's, the GI, ROMA and the path tracer. */
+/** Every mode the page draws: the frame pass's, the GI, ROMA, the irradiance cache and the
+ * path tracer. */
 export class Renderer {
   private readonly world: WorldGroup;
   private frames: FramePass | undefined;
   private paths: PathTracer | undefined;
   private gi: GiRenderer | undefined;
   private roma: RomaRenderer | undefined;
+  private irradiance: IrradianceRenderer | undefined;
   /** The last frame drawn. */
   last: ImageData | undefined;
 
@@ -428,25 +432,33 @@ export class Renderer {
   }
 
   /** The pass that draws `mode`, made on first use. */
-  private pass(mode: string): FramePass | PathTracer | GiRenderer | RomaRenderer {
+  private pass(mode: string): FramePass | PathTracer | GiRenderer | RomaRenderer | IrradianceRenderer {
     if (mode === "pathtrace") return (this.paths ??= new PathTracer(this.device, this.world));
     if (mode === "gi") return (this.gi ??= new GiRenderer(this.device, this.world));
     if (mode === "roma") return (this.roma ??= new RomaRenderer(this.device, this.world));
+    if (mode === "irradiance") return (this.irradiance ??= new IrradianceRenderer(this.device, this.world));
     return (this.frames ??= new FramePass(this.device, this.world));
   }
 
-  /** Whether `mode` keeps improving while nothing changes (the path tracer's and ROMA's
-   * samples, the GI's history). */
+  /** Whether `mode` keeps improving while nothing changes (the path tracer's, ROMA's and
+   * the irradiance cache's samples, the GI's history). */
   static accumulates(mode: string): boolean {
-    return mode === "pathtrace" || mode === "gi" || mode === "roma";
+    return mode === "pathtrace" || mode === "gi" || mode === "roma" || mode === "irradiance";
   }
 
-  /** How far `mode` has come with the current view: the path tracer's or ROMA's samples
-   * per pixel, or the GI's frames since the view or the world last changed. */
+  /** How far `mode` has come with the current view: the path tracer's, ROMA's or the
+   * irradiance cache's samples per pixel, or the GI's frames since the view or the world
+   * last changed. */
   samples(mode: string): number {
     if (mode === "gi") return this.gi?.still ?? 0;
     if (mode === "roma") return this.roma?.samples ?? 0;
+    if (mode === "irradiance") return this.irradiance?.samples ?? 0;
     return mode === "pathtrace" ? (this.paths?.samples ?? 0) : 0;
+  }
+
+  /** What the irradiance cache's last frame did (null before its first). */
+  get irradianceStats(): IrradianceStats | null {
+    return this.irradiance?.stats ?? null;
   }
 
   /** Draws `camera`'s view of `world` at `width × height` in `mode` (`gi` may draw a

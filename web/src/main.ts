@@ -10,6 +10,7 @@ import { basis, defaultCamera } from "./camera";
 import { PageCache } from "./cache";
 import { digestHex, loadHasher } from "./digest";
 import { GpuWorld, NoWebGpu, Renderer, openDevice } from "./gpu";
+import type { IrradianceStats } from "./irradiance";
 import type { Marker } from "./overlay";
 import { drawOverlay, rayThrough } from "./overlay";
 import type { Pick } from "./pick";
@@ -54,8 +55,11 @@ interface PageState {
   shownGeneration: number;
   /** The local instances the active tool's preview shows. */
   previewInstances: number;
-  /** The path tracer's samples per pixel, or the GI's frames, since the view last changed. */
+  /** The path tracer's (or `roma`'s, or `irradiance`'s) samples per pixel, or the GI's
+   * frames, since the view last changed. */
   samples: number;
+  /** What `irradiance`'s last frame did to its cache (null before its first frame). */
+  irradiance: IrradianceStats | null;
   /** The voxel under the pointer and the empty voxel before it (where placing tools build). */
   pointer: { voxel: number[]; before: number[] } | null;
   /** The display name this page publishes. */
@@ -105,6 +109,7 @@ const naadf: PageState = {
   shownGeneration: -1,
   previewInstances: 0,
   samples: 0,
+  irradiance: null,
   pointer: null,
   name: "",
   voxel: () => 0,
@@ -505,6 +510,7 @@ async function main(): Promise<void> {
           naadf.timings.firstFrame ??= performance.now();
           // The path tracer and the GI keep improving while nothing changes.
           naadf.samples = renderer.samples(naadf.mode);
+          naadf.irradiance = renderer.irradianceStats;
           if (Renderer.accumulates(naadf.mode) && naadf.samples < accumulationCap(naadf.mode, link)) dirty = true;
           drawHud();
         })

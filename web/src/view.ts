@@ -5,7 +5,7 @@ import { cameraJson, parseCamera } from "./camera";
 import { GI } from "./gen/layout";
 
 /** The modes of docs/RENDERING.md, in the order the page offers them. */
-export const MODES = ["albedo", "material", "normal", "steps", "gi", "roma", "pathtrace"] as const;
+export const MODES = ["albedo", "material", "normal", "steps", "gi", "roma", "irradiance", "pathtrace"] as const;
 
 /** The most samples per pixel the path tracer adds to one view, and the most `spp` takes. */
 const DEFAULT_MAX_SPP = 4096;
@@ -19,7 +19,7 @@ export interface LinkedView {
   camera: Camera | undefined;
   mode: string | undefined;
   size: [number, number] | undefined;
-  /** The most samples per pixel `pathtrace` or `roma` adds, or frames `gi` draws, to a
+  /** The most samples per pixel `pathtrace`, `roma` or `irradiance` adds, or frames `gi` draws, to a
    * still view (`spp`), when given. */
   spp: number | undefined;
   problems: string[];
@@ -69,7 +69,7 @@ export function writeLink(camera: Camera, mode: string, link: LinkedView): void 
 }
 
 /** How far an accumulating mode goes with a still view: `spp` when given, else 4096
- * samples per pixel for `pathtrace` and `roma` and 64 frames for `gi`. */
+ * samples per pixel for `pathtrace`, `roma` and `irradiance` and 64 frames for `gi`. */
 export function accumulationCap(mode: string, link: LinkedView): number {
   return link.spp ?? (mode === "gi" ? DEFAULT_GI_FRAMES : DEFAULT_MAX_SPP);
 }

@@ -8,7 +8,10 @@
 
 use super::bindings::BUFFERS;
 use super::gi::{GiPass, GiSplit, gi_pass, host_constants};
-use super::params::{FrameInfo, GiInfo, LightInfo, RomaInfo, RomaJob, RomaWindow, View, WgslStruct, WorldInfo};
+use super::irradiance::{self, irradiance_sample_pass, irradiance_update_pass};
+use super::params::{
+    FrameInfo, GiInfo, IrradianceInfo, LightInfo, RomaInfo, RomaJob, RomaWindow, View, WgslStruct, WorldInfo,
+};
 use super::pathtrace::path_pass;
 use super::render::render_pass;
 use super::render::{DEFAULT_SUN, STEPS_FULL_SCALE};
@@ -16,6 +19,7 @@ use super::roma::{roma_build_pass, roma_sample_pass};
 use super::shaders::{Loop, WorldBindings, source};
 use super::world::GPU_BUFFERS;
 use crate::frame::Mode;
+use crate::light::irradiance::{BOUNCE_DISTANCE, DEFAULT_RAYS, HISTORY, IrradianceOptions};
 use crate::light::roma::{self, RomaOptions, map_frames};
 use crate::light::{DEFAULT_LIT_BOUNCES, DEFAULT_PATHTRACE_BOUNCES, LitOptions};
 use naadf_world::entity::{self, bvh, local, pack};
@@ -59,6 +63,21 @@ pub fn generated_files() -> Vec<(&'static str, String)> {
             "roma_build.wgsl",
             source(&roma_build_pass(), Loop::Hierarchy, WorldBindings::Single),
         ),
+        // `irradiance`'s sample pass (the page uses its `path_trace` entry) and its update
+        // module, whose three entry points (`irradiance_invalidate`, `irradiance_args`,
+        // `irradiance_update`) share one source.
+        (
+            "irradiance.wgsl",
+            source(&irradiance_sample_pass(), Loop::Hierarchy, WorldBindings::Single),
+        ),
+        (
+            "irradiance_update.wgsl",
+            source(
+                &irradiance_update_pass("irradiance_update"),
+                Loop::Hierarchy,
+                WorldBindings::Single,
+            ),
+        ),
         ("layout.ts", layout_ts()),
     ]
 }
@@ -92,6 +111,7 @@ fn layout_ts() -> String {
     struct_ts::<RomaInfo>(&mut s);
     struct_ts::<RomaWindow>(&mut s);
     struct_ts::<RomaJob>(&mut s);
+    struct_ts::<IrradianceInfo>(&mut s);
     let lit = LitOptions::default();
     let light_words = |bounces: u32| -> String {
         let light = lit.light(bounces).expect("the default light is valid");
@@ -165,7 +185,34 @@ fn layout_ts() -> String {
         identity[1],
     );
     roma_ts(&mut s, &lit);
+    irradiance_ts(&mut s);
     s
+}
+
+/// `irradiance`'s constants for `layout.ts` (client/src/gpu/irradiance.rs and
+/// client/src/light/irradiance/): the table's and the request list's layout, the history,
+/// the bounce distance, the bounds on the table and the invalidation boxes, and the ray
+/// budget's defaults.
+fn irradiance_ts(s: &mut String) {
+    let _ = writeln!(
+        s,
+        "\n/** `irradiance` (client/src/gpu/irradiance.rs): words per table slot; words of the request list before\n * its slots, and its counters' indices (requested, with no samples, samples taken, slots keyed); an\n * entry's most samples; the invalidation's reach in voxels; the fewest slots of a table; the most\n * boxes invalidated one by one; the most requests one update serves; the default rays per frame,\n * and the rays one entry sample costs with and without the sun. */\n\
+         export const IRR = {{\n  WORDS: {},\n  LIST: {},\n  COUNT: {},\n  FRESH: {},\n  TAKEN: {},\n  OCCUPIED: {},\n  HISTORY: {},\n  BOUNCE_DISTANCE: {},\n  MIN_SLOTS: {},\n  MAX_BOXES: {},\n  MAX_REQUESTS: {},\n  DEFAULT_RAYS: {},\n  RAYS_PER_SAMPLE_SUN: {},\n  RAYS_PER_SAMPLE: {},\n}} as const;",
+        irradiance::WORDS,
+        irradiance::LIST,
+        irradiance::COUNT,
+        irradiance::FRESH,
+        irradiance::TAKEN,
+        irradiance::OCCUPIED,
+        HISTORY,
+        BOUNCE_DISTANCE,
+        irradiance::MIN_SLOTS,
+        irradiance::MAX_BOXES,
+        irradiance::MAX_REQUESTS,
+        DEFAULT_RAYS,
+        IrradianceOptions::rays_per_sample(true),
+        IrradianceOptions::rays_per_sample(false),
+    );
 }
 
 /// `roma`'s constants for `layout.ts`, with its default settings under the default light:

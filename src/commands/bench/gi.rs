@@ -158,6 +158,11 @@ struct IrradianceCache {
     first_frame_ms: f64,
     /// Entry samples the last timed frame took.
     samples: u32,
+    /// Milliseconds of a frame whose update takes one sample (the sample pass and the
+    /// TAA over entries filled before), per round.
+    lean_ms: Spread,
+    /// The refresh's share: `irradiance` less that lean frame, per round.
+    refresh_ms: Spread,
 }
 
 /// What every section shares.
@@ -440,6 +445,17 @@ fn timing(b: &Bench, camera: &Camera, a: &GiArgs) -> Result<Timing> {
     irradiance.radiance(&b.gpu)?;
     let first_frame_ms = t0.elapsed().as_secs_f64() * 1e3;
     let first_samples = irradiance.stats(&b.gpu)?.samples;
+    // The same frames with the least budget, once the view's entries hold samples: what
+    // the sample pass and the TAA cost without the refresh.
+    let mut lean = b.irradiance();
+    for _ in 0..4 {
+        b.frame(&mut lean, camera)?;
+    }
+    lean.set_options(IrradianceOptions {
+        rays: naadf_client::light::irradiance::MIN_RAYS,
+    });
+    b.frame(&mut lean, camera)?;
+    let mut lean_ms = Vec::new();
     for round in 0..a.rounds as usize {
         for k in 0..order.len() {
             let mode = order[(round + k) % order.len()];
@@ -472,6 +488,12 @@ fn timing(b: &Bench, camera: &Camera, a: &GiArgs) -> Result<Timing> {
                 .or_default()
                 .push(t0.elapsed().as_secs_f64() * 1e3 / f64::from(a.timing_frames));
         }
+        let t0 = Instant::now();
+        for _ in 0..a.timing_frames {
+            b.frame(&mut lean, camera)?;
+            lean.radiance(&b.gpu)?;
+        }
+        lean_ms.push(t0.elapsed().as_secs_f64() * 1e3 / f64::from(a.timing_frames));
     }
     let per_round = |num: &str, den: &str| Spread::of(ms[num].iter().zip(&ms[den]).map(|(n, d)| n / d).collect());
     let ratios = BTreeMap::from([
@@ -487,6 +509,8 @@ fn timing(b: &Bench, camera: &Camera, a: &GiArgs) -> Result<Timing> {
         first_samples,
         first_frame_ms,
         samples: irradiance.stats(&b.gpu)?.samples,
+        refresh_ms: Spread::of(ms["irradiance"].iter().zip(&lean_ms).map(|(f, l)| f - l).collect()),
+        lean_ms: Spread::of(lean_ms),
     };
     let passes = GiPass::ALL
         .iter()
@@ -622,6 +646,16 @@ fn print_report(r: &Report) {
         c.first_frame_ms,
         c.first_samples,
         c.samples
+    );
+    println!(
+        "{:<24} sample pass and TAA {:.1} ms ({:.1}–{:.1}), refresh {:.1} ms ({:.1}–{:.1})",
+        "irradiance frame",
+        c.lean_ms.median,
+        c.lean_ms.min,
+        c.lean_ms.max,
+        c.refresh_ms.median,
+        c.refresh_ms.min,
+        c.refresh_ms.max
     );
     if let Some(f) = &r.face_granularity {
         println!(

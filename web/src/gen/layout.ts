@@ -155,6 +155,21 @@ export const RomaJob: StructLayout = {
   },
 };
 
+/** `IrradianceInfo`, as the shaders declare it. */
+export const IrradianceInfo: StructLayout = {
+  size: 32,
+  fields: {
+    stamp: { offset: 0, type: "u32" },
+    mask: { offset: 4, type: "u32" },
+    max_requests: { offset: 8, type: "u32" },
+    budget: { offset: 12, type: "u32" },
+    seed: { offset: 16, type: "u32" },
+    boxes: { offset: 20, type: "u32" },
+    _pad0: { offset: 24, type: "u32" },
+    _pad1: { offset: 28, type: "u32" },
+  },
+};
+
 /** `LightInfo` of the default light (physical sky and sun) with the path tracer's bounces, as words. */
 export const PATHTRACE_LIGHT_WORDS = [1077936128, 1077936128, 1077936128, 1, 3208642560, 1056964608, 1054716887, 1, 1193802333, 1077936198, 926566462, 8];
 /** `LightInfo` of the default light with the GI's bounces, as words. */
@@ -270,4 +285,26 @@ export const ROMA = {
     [0.8162161205656171, -0.22921877001854332, -0.5303300858899107, -0.22921877001854332, 0.7141139653242934, -0.6614378277661477, 0.5303300858899107, 0.6614378277661477, 0.5303300858899106],
     [0.6074703320792287, 0.2616864452805141, 0.75, 0.2616864452805141, 0.8255423698129906, -0.49999999999999994, -0.75, 0.49999999999999994, 0.43301270189221946],
   ],
+} as const;
+
+/** `irradiance` (client/src/gpu/irradiance.rs): words per table slot; words of the request list before
+ * its slots, and its counters' indices (requested, with no samples, samples taken, slots keyed); an
+ * entry's most samples; the invalidation's reach in voxels; the fewest slots of a table; the most
+ * boxes invalidated one by one; the most requests one update serves; the default rays per frame,
+ * and the rays one entry sample costs with and without the sun. */
+export const IRR = {
+  WORDS: 8,
+  LIST: 4,
+  COUNT: 0,
+  FRESH: 1,
+  TAKEN: 2,
+  OCCUPIED: 3,
+  HISTORY: 64,
+  BOUNCE_DISTANCE: 32,
+  MIN_SLOTS: 1048576,
+  MAX_BOXES: 256,
+  MAX_REQUESTS: 4194240,
+  DEFAULT_RAYS: 262144,
+  RAYS_PER_SAMPLE_SUN: 4,
+  RAYS_PER_SAMPLE: 2,
 } as const;
