@@ -236,6 +236,8 @@ impl Bench {
 }
 
 const COMPARED: [Mode; 4] = [Mode::Baseline, Mode::Gi, Mode::Roma, Mode::Irradiance];
+/// Frames the lean irradiance renderer draws with the full budget before it is timed.
+const LEAN_WARM_UP: u32 = 32;
 /// The `gi` frames whose time the matched-time comparison gives every mode.
 const MATCHED_GI_FRAMES: f64 = 32.0;
 /// The most frames a mode runs in the matched-time comparison.
@@ -445,10 +447,11 @@ fn timing(b: &Bench, camera: &Camera, a: &GiArgs) -> Result<Timing> {
     irradiance.radiance(&b.gpu)?;
     let first_frame_ms = t0.elapsed().as_secs_f64() * 1e3;
     let first_samples = irradiance.stats(&b.gpu)?.samples;
-    // The same frames with the least budget, once the view's entries hold samples: what
-    // the sample pass and the TAA cost without the refresh.
+    // The same frames with the least budget, once the view's entries hold samples (the
+    // camera's jitter finds new faces for a while): what the sample pass and the TAA cost
+    // without the refresh.
     let mut lean = b.irradiance();
-    for _ in 0..4 {
+    for _ in 0..LEAN_WARM_UP {
         b.frame(&mut lean, camera)?;
     }
     lean.set_options(IrradianceOptions {
