@@ -8458,20 +8458,15 @@ fn irr_claim(at: u32, value: u32) -> u32 {
     return r.old_value;
 }
 
-// The slot of \`key\`, keyed there when absent and \`insert\`; IRR_NONE when absent (or when
-// IRR_PROBES slots were taken). Each word is claimed once, so two invocations with one key
-// agree on its slot, and a key is never held twice. A slot whose second word is still
-// being claimed was empty when the frame began, so no key of an earlier frame lies past
-// it: a lookup may stop there.
-fn irr_find(key: vec2<u32>, insert: bool) -> u32 {
+// The slot of \`key\`, keyed there when absent; IRR_NONE when IRR_PROBES slots were taken.
+// Each word is claimed once, so two invocations with one key agree on its slot, and a key
+// is never held twice.
+fn irr_find(key: vec2<u32>) -> u32 {
     var slot = irr_stream(key) & irr.mask;
     for (var i = 0u; i < IRR_PROBES; i++) {
         let at = slot * IRR_WORDS;
         var a = atomicLoad(&irr_table[at]);
         if a == 0u {
-            if !insert {
-                return IRR_NONE;
-            }
             a = irr_claim(at, key.x);
             if a == 0u {
                 a = key.x;
@@ -8480,9 +8475,6 @@ fn irr_find(key: vec2<u32>, insert: bool) -> u32 {
         if a == key.x {
             var b = atomicLoad(&irr_table[at + 1u]);
             if b == 0u {
-                if !insert {
-                    return IRR_NONE;
-                }
                 b = irr_claim(at + 1u, key.y);
                 if b == 0u {
                     b = key.y;
@@ -8531,7 +8523,7 @@ fn irr_mean(slot: u32) -> vec4<f32> {
 // The irradiance at world point \`p\` (just off a surface of normal \`n\`) by gathering: one
 // sun sample, and π times the radiance of one cosine ray: the sky's, or the emission of
 // the surface it meets plus, for a diffuse world face with samples, albedo/π times its
-// entry.
+// entry (a face met is keyed and requested, as a face seen is).
 fn irr_gather(p: vec3<f32>, n: vec3<f32>, rng: ptr<function, u32>) -> vec3<f32> {
     let base = ray_new(vec3<i32>(0), vec3<f32>(0.0), n);
     var e = vec3<f32>(irr_sun(base, p, n, rng));
@@ -8552,8 +8544,11 @@ fn irr_gather(p: vec3<f32>, n: vec3<f32>, rng: ptr<function, u32>) -> vec3<f32> 
         l += m.albedo * m.emission;
     }
     if h.entity == NO_ENTITY && m.kind != KIND_MIRROR && m.kind != KIND_METAL {
-        let slot = irr_find(irr_key(h.voxel, h.normal), false);
+        // The face is near the view: it is keyed and requested too, so that the bounce
+        // light of the next frames' gathers finds it.
+        let slot = irr_find(irr_key(h.voxel, h.normal));
         if slot != IRR_NONE {
+            irr_request(slot);
             l += m.albedo / PI * irr_mean(slot).xyz;
         }
     }
@@ -8564,7 +8559,7 @@ fn irr_gather(p: vec3<f32>, n: vec3<f32>, rng: ptr<function, u32>) -> vec3<f32> 
 // emission excluded: the path adds it).
 fn diffuse_tier(h: Hit, p: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, rng: ptr<function, u32>) -> vec3<f32> {
     if h.entity == NO_ENTITY {
-        let slot = irr_find(irr_key(h.voxel, h.normal), true);
+        let slot = irr_find(irr_key(h.voxel, h.normal));
         if slot != IRR_NONE {
             irr_request(slot);
             let e = irr_mean(slot);
