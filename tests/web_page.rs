@@ -121,6 +121,22 @@ impl Browser {
     }
 }
 
+/// Edits a box of material 2 (6 × 6 × 6 voxels) onto the empty voxel under page `id`'s
+/// pointer; returns the version the edit made.
+fn box_at_pointer(browser: &mut Browser, id: &str) -> Value {
+    let v = &browser.eval(id, "return n.pointer")["before"];
+    let (x, y, z) = (v[0].as_i64().unwrap(), v[1].as_i64().unwrap(), v[2].as_i64().unwrap());
+    let edit = format!(
+        r#"{{"op":"box","min":[{},{y},{}],"max":[{},{},{}],"material":2}}"#,
+        x - 3,
+        z - 3,
+        x + 3,
+        y + 6,
+        z + 3
+    );
+    browser.eval(id, &format!("return await n.edit({})", json!(edit)))
+}
+
 impl Drop for Browser {
     fn drop(&mut self) {
         let _ = self.child.kill();
@@ -698,17 +714,7 @@ fn the_irradiance_mode_draws_what_naadf_render_draws() {
         "n.mode === 'albedo' && n.samples === 0 && n.pointer !== null",
         60_000,
     );
-    let v = &browser.eval("a", "return n.pointer")["before"];
-    let (x, y, z) = (v[0].as_i64().unwrap(), v[1].as_i64().unwrap(), v[2].as_i64().unwrap());
-    let edit = format!(
-        r#"{{"op":"box","min":[{},{y},{}],"max":[{},{},{}],"material":2}}"#,
-        x - 3,
-        z - 3,
-        x + 3,
-        y + 6,
-        z + 3
-    );
-    let version = browser.eval("a", &format!("return await n.edit({})", json!(edit)));
+    let version = box_at_pointer(&mut browser, "a");
     browser.wait("a", &format!("n.shownVersion >= {version} && {SETTLED}"), 120_000);
     browser.send(json!({"op": "select", "id": "a", "selector": "#mode", "value": "irradiance"}));
     let page = browser.wait("a", "n.mode === 'irradiance' && n.irradiance.stamp === 3", 120_000);
@@ -753,18 +759,7 @@ fn the_gi_mode_draws_what_naadf_render_draws() {
     let before_version = browser.eval("a", "return n.version").as_u64().unwrap();
     let mut prints = ChunkPrints::new(rt.block_on(session.until_quiescent(before_version, SETTLE)).unwrap());
     let generation = browser.eval("a", "return n.generation()");
-    let aimed = browser.eval("a", "return n.pointer");
-    let v = &aimed["before"];
-    let (x, y, z) = (v[0].as_i64().unwrap(), v[1].as_i64().unwrap(), v[2].as_i64().unwrap());
-    let edit = format!(
-        r#"{{"op":"box","min":[{},{y},{}],"max":[{},{},{}],"material":2}}"#,
-        x - 3,
-        z - 3,
-        x + 3,
-        y + 6,
-        z + 3
-    );
-    let version = browser.eval("a", &format!("return await n.edit({})", json!(edit)));
+    let version = box_at_pointer(&mut browser, "a");
     let page = browser.wait(
         "a",
         &format!(

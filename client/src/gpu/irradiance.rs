@@ -14,7 +14,7 @@ use super::baseline::{Baseline, History};
 use super::context::{Gpu, GpuError};
 use super::params::{IrradianceInfo, LightInfo, WgslStruct};
 use super::pathtrace::PATHTRACE;
-use super::pipeline::{PassPipelines, dispatch_2d};
+use super::pipeline::PassPipelines;
 use super::shaders::{LIGHT, Loop, NO_TIER, PassSource, SAMPLE, WgslValue, constants};
 use super::shot::Shot;
 use super::temporal::Temporal;
@@ -280,22 +280,12 @@ impl Irradiance {
             usage: wgpu::BufferUsages::STORAGE,
         });
         let light = gpu.params("light", bytemuck::bytes_of(&LightInfo::new(&shot.light)));
-        let pipeline = self.invalidate.get(gpu, world, Loop::Hierarchy, true)?;
-        let (gx, gy) = dispatch_2d(cache.slots.div_ceil(64) as u32);
-        gpu.checked(|| {
-            let group = self
-                .invalidate
-                .group1(gpu, &[&light, &info, &cache.table, &cache.requests, &boxes]);
-            let mut enc = gpu.device.create_command_encoder(&Default::default());
-            {
-                let mut pass = enc.begin_compute_pass(&Default::default());
-                pass.set_pipeline(&pipeline);
-                pass.set_bind_group(0, world.bind_group(), &[]);
-                pass.set_bind_group(1, &group, &[]);
-                pass.dispatch_workgroups(gx, gy, 1);
-            }
-            gpu.queue.submit([enc.finish()]);
-        })
+        self.invalidate.submit(
+            gpu,
+            world,
+            &[&light, &info, &cache.table, &cache.requests, &boxes],
+            cache.slots.div_ceil(64) as u32,
+        )
     }
 }
 

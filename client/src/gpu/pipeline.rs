@@ -95,6 +95,31 @@ impl PassPipelines {
         }
         Ok(self.cache[&key].clone())
     }
+
+    /// Runs `groups` workgroups (split by [`dispatch_2d`]) of the pass's hierarchy pipeline
+    /// over `world`, with `buffers` as its group 1, in a submission of its own.
+    pub fn submit(
+        &mut self,
+        gpu: &Gpu,
+        world: &GpuWorld,
+        buffers: &[&wgpu::Buffer],
+        groups: u32,
+    ) -> Result<(), GpuError> {
+        let pipeline = self.get(gpu, world, Loop::Hierarchy, true)?;
+        let (gx, gy) = dispatch_2d(groups);
+        gpu.checked(|| {
+            let group = self.group1(gpu, buffers);
+            let mut enc = gpu.device.create_command_encoder(&Default::default());
+            {
+                let mut pass = enc.begin_compute_pass(&Default::default());
+                pass.set_pipeline(&pipeline);
+                pass.set_bind_group(0, world.bind_group(), &[]);
+                pass.set_bind_group(1, &group, &[]);
+                pass.dispatch_workgroups(gx, gy, 1);
+            }
+            gpu.queue.submit([enc.finish()]);
+        })
+    }
 }
 
 /// Splits `groups` workgroups into a 2D dispatch within the per-dimension limit; returns

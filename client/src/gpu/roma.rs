@@ -14,8 +14,8 @@ use super::baseline::Baseline;
 use super::context::{Gpu, GpuError};
 use super::params::{RomaInfo, RomaJob, RomaWindow, WgslStruct};
 use super::pathtrace::PATHTRACE;
-use super::pipeline::{PassPipelines, dispatch_2d};
-use super::shaders::{LIGHT, Loop, PassSource, SAMPLE, WgslValue, constants};
+use super::pipeline::PassPipelines;
+use super::shaders::{LIGHT, PassSource, SAMPLE, WgslValue, constants};
 use super::shot::Shot;
 use super::temporal::Temporal;
 use super::world::GpuWorld;
@@ -224,25 +224,17 @@ impl Roma {
         if jobs.is_empty() {
             return Ok(());
         }
-        let pipeline = self.build.get(gpu, world, Loop::Hierarchy, true)?;
         let job_buffer = gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some("roma jobs"),
             contents: bytemuck::cast_slice(&jobs),
             usage: wgpu::BufferUsages::STORAGE,
         });
-        let (gx, gy) = dispatch_2d(jobs.len() as u32);
-        gpu.checked(|| {
-            let group = self.build.group1(gpu, &[&maps.windows_buffer, &job_buffer, &maps.bits]);
-            let mut enc = gpu.device.create_command_encoder(&Default::default());
-            {
-                let mut pass = enc.begin_compute_pass(&Default::default());
-                pass.set_pipeline(&pipeline);
-                pass.set_bind_group(0, world.bind_group(), &[]);
-                pass.set_bind_group(1, &group, &[]);
-                pass.dispatch_workgroups(gx, gy, 1);
-            }
-            gpu.queue.submit([enc.finish()]);
-        })
+        self.build.submit(
+            gpu,
+            world,
+            &[&maps.windows_buffer, &job_buffer, &maps.bits],
+            jobs.len() as u32,
+        )
     }
 }
 
