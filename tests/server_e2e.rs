@@ -328,6 +328,18 @@ async fn a_slow_client_is_cut_and_does_not_stall_others() {
             .collect();
         let ops = format!(r#"{{"op":"set","voxels":[{}]}}"#, voxels.join(","));
         c.edit(ops, k + 1).await.unwrap();
+        // The edits keep pace with the fast mirror (at most 8 versions ahead of it), so
+        // that only a client that stops reading falls the 16 events behind that cut it,
+        // however loaded the machine. A server stalled by the slow client stalls the fast
+        // one too, and this wait fails.
+        let mut seen = fast.state.clone();
+        tokio::time::timeout(
+            Duration::from_secs(60),
+            seen.wait_for(|p| p.as_ref().is_some_and(|p| p.0 + 8 > k)),
+        )
+        .await
+        .expect("the fast mirror keeps up")
+        .expect("the fast mirror follows");
     }
     let point = converge(&c, &[&fast]).await;
     assert_eq!(point.0, 300, "the fast mirror kept up while the slow one did not read");
