@@ -100,7 +100,7 @@ fn irr_mean(slot: u32) -> vec4<f32> {
 // entry (a face met is keyed and requested, as a face seen is).
 fn irr_gather(p: vec3<f32>, n: vec3<f32>, rng: ptr<function, u32>) -> vec3<f32> {
     let base = ray_new(vec3<i32>(0), vec3<f32>(0.0), n);
-    var e = vec3<f32>(irr_sun(base, p, n, rng));
+    var e = vec3<f32>(sun_sample(base, p, n, rng).irradiance);
     let w = sample_cosine(n, vec2<f32>(rng_next(rng), rng_next(rng)));
     let h = trace(ray_at(base, p, w));
     if h.exhausted {

@@ -17,18 +17,3 @@
 fn irr_stream(key: vec2<u32>) -> u32 {
     return pcg_hash(key.x ^ pcg_hash(key.y));
 }
-
-// The sun's irradiance at `p` (relative to `r`'s integer origin, just off a surface of
-// normal `n`) by one sample of its disc.
-fn irr_sun(r: Ray, p: vec3<f32>, n: vec3<f32>, rng: ptr<function, u32>) -> f32 {
-    if light.sun_on == 0u {
-        return 0.0;
-    }
-    let u = vec2<f32>(rng_next(rng), rng_next(rng));
-    let wi = sample_cone(light.sun_dir, light.sun_omc, u);
-    let c = dot(n, wi);
-    if c > 0.0 && !blocked(r, p, wi) {
-        return c * light.sun_weight;
-    }
-    return 0.0;
-}

@@ -93,7 +93,7 @@ fn irradiance_update(@builtin(global_invocation_id) gid: vec3<u32>) {
     p[(axis + 1u) % 3u] = rng_next(&rng);
     p[(axis + 2u) % 3u] = rng_next(&rng);
     let base = ray_new(irr_voxel(at), vec3<f32>(0.0), normal);
-    var e = vec3<f32>(irr_sun(base, p, normal, &rng));
+    var e = vec3<f32>(sun_sample(base, p, normal, &rng).irradiance);
     let u = vec2<f32>((taken * IRR_R2 + offset) >> vec2<u32>(8u)) * (1.0 / 16777216.0);
     let w = sample_cosine(normal, u);
     e += PI * path_radiance(ray_at(base, p, w), 1u, false, &rng).radiance;

@@ -181,26 +181,28 @@ impl LightArgs {
             ("--exposure", self.exposure.is_some()),
         ];
         let mut given: Vec<_> = flags.iter().filter(|f| f.1).map(|f| f.0).collect();
-        given.extend(self.roma_given());
-        given.extend(self.irradiance_given());
+        given.extend(self.tier_options().iter().filter(|o| o.2).map(|o| o.1));
         given
     }
 
-    /// The options of `--mode roma` alone given, by name (for a lit mode that takes none).
+    /// The options that belong to one lit mode alone: the mode, the flag, and whether it
+    /// was given.
     #[cfg(feature = "gpu")]
-    pub fn roma_given(&self) -> Vec<&'static str> {
-        let flags = [
-            ("--roma-directions", self.roma_directions.is_some()),
-            ("--ao-range", self.ao_range.is_some()),
-        ];
-        flags.iter().filter(|f| f.1).map(|f| f.0).collect()
+    fn tier_options(&self) -> [(Mode, &'static str, bool); 3] {
+        [
+            (Mode::Roma, "--roma-directions", self.roma_directions.is_some()),
+            (Mode::Roma, "--ao-range", self.ao_range.is_some()),
+            (Mode::Irradiance, "--irradiance-rays", self.irradiance_rays.is_some()),
+        ]
     }
 
-    /// The options of `--mode irradiance` alone given, by name (for a lit mode that takes
-    /// none).
+    /// The first option given that belongs to a lit mode other than `mode`.
     #[cfg(feature = "gpu")]
-    pub fn irradiance_given(&self) -> Vec<&'static str> {
-        self.irradiance_rays.map(|_| "--irradiance-rays").into_iter().collect()
+    pub fn foreign_to(&self, mode: Mode) -> Option<&'static str> {
+        self.tier_options()
+            .into_iter()
+            .find(|o| o.2 && o.0 != mode)
+            .map(|o| o.1)
     }
 
     /// The options given, over the defaults of docs/RENDERING.md.

@@ -114,34 +114,25 @@ struct Summary {
 
 /// Renders and writes the image.
 pub fn run(a: Args) -> Result<()> {
-    // Refuse what the mode would ignore before any work.
+    // Refuse what the mode would ignore before any work: another lit mode's options, and
+    // below what only some lit modes take.
+    if a.mode.is_lit()
+        && let Some(flag) = a.light.foreign_to(a.mode)
+    {
+        bail!("{flag} does not apply to --mode {}", a.mode.name());
+    }
     let job = match a.mode {
         Mode::PathTrace => {
             if a.frames.is_some() {
                 bail!("--frames does not apply to pathtrace: give the samples per pixel with --spp");
             }
-            refuse_for(
-                &a,
-                &[
-                    "--gbuffer",
-                    "--camera-path",
-                    "--roma-directions",
-                    "--ao-range",
-                    "--irradiance-rays",
-                ],
-            )?;
+            refuse_for(&a, &["--gbuffer", "--camera-path"])?;
             let options = a.light.options()?;
             let light = options.light(DEFAULT_PATHTRACE_BOUNCES).map_err(anyhow::Error::msg)?;
             Job::Lit(options, light)
         }
         mode if mode.is_temporal() => {
             refuse_for(&a, &["--gbuffer", "--spp"])?;
-            if mode != Mode::Roma {
-                refuse_for(&a, &["--roma-directions", "--ao-range"])?;
-            }
-            if mode != Mode::Irradiance {
-                refuse_for(&a, &["--irradiance-rays"])?;
-            }
             let options = LitOptions {
                 frames: a.frames.unwrap_or(1),
                 ..a.light.options()?
@@ -184,14 +175,11 @@ pub fn run(a: Args) -> Result<()> {
     Ok(())
 }
 
-/// Fails if one of `flags` (among `--gbuffer`, `--spp`, `--roma-directions`, `--ao-range`,
-/// `--irradiance-rays`, `--camera-path`) was given.
+/// Fails if one of `flags` (among `--gbuffer`, `--spp`, `--camera-path`) was given.
 fn refuse_for(a: &Args, flags: &[&str]) -> Result<()> {
     let given = |f: &str| match f {
         "--gbuffer" => a.gbuffer.is_some(),
         "--spp" => a.light.given().contains(&"--spp"),
-        "--roma-directions" | "--ao-range" => a.light.roma_given().contains(&f),
-        "--irradiance-rays" => a.light.irradiance_given().contains(&f),
         _ => a.camera_path.is_some(),
     };
     match flags.iter().find(|f| given(f)) {

@@ -77,6 +77,31 @@ export function passPipeline(device: GPUDevice, world: WorldGroup, label: string
   return { pipeline, layout };
 }
 
+/** A bind group of `layout` binding `buffers` at 0, 1, 2, … in order. */
+export function bindBuffers(device: GPUDevice, layout: GPUBindGroupLayout, buffers: GPUBuffer[]): GPUBindGroup {
+  return device.createBindGroup({ layout, entries: buffers.map((buffer, binding) => ({ binding, resource: { buffer } })) });
+}
+
+/** Submits one dispatch of `groups` workgroups of `pipeline` (split in two dimensions at
+ * the adapter's limit), with the world as group 0 and `group1`. */
+export async function submitGroups(
+  device: GPUDevice,
+  pipeline: Promise<GPUComputePipeline>,
+  world: GPUBindGroup,
+  group1: GPUBindGroup,
+  groups: number,
+): Promise<void> {
+  const enc = device.createCommandEncoder();
+  const pass = enc.beginComputePass();
+  pass.setPipeline(await pipeline);
+  pass.setBindGroup(0, world);
+  pass.setBindGroup(1, group1);
+  const max = device.limits.maxComputeWorkgroupsPerDimension;
+  pass.dispatchWorkgroups(Math.min(groups, max), Math.ceil(groups / max));
+  pass.end();
+  device.queue.submit([enc.finish()]);
+}
+
 /** An encoder holding one dispatch of `pipeline` over `width × height` pixels in 8×8
  * workgroups, with the world as group 0 and `group1`. */
 export async function dispatchPixels(

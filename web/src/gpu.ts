@@ -16,7 +16,7 @@ import {
   View,
   WorldInfo,
 } from "./gen/layout";
-import { WorldGroup, dispatchPixels, passPipeline, readBack, writeStruct } from "./compute";
+import { WorldGroup, bindBuffers, dispatchPixels, passPipeline, readBack, writeStruct } from "./compute";
 import type { Camera } from "./camera";
 import { cameraRays } from "./camera";
 import type { Mirror, Touched } from "./mirror";
@@ -397,14 +397,7 @@ class PathTracer {
 
   async render(world: GpuWorld, camera: Camera, width: number, height: number): Promise<ImageData> {
     const sums = this.sums.next(world, camera, width, height);
-    const group = this.device.createBindGroup({
-      layout: this.group1,
-      entries: [
-        { binding: 0, resource: { buffer: this.sums.frame } },
-        { binding: 1, resource: { buffer: this.light } },
-        { binding: 2, resource: { buffer: sums } },
-      ],
-    });
+    const group = bindBuffers(this.device, this.group1, [this.sums.frame, this.light, sums]);
     const enc = await dispatchPixels(this.device, this.pipeline, this.world.of(world), group, width, height);
     return this.sums.finish(enc, width, height);
   }

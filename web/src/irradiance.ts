@@ -7,7 +7,7 @@
 import irradianceWgsl from "./gen/irradiance.wgsl?raw";
 import irradianceUpdateWgsl from "./gen/irradiance_update.wgsl?raw";
 import { DEFAULT_SEED, GI_LIGHT_WORDS, IRR, IrradianceInfo, LightInfo } from "./gen/layout";
-import { WorldGroup, dispatchPixels, passPipeline, writeStruct } from "./compute";
+import { WorldGroup, bindBuffers, dispatchPixels, passPipeline, submitGroups, writeStruct } from "./compute";
 import type { Camera } from "./camera";
 import type { GpuWorld } from "./gpu";
 import { ProgressiveSums } from "./progressive";
@@ -244,20 +244,8 @@ export class IrradianceRenderer {
     const list = this.device.createBuffer({ label: "irradiance boxes", size: boxes.byteLength, usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_DST });
     this.device.queue.writeBuffer(list, 0, boxes);
     this.device.queue.writeBuffer(this.invalidateInfo, 0, this.infoBytes(cache, boxes.length / 8));
-    const group = this.device.createBindGroup({
-      layout: this.invalidateLayout,
-      entries: [this.light, this.invalidateInfo, cache.table, cache.requests, list].map((buffer, binding) => ({ binding, resource: { buffer } })),
-    });
-    const enc = this.device.createCommandEncoder();
-    const pass = enc.beginComputePass({ label: "irradiance_invalidate" });
-    pass.setPipeline(await this.invalidate);
-    pass.setBindGroup(0, this.world.of(world));
-    pass.setBindGroup(1, group);
-    const groups = Math.ceil(cache.slots / 64);
-    const max = this.device.limits.maxComputeWorkgroupsPerDimension;
-    pass.dispatchWorkgroups(Math.min(groups, max), Math.ceil(groups / max));
-    pass.end();
-    this.device.queue.submit([enc.finish()]);
+    const group = bindBuffers(this.device, this.invalidateLayout, [this.light, this.invalidateInfo, cache.table, cache.requests, list]);
+    await submitGroups(this.device, this.invalidate, this.world.of(world), group, Math.ceil(cache.slots / 64));
     list.destroy();
     return cache;
   }
@@ -271,23 +259,21 @@ export class IrradianceRenderer {
     const sums = this.sums.next(world, camera, width, height);
     this.device.queue.writeBuffer(this.info, 0, this.infoBytes(cache, 0));
     const buffers = [this.light, this.info, cache.table, cache.requests, this.noBoxes, cache.args];
-    const bind = (layout: GPUBindGroupLayout, list: GPUBuffer[]) =>
-      this.device.createBindGroup({ layout, entries: list.map((buffer, binding) => ({ binding, resource: { buffer } })) });
-    const sampleGroup = bind(this.sampleLayout, [this.sums.frame, this.light, sums, this.info, cache.table, cache.requests]);
+    const sampleGroup = bindBuffers(this.device, this.sampleLayout, [this.sums.frame, this.light, sums, this.info, cache.table, cache.requests]);
     const group0 = this.world.of(world);
     const enc = await dispatchPixels(this.device, this.sample, group0, sampleGroup, width, height);
     const [args, update] = await Promise.all([this.args, this.update]);
     let pass = enc.beginComputePass({ label: "irradiance_args" });
     pass.setPipeline(args);
     pass.setBindGroup(0, group0);
-    pass.setBindGroup(1, bind(this.argsLayout, buffers));
+    pass.setBindGroup(1, bindBuffers(this.device, this.argsLayout, buffers));
     pass.dispatchWorkgroups(1);
     pass.end();
     // A pass of its own: the dispatch reads what the one before wrote.
     pass = enc.beginComputePass({ label: "irradiance_update" });
     pass.setPipeline(update);
     pass.setBindGroup(0, group0);
-    pass.setBindGroup(1, bind(this.updateLayout, buffers.slice(0, 5)));
+    pass.setBindGroup(1, bindBuffers(this.device, this.updateLayout, buffers.slice(0, 5)));
     pass.dispatchWorkgroupsIndirect(cache.args, 0);
     pass.end();
     enc.copyBufferToBuffer(cache.requests, 0, this.counters, 0, IRR.LIST * 4);

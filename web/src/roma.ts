@@ -6,7 +6,7 @@
 import romaWgsl from "./gen/roma.wgsl?raw";
 import romaBuildWgsl from "./gen/roma_build.wgsl?raw";
 import { GI_LIGHT_WORDS, ROMA, RomaInfo, RomaJob, RomaWindow } from "./gen/layout";
-import { WorldGroup, dispatchPixels, passPipeline, writeStruct } from "./compute";
+import { WorldGroup, bindBuffers, dispatchPixels, passPipeline, submitGroups, writeStruct } from "./compute";
 import type { Camera } from "./camera";
 import type { GpuWorld } from "./gpu";
 import { ProgressiveSums } from "./progressive";
@@ -167,23 +167,8 @@ export class RomaRenderer {
     }
     const jobBuffer = this.device.createBuffer({ label: "roma jobs", size: list.byteLength, usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_DST });
     this.device.queue.writeBuffer(jobBuffer, 0, list);
-    const group = this.device.createBindGroup({
-      layout: this.buildLayout,
-      entries: [
-        { binding: 0, resource: { buffer: this.windows } },
-        { binding: 1, resource: { buffer: jobBuffer } },
-        { binding: 2, resource: { buffer: this.bits } },
-      ],
-    });
-    const enc = this.device.createCommandEncoder();
-    const pass = enc.beginComputePass();
-    pass.setPipeline(await this.build);
-    pass.setBindGroup(0, this.world.of(world));
-    pass.setBindGroup(1, group);
-    const max = this.device.limits.maxComputeWorkgroupsPerDimension;
-    pass.dispatchWorkgroups(Math.min(jobs.size, max), Math.ceil(jobs.size / max));
-    pass.end();
-    this.device.queue.submit([enc.finish()]);
+    const group = bindBuffers(this.device, this.buildLayout, [this.windows, jobBuffer, this.bits]);
+    await submitGroups(this.device, this.build, this.world.of(world), group, jobs.size);
     jobBuffer.destroy();
   }
 
@@ -203,17 +188,7 @@ export class RomaRenderer {
       0,
       writeStruct(RomaInfo, { camera: camera.pos, ao_range: ROMA.AO_RANGE, side: ROMA.SIDE, directions: ROMA.DIRECTIONS }),
     );
-    const group = this.device.createBindGroup({
-      layout: this.sampleLayout,
-      entries: [
-        { binding: 0, resource: { buffer: this.sums.frame } },
-        { binding: 1, resource: { buffer: this.light } },
-        { binding: 2, resource: { buffer: sums } },
-        { binding: 3, resource: { buffer: this.info } },
-        { binding: 4, resource: { buffer: this.windows } },
-        { binding: 5, resource: { buffer: this.bits } },
-      ],
-    });
+    const group = bindBuffers(this.device, this.sampleLayout, [this.sums.frame, this.light, sums, this.info, this.windows, this.bits]);
     const enc = await dispatchPixels(this.device, this.sample, this.world.of(world), group, width, height);
     return this.sums.finish(enc, width, height);
   }

@@ -128,16 +128,6 @@ impl Headless {
         &mut self.gi
     }
 
-    /// The ROMA renderer (its directions and AO range).
-    pub fn roma_mut(&mut self) -> &mut Roma {
-        &mut self.roma
-    }
-
-    /// The irradiance-cache renderer (its ray budget).
-    pub fn irradiance_mut(&mut self) -> &mut Irradiance {
-        &mut self.irradiance
-    }
-
     /// Renders the frame `spec` asks for, in any mode: the lit modes continue the state of
     /// `spec.lit.stream` (its path-tracer sums and its baseline, GI, ROMA and irradiance
     /// histories; a request without a stream starts afresh) and are tone-mapped with its

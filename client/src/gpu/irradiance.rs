@@ -138,6 +138,8 @@ pub struct Irradiance {
     frames: Baseline,
     options: IrradianceOptions,
     cache: Option<Cache>,
+    /// The boxes the update passes bind (they read none).
+    no_boxes: wgpu::Buffer,
 }
 
 /// The read-only flags of the update module's group 1 after its two parameter buffers:
@@ -155,6 +157,7 @@ impl Irradiance {
             frames: Baseline::with_sample_pass(gpu, irradiance_sample_pass(), &[true, false, false]),
             options: IrradianceOptions::default(),
             cache: None,
+            no_boxes: gpu.params("irradiance boxes", &[0u8; 32]),
         }
     }
 
@@ -214,7 +217,7 @@ impl Irradiance {
 
     /// Brings the cache up to date for `shot` of `world`: a new one when its basis or size
     /// changed (or it fills past half), and the entries near changed chunks cleared.
-    fn prepare(&mut self, gpu: &Gpu, world: &GpuWorld, shot: &Shot) -> Result<(), GpuError> {
+    fn prepare(&mut self, gpu: &Gpu, world: &GpuWorld, shot: &Shot, light: &wgpu::Buffer) -> Result<(), GpuError> {
         self.options.check().map_err(GpuError::Unsupported)?;
         let basis = Basis {
             sky: shot.light.sky,
@@ -279,11 +282,10 @@ impl Irradiance {
             contents: bytemuck::cast_slice(&boxes),
             usage: wgpu::BufferUsages::STORAGE,
         });
-        let light = gpu.params("light", bytemuck::bytes_of(&LightInfo::new(&shot.light)));
         self.invalidate.submit(
             gpu,
             world,
-            &[&light, &info, &cache.table, &cache.requests, &boxes],
+            &[light, &info, &cache.table, &cache.requests, &boxes],
             cache.slots.div_ceil(64) as u32,
         )
     }
@@ -293,17 +295,23 @@ impl Temporal for Irradiance {
     /// Brings the cache up to date, renders the next frame as the baseline does with the
     /// cache lighting diffuse surfaces, then refreshes the entries the frame requested.
     fn frame(&mut self, gpu: &Gpu, world: &GpuWorld, shot: &Shot) -> Result<(), GpuError> {
-        self.prepare(gpu, world, shot)?;
+        let light = gpu.params("light", bytemuck::bytes_of(&LightInfo::new(&shot.light)));
+        self.prepare(gpu, world, shot, &light)?;
         let cache = self.cache.as_ref().expect("prepared above");
         let info = info(gpu, &self.options, cache, 0);
         self.frames
             .frame_with(gpu, world, shot, &[&info, &cache.table, &cache.requests])?;
-        let light = gpu.params("light", bytemuck::bytes_of(&LightInfo::new(&shot.light)));
-        let no_boxes = gpu.params("irradiance boxes", &[0u8; 32]);
         let args = self.args.get(gpu, world, Loop::Hierarchy, true)?;
         let update = self.update.get(gpu, world, Loop::Hierarchy, true)?;
         gpu.checked(|| {
-            let buffers = [&light, &info, &cache.table, &cache.requests, &no_boxes, &cache.args];
+            let buffers = [
+                &light,
+                &info,
+                &cache.table,
+                &cache.requests,
+                &self.no_boxes,
+                &cache.args,
+            ];
             let args_group = self.args.group1(gpu, &buffers);
             let update_group = self.update.group1(gpu, &buffers[..5]);
             let mut enc = gpu.device.create_command_encoder(&Default::default());

@@ -171,13 +171,8 @@ impl<'w> CpuPathTracer<'w> {
                         MaterialKind::Metal => scatter::ggx(n, wo, wi, alpha, albedo),
                         _ => albedo / std::f64::consts::PI,
                     };
-                    if let Some(sun) = sun {
-                        let u = [f64::from(rng.next_f32()), f64::from(rng.next_f32())];
-                        let wi = scatter::cone(sun_dir, Sun::one_minus_cos(), u);
-                        let cos = n.dot(wi);
-                        if cos > 0.0 && !self.blocked(p, wi) {
-                            light += throughput * brdf(wi) * (cos * sun.sample_weight());
-                        }
+                    if let Some((wi, e)) = self.sun_sample(p, n, rng) {
+                        light += throughput * brdf(wi) * e;
                     }
                     let u = [f64::from(rng.next_f32()), f64::from(rng.next_f32())];
                     sees_disc = false;
@@ -199,20 +194,15 @@ impl<'w> CpuPathTracer<'w> {
         light
     }
 
-    /// The sun's irradiance at `p` (just off a surface of normal `n`) by one sample of its
-    /// disc: `E·cosθ`-weighted when the disc sample is above the surface and unblocked.
-    pub(crate) fn sun_irradiance(&self, p: DVec3, n: DVec3, rng: &mut Rng) -> f64 {
-        let Some(sun) = self.light.sun else {
-            return 0.0;
-        };
+    /// One sample of the sun's disc seen from `p` (just off a surface of normal `n`): its
+    /// direction and the irradiance it brings, `E·cosθ`-weighted, when it is above the
+    /// surface and unblocked (two random numbers drawn whenever the sun is on).
+    pub(crate) fn sun_sample(&self, p: DVec3, n: DVec3, rng: &mut Rng) -> Option<(DVec3, f64)> {
+        let sun = self.light.sun?;
         let u = [f64::from(rng.next_f32()), f64::from(rng.next_f32())];
         let wi = scatter::cone(DVec3::from(sun.direction()), Sun::one_minus_cos(), u);
         let cos = n.dot(wi);
-        if cos > 0.0 && !self.blocked(p, wi) {
-            cos * sun.sample_weight()
-        } else {
-            0.0
-        }
+        (cos > 0.0 && !self.blocked(p, wi)).then(|| (wi, cos * sun.sample_weight()))
     }
 
     /// The sky along `d` as a ray leaving a diffuse surface sees it (no disc).

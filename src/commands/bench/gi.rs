@@ -197,6 +197,13 @@ impl Bench {
         )?)
     }
 
+    /// The next frame of `r`, read back as a client reads it.
+    fn show(&self, r: &mut dyn Temporal, camera: &Camera) -> Result<()> {
+        self.frame(r, camera)?;
+        r.radiance(&self.gpu)?;
+        Ok(())
+    }
+
     fn measure(&self, img: &Radiance, reference: &Radiance) -> Result<Quality> {
         Quality::measure(img, reference, self.exposure).context("image sizes differ")
     }
@@ -432,8 +439,7 @@ fn timing(b: &Bench, camera: &Camera, a: &GiArgs) -> Result<Timing> {
     b.frame(&mut roma, camera)?;
     roma.forget_maps();
     let t0 = Instant::now();
-    b.frame(&mut roma, camera)?;
-    roma.radiance(&b.gpu)?;
+    b.show(&mut roma, camera)?;
     let roma_maps = RomaMaps {
         bytes: roma.map_bytes(),
         first_tiles: roma.tiles_written(),
@@ -443,8 +449,7 @@ fn timing(b: &Bench, camera: &Camera, a: &GiArgs) -> Result<Timing> {
     // cache starts empty.
     irradiance.forget_cache();
     let t0 = Instant::now();
-    b.frame(&mut irradiance, camera)?;
-    irradiance.radiance(&b.gpu)?;
+    b.show(&mut irradiance, camera)?;
     let first_frame_ms = t0.elapsed().as_secs_f64() * 1e3;
     let first_samples = irradiance.stats(&b.gpu)?.samples;
     // The same frames with the least budget, once the view's entries hold samples (the
@@ -466,21 +471,11 @@ fn timing(b: &Bench, camera: &Camera, a: &GiArgs) -> Result<Timing> {
             for _ in 0..a.timing_frames {
                 match mode {
                     Mode::Albedo => drop(renderer.render(&b.gpu, &b.gw, camera, b.size, mode, false)?),
-                    Mode::Baseline => {
-                        b.frame(&mut baseline, camera)?;
-                        baseline.radiance(&b.gpu)?;
-                    }
-                    Mode::Roma => {
-                        b.frame(&mut roma, camera)?;
-                        roma.radiance(&b.gpu)?;
-                    }
-                    Mode::Irradiance => {
-                        b.frame(&mut irradiance, camera)?;
-                        irradiance.radiance(&b.gpu)?;
-                    }
+                    Mode::Baseline => b.show(&mut baseline, camera)?,
+                    Mode::Roma => b.show(&mut roma, camera)?,
+                    Mode::Irradiance => b.show(&mut irradiance, camera)?,
                     _ => {
-                        b.frame(&mut gi, camera)?;
-                        gi.radiance(&b.gpu)?;
+                        b.show(&mut gi, camera)?;
                         for (p, t) in gi.pass_times(&b.gpu).unwrap_or_default() {
                             pass_ms.entry(p.entry()).or_default().push(t);
                         }
@@ -493,8 +488,7 @@ fn timing(b: &Bench, camera: &Camera, a: &GiArgs) -> Result<Timing> {
         }
         let t0 = Instant::now();
         for _ in 0..a.timing_frames {
-            b.frame(&mut lean, camera)?;
-            lean.radiance(&b.gpu)?;
+            b.show(&mut lean, camera)?;
         }
         lean_ms.push(t0.elapsed().as_secs_f64() * 1e3 / f64::from(a.timing_frames));
     }

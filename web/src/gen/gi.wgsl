@@ -1040,6 +1040,28 @@ fn blocked(r: Ray, p: vec3<f32>, dir: vec3<f32>) -> bool {
     return h.hit || h.exhausted;
 }
 
+// One sample of the sun's disc seen from `p` (relative to `r`'s integer origin, just off a
+// surface of normal `n`): its direction, and the irradiance it brings (`E·cosθ`-weighted)
+// when it is above the surface and unblocked, else 0. Two random numbers are drawn
+// whenever the sun is on (cpu.rs `sun_sample`).
+struct SunSample {
+    dir: vec3<f32>,
+    irradiance: f32,
+}
+
+fn sun_sample(r: Ray, p: vec3<f32>, n: vec3<f32>, rng: ptr<function, u32>) -> SunSample {
+    if light.sun_on == 0u {
+        return SunSample(vec3<f32>(0.0), 0.0);
+    }
+    let u = vec2<f32>(rng_next(rng), rng_next(rng));
+    let wi = sample_cone(light.sun_dir, light.sun_omc, u);
+    let c = dot(n, wi);
+    if c > 0.0 && !blocked(r, p, wi) {
+        return SunSample(wi, c * light.sun_weight);
+    }
+    return SunSample(wi, 0.0);
+}
+
 // One step of a path: what it adds and whether it goes on.
 struct PathState {
     r: Ray,
@@ -1097,17 +1119,13 @@ fn path_step(s: ptr<function, PathState>, scatter: bool, rng: ptr<function, u32>
     } else {
         let wo = -d;
         let alpha = max(m.roughness, MIN_ALPHA);
-        if light.sun_on != 0u {
-            let u = vec2<f32>(rng_next(rng), rng_next(rng));
-            let wi = sample_cone(light.sun_dir, light.sun_omc, u);
-            let c = dot(n, wi);
-            if c > 0.0 && !blocked(r, p, wi) {
-                var f = m.albedo / PI;
-                if m.kind == KIND_METAL {
-                    f = ggx(n, wo, wi, alpha, m.albedo);
-                }
-                (*s).radiance += (*s).throughput * f * (c * light.sun_weight);
+        let sun = sun_sample(r, p, n, rng);
+        if sun.irradiance > 0.0 {
+            var f = m.albedo / PI;
+            if m.kind == KIND_METAL {
+                f = ggx(n, wo, sun.dir, alpha, m.albedo);
             }
+            (*s).radiance += (*s).throughput * f * sun.irradiance;
         }
         let u = vec2<f32>(rng_next(rng), rng_next(rng));
         (*s).sees_disc = false;

@@ -1040,6 +1040,28 @@ fn blocked(r: Ray, p: vec3<f32>, dir: vec3<f32>) -> bool {
     return h.hit || h.exhausted;
 }
 
+// One sample of the sun's disc seen from `p` (relative to `r`'s integer origin, just off a
+// surface of normal `n`): its direction, and the irradiance it brings (`E·cosθ`-weighted)
+// when it is above the surface and unblocked, else 0. Two random numbers are drawn
+// whenever the sun is on (cpu.rs `sun_sample`).
+struct SunSample {
+    dir: vec3<f32>,
+    irradiance: f32,
+}
+
+fn sun_sample(r: Ray, p: vec3<f32>, n: vec3<f32>, rng: ptr<function, u32>) -> SunSample {
+    if light.sun_on == 0u {
+        return SunSample(vec3<f32>(0.0), 0.0);
+    }
+    let u = vec2<f32>(rng_next(rng), rng_next(rng));
+    let wi = sample_cone(light.sun_dir, light.sun_omc, u);
+    let c = dot(n, wi);
+    if c > 0.0 && !blocked(r, p, wi) {
+        return SunSample(wi, c * light.sun_weight);
+    }
+    return SunSample(wi, 0.0);
+}
+
 // One step of a path: what it adds and whether it goes on.
 struct PathState {
     r: Ray,
@@ -1097,17 +1119,13 @@ fn path_step(s: ptr<function, PathState>, scatter: bool, rng: ptr<function, u32>
     } else {
         let wo = -d;
         let alpha = max(m.roughness, MIN_ALPHA);
-        if light.sun_on != 0u {
-            let u = vec2<f32>(rng_next(rng), rng_next(rng));
-            let wi = sample_cone(light.sun_dir, light.sun_omc, u);
-            let c = dot(n, wi);
-            if c > 0.0 && !blocked(r, p, wi) {
-                var f = m.albedo / PI;
-                if m.kind == KIND_METAL {
-                    f = ggx(n, wo, wi, alpha, m.albedo);
-                }
-                (*s).radiance += (*s).throughput * f * (c * light.sun_weight);
+        let sun = sun_sample(r, p, n, rng);
+        if sun.irradiance > 0.0 {
+            var f = m.albedo / PI;
+            if m.kind == KIND_METAL {
+                f = ggx(n, wo, sun.dir, alpha, m.albedo);
             }
+            (*s).radiance += (*s).throughput * f * sun.irradiance;
         }
         let u = vec2<f32>(rng_next(rng), rng_next(rng));
         (*s).sees_disc = false;
@@ -1163,21 +1181,6 @@ fn path_radiance(primary: Ray, bounces: u32, sees_disc: bool, rng: ptr<function,
 // The stream of the entry of `key`: its home slot and its samples' random streams.
 fn irr_stream(key: vec2<u32>) -> u32 {
     return pcg_hash(key.x ^ pcg_hash(key.y));
-}
-
-// The sun's irradiance at `p` (relative to `r`'s integer origin, just off a surface of
-// normal `n`) by one sample of its disc.
-fn irr_sun(r: Ray, p: vec3<f32>, n: vec3<f32>, rng: ptr<function, u32>) -> f32 {
-    if light.sun_on == 0u {
-        return 0.0;
-    }
-    let u = vec2<f32>(rng_next(rng), rng_next(rng));
-    let wi = sample_cone(light.sun_dir, light.sun_omc, u);
-    let c = dot(n, wi);
-    if c > 0.0 && !blocked(r, p, wi) {
-        return c * light.sun_weight;
-    }
-    return 0.0;
 }
 
 // The irradiance cache as the diffuse tier of `irradiance` (docs/RENDERING.md §3e): the
@@ -1282,7 +1285,7 @@ fn irr_mean(slot: u32) -> vec4<f32> {
 // entry (a face met is keyed and requested, as a face seen is).
 fn irr_gather(p: vec3<f32>, n: vec3<f32>, rng: ptr<function, u32>) -> vec3<f32> {
     let base = ray_new(vec3<i32>(0), vec3<f32>(0.0), n);
-    var e = vec3<f32>(irr_sun(base, p, n, rng));
+    var e = vec3<f32>(sun_sample(base, p, n, rng).irradiance);
     let w = sample_cosine(n, vec2<f32>(rng_next(rng), rng_next(rng)));
     let h = trace(ray_at(base, p, w));
     if h.exhausted {

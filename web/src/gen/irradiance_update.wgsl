@@ -1040,6 +1040,28 @@ fn blocked(r: Ray, p: vec3<f32>, dir: vec3<f32>) -> bool {
     return h.hit || h.exhausted;
 }
 
+// One sample of the sun's disc seen from `p` (relative to `r`'s integer origin, just off a
+// surface of normal `n`): its direction, and the irradiance it brings (`E·cosθ`-weighted)
+// when it is above the surface and unblocked, else 0. Two random numbers are drawn
+// whenever the sun is on (cpu.rs `sun_sample`).
+struct SunSample {
+    dir: vec3<f32>,
+    irradiance: f32,
+}
+
+fn sun_sample(r: Ray, p: vec3<f32>, n: vec3<f32>, rng: ptr<function, u32>) -> SunSample {
+    if light.sun_on == 0u {
+        return SunSample(vec3<f32>(0.0), 0.0);
+    }
+    let u = vec2<f32>(rng_next(rng), rng_next(rng));
+    let wi = sample_cone(light.sun_dir, light.sun_omc, u);
+    let c = dot(n, wi);
+    if c > 0.0 && !blocked(r, p, wi) {
+        return SunSample(wi, c * light.sun_weight);
+    }
+    return SunSample(wi, 0.0);
+}
+
 // One step of a path: what it adds and whether it goes on.
 struct PathState {
     r: Ray,
@@ -1097,17 +1119,13 @@ fn path_step(s: ptr<function, PathState>, scatter: bool, rng: ptr<function, u32>
     } else {
         let wo = -d;
         let alpha = max(m.roughness, MIN_ALPHA);
-        if light.sun_on != 0u {
-            let u = vec2<f32>(rng_next(rng), rng_next(rng));
-            let wi = sample_cone(light.sun_dir, light.sun_omc, u);
-            let c = dot(n, wi);
-            if c > 0.0 && !blocked(r, p, wi) {
-                var f = m.albedo / PI;
-                if m.kind == KIND_METAL {
-                    f = ggx(n, wo, wi, alpha, m.albedo);
-                }
-                (*s).radiance += (*s).throughput * f * (c * light.sun_weight);
+        let sun = sun_sample(r, p, n, rng);
+        if sun.irradiance > 0.0 {
+            var f = m.albedo / PI;
+            if m.kind == KIND_METAL {
+                f = ggx(n, wo, sun.dir, alpha, m.albedo);
             }
+            (*s).radiance += (*s).throughput * f * sun.irradiance;
         }
         let u = vec2<f32>(rng_next(rng), rng_next(rng));
         (*s).sees_disc = false;
@@ -1173,21 +1191,6 @@ fn diffuse_tier(h: Hit, p: vec3<f32>, n: vec3<f32>, albedo: vec3<f32>, rng: ptr<
 // The stream of the entry of `key`: its home slot and its samples' random streams.
 fn irr_stream(key: vec2<u32>) -> u32 {
     return pcg_hash(key.x ^ pcg_hash(key.y));
-}
-
-// The sun's irradiance at `p` (relative to `r`'s integer origin, just off a surface of
-// normal `n`) by one sample of its disc.
-fn irr_sun(r: Ray, p: vec3<f32>, n: vec3<f32>, rng: ptr<function, u32>) -> f32 {
-    if light.sun_on == 0u {
-        return 0.0;
-    }
-    let u = vec2<f32>(rng_next(rng), rng_next(rng));
-    let wi = sample_cone(light.sun_dir, light.sun_omc, u);
-    let c = dot(n, wi);
-    if c > 0.0 && !blocked(r, p, wi) {
-        return c * light.sun_weight;
-    }
-    return 0.0;
 }
 
 // The irradiance cache's update passes (`irradiance`; docs/RENDERING.md §3e), with
@@ -1285,7 +1288,7 @@ fn irradiance_update(@builtin(global_invocation_id) gid: vec3<u32>) {
     p[(axis + 1u) % 3u] = rng_next(&rng);
     p[(axis + 2u) % 3u] = rng_next(&rng);
     let base = ray_new(irr_voxel(at), vec3<f32>(0.0), normal);
-    var e = vec3<f32>(irr_sun(base, p, normal, &rng));
+    var e = vec3<f32>(sun_sample(base, p, normal, &rng).irradiance);
     let u = vec2<f32>((taken * IRR_R2 + offset) >> vec2<u32>(8u)) * (1.0 / 16777216.0);
     let w = sample_cosine(normal, u);
     e += PI * path_radiance(ray_at(base, p, w), 1u, false, &rng).radiance;

@@ -162,7 +162,7 @@ impl<'w> CpuIrradiance<'w> {
         let mut rng = Rng::new(self.seed, key.stream(), n);
         let p = key.point([f64::from(rng.next_f32()), f64::from(rng.next_f32())]);
         let normal = key.normal();
-        let mut e = DVec3::splat(self.tracer.sun_irradiance(p, normal, &mut rng));
+        let mut e = DVec3::splat(self.tracer.sun_sample(p, normal, &mut rng).map_or(0.0, |s| s.1));
         let u = [0, 1].map(|d| f64::from(qmc(n, d, offsets[d])));
         if let Ok(ray) = Ray::new(p.to_array(), cosine(normal, u).to_array()) {
             e += PI * self.tracer.radiance(ray, false, &mut rng);
@@ -185,7 +185,7 @@ impl<'w> CpuIrradiance<'w> {
     /// radiance of one cosine ray, which is the sky's or that of the surface it meets (its
     /// emission, and for a world face the entry's light).
     pub fn gather(&self, p: DVec3, n: DVec3, rng: &mut Rng) -> DVec3 {
-        let mut e = DVec3::splat(self.tracer.sun_irradiance(p, n, rng));
+        let mut e = DVec3::splat(self.tracer.sun_sample(p, n, rng).map_or(0.0, |s| s.1));
         let u = [f64::from(rng.next_f32()), f64::from(rng.next_f32())];
         let w = cosine(n, u);
         let Ok(ray) = Ray::new(p.to_array(), w.to_array()) else {
