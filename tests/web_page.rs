@@ -255,6 +255,54 @@ fn two_pages_edit_together_and_see_each_other() {
         10_000,
     );
     assert_eq!(b["users"].as_array().unwrap().len(), 2, "{b}");
+    // A's marker is a local instance that B's GPU draws at A's camera: B's frame differs
+    // from `naadf render` of B's view (which knows no markers) in a few pixels, all of them
+    // around where A's name is written. A draws B's marker too (behind A, out of view).
+    browser.wait("a", "n.markerInstances === 1", 10_000);
+    let b = browser.wait(
+        "b",
+        &format!("n.markerInstances === 1 && n.shownGeneration === n.generation() && {SETTLED}"),
+        10_000,
+    );
+    assert_eq!(b["previewInstances"], 0, "{b}");
+    let marker = b["markers"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|m| m["name"] == a_name)
+        .unwrap_or_else(|| panic!("A's marker in {b}"));
+    let (mx, my) = (marker["x"].as_f64().unwrap(), marker["y"].as_f64().unwrap());
+    let (png, native) = page_and_native(
+        &mut browser,
+        "b",
+        &server,
+        b_cam,
+        &["--size", "96x54", "--mode", "albedo"],
+        dir.path(),
+    );
+    let (page, native) = (
+        image::open(&png).unwrap().to_rgba8(),
+        image::open(&native).unwrap().to_rgba8(),
+    );
+    assert_eq!(page.dimensions(), native.dimensions());
+    let differing: Vec<(u32, u32)> = page
+        .enumerate_pixels()
+        .filter(|&(x, y, p)| p != native.get_pixel(x, y))
+        .map(|(x, y, _)| (x, y))
+        .collect();
+    eprintln!(
+        "A's marker: {} pixels differ, around ({mx:.1}, {my:.1})",
+        differing.len()
+    );
+    // The 3-voxel box, about 25 voxels away, covers some 4 pixels a side.
+    assert!(differing.len() >= 4, "A's marker changed {} pixels", differing.len());
+    for &(x, y) in &differing {
+        let (dx, dy) = (f64::from(x) + 0.5 - mx, f64::from(y) + 0.5 - my);
+        assert!(
+            dx.abs() <= 8.0 && dy.abs() <= 8.0,
+            "pixel ({x}, {y}) differs, away from A's marker at ({mx}, {my})"
+        );
+    }
 
     // B edits first; then A places a sphere where its view's centre meets the terrain.
     let b_box = r#"{"op":"box","min":[10,40,10],"max":[14,44,14],"material":2}"#;

@@ -10,7 +10,9 @@ import { basis, defaultCamera } from "./camera";
 import { PageCache } from "./cache";
 import { digestHex, loadHasher } from "./digest";
 import { GpuWorld, NoWebGpu, Renderer, openDevice } from "./gpu";
+import type { LocalBox } from "./instances";
 import type { IrradianceStats } from "./irradiance";
+import { markerBoxes } from "./markers";
 import type { Marker } from "./overlay";
 import { drawOverlay, rayThrough } from "./overlay";
 import type { Pick } from "./pick";
@@ -42,7 +44,7 @@ interface PageState {
   bytesReceived: number;
   /** Bytes of the last snapshot (or resume): its header and pages. */
   snapshotBytes: number;
-  /** The other clients' markers drawn on the last frame. */
+  /** The other clients' name labels drawn on the last frame. */
   markers: Marker[];
   /** Calls retried after the server's rate limit turned them away. */
   rateLimited: number;
@@ -55,6 +57,8 @@ interface PageState {
   shownGeneration: number;
   /** The local instances the active tool's preview shows. */
   previewInstances: number;
+  /** The local instances that mark the other clients' cameras (markers.ts). */
+  markerInstances: number;
   /** The path tracer's (or `roma`'s, or `irradiance`'s) samples per pixel, or the GI's
    * frames, since the view last changed. */
   samples: number;
@@ -108,6 +112,7 @@ const naadf: PageState = {
   shownVersion: -1,
   shownGeneration: -1,
   previewInstances: 0,
+  markerInstances: 0,
   samples: 0,
   irradiance: null,
   pointer: null,
@@ -184,8 +189,13 @@ async function main(): Promise<void> {
   const renderer = new Renderer(device, naadf.mode);
   let voxels: Voxels | undefined;
   let others: PresenceEntry[] = [];
+  // The local instances' parts: the tool's solid preview, and the world's non-empty
+  // materials that the other clients' markers take theirs from.
+  let previewBoxes: LocalBox[] = [];
+  let materials: number[] = [];
   // `dirty`: the next animation frame renders the world again; `overlayDirty`: it only
-  // redraws the overlay (markers, the tool's preview) over the frame shown.
+  // redraws the overlay (the other clients' names and pointers, the tool's outline) over
+  // the frame shown.
   let dirty = true;
   let overlayDirty = false;
   let shownView: Camera | undefined;
@@ -230,6 +240,7 @@ async function main(): Promise<void> {
     presence(entries) {
       naadf.users = entries.map((e) => e.name || e.user || "anonymous").sort();
       others = entries.filter((e) => e.session !== presenceSession);
+      showLocals();
       overlayDirty = true;
       drawHud();
     },
@@ -356,9 +367,11 @@ async function main(): Promise<void> {
     overlayDirty = true;
   };
   function fillPalette(): void {
+    const swatches = palette(session.mirror);
+    materials = swatches.map((s) => s.id);
     const box = $<HTMLDivElement>("palette");
     box.replaceChildren(
-      ...palette(session.mirror).map((s) => {
+      ...swatches.map((s) => {
         const b = document.createElement("button");
         b.className = s.id === tool.material ? "swatch chosen" : "swatch";
         b.style.background = s.colour;
@@ -379,10 +392,18 @@ async function main(): Promise<void> {
     region = pointer && naadf.role !== "viewer" ? preview(tool, voxels, pointer) : undefined;
     naadf.pointer = pointer ? { voxel: pointer.voxel, before: pointer.before } : null;
     // The voxel and box tools show what they would build where it would go.
+    previewBoxes = hovering ? solidPreview(tool, region) : [];
+    showLocals();
+  }
+  /** Gives the GPU the page's local instances: the tool's preview, then a marker box at
+   * each other client's camera (none around this page's own camera); the frame is drawn
+   * again when they changed. */
+  function showLocals(): void {
     const generation = world.generation;
-    const shown = hovering ? solidPreview(tool, region) : [];
-    world.setLocals(shown);
-    naadf.previewInstances = shown.length;
+    const marked = markerBoxes(others, session.mirror.size, materials, camera?.pos);
+    world.setLocals([...previewBoxes, ...marked]);
+    naadf.previewInstances = previewBoxes.length;
+    naadf.markerInstances = marked.length;
     if (world.generation !== generation) dirty = true;
   }
   // The solid preview shows only while the mouse is over the view: the frame of a page
@@ -485,6 +506,8 @@ async function main(): Promise<void> {
       dirty = true;
     }
     if (world.buffer && camera && dirty && !drawing) {
+      // The markers skip the one the camera has flown into.
+      showLocals();
       dirty = false;
       drawing = true;
       const [w, h] = renderSize();

@@ -1,5 +1,6 @@
-// What is drawn over the frame: the other people here (a named marker at each camera, their
-// pointer voxel outlined) and the active tool's preview, projected with the camera contract.
+// What is drawn over the frame: the other people here (the name at each camera, whose
+// marker box the GPU draws as a local instance, markers.ts; their pointer voxel outlined)
+// and the active tool's preview, projected with the camera contract.
 import type { Camera } from "./camera";
 import { basis } from "./camera";
 import type { PresenceEntry } from "./gen/naadf/v1/naadf_pb";
@@ -7,7 +8,8 @@ import type { Region } from "./tools";
 
 type V3 = [number, number, number];
 
-/** A marker drawn for another client, where it is on the frame (render pixels). */
+/** The name label drawn for another client, and where its camera is on the frame (render
+ * pixels). */
 export interface Marker {
   name: string;
   x: number;
@@ -56,7 +58,8 @@ function drawBox(ctx: CanvasRenderingContext2D, camera: Camera, min: V3, max: V3
   ctx.stroke();
 }
 
-/** Draws the overlay: the preview `region` and the markers of `others`; returns the markers drawn. */
+/** Draws the overlay: the preview `region`, and the pointer voxels and names of `others`;
+ * returns the names drawn (those whose camera is in front and inside the frame). */
 export function drawOverlay(
   ctx: CanvasRenderingContext2D,
   camera: Camera,
@@ -77,10 +80,6 @@ export function drawOverlay(
     if (e.position.length !== 3) continue;
     const at = project(camera, w, h, e.position as V3);
     if (!at || at[0] < 0 || at[1] < 0 || at[0] > w || at[1] > h) continue;
-    ctx.fillStyle = "#0ff";
-    ctx.beginPath();
-    ctx.arc(at[0], at[1], 5, 0, 2 * Math.PI);
-    ctx.fill();
     ctx.fillStyle = "#fff";
     ctx.fillText(name, at[0] + 8, at[1] - 8);
     drawn.push({ name, x: at[0], y: at[1] });

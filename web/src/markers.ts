@@ -1,0 +1,45 @@
+// The other people here as local instances (docs/FORMAT.md §5.11): a small solid box at
+// each one's camera, in a material of the world's palette that their presence session
+// picks, so that the GPU draws them in the world, lit, hiding what is behind them and
+// hidden behind the terrain. The overlay (overlay.ts) only writes their names beside them.
+import type { PresenceEntry } from "./gen/naadf/v1/naadf_pb";
+import type { LocalBox } from "./instances";
+
+/** The edge of a marker box in voxels: odd, so that the voxel holding the camera is its
+ * centre. */
+export const MARKER_EDGE = 3;
+
+/** The material of the marker of presence session `session`: one of `materials` (the
+ * world's non-empty materials, the palette's ids), the same one for as long as the session
+ * and the palette last; undefined when the palette is empty. */
+export function markerMaterial(session: bigint, materials: number[]): number | undefined {
+  if (materials.length === 0) return undefined;
+  return materials[Number(BigInt.asUintN(64, session) % BigInt(materials.length))];
+}
+
+/** The marker box of a camera at `pos` in a world of `size` voxels: `MARKER_EDGE` voxels a
+ * side around the voxel holding `pos`, clipped to the world; undefined when no voxel of it
+ * is inside the world, when `pos` is not three finite numbers, or when `eye` (this page's
+ * camera) is inside it (a box around the viewer would hide everything). */
+export function markerBox(pos: number[], size: number[], material: number, eye?: number[]): LocalBox | undefined {
+  if (pos.length !== 3 || !pos.every(Number.isFinite)) return undefined;
+  const half = MARKER_EDGE >> 1;
+  const min = pos.map((p) => Math.max(0, Math.floor(p) - half));
+  const max = pos.map((p, a) => Math.min(size[a], Math.floor(p) - half + MARKER_EDGE));
+  if (min.some((v, a) => v >= max[a])) return undefined;
+  if (eye && eye.every((e, a) => e >= min[a] && e < max[a])) return undefined;
+  return { min, size: max.map((v, a) => v - min[a]), material };
+}
+
+/** The marker boxes of `others` (presence entries with a position) in a world of `size`
+ * voxels whose palette holds `materials`, seen from `eye`: in the order of their sessions,
+ * so that the same people give the same list. */
+export function markerBoxes(others: PresenceEntry[], size: number[], materials: number[], eye?: number[]): LocalBox[] {
+  const boxes: LocalBox[] = [];
+  for (const e of [...others].sort((p, q) => (p.session < q.session ? -1 : p.session > q.session ? 1 : 0))) {
+    const material = markerMaterial(e.session, materials);
+    const box = material === undefined ? undefined : markerBox(e.position, size, material, eye);
+    if (box) boxes.push(box);
+  }
+  return boxes;
+}
