@@ -1,11 +1,88 @@
-//! Other people on the frame: a named marker at each other client's camera and its pointer
-//! voxel outlined, from the presence table the world stream carries (docs/PROTOCOL.md,
-//! "Presence"), projected with the camera contract (docs/CAMERA.md).
+//! Other people in the view, from the presence table the world stream carries
+//! (docs/PROTOCOL.md, "Presence"): a solid box at each other client's camera, as a local
+//! instance the GPU draws and hits ([`place_markers`]), and over the frame its name and its
+//! pointer voxel's corners, projected with the camera contract (docs/CAMERA.md).
 
 use super::hud::Canvas;
 use crate::frame::Frame;
 use naadf_proto::v1::PresenceEntry;
+use naadf_world::World;
 use naadf_world::camera::Camera;
+use naadf_world::entity::local::LocalInstances;
+use naadf_world::model::Model;
+
+/// The edge of a marker box in voxels: odd, so that the voxel holding the camera is its
+/// centre.
+const MARKER_EDGE: i64 = 3;
+
+/// The material of the marker of presence session `session` in a world of `materials`
+/// table entries (the empty entry 0 included): the defined materials taken in id order,
+/// `session` modulo their count, as the browser page picks it, so a person has one colour
+/// everywhere; `None` when no material is defined.
+///
+/// ```
+/// use naadf_client::viewer::marker_material;
+/// assert_eq!(marker_material(7, 4), Some(2)); // materials 1, 2, 3: 7 mod 3 = 1 → the second
+/// assert_eq!(marker_material(7, 1), None);
+/// ```
+pub fn marker_material(session: u64, materials: usize) -> Option<u16> {
+    let defined = materials.checked_sub(1).filter(|&n| n > 0)? as u64;
+    u16::try_from(1 + session % defined).ok()
+}
+
+/// The marker box `(min, size)` of a camera at `pos` in a world of `dims` voxels:
+/// [`MARKER_EDGE`] voxels a side around the voxel holding `pos`, clipped to the world;
+/// `None` when none of it is inside the world, when `pos` is not finite, or when `eye`
+/// (this window's camera) is inside it (a box around the viewer would hide everything).
+fn marker_box(pos: [f64; 3], dims: [u32; 3], eye: [f64; 3]) -> Option<([i64; 3], [i64; 3])> {
+    if !pos.iter().all(|v| v.is_finite() && v.abs() < 1e15) {
+        return None;
+    }
+    let min: [i64; 3] = std::array::from_fn(|a| (pos[a].floor() as i64 - MARKER_EDGE / 2).max(0));
+    let max: [i64; 3] =
+        std::array::from_fn(|a| (pos[a].floor() as i64 - MARKER_EDGE / 2 + MARKER_EDGE).min(i64::from(dims[a])));
+    if (0..3).any(|a| min[a] >= max[a]) {
+        return None;
+    }
+    if (0..3).all(|a| eye[a] >= min[a] as f64 && eye[a] < max[a] as f64) {
+        return None;
+    }
+    Some((min, std::array::from_fn(|a| max[a] - min[a])))
+}
+
+/// Adds a marker box for each entry of `others` (the table less this window's own session)
+/// to `locals`, under keys from `first_key` up, in the order of their sessions; `eye` is
+/// this window's camera. Returns how many were placed.
+pub fn place_markers(
+    locals: &mut LocalInstances,
+    world: &World,
+    others: &[PresenceEntry],
+    eye: [f64; 3],
+    first_key: u32,
+) -> usize {
+    let mut sorted: Vec<&PresenceEntry> = others.iter().collect();
+    sorted.sort_by_key(|e| e.session);
+    let mut key = first_key;
+    for e in sorted {
+        let (&[x, y, z], Some(m)) = (&e.position[..], marker_material(e.session, world.materials().len())) else {
+            continue;
+        };
+        let Some((min, size)) = marker_box([x, y, z], world.size().voxels(), eye) else {
+            continue;
+        };
+        let size = size.map(|v| v as u32);
+        let name = format!("marker {}x{}x{} {m}", size[0], size[1], size[2]);
+        let cells = size.iter().product::<u32>() as usize;
+        let placed = Model::new(size, vec![m; cells])
+            .map_err(|e| e.to_string())
+            .and_then(|model| locals.define_model(&name, model, world.materials()))
+            .and_then(|()| locals.place(key, &name, min.map(|v| v as f64), [0.0, 0.0, 0.0, 1.0]));
+        if placed.is_ok() {
+            key += 1;
+        }
+    }
+    (key - first_key) as usize
+}
 
 /// The markers' colour.
 const CYAN: [u8; 3] = [0, 255, 255];
@@ -35,8 +112,9 @@ pub fn project(camera: &Camera, (w, h): (u32, u32), p: [f64; 3]) -> Option<(f64,
     Some(((sx + 1.0) / 2.0 * w, (1.0 - sy) / 2.0 * h))
 }
 
-/// Draws the entries of `others` (the table less this window's own session) over `frame`
-/// seen from `camera`; returns how many markers landed on it.
+/// Writes the names and pointer voxels of `others` (the table less this window's own
+/// session) over `frame` seen from `camera` (the box at each camera is a local instance:
+/// [`place_markers`]); returns how many names landed on it.
 pub fn draw_markers(frame: &mut Frame, camera: &Camera, others: &[PresenceEntry]) -> usize {
     let size = (frame.width, frame.height);
     let mut canvas = Canvas {
@@ -63,7 +141,6 @@ pub fn draw_markers(frame: &mut Frame, camera: &Camera, others: &[PresenceEntry]
             continue;
         }
         let (px, py) = (px as u32, py as u32);
-        canvas.fill(px.saturating_sub(3), py.saturating_sub(3), 7, 7, CYAN);
         let name = if e.name.is_empty() { &e.user } else { &e.name };
         canvas.text(px + 8, py.saturating_sub(20), name, [255; 3]);
         drawn += 1;
@@ -76,7 +153,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn a_marker_lands_where_the_other_camera_is() {
+    fn a_name_lands_beside_the_other_camera() {
         let camera = Camera {
             pos: [10.0, 10.0, 0.0],
             yaw: 0.0,
@@ -99,8 +176,50 @@ mod tests {
             ..ahead.clone()
         };
         assert_eq!(draw_markers(&mut frame, &camera, &[ahead, behind]), 1);
-        let at = |x: usize, y: usize| &frame.rgba[(y * 64 + x) * 4..][..3];
-        assert_eq!(at(32, 16), CYAN, "the marker is at the centre");
-        assert_eq!(at(2, 30), [0, 0, 0], "nothing else is drawn there");
+        let lit = |x0: usize, x1: usize, y0: usize, y1: usize| {
+            (y0..y1).any(|y| (x0..x1).any(|x| frame.rgba[(y * 64 + x) * 4..][..3] != [0, 0, 0]))
+        };
+        // The camera lands at (32, 16); its name is written to the right, above it.
+        assert!(lit(40, 64, 0, 16), "the name is written beside the camera");
+        assert!(!lit(0, 40, 0, 32) && !lit(40, 64, 16, 32), "nothing else is drawn");
+    }
+
+    #[test]
+    fn markers_are_boxes_around_the_other_cameras_inside_the_world() {
+        use naadf_world::preset::Preset;
+        let src = Preset::Test.source(None, 1).unwrap();
+        let world = World::build(&*src, &|_| {}).unwrap();
+        let dims = world.size().voxels();
+        let at = |session: u64, position: Vec<f64>| PresenceEntry {
+            session,
+            position,
+            ..PresenceEntry::default()
+        };
+        let eye = [5.5, 60.5, 5.5];
+        let others = [
+            at(9, vec![20.5, 40.2, 30.9]),
+            at(3, vec![0.2, 0.5, 1.5]),                        // at the corner: clipped
+            at(4, vec![5.0, 60.0, 5.0]),                       // around this window's camera
+            at(5, vec![-10.0, 40.0, 30.0]),                    // outside the world
+            at(6, vec![f64::NAN, 40.0, 30.0]),                 // not a position
+            at(7, vec![f64::from(dims[0]) + 0.5, 40.0, 30.0]), // one voxel outside
+            at(8, vec![f64::from(dims[0]) - 0.5, f64::from(dims[1]) - 0.5, 1.0]), // at the far edge
+        ];
+        let mut locals = LocalInstances::default();
+        assert_eq!(place_markers(&mut locals, &world, &others, eye, 1), 4);
+        let materials = world.materials().len();
+        // In the order of the sessions: 3, 7 (its clipped box reaches one voxel in), 8, 9.
+        let expect = [
+            (3, [0.0, 0.0, 0.0], [2, 2, 3]),
+            (7, [f64::from(dims[0]) - 1.0, 39.0, 29.0], [1, 3, 3]),
+            (8, [f64::from(dims[0]) - 2.0, f64::from(dims[1]) - 2.0, 0.0], [2, 2, 3]),
+            (9, [19.0, 39.0, 29.0], [3, 3, 3]),
+        ];
+        for (k, (session, pos, size)) in expect.into_iter().enumerate() {
+            let pose = locals.get(1 + k as u32).expect("placed");
+            let m = marker_material(session, materials).unwrap();
+            assert_eq!(pose.pos, pos, "session {session}");
+            assert_eq!(pose.model, format!("marker {}x{}x{} {m}", size[0], size[1], size[2]));
+        }
     }
 }

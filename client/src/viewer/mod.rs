@@ -6,7 +6,8 @@
 //! - `pick` ([`edit_for_click`]): which voxel a click edits, and the preview of what a
 //!   right click would place (a local instance, drawn only on this window's GPU);
 //! - `hud` ([`draw_hud`]): the text overlay;
-//! - `markers` ([`draw_markers`]): the other people here, from the presence table;
+//! - `markers` ([`place_markers`], [`draw_markers`]): the other people here, from the
+//!   presence table: a box at each camera (local instances) and their names;
 //! - `present` ([`Presenter`]): showing frames in the window;
 //! - this module: the window's event loop, which owns the [`Mirror`] and the [`GpuWorld`]
 //!   and applies stream messages in order on its own thread.
@@ -27,7 +28,7 @@ pub use error::ViewerError;
 pub use fly::{Fly, Move};
 pub use hud::draw_hud;
 pub use link::{Event, Link};
-pub use markers::{draw_markers, project};
+pub use markers::{draw_markers, marker_material, place_markers, project};
 use pick::place_preview;
 pub use pick::{Click, edit_for_click};
 pub use present::Presenter;
@@ -436,14 +437,23 @@ impl App {
         }
         self.last_frame = Some(now);
         let size = gfx.presenter.size();
-        // While the window edits, what a right click would place shows where it would go.
-        let preview = if self.grabbed {
+        let others: Vec<_> = self
+            .mirror
+            .presence()
+            .iter()
+            .filter(|e| e.session != self.presence.session)
+            .cloned()
+            .collect();
+        // While the window edits, what a right click would place shows where it would go
+        // (key 0); the other people show as boxes at their cameras (keys from 1).
+        let mut locals = if self.grabbed {
             place_preview(world, &fly.camera, size, self.material)
         } else {
             LocalInstances::default()
         };
-        if let Some(gw) = gfx.world.as_mut().filter(|gw| *gw.locals() != preview) {
-            gw.set_locals(&preview);
+        place_markers(&mut locals, world, &others, fly.camera.pos, 1);
+        if let Some(gw) = gfx.world.as_mut().filter(|gw| *gw.locals() != locals) {
+            gw.set_locals(&locals);
             gw.sync(world)?;
         }
         let mut frame = match gfx.render(&fly.camera, size, self.opts.mode) {
@@ -485,13 +495,6 @@ impl App {
             w.set_title(&title);
             self.title = title;
         }
-        let others: Vec<_> = self
-            .mirror
-            .presence()
-            .iter()
-            .filter(|e| e.session != self.presence.session)
-            .cloned()
-            .collect();
         draw_markers(&mut frame, &fly.camera, &others);
         draw_crosshair(&mut frame);
         let camera = fly.camera;
