@@ -257,7 +257,7 @@ fn two_pages_edit_together_and_see_each_other() {
     assert_eq!(b["users"].as_array().unwrap().len(), 2, "{b}");
     // A's marker is a local instance that B's GPU draws at A's camera: B's frame differs
     // from `naadf render` of B's view (which knows no markers) in a few pixels, all of them
-    // around where A's name is written. A draws B's marker too (behind A, out of view).
+    // around where A's camera projects (the position its name is written beside). A draws B's marker too (behind A, out of view).
     browser.wait("a", "n.markerInstances === 1", 10_000);
     let b = browser.wait(
         "b",
