@@ -285,24 +285,15 @@ fn report_walk(plain: &World, crowded: &World, sets: [&[Ray]; 2]) {
     use naadf_world::entity::bvh::Bvh;
     use naadf_world::traverse::trace_naadf;
     let bvh = Bvh::build(&naadf_world::entity::instance_boxes(crowded.entity_instances()));
-    let dims = plain.size().voxels().map(f64::from);
+    let dims = plain.size().voxels();
     // Each ray's origin, 1/d and span; rays that miss the world are left out.
     let spans: Vec<([f64; 3], [f64; 3], f64, f64)> = sets
         .iter()
         .flat_map(|rays| rays.iter())
         .filter_map(|r| {
-            let (o, inv) = (r.origin(), r.dir().map(|v| 1.0 / v));
-            let (mut lo, mut hi) = (0.0f64, f64::INFINITY);
-            for a in 0..3 {
-                let (t0, t1) = ((0.0 - o[a]) * inv[a], (dims[a] - o[a]) * inv[a]);
-                let (near, far) = if t0 <= t1 { (t0, t1) } else { (t1, t0) };
-                // A ray parallel to an axis gives NaN only on its planes; the world box's
-                // other axes still bound it.
-                lo = lo.max(if near.is_nan() { 0.0 } else { near });
-                hi = hi.min(if far.is_nan() { f64::INFINITY } else { far });
-            }
+            let (lo, hi) = r.span_in(dims)?;
             let end = trace_naadf(plain, r).map_or(hi, |h| h.t);
-            (lo <= hi).then_some((o, inv, lo, end))
+            Some((r.origin(), r.dir().map(|v| 1.0 / v), lo, end))
         })
         .collect();
     let rays: Vec<&Ray> = sets.iter().flat_map(|rays| rays.iter()).collect();

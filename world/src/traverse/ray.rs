@@ -221,6 +221,19 @@ impl Ray {
         })
     }
 
+    /// The times `(entered, left)` between which the ray is inside the box `[0, size]` (a
+    /// world's voxels), or `None` if it never enters it, as the traversal finds them.
+    ///
+    /// ```
+    /// use naadf_world::traverse::Ray;
+    /// let r = Ray::new([-2.0, 1.5, 1.5], [1.0, 0.0, 0.0]).unwrap();
+    /// assert_eq!(r.span_in([4, 4, 4]), Some((2.0, 6.0)));
+    /// assert_eq!(r.span_in([4, 1, 4]), None);
+    /// ```
+    pub fn span_in(&self, size: [u32; 3]) -> Option<(f64, f64)> {
+        Some((self.entry(size)?.t, self.leave_time(size)))
+    }
+
     /// When the ray leaves the box `[0, size]` (a ray inside it): the first crossing of one
     /// of the far planes it moves toward, where a cell-by-cell walk steps outside.
     pub(crate) fn leave_time(&self, size: [u32; 3]) -> f64 {
