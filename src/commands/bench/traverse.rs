@@ -277,10 +277,11 @@ fn report_instances(world: &World) -> Result<()> {
 }
 
 /// Where the entity cost of a ray comes from: on one thread, over `sets`, the time a ray
-/// takes through `plain` (no entities) against the time the walk through `crowded`'s
-/// instance hierarchy alone takes over the ray's span (from where it enters the world to
-/// its static hit or where it leaves), over an empty span (only the nodes around the
-/// origin), and the loop around the calls; the median of 7 rounds, the four alternated.
+/// takes through `plain` (no entities) and through `crowded`, against the time the walk
+/// through `crowded`'s instance hierarchy alone takes over the ray's span (from where it
+/// enters the world to its static hit or where it leaves), over an empty span (only the
+/// nodes around the origin), and the loop around the calls; the median of 7 rounds, the
+/// five alternated.
 fn report_walk(plain: &World, crowded: &World, sets: [&[Ray]; 2]) {
     use naadf_world::entity::bvh::Bvh;
     use naadf_world::traverse::trace_naadf;
@@ -298,7 +299,7 @@ fn report_walk(plain: &World, crowded: &World, sets: [&[Ray]; 2]) {
         .collect();
     let rays: Vec<&Ray> = sets.iter().flat_map(|rays| rays.iter()).collect();
     let ns_per = |t: Instant, n: usize| t.elapsed().as_secs_f64() * 1e9 / n.max(1) as f64;
-    let mut times: [Vec<f64>; 4] = Default::default();
+    let mut times: [Vec<f64>; 5] = Default::default();
     let mut sink = 0u64;
     for _ in 0..7 {
         let t = Instant::now();
@@ -319,16 +320,20 @@ fn report_walk(plain: &World, crowded: &World, sets: [&[Ray]; 2]) {
             sink += std::hint::black_box(o[0] + inv[1] + lo + hi) as u64;
         }
         times[3].push(ns_per(t, spans.len()));
+        let t = Instant::now();
+        sink += rays.iter().filter(|r| trace_naadf(crowded, r).is_some()).count() as u64;
+        times[4].push(ns_per(t, rays.len()));
     }
     std::hint::black_box(sink);
-    let [world_ray, walk, empty, around] = times.map(|mut v| {
+    let [world_ray, walk, empty, around, crowded_ray] = times.map(|mut v| {
         v.sort_by(f64::total_cmp);
         v[3]
     });
     eprintln!(
-        "one thread, ns per ray (median of 7): a ray through the world without entities {world_ray:.1}; \
-         the instance hierarchy's walk alone over the ray's span {walk:.1} ({:.1} % of that ray), \
+        "one thread, ns per ray (median of 7): a ray through the world without entities {world_ray:.1}, \
+         with them {crowded_ray:.1} ({:.1} % more); the instance hierarchy's walk alone over the ray's span {walk:.1} ({:.1} % of that ray), \
          over an empty span {empty:.1}; the loop around the calls {around:.1}",
+        100.0 * (crowded_ray - world_ray) / world_ray,
         100.0 * (walk - around) / world_ray
     );
 }
