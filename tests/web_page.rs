@@ -257,7 +257,8 @@ fn two_pages_edit_together_and_see_each_other() {
     assert_eq!(b["users"].as_array().unwrap().len(), 2, "{b}");
     // A's marker is a local instance that B's GPU draws at A's camera: B's frame differs
     // from `naadf render` of B's view (which knows no markers) in a few pixels, all of them
-    // around where A's camera projects (the position its name is written beside). A draws B's marker too (behind A, out of view).
+    // around where A's camera projects (its name is written over the box). A draws B's
+    // marker too (behind A, out of view).
     browser.wait("a", "n.markerInstances === 1", 10_000);
     let b = browser.wait(
         "b",
@@ -272,6 +273,28 @@ fn two_pages_edit_together_and_see_each_other() {
         .find(|m| m["name"] == a_name)
         .unwrap_or_else(|| panic!("A's marker in {b}"));
     let (mx, my) = (marker["x"].as_f64().unwrap(), marker["y"].as_f64().unwrap());
+    // A's name is written in white on B's overlay, centred over the box: above A's camera
+    // and about as far left of it as right.
+    let label = browser.eval(
+        "b",
+        r#"const c = document.getElementById("overlay");
+           const d = c.getContext("2d").getImageData(0, 0, c.width, c.height).data;
+           let [x0, x1, y0, y1, count] = [Infinity, -Infinity, Infinity, -Infinity, 0];
+           for (let i = 0; i < d.length; i += 4) {
+             if (d[i] === 255 && d[i + 1] === 255 && d[i + 2] === 255 && d[i + 3] > 128) {
+               const [x, y] = [(i / 4) % c.width, Math.floor(i / 4 / c.width)];
+               [x0, x1, y0, y1, count] = [Math.min(x0, x), Math.max(x1, x), Math.min(y0, y), Math.max(y1, y), count + 1];
+             }
+           }
+           return { x0, x1, y0, y1, count };"#,
+    );
+    let at = |k: &str| label[k].as_f64().unwrap_or(f64::NAN);
+    assert!(at("count") > 0.0, "no name on B's overlay: {label}");
+    assert!(at("y1") < my, "A's name ends above A's camera at ({mx}, {my}): {label}");
+    assert!(
+        ((at("x0") + at("x1") + 1.0) / 2.0 - mx).abs() <= 4.0,
+        "A's name is centred over A's camera at ({mx}, {my}): {label}"
+    );
     let (png, native) = page_and_native(
         &mut browser,
         "b",

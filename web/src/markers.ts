@@ -31,6 +31,14 @@ export function markerBox(pos: number[], size: number[], material: number, eye?:
   return { min, size: max.map((v, a) => v - min[a]), material };
 }
 
+/** Where the name of the camera at `pos` is written: the middle of the top face of its
+ * marker box as `markerBox` centres it, before clipping, so that the name stands over the
+ * box. */
+export function labelAnchor(pos: number[]): [number, number, number] {
+  const top = Math.floor(pos[1]) - (MARKER_EDGE >> 1) + MARKER_EDGE;
+  return [Math.floor(pos[0]) + 0.5, top, Math.floor(pos[2]) + 0.5];
+}
+
 /** The marker boxes of `others` (presence entries with a position) in a world of `size`
  * voxels whose palette holds `materials`, seen from `eye`: in the order of their sessions,
  * so that the same people give the same list. */

@@ -1,9 +1,10 @@
-// What is drawn over the frame: the other people here (the name at each camera, whose
-// marker box the GPU draws as a local instance, markers.ts; their pointer voxel outlined)
+// What is drawn over the frame: the other people here (the name over each camera's marker
+// box, which the GPU draws as a local instance, markers.ts; their pointer voxel outlined)
 // and the active tool's preview, projected with the camera contract.
 import type { Camera } from "./camera";
 import { basis } from "./camera";
 import type { PresenceEntry } from "./gen/naadf/v1/naadf_pb";
+import { labelAnchor } from "./markers";
 import type { Region } from "./tools";
 
 type V3 = [number, number, number];
@@ -80,8 +81,12 @@ export function drawOverlay(
     if (e.position.length !== 3) continue;
     const at = project(camera, w, h, e.position as V3);
     if (!at || at[0] < 0 || at[1] < 0 || at[0] > w || at[1] > h) continue;
+    // Centred over the marker box, a little above its top face.
+    const label = project(camera, w, h, labelAnchor(e.position)) ?? at;
     ctx.fillStyle = "#fff";
-    ctx.fillText(name, at[0] + 8, at[1] - 8);
+    ctx.textAlign = "center";
+    ctx.textBaseline = "bottom";
+    ctx.fillText(name, label[0], label[1] - 2);
     drawn.push({ name, x: at[0], y: at[1] });
   }
   return drawn;

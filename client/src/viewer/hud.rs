@@ -8,7 +8,7 @@ use font8x8::legacy::BASIC_LEGACY;
 /// Glyph pixels are drawn as `SCALE × SCALE` squares.
 const SCALE: u32 = 2;
 /// Glyph cell edge in frame pixels.
-const CELL: u32 = 8 * SCALE;
+pub(crate) const CELL: u32 = 8 * SCALE;
 /// Space around the text block.
 const MARGIN: u32 = 6;
 

@@ -3,7 +3,7 @@
 //! instance the GPU draws and hits ([`place_markers`]), and over the frame its name and its
 //! pointer voxel's corners, projected with the camera contract (docs/CAMERA.md).
 
-use super::hud::Canvas;
+use super::hud::{self, Canvas};
 use crate::frame::Frame;
 use naadf_proto::v1::PresenceEntry;
 use naadf_world::World;
@@ -48,6 +48,14 @@ fn marker_box(pos: [f64; 3], dims: [u32; 3], eye: [f64; 3]) -> Option<([i64; 3],
         return None;
     }
     Some((min, std::array::from_fn(|a| max[a] - min[a])))
+}
+
+/// Where the name of the camera at `pos` is written: above the middle of its marker box's
+/// top face (the box as [`marker_box`] centres it, before clipping), so that the name stands
+/// over the box.
+fn label_anchor(pos: [f64; 3]) -> [f64; 3] {
+    let top = (pos[1].floor() as i64 - MARKER_EDGE / 2 + MARKER_EDGE) as f64;
+    [pos[0].floor() + 0.5, top, pos[2].floor() + 0.5]
 }
 
 /// Adds a marker box for each entry of `others` (the table less this window's own session)
@@ -134,15 +142,18 @@ pub fn draw_markers(frame: &mut Frame, camera: &Camera, others: &[PresenceEntry]
             }
         }
         let [x, y, z] = e.position[..] else { continue };
-        let Some((px, py)) = project(camera, size, [x, y, z]) else {
+        let Some((px, py)) = project(camera, size, label_anchor([x, y, z])) else {
             continue;
         };
         if px < 0.0 || py < 0.0 || px >= f64::from(size.0) || py >= f64::from(size.1) {
             continue;
         }
-        let (px, py) = (px as u32, py as u32);
+        // Centred above the anchor, kept on the frame.
         let name = if e.name.is_empty() { &e.user } else { &e.name };
-        canvas.text(px + 8, py.saturating_sub(20), name, [255; 3]);
+        let width = name.chars().count() as u32 * hud::CELL;
+        let x0 = (px as u32).saturating_sub(width / 2);
+        let y0 = (py as u32).saturating_sub(hud::CELL + 2);
+        canvas.text(x0, y0, name, [255; 3]);
         drawn += 1;
     }
     drawn
@@ -153,7 +164,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn a_name_lands_beside_the_other_camera() {
+    fn a_name_lands_over_the_other_cameras_box() {
         let camera = Camera {
             pos: [10.0, 10.0, 0.0],
             yaw: 0.0,
@@ -162,8 +173,8 @@ mod tests {
         };
         let mut frame = Frame {
             width: 64,
-            height: 32,
-            rgba: vec![0; 64 * 32 * 4],
+            height: 64,
+            rgba: vec![0; 64 * 64 * 4],
             gbuffer: None,
         };
         let ahead = PresenceEntry {
@@ -179,9 +190,13 @@ mod tests {
         let lit = |x0: usize, x1: usize, y0: usize, y1: usize| {
             (y0..y1).any(|y| (x0..x1).any(|x| frame.rgba[(y * 64 + x) * 4..][..3] != [0, 0, 0]))
         };
-        // The camera lands at (32, 16); its name is written to the right, above it.
-        assert!(lit(40, 64, 0, 16), "the name is written beside the camera");
-        assert!(!lit(0, 40, 0, 32) && !lit(40, 64, 16, 32), "nothing else is drawn");
+        // The top of the box, (10.5, 12, 20.5), lands at about (32.8, 28.9): the name (three
+        // 16-pixel cells) is written centred over it, from x 8 to 56 and y 10 to 26.
+        assert!(lit(8, 56, 10, 26), "the name is written over the box");
+        assert!(
+            !lit(0, 8, 0, 64) && !lit(56, 64, 0, 64) && !lit(0, 64, 0, 10) && !lit(0, 64, 26, 64),
+            "nothing else is drawn"
+        );
     }
 
     #[test]
