@@ -6,7 +6,9 @@
 
 mod support;
 
+use naadf_client::viewer::{marker_material, marker_materials};
 use naadf_world::digest::BufferId;
+use naadf_world::file;
 use naadf_world::fingerprint::{ChunkChanges, ChunkPrints, stale_words};
 use serde_json::{Value, json};
 use std::io::{BufRead, BufReader, Write};
@@ -266,6 +268,25 @@ fn two_pages_edit_together_and_see_each_other() {
         10_000,
     );
     assert_eq!(b["previewInstances"], 0, "{b}");
+    // A's marker takes the material the native viewer picks for A's session: one of the
+    // palette's that neither emits nor mirrors (the terrain's palette has both kinds).
+    let a_session: u64 = browser
+        .eval("a", "return n.presenceSession")
+        .as_str()
+        .unwrap()
+        .parse()
+        .unwrap();
+    let table = file::load(Path::new(&world)).unwrap().materials().clone();
+    let candidates = marker_materials(&table);
+    assert!(
+        candidates.len() + 1 < table.len(),
+        "the palette has materials markers leave out"
+    );
+    assert_eq!(
+        b["markerMaterials"],
+        json!([marker_material(a_session, &candidates).unwrap()]),
+        "{b}"
+    );
     let marker = b["markers"]
         .as_array()
         .unwrap()

@@ -12,7 +12,7 @@ import { digestHex, loadHasher } from "./digest";
 import { GpuWorld, NoWebGpu, Renderer, openDevice } from "./gpu";
 import type { LocalBox } from "./instances";
 import type { IrradianceStats } from "./irradiance";
-import { markerBoxes } from "./markers";
+import { markerBoxes, markerMaterials } from "./markers";
 import type { Marker } from "./overlay";
 import { drawOverlay, rayThrough } from "./overlay";
 import type { Pick } from "./pick";
@@ -59,6 +59,11 @@ interface PageState {
   previewInstances: number;
   /** The local instances that mark the other clients' cameras (markers.ts). */
   markerInstances: number;
+  /** Their materials, in the order of the other clients' presence sessions. */
+  markerMaterials: number[];
+  /** This page's presence session, in decimal (what picks its marker's material on the
+   * other clients). */
+  presenceSession: string;
   /** The path tracer's (or `roma`'s, or `irradiance`'s) samples per pixel, or the GI's
    * frames, since the view last changed. */
   samples: number;
@@ -113,6 +118,8 @@ const naadf: PageState = {
   shownGeneration: -1,
   previewInstances: 0,
   markerInstances: 0,
+  markerMaterials: [],
+  presenceSession: "",
   samples: 0,
   irradiance: null,
   pointer: null,
@@ -189,10 +196,10 @@ async function main(): Promise<void> {
   const renderer = new Renderer(device, naadf.mode);
   let voxels: Voxels | undefined;
   let others: PresenceEntry[] = [];
-  // The local instances' parts: the tool's solid preview, and the world's non-empty
-  // materials that the other clients' markers take theirs from.
+  // The local instances' parts: the tool's solid preview, and the palette's materials that
+  // the other clients' markers take theirs from.
   let previewBoxes: LocalBox[] = [];
-  let materials: number[] = [];
+  let markerIds: number[] = [];
   // `dirty`: the next animation frame renders the world again; `overlayDirty`: it only
   // redraws the overlay (the other clients' names and pointers, the tool's outline) over
   // the frame shown.
@@ -205,6 +212,7 @@ async function main(): Promise<void> {
   let lastMouse: MouseEvent | undefined;
 
   const presenceSession = BigInt(Math.floor(Math.random() * 2 ** 52));
+  naadf.presenceSession = presenceSession.toString();
   const upload = (m: typeof session.mirror) => {
     world.uploadAll(m);
     camera ??= defaultCamera(m.size);
@@ -368,7 +376,7 @@ async function main(): Promise<void> {
   };
   function fillPalette(): void {
     const swatches = palette(session.mirror);
-    materials = swatches.map((s) => s.id);
+    markerIds = markerMaterials(swatches);
     const box = $<HTMLDivElement>("palette");
     box.replaceChildren(
       ...swatches.map((s) => {
@@ -400,10 +408,11 @@ async function main(): Promise<void> {
    * again when they changed. */
   function showLocals(): void {
     const generation = world.generation;
-    const marked = markerBoxes(others, session.mirror.size, materials, camera?.pos);
+    const marked = markerBoxes(others, session.mirror.size, markerIds, camera?.pos);
     world.setLocals([...previewBoxes, ...marked]);
     naadf.previewInstances = previewBoxes.length;
     naadf.markerInstances = marked.length;
+    naadf.markerMaterials = marked.map((b) => b.material);
     if (world.generation !== generation) dirty = true;
   }
   // The solid preview shows only while the mouse is over the view: the frame of a page

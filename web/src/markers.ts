@@ -1,17 +1,27 @@
 // The other people here as local instances (docs/FORMAT.md §5.11): a small solid box at
 // each one's camera, in a material of the world's palette that their presence session
 // picks, so that the GPU draws them in the world, lit, hiding what is behind them and
-// hidden behind the terrain. The overlay (overlay.ts) only writes their names beside them.
+// hidden behind the terrain. The overlay (overlay.ts) only writes their names over them.
 import type { PresenceEntry } from "./gen/naadf/v1/naadf_pb";
 import type { LocalBox } from "./instances";
+import type { Swatch } from "./tools";
 
 /** The edge of a marker box in voxels: odd, so that the voxel holding the camera is its
  * centre. */
 export const MARKER_EDGE = 3;
 
-/** The material of the marker of presence session `session`: one of `materials` (the
- * world's non-empty materials, the palette's ids), the same one for as long as the session
- * and the palette last; undefined when the palette is empty. */
+/** The materials a marker may take, in id order: those of the palette that neither emit
+ * light nor mirror (diffuse and metal: a marker shows its own colour and does not light the
+ * scene on one client alone), or the whole palette when it has none of those. The native
+ * viewer picks from the same list. */
+export function markerMaterials(swatches: Swatch[]): number[] {
+  const plain = swatches.filter((s) => s.kind === 0 || s.kind === 2);
+  return (plain.length > 0 ? plain : swatches).map((s) => s.id);
+}
+
+/** The material of the marker of presence session `session`: one of `materials` (as
+ * `markerMaterials` lists them), the one at index `session` modulo their count, the same
+ * for as long as the session and the palette last; undefined when the list is empty. */
 export function markerMaterial(session: bigint, materials: number[]): number | undefined {
   if (materials.length === 0) return undefined;
   return materials[Number(BigInt.asUintN(64, session) % BigInt(materials.length))];
@@ -40,7 +50,7 @@ export function labelAnchor(pos: number[]): [number, number, number] {
 }
 
 /** The marker boxes of `others` (presence entries with a position) in a world of `size`
- * voxels whose palette holds `materials`, seen from `eye`: in the order of their sessions,
+ * voxels, in `materials` (as `markerMaterials` lists them), seen from `eye`: in the order of their sessions,
  * so that the same people give the same list. */
 export function markerBoxes(others: PresenceEntry[], size: number[], materials: number[], eye?: number[]): LocalBox[] {
   const boxes: LocalBox[] = [];

@@ -134,6 +134,8 @@ export interface Swatch {
   id: number;
   /** CSS colour of its albedo. */
   colour: string;
+  /** Its kind (word 0, bits 0–1): 0 diffuse, 1 emissive, 2 metal, 3 mirror. */
+  kind: number;
 }
 
 /** Half-float bits to a number. */
@@ -154,7 +156,7 @@ export function palette(m: Mirror): Swatch[] {
     const w1 = words[4 * id + 1];
     const w2 = words[4 * id + 2];
     const [r, g, bl] = [half(w1 & 0xffff), half(w1 >>> 16), half(w2 & 0xffff)];
-    out.push({ id, colour: `rgb(${srgb8(r)},${srgb8(g)},${srgb8(bl)})` });
+    out.push({ id, colour: `rgb(${srgb8(r)},${srgb8(g)},${srgb8(bl)})`, kind: words[4 * id] & 3 });
   }
   return out;
 }

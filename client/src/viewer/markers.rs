@@ -9,25 +9,53 @@ use naadf_proto::v1::PresenceEntry;
 use naadf_world::World;
 use naadf_world::camera::Camera;
 use naadf_world::entity::local::LocalInstances;
+use naadf_world::material::{MaterialKind, MaterialTable};
 use naadf_world::model::Model;
 
 /// The edge of a marker box in voxels: odd, so that the voxel holding the camera is its
 /// centre.
 const MARKER_EDGE: i64 = 3;
 
-/// The material of the marker of presence session `session` in a world of `materials`
-/// table entries (the empty entry 0 included): the defined materials taken in id order,
-/// `session` modulo their count, as the browser page picks it, so a person has one colour
-/// everywhere; `None` when no material is defined.
+/// The materials a marker may take, in id order: the defined materials that neither emit
+/// light nor mirror (diffuse and metal: a marker should show its own colour and must not
+/// light the scene on one client alone), or every defined material when there is none of
+/// those. The browser page picks from the same list.
+///
+/// ```
+/// use naadf_client::viewer::marker_materials;
+/// use naadf_world::material::{Material, MaterialKind, MaterialTable};
+/// let lamp = Material { kind: MaterialKind::Emissive, emission: 4.0, ..Material::diffuse([1.0; 3]) };
+/// let table = MaterialTable::from_materials(&[Material::diffuse([0.5; 3]), lamp, Material::diffuse([0.2; 3])]).unwrap();
+/// assert_eq!(marker_materials(&table), [1, 3]);
+/// assert_eq!(marker_materials(&MaterialTable::from_materials(&[lamp]).unwrap()), [1]);
+/// ```
+pub fn marker_materials(table: &MaterialTable) -> Vec<u16> {
+    let defined: Vec<u16> = (1..table.len()).filter_map(|id| u16::try_from(id).ok()).collect();
+    let plain: Vec<u16> = defined
+        .iter()
+        .copied()
+        .filter(|&id| {
+            table
+                .get(id)
+                .is_some_and(|m| matches!(m.kind, MaterialKind::Diffuse | MaterialKind::Metal))
+        })
+        .collect();
+    if plain.is_empty() { defined } else { plain }
+}
+
+/// The material of the marker of presence session `session`, among `materials` (as
+/// [`marker_materials`] lists them): the one at index `session` modulo their count, as the
+/// browser page picks it, so a person has one colour everywhere; `None` when the list is
+/// empty.
 ///
 /// ```
 /// use naadf_client::viewer::marker_material;
-/// assert_eq!(marker_material(7, 4), Some(2)); // materials 1, 2, 3: 7 mod 3 = 1 → the second
-/// assert_eq!(marker_material(7, 1), None);
+/// assert_eq!(marker_material(7, &[1, 3, 4]), Some(3)); // 7 mod 3 = 1 → the second
+/// assert_eq!(marker_material(7, &[]), None);
 /// ```
-pub fn marker_material(session: u64, materials: usize) -> Option<u16> {
-    let defined = materials.checked_sub(1).filter(|&n| n > 0)? as u64;
-    u16::try_from(1 + session % defined).ok()
+pub fn marker_material(session: u64, materials: &[u16]) -> Option<u16> {
+    let n = u64::try_from(materials.len()).ok().filter(|&n| n > 0)?;
+    materials.get(usize::try_from(session % n).ok()?).copied()
 }
 
 /// The marker box `(min, size)` of a camera at `pos` in a world of `dims` voxels:
@@ -70,9 +98,10 @@ pub fn place_markers(
 ) -> usize {
     let mut sorted: Vec<&PresenceEntry> = others.iter().collect();
     sorted.sort_by_key(|e| e.session);
+    let materials = marker_materials(world.materials());
     let mut key = first_key;
     for e in sorted {
-        let (&[x, y, z], Some(m)) = (&e.position[..], marker_material(e.session, world.materials().len())) else {
+        let (&[x, y, z], Some(m)) = (&e.position[..], marker_material(e.session, &materials)) else {
             continue;
         };
         let Some((min, size)) = marker_box([x, y, z], world.size().voxels(), eye) else {
@@ -222,7 +251,7 @@ mod tests {
         ];
         let mut locals = LocalInstances::default();
         assert_eq!(place_markers(&mut locals, &world, &others, eye, 1), 4);
-        let materials = world.materials().len();
+        let materials = marker_materials(world.materials());
         // In the order of the sessions: 3, 7 (its clipped box reaches one voxel in), 8, 9.
         let expect = [
             (3, [0.0, 0.0, 0.0], [2, 2, 3]),
@@ -232,7 +261,7 @@ mod tests {
         ];
         for (k, (session, pos, size)) in expect.into_iter().enumerate() {
             let pose = locals.get(1 + k as u32).expect("placed");
-            let m = marker_material(session, materials).unwrap();
+            let m = marker_material(session, &materials).unwrap();
             assert_eq!(pose.pos, pos, "session {session}");
             assert_eq!(pose.model, format!("marker {}x{}x{} {m}", size[0], size[1], size[2]));
         }

@@ -28,7 +28,7 @@ pub use error::ViewerError;
 pub use fly::{Fly, Move};
 pub use hud::draw_hud;
 pub use link::{Event, Link};
-pub use markers::{draw_markers, marker_material, place_markers, project};
+pub use markers::{draw_markers, marker_material, marker_materials, place_markers, project};
 use pick::place_preview;
 pub use pick::{Click, edit_for_click};
 pub use present::Presenter;
