@@ -80,7 +80,8 @@ export function drawOverlay(
     }
     if (e.position.length !== 3) continue;
     const at = project(camera, w, h, e.position as V3);
-    if (!at || at[0] < 0 || at[1] < 0 || at[0] > w || at[1] > h) continue;
+    // (Written so that a NaN, from a position far out of range, is left out too.)
+    if (!at || !(at[0] >= 0 && at[1] >= 0 && at[0] <= w && at[1] <= h)) continue;
     // Centred over the marker box, a little above its top face.
     const label = project(camera, w, h, labelAnchor(e.position)) ?? at;
     ctx.fillStyle = "#fff";

@@ -63,7 +63,7 @@ pub fn marker_material(session: u64, materials: &[u16]) -> Option<u16> {
 /// `None` when none of it is inside the world, when `pos` is not finite, or when `eye`
 /// (this window's camera) is inside it (a box around the viewer would hide everything).
 fn marker_box(pos: [f64; 3], dims: [u32; 3], eye: [f64; 3]) -> Option<([i64; 3], [i64; 3])> {
-    if !pos.iter().all(|v| v.is_finite() && v.abs() < 1e15) {
+    if !plausible(pos) {
         return None;
     }
     let min: [i64; 3] = std::array::from_fn(|a| (pos[a].floor() as i64 - MARKER_EDGE / 2).max(0));
@@ -78,11 +78,18 @@ fn marker_box(pos: [f64; 3], dims: [u32; 3], eye: [f64; 3]) -> Option<([i64; 3],
     Some((min, std::array::from_fn(|a| max[a] - min[a])))
 }
 
+/// Whether a position another client published can be a camera: finite, and far inside the
+/// range where voxel arithmetic stays exact (anything else gets neither box nor name).
+fn plausible(pos: [f64; 3]) -> bool {
+    pos.iter().all(|v| v.is_finite() && v.abs() < 1e15)
+}
+
 /// Where the name of the camera at `pos` is written: above the middle of its marker box's
 /// top face (the box as [`marker_box`] centres it, before clipping), so that the name stands
 /// over the box.
+/// (In `f64`: a position from another client may be anything, and must not overflow.)
 fn label_anchor(pos: [f64; 3]) -> [f64; 3] {
-    let top = (pos[1].floor() as i64 - MARKER_EDGE / 2 + MARKER_EDGE) as f64;
+    let top = pos[1].floor() + (MARKER_EDGE - MARKER_EDGE / 2) as f64;
     [pos[0].floor() + 0.5, top, pos[2].floor() + 0.5]
 }
 
@@ -171,10 +178,14 @@ pub fn draw_markers(frame: &mut Frame, camera: &Camera, others: &[PresenceEntry]
             }
         }
         let [x, y, z] = e.position[..] else { continue };
+        if !plausible([x, y, z]) {
+            continue;
+        }
         let Some((px, py)) = project(camera, size, label_anchor([x, y, z])) else {
             continue;
         };
-        if px < 0.0 || py < 0.0 || px >= f64::from(size.0) || py >= f64::from(size.1) {
+        // (Written so that a NaN, from a position far out of range, is left out too.)
+        if !(px >= 0.0 && py >= 0.0 && px < f64::from(size.0) && py < f64::from(size.1)) {
             continue;
         }
         // Centred above the anchor, kept on the frame.
@@ -215,7 +226,21 @@ mod tests {
             position: vec![10.0, 10.0, -20.0],
             ..ahead.clone()
         };
-        assert_eq!(draw_markers(&mut frame, &camera, &[ahead, behind]), 1);
+        // Positions another client may send that get no name: not finite, or far beyond
+        // any world (though one of them would project onto the frame).
+        let hostile = [
+            [f64::NAN, 10.0, 20.0],
+            [f64::MAX, f64::MAX, f64::MAX],
+            [-f64::MAX, 10.0, f64::MAX],
+            [f64::INFINITY, 0.0, 1.0],
+        ]
+        .map(|p| PresenceEntry {
+            position: p.to_vec(),
+            ..ahead.clone()
+        });
+        let mut all = vec![ahead, behind];
+        all.extend(hostile);
+        assert_eq!(draw_markers(&mut frame, &camera, &all), 1);
         let lit = |x0: usize, x1: usize, y0: usize, y1: usize| {
             (y0..y1).any(|y| (x0..x1).any(|x| frame.rgba[(y * 64 + x) * 4..][..3] != [0, 0, 0]))
         };
