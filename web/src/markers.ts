@@ -33,25 +33,30 @@ export function markerMaterial(session: bigint, materials: number[]): number | u
  * camera) is inside it (a box around the viewer would hide everything). */
 export function markerBox(pos: number[], size: number[], material: number, eye?: number[]): LocalBox | undefined {
   if (pos.length !== 3 || !pos.every(Number.isFinite)) return undefined;
-  const half = MARKER_EDGE >> 1;
-  const min = pos.map((p) => Math.max(0, Math.floor(p) - half));
-  const max = pos.map((p, a) => Math.min(size[a], Math.floor(p) - half + MARKER_EDGE));
+  const corner = unclippedCorner(pos);
+  const min = corner.map((c) => Math.max(0, c));
+  const max = corner.map((c, a) => Math.min(size[a], c + MARKER_EDGE));
   if (min.some((v, a) => v >= max[a])) return undefined;
   if (eye && eye.every((e, a) => e >= min[a] && e < max[a])) return undefined;
   return { min, size: max.map((v, a) => v - min[a]), material };
 }
 
-/** Where the name of the camera at `pos` is written: the middle of the top face of its
- * marker box as `markerBox` centres it, before clipping, so that the name stands over the
- * box. */
+/** The lowest corner of the marker box of a camera at `pos`, before clipping: `MARKER_EDGE`
+ * voxels a side, centred on the voxel holding `pos`. */
+function unclippedCorner(pos: number[]): number[] {
+  return pos.map((p) => Math.floor(p) - (MARKER_EDGE >> 1));
+}
+
+/** Where the name of the camera at `pos` is written: the middle of its marker box's top
+ * face, before clipping, so that the name stands over the box. */
 export function labelAnchor(pos: number[]): [number, number, number] {
-  const top = Math.floor(pos[1]) - (MARKER_EDGE >> 1) + MARKER_EDGE;
-  return [Math.floor(pos[0]) + 0.5, top, Math.floor(pos[2]) + 0.5];
+  const [x, y, z] = unclippedCorner(pos);
+  return [x + MARKER_EDGE / 2, y + MARKER_EDGE, z + MARKER_EDGE / 2];
 }
 
 /** The marker boxes of `others` (presence entries with a position) in a world of `size`
- * voxels, in `materials` (as `markerMaterials` lists them), seen from `eye`: in the order of their sessions,
- * so that the same people give the same list. */
+ * voxels, in `materials` (as `markerMaterials` lists them), seen from `eye`: in the order
+ * of their sessions, so that the same people give the same list. */
 export function markerBoxes(others: PresenceEntry[], size: number[], materials: number[], eye?: number[]): LocalBox[] {
   const boxes: LocalBox[] = [];
   for (const e of [...others].sort((p, q) => (p.session < q.session ? -1 : p.session > q.session ? 1 : 0))) {

@@ -9,6 +9,11 @@ use font8x8::legacy::BASIC_LEGACY;
 const SCALE: u32 = 2;
 /// Glyph cell edge in frame pixels.
 pub(crate) const CELL: u32 = 8 * SCALE;
+/// Frame pixels that [`Canvas::text`] takes across for `text` (its height is [`CELL`]).
+pub(crate) fn text_width(text: &str) -> u32 {
+    text.chars().count() as u32 * CELL
+}
+
 /// Space around the text block.
 const MARGIN: u32 = 6;
 
@@ -23,8 +28,8 @@ const MARGIN: u32 = 6;
 /// assert!(rgba.chunks(4).any(|p| p[..3] == [255, 0, 0])); // swatch
 /// ```
 pub fn draw_hud(rgba: &mut [u8], width: u32, height: u32, lines: &[String], swatch: Option<[u8; 3]>) {
-    let cols = lines.iter().map(|l| l.chars().count() as u32).max().unwrap_or(0) + 2 * u32::from(swatch.is_some());
-    let panel_w = (2 * MARGIN + cols * CELL).min(width);
+    let text_w = lines.iter().map(|l| text_width(l)).max().unwrap_or(0);
+    let panel_w = (2 * MARGIN + text_w + 2 * CELL * u32::from(swatch.is_some())).min(width);
     let panel_h = (2 * MARGIN + lines.len() as u32 * (CELL + 2)).min(height);
     let mut canvas = Canvas { rgba, width, height };
     for y in 0..panel_h {
@@ -38,7 +43,7 @@ pub fn draw_hud(rgba: &mut [u8], width: u32, height: u32, lines: &[String], swat
         y0 += CELL + 2;
     }
     if let (Some(c), Some(last)) = (swatch, lines.last()) {
-        let x0 = MARGIN + (last.chars().count() as u32 + 1) * CELL;
+        let x0 = MARGIN + text_width(last) + CELL;
         let y0 = MARGIN + (lines.len() as u32 - 1) * (CELL + 2);
         canvas.fill(x0, y0, CELL, CELL, c);
     }

@@ -54,8 +54,10 @@ pub fn marker_materials(table: &MaterialTable) -> Vec<u16> {
 /// assert_eq!(marker_material(7, &[]), None);
 /// ```
 pub fn marker_material(session: u64, materials: &[u16]) -> Option<u16> {
-    let n = u64::try_from(materials.len()).ok().filter(|&n| n > 0)?;
-    materials.get(usize::try_from(session % n).ok()?).copied()
+    if materials.is_empty() {
+        return None;
+    }
+    materials.get((session % materials.len() as u64) as usize).copied()
 }
 
 /// The marker box `(min, size)` of a camera at `pos` in a world of `dims` voxels:
@@ -66,9 +68,9 @@ fn marker_box(pos: [f64; 3], dims: [u32; 3], eye: [f64; 3]) -> Option<([i64; 3],
     if !plausible(pos) {
         return None;
     }
-    let min: [i64; 3] = std::array::from_fn(|a| (pos[a].floor() as i64 - MARKER_EDGE / 2).max(0));
-    let max: [i64; 3] =
-        std::array::from_fn(|a| (pos[a].floor() as i64 - MARKER_EDGE / 2 + MARKER_EDGE).min(i64::from(dims[a])));
+    let corner = unclipped_corner(pos);
+    let min: [i64; 3] = std::array::from_fn(|a| corner[a].max(0));
+    let max: [i64; 3] = std::array::from_fn(|a| (corner[a] + MARKER_EDGE).min(i64::from(dims[a])));
     if (0..3).any(|a| min[a] >= max[a]) {
         return None;
     }
@@ -84,13 +86,18 @@ fn plausible(pos: [f64; 3]) -> bool {
     pos.iter().all(|v| v.is_finite() && v.abs() < 1e15)
 }
 
-/// Where the name of the camera at `pos` is written: above the middle of its marker box's
-/// top face (the box as [`marker_box`] centres it, before clipping), so that the name stands
-/// over the box.
-/// (In `f64`: a position from another client may be anything, and must not overflow.)
+/// The lowest corner of the marker box of a [`plausible`] camera at `pos`, before clipping:
+/// [`MARKER_EDGE`] voxels a side, centred on the voxel holding `pos`.
+fn unclipped_corner(pos: [f64; 3]) -> [i64; 3] {
+    pos.map(|v| v.floor() as i64 - MARKER_EDGE / 2)
+}
+
+/// Where the name of the [`plausible`] camera at `pos` is written: the middle of its marker
+/// box's top face, before clipping, so that the name stands over the box.
 fn label_anchor(pos: [f64; 3]) -> [f64; 3] {
-    let top = pos[1].floor() + (MARKER_EDGE - MARKER_EDGE / 2) as f64;
-    [pos[0].floor() + 0.5, top, pos[2].floor() + 0.5]
+    let corner = unclipped_corner(pos);
+    let mid = |a: usize| corner[a] as f64 + MARKER_EDGE as f64 / 2.0;
+    [mid(0), (corner[1] + MARKER_EDGE) as f64, mid(2)]
 }
 
 /// Adds a marker box for each entry of `others` (the table less this window's own session)
@@ -190,8 +197,7 @@ pub fn draw_markers(frame: &mut Frame, camera: &Camera, others: &[PresenceEntry]
         }
         // Centred above the anchor, kept on the frame.
         let name = if e.name.is_empty() { &e.user } else { &e.name };
-        let width = name.chars().count() as u32 * hud::CELL;
-        let x0 = (px as u32).saturating_sub(width / 2);
+        let x0 = (px as u32).saturating_sub(hud::text_width(name) / 2);
         let y0 = (py as u32).saturating_sub(hud::CELL + 2);
         canvas.text(x0, y0, name, [255; 3]);
         drawn += 1;

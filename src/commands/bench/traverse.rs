@@ -298,31 +298,36 @@ fn report_walk(plain: &World, crowded: &World, sets: [&[Ray]; 2]) {
         })
         .collect();
     let rays: Vec<&Ray> = sets.iter().flat_map(|rays| rays.iter()).collect();
-    let ns_per = |t: Instant, n: usize| t.elapsed().as_secs_f64() * 1e9 / n.max(1) as f64;
+    // Nanoseconds per item of `n` that `work` takes.
+    let ns_per = |n: usize, work: &mut dyn FnMut()| {
+        let t = Instant::now();
+        work();
+        t.elapsed().as_secs_f64() * 1e9 / n.max(1) as f64
+    };
     let mut times: [Vec<f64>; 5] = Default::default();
     let mut sink = 0u64;
     for _ in 0..7 {
-        let t = Instant::now();
-        sink += rays.iter().filter(|r| trace_naadf(plain, r).is_some()).count() as u64;
-        times[0].push(ns_per(t, rays.len()));
-        let t = Instant::now();
-        for &(o, inv, lo, hi) in &spans {
-            bvh.crossing(o, inv, lo, hi, |k| sink += u64::from(k));
-        }
-        times[1].push(ns_per(t, spans.len()));
-        let t = Instant::now();
-        for &(o, inv, lo, _) in &spans {
-            bvh.crossing(o, inv, lo, lo, |k| sink += u64::from(k));
-        }
-        times[2].push(ns_per(t, spans.len()));
-        let t = Instant::now();
-        for &(o, inv, lo, hi) in &spans {
-            sink += std::hint::black_box(o[0] + inv[1] + lo + hi) as u64;
-        }
-        times[3].push(ns_per(t, spans.len()));
-        let t = Instant::now();
-        sink += rays.iter().filter(|r| trace_naadf(crowded, r).is_some()).count() as u64;
-        times[4].push(ns_per(t, rays.len()));
+        times[0].push(ns_per(rays.len(), &mut || {
+            sink += rays.iter().filter(|r| trace_naadf(plain, r).is_some()).count() as u64;
+        }));
+        times[1].push(ns_per(spans.len(), &mut || {
+            for &(o, inv, lo, hi) in &spans {
+                bvh.crossing(o, inv, lo, hi, |k| sink += u64::from(k));
+            }
+        }));
+        times[2].push(ns_per(spans.len(), &mut || {
+            for &(o, inv, lo, _) in &spans {
+                bvh.crossing(o, inv, lo, lo, |k| sink += u64::from(k));
+            }
+        }));
+        times[3].push(ns_per(spans.len(), &mut || {
+            for &(o, inv, lo, hi) in &spans {
+                sink += std::hint::black_box(o[0] + inv[1] + lo + hi) as u64;
+            }
+        }));
+        times[4].push(ns_per(rays.len(), &mut || {
+            sink += rays.iter().filter(|r| trace_naadf(crowded, r).is_some()).count() as u64;
+        }));
     }
     std::hint::black_box(sink);
     let [world_ray, walk, empty, around, crowded_ray] = times.map(|mut v| {
