@@ -7,6 +7,8 @@
 mod support;
 
 use naadf_client::viewer::{marker_material, marker_materials};
+use naadf_proto::v1::PresenceRequest;
+use naadf_proto::v1::world_service_client::WorldServiceClient;
 use naadf_world::digest::BufferId;
 use naadf_world::file;
 use naadf_world::fingerprint::{ChunkChanges, ChunkPrints, stale_words};
@@ -347,6 +349,31 @@ fn two_pages_edit_together_and_see_each_other() {
             "pixel ({x}, {y}) differs, away from A's marker at ({mx}, {my})"
         );
     }
+    // A position that cannot be a camera, 1e16 voxels straight along B's view, gets neither
+    // box nor name on B, as in the native viewer; one in front of B, published after it,
+    // gets both (so the overlay B drew knew of the far one).
+    let publish = |session: u64, name: &str, position: [f64; 3]| PresenceRequest {
+        session,
+        name: name.into(),
+        position: position.to_vec(),
+        forward: vec![0.0, 0.0, 1.0],
+        pointer: Vec::new(),
+        tool: String::new(),
+    };
+    let far = 1e16;
+    let along_b = [64.5, 62.5 + far * (-20f64).to_radians().tan(), 4.5 + far];
+    tokio::runtime::Runtime::new().unwrap().block_on(async {
+        let mut c = WorldServiceClient::connect(server.url.clone()).await.unwrap();
+        c.publish(publish(4242, "far away", along_b)).await.unwrap();
+        c.publish(publish(4243, "in front", [40.5, 50.5, 40.5])).await.unwrap();
+    });
+    let b = browser.wait("b", "n.markers.some(m => m.name === 'in front')", 10_000);
+    assert_eq!(b["users"].as_array().unwrap().len(), 4, "{b}");
+    assert!(
+        !b["markers"].as_array().unwrap().iter().any(|m| m["name"] == "far away"),
+        "a name for a camera 1e16 voxels away: {b}"
+    );
+    assert_eq!(b["markerInstances"], 2, "{b}");
 
     // B edits first; then A places a sphere where its view's centre meets the terrain.
     let b_box = r#"{"op":"box","min":[10,40,10],"max":[14,44,14],"material":2}"#;

@@ -27,12 +27,19 @@ export function markerMaterial(session: bigint, materials: number[]): number | u
   return materials[Number(BigInt.asUintN(64, session) % BigInt(materials.length))];
 }
 
+/** Whether a position another client published can be a camera: three finite numbers, far
+ * inside the range where voxel arithmetic stays exact (below 1e15 in magnitude). Anything
+ * else gets neither box nor name, as in the native viewer. */
+export function plausible(pos: number[]): boolean {
+  return pos.length === 3 && pos.every((v) => Number.isFinite(v) && Math.abs(v) < 1e15);
+}
+
 /** The marker box of a camera at `pos` in a world of `size` voxels: `MARKER_EDGE` voxels a
  * side around the voxel holding `pos`, clipped to the world; undefined when no voxel of it
- * is inside the world, when `pos` is not three finite numbers, or when `eye` (this page's
- * camera) is inside it (a box around the viewer would hide everything). */
+ * is inside the world, when `pos` is not `plausible`, or when `eye` (this page's camera) is
+ * inside it (a box around the viewer would hide everything). */
 export function markerBox(pos: number[], size: number[], material: number, eye?: number[]): LocalBox | undefined {
-  if (pos.length !== 3 || !pos.every(Number.isFinite)) return undefined;
+  if (!plausible(pos)) return undefined;
   const corner = unclippedCorner(pos);
   const min = corner.map((c) => Math.max(0, c));
   const max = corner.map((c, a) => Math.min(size[a], c + MARKER_EDGE));
@@ -41,13 +48,13 @@ export function markerBox(pos: number[], size: number[], material: number, eye?:
   return { min, size: max.map((v, a) => v - min[a]), material };
 }
 
-/** The lowest corner of the marker box of a camera at `pos`, before clipping: `MARKER_EDGE`
+/** The lowest corner of the marker box of a `plausible` camera at `pos`, before clipping: `MARKER_EDGE`
  * voxels a side, centred on the voxel holding `pos`. */
 function unclippedCorner(pos: number[]): number[] {
   return pos.map((p) => Math.floor(p) - (MARKER_EDGE >> 1));
 }
 
-/** Where the name of the camera at `pos` is written: the middle of its marker box's top
+/** Where the name of the `plausible` camera at `pos` is written: the middle of its marker box's top
  * face, before clipping, so that the name stands over the box. */
 export function labelAnchor(pos: number[]): [number, number, number] {
   const [x, y, z] = unclippedCorner(pos);

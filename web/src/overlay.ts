@@ -4,7 +4,7 @@
 import type { Camera } from "./camera";
 import { basis } from "./camera";
 import type { PresenceEntry } from "./gen/naadf/v1/naadf_pb";
-import { labelAnchor } from "./markers";
+import { labelAnchor, plausible } from "./markers";
 import type { Region } from "./tools";
 
 type V3 = [number, number, number];
@@ -78,9 +78,9 @@ export function drawOverlay(
       const v = e.pointer.map(Number) as V3;
       drawBox(ctx, camera, v, [v[0] + 1, v[1] + 1, v[2] + 1], "#0ff");
     }
-    if (e.position.length !== 3) continue;
+    if (!plausible(e.position)) continue;
     const at = project(camera, w, h, e.position as V3);
-    // (Written so that a NaN, from a position far out of range, is left out too.)
+    // (Written so that a NaN would be left out too.)
     if (!at || !(at[0] >= 0 && at[1] >= 0 && at[0] <= w && at[1] <= h)) continue;
     // Centred over the marker box, a little above its top face.
     const label = project(camera, w, h, labelAnchor(e.position)) ?? at;
