@@ -352,7 +352,7 @@ fn two_pages_edit_together_and_see_each_other() {
     // A position that cannot be a camera, 1e16 voxels straight along B's view, gets neither
     // box nor name on B, as in the native viewer; one in front of B, published after it,
     // gets both (so the overlay B drew knew of the far one).
-    let publish = |session: u64, name: &str, position: [f64; 3]| PresenceRequest {
+    let presence_at = |session: u64, name: &str, position: [f64; 3]| PresenceRequest {
         session,
         name: name.into(),
         position: position.to_vec(),
@@ -364,8 +364,10 @@ fn two_pages_edit_together_and_see_each_other() {
     let along_b = [64.5, 62.5 + far * (-20f64).to_radians().tan(), 4.5 + far];
     tokio::runtime::Runtime::new().unwrap().block_on(async {
         let mut c = WorldServiceClient::connect(server.url.clone()).await.unwrap();
-        c.publish(publish(4242, "far away", along_b)).await.unwrap();
-        c.publish(publish(4243, "in front", [40.5, 50.5, 40.5])).await.unwrap();
+        c.publish(presence_at(4242, "far away", along_b)).await.unwrap();
+        c.publish(presence_at(4243, "in front", [40.5, 50.5, 40.5]))
+            .await
+            .unwrap();
     });
     let b = browser.wait("b", "n.markers.some(m => m.name === 'in front')", 10_000);
     assert_eq!(b["users"].as_array().unwrap().len(), 4, "{b}");

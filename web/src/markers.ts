@@ -48,14 +48,14 @@ export function markerBox(pos: number[], size: number[], material: number, eye?:
   return { min, size: max.map((v, a) => v - min[a]), material };
 }
 
-/** The lowest corner of the marker box of a `plausible` camera at `pos`, before clipping: `MARKER_EDGE`
- * voxels a side, centred on the voxel holding `pos`. */
+/** The lowest corner of the marker box of a `plausible` camera at `pos`, before clipping:
+ * `MARKER_EDGE` voxels a side, centred on the voxel holding `pos`. */
 function unclippedCorner(pos: number[]): number[] {
   return pos.map((p) => Math.floor(p) - (MARKER_EDGE >> 1));
 }
 
-/** Where the name of the `plausible` camera at `pos` is written: the middle of its marker box's top
- * face, before clipping, so that the name stands over the box. */
+/** Where the name of the `plausible` camera at `pos` is written: the middle of its marker
+ * box's top face, before clipping, so that the name stands over the box. */
 export function labelAnchor(pos: number[]): [number, number, number] {
   const [x, y, z] = unclippedCorner(pos);
   return [x + MARKER_EDGE / 2, y + MARKER_EDGE, z + MARKER_EDGE / 2];

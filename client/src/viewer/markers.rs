@@ -30,17 +30,16 @@ const MARKER_EDGE: i64 = 3;
 /// assert_eq!(marker_materials(&MaterialTable::from_materials(&[lamp]).unwrap()), [1]);
 /// ```
 pub fn marker_materials(table: &MaterialTable) -> Vec<u16> {
-    let defined: Vec<u16> = (1..table.len()).filter_map(|id| u16::try_from(id).ok()).collect();
+    let defined = (1..table.len()).filter_map(|id| u16::try_from(id).ok());
     let plain: Vec<u16> = defined
-        .iter()
-        .copied()
+        .clone()
         .filter(|&id| {
             table
                 .get(id)
                 .is_some_and(|m| matches!(m.kind, MaterialKind::Diffuse | MaterialKind::Metal))
         })
         .collect();
-    if plain.is_empty() { defined } else { plain }
+    if plain.is_empty() { defined.collect() } else { plain }
 }
 
 /// The material of the marker of presence session `session`, among `materials` (as
@@ -54,10 +53,8 @@ pub fn marker_materials(table: &MaterialTable) -> Vec<u16> {
 /// assert_eq!(marker_material(7, &[]), None);
 /// ```
 pub fn marker_material(session: u64, materials: &[u16]) -> Option<u16> {
-    if materials.is_empty() {
-        return None;
-    }
-    materials.get((session % materials.len() as u64) as usize).copied()
+    let n = materials.len() as u64;
+    (n > 0).then(|| materials[(session % n) as usize])
 }
 
 /// The marker box `(min, size)` of a camera at `pos` in a world of `dims` voxels:
@@ -191,7 +188,7 @@ pub fn draw_markers(frame: &mut Frame, camera: &Camera, others: &[PresenceEntry]
         let Some((px, py)) = project(camera, size, label_anchor([x, y, z])) else {
             continue;
         };
-        // (Written so that a NaN, from a position far out of range, is left out too.)
+        // (Written so that a NaN would be left out too.)
         if !(px >= 0.0 && py >= 0.0 && px < f64::from(size.0) && py < f64::from(size.1)) {
             continue;
         }

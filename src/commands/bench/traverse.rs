@@ -298,6 +298,8 @@ fn report_walk(plain: &World, crowded: &World, sets: [&[Ray]; 2]) {
         })
         .collect();
     let rays: Vec<&Ray> = sets.iter().flat_map(|rays| rays.iter()).collect();
+    // The rays' hits through `world` (counted, so that the traces are not elided).
+    let hits_through = |world: &World| rays.iter().filter(|r| trace_naadf(world, r).is_some()).count() as u64;
     // Nanoseconds per item of `n` that `work` takes.
     let ns_per = |n: usize, work: &mut dyn FnMut()| {
         let t = Instant::now();
@@ -307,9 +309,7 @@ fn report_walk(plain: &World, crowded: &World, sets: [&[Ray]; 2]) {
     let mut times: [Vec<f64>; 5] = Default::default();
     let mut sink = 0u64;
     for _ in 0..7 {
-        times[0].push(ns_per(rays.len(), &mut || {
-            sink += rays.iter().filter(|r| trace_naadf(plain, r).is_some()).count() as u64;
-        }));
+        times[0].push(ns_per(rays.len(), &mut || sink += hits_through(plain)));
         times[1].push(ns_per(spans.len(), &mut || {
             for &(o, inv, lo, hi) in &spans {
                 bvh.crossing(o, inv, lo, hi, |k| sink += u64::from(k));
@@ -325,9 +325,7 @@ fn report_walk(plain: &World, crowded: &World, sets: [&[Ray]; 2]) {
                 sink += std::hint::black_box(o[0] + inv[1] + lo + hi) as u64;
             }
         }));
-        times[4].push(ns_per(rays.len(), &mut || {
-            sink += rays.iter().filter(|r| trace_naadf(crowded, r).is_some()).count() as u64;
-        }));
+        times[4].push(ns_per(rays.len(), &mut || sink += hits_through(crowded)));
     }
     std::hint::black_box(sink);
     let [world_ray, walk, empty, around, crowded_ray] = times.map(|mut v| {
