@@ -9,7 +9,8 @@
 //! - With a device: every entry the GPU keeps holds the mean of the samples the CPU takes
 //!   for its face (the same random streams; an entry may differ where f32 and f64 round a
 //!   ray differently); the same seed gives the same image; the ray budget bounds the
-//!   samples of a frame; an edit clears the entries within the bounce distance and no
+//!   samples of a frame; streams of different seeds taking turns keep their caches; an
+//!   edit clears the entries within the bounce distance and no
 //!   others; an emitter removed, and an emitting entity moved away, leave the floor they
 //!   lit dark (at most 1 % of its lit value) within 32 frames.
 
@@ -209,6 +210,31 @@ fn the_same_seed_gives_the_same_image() {
     let a = run(2);
     assert_eq!(a, run(2));
     assert_ne!(a, run(3));
+}
+
+/// Two camera streams of different seeds taking turns (each with its own TAA history, as a
+/// render node keeps them) keep their caches: a stream's frames after the other's turn are
+/// those it renders alone.
+#[test]
+fn streams_of_different_seeds_taking_turns_keep_their_caches() {
+    let Some(gpu) = gpu() else { return };
+    let w = courtyard_with_lamp();
+    let light = Light::new(Sky::Physical, None, 3).unwrap();
+    let cam = camera(COURTYARD_CAMERA);
+    let gw = GpuWorld::new(gpu, &w).unwrap();
+    let (a, b) = (Shot::new(cam, (32, 24), light, 2), Shot::new(cam, (32, 24), light, 3));
+    let alone = frames(&mut Irradiance::new(gpu), &gw, &a, 6).rgb;
+    let mut turns = Irradiance::new(gpu);
+    frames(&mut turns, &gw, &a, 3);
+    let mut other = None;
+    turns.swap_history(&mut other);
+    frames(&mut turns, &gw, &b, 3);
+    turns.swap_history(&mut other);
+    let after = frames(&mut turns, &gw, &a, 3).rgb;
+    assert!(
+        after == alone,
+        "the first stream's frames changed after the second's turn"
+    );
 }
 
 #[test]

@@ -7,8 +7,10 @@
 //! A frame runs, in order: the invalidation of the entries near the chunks changed since
 //! the last frame (edits and entity moves alike); the sample pass, which requests every
 //! entry it reads; and the update, which takes one sample of each requested entry the
-//! ray budget pays for. The cache is the same for every camera stream: it depends on the
-//! world, the sky, the sun and the seed only.
+//! ray budget pays for. A cache depends on the world, the sky, the sun and the seed only:
+//! every camera stream with the same light and seed shares one, and the caches of the last
+//! few (up to four) are kept, so that streams taking turns with different ones do not
+//! empty each other's.
 
 use super::baseline::{Baseline, History};
 use super::context::{Gpu, GpuError};
@@ -35,6 +37,12 @@ const UPDATE: &str = include_str!("../../../shaders/irradiance_update.wgsl");
 
 /// Words of a slot: the key (2), the stamp, the count, the sums (3) and the samples drawn.
 pub(crate) const WORDS: u32 = 8;
+/// Caches kept at most: streams that take turns with different lights or seeds each keep
+/// theirs, rather than emptying a shared one at every turn.
+const MAX_CACHES: usize = 4;
+/// Bytes the caches other than the current one may take together (a cache takes 36 to 144
+/// MiB, by the frame size).
+const KEPT_BYTES: u64 = 512 << 20;
 /// Slots a key may be placed past its home slot.
 const PROBES: u32 = 64;
 /// Words of the request list before the slots: the counters.
@@ -91,7 +99,7 @@ pub(crate) fn irradiance_update_pass(entry: &'static str) -> PassSource {
     }
 }
 
-/// What the cache's entries depend on besides the world: a change clears them.
+/// What the cache's entries depend on besides the world: each basis has a cache of its own.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Basis {
     sky: Sky,
@@ -113,6 +121,13 @@ struct Cache {
     stamp: u32,
     /// At most this many slots are keyed (the exact count is read back only near half).
     keyed_bound: u64,
+}
+
+impl Cache {
+    /// Its bytes on the device.
+    fn bytes(&self) -> u64 {
+        self.table.size() + self.requests.size()
+    }
 }
 
 /// What the last frame did to the cache, read back on demand ([`Irradiance::stats`]).
@@ -137,7 +152,9 @@ pub struct Irradiance {
     update: PassPipelines,
     frames: Baseline,
     options: IrradianceOptions,
-    cache: Option<Cache>,
+    /// A cache per basis lately rendered, the current one last and the others in the order
+    /// they were last used (at most [`MAX_CACHES`], [`KEPT_BYTES`] besides the current).
+    caches: Vec<Cache>,
     /// The boxes the update passes bind (they read none).
     no_boxes: wgpu::Buffer,
 }
@@ -156,7 +173,7 @@ impl Irradiance {
             update: pass("irradiance_update", &UPDATE_STORAGE[..3]),
             frames: Baseline::with_sample_pass(gpu, irradiance_sample_pass(), &[true, false, false]),
             options: IrradianceOptions::default(),
-            cache: None,
+            caches: Vec::new(),
             no_boxes: gpu.params("irradiance boxes", &[0u8; 32]),
         }
     }
@@ -166,25 +183,25 @@ impl Irradiance {
         self.options = options;
     }
 
-    /// Bytes of the cache on the device (0 before the first frame).
+    /// Bytes of the caches on the device (0 before the first frame).
     pub fn cache_bytes(&self) -> u64 {
-        self.cache.as_ref().map_or(0, |c| c.table.size() + c.requests.size())
+        self.caches.iter().map(Cache::bytes).sum()
     }
 
-    /// Forgets the cache: the next frame starts from an empty one.
+    /// Forgets the caches: the next frame starts from an empty one.
     pub fn forget_cache(&mut self) {
-        self.cache = None;
+        self.caches.clear();
     }
 
     /// Swaps the TAA history with `other` (one per camera stream, as the baseline's); the
-    /// cache is shared by every stream.
+    /// cache of a basis is shared by every stream that renders with it.
     pub fn swap_history(&mut self, other: &mut Option<History>) {
         self.frames.swap_history(other);
     }
 
     /// What the last frame did (read back from the device; zeros before the first frame).
     pub fn stats(&self, gpu: &Gpu) -> Result<IrradianceStats, GpuError> {
-        let Some(c) = &self.cache else {
+        let Some(c) = self.caches.last() else {
             return Ok(IrradianceStats::default());
         };
         let words: Vec<u32> = bytemuck::pod_collect_to_vec(&gpu.read_buffer(&c.requests, 16)?);
@@ -200,7 +217,7 @@ impl Irradiance {
     /// Every keyed entry: its face, its mean irradiance and its sample count (for tests
     /// and tools; it reads the whole table back).
     pub fn entries(&self, gpu: &Gpu) -> Result<Vec<(FaceKey, [f32; 3], u32)>, GpuError> {
-        let Some(c) = &self.cache else {
+        let Some(c) = self.caches.last() else {
             return Ok(Vec::new());
         };
         let words: Vec<u32> = bytemuck::pod_collect_to_vec(&gpu.read_buffer(&c.table, c.table.size())?);
@@ -215,8 +232,18 @@ impl Irradiance {
             .collect())
     }
 
-    /// Brings the cache up to date for `shot` of `world`: a new one when its basis or size
-    /// changed (or it fills past half), and the entries near changed chunks cleared.
+    /// Drops the least recently used caches beyond [`MAX_CACHES`] or [`KEPT_BYTES`]; the
+    /// current one stays.
+    fn trim(&mut self) {
+        let older = |caches: &[Cache]| caches[..caches.len() - 1].iter().map(Cache::bytes).sum::<u64>();
+        while self.caches.len() > MAX_CACHES || (self.caches.len() > 1 && older(&self.caches) > KEPT_BYTES) {
+            self.caches.remove(0);
+        }
+    }
+
+    /// Brings the cache of `shot`'s basis up to date for `shot` of `world` and makes it the
+    /// current one: a new one when there is none for the basis or it is too small (or it
+    /// fills past half), and the entries near changed chunks cleared.
     fn prepare(&mut self, gpu: &Gpu, world: &GpuWorld, shot: &Shot, light: &wgpu::Buffer) -> Result<(), GpuError> {
         self.options.check().map_err(GpuError::Unsupported)?;
         let basis = Basis {
@@ -226,18 +253,23 @@ impl Irradiance {
         };
         let pixels = u64::from(shot.size.0) * u64::from(shot.size.1);
         let slots = slots_for(gpu, pixels)?;
-        let fresh = match &self.cache {
-            Some(c) => c.basis != basis || c.slots < slots || c.generation > world.generation(),
-            None => true,
-        };
-        if fresh {
-            // An empty cache shows no change: nothing to invalidate.
-            self.cache = Some(Cache {
-                generation: world.generation(),
-                ..allocate(gpu, basis, slots)?
-            });
+        let kept = self
+            .caches
+            .iter()
+            .position(|c| c.basis == basis)
+            .map(|at| self.caches.remove(at));
+        match kept {
+            Some(c) if c.slots >= slots && c.generation <= world.generation() => self.caches.push(c),
+            _ => {
+                // An empty cache shows no change: nothing to invalidate.
+                self.caches.push(Cache {
+                    generation: world.generation(),
+                    ..allocate(gpu, basis, slots)?
+                });
+                self.trim();
+            }
         }
-        let cache = self.cache.as_mut().expect("allocated above");
+        let cache = self.caches.last_mut().expect("pushed above");
         // A frame keys at most two entries per pixel (its surface and its gather's): while
         // that bound stays under half the slots nothing is read back; past it, the exact
         // count is, and a table more than half full is renewed (a key that finds no slot
@@ -297,7 +329,7 @@ impl Temporal for Irradiance {
     fn frame(&mut self, gpu: &Gpu, world: &GpuWorld, shot: &Shot) -> Result<(), GpuError> {
         let light = gpu.params("light", bytemuck::bytes_of(&LightInfo::new(&shot.light)));
         self.prepare(gpu, world, shot, &light)?;
-        let cache = self.cache.as_ref().expect("prepared above");
+        let cache = self.caches.last().expect("prepared above");
         let info = info(gpu, &self.options, cache, 0);
         self.frames
             .frame_with(gpu, world, shot, &[&info, &cache.table, &cache.requests])?;
