@@ -2,15 +2,12 @@
 //! lit renderers (path tracer, baseline, GI, ROMA, irradiance cache) and a GPU copy of the
 //! world that follows it (`naadf render`, `naadf replay`, render nodes).
 
-use super::baseline::{Baseline, History};
+use super::baseline::History;
 use super::context::{Gpu, GpuError};
 use super::gi::{Gi, GiHistory};
-use super::irradiance::Irradiance;
-use super::pathtrace::{Accumulation, PathTracer};
-use super::render::Renderer;
-use super::roma::Roma;
+use super::pathtrace::Accumulation;
+use super::renderers::Renderers;
 use super::shot::Shot;
-use super::temporal::Temporal;
 use super::world::GpuWorld;
 use crate::frame::{Frame, FrameSpec, Mode};
 use crate::light::hdr::Radiance;
@@ -22,12 +19,7 @@ use naadf_world::camera::Camera;
 pub struct Headless {
     /// The device.
     pub gpu: Gpu,
-    renderer: Renderer,
-    path_tracer: PathTracer,
-    baseline: Baseline,
-    gi: Gi,
-    roma: Roma,
-    irradiance: Irradiance,
+    renderers: Renderers,
     world: Option<GpuWorld>,
     /// The camera streams of [`Headless::render_spec`], least recently used first.
     streams: Vec<Stream>,
@@ -51,20 +43,9 @@ impl Headless {
     /// Opens the default adapter ([`Gpu::new`]).
     pub fn new() -> Result<Self, GpuError> {
         let gpu = Gpu::new()?;
-        let renderer = Renderer::new(&gpu);
-        let path_tracer = PathTracer::new(&gpu);
-        let baseline = Baseline::new(&gpu);
-        let gi = Gi::new(&gpu);
-        let roma = Roma::new(&gpu);
-        let irradiance = Irradiance::new(&gpu);
         Ok(Headless {
+            renderers: Renderers::new(&gpu),
             gpu,
-            renderer,
-            path_tracer,
-            baseline,
-            gi,
-            roma,
-            irradiance,
             world: None,
             streams: Vec::new(),
         })
@@ -80,7 +61,9 @@ impl Headless {
         gbuffer: bool,
     ) -> Result<Frame, GpuError> {
         let gw = GpuWorld::follow(&mut self.world, &self.gpu, world)?;
-        self.renderer.render(&self.gpu, gw, camera, size, mode, gbuffer)
+        self.renderers
+            .renderer
+            .render(&self.gpu, gw, camera, size, mode, gbuffer)
     }
 
     /// Path-traces `shot` of `world` to `spp` samples per pixel ([`PathTracer::render`]:
@@ -93,7 +76,7 @@ impl Headless {
         progress: &mut dyn FnMut(u32),
     ) -> Result<Radiance, GpuError> {
         let gw = GpuWorld::follow(&mut self.world, &self.gpu, world)?;
-        self.path_tracer.render(&self.gpu, gw, shot, spp, progress)
+        self.renderers.path_tracer.render(&self.gpu, gw, shot, spp, progress)
     }
 
     /// Renders the next frame of `shot` of `world` in a temporal mode
@@ -101,31 +84,19 @@ impl Headless {
     /// [`Roma`], `irradiance` with [`Irradiance`]).
     pub fn temporal_frame(&mut self, mode: Mode, world: &World, shot: &Shot) -> Result<(), GpuError> {
         let gw = GpuWorld::follow(&mut self.world, &self.gpu, world)?;
-        let renderer: &mut dyn Temporal = match mode {
-            Mode::Baseline => &mut self.baseline,
-            Mode::Gi => &mut self.gi,
-            Mode::Roma => &mut self.roma,
-            Mode::Irradiance => &mut self.irradiance,
-            _ => return Err(not_temporal(mode)),
-        };
+        let renderer = self.renderers.temporal_mut(mode).ok_or_else(|| not_temporal(mode))?;
         renderer.frame(&self.gpu, gw, shot)
     }
 
     /// The newest frame of a temporal mode as linear radiance.
     pub fn temporal_radiance(&self, mode: Mode) -> Result<Radiance, GpuError> {
-        let renderer: &dyn Temporal = match mode {
-            Mode::Baseline => &self.baseline,
-            Mode::Gi => &self.gi,
-            Mode::Roma => &self.roma,
-            Mode::Irradiance => &self.irradiance,
-            _ => return Err(not_temporal(mode)),
-        };
+        let renderer = self.renderers.temporal(mode).ok_or_else(|| not_temporal(mode))?;
         renderer.radiance(&self.gpu)
     }
 
     /// The GI renderer (its options, such as the denoiser).
     pub fn gi_mut(&mut self) -> &mut Gi {
-        &mut self.gi
+        &mut self.renderers.gi
     }
 
     /// Renders the frame `spec` asks for, in any mode: the lit modes continue the state of
@@ -158,11 +129,12 @@ impl Headless {
             _ => fresh,
         };
         let swap = |h: &mut Self, s: &mut Stream| {
-            h.path_tracer.swap_sums(&mut s.sums);
-            h.baseline.swap_history(&mut s.history);
-            h.gi.swap_history(&mut s.gi);
-            h.roma.swap_history(&mut s.roma);
-            h.irradiance.swap_history(&mut s.irradiance);
+            let r = &mut h.renderers;
+            r.path_tracer.swap_sums(&mut s.sums);
+            r.baseline.swap_history(&mut s.history);
+            r.gi.swap_history(&mut s.gi);
+            r.roma.swap_history(&mut s.roma);
+            r.irradiance.swap_history(&mut s.irradiance);
         };
         swap(self, &mut stream);
         let radiance = self.render_lit(world, spec, &light);
@@ -183,8 +155,8 @@ impl Headless {
         if spec.mode == Mode::PathTrace {
             return self.path_trace(world, &shot, lit.spp, &mut |_| {});
         }
-        self.roma.set_options(lit.roma);
-        self.irradiance.set_options(lit.irradiance);
+        self.renderers.roma.set_options(lit.roma);
+        self.renderers.irradiance.set_options(lit.irradiance);
         for _ in 0..lit.frames {
             self.temporal_frame(spec.mode, world, &shot)?;
         }

@@ -44,6 +44,7 @@ mod pathtrace;
 mod pipeline;
 mod rays;
 mod render;
+mod renderers;
 mod roma;
 pub mod shaders;
 mod shot;
@@ -64,6 +65,7 @@ pub use params::{FrameInfo, GiInfo, LightInfo, Member, RayIn, View, WgslStruct, 
 pub use pathtrace::PathTracer;
 pub use rays::{GpuHit, GpuRay, RayBatch, RayTracer};
 pub use render::{DEFAULT_SUN, Renderer, STEPS_FULL_SCALE};
+pub(crate) use renderers::Renderers;
 pub use roma::Roma;
 pub use shot::{MAX_EDGE, Shot};
 pub use temporal::Temporal;

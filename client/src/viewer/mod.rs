@@ -35,7 +35,7 @@ pub use present::Presenter;
 
 use crate::client::{PresenceUpdate, ServerAddress};
 use crate::frame::{Frame, Mode};
-use crate::gpu::{Baseline, Gi, Gpu, GpuError, GpuWorld, Irradiance, PathTracer, Renderer, Roma, Shot, Temporal};
+use crate::gpu::{Gpu, GpuError, GpuWorld, Renderers, Shot};
 use crate::light::{DEFAULT_LIT_BOUNCES, DEFAULT_PATHTRACE_BOUNCES, LitOptions};
 use crate::mirror::Mirror;
 use naadf_world::camera::Camera;
@@ -161,12 +161,7 @@ pub fn run(opts: ViewerOptions) -> Result<ViewerSummary, ViewerError> {
 struct Graphics {
     gpu: Gpu,
     presenter: Presenter,
-    renderer: Renderer,
-    path_tracer: PathTracer,
-    baseline: Baseline,
-    gi: Gi,
-    roma: Roma,
-    irradiance: Irradiance,
+    renderers: Renderers,
     world: Option<GpuWorld>,
 }
 
@@ -176,42 +171,28 @@ impl Graphics {
     /// and the world stay the same.
     fn render(&mut self, camera: &Camera, size: (u32, u32), mode: Mode) -> Result<Frame, GpuError> {
         let Graphics {
-            gpu,
-            renderer,
-            path_tracer,
-            baseline,
-            gi,
-            roma,
-            irradiance,
-            world,
-            ..
+            gpu, renderers, world, ..
         } = self;
         let gw = world
             .as_ref()
             .ok_or_else(|| GpuError::Unsupported("no world on the device yet".into()))?;
         let lit = LitOptions::default();
         let light = |bounces| lit.light(bounces).map_err(GpuError::Unsupported);
-        let radiance = match mode {
-            Mode::PathTrace => path_tracer.add_sample(
+        let radiance = if mode == Mode::PathTrace {
+            renderers.path_tracer.add_sample(
                 gpu,
                 gw,
                 &Shot::new(*camera, size, light(DEFAULT_PATHTRACE_BOUNCES)?, lit.seed),
-            )?,
-            Mode::Baseline | Mode::Gi | Mode::Roma | Mode::Irradiance => {
-                let r: &mut dyn Temporal = match mode {
-                    Mode::Gi => gi,
-                    Mode::Roma => roma,
-                    Mode::Irradiance => irradiance,
-                    _ => baseline,
-                };
-                r.frame(
-                    gpu,
-                    gw,
-                    &Shot::new(*camera, size, light(DEFAULT_LIT_BOUNCES)?, lit.seed),
-                )?;
-                r.radiance(gpu)?
-            }
-            _ => return renderer.render(gpu, gw, camera, size, mode, false),
+            )?
+        } else if let Some(r) = renderers.temporal_mut(mode) {
+            r.frame(
+                gpu,
+                gw,
+                &Shot::new(*camera, size, light(DEFAULT_LIT_BOUNCES)?, lit.seed),
+            )?;
+            r.radiance(gpu)?
+        } else {
+            return renderers.renderer.render(gpu, gw, camera, size, mode, false);
         };
         Ok(radiance.tone_mapped(lit.exposure))
     }
@@ -281,22 +262,12 @@ impl App {
         let (gpu, surface) = Gpu::for_window(window.clone())?;
         let size = window.inner_size();
         let presenter = Presenter::new(&gpu, surface, (size.width, size.height))?;
-        let renderer = Renderer::new(&gpu);
-        let path_tracer = PathTracer::new(&gpu);
-        let baseline = Baseline::new(&gpu);
-        let mut gi = Gi::new(&gpu);
-        gi.profile = true;
-        let roma = Roma::new(&gpu);
-        let irradiance = Irradiance::new(&gpu);
+        let mut renderers = Renderers::new(&gpu);
+        renderers.gi.profile = true;
         self.gfx = Some(Graphics {
             gpu,
             presenter,
-            renderer,
-            path_tracer,
-            baseline,
-            gi,
-            roma,
-            irradiance,
+            renderers,
             world: None,
         });
         self.window = Some(window);
@@ -468,7 +439,7 @@ impl App {
         };
         let swatch = world.materials().get(self.material).map(|m| m.albedo.map(srgb8));
         let mode = match self.opts.mode {
-            Mode::PathTrace => format!("pathtrace {} spp", gfx.path_tracer.samples()),
+            Mode::PathTrace => format!("pathtrace {} spp", gfx.renderers.path_tracer.samples()),
             m => m.name().to_owned(),
         };
         let mut lines = vec![format!(
@@ -479,7 +450,7 @@ impl App {
             self.clients,
         )];
         if self.opts.mode == Mode::Gi
-            && let Some(times) = gfx.gi.pass_times(&gfx.gpu)
+            && let Some(times) = gfx.renderers.gi.pass_times(&gfx.gpu)
         {
             lines.extend(pass_time_lines(&times));
         }
