@@ -50,26 +50,15 @@ fn browser_available() -> bool {
     false
 }
 
-/// What every test starts from: a temporary directory with the test world in it, and a
-/// browser.
-struct Fixture {
-    dir: tempfile::TempDir,
-    world: String,
-    browser: Browser,
-}
-
-/// The fixture, or `None` (the test skips) where the browser is missing.
-fn fixture() -> Option<Fixture> {
+/// What every test starts from: a temporary directory, the path of the test world in it,
+/// and a browser; `None` (the test skips) where the browser is missing.
+fn fixture() -> Option<(tempfile::TempDir, String, Browser)> {
     if !browser_available() {
         return None;
     }
     let dir = tempfile::tempdir().unwrap();
     let world = start_world(dir.path());
-    Some(Fixture {
-        dir,
-        world,
-        browser: Browser::start(),
-    })
+    Some((dir, world, Browser::start()))
 }
 
 /// `web/tests/driver.mjs`: pages in one headless Chromium, driven a command at a time.
@@ -191,12 +180,7 @@ const SETTLED: &str = "n.state === 'live' && n.quiescent && n.shownVersion === n
 /// `naadf render` of the same camera and size, pixel for pixel.
 #[test]
 fn the_page_mirrors_the_world_and_draws_what_naadf_render_draws() {
-    let Some(Fixture {
-        dir,
-        world,
-        mut browser,
-    }) = fixture()
-    else {
+    let Some((dir, world, mut browser)) = fixture() else {
         return;
     };
     let server = serve_world(dir.path(), &world, &[], &[]);
@@ -235,12 +219,7 @@ fn the_page_mirrors_the_world_and_draws_what_naadf_render_draws() {
 /// the test, so the pages' streams (HTTP/1.1 gRPC-web) must count as in use throughout.
 #[test]
 fn two_pages_edit_together_and_see_each_other() {
-    let Some(Fixture {
-        dir,
-        world,
-        mut browser,
-    }) = fixture()
-    else {
+    let Some((dir, world, mut browser)) = fixture() else {
         return;
     };
     let server = serve_world(dir.path(), &world, &["--idle-timeout", "3"], &[]);
@@ -469,12 +448,7 @@ fn two_pages_edit_together_and_see_each_other() {
 /// Picking does not see the preview (the click places where the preview stood).
 #[test]
 fn the_voxel_tool_previews_the_voxel_it_would_place() {
-    let Some(Fixture {
-        dir,
-        world,
-        mut browser,
-    }) = fixture()
-    else {
+    let Some((dir, world, mut browser)) = fixture() else {
         return;
     };
     let server = serve_world(dir.path(), &world, &[], &[]);
@@ -543,12 +517,7 @@ fn the_voxel_tool_previews_the_voxel_it_would_place() {
 /// of the page then takes the world from its cache and downloads none of it.
 #[test]
 fn the_page_resumes_after_the_server_is_killed() {
-    let Some(Fixture {
-        dir,
-        world,
-        mut browser,
-    }) = fixture()
-    else {
+    let Some((dir, world, mut browser)) = fixture() else {
         return;
     };
     let (grpc, http) = (support::free_addr(), support::free_addr());
@@ -610,12 +579,7 @@ fn the_page_resumes_after_the_server_is_killed() {
 /// is edited.
 #[test]
 fn the_page_asks_for_a_token_and_refuses_viewers_edits() {
-    let Some(Fixture {
-        dir,
-        world,
-        mut browser,
-    }) = fixture()
-    else {
+    let Some((dir, world, mut browser)) = fixture() else {
         return;
     };
     let tokens = [("NAADF_TOKENS", "vt=vera:viewer,et=edwin:editor")];
@@ -674,12 +638,7 @@ fn the_page_asks_for_a_token_and_refuses_viewers_edits() {
 /// A relay serves the page on its own gRPC listener, and forwards its edits upstream.
 #[test]
 fn a_relay_serves_the_page_and_forwards_its_edits() {
-    let Some(Fixture {
-        dir,
-        world,
-        mut browser,
-    }) = fixture()
-    else {
+    let Some((dir, world, mut browser)) = fixture() else {
         return;
     };
     let server = serve_world(dir.path(), &world, &[], &[]);
@@ -709,12 +668,7 @@ fn a_relay_serves_the_page_and_forwards_its_edits() {
 /// of the channels): the test bounds the mean and the largest difference.
 #[test]
 fn the_path_tracer_accumulates_what_naadf_render_traces() {
-    let Some(Fixture {
-        dir,
-        world,
-        mut browser,
-    }) = fixture()
-    else {
+    let Some((dir, world, mut browser)) = fixture() else {
         return;
     };
     let server = serve_world(dir.path(), &world, &[], &[]);
@@ -732,12 +686,7 @@ fn the_path_tracer_accumulates_what_naadf_render_traces() {
 /// flips: the test bounds the mean difference and the share of channels that differ.
 #[test]
 fn the_roma_mode_draws_what_naadf_render_draws() {
-    let Some(Fixture {
-        dir,
-        world,
-        mut browser,
-    }) = fixture()
-    else {
+    let Some((dir, world, mut browser)) = fixture() else {
         return;
     };
     let server = serve_world(dir.path(), &world, &[], &[]);
@@ -764,12 +713,7 @@ fn the_roma_mode_draws_what_naadf_render_draws() {
 /// view 1,548, of which 1,205 without samples where it keyed only 15 anew.
 #[test]
 fn the_irradiance_mode_draws_what_naadf_render_draws() {
-    let Some(Fixture {
-        dir,
-        world,
-        mut browser,
-    }) = fixture()
-    else {
+    let Some((dir, world, mut browser)) = fixture() else {
         return;
     };
     let server = serve_world(dir.path(), &world, &[], &[]);
@@ -857,12 +801,7 @@ fn the_irradiance_mode_draws_what_naadf_render_draws() {
 /// bound `gi_against_native` explains).
 #[test]
 fn the_gi_mode_draws_what_naadf_render_draws() {
-    let Some(Fixture {
-        dir,
-        world,
-        mut browser,
-    }) = fixture()
-    else {
+    let Some((dir, world, mut browser)) = fixture() else {
         return;
     };
     let server = serve_world(dir.path(), &world, &[], &[]);
@@ -1020,12 +959,7 @@ fn share_off_by_more_than_2(a: &str, b: &str) -> f64 {
 /// address); the HTTP port's `/` sends browsers to it.
 #[test]
 fn the_page_is_served_over_https_with_the_servers_certificate() {
-    let Some(Fixture {
-        dir,
-        world,
-        mut browser,
-    }) = fixture()
-    else {
+    let Some((dir, world, mut browser)) = fixture() else {
         return;
     };
     let pair = rcgen::generate_simple_self_signed(vec!["localhost".to_string()]).unwrap();
@@ -1065,12 +999,7 @@ fn redirect_of(http: &str, path: &str) -> String {
 /// does, and follows their moves on the server's digest.
 #[test]
 fn the_page_draws_entities_and_follows_their_moves() {
-    let Some(Fixture {
-        dir,
-        world,
-        mut browser,
-    }) = fixture()
-    else {
+    let Some((dir, world, mut browser)) = fixture() else {
         return;
     };
     let server = serve_world(dir.path(), &world, &[], &[]);
@@ -1133,12 +1062,7 @@ fn same_frame_as_native(
 /// `client_seq`: every edit of a burst is applied exactly once.
 #[test]
 fn rate_limited_edits_are_retried_and_applied_once() {
-    let Some(Fixture {
-        dir,
-        world,
-        mut browser,
-    }) = fixture()
-    else {
+    let Some((dir, world, mut browser)) = fixture() else {
         return;
     };
     let server = serve_world(dir.path(), &world, &["--rate", "1"], &[]);
