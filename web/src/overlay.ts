@@ -10,7 +10,7 @@ import type { Region } from "./tools";
 type V3 = [number, number, number];
 
 /** The name label drawn for another client, and where its camera is on the frame (render
- * pixels). */
+ * pixels; where the label is when the camera is behind this one's). */
 export interface Marker {
   name: string;
   x: number;
@@ -79,11 +79,11 @@ export function drawOverlay(
       drawBox(ctx, camera, v, [v[0] + 1, v[1] + 1, v[2] + 1], "#0ff");
     }
     if (!plausible(e.position)) continue;
-    const at = project(camera, w, h, e.position as V3);
-    // (Written so that a NaN would be left out too.)
-    if (!at || !(at[0] >= 0 && at[1] >= 0 && at[0] <= w && at[1] <= h)) continue;
-    // Centred over the marker box, a little above its top face.
-    const label = project(camera, w, h, labelAnchor(e.position)) ?? at;
+    // Centred over the marker box, a little above its top face, when that point is on the
+    // frame (as in the native viewer). (Written so that a NaN would be left out too.)
+    const label = project(camera, w, h, labelAnchor(e.position));
+    if (!label || !(label[0] >= 0 && label[1] >= 0 && label[0] < w && label[1] < h)) continue;
+    const at = project(camera, w, h, e.position as V3) ?? label;
     ctx.fillStyle = "#fff";
     ctx.textAlign = "center";
     ctx.textBaseline = "bottom";
