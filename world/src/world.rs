@@ -613,7 +613,7 @@ impl World {
     /// ([`crate::entity::bvh`]): derived from the instance buffer, neither mirrored nor
     /// digested. Empty when there is no instance.
     pub fn entity_hierarchy_words(&self) -> Vec<u32> {
-        self.entities.set.hierarchy_words()
+        self.entities.set().hierarchy_words()
     }
 
     /// Whether a chunk is empty (it may carry a chunk AADF).

@@ -290,6 +290,8 @@ fn rays_through_entity_scenes_match_brute_force_and_the_methods_agree() {
 
 /// Batches of small moves keep the hierarchy's shape and refit its boxes; rays through
 /// the moved instances still match brute force after every batch.
+/// Small moves refit the hierarchy derived last; after the third batch no ray is traced,
+/// so the fourth batch's set is refitted from the second's, two buffers back.
 #[test]
 fn rays_match_brute_force_after_small_moves_refit_the_hierarchy() {
     let size = WorldSize::new(64, 64, 64).unwrap();
@@ -308,6 +310,9 @@ fn rays_match_brute_force_after_small_moves_refit_the_hierarchy() {
             })
             .collect();
         apply(&mut w, moves);
+        if step == 2 {
+            continue;
+        }
         let grid = DenseGrid::from_world(&w).unwrap();
         let mut entity_hits = 0;
         for (_, pose) in w.entity_table().instances.clone() {

@@ -23,7 +23,8 @@
 //! - The static world knows nothing of entities (a deviation from the reference, docs/
 //!   NAADF.md §11): the chunk entity buffer stays zero and no distance field is cut around
 //!   an instance. Rays find instances through a hierarchy over their world boxes
-//!   ([`bvh::Bvh`]), which every machine derives from the instance buffer (`set.rs`).
+//!   ([`bvh::Bvh`]), which every machine derives from the instance buffer (`set.rs`) when
+//!   it first traces a ray or uploads the hierarchy after a change, not at every batch.
 
 pub(crate) mod bounds;
 pub mod bvh;
@@ -42,6 +43,7 @@ use bounds::world_box;
 use pack::{InstanceRecord, MAX_VOXEL_START, RECORD_WORDS, quantise_pose};
 use rustc_hash::FxHashMap;
 use std::collections::BTreeMap;
+use std::sync::{Arc, OnceLock};
 
 /// Largest entity id (14 bits; `0x3FFF` means "no entity" on the GPU).
 pub const MAX_ENTITY_ID: u32 = 0x3FFE;
@@ -177,8 +179,12 @@ pub(crate) struct Entities {
     pub type_starts: Vec<u32>,
     /// The instance buffer: each instance's 5-word record in the slot of its id.
     pub instances: Vec<u32>,
-    /// What a ray test reads of the instances (derived from `instances`).
-    pub set: set::InstanceSet,
+    /// What a ray test reads of the instances, derived from `instances` when first asked
+    /// for ([`Entities::set`]): a machine that only mirrors moves (a server, a CPU mirror)
+    /// never pays for boxes and a hierarchy it does not trace.
+    set: OnceLock<Arc<set::InstanceSet>>,
+    /// The set last derived for an earlier instance buffer, if any: the one to refit.
+    earlier: Option<Arc<set::InstanceSet>>,
 }
 
 /// The voxels of an entity type made from `model`.
@@ -273,7 +279,18 @@ impl Entities {
     /// Whether there is any instance (traversals test entities only then).
     #[inline]
     pub fn present(&self) -> bool {
-        !self.set.is_empty()
+        !self.table.instances.is_empty()
+    }
+
+    /// What a ray test reads of the instances: derived on the first call after the instance
+    /// buffer changed, refitting the set derived last if it fits ([`set::InstanceSet::moved_to`]).
+    pub fn set(&self) -> &set::InstanceSet {
+        self.set.get_or_init(|| {
+            Arc::new(match &self.earlier {
+                Some(earlier) => earlier.moved_to(&self.instances),
+                None => set::InstanceSet::of_buffer(&self.instances),
+            })
+        })
     }
 
     /// Derives every buffer for `table` from scratch (types made from `models`).
@@ -342,8 +359,9 @@ impl Entities {
             table,
             type_voxels,
             type_starts,
-            set: self.set.moved_to(&instances),
             instances,
+            set: OnceLock::new(),
+            earlier: self.set.get().or(self.earlier.as_ref()).cloned(),
         })
     }
 }

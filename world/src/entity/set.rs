@@ -2,13 +2,16 @@
 //! buffer on every machine (neither mirrored nor digested): each live record, its boxes,
 //! and the hierarchy over their world boxes.
 //!
-//! When a batch only moves instances (the same slots hold instances before and after), the
+//! A set is derived when a machine first needs it after the instance buffer changed (a ray
+//! test, or the hierarchy for a device), so that a machine that only applies moves never
+//! derives one. When the same slots hold instances as in the set derived last, that set's
 //! hierarchy is refitted rather than built: about ten times cheaper, and as good while the
 //! moves are small. Moves anywhere make a refitted shape far worse (BENCHMARKS.md, "Entities
 //! as instances": 163 expected node visits against 9 for 1,000 entities), so a refit is
 //! kept only while its [`Bvh::expected_visits`] stays within [`REFIT_SLACK`] of the build
 //! it came from; otherwise the hierarchy is built anew. The shape thus depends on the
-//! history of moves, which changes how many boxes a ray tests, never what it hits.
+//! history of moves, and of when sets were derived, which changes how many boxes a ray
+//! tests, never what it hits.
 
 use super::bounds::Bounds;
 use super::bvh::{Aabb, Bvh};

@@ -194,7 +194,7 @@ impl World {
     #[inline]
     pub(crate) fn entity_view(&self) -> Option<EntityView<'_>> {
         self.entities.present().then(|| EntityView {
-            set: &self.entities.set,
+            set: self.entities.set(),
             voxels: &self.entities.type_voxels,
         })
     }
