@@ -388,6 +388,25 @@ fn synced_buffers_equal_the_worlds_after_edits_also_when_split() {
     assert_eq!(a, b);
 }
 
+/// Two copies never share a generation: a renderer that kept the generation of one (a GI
+/// history, an irradiance cache, ROMA's maps) and is then shown the other learns that
+/// everything changed, whichever copy was made first.
+#[test]
+fn another_copys_generation_reads_as_everything_changed() {
+    let Some(gpu) = gpu() else { return };
+    let src = Preset::Test.source(Some(size(64, 64, 64)), 3).unwrap();
+    let world = World::build(&*src, &|_| {}).unwrap();
+    let first = GpuWorld::new(gpu, &world).unwrap();
+    let second = GpuWorld::new(gpu, &world).unwrap();
+    assert_ne!(first.generation(), second.generation());
+    assert_eq!(second.changes_since(first.generation()), ChunkChanges::Everything);
+    assert_eq!(first.changes_since(second.generation()), ChunkChanges::Everything);
+    assert_eq!(
+        first.changes_since(first.generation()),
+        ChunkChanges::Chunks(Vec::new())
+    );
+}
+
 #[test]
 fn a_synced_copy_logs_which_chunks_each_sync_changed() {
     let Some(gpu) = gpu() else { return };

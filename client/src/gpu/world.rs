@@ -32,6 +32,7 @@ use naadf_world::fingerprint::{ChunkChanges, ChunkPrints, chunks_under, stale_wo
 use naadf_world::traverse::{DEFAULT_MAX_STEPS, Method};
 use naadf_world::{World, WorldError};
 use std::collections::VecDeque;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 /// The digested buffers that live on the GPU, in the binding order of the world's buffers
 /// (`BUFFERS`). The model table and the chunk entity buffer (all zero: entities live
@@ -67,6 +68,17 @@ const MIN_PART_WORDS: u64 = (PAGE_BYTES / 4) as u64;
 const PASS_STORAGE_BUFFERS: u32 = 5;
 /// Smallest buffer allocated (bindings must not be empty).
 const MIN_BYTES: u64 = 16;
+
+/// Generations a copy may count through before its range would meet the next copy's.
+const GENERATIONS_PER_COPY: u64 = 1 << 40;
+
+/// The first generation of a new copy: each copy in this process counts from a base of its
+/// own, so that a renderer that kept state from one copy (a GI history, an irradiance cache,
+/// ROMA's maps) never takes another copy's generation for one it has seen.
+fn first_generation() -> u64 {
+    static COPIES: AtomicU64 = AtomicU64::new(0);
+    COPIES.fetch_add(1, Ordering::Relaxed) * GENERATIONS_PER_COPY
+}
 /// Syncs whose changed chunks are kept in the log; a renderer further behind than that is
 /// told that everything changed.
 const CHANGE_LOG_SYNCS: usize = 256;
@@ -105,7 +117,8 @@ pub struct GpuWorld {
     bind_group: wgpu::BindGroup,
     split: Split,
     max_storage_buffers: u32,
-    /// Counts the syncs that changed anything on the device.
+    /// Counts the syncs that changed anything on the device, from a base of this copy's own
+    /// ([`first_generation`]), so that no two copies share a generation.
     generation: u64,
     /// The fingerprints of the synced world's chunks (none until the first upload).
     prints: Option<ChunkPrints>,
@@ -195,7 +208,7 @@ impl GpuWorld {
             layout,
             split,
             max_storage_buffers: gpu.limits.max_storage_buffers_per_shader_stage,
-            generation: 0,
+            generation: first_generation(),
             prints: None,
             changes: VecDeque::new(),
             changes_from: 0,
@@ -376,9 +389,10 @@ impl GpuWorld {
     /// The chunks that show something else now than at `generation` (an earlier
     /// [`GpuWorld::generation`]): distance fields aside, their voxels, their entity records
     /// or those entities' types changed. [`ChunkChanges::Everything`] when the materials or
-    /// the world's size changed, or when `generation` is older than the log reaches.
+    /// the world's size changed, or when `generation` is older than the log reaches or is
+    /// not one of this copy's (a renderer that last drew another copy).
     pub fn changes_since(&self, generation: u64) -> ChunkChanges {
-        if generation < self.changes_from {
+        if generation < self.changes_from || generation > self.generation {
             return ChunkChanges::Everything;
         }
         let mut chunks = Vec::new();
