@@ -162,7 +162,7 @@ impl Roma {
         }
         // The chunks changed since the tiles were written (read once: it walks the log).
         let changes = world.changes_since(maps.generation);
-        let everything = fresh || changes == ChunkChanges::Everything || maps.generation > world.generation();
+        let everything = fresh || changes == ChunkChanges::Everything;
         let sun_map = maps.options.maps() - 1;
         for map in 0..maps.options.maps() {
             for level in 0..LEVELS {

@@ -79,6 +79,7 @@ fn first_generation() -> u64 {
     static COPIES: AtomicU64 = AtomicU64::new(0);
     COPIES.fetch_add(1, Ordering::Relaxed) * GENERATIONS_PER_COPY
 }
+
 /// Syncs whose changed chunks are kept in the log; a renderer further behind than that is
 /// told that everything changed.
 const CHANGE_LOG_SYNCS: usize = 256;
