@@ -200,6 +200,34 @@ fn entity_ops(seed: u64) -> Vec<Op> {
     ops
 }
 
+/// The "crate" model of [`entity_ops`] spawned 28 times along the x axis, two voxels apart
+/// (so the boxes overlap), above a random floor, with rays along the row from both ends and
+/// slightly across it: each crosses more instance boxes than the GPU walk gathers before it
+/// tests them (`INSTANCE_BATCH` in `shaders/trace.wgsl`).
+fn entity_row() -> (World, Vec<Ray>) {
+    let mut w = random_world(size(64, 64, 64), 5).build();
+    let mut ops = entity_ops(0);
+    ops.truncate(1);
+    let mut rng = Rng(0x520);
+    for i in 0..28u32 {
+        ops.push(Op::SpawnEntity {
+            id: 100 + i,
+            model: "crate".into(),
+            pos: [2.0 + 2.0 * f64::from(i), 40.0, 30.0],
+            rot: [0, 1, 2, 3].map(|_| rng.unit() * 0.2 - 0.1).map(|v| v + 0.5),
+        });
+    }
+    w.apply(&Batch { ops }, &Limits::default()).expect("entities");
+    let mut rays = Vec::new();
+    for k in 0..400 {
+        let at = [40.5 + rng.unit() * 6.0, 30.5 + rng.unit() * 6.0];
+        let across = [rng.unit() - 0.5, rng.unit() - 0.5].map(|v| v * 0.05);
+        let (x, dx) = if k % 2 == 0 { (0.25, 1.0) } else { (63.75, -1.0) };
+        rays.push(Ray::new([x, at[0], at[1]], [dx, across[0], across[1]]).expect("a ray"));
+    }
+    (w, rays)
+}
+
 #[test]
 fn gpu_hits_equal_the_cpu_for_every_method() {
     let Some(gpu) = gpu() else { return };
@@ -232,6 +260,18 @@ fn gpu_hits_equal_the_cpu_for_every_method() {
         total += n;
         differed += d;
     }
+    let (row, row_rays) = entity_row();
+    let entity_hits = row_rays
+        .iter()
+        .filter(|r| trace_naadf(&row, r).is_some_and(|h| h.entity.is_some()))
+        .count();
+    assert!(
+        entity_hits * 2 > row_rays.len(),
+        "{entity_hits} of the row's rays hit an entity"
+    );
+    let (n, d) = compare(gpu, &row, "entity row", &row_rays);
+    total += n;
+    differed += d;
     eprintln!("GPU vs CPU: {differed} of {total} ray traces differed (each within {TIE_EPS} of a tie)");
     assert!(
         differed * 10_000 <= total,

@@ -12,7 +12,7 @@ use std::collections::HashMap;
 pub(crate) struct PassPipelines {
     pass: PassSource,
     group1: wgpu::BindGroupLayout,
-    cache: HashMap<(Split, Loop, bool), wgpu::ComputePipeline>,
+    cache: HashMap<(Split, Loop, bool, bool), wgpu::ComputePipeline>,
 }
 
 impl PassPipelines {
@@ -53,8 +53,11 @@ impl PassPipelines {
         })
     }
 
-    /// The pipeline for the world's current split, world loop `lp` and (for the
-    /// hierarchy) whether AADFs are used (a cheap handle to the cached pipeline).
+    /// The pipeline for the world's current split, world loop `lp`, (for the hierarchy)
+    /// whether AADFs are used, and whether the world has instances (a cheap handle to the
+    /// cached pipeline). A world without instances gets a pipeline without the instance
+    /// walk: a device that runs neighbouring invocations in lock step, such as Mesa's
+    /// lavapipe, may run every branch of a shader whether or not any invocation takes it.
     pub fn get(
         &mut self,
         gpu: &Gpu,
@@ -62,7 +65,7 @@ impl PassPipelines {
         lp: Loop,
         aadf: bool,
     ) -> Result<wgpu::ComputePipeline, GpuError> {
-        let key = (world.split(), lp, aadf);
+        let key = (world.split(), lp, aadf, world.has_instances());
         if !self.cache.contains_key(&key) {
             let src = shaders::source(&self.pass, lp, shaders::WorldBindings::Split(&key.0));
             let pipeline = gpu.checked(|| {
@@ -75,9 +78,11 @@ impl PassPipelines {
                     bind_group_layouts: &[Some(world.layout()), Some(&self.group1)],
                     immediate_size: 0,
                 });
+                let flag = |on: bool| if on { 1.0 } else { 0.0 };
+                let instances = ("HAS_INSTANCES", flag(key.3));
                 let constants: &[(&str, f64)] = match lp {
-                    Loop::Hierarchy => &[("USE_AADF", if aadf { 1.0 } else { 0.0 })],
-                    Loop::Grid | Loop::Svo | Loop::Svdag | Loop::Hybrid => &[],
+                    Loop::Hierarchy => &[("USE_AADF", flag(aadf)), instances],
+                    Loop::Grid | Loop::Svo | Loop::Svdag | Loop::Hybrid => &[instances],
                 };
                 gpu.device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                     label: Some(self.pass.entry),

@@ -565,6 +565,12 @@ impl GpuWorld {
         self.split
     }
 
+    /// Whether the instance buffer has any slot (the world's or a local one), so that the
+    /// shaders walk the instance hierarchy at all (their `HAS_INSTANCES` override).
+    pub fn has_instances(&self) -> bool {
+        self.world_info.instance_slots > 0
+    }
+
     /// Writes `bytes` (whole words) at byte `offset` of logical buffer `k`, page by page
     /// (a write never crosses a part).
     fn write_span(&self, k: usize, offset: u64, bytes: &[u8]) {

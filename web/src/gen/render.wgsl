@@ -525,54 +525,92 @@ var<private> entity_steps: u32;
 // Whether the last `trace` returned an instance's hit (a local instance's has no entity id).
 var<private> hit_instance: bool;
 
+// Whether the world holds any instance. The host builds a pipeline for each value and
+// picks the one that matches its world: a device that runs neighbouring rays in lock step
+// may run code that no ray takes, and without instances none of the walk is compiled.
+override HAS_INSTANCES: bool = true;
+
+// How many instances the walk finds before it stops to test them.
+const INSTANCE_BATCH: u32 = 8u;
+
+// The walk's node stack and found instances, at module scope, so that an invocation holds
+// (and zeroes) one of each rather than one for every trace inlined into it.
+var<private> bvh_stack: array<u32, BVH_STACK>;
+var<private> found_t: array<f32, INSTANCE_BATCH>;
+var<private> found_slot: array<u32, INSTANCE_BATCH>;
+
 // Walks the instance hierarchy (world/src/entity/bvh.rs: four-wide nodes of NODE_WORDS
 // words, the children's f32 boxes axis by axis, then their references) and tests every
 // instance whose box the ray is inside at some t in [t_lo, t_hi] (or up to the best entity
 // hit so far). Boxes are padded and rounded outward, so the f32 test never rejects an
-// instance the ray can hit.
+// instance the ray can hit. The walk gathers up to INSTANCE_BATCH instances, then tests them in
+// the order the ray enters their boxes, stopping at a box that starts after the best hit,
+// and goes on while nodes are left. Testing outside the walk's loop keeps that loop small,
+// which is what costs on a device that runs neighbouring rays in lock step.
 fn find_instances(r: Ray, t_lo: f32, t_hi: f32) {
     // The world loop says whether its structure is traced with entities: the comparison
     // trees hold geometry only.
-    if !TRACES_ENTITIES || world_info.instance_slots == 0u {
+    if !TRACES_ENTITIES || !HAS_INSTANCES || world_info.instance_slots == 0u {
         return;
     }
     // 1/d, with ±FAR for axes the ray does not move along.
     let inv = select(1.0 / r.d, select(vec3<f32>(BVH_FAR), vec3<f32>(-BVH_FAR), r.d < vec3<f32>(0.0)), r.d == vec3<f32>(0.0));
     let o = vec3<f32>(r.o_int);
-    var stack: array<u32, BVH_STACK>;
-    stack[0] = 0u;
+    bvh_stack[0] = 0u;
     var sp = 1u;
     while sp > 0u {
-        sp -= 1u;
-        let base = stack[sp] * NODE_WORDS;
         var far_limit = t_hi * 1.000001 + 1e-3;
         if best_entity.hit {
             far_limit = min(far_limit, best_entity.t * 1.000001 + 1e-3);
         }
-        for (var lane = 0u; lane < 4u; lane++) {
-            let c = hierarchy_word(base + 24u + lane);
-            if c == BVH_NONE {
-                continue;
+        // A node adds at most four instances, so one is taken while four places are left.
+        var found = 0u;
+        while sp > 0u && found + 4u <= INSTANCE_BATCH {
+            sp -= 1u;
+            let base = bvh_stack[sp] * NODE_WORDS;
+            for (var lane = 0u; lane < 4u; lane++) {
+                let c = hierarchy_word(base + 24u + lane);
+                if c == BVH_NONE {
+                    continue;
+                }
+                var near = t_lo - 1e-3;
+                var far = far_limit;
+                for (var a = 0u; a < 3u; a++) {
+                    let lo = (bitcast<f32>(hierarchy_word(base + 8u * a + lane)) - o[a]) - r.o_frac[a];
+                    let hi = (bitcast<f32>(hierarchy_word(base + 8u * a + 4u + lane)) - o[a]) - r.o_frac[a];
+                    let t0 = lo * inv[a];
+                    let t1 = hi * inv[a];
+                    near = max(near, min(t0, t1));
+                    far = min(far, max(t0, t1));
+                }
+                if near > far {
+                    continue;
+                }
+                if (c & BVH_LEAF) != 0u {
+                    found_t[found] = near;
+                    found_slot[found] = c & ~BVH_LEAF;
+                    found += 1u;
+                } else if sp < BVH_STACK {
+                    bvh_stack[sp] = c;
+                    sp += 1u;
+                }
             }
-            var near = t_lo - 1e-3;
-            var far = far_limit;
-            for (var a = 0u; a < 3u; a++) {
-                let lo = (bitcast<f32>(hierarchy_word(base + 8u * a + lane)) - o[a]) - r.o_frac[a];
-                let hi = (bitcast<f32>(hierarchy_word(base + 8u * a + 4u + lane)) - o[a]) - r.o_frac[a];
-                let t0 = lo * inv[a];
-                let t1 = hi * inv[a];
-                near = max(near, min(t0, t1));
-                far = min(far, max(t0, t1));
+        }
+        // Nearest box first, until one starts after the best hit (whose own box started no
+        // later: the boxes are padded beyond the f32 test's rounding).
+        for (var left = found; left > 0u; left--) {
+            var k = 0u;
+            for (var j = 1u; j < left; j++) {
+                if found_t[j] < found_t[k] {
+                    k = j;
+                }
             }
-            if near > far {
-                continue;
+            if best_entity.hit && found_t[k] > best_entity.t {
+                break;
             }
-            if (c & BVH_LEAF) != 0u {
-                test_instance(r, (c & ~BVH_LEAF) * RECORD_WORDS, t_lo);
-            } else if sp < BVH_STACK {
-                stack[sp] = c;
-                sp += 1u;
-            }
+            test_instance(r, found_slot[k] * RECORD_WORDS, t_lo);
+            found_t[k] = found_t[left - 1u];
+            found_slot[k] = found_slot[left - 1u];
         }
     }
 }
