@@ -210,8 +210,7 @@ fn ggx_sample(n: vec3<f32>, wo: vec3<f32>, alpha: f32, f0: vec3<f32>, u: vec2<f3
 // Whether a shadow ray meets anything before leaving the world (a ray out of cells counts
 // as blocked).
 fn blocked(r: Ray, p: vec3<f32>, dir: vec3<f32>) -> bool {
-    let h = trace(ray_at(r, p, dir));
-    return h.hit || h.exhausted;
+    return any(occlusion(ray_at(r, p, dir)));
 }
 
 // One sample of the sun's disc seen from `p` (relative to `r`'s integer origin, just off a

@@ -73,8 +73,7 @@ fn shade_path(primary: Ray, first: Hit, gb: ptr<function, vec4<u32>>) -> vec3<f3
         mat_id = c.h.material;
         entity = c.h.entity;
         let p = ray_local(c.r, c.h.t) + c.n * SURFACE_OFFSET;
-        let shadow = trace(ray_at(c.r, p, view.sun));
-        let lit = select(1.0, 0.0, shadow.hit);
+        let lit = select(1.0, 0.0, occlusion(ray_at(c.r, p, view.sun)).x);
         let direct = 2.0 * max(dot(c.n, view.sun), 0.0) * lit;
         let ambient = 0.2 * max(dot(view.sun, normalize(c.n + 1.01 * view.sun)), 0.0);
         var col = m.albedo * (direct + ambient) * SUN_COLOR;

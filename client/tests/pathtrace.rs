@@ -2,7 +2,7 @@
 //!
 //! - Scenes with a closed-form radiance (docs/RENDERING.md §3a): a diffuse floor under
 //!   a uniform sky (a·L), the same floor lit only by the sun (a·E·sin(EL)/π, and 0 in the
-//!   shadow of a black pillar), a closed box of emissive walls (a·e·(1 − a^(B+1))/(1 − a)).
+//!   shadow of a black pillar, part of the world or an entity), a closed box of emissive walls (a·e·(1 − a^(B+1))/(1 − a)).
 //!   Means over pixels are compared as |Δ| ≤ 4·SE + 1e-4·expected. Each scene runs on the
 //!   CPU path tracer, and on the GPU when there is one.
 //! - The GPU mean of single pixels of a scene with every material kind and the physical
@@ -80,13 +80,32 @@ fn a_floor_under_a_uniform_sky_has_radiance_albedo_times_sky() {
 
 #[test]
 fn a_floor_lit_by_the_sun_has_the_cosine_law_radiance_and_a_black_shadow() {
+    // The pillar that casts the shadow is part of the world, then an entity in the same
+    // place (whose shadow rays leave the world and meet it on the instance walk).
+    let voxels: Vec<String> = (0..8 * 32 * 8)
+        .map(|i| format!("[{},{},{},2]", i % 8, i / 8 % 32, i / 256))
+        .collect();
+    let model = format!(
+        r#"{{"op":"define_model","name":"pillar","size":[8,32,8],"voxels":[{}]}}"#,
+        voxels.join(",")
+    );
+    let spawn = r#"{"op":"spawn_entity","id":1,"model":"pillar","pos":[28,8,28],"rot":[0,0,0,1]}"#;
+    let pillar = r#"{"op":"box","min":[28,8,28],"max":[36,40,36],"material":2}"#;
+    for caster in [vec![pillar], vec![model.as_str(), spawn]] {
+        let mut ops = vec![
+            GREY,
+            r#"{"op":"define_material","id":2,"kind":"diffuse","albedo":[0,0,0]}"#,
+            FLOOR,
+        ];
+        ops.extend(caster);
+        sun_on_a_floor(&world(&ops));
+    }
+}
+
+/// The sun test's checks on `w`: a grey floor and a black pillar of 8 × 32 × 8 voxels
+/// standing on it at x, z = 28.
+fn sun_on_a_floor(w: &World) {
     let (e, el) = (2.0, 45.0);
-    let w = world(&[
-        GREY,
-        r#"{"op":"define_material","id":2,"kind":"diffuse","albedo":[0,0,0]}"#,
-        FLOOR,
-        r#"{"op":"box","min":[28,8,28],"max":[36,40,36],"material":2}"#,
-    ]);
     // Seen from above, 1.25 voxels of floor per pixel.
     let cam = camera(r#"{"pos":[32,60,32],"yaw":0,"pitch":-89.9,"fov_y":60}"#);
     let size = (48, 48);
@@ -112,7 +131,7 @@ fn a_floor_lit_by_the_sun_has_the_cosine_law_radiance_and_a_black_shadow() {
         (29.5..=34.5).contains(&z) && x < 34.5
     };
     let expected = 0.5 * e * f64::to_radians(el).sin() / std::f64::consts::PI;
-    for (who, img) in render(&w, &cam, size, light, 4) {
+    for (who, img) in render(w, &cam, size, light, 4) {
         assert_mean(
             &format!("{who}, lit floor"),
             img.mean_where(lit).unwrap(),

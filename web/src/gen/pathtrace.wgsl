@@ -543,11 +543,12 @@ var<private> found_slot: array<u32, INSTANCE_BATCH>;
 // words, the children's f32 boxes axis by axis, then their references) and tests every
 // instance whose box the ray is inside at some t in [t_lo, t_hi] (or up to the best entity
 // hit so far). Boxes are padded and rounded outward, so the f32 test never rejects an
-// instance the ray can hit. The walk gathers up to INSTANCE_BATCH instances, then tests them in
-// the order the ray enters their boxes, stopping at a box that starts after the best hit,
+// instance the ray can hit. The walk gathers up to INSTANCE_BATCH instances, then tests them
+// in the order the ray enters their boxes, stopping at a box that starts after the best hit,
 // and goes on while nodes are left. Testing outside the walk's loop keeps that loop small,
-// which is what costs on a device that runs neighbouring rays in lock step.
-fn find_instances(r: Ray, t_lo: f32, t_hi: f32) {
+// which is what costs on a device that runs neighbouring rays in lock step. With `any_hit`
+// it returns at the first hit before `t_hi`.
+fn find_instances(r: Ray, t_lo: f32, t_hi: f32, any_hit: bool) {
     // The world loop says whether its structure is traced with entities: the comparison
     // trees hold geometry only.
     if !TRACES_ENTITIES || !HAS_INSTANCES || world_info.instance_slots == 0u {
@@ -609,6 +610,9 @@ fn find_instances(r: Ray, t_lo: f32, t_hi: f32) {
                 break;
             }
             test_instance(r, found_slot[k] * RECORD_WORDS, t_lo);
+            if any_hit && best_entity.hit && best_entity.t < t_hi {
+                return;
+            }
             found_t[k] = found_t[left - 1u];
             found_slot[k] = found_slot[left - 1u];
         }
@@ -727,7 +731,7 @@ fn trace(r: Ray) -> Hit {
     if w.end == END_MISSED || w.end == END_EXHAUSTED {
         return w.hit;
     }
-    find_instances(r, w.t_entry, w.t_end);
+    find_instances(r, w.t_entry, w.t_end, false);
     if best_entity.hit && best_entity.t < w.t_end {
         hit_instance = true;
         var h = best_entity;
@@ -737,6 +741,21 @@ fn trace(r: Ray) -> Hit {
     var h = w.hit;
     h.steps += entity_steps;
     return h;
+}
+
+// Whether `trace(r)` would hit (`x`) and whether it would run out of steps (`y`), for rays
+// that only ask whether something is in the way (shadow rays): a ray that hits the world
+// needs no instance walk, and one that leaves it stops walking at the first instance hit.
+fn occlusion(r: Ray) -> vec2<bool> {
+    entity_steps = 0u;
+    best_entity = no_hit(0u);
+    hit_instance = false;
+    let w = world_loop(r);
+    if w.end != END_LEFT {
+        return vec2<bool>(w.hit.hit, w.hit.exhausted);
+    }
+    find_instances(r, w.t_entry, w.t_end, true);
+    return vec2<bool>(best_entity.hit && best_entity.t < w.t_end, false);
 }
 
 // The world loop over the chunk → block → voxel hierarchy (docs/NAADF.md §9), with
@@ -1074,8 +1093,7 @@ fn ggx_sample(n: vec3<f32>, wo: vec3<f32>, alpha: f32, f0: vec3<f32>, u: vec2<f3
 // Whether a shadow ray meets anything before leaving the world (a ray out of cells counts
 // as blocked).
 fn blocked(r: Ray, p: vec3<f32>, dir: vec3<f32>) -> bool {
-    let h = trace(ray_at(r, p, dir));
-    return h.hit || h.exhausted;
+    return any(occlusion(ray_at(r, p, dir)));
 }
 
 // One sample of the sun's disc seen from `p` (relative to `r`'s integer origin, just off a
