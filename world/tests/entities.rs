@@ -9,7 +9,7 @@ use common::{Raw, Rng, assert_aadf_valid, assert_canonical, random_world, rays};
 use naadf_world::entity::pack::{InstanceRecord, RECORD_WORDS, conjugate, rotate};
 use naadf_world::entity::{EntityTable, MAX_ENTITY_ID};
 use naadf_world::ops::{Batch, EditError, Limits, Op};
-use naadf_world::traverse::{DenseGrid, Hit, Ray, same_result, trace_naadf, trace_nodf};
+use naadf_world::traverse::{DenseGrid, Hit, Ray, occluded_naadf, same_result, trace_naadf, trace_nodf};
 use naadf_world::{World, WorldSize, file};
 
 /// A model op: random solid voxels, a shell, or a solid block, of materials 1..=9.
@@ -158,13 +158,19 @@ fn brute_entity(w: &World, ray: &Ray, t_lo: f64, t_hi: f64) -> Option<(f64, u32,
     best
 }
 
-/// Checks one ray: the three methods agree exactly, and the result matches the brute-force
-/// oracle (world-only trace plus brute-force entities). Returns whether an entity was hit.
+/// Checks one ray: the three methods agree exactly, the occlusion query says whether they
+/// hit, and the result matches the brute-force oracle (world-only trace plus brute-force
+/// entities). Returns whether an entity was hit.
 fn check_ray(w: &World, world_only: &DenseGrid, grid: &DenseGrid, ray: &Ray) -> bool {
     let (a, b, c) = (trace_naadf(w, ray), trace_nodf(w, ray), grid.trace(ray));
     assert!(
         same_result(&a, &b) && same_result(&a, &c),
         "{ray:?}: naadf {a:?} / nodf {b:?} / grid {c:?}"
+    );
+    assert_eq!(
+        occluded_naadf(w, ray),
+        a.is_some(),
+        "{ray:?}: occlusion and trace differ"
     );
     if let (Some(x), Some(y)) = (a, b) {
         assert!(x.steps <= y.steps, "AADF jumps never take more steps");

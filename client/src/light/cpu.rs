@@ -11,7 +11,7 @@ use naadf_world::World;
 use naadf_world::camera::Camera;
 use naadf_world::entity::pack::rotate;
 use naadf_world::material::MaterialKind;
-use naadf_world::traverse::{DEFAULT_MAX_STEPS, Hit, Ray, trace_naadf};
+use naadf_world::traverse::{DEFAULT_MAX_STEPS, Hit, Ray, occluded_naadf, trace_naadf};
 
 /// A Monte Carlo estimate: the mean and the standard error of the mean, per channel.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -213,7 +213,7 @@ impl<'w> CpuPathTracer<'w> {
     /// Whether a shadow ray from `p` along `dir` meets anything (or runs out of cells).
     fn blocked(&self, p: DVec3, dir: DVec3) -> bool {
         match Ray::new(p.to_array(), dir.to_array()) {
-            Ok(r) => trace_naadf(self.world, &r).is_some(),
+            Ok(r) => occluded_naadf(self.world, &r),
             Err(_) => true,
         }
     }

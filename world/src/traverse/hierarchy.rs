@@ -26,6 +26,31 @@ pub fn trace_nodf(world: &World, ray: &Ray) -> Option<Hit> {
     trace::<false>(world, ray)
 }
 
+/// Whether `ray` meets anything, world or entity, within its step budget: the same as
+/// `trace_naadf(world, ray).is_some()`, for rays that only ask whether something is in the
+/// way (shadow rays). A ray that hits the static world needs no walk of the instances, since
+/// any hit will do.
+///
+/// ```
+/// use naadf_world::{World, preset::Preset, traverse::{occluded_naadf, trace_naadf, Ray}};
+/// let src = Preset::Test.source(None, 1).unwrap();
+/// let world = World::build(&*src, &|_| {}).unwrap();
+/// let down = Ray::new([20.5, 63.5, 20.5], [0.0, -1.0, 0.0]).unwrap();
+/// assert_eq!(occluded_naadf(&world, &down), trace_naadf(&world, &down).is_some());
+/// ```
+pub fn occluded_naadf(world: &World, ray: &Ray) -> bool {
+    let Some(view) = world.entity_view() else {
+        return world_loop::<true, false>(world, ray, &mut (0.0, 0.0, 0)).is_some();
+    };
+    let mut span = (f64::NAN, f64::NAN, 0);
+    match world_loop::<true, true>(world, ray, &mut span) {
+        Some(_) => true,
+        // Missed the world, or ran out of steps.
+        None if span.1.is_nan() => false,
+        None => view.resolve(ray, None, span.0, span.1, span.2).is_some(),
+    }
+}
+
 /// What a cell lookup found: a solid material, or how far the empty region extends.
 enum Probe {
     Solid(u16),

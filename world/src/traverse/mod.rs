@@ -18,7 +18,7 @@ mod hierarchy;
 pub mod ray;
 
 pub use grid::DenseGrid;
-pub use hierarchy::{trace_naadf, trace_nodf};
+pub use hierarchy::{occluded_naadf, trace_naadf, trace_nodf};
 pub use ray::{DEFAULT_MAX_STEPS, Hit, MAX_COORD, Ray, same_result};
 
 use crate::world::World;
