@@ -571,32 +571,29 @@ fn find_instances(r: Ray, t_lo: f32, t_hi: f32, any_hit: bool) {
         while sp > 0u && found + 4u <= INSTANCE_BATCH {
             sp -= 1u;
             let base = bvh_stack[sp] * NODE_WORDS;
-            for (var lane = 0u; lane < 4u; lane++) {
-                let c = hierarchy_word(base + 24u + lane);
-                if c == BVH_NONE {
-                    continue;
-                }
-                var near = t_lo - 1e-3;
-                var far = far_limit;
-                for (var a = 0u; a < 3u; a++) {
-                    let lo = (bitcast<f32>(hierarchy_word(base + 8u * a + lane)) - o[a]) - r.o_frac[a];
-                    let hi = (bitcast<f32>(hierarchy_word(base + 8u * a + 4u + lane)) - o[a]) - r.o_frac[a];
-                    let t0 = lo * inv[a];
-                    let t1 = hi * inv[a];
-                    near = max(near, min(t0, t1));
-                    far = min(far, max(t0, t1));
-                }
-                if near > far {
-                    continue;
-                }
-                if (c & BVH_LEAF) != 0u {
-                    found_t[found] = near;
-                    found_slot[found] = c & ~BVH_LEAF;
-                    found += 1u;
-                } else if sp < BVH_STACK {
-                    bvh_stack[sp] = c;
-                    sp += 1u;
-                }
+            // The four lanes at once, axis by axis.
+            let tx0 = ((node_lanes(base) - o.x) - r.o_frac.x) * inv.x;
+            let tx1 = ((node_lanes(base + 4u) - o.x) - r.o_frac.x) * inv.x;
+            let ty0 = ((node_lanes(base + 8u) - o.y) - r.o_frac.y) * inv.y;
+            let ty1 = ((node_lanes(base + 12u) - o.y) - r.o_frac.y) * inv.y;
+            let tz0 = ((node_lanes(base + 16u) - o.z) - r.o_frac.z) * inv.z;
+            let tz1 = ((node_lanes(base + 20u) - o.z) - r.o_frac.z) * inv.z;
+            let near = max(vec4<f32>(t_lo - 1e-3), max(min(tx0, tx1), max(min(ty0, ty1), min(tz0, tz1))));
+            let far = min(vec4<f32>(far_limit), min(max(tx0, tx1), min(max(ty0, ty1), max(tz0, tz1))));
+            let child = vec4<u32>(hierarchy_word(base + 24u), hierarchy_word(base + 25u), hierarchy_word(base + 26u), hierarchy_word(base + 27u));
+            let entered = !(near > far) & (child != vec4<u32>(BVH_NONE));
+            // Each lane in turn: no loop, so that no lane's index is dynamic.
+            if entered.x {
+                keep_lane(child.x, near.x, &sp, &found);
+            }
+            if entered.y {
+                keep_lane(child.y, near.y, &sp, &found);
+            }
+            if entered.z {
+                keep_lane(child.z, near.z, &sp, &found);
+            }
+            if entered.w {
+                keep_lane(child.w, near.w, &sp, &found);
             }
         }
         // Nearest box first, until one starts after the best hit (whose own box started no
@@ -619,6 +616,24 @@ fn find_instances(r: Ray, t_lo: f32, t_hi: f32, any_hit: bool) {
             found_slot[k] = found_slot[left - 1u];
         }
     }
+}
+
+// Keeps a lane the ray enters at \`near\`: an instance among the found ones, or a node on the
+// stack.
+fn keep_lane(c: u32, near: f32, sp: ptr<function, u32>, found: ptr<function, u32>) {
+    if (c & BVH_LEAF) != 0u {
+        found_t[*found] = near;
+        found_slot[*found] = c & ~BVH_LEAF;
+        *found += 1u;
+    } else if *sp < BVH_STACK {
+        bvh_stack[*sp] = c;
+        *sp += 1u;
+    }
+}
+
+// Four lanes' planes of one axis, from word \`at\` of the hierarchy.
+fn node_lanes(at: u32) -> vec4<f32> {
+    return bitcast<vec4<f32>>(vec4<u32>(hierarchy_word(at), hierarchy_word(at + 1u), hierarchy_word(at + 2u), hierarchy_word(at + 3u)));
 }
 
 // Decodes a smallest-three quaternion (world/src/entity/pack.rs).
@@ -1853,32 +1868,29 @@ fn find_instances(r: Ray, t_lo: f32, t_hi: f32, any_hit: bool) {
         while sp > 0u && found + 4u <= INSTANCE_BATCH {
             sp -= 1u;
             let base = bvh_stack[sp] * NODE_WORDS;
-            for (var lane = 0u; lane < 4u; lane++) {
-                let c = hierarchy_word(base + 24u + lane);
-                if c == BVH_NONE {
-                    continue;
-                }
-                var near = t_lo - 1e-3;
-                var far = far_limit;
-                for (var a = 0u; a < 3u; a++) {
-                    let lo = (bitcast<f32>(hierarchy_word(base + 8u * a + lane)) - o[a]) - r.o_frac[a];
-                    let hi = (bitcast<f32>(hierarchy_word(base + 8u * a + 4u + lane)) - o[a]) - r.o_frac[a];
-                    let t0 = lo * inv[a];
-                    let t1 = hi * inv[a];
-                    near = max(near, min(t0, t1));
-                    far = min(far, max(t0, t1));
-                }
-                if near > far {
-                    continue;
-                }
-                if (c & BVH_LEAF) != 0u {
-                    found_t[found] = near;
-                    found_slot[found] = c & ~BVH_LEAF;
-                    found += 1u;
-                } else if sp < BVH_STACK {
-                    bvh_stack[sp] = c;
-                    sp += 1u;
-                }
+            // The four lanes at once, axis by axis.
+            let tx0 = ((node_lanes(base) - o.x) - r.o_frac.x) * inv.x;
+            let tx1 = ((node_lanes(base + 4u) - o.x) - r.o_frac.x) * inv.x;
+            let ty0 = ((node_lanes(base + 8u) - o.y) - r.o_frac.y) * inv.y;
+            let ty1 = ((node_lanes(base + 12u) - o.y) - r.o_frac.y) * inv.y;
+            let tz0 = ((node_lanes(base + 16u) - o.z) - r.o_frac.z) * inv.z;
+            let tz1 = ((node_lanes(base + 20u) - o.z) - r.o_frac.z) * inv.z;
+            let near = max(vec4<f32>(t_lo - 1e-3), max(min(tx0, tx1), max(min(ty0, ty1), min(tz0, tz1))));
+            let far = min(vec4<f32>(far_limit), min(max(tx0, tx1), min(max(ty0, ty1), max(tz0, tz1))));
+            let child = vec4<u32>(hierarchy_word(base + 24u), hierarchy_word(base + 25u), hierarchy_word(base + 26u), hierarchy_word(base + 27u));
+            let entered = !(near > far) & (child != vec4<u32>(BVH_NONE));
+            // Each lane in turn: no loop, so that no lane's index is dynamic.
+            if entered.x {
+                keep_lane(child.x, near.x, &sp, &found);
+            }
+            if entered.y {
+                keep_lane(child.y, near.y, &sp, &found);
+            }
+            if entered.z {
+                keep_lane(child.z, near.z, &sp, &found);
+            }
+            if entered.w {
+                keep_lane(child.w, near.w, &sp, &found);
             }
         }
         // Nearest box first, until one starts after the best hit (whose own box started no
@@ -1901,6 +1913,24 @@ fn find_instances(r: Ray, t_lo: f32, t_hi: f32, any_hit: bool) {
             found_slot[k] = found_slot[left - 1u];
         }
     }
+}
+
+// Keeps a lane the ray enters at \`near\`: an instance among the found ones, or a node on the
+// stack.
+fn keep_lane(c: u32, near: f32, sp: ptr<function, u32>, found: ptr<function, u32>) {
+    if (c & BVH_LEAF) != 0u {
+        found_t[*found] = near;
+        found_slot[*found] = c & ~BVH_LEAF;
+        *found += 1u;
+    } else if *sp < BVH_STACK {
+        bvh_stack[*sp] = c;
+        *sp += 1u;
+    }
+}
+
+// Four lanes' planes of one axis, from word \`at\` of the hierarchy.
+fn node_lanes(at: u32) -> vec4<f32> {
+    return bitcast<vec4<f32>>(vec4<u32>(hierarchy_word(at), hierarchy_word(at + 1u), hierarchy_word(at + 2u), hierarchy_word(at + 3u)));
 }
 
 // Decodes a smallest-three quaternion (world/src/entity/pack.rs).
@@ -2938,32 +2968,29 @@ fn find_instances(r: Ray, t_lo: f32, t_hi: f32, any_hit: bool) {
         while sp > 0u && found + 4u <= INSTANCE_BATCH {
             sp -= 1u;
             let base = bvh_stack[sp] * NODE_WORDS;
-            for (var lane = 0u; lane < 4u; lane++) {
-                let c = hierarchy_word(base + 24u + lane);
-                if c == BVH_NONE {
-                    continue;
-                }
-                var near = t_lo - 1e-3;
-                var far = far_limit;
-                for (var a = 0u; a < 3u; a++) {
-                    let lo = (bitcast<f32>(hierarchy_word(base + 8u * a + lane)) - o[a]) - r.o_frac[a];
-                    let hi = (bitcast<f32>(hierarchy_word(base + 8u * a + 4u + lane)) - o[a]) - r.o_frac[a];
-                    let t0 = lo * inv[a];
-                    let t1 = hi * inv[a];
-                    near = max(near, min(t0, t1));
-                    far = min(far, max(t0, t1));
-                }
-                if near > far {
-                    continue;
-                }
-                if (c & BVH_LEAF) != 0u {
-                    found_t[found] = near;
-                    found_slot[found] = c & ~BVH_LEAF;
-                    found += 1u;
-                } else if sp < BVH_STACK {
-                    bvh_stack[sp] = c;
-                    sp += 1u;
-                }
+            // The four lanes at once, axis by axis.
+            let tx0 = ((node_lanes(base) - o.x) - r.o_frac.x) * inv.x;
+            let tx1 = ((node_lanes(base + 4u) - o.x) - r.o_frac.x) * inv.x;
+            let ty0 = ((node_lanes(base + 8u) - o.y) - r.o_frac.y) * inv.y;
+            let ty1 = ((node_lanes(base + 12u) - o.y) - r.o_frac.y) * inv.y;
+            let tz0 = ((node_lanes(base + 16u) - o.z) - r.o_frac.z) * inv.z;
+            let tz1 = ((node_lanes(base + 20u) - o.z) - r.o_frac.z) * inv.z;
+            let near = max(vec4<f32>(t_lo - 1e-3), max(min(tx0, tx1), max(min(ty0, ty1), min(tz0, tz1))));
+            let far = min(vec4<f32>(far_limit), min(max(tx0, tx1), min(max(ty0, ty1), max(tz0, tz1))));
+            let child = vec4<u32>(hierarchy_word(base + 24u), hierarchy_word(base + 25u), hierarchy_word(base + 26u), hierarchy_word(base + 27u));
+            let entered = !(near > far) & (child != vec4<u32>(BVH_NONE));
+            // Each lane in turn: no loop, so that no lane's index is dynamic.
+            if entered.x {
+                keep_lane(child.x, near.x, &sp, &found);
+            }
+            if entered.y {
+                keep_lane(child.y, near.y, &sp, &found);
+            }
+            if entered.z {
+                keep_lane(child.z, near.z, &sp, &found);
+            }
+            if entered.w {
+                keep_lane(child.w, near.w, &sp, &found);
             }
         }
         // Nearest box first, until one starts after the best hit (whose own box started no
@@ -2986,6 +3013,24 @@ fn find_instances(r: Ray, t_lo: f32, t_hi: f32, any_hit: bool) {
             found_slot[k] = found_slot[left - 1u];
         }
     }
+}
+
+// Keeps a lane the ray enters at \`near\`: an instance among the found ones, or a node on the
+// stack.
+fn keep_lane(c: u32, near: f32, sp: ptr<function, u32>, found: ptr<function, u32>) {
+    if (c & BVH_LEAF) != 0u {
+        found_t[*found] = near;
+        found_slot[*found] = c & ~BVH_LEAF;
+        *found += 1u;
+    } else if *sp < BVH_STACK {
+        bvh_stack[*sp] = c;
+        *sp += 1u;
+    }
+}
+
+// Four lanes' planes of one axis, from word \`at\` of the hierarchy.
+fn node_lanes(at: u32) -> vec4<f32> {
+    return bitcast<vec4<f32>>(vec4<u32>(hierarchy_word(at), hierarchy_word(at + 1u), hierarchy_word(at + 2u), hierarchy_word(at + 3u)));
 }
 
 // Decodes a smallest-three quaternion (world/src/entity/pack.rs).
@@ -5608,32 +5653,29 @@ fn find_instances(r: Ray, t_lo: f32, t_hi: f32, any_hit: bool) {
         while sp > 0u && found + 4u <= INSTANCE_BATCH {
             sp -= 1u;
             let base = bvh_stack[sp] * NODE_WORDS;
-            for (var lane = 0u; lane < 4u; lane++) {
-                let c = hierarchy_word(base + 24u + lane);
-                if c == BVH_NONE {
-                    continue;
-                }
-                var near = t_lo - 1e-3;
-                var far = far_limit;
-                for (var a = 0u; a < 3u; a++) {
-                    let lo = (bitcast<f32>(hierarchy_word(base + 8u * a + lane)) - o[a]) - r.o_frac[a];
-                    let hi = (bitcast<f32>(hierarchy_word(base + 8u * a + 4u + lane)) - o[a]) - r.o_frac[a];
-                    let t0 = lo * inv[a];
-                    let t1 = hi * inv[a];
-                    near = max(near, min(t0, t1));
-                    far = min(far, max(t0, t1));
-                }
-                if near > far {
-                    continue;
-                }
-                if (c & BVH_LEAF) != 0u {
-                    found_t[found] = near;
-                    found_slot[found] = c & ~BVH_LEAF;
-                    found += 1u;
-                } else if sp < BVH_STACK {
-                    bvh_stack[sp] = c;
-                    sp += 1u;
-                }
+            // The four lanes at once, axis by axis.
+            let tx0 = ((node_lanes(base) - o.x) - r.o_frac.x) * inv.x;
+            let tx1 = ((node_lanes(base + 4u) - o.x) - r.o_frac.x) * inv.x;
+            let ty0 = ((node_lanes(base + 8u) - o.y) - r.o_frac.y) * inv.y;
+            let ty1 = ((node_lanes(base + 12u) - o.y) - r.o_frac.y) * inv.y;
+            let tz0 = ((node_lanes(base + 16u) - o.z) - r.o_frac.z) * inv.z;
+            let tz1 = ((node_lanes(base + 20u) - o.z) - r.o_frac.z) * inv.z;
+            let near = max(vec4<f32>(t_lo - 1e-3), max(min(tx0, tx1), max(min(ty0, ty1), min(tz0, tz1))));
+            let far = min(vec4<f32>(far_limit), min(max(tx0, tx1), min(max(ty0, ty1), max(tz0, tz1))));
+            let child = vec4<u32>(hierarchy_word(base + 24u), hierarchy_word(base + 25u), hierarchy_word(base + 26u), hierarchy_word(base + 27u));
+            let entered = !(near > far) & (child != vec4<u32>(BVH_NONE));
+            // Each lane in turn: no loop, so that no lane's index is dynamic.
+            if entered.x {
+                keep_lane(child.x, near.x, &sp, &found);
+            }
+            if entered.y {
+                keep_lane(child.y, near.y, &sp, &found);
+            }
+            if entered.z {
+                keep_lane(child.z, near.z, &sp, &found);
+            }
+            if entered.w {
+                keep_lane(child.w, near.w, &sp, &found);
             }
         }
         // Nearest box first, until one starts after the best hit (whose own box started no
@@ -5656,6 +5698,24 @@ fn find_instances(r: Ray, t_lo: f32, t_hi: f32, any_hit: bool) {
             found_slot[k] = found_slot[left - 1u];
         }
     }
+}
+
+// Keeps a lane the ray enters at \`near\`: an instance among the found ones, or a node on the
+// stack.
+fn keep_lane(c: u32, near: f32, sp: ptr<function, u32>, found: ptr<function, u32>) {
+    if (c & BVH_LEAF) != 0u {
+        found_t[*found] = near;
+        found_slot[*found] = c & ~BVH_LEAF;
+        *found += 1u;
+    } else if *sp < BVH_STACK {
+        bvh_stack[*sp] = c;
+        *sp += 1u;
+    }
+}
+
+// Four lanes' planes of one axis, from word \`at\` of the hierarchy.
+fn node_lanes(at: u32) -> vec4<f32> {
+    return bitcast<vec4<f32>>(vec4<u32>(hierarchy_word(at), hierarchy_word(at + 1u), hierarchy_word(at + 2u), hierarchy_word(at + 3u)));
 }
 
 // Decodes a smallest-three quaternion (world/src/entity/pack.rs).
@@ -7149,32 +7209,29 @@ fn find_instances(r: Ray, t_lo: f32, t_hi: f32, any_hit: bool) {
         while sp > 0u && found + 4u <= INSTANCE_BATCH {
             sp -= 1u;
             let base = bvh_stack[sp] * NODE_WORDS;
-            for (var lane = 0u; lane < 4u; lane++) {
-                let c = hierarchy_word(base + 24u + lane);
-                if c == BVH_NONE {
-                    continue;
-                }
-                var near = t_lo - 1e-3;
-                var far = far_limit;
-                for (var a = 0u; a < 3u; a++) {
-                    let lo = (bitcast<f32>(hierarchy_word(base + 8u * a + lane)) - o[a]) - r.o_frac[a];
-                    let hi = (bitcast<f32>(hierarchy_word(base + 8u * a + 4u + lane)) - o[a]) - r.o_frac[a];
-                    let t0 = lo * inv[a];
-                    let t1 = hi * inv[a];
-                    near = max(near, min(t0, t1));
-                    far = min(far, max(t0, t1));
-                }
-                if near > far {
-                    continue;
-                }
-                if (c & BVH_LEAF) != 0u {
-                    found_t[found] = near;
-                    found_slot[found] = c & ~BVH_LEAF;
-                    found += 1u;
-                } else if sp < BVH_STACK {
-                    bvh_stack[sp] = c;
-                    sp += 1u;
-                }
+            // The four lanes at once, axis by axis.
+            let tx0 = ((node_lanes(base) - o.x) - r.o_frac.x) * inv.x;
+            let tx1 = ((node_lanes(base + 4u) - o.x) - r.o_frac.x) * inv.x;
+            let ty0 = ((node_lanes(base + 8u) - o.y) - r.o_frac.y) * inv.y;
+            let ty1 = ((node_lanes(base + 12u) - o.y) - r.o_frac.y) * inv.y;
+            let tz0 = ((node_lanes(base + 16u) - o.z) - r.o_frac.z) * inv.z;
+            let tz1 = ((node_lanes(base + 20u) - o.z) - r.o_frac.z) * inv.z;
+            let near = max(vec4<f32>(t_lo - 1e-3), max(min(tx0, tx1), max(min(ty0, ty1), min(tz0, tz1))));
+            let far = min(vec4<f32>(far_limit), min(max(tx0, tx1), min(max(ty0, ty1), max(tz0, tz1))));
+            let child = vec4<u32>(hierarchy_word(base + 24u), hierarchy_word(base + 25u), hierarchy_word(base + 26u), hierarchy_word(base + 27u));
+            let entered = !(near > far) & (child != vec4<u32>(BVH_NONE));
+            // Each lane in turn: no loop, so that no lane's index is dynamic.
+            if entered.x {
+                keep_lane(child.x, near.x, &sp, &found);
+            }
+            if entered.y {
+                keep_lane(child.y, near.y, &sp, &found);
+            }
+            if entered.z {
+                keep_lane(child.z, near.z, &sp, &found);
+            }
+            if entered.w {
+                keep_lane(child.w, near.w, &sp, &found);
             }
         }
         // Nearest box first, until one starts after the best hit (whose own box started no
@@ -7197,6 +7254,24 @@ fn find_instances(r: Ray, t_lo: f32, t_hi: f32, any_hit: bool) {
             found_slot[k] = found_slot[left - 1u];
         }
     }
+}
+
+// Keeps a lane the ray enters at \`near\`: an instance among the found ones, or a node on the
+// stack.
+fn keep_lane(c: u32, near: f32, sp: ptr<function, u32>, found: ptr<function, u32>) {
+    if (c & BVH_LEAF) != 0u {
+        found_t[*found] = near;
+        found_slot[*found] = c & ~BVH_LEAF;
+        *found += 1u;
+    } else if *sp < BVH_STACK {
+        bvh_stack[*sp] = c;
+        *sp += 1u;
+    }
+}
+
+// Four lanes' planes of one axis, from word \`at\` of the hierarchy.
+fn node_lanes(at: u32) -> vec4<f32> {
+    return bitcast<vec4<f32>>(vec4<u32>(hierarchy_word(at), hierarchy_word(at + 1u), hierarchy_word(at + 2u), hierarchy_word(at + 3u)));
 }
 
 // Decodes a smallest-three quaternion (world/src/entity/pack.rs).
@@ -8148,32 +8223,29 @@ fn find_instances(r: Ray, t_lo: f32, t_hi: f32, any_hit: bool) {
         while sp > 0u && found + 4u <= INSTANCE_BATCH {
             sp -= 1u;
             let base = bvh_stack[sp] * NODE_WORDS;
-            for (var lane = 0u; lane < 4u; lane++) {
-                let c = hierarchy_word(base + 24u + lane);
-                if c == BVH_NONE {
-                    continue;
-                }
-                var near = t_lo - 1e-3;
-                var far = far_limit;
-                for (var a = 0u; a < 3u; a++) {
-                    let lo = (bitcast<f32>(hierarchy_word(base + 8u * a + lane)) - o[a]) - r.o_frac[a];
-                    let hi = (bitcast<f32>(hierarchy_word(base + 8u * a + 4u + lane)) - o[a]) - r.o_frac[a];
-                    let t0 = lo * inv[a];
-                    let t1 = hi * inv[a];
-                    near = max(near, min(t0, t1));
-                    far = min(far, max(t0, t1));
-                }
-                if near > far {
-                    continue;
-                }
-                if (c & BVH_LEAF) != 0u {
-                    found_t[found] = near;
-                    found_slot[found] = c & ~BVH_LEAF;
-                    found += 1u;
-                } else if sp < BVH_STACK {
-                    bvh_stack[sp] = c;
-                    sp += 1u;
-                }
+            // The four lanes at once, axis by axis.
+            let tx0 = ((node_lanes(base) - o.x) - r.o_frac.x) * inv.x;
+            let tx1 = ((node_lanes(base + 4u) - o.x) - r.o_frac.x) * inv.x;
+            let ty0 = ((node_lanes(base + 8u) - o.y) - r.o_frac.y) * inv.y;
+            let ty1 = ((node_lanes(base + 12u) - o.y) - r.o_frac.y) * inv.y;
+            let tz0 = ((node_lanes(base + 16u) - o.z) - r.o_frac.z) * inv.z;
+            let tz1 = ((node_lanes(base + 20u) - o.z) - r.o_frac.z) * inv.z;
+            let near = max(vec4<f32>(t_lo - 1e-3), max(min(tx0, tx1), max(min(ty0, ty1), min(tz0, tz1))));
+            let far = min(vec4<f32>(far_limit), min(max(tx0, tx1), min(max(ty0, ty1), max(tz0, tz1))));
+            let child = vec4<u32>(hierarchy_word(base + 24u), hierarchy_word(base + 25u), hierarchy_word(base + 26u), hierarchy_word(base + 27u));
+            let entered = !(near > far) & (child != vec4<u32>(BVH_NONE));
+            // Each lane in turn: no loop, so that no lane's index is dynamic.
+            if entered.x {
+                keep_lane(child.x, near.x, &sp, &found);
+            }
+            if entered.y {
+                keep_lane(child.y, near.y, &sp, &found);
+            }
+            if entered.z {
+                keep_lane(child.z, near.z, &sp, &found);
+            }
+            if entered.w {
+                keep_lane(child.w, near.w, &sp, &found);
             }
         }
         // Nearest box first, until one starts after the best hit (whose own box started no
@@ -8196,6 +8268,24 @@ fn find_instances(r: Ray, t_lo: f32, t_hi: f32, any_hit: bool) {
             found_slot[k] = found_slot[left - 1u];
         }
     }
+}
+
+// Keeps a lane the ray enters at \`near\`: an instance among the found ones, or a node on the
+// stack.
+fn keep_lane(c: u32, near: f32, sp: ptr<function, u32>, found: ptr<function, u32>) {
+    if (c & BVH_LEAF) != 0u {
+        found_t[*found] = near;
+        found_slot[*found] = c & ~BVH_LEAF;
+        *found += 1u;
+    } else if *sp < BVH_STACK {
+        bvh_stack[*sp] = c;
+        *sp += 1u;
+    }
+}
+
+// Four lanes' planes of one axis, from word \`at\` of the hierarchy.
+fn node_lanes(at: u32) -> vec4<f32> {
+    return bitcast<vec4<f32>>(vec4<u32>(hierarchy_word(at), hierarchy_word(at + 1u), hierarchy_word(at + 2u), hierarchy_word(at + 3u)));
 }
 
 // Decodes a smallest-three quaternion (world/src/entity/pack.rs).
@@ -9615,32 +9705,29 @@ fn find_instances(r: Ray, t_lo: f32, t_hi: f32, any_hit: bool) {
         while sp > 0u && found + 4u <= INSTANCE_BATCH {
             sp -= 1u;
             let base = bvh_stack[sp] * NODE_WORDS;
-            for (var lane = 0u; lane < 4u; lane++) {
-                let c = hierarchy_word(base + 24u + lane);
-                if c == BVH_NONE {
-                    continue;
-                }
-                var near = t_lo - 1e-3;
-                var far = far_limit;
-                for (var a = 0u; a < 3u; a++) {
-                    let lo = (bitcast<f32>(hierarchy_word(base + 8u * a + lane)) - o[a]) - r.o_frac[a];
-                    let hi = (bitcast<f32>(hierarchy_word(base + 8u * a + 4u + lane)) - o[a]) - r.o_frac[a];
-                    let t0 = lo * inv[a];
-                    let t1 = hi * inv[a];
-                    near = max(near, min(t0, t1));
-                    far = min(far, max(t0, t1));
-                }
-                if near > far {
-                    continue;
-                }
-                if (c & BVH_LEAF) != 0u {
-                    found_t[found] = near;
-                    found_slot[found] = c & ~BVH_LEAF;
-                    found += 1u;
-                } else if sp < BVH_STACK {
-                    bvh_stack[sp] = c;
-                    sp += 1u;
-                }
+            // The four lanes at once, axis by axis.
+            let tx0 = ((node_lanes(base) - o.x) - r.o_frac.x) * inv.x;
+            let tx1 = ((node_lanes(base + 4u) - o.x) - r.o_frac.x) * inv.x;
+            let ty0 = ((node_lanes(base + 8u) - o.y) - r.o_frac.y) * inv.y;
+            let ty1 = ((node_lanes(base + 12u) - o.y) - r.o_frac.y) * inv.y;
+            let tz0 = ((node_lanes(base + 16u) - o.z) - r.o_frac.z) * inv.z;
+            let tz1 = ((node_lanes(base + 20u) - o.z) - r.o_frac.z) * inv.z;
+            let near = max(vec4<f32>(t_lo - 1e-3), max(min(tx0, tx1), max(min(ty0, ty1), min(tz0, tz1))));
+            let far = min(vec4<f32>(far_limit), min(max(tx0, tx1), min(max(ty0, ty1), max(tz0, tz1))));
+            let child = vec4<u32>(hierarchy_word(base + 24u), hierarchy_word(base + 25u), hierarchy_word(base + 26u), hierarchy_word(base + 27u));
+            let entered = !(near > far) & (child != vec4<u32>(BVH_NONE));
+            // Each lane in turn: no loop, so that no lane's index is dynamic.
+            if entered.x {
+                keep_lane(child.x, near.x, &sp, &found);
+            }
+            if entered.y {
+                keep_lane(child.y, near.y, &sp, &found);
+            }
+            if entered.z {
+                keep_lane(child.z, near.z, &sp, &found);
+            }
+            if entered.w {
+                keep_lane(child.w, near.w, &sp, &found);
             }
         }
         // Nearest box first, until one starts after the best hit (whose own box started no
@@ -9663,6 +9750,24 @@ fn find_instances(r: Ray, t_lo: f32, t_hi: f32, any_hit: bool) {
             found_slot[k] = found_slot[left - 1u];
         }
     }
+}
+
+// Keeps a lane the ray enters at \`near\`: an instance among the found ones, or a node on the
+// stack.
+fn keep_lane(c: u32, near: f32, sp: ptr<function, u32>, found: ptr<function, u32>) {
+    if (c & BVH_LEAF) != 0u {
+        found_t[*found] = near;
+        found_slot[*found] = c & ~BVH_LEAF;
+        *found += 1u;
+    } else if *sp < BVH_STACK {
+        bvh_stack[*sp] = c;
+        *sp += 1u;
+    }
+}
+
+// Four lanes' planes of one axis, from word \`at\` of the hierarchy.
+fn node_lanes(at: u32) -> vec4<f32> {
+    return bitcast<vec4<f32>>(vec4<u32>(hierarchy_word(at), hierarchy_word(at + 1u), hierarchy_word(at + 2u), hierarchy_word(at + 3u)));
 }
 
 // Decodes a smallest-three quaternion (world/src/entity/pack.rs).
