@@ -6,6 +6,8 @@
 //!   ray may differ only if it lies within [`TIE_EPS`] of a tie, as shown
 //!   by a CPU trace of a nudged copy giving the GPU's answer, and at most 1 ray in 10,000.
 //! - The `material` image and the first-hit buffer match the CPU raycast of every pixel.
+//! - The pipelines follow whether the world has instances: a world traced without them hits
+//!   entities spawned later, and local instances are hit as world entities are.
 //! - GpuWorld buffers read back equal the world's after edits, also when split across
 //!   bindings, and give the world's digest.
 
@@ -501,6 +503,71 @@ fn a_synced_copy_logs_which_chunks_each_sync_changed() {
     assert_eq!(gw.changes_since(start), ChunkChanges::Everything);
 }
 
+/// Traces `rays` (their CPU and GPU copies) on `gw` and asserts that each GPU hit equals
+/// `truth`'s CPU trace (entity ids dropped unless `ids`) or lies within a tie of it; returns
+/// how many of the CPU hits were on an entity.
+fn assert_hits(
+    gpu: &Gpu,
+    tracer: &mut RayTracer,
+    gw: &GpuWorld,
+    truth: &World,
+    rays: &(Vec<Ray>, Vec<GpuRay>),
+    ids: bool,
+    what: &str,
+) -> usize {
+    let cpu = |r: &Ray| trace_naadf(truth, r).map(|h| if ids { h } else { Hit { entity: None, ..h } });
+    let got = tracer.trace(gpu, gw, &rays.1, Method::Naadf).unwrap();
+    let mut on_entities = 0;
+    for (i, (g, r)) in got.iter().zip(&rays.0).enumerate() {
+        on_entities += usize::from(trace_naadf(truth, r).is_some_and(|h| h.entity.is_some()));
+        let expected = cpu(r);
+        assert!(
+            same_result(&expected, &g.hit) || near_tie(&cpu, r, |h| same_result(h, &g.hit)),
+            "{what}: ray {i}: CPU {expected:?}, GPU {:?}",
+            g.hit
+        );
+    }
+    on_entities
+}
+
+/// The device world's pipelines follow whether it has instances (shaders/trace.wgsl's
+/// `HAS_INSTANCES`): entities spawned into a world traced without them are hit from the next
+/// sync on, by the same tracer, and once they are despawned the world's hits come back.
+#[test]
+fn the_instance_walk_follows_the_worlds_instances() {
+    let Some(gpu) = gpu() else { return };
+    let mut world = random_world(size(64, 64, 64), 31).build();
+    let mut gw = GpuWorld::new(gpu, &world).unwrap();
+    let mut tracer = RayTracer::new(gpu);
+    let rays: (Vec<Ray>, Vec<GpuRay>) = rays(world.size().voxels(), &mut Rng(9), 3000)
+        .iter()
+        .enumerate()
+        .map(|(i, r)| exact_f32(i, r))
+        .unzip();
+    assert_eq!(
+        assert_hits(gpu, &mut tracer, &gw, &world, &rays, true, "no entities"),
+        0
+    );
+    let ops = entity_ops(31);
+    let ids: Vec<u32> = ops
+        .iter()
+        .filter_map(|op| match op {
+            Op::SpawnEntity { id, .. } => Some(*id),
+            _ => None,
+        })
+        .collect();
+    world.apply(&Batch { ops }, &Limits::default()).unwrap();
+    gw.sync(&world).unwrap();
+    assert!(
+        assert_hits(gpu, &mut tracer, &gw, &world, &rays, true, "entities") > 100,
+        "too few rays meet the entities to tell"
+    );
+    let despawn = ids.into_iter().map(|id| Op::DespawnEntity { id }).collect();
+    world.apply(&Batch { ops: despawn }, &Limits::default()).unwrap();
+    gw.sync(&world).unwrap();
+    assert_eq!(assert_hits(gpu, &mut tracer, &gw, &world, &rays, true, "despawned"), 0);
+}
+
 /// Local instances (previews, markers) are hit exactly where the same model spawned as
 /// world entities is, only without an entity id, also after the world's own instance and
 /// type buffers grow under them; the mirrored buffers and the digest stay the world's; a
@@ -525,28 +592,14 @@ fn local_instances_are_hit_as_entities_are_but_stay_out_of_the_mirror() {
     gw.sync(&world).unwrap();
     let mut tracer = RayTracer::new(gpu);
     let mut rng = Rng(3);
-    let (cpu_rays, gpu_rays): (Vec<Ray>, Vec<GpuRay>) = rays(world.size().voxels(), &mut rng, 3000)
+    let rays: (Vec<Ray>, Vec<GpuRay>) = rays(world.size().voxels(), &mut rng, 3000)
         .iter()
         .enumerate()
         .map(|(i, r)| exact_f32(i, r))
         .unzip();
-    // The GPU's hits against `truth`'s CPU hits, entity ids dropped; returns how many
-    // were hits on an entity.
-    let mut check = |gw: &GpuWorld, truth: &World, what: &str| {
-        let cpu = |r: &Ray| trace_naadf(truth, r).map(|h| Hit { entity: None, ..h });
-        let got = tracer.trace(gpu, gw, &gpu_rays, Method::Naadf).unwrap();
-        let mut on_entities = 0;
-        for (i, g) in got.iter().enumerate() {
-            on_entities += usize::from(trace_naadf(truth, &cpu_rays[i]).is_some_and(|h| h.entity.is_some()));
-            let expected = cpu(&cpu_rays[i]);
-            assert!(
-                same_result(&expected, &g.hit) || near_tie(&cpu, &cpu_rays[i], |h| same_result(h, &g.hit)),
-                "{what}: ray {i}: CPU {expected:?}, GPU {:?}",
-                g.hit
-            );
-        }
-        on_entities
-    };
+    // Local instances carry no entity id.
+    let mut check =
+        |gw: &GpuWorld, truth: &World, what: &str| assert_hits(gpu, &mut tracer, gw, truth, &rays, false, what);
     assert!(
         check(&gw, &oracle, "locals") > 100,
         "too few rays meet the instances to tell"
