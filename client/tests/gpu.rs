@@ -84,11 +84,16 @@ fn near_tie(cpu: &impl Fn(&Ray) -> Option<Hit>, ray: &Ray, accept: impl Fn(&Opti
 /// A CPU trace: the oracle of one GPU traversal.
 type CpuTrace<'a> = dyn Fn(&Ray) -> Option<Hit> + 'a;
 
+/// [`exact_f32`] of each of `rays`: the CPU copies and the GPU copies.
+fn exact_rays(rays: &[Ray]) -> (Vec<Ray>, Vec<GpuRay>) {
+    rays.iter().enumerate().map(|(i, r)| exact_f32(i, r)).unzip()
+}
+
 /// Traces `rays` on the GPU with every traversal and compares with the CPU: the world's
 /// methods with `trace_naadf`, the SVO, the SVDAG and the hybrid formats with the CPU walk
 /// of the same structure (geometry only); returns (ray traces compared, traces that differed).
 fn compare(gpu: &Gpu, world: &World, what: &str, rays: &[Ray]) -> (usize, usize) {
-    let (cpu_rays, gpu_rays): (Vec<Ray>, Vec<GpuRay>) = rays.iter().enumerate().map(|(i, r)| exact_f32(i, r)).unzip();
+    let (cpu_rays, gpu_rays) = exact_rays(rays);
     let mut gw = GpuWorld::new(gpu, world).expect("upload");
     let mut tracer = RayTracer::new(gpu);
     // A world without solid voxels has no trees (the builds refuse it).
@@ -420,11 +425,7 @@ fn synced_buffers_equal_the_worlds_after_edits_also_when_split() {
     );
     // Both copies trace alike.
     let mut tracer = RayTracer::new(gpu);
-    let rays: Vec<GpuRay> = rays(world.size().voxels(), &mut rng, 500)
-        .iter()
-        .enumerate()
-        .map(|(i, r)| exact_f32(i, r).1)
-        .collect();
+    let rays = exact_rays(&rays(world.size().voxels(), &mut rng, 500)).1;
     let a = tracer.trace(gpu, &split, &rays, Method::Naadf).unwrap();
     let b = tracer.trace(gpu, &whole, &rays, Method::Naadf).unwrap();
     assert_eq!(a, b);
@@ -539,11 +540,7 @@ fn the_instance_walk_follows_the_worlds_instances() {
     let mut world = random_world(size(64, 64, 64), 31).build();
     let mut gw = GpuWorld::new(gpu, &world).unwrap();
     let mut tracer = RayTracer::new(gpu);
-    let rays: (Vec<Ray>, Vec<GpuRay>) = rays(world.size().voxels(), &mut Rng(9), 3000)
-        .iter()
-        .enumerate()
-        .map(|(i, r)| exact_f32(i, r))
-        .unzip();
+    let rays = exact_rays(&rays(world.size().voxels(), &mut Rng(9), 3000));
     assert_eq!(
         assert_hits(gpu, &mut tracer, &gw, &world, &rays, true, "no entities"),
         0
@@ -592,11 +589,7 @@ fn local_instances_are_hit_as_entities_are_but_stay_out_of_the_mirror() {
     gw.sync(&world).unwrap();
     let mut tracer = RayTracer::new(gpu);
     let mut rng = Rng(3);
-    let rays: (Vec<Ray>, Vec<GpuRay>) = rays(world.size().voxels(), &mut rng, 3000)
-        .iter()
-        .enumerate()
-        .map(|(i, r)| exact_f32(i, r))
-        .unzip();
+    let rays = exact_rays(&rays(world.size().voxels(), &mut rng, 3000));
     // Local instances carry no entity id.
     let mut check =
         |gw: &GpuWorld, truth: &World, what: &str| assert_hits(gpu, &mut tracer, gw, truth, &rays, false, what);

@@ -737,12 +737,17 @@ fn world_normal(h: Hit) -> vec3<f32> {
     return rotate(conjugate(best_rotation), n);
 }
 
-// Traces `r` through the world and its entities.
-fn trace(r: Ray) -> Hit {
+// Clears the entity state of the last trace and runs the world loop: how a trace starts.
+fn world_first(r: Ray) -> WorldTrace {
     entity_steps = 0u;
     best_entity = no_hit(0u);
     hit_instance = false;
-    let w = world_loop(r);
+    return world_loop(r);
+}
+
+// Traces `r` through the world and its entities.
+fn trace(r: Ray) -> Hit {
+    let w = world_first(r);
     if w.end == END_MISSED || w.end == END_EXHAUSTED {
         return w.hit;
     }
@@ -762,10 +767,7 @@ fn trace(r: Ray) -> Hit {
 // that only ask whether something is in the way (shadow rays): a ray that hits the world
 // needs no instance walk, and one that leaves it stops walking at the first instance hit.
 fn occlusion(r: Ray) -> vec2<bool> {
-    entity_steps = 0u;
-    best_entity = no_hit(0u);
-    hit_instance = false;
-    let w = world_loop(r);
+    let w = world_first(r);
     if w.end != END_LEFT {
         return vec2<bool>(w.hit.hit, w.hit.exhausted);
     }

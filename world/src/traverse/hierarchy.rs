@@ -18,12 +18,12 @@ const MAX_STEPS: u32 = 1 << 24;
 /// assert!(trace_naadf(&world, &down).is_some());
 /// ```
 pub fn trace_naadf(world: &World, ray: &Ray) -> Option<Hit> {
-    trace::<true>(world, ray)
+    trace::<true, false>(world, ray)
 }
 
 /// Traces `ray` through the same hierarchy without distance fields.
 pub fn trace_nodf(world: &World, ray: &Ray) -> Option<Hit> {
-    trace::<false>(world, ray)
+    trace::<false, false>(world, ray)
 }
 
 /// Whether `ray` meets anything, world or entity, within its step budget: the same as
@@ -39,16 +39,7 @@ pub fn trace_nodf(world: &World, ray: &Ray) -> Option<Hit> {
 /// assert_eq!(occluded_naadf(&world, &down), trace_naadf(&world, &down).is_some());
 /// ```
 pub fn occluded_naadf(world: &World, ray: &Ray) -> bool {
-    let Some(view) = world.entity_view() else {
-        return world_loop::<true, false>(world, ray, &mut (0.0, 0.0, 0)).is_some();
-    };
-    let mut span = (f64::NAN, f64::NAN, 0);
-    match world_loop::<true, true>(world, ray, &mut span) {
-        Some(_) => true,
-        // Missed the world, or ran out of steps.
-        None if span.1.is_nan() => false,
-        None => view.resolve(ray, None, span.0, span.1, span.2).is_some(),
-    }
+    trace::<true, true>(world, ray).is_some()
 }
 
 /// What a cell lookup found: a solid material, or how far the empty region extends.
@@ -57,7 +48,9 @@ enum Probe {
     Empty([i64; 3]),
 }
 
-fn trace<const DF: bool>(world: &World, ray: &Ray) -> Option<Hit> {
+/// The world loop, then the instances. With `ANY`, a world hit is returned as it is,
+/// without looking for a nearer entity (whether there is a hit is all the caller asks).
+fn trace<const DF: bool, const ANY: bool>(world: &World, ray: &Ray) -> Option<Hit> {
     // Worlds without entities run a loop with no entity code at all.
     let Some(view) = world.entity_view() else {
         return world_loop::<DF, false>(world, ray, &mut (0.0, 0.0, 0));
@@ -65,6 +58,7 @@ fn trace<const DF: bool>(world: &World, ray: &Ray) -> Option<Hit> {
     let mut span = (f64::NAN, f64::NAN, 0);
     let hit = world_loop::<DF, true>(world, ray, &mut span);
     let (t_entry, t_end, steps) = match hit {
+        Some(h) if ANY => return Some(h),
         Some(h) => (span.0, h.t, h.steps),
         // Missed the world, or ran out of steps.
         None if span.1.is_nan() => return None,

@@ -739,12 +739,17 @@ fn world_normal(h: Hit) -> vec3<f32> {
     return rotate(conjugate(best_rotation), n);
 }
 
-// Traces \`r\` through the world and its entities.
-fn trace(r: Ray) -> Hit {
+// Clears the entity state of the last trace and runs the world loop: how a trace starts.
+fn world_first(r: Ray) -> WorldTrace {
     entity_steps = 0u;
     best_entity = no_hit(0u);
     hit_instance = false;
-    let w = world_loop(r);
+    return world_loop(r);
+}
+
+// Traces \`r\` through the world and its entities.
+fn trace(r: Ray) -> Hit {
+    let w = world_first(r);
     if w.end == END_MISSED || w.end == END_EXHAUSTED {
         return w.hit;
     }
@@ -764,10 +769,7 @@ fn trace(r: Ray) -> Hit {
 // that only ask whether something is in the way (shadow rays): a ray that hits the world
 // needs no instance walk, and one that leaves it stops walking at the first instance hit.
 fn occlusion(r: Ray) -> vec2<bool> {
-    entity_steps = 0u;
-    best_entity = no_hit(0u);
-    hit_instance = false;
-    let w = world_loop(r);
+    let w = world_first(r);
     if w.end != END_LEFT {
         return vec2<bool>(w.hit.hit, w.hit.exhausted);
     }
@@ -2036,12 +2038,17 @@ fn world_normal(h: Hit) -> vec3<f32> {
     return rotate(conjugate(best_rotation), n);
 }
 
-// Traces \`r\` through the world and its entities.
-fn trace(r: Ray) -> Hit {
+// Clears the entity state of the last trace and runs the world loop: how a trace starts.
+fn world_first(r: Ray) -> WorldTrace {
     entity_steps = 0u;
     best_entity = no_hit(0u);
     hit_instance = false;
-    let w = world_loop(r);
+    return world_loop(r);
+}
+
+// Traces \`r\` through the world and its entities.
+fn trace(r: Ray) -> Hit {
+    let w = world_first(r);
     if w.end == END_MISSED || w.end == END_EXHAUSTED {
         return w.hit;
     }
@@ -2061,10 +2068,7 @@ fn trace(r: Ray) -> Hit {
 // that only ask whether something is in the way (shadow rays): a ray that hits the world
 // needs no instance walk, and one that leaves it stops walking at the first instance hit.
 fn occlusion(r: Ray) -> vec2<bool> {
-    entity_steps = 0u;
-    best_entity = no_hit(0u);
-    hit_instance = false;
-    let w = world_loop(r);
+    let w = world_first(r);
     if w.end != END_LEFT {
         return vec2<bool>(w.hit.hit, w.hit.exhausted);
     }
@@ -3136,12 +3140,17 @@ fn world_normal(h: Hit) -> vec3<f32> {
     return rotate(conjugate(best_rotation), n);
 }
 
-// Traces \`r\` through the world and its entities.
-fn trace(r: Ray) -> Hit {
+// Clears the entity state of the last trace and runs the world loop: how a trace starts.
+fn world_first(r: Ray) -> WorldTrace {
     entity_steps = 0u;
     best_entity = no_hit(0u);
     hit_instance = false;
-    let w = world_loop(r);
+    return world_loop(r);
+}
+
+// Traces \`r\` through the world and its entities.
+fn trace(r: Ray) -> Hit {
+    let w = world_first(r);
     if w.end == END_MISSED || w.end == END_EXHAUSTED {
         return w.hit;
     }
@@ -3161,10 +3170,7 @@ fn trace(r: Ray) -> Hit {
 // that only ask whether something is in the way (shadow rays): a ray that hits the world
 // needs no instance walk, and one that leaves it stops walking at the first instance hit.
 fn occlusion(r: Ray) -> vec2<bool> {
-    entity_steps = 0u;
-    best_entity = no_hit(0u);
-    hit_instance = false;
-    let w = world_loop(r);
+    let w = world_first(r);
     if w.end != END_LEFT {
         return vec2<bool>(w.hit.hit, w.hit.exhausted);
     }
@@ -5821,12 +5827,17 @@ fn world_normal(h: Hit) -> vec3<f32> {
     return rotate(conjugate(best_rotation), n);
 }
 
-// Traces \`r\` through the world and its entities.
-fn trace(r: Ray) -> Hit {
+// Clears the entity state of the last trace and runs the world loop: how a trace starts.
+fn world_first(r: Ray) -> WorldTrace {
     entity_steps = 0u;
     best_entity = no_hit(0u);
     hit_instance = false;
-    let w = world_loop(r);
+    return world_loop(r);
+}
+
+// Traces \`r\` through the world and its entities.
+fn trace(r: Ray) -> Hit {
+    let w = world_first(r);
     if w.end == END_MISSED || w.end == END_EXHAUSTED {
         return w.hit;
     }
@@ -5846,10 +5857,7 @@ fn trace(r: Ray) -> Hit {
 // that only ask whether something is in the way (shadow rays): a ray that hits the world
 // needs no instance walk, and one that leaves it stops walking at the first instance hit.
 fn occlusion(r: Ray) -> vec2<bool> {
-    entity_steps = 0u;
-    best_entity = no_hit(0u);
-    hit_instance = false;
-    let w = world_loop(r);
+    let w = world_first(r);
     if w.end != END_LEFT {
         return vec2<bool>(w.hit.hit, w.hit.exhausted);
     }
@@ -7377,12 +7385,17 @@ fn world_normal(h: Hit) -> vec3<f32> {
     return rotate(conjugate(best_rotation), n);
 }
 
-// Traces \`r\` through the world and its entities.
-fn trace(r: Ray) -> Hit {
+// Clears the entity state of the last trace and runs the world loop: how a trace starts.
+fn world_first(r: Ray) -> WorldTrace {
     entity_steps = 0u;
     best_entity = no_hit(0u);
     hit_instance = false;
-    let w = world_loop(r);
+    return world_loop(r);
+}
+
+// Traces \`r\` through the world and its entities.
+fn trace(r: Ray) -> Hit {
+    let w = world_first(r);
     if w.end == END_MISSED || w.end == END_EXHAUSTED {
         return w.hit;
     }
@@ -7402,10 +7415,7 @@ fn trace(r: Ray) -> Hit {
 // that only ask whether something is in the way (shadow rays): a ray that hits the world
 // needs no instance walk, and one that leaves it stops walking at the first instance hit.
 fn occlusion(r: Ray) -> vec2<bool> {
-    entity_steps = 0u;
-    best_entity = no_hit(0u);
-    hit_instance = false;
-    let w = world_loop(r);
+    let w = world_first(r);
     if w.end != END_LEFT {
         return vec2<bool>(w.hit.hit, w.hit.exhausted);
     }
@@ -8391,12 +8401,17 @@ fn world_normal(h: Hit) -> vec3<f32> {
     return rotate(conjugate(best_rotation), n);
 }
 
-// Traces \`r\` through the world and its entities.
-fn trace(r: Ray) -> Hit {
+// Clears the entity state of the last trace and runs the world loop: how a trace starts.
+fn world_first(r: Ray) -> WorldTrace {
     entity_steps = 0u;
     best_entity = no_hit(0u);
     hit_instance = false;
-    let w = world_loop(r);
+    return world_loop(r);
+}
+
+// Traces \`r\` through the world and its entities.
+fn trace(r: Ray) -> Hit {
+    let w = world_first(r);
     if w.end == END_MISSED || w.end == END_EXHAUSTED {
         return w.hit;
     }
@@ -8416,10 +8431,7 @@ fn trace(r: Ray) -> Hit {
 // that only ask whether something is in the way (shadow rays): a ray that hits the world
 // needs no instance walk, and one that leaves it stops walking at the first instance hit.
 fn occlusion(r: Ray) -> vec2<bool> {
-    entity_steps = 0u;
-    best_entity = no_hit(0u);
-    hit_instance = false;
-    let w = world_loop(r);
+    let w = world_first(r);
     if w.end != END_LEFT {
         return vec2<bool>(w.hit.hit, w.hit.exhausted);
     }
@@ -9873,12 +9885,17 @@ fn world_normal(h: Hit) -> vec3<f32> {
     return rotate(conjugate(best_rotation), n);
 }
 
-// Traces \`r\` through the world and its entities.
-fn trace(r: Ray) -> Hit {
+// Clears the entity state of the last trace and runs the world loop: how a trace starts.
+fn world_first(r: Ray) -> WorldTrace {
     entity_steps = 0u;
     best_entity = no_hit(0u);
     hit_instance = false;
-    let w = world_loop(r);
+    return world_loop(r);
+}
+
+// Traces \`r\` through the world and its entities.
+fn trace(r: Ray) -> Hit {
+    let w = world_first(r);
     if w.end == END_MISSED || w.end == END_EXHAUSTED {
         return w.hit;
     }
@@ -9898,10 +9915,7 @@ fn trace(r: Ray) -> Hit {
 // that only ask whether something is in the way (shadow rays): a ray that hits the world
 // needs no instance walk, and one that leaves it stops walking at the first instance hit.
 fn occlusion(r: Ray) -> vec2<bool> {
-    entity_steps = 0u;
-    best_entity = no_hit(0u);
-    hit_instance = false;
-    let w = world_loop(r);
+    let w = world_first(r);
     if w.end != END_LEFT {
         return vec2<bool>(w.hit.hit, w.hit.exhausted);
     }
