@@ -9,7 +9,9 @@ use common::{Raw, Rng, assert_aadf_valid, assert_canonical, random_world, rays};
 use naadf_world::entity::pack::{InstanceRecord, RECORD_WORDS, conjugate, rotate};
 use naadf_world::entity::{EntityTable, MAX_ENTITY_ID};
 use naadf_world::ops::{Batch, EditError, Limits, Op};
-use naadf_world::traverse::{DenseGrid, Hit, Ray, occluded_naadf, same_result, trace_naadf, trace_nodf};
+use naadf_world::traverse::{
+    DenseGrid, Hit, Method, Ray, Tracer, occluded_naadf, same_result, trace_naadf, trace_nodf,
+};
 use naadf_world::{World, WorldSize, file};
 
 /// A model op: random solid voxels, a shell, or a solid block, of materials 1..=9.
@@ -223,6 +225,59 @@ fn check_ray(w: &World, world_only: &DenseGrid, grid: &DenseGrid, ray: &Ray) -> 
     }
 }
 
+/// Rays through an entity scene: random ones through the world; rays aimed at each
+/// entity from near and far; fans of rays from one origin toward each entity (neighbouring
+/// camera rays, which a batch walks as one group); and adversarial ones, from inside an
+/// instance's grid, moving within a face plane of its world box (grazing it), or along one
+/// of the box's edges.
+fn scene_rays(w: &World, rng: &mut Rng, random: usize) -> Vec<Ray> {
+    let mut out = rays(w.size().voxels(), rng, random);
+    for (_, pose) in w.entity_table().instances.clone() {
+        for _ in 0..40 {
+            let target = [0, 1, 2].map(|a| pose.pos[a] + rng.unit() * 8.0 - 2.0);
+            let from = [0, 1, 2].map(|a| target[a] + (rng.unit() * 2.0 - 1.0) * 40.0);
+            out.extend(Ray::new(from, [0, 1, 2].map(|a| target[a] - from[a])));
+        }
+        let from = [0, 1, 2].map(|a| pose.pos[a] + (rng.unit() * 2.0 - 1.0) * 30.0);
+        for k in 0..48 {
+            let target =
+                [0, 1, 2].map(|a| pose.pos[a] + f64::from(k % 8) * 1.3 - 2.0 + f64::from(k / 8 * a as u32) * 0.9);
+            out.extend(Ray::new(from, [0, 1, 2].map(|a| target[a] - from[a])));
+        }
+    }
+    for (_, pose) in w.entity_table().instances.clone() {
+        let size = w.models().get(&pose.model).unwrap().size().map(f64::from);
+        let corners: Vec<[f64; 3]> = (0..8)
+            .map(|c| {
+                let p = rotate(pose.rot, [0, 1, 2].map(|a| if c >> a & 1 == 1 { size[a] } else { 0.0 }));
+                [0, 1, 2].map(|a| pose.pos[a] + p[a])
+            })
+            .collect();
+        let lo = [0, 1, 2].map(|a| corners.iter().map(|c| c[a]).fold(f64::INFINITY, f64::min));
+        let hi = [0, 1, 2].map(|a| corners.iter().map(|c| c[a]).fold(f64::NEG_INFINITY, f64::max));
+        for _ in 0..20 {
+            let local = [0, 1, 2].map(|a| rng.unit() * size[a]);
+            let p = rotate(pose.rot, local);
+            let inside = [0, 1, 2].map(|a| pose.pos[a] + p[a]);
+            let d = [0, 1, 2].map(|_| rng.unit() - 0.5);
+            out.extend(Ray::new(inside, d));
+            let axis = rng.below(3) as usize;
+            let mut o = [0, 1, 2].map(|a| lo[a] - 3.0 + rng.unit() * (hi[a] - lo[a] + 6.0));
+            o[axis] = if rng.unit() < 0.5 { lo[axis] } else { hi[axis] };
+            let mut d = [0, 1, 2].map(|_| rng.unit() - 0.5);
+            d[axis] = 0.0;
+            if rng.unit() < 0.3 {
+                // Along an edge: on two face planes, moving along the third axis.
+                let b = (axis + 1) % 3;
+                o[b] = if rng.unit() < 0.5 { lo[b] } else { hi[b] };
+                d[b] = 0.0;
+            }
+            out.extend(Ray::new(o, d));
+        }
+    }
+    out
+}
+
 #[test]
 fn rays_through_entity_scenes_match_brute_force_and_the_methods_agree() {
     for seed in 0..5u64 {
@@ -232,57 +287,10 @@ fn rays_through_entity_scenes_match_brute_force_and_the_methods_agree() {
         let grid = DenseGrid::from_world(&w).unwrap();
         let world_only = DenseGrid::from_world(&without_entities(&w)).unwrap();
         let mut rng = Rng(seed + 100);
-        let mut entity_hits = 0;
-        for ray in rays(size.voxels(), &mut rng, 1500) {
-            entity_hits += usize::from(check_ray(&w, &world_only, &grid, &ray));
-        }
-        // Rays aimed at entities, from near and far.
-        for (_, pose) in w.entity_table().instances.clone() {
-            for _ in 0..40 {
-                let target = [0, 1, 2].map(|a| pose.pos[a] + rng.unit() * 8.0 - 2.0);
-                let from = [0, 1, 2].map(|a| target[a] + (rng.unit() * 2.0 - 1.0) * 40.0);
-                let Ok(ray) = Ray::new(from, [0, 1, 2].map(|a| target[a] - from[a])) else {
-                    continue;
-                };
-                entity_hits += usize::from(check_ray(&w, &world_only, &grid, &ray));
-            }
-        }
-        // Adversarial rays: from inside an instance's grid, and moving within a face plane
-        // of its world box (grazing it), or along one of the box's edges.
-        for (_, pose) in w.entity_table().instances.clone() {
-            let size = w.models().get(&pose.model).unwrap().size().map(f64::from);
-            let corners: Vec<[f64; 3]> = (0..8)
-                .map(|c| {
-                    let p = rotate(pose.rot, [0, 1, 2].map(|a| if c >> a & 1 == 1 { size[a] } else { 0.0 }));
-                    [0, 1, 2].map(|a| pose.pos[a] + p[a])
-                })
-                .collect();
-            let lo = [0, 1, 2].map(|a| corners.iter().map(|c| c[a]).fold(f64::INFINITY, f64::min));
-            let hi = [0, 1, 2].map(|a| corners.iter().map(|c| c[a]).fold(f64::NEG_INFINITY, f64::max));
-            for _ in 0..20 {
-                let local = [0, 1, 2].map(|a| rng.unit() * size[a]);
-                let p = rotate(pose.rot, local);
-                let inside = [0, 1, 2].map(|a| pose.pos[a] + p[a]);
-                let d = [0, 1, 2].map(|_| rng.unit() - 0.5);
-                if let Ok(ray) = Ray::new(inside, d) {
-                    check_ray(&w, &world_only, &grid, &ray);
-                }
-                let axis = rng.below(3) as usize;
-                let mut o = [0, 1, 2].map(|a| lo[a] - 3.0 + rng.unit() * (hi[a] - lo[a] + 6.0));
-                o[axis] = if rng.unit() < 0.5 { lo[axis] } else { hi[axis] };
-                let mut d = [0, 1, 2].map(|_| rng.unit() - 0.5);
-                d[axis] = 0.0;
-                if rng.unit() < 0.3 {
-                    // Along an edge: on two face planes, moving along the third axis.
-                    let b = (axis + 1) % 3;
-                    o[b] = if rng.unit() < 0.5 { lo[b] } else { hi[b] };
-                    d[b] = 0.0;
-                }
-                if let Ok(ray) = Ray::new(o, d) {
-                    check_ray(&w, &world_only, &grid, &ray);
-                }
-            }
-        }
+        let entity_hits: usize = scene_rays(&w, &mut rng, 1500)
+            .iter()
+            .map(|ray| usize::from(check_ray(&w, &world_only, &grid, ray)))
+            .sum();
         assert!(entity_hits > 100, "seed {seed}: only {entity_hits} entity hits");
         // After growth, the same again.
         let mut w2 = w.clone();
@@ -290,6 +298,28 @@ fn rays_through_entity_scenes_match_brute_force_and_the_methods_agree() {
         assert_aadf_valid(&raw, &w2, "scene after growth");
         for ray in rays(size.voxels(), &mut rng, 300) {
             check_ray(&w2, &world_only, &grid, &ray);
+        }
+    }
+}
+
+/// Every method traces a slice of rays ([`Tracer::trace_many`], whose instance walks go as
+/// batches, coherent groups and the rest apart) to exactly what it traces ray by ray
+/// (which the test above holds to brute force), steps included; the rays cover the scene's
+/// adversarial cases, and slices of every length split them differently.
+#[test]
+fn tracing_slices_of_rays_gives_what_tracing_each_gives() {
+    for seed in 0..3u64 {
+        let size = common::size_for(seed, &[[64, 64, 64], [128, 64, 64]]);
+        let (_, w) = scene(size, seed, 4, 12);
+        let rays = scene_rays(&w, &mut Rng(seed + 7), 2000);
+        for method in Method::ALL {
+            let tracer = Tracer::new(&w, method).unwrap();
+            let one_by_one: Vec<Option<Hit>> = rays.iter().map(|r| tracer.trace(r)).collect();
+            assert!(one_by_one.iter().flatten().filter(|h| h.entity.is_some()).count() > 100);
+            for slice in [rays.len(), 1, 15, 1000, 1025] {
+                let sliced: Vec<Option<Hit>> = rays.chunks(slice).flat_map(|c| tracer.trace_many(c)).collect();
+                assert!(sliced == one_by_one, "{method:?}, slices of {slice}: results differ");
+            }
         }
     }
 }

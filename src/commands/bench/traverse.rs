@@ -69,17 +69,23 @@ struct TraverseReport {
     mismatches: usize,
 }
 
+/// Rays a worker traces at a time ([`Tracer::trace_many`]), as a renderer hands them over.
+const SLICE: usize = 4096;
+
+/// Traces `rays` on the worker threads, a slice at a time.
+fn trace_slices(tracer: &Tracer, rays: &[Ray]) -> Vec<Option<Hit>> {
+    rays.par_chunks(SLICE).flat_map_iter(|c| tracer.trace_many(c)).collect()
+}
+
 /// Traces `rays` `repeat` times; returns the best Mrays/s, the hits and mean steps.
 fn time_rays(tracer: &Tracer, rays: &[Ray], repeat: u32) -> (f64, Vec<Option<Hit>>, f64) {
     // Warm caches and the thread pool.
-    rays.par_iter().take(rays.len() / 20).for_each(|r| {
-        std::hint::black_box(tracer.trace(r));
-    });
+    std::hint::black_box(trace_slices(tracer, &rays[..rays.len() / 20]));
     let mut best = f64::INFINITY;
     let mut hits = Vec::new();
     for _ in 0..repeat.max(1) {
         let t0 = Instant::now();
-        hits = rays.par_iter().map(|r| tracer.trace(r)).collect();
+        hits = trace_slices(tracer, rays);
         best = best.min(t0.elapsed().as_secs_f64());
     }
     // Steps of missed rays are not reported by the tracer; count hits only.
@@ -110,7 +116,7 @@ pub fn run(a: TraverseArgs) -> Result<()> {
         let (report, _) = measure(&crowded, &a, Some(secondary.clone()))?;
         let primary = primary_rays(&fixed_cameras(world.size()), a.width, a.height);
         let cost = EntityCost::measure(&world, &crowded, [&primary, &secondary], a.rounds)?;
-        report_walk(&world, &crowded, [&primary, &secondary]);
+        report_walk(&world, &crowded, [&primary, &secondary])?;
         Some((report, cost))
     } else {
         None
@@ -225,8 +231,15 @@ impl EntityCost {
 /// Traces every ray once, in parallel, keeping only a checksum so the work is not elided.
 fn trace_all(tracer: &Tracer, rays: &[Ray]) {
     let steps: u64 = rays
-        .par_iter()
-        .map(|r| tracer.trace(r).map_or(0, |h| u64::from(h.steps)))
+        .par_chunks(SLICE)
+        .map(|c| {
+            tracer
+                .trace_many(c)
+                .iter()
+                .flatten()
+                .map(|h| u64::from(h.steps))
+                .sum::<u64>()
+        })
         .sum();
     std::hint::black_box(steps);
 }
@@ -283,29 +296,34 @@ fn report_instances(world: &World) -> Result<()> {
 }
 
 /// Where the entity cost of a ray comes from: on one thread, over `sets`, the time a ray
-/// takes through `plain` (no entities) and through `crowded`, against the time the walk
-/// through `crowded`'s instance hierarchy alone takes over the ray's span (from where it
-/// enters the world to its static hit or where it leaves), over an empty span (only the
-/// nodes around the origin), and the loop around the calls; the median of 7 rounds, the
+/// takes through `plain` (no entities) and through `crowded`, traced one by one and in
+/// slices ([`Tracer::trace_many`]), against the time the walk through `crowded`'s instance
+/// hierarchy alone takes over the rays' spans (from where each enters the world to its
+/// static hit or where it leaves), ray by ray and as batches; the median of 7 rounds, the
 /// five alternated.
-fn report_walk(plain: &World, crowded: &World, sets: [&[Ray]; 2]) {
+fn report_walk(plain: &World, crowded: &World, sets: [&[Ray]; 2]) -> Result<()> {
     use naadf_world::entity::bvh::Bvh;
-    use naadf_world::traverse::trace_naadf;
+    use naadf_world::entity::bvh::batch::{Scratch, WalkRay};
     let bvh = Bvh::build(&naadf_world::entity::instance_boxes(crowded.entity_instances()));
     let dims = plain.size().voxels();
-    // Each ray's origin, 1/d and span; rays that miss the world are left out.
-    let spans: Vec<([f64; 3], [f64; 3], f64, f64)> = sets
+    let [plain, crowded] = [Tracer::new(plain, Method::Naadf)?, Tracer::new(crowded, Method::Naadf)?];
+    let rays: Vec<Ray> = sets.iter().flat_map(|rays| rays.iter().copied()).collect();
+    // Each ray's walk over its span; rays that miss the world are left out.
+    let walks: Vec<WalkRay> = rays
         .iter()
-        .flat_map(|rays| rays.iter())
         .filter_map(|r| {
             let (lo, hi) = r.span_in(dims)?;
-            let end = trace_naadf(plain, r).map_or(hi, |h| h.t);
-            Some((r.origin(), r.dir().map(|v| 1.0 / v), lo, end))
+            let end = plain.trace(r).map_or(hi, |h| h.t);
+            Some(WalkRay::new(r.origin(), r.dir(), lo, end))
         })
         .collect();
-    let rays: Vec<&Ray> = sets.iter().flat_map(|rays| rays.iter()).collect();
-    // The rays' hits through `world` (counted, so that the traces are not elided).
-    let hits_through = |world: &World| rays.iter().filter(|r| trace_naadf(world, r).is_some()).count() as u64;
+    // Hits counted, so that the traces are not elided.
+    let one_by_one = |t: &Tracer| rays.iter().filter(|r| t.trace(r).is_some()).count() as u64;
+    let in_slices = |t: &Tracer| {
+        rays.chunks(SLICE)
+            .map(|c| t.trace_many(c).iter().flatten().count() as u64)
+            .sum::<u64>()
+    };
     // Nanoseconds per item of `n` that `work` takes.
     let ns_per = |n: usize, work: &mut dyn FnMut()| {
         let t = Instant::now();
@@ -314,37 +332,38 @@ fn report_walk(plain: &World, crowded: &World, sets: [&[Ray]; 2]) {
     };
     let mut times: [Vec<f64>; 5] = Default::default();
     let mut sink = 0u64;
+    let mut scratch = Scratch::default();
     for _ in 0..7 {
-        times[0].push(ns_per(rays.len(), &mut || sink += hits_through(plain)));
-        times[1].push(ns_per(spans.len(), &mut || {
-            for &(o, inv, lo, hi) in &spans {
-                bvh.crossing(o, inv, lo, hi, |k| sink += u64::from(k));
+        times[0].push(ns_per(rays.len(), &mut || sink += in_slices(&plain)));
+        times[1].push(ns_per(walks.len(), &mut || {
+            for w in &walks {
+                bvh.crossing(w, |k| sink += u64::from(k));
             }
         }));
-        times[2].push(ns_per(spans.len(), &mut || {
-            for &(o, inv, lo, _) in &spans {
-                bvh.crossing(o, inv, lo, lo, |k| sink += u64::from(k));
+        times[2].push(ns_per(walks.len(), &mut || {
+            for c in walks.chunks(SLICE) {
+                bvh.crossing_many(c, &mut scratch, |i, k| sink += u64::from(i ^ k));
             }
         }));
-        times[3].push(ns_per(spans.len(), &mut || {
-            for &(o, inv, lo, hi) in &spans {
-                sink += std::hint::black_box(o[0] + inv[1] + lo + hi) as u64;
-            }
-        }));
-        times[4].push(ns_per(rays.len(), &mut || sink += hits_through(crowded)));
+        times[3].push(ns_per(rays.len(), &mut || sink += one_by_one(&crowded)));
+        times[4].push(ns_per(rays.len(), &mut || sink += in_slices(&crowded)));
     }
     std::hint::black_box(sink);
-    let [world_ray, walk, empty, around, crowded_ray] = times.map(|mut v| {
+    let [world_ray, walk, walk_many, crowded_ray, crowded_many] = times.map(|mut v| {
         v.sort_by(f64::total_cmp);
         v[3]
     });
+    let more = |t: f64| 100.0 * (t - world_ray) / world_ray;
     eprintln!(
-        "one thread, ns per ray (median of 7): a ray through the world without entities {world_ray:.1}, \
-         with them {crowded_ray:.1} ({:.1} % more); the instance hierarchy's walk alone over the ray's span {walk:.1} ({:.1} % of that ray), \
-         over an empty span {empty:.1}; the loop around the calls {around:.1}",
-        100.0 * (crowded_ray - world_ray) / world_ray,
-        100.0 * (walk - around) / world_ray
+        "one thread, ns per ray (median of 7): without entities {world_ray:.1}; with them {crowded_ray:.1} one by one ({:.1} % more), \
+         {crowded_many:.1} in slices of {SLICE} ({:.1} % more); the hierarchy's walk alone over the rays' spans {walk:.1} ray by ray \
+         ({:.1} % of a ray without entities), {walk_many:.1} in batches ({:.1} %)",
+        more(crowded_ray),
+        more(crowded_many),
+        100.0 * walk / world_ray,
+        100.0 * walk_many / world_ray
     );
+    Ok(())
 }
 
 /// Moves every entity of `world` to `to(its position)`, rotation kept, in one batch;

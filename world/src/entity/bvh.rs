@@ -18,6 +18,10 @@
 //! padded by [`F32_PAD`], so that a test in `f32` arithmetic never rejects a box the exact
 //! one would enter.
 
+pub mod batch;
+
+use batch::WalkRay;
+
 /// An axis-aligned box `(lo, hi)`.
 pub type Aabb = ([f64; 3], [f64; 3]);
 
@@ -111,21 +115,11 @@ fn lane_max(a: f32, b: f32) -> f32 {
     if a > b { a } else { b }
 }
 
-/// `inv_d` in `f32`, kept finite: an axis the ray does not move along gets ±[`FAR`], which
-/// puts every plane of it at ± far beyond the ray's reach unless the origin lies on it.
-#[inline]
-fn finite_f32(inv_d: [f64; 3]) -> [f32; 3] {
-    inv_d.map(|v| {
-        let i = v as f32;
-        if i.is_finite() { i } else { FAR.copysign(i) }
-    })
-}
-
 impl Bvh {
     /// The hierarchy over `boxes`.
     ///
     /// ```
-    /// use naadf_world::entity::bvh::Bvh;
+    /// use naadf_world::entity::bvh::{Bvh, batch::WalkRay};
     /// // A row of 100 unit boxes, 10 apart along x.
     /// let boxes: Vec<_> = (0..100).map(|i| {
     ///     let x = 10.0 * f64::from(i);
@@ -134,8 +128,8 @@ impl Bvh {
     /// let bvh = Bvh::build(&boxes);
     /// let mut met = Vec::new();
     /// // A ray along +z through the first box finds it alone.
-    /// let inv_d = [f64::INFINITY, f64::INFINITY, 1.0];
-    /// bvh.crossing([0.5, 0.5, -1.0], inv_d, 0.0, 100.0, |i| met.push(i));
+    /// let ray = WalkRay::new([0.5, 0.5, -1.0], [0.0, 0.0, 1.0], 0.0, 100.0);
+    /// bvh.crossing(&ray, |i| met.push(i));
     /// assert_eq!(met, [0]);
     /// ```
     pub fn build(boxes: &[Aabb]) -> Self {
@@ -251,33 +245,22 @@ impl Bvh {
         1.0 + inner / half_area(&root_box)
     }
 
-    /// Calls `visit` once with every primitive whose box the ray `o + t·d` (`inv_d` = 1/d
-    /// per axis) is inside at some `t` in `[t_lo, t_hi]`, in no particular order, and
-    /// perhaps with a few more whose boxes it passes within [`F32_PAD`] (the caller tests
-    /// each exactly anyway). Boxes are tested in `f32`, four at a time.
-    pub fn crossing(&self, o: [f64; 3], inv_d: [f64; 3], t_lo: f64, t_hi: f64, mut visit: impl FnMut(u32)) {
+    /// Calls `visit` once with every primitive whose box `ray` is inside at some time in its
+    /// window, in no particular order, and perhaps with a few more whose boxes it passes
+    /// within [`F32_PAD`] (the caller tests each exactly anyway). Boxes are tested in
+    /// `f32`, four at a time. For many rays at once, [`Bvh::crossing_many`] gives the same
+    /// answers for less work.
+    pub fn crossing(&self, ray: &WalkRay, mut visit: impl FnMut(u32)) {
         if self.nodes.is_empty() {
             return;
         }
-        let o = o.map(|v| v as f32);
-        let inv = finite_f32(inv_d);
-        // The window in f32, widened by more than its rounding.
-        let (t_lo, t_hi) = ((t_lo as f32) - 1e-3, (t_hi as f32) * (1.0 + 1e-6) + 1e-3);
+        let (o, inv, t_lo, t_hi) = ray.parts();
         let mut stack = [0u32; STACK];
         let mut sp = 1;
         while sp > 0 {
             sp -= 1;
             let n = &self.nodes[stack[sp] as usize];
-            let mut near = [t_lo; WIDTH];
-            let mut far = [t_hi; WIDTH];
-            for a in 0..3 {
-                for l in 0..WIDTH {
-                    let t0 = (n.lo[a][l] - o[a]) * inv[a];
-                    let t1 = (n.hi[a][l] - o[a]) * inv[a];
-                    near[l] = lane_max(near[l], lane_min(t0, t1));
-                    far[l] = lane_min(far[l], lane_max(t0, t1));
-                }
-            }
+            let (near, far) = batch::lanes(n, o, inv, t_lo, t_hi);
             for l in 0..WIDTH {
                 let c = n.child[l];
                 if near[l] > far[l] || c == NO_CHILD {
@@ -609,7 +592,7 @@ mod tests {
             let bvh = Bvh::build(&boxes);
             let inv_d = d.map(|v| 1.0 / v);
             let mut met = Vec::new();
-            bvh.crossing(o, inv_d, t_lo, t_lo + len, |p| met.push(p));
+            bvh.crossing(&WalkRay::new(o, d, t_lo, t_lo + len), |p| met.push(p));
             met.sort_unstable();
             let once = met.windows(2).all(|w| w[0] < w[1]);
             prop_assert!(once, "{:?}", met);
@@ -665,13 +648,9 @@ mod tests {
         let bvh = Bvh::build(&boxes);
         assert!(bvh.node_count() < 600, "{} nodes", bvh.node_count());
         let mut met = Vec::new();
-        bvh.crossing(
-            [1.0, 1.0, -10.0],
-            [f64::INFINITY, f64::INFINITY, 1.0],
-            0.0,
-            1000.0,
-            |p| met.push(p),
-        );
+        bvh.crossing(&WalkRay::new([1.0, 1.0, -10.0], [0.0, 0.0, 1.0], 0.0, 1000.0), |p| {
+            met.push(p)
+        });
         met.sort_unstable();
         assert_eq!(met, (0..10).map(|k| k * 100).collect::<Vec<u32>>());
     }
@@ -706,7 +685,7 @@ mod tests {
             let d = [1.0, 0.3, 0.2];
             let inv = d.map(|v| 1.0 / v);
             let mut met = Vec::new();
-            refit.crossing(o, inv, 0.0, 400.0, |i| met.push(i));
+            refit.crossing(&WalkRay::new(o, d, 0.0, 400.0), |i| met.push(i));
             for (i, b) in after.iter().enumerate() {
                 if slab(o, inv, b.0, b.1, 0.0, 400.0).is_some() {
                     assert!(met.contains(&(i as u32)), "ray {k} misses box {i}");

@@ -21,11 +21,34 @@
 //! hierarchy nor the order changes the result, only the work.
 
 use super::ray::{End, Hit, Ray, Visit, walk};
+use crate::entity::bvh::batch::{BATCH, Scratch, WalkRay};
 use crate::entity::pack::{InstanceRecord, rotate};
 use crate::entity::set::InstanceSet;
 use crate::entity::{ENTITY_SOLID, TYPE_ALIGN};
 use crate::world::World;
 use smallvec::SmallVec;
+use std::cell::RefCell;
+
+/// What a method's world loop leaves to the instance test.
+pub(crate) enum WorldPart {
+    /// The final result: no instance can change it (the ray missed the world, ran out of
+    /// steps, or asks only whether anything is in the way and hit the world).
+    Done(Option<Hit>),
+    /// The world's hit, if any, and the ray's span in the world (from `t_entry` to the hit
+    /// or to where it leaves), over which a nearer instance may lie; `steps` the cells the
+    /// world loop visited.
+    Open {
+        world: Option<Hit>,
+        t_entry: f64,
+        t_end: f64,
+        steps: u32,
+    },
+}
+
+thread_local! {
+    /// The lists a batch walk of the hierarchy fills, kept per thread between batches.
+    static SCRATCH: RefCell<Scratch> = RefCell::default();
+}
 
 /// What a ray test reads: the instances (records, boxes and hierarchy) and the entity
 /// types' voxels.
@@ -62,20 +85,73 @@ impl OwnedEntities {
 }
 
 impl<'a> EntityView<'a> {
-    /// The final result of a trace: `world` (the world loop's hit, if any, ending at
-    /// `t_end`; else `t_end` is where the ray left the world), or a nearer entity hit.
-    /// `t_entry` is when the ray entered the world and `steps` the cells the world loop
-    /// visited; the entity cells visited are added.
-    pub fn resolve(&self, ray: &Ray, world: Option<Hit>, t_entry: f64, t_end: f64, steps: u32) -> Option<Hit> {
+    /// The final result of a trace: the world loop's `part`, or a nearer entity hit (the
+    /// entity cells visited are added to the steps).
+    pub fn resolve(&self, ray: &Ray, part: WorldPart) -> Option<Hit> {
+        let (world, t_entry, t_end, steps) = match part {
+            WorldPart::Done(hit) => return hit,
+            WorldPart::Open {
+                world,
+                t_entry,
+                t_end,
+                steps,
+            } => (world, t_entry, t_end, steps),
+        };
         let mut crossed = Crossed::new(self, ray, t_entry, t_end);
-        let inv_d = crossed.inv_d;
-        self.set
-            .bvh
-            .crossing(ray.origin(), inv_d, t_entry, t_end, |k| crossed.offer(k));
+        let walk = WalkRay::new(ray.origin(), ray.dir(), t_entry, t_end);
+        self.set.bvh.crossing(&walk, |k| crossed.offer(k));
         if crossed.list.is_empty() {
             return world;
         }
         self.nearest(ray, world, crossed, steps)
+    }
+
+    /// [`EntityView::resolve`] for each ray of `rays` and its world part (`part` of the
+    /// ray), the rays' walks of the hierarchy made in batches
+    /// ([`crate::entity::bvh::batch`]).
+    pub fn resolve_many(&self, rays: &[Ray], part: impl Fn(&Ray) -> WorldPart) -> Vec<Option<Hit>> {
+        let mut out = Vec::with_capacity(rays.len());
+        let mut walks = Vec::with_capacity(BATCH.min(rays.len()));
+        let mut open = Vec::with_capacity(BATCH.min(rays.len()));
+        let mut found: Vec<(u32, u32)> = Vec::new();
+        for batch in rays.chunks(BATCH) {
+            let first = out.len();
+            walks.clear();
+            open.clear();
+            found.clear();
+            for ray in batch {
+                match part(ray) {
+                    WorldPart::Done(hit) => out.push(hit),
+                    WorldPart::Open {
+                        world,
+                        t_entry,
+                        t_end,
+                        steps,
+                    } => {
+                        walks.push(WalkRay::new(ray.origin(), ray.dir(), t_entry, t_end));
+                        open.push((out.len(), t_entry, t_end, steps));
+                        out.push(world);
+                    }
+                }
+            }
+            SCRATCH.with_borrow_mut(|scratch| {
+                self.set.bvh.crossing_many(&walks, scratch, |j, k| found.push((j, k)));
+            });
+            found.sort_unstable();
+            // Each open ray's instances, in the order of `open`.
+            for run in found.chunk_by(|a, b| a.0 == b.0) {
+                let (at, t_entry, t_end, steps) = open[run[0].0 as usize];
+                let ray = &batch[at - first];
+                let mut crossed = Crossed::new(self, ray, t_entry, t_end);
+                for &(_, k) in run {
+                    crossed.offer(k);
+                }
+                if !crossed.list.is_empty() {
+                    out[at] = self.nearest(ray, out[at], crossed, steps);
+                }
+            }
+        }
+        out
     }
 
     /// The nearest hit among `world` and the instances `crossed` found.

@@ -1,6 +1,6 @@
 //! The dense-grid oracle: Amanatides–Woo over a full decode of the world.
 
-use super::entities::OwnedEntities;
+use super::entities::{OwnedEntities, WorldPart};
 use super::ray::{End, Hit, Ray, Visit, walk};
 use crate::error::WorldError;
 use crate::world::World;
@@ -53,20 +53,40 @@ impl DenseGrid {
     /// Traces `ray` one voxel at a time, then against the entities whose boxes it crosses
     /// (as every method does: see [`crate::entity`]).
     pub fn trace(&self, ray: &Ray) -> Option<Hit> {
-        let walk = walk(ray, self.size, |cell, _| match self.get(cell.map(|v| v as u32)) {
+        let part = self.world_part(ray);
+        match &self.entities {
+            Some(ents) => ents.view().resolve(ray, part),
+            None => match part {
+                WorldPart::Done(hit) | WorldPart::Open { world: hit, .. } => hit,
+            },
+        }
+    }
+
+    /// [`DenseGrid::trace`] for each of `rays`, the instance test made for all at once.
+    pub fn trace_many(&self, rays: &[Ray]) -> Vec<Option<Hit>> {
+        match &self.entities {
+            Some(ents) => ents.view().resolve_many(rays, |r| self.world_part(r)),
+            None => rays.iter().map(|r| self.trace(r)).collect(),
+        }
+    }
+
+    /// The walk through the grid: its hit and the ray's span in the world.
+    fn world_part(&self, ray: &Ray) -> WorldPart {
+        let Some(walk) = walk(ray, self.size, |cell, _| match self.get(cell.map(|v| v as u32)) {
             0 => Visit::Empty,
             m => Visit::Solid(m),
-        })?;
-        let Some(ents) = &self.entities else {
-            return match walk.end {
-                End::Hit(h) => Some(h),
-                _ => None,
-            };
+        }) else {
+            return WorldPart::Done(None);
         };
         let (world, t_end, steps) = match walk.end {
             End::Hit(h) => (Some(h), h.t, h.steps),
             End::Left { t, steps } | End::Stopped { t, steps } => (None, t, steps),
         };
-        ents.view().resolve(ray, world, walk.entry_t, t_end, steps)
+        WorldPart::Open {
+            world,
+            t_entry: walk.entry_t,
+            t_end,
+            steps,
+        }
     }
 }

@@ -1,5 +1,6 @@
 //! Traversal of the chunk → block → voxel hierarchy, with or without AADF jumps.
 
+use super::entities::WorldPart;
 use super::ray::{Hit, Ray};
 use crate::cell::{self, Aadf, CELL_FIELD_BITS, CHUNK_FIELD_BITS, State};
 use crate::world::World;
@@ -55,16 +56,39 @@ fn trace<const DF: bool, const ANY: bool>(world: &World, ray: &Ray) -> Option<Hi
     let Some(view) = world.entity_view() else {
         return world_loop::<DF, false>(world, ray, &mut (0.0, 0.0, 0));
     };
+    view.resolve(ray, world_part::<DF, ANY>(world, ray))
+}
+
+/// [`trace`] (without `ANY`) for each of `rays`, the instance test made for all at once.
+pub(crate) fn trace_many<const DF: bool>(world: &World, rays: &[Ray]) -> Vec<Option<Hit>> {
+    let Some(view) = world.entity_view() else {
+        return rays.iter().map(|r| trace::<DF, false>(world, r)).collect();
+    };
+    view.resolve_many(rays, |r| world_part::<DF, false>(world, r))
+}
+
+/// The world loop's part of a trace through a world with entities.
+#[inline(always)]
+fn world_part<const DF: bool, const ANY: bool>(world: &World, ray: &Ray) -> WorldPart {
     let mut span = (f64::NAN, f64::NAN, 0);
     let hit = world_loop::<DF, true>(world, ray, &mut span);
-    let (t_entry, t_end, steps) = match hit {
-        Some(h) if ANY => return Some(h),
-        Some(h) => (span.0, h.t, h.steps),
+    match hit {
+        Some(h) if ANY => WorldPart::Done(Some(h)),
+        Some(h) => WorldPart::Open {
+            world: hit,
+            t_entry: span.0,
+            t_end: h.t,
+            steps: h.steps,
+        },
         // Missed the world, or ran out of steps.
-        None if span.1.is_nan() => return None,
-        None => span,
-    };
-    view.resolve(ray, hit, t_entry, t_end, steps)
+        None if span.1.is_nan() => WorldPart::Done(None),
+        None => WorldPart::Open {
+            world: None,
+            t_entry: span.0,
+            t_end: span.1,
+            steps: span.2,
+        },
+    }
 }
 
 /// The hierarchical DDA through the static world: the world hit, if any. With `ENT`, it

@@ -1,0 +1,376 @@
+//! Walks of many rays at once ([`Bvh::crossing_many`]): the same answers as
+//! [`Bvh::crossing`] ray by ray, for less work per ray.
+//!
+//! One ray's walk is a chain of dependent steps (load a node, test its four boxes, branch on
+//! each, pop the next), and for incoherent rays those branches are guesses the processor
+//! often gets wrong. A batch is walked instead:
+//! - **Coherent groups** ([`GROUP`] consecutive rays from one origin, moving the same way on
+//!   every axis, such as neighbouring camera rays) walk the tree once per group, each node
+//!   tested against the interval that bounds the group's rays: a group may enter a node
+//!   only if that interval enters it. At an instance, each ray of the group is tested on
+//!   its own.
+//! - **The other rays** descend together, breadth by node: at each node every ray of the
+//!   node's list is tested against the four boxes and appended, without a branch, to the
+//!   list of each child it enters. The tests of different rays do not wait on each other,
+//!   and the only branches left are per node, not per ray.
+//!
+//! Both find, for each ray, exactly the instances whose `f32` lane box the ray enters
+//! within its window: a parent's box holds its children's, so a ray that enters a leaf's
+//! box entered every box above it, and the per-ray test at the leaf is the one
+//! [`Bvh::crossing`] makes.
+
+use super::{Bvh, FAR, LEAF, NO_CHILD, Node, STACK, WIDTH, lane_max, lane_min};
+
+/// Rays a batch holds at most: [`Bvh::crossing_many`] takes longer slices in runs of this
+/// many. (Lists of a few thousand entries per level stay in the processor's caches.)
+pub const BATCH: usize = 1024;
+// The list walk writes one list per lane by name.
+const _: () = assert!(WIDTH == 4 && BATCH.is_power_of_two());
+/// Consecutive rays tested as one group when they are coherent.
+pub const GROUP: usize = 16;
+
+/// One ray as a walk reads it, in `f32`: its origin, `1/d` kept finite, and the window of
+/// times to look in, widened by more than its rounding.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[repr(C)]
+pub struct WalkRay {
+    o: [f32; 3],
+    inv: [f32; 3],
+    t_lo: f32,
+    t_hi: f32,
+}
+
+impl WalkRay {
+    /// The ray `o + t·d` over the times `[t_lo, t_hi]`.
+    #[inline]
+    pub fn new(o: [f64; 3], d: [f64; 3], t_lo: f64, t_hi: f64) -> Self {
+        WalkRay {
+            o: o.map(|v| v as f32),
+            // In `f32` from the start: the boxes' padding (`F32_PAD`) covers the rounding.
+            // An axis the ray does not move along gets ±FAR, which puts every plane of it
+            // at ± far beyond the ray's reach unless the origin lies on it.
+            inv: d.map(|v| {
+                let i = 1.0 / v as f32;
+                if i.is_finite() { i } else { FAR.copysign(i) }
+            }),
+            t_lo: (t_lo as f32) - 1e-3,
+            t_hi: (t_hi as f32) * (1.0 + 1e-6) + 1e-3,
+        }
+    }
+
+    /// The ray's fields, for a loop that keeps them in registers.
+    #[inline(always)]
+    pub(super) fn parts(&self) -> ([f32; 3], [f32; 3], f32, f32) {
+        (self.o, self.inv, self.t_lo, self.t_hi)
+    }
+
+    /// The times at which the ray enters and leaves each lane's box of `n` (within its
+    /// window); it meets lane `l` unless `near[l] > far[l]`.
+    #[inline(always)]
+    pub(super) fn lanes(&self, n: &Node) -> ([f32; WIDTH], [f32; WIDTH]) {
+        lanes(n, self.o, self.inv, self.t_lo, self.t_hi)
+    }
+}
+
+/// [`WalkRay::lanes`] for a ray given by its fields.
+#[inline(always)]
+pub(super) fn lanes(n: &Node, o: [f32; 3], inv: [f32; 3], t_lo: f32, t_hi: f32) -> ([f32; WIDTH], [f32; WIDTH]) {
+    let mut near = [t_lo; WIDTH];
+    let mut far = [t_hi; WIDTH];
+    for a in 0..3 {
+        for l in 0..WIDTH {
+            let t0 = (n.lo[a][l] - o[a]) * inv[a];
+            let t1 = (n.hi[a][l] - o[a]) * inv[a];
+            near[l] = lane_max(near[l], lane_min(t0, t1));
+            far[l] = lane_min(far[l], lane_max(t0, t1));
+        }
+    }
+    (near, far)
+}
+
+/// What a walk of a batch keeps between calls: one list of rays per child lane and level.
+#[derive(Default)]
+pub struct Scratch {
+    levels: Vec<[Vec<u32>; WIDTH]>,
+    incoherent: Vec<u32>,
+}
+
+/// The box that holds every ray of a group: each field's lowest and highest value.
+struct Interval {
+    lo: WalkRay,
+    hi: WalkRay,
+}
+
+impl Interval {
+    /// The group's bounds if it is coherent (one origin, the same signs of `1/d`), which
+    /// keeps them tight enough to be worth testing.
+    fn of(group: &[WalkRay]) -> Option<Self> {
+        let first = group.first()?;
+        let (mut lo, mut hi) = (*first, *first);
+        for r in &group[1..] {
+            for a in 0..3 {
+                if r.o[a] != first.o[a] || (r.inv[a] > 0.0) != (first.inv[a] > 0.0) {
+                    return None;
+                }
+                lo.inv[a] = lane_min(lo.inv[a], r.inv[a]);
+                hi.inv[a] = lane_max(hi.inv[a], r.inv[a]);
+            }
+            lo.t_lo = lane_min(lo.t_lo, r.t_lo);
+            hi.t_hi = lane_max(hi.t_hi, r.t_hi);
+        }
+        Some(Interval { lo, hi })
+    }
+
+    /// Whether some ray of the group may meet each lane's box of `n`: the lanes' entry and
+    /// exit times bounded over the group, as in [`WalkRay::lanes`]. With one origin, each
+    /// plane's time `(p − o)·inv` is monotone in `inv`, so its bounds are the two ends.
+    #[inline(always)]
+    fn lanes(&self, n: &Node) -> ([f32; WIDTH], [f32; WIDTH]) {
+        let mut near = [self.lo.t_lo; WIDTH];
+        let mut far = [self.hi.t_hi; WIDTH];
+        for a in 0..3 {
+            let (o, i0, i1) = (self.lo.o[a], self.lo.inv[a], self.hi.inv[a]);
+            for l in 0..WIDTH {
+                let (p0, p1) = (n.lo[a][l] - o, n.hi[a][l] - o);
+                let (a0, b0) = (p0 * i0, p0 * i1);
+                let (a1, b1) = (p1 * i0, p1 * i1);
+                let low = lane_min(lane_min(a0, b0), lane_min(a1, b1));
+                let high = lane_max(lane_max(a0, b0), lane_max(a1, b1));
+                near[l] = lane_max(near[l], low);
+                far[l] = lane_min(far[l], high);
+            }
+        }
+        (near, far)
+    }
+}
+
+impl Bvh {
+    /// Calls `visit(i, k)` once for every ray `i` of `rays` and every primitive `k` that
+    /// [`Bvh::crossing`] would give that ray, in no particular order.
+    ///
+    /// ```
+    /// use naadf_world::entity::bvh::{Bvh, batch::{Scratch, WalkRay}};
+    /// let boxes: Vec<_> = (0..100).map(|i| {
+    ///     let x = 10.0 * f64::from(i);
+    ///     ([x, 0.0, 0.0], [x + 1.0, 1.0, 1.0])
+    /// }).collect();
+    /// let bvh = Bvh::build(&boxes);
+    /// // Rays along +z through boxes 0, 1 and 2.
+    /// let rays: Vec<_> = (0..3)
+    ///     .map(|i| WalkRay::new([10.0 * f64::from(i) + 0.5, 0.5, -1.0], [0.0, 0.0, 1.0], 0.0, 100.0))
+    ///     .collect();
+    /// let mut met = Vec::new();
+    /// bvh.crossing_many(&rays, &mut Scratch::default(), |i, k| met.push((i, k)));
+    /// met.sort();
+    /// assert_eq!(met, [(0, 0), (1, 1), (2, 2)]);
+    /// ```
+    pub fn crossing_many(&self, rays: &[WalkRay], scratch: &mut Scratch, mut visit: impl FnMut(u32, u32)) {
+        if self.nodes.is_empty() {
+            return;
+        }
+        for (b, batch) in rays.chunks(BATCH).enumerate() {
+            let base = (b * BATCH) as u32;
+            scratch.incoherent.clear();
+            for (g, group) in batch.chunks(GROUP).enumerate() {
+                let first = (g * GROUP) as u32;
+                match Interval::of(group) {
+                    Some(bounds) if group.len() > 1 => {
+                        self.group_walk(group, &bounds, &mut |i, k| visit(base + first + i, k));
+                    }
+                    _ => scratch.incoherent.extend(first..first + group.len() as u32),
+                }
+            }
+            if !scratch.incoherent.is_empty() {
+                let ids = std::mem::take(&mut scratch.incoherent);
+                self.list_walk(0, batch, &ids, 0, &mut scratch.levels, &mut |i, k| visit(base + i, k));
+                scratch.incoherent = ids;
+            }
+        }
+    }
+
+    /// One walk for a coherent group; each instance a lane leads to is tested per ray.
+    fn group_walk(&self, group: &[WalkRay], bounds: &Interval, visit: &mut impl FnMut(u32, u32)) {
+        let mut stack = [0u32; STACK];
+        let mut sp = 1;
+        while sp > 0 {
+            sp -= 1;
+            let n = &self.nodes[stack[sp] as usize];
+            let (near, far) = bounds.lanes(n);
+            for l in 0..WIDTH {
+                let c = n.child[l];
+                if near[l] > far[l] || c == NO_CHILD {
+                    continue;
+                }
+                if c & LEAF == 0 {
+                    stack[sp] = c;
+                    sp += 1;
+                    continue;
+                }
+                for (i, r) in group.iter().enumerate() {
+                    let (near, far) = r.lanes(n);
+                    if near[l] <= far[l] {
+                        visit(i as u32, c & !LEAF);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Node `at` for the rays `ids` of `batch`, then its children for the rays that enter
+    /// them; `levels[depth]` holds the lists this level fills.
+    fn list_walk(
+        &self,
+        at: usize,
+        batch: &[WalkRay],
+        ids: &[u32],
+        depth: usize,
+        levels: &mut Vec<[Vec<u32>; WIDTH]>,
+        visit: &mut impl FnMut(u32, u32),
+    ) {
+        let n = &self.nodes[at];
+        if levels.len() <= depth {
+            levels.push(std::array::from_fn(|_| vec![0; BATCH]));
+        }
+        let mut lists = std::mem::take(&mut levels[depth]);
+        let len = {
+            // Each ray is written to every list and kept (the list's length moved past it)
+            // only by the lists of lanes it enters: no branch per ray and lane. Indices stay
+            // below `BATCH` (a power of two), which the mask tells the compiler.
+            let [l0, l1, l2, l3] = &mut lists;
+            let (l0, l1, l2, l3) = (&mut l0[..BATCH], &mut l1[..BATCH], &mut l2[..BATCH], &mut l3[..BATCH]);
+            let (mut n0, mut n1, mut n2, mut n3) = (0usize, 0usize, 0usize, 0usize);
+            for &i in ids {
+                let (near, far) = batch[i as usize].lanes(n);
+                l0[n0 & (BATCH - 1)] = i;
+                n0 += usize::from(near[0] <= far[0]);
+                l1[n1 & (BATCH - 1)] = i;
+                n1 += usize::from(near[1] <= far[1]);
+                l2[n2 & (BATCH - 1)] = i;
+                n2 += usize::from(near[2] <= far[2]);
+                l3[n3 & (BATCH - 1)] = i;
+                n3 += usize::from(near[3] <= far[3]);
+            }
+            [n0, n1, n2, n3].map(|v| v.min(ids.len()))
+        };
+        for l in 0..WIDTH {
+            let c = n.child[l];
+            if len[l] == 0 || c == NO_CHILD {
+                continue;
+            }
+            if c & LEAF != 0 {
+                for &i in &lists[l][..len[l]] {
+                    visit(i, c & !LEAF);
+                }
+            } else {
+                self.list_walk(c as usize, batch, &lists[l][..len[l]], depth + 1, levels, visit);
+            }
+        }
+        levels[depth] = lists;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::entity::bvh::Aabb;
+    use proptest::prelude::*;
+
+    /// Boxes of up to 12 voxels scattered over 100³.
+    fn boxes() -> impl Strategy<Value = Vec<Aabb>> {
+        prop::collection::vec(
+            (
+                prop::array::uniform3(0.0f64..100.0),
+                prop::array::uniform3(0.0f64..12.0),
+            ),
+            1..300,
+        )
+        .prop_map(|v| {
+            v.into_iter()
+                .map(|(lo, e)| (lo, std::array::from_fn(|k| lo[k] + e[k])))
+                .collect()
+        })
+    }
+
+    /// Rays in runs: some runs share an origin and turn a little from ray to ray (camera
+    /// rays, walked as groups), the rest start anywhere in any direction, axis-parallel
+    /// ones included.
+    fn rays() -> impl Strategy<Value = Vec<WalkRay>> {
+        let direction = prop::array::uniform3(prop_oneof![Just(0.0), -1.0f64..1.0])
+            .prop_filter("a direction", |d| d.iter().any(|&v| v != 0.0));
+        let run = (
+            prop::array::uniform3(-20.0f64..120.0),
+            direction,
+            any::<bool>(),
+            1usize..40,
+            0.0f64..30.0,
+            1.0f64..200.0,
+        )
+            .prop_map(|(o, d, fan, n, t_lo, len)| {
+                (0..n)
+                    .map(|k| {
+                        let turn = 0.01 * k as f64;
+                        let (o, d) = if fan {
+                            (o, [d[0] + turn, d[1], d[2] - turn])
+                        } else {
+                            (
+                                [o[0] + 7.0 * turn, o[1] * (1.0 - turn), o[2]],
+                                [d[1] - turn, d[2], d[0]],
+                            )
+                        };
+                        WalkRay::new(o, d, t_lo, t_lo + len)
+                    })
+                    .collect::<Vec<_>>()
+            });
+        prop::collection::vec(run, 1..80).prop_map(|runs| runs.concat())
+    }
+
+    proptest! {
+        /// A batch finds, for every ray, exactly the primitives the ray's own walk finds.
+        #[test]
+        fn a_batch_finds_what_each_rays_walk_finds(boxes in boxes(), rays in rays()) {
+            let bvh = Bvh::build(&boxes);
+            let mut each = Vec::new();
+            for (i, r) in rays.iter().enumerate() {
+                bvh.crossing(r, |k| each.push((i as u32, k)));
+            }
+            let mut batch = Vec::new();
+            bvh.crossing_many(&rays, &mut Scratch::default(), |i, k| batch.push((i, k)));
+            each.sort_unstable();
+            batch.sort_unstable();
+            prop_assert_eq!(batch, each);
+        }
+    }
+
+    /// A coherent group's interval bounds each of its rays' entry and exit times, so the
+    /// group enters every box one of its rays enters.
+    #[test]
+    fn a_groups_interval_holds_its_rays() {
+        let boxes: Vec<Aabb> = (0..64)
+            .map(|i| {
+                let lo = [
+                    f64::from(i % 4) * 20.0,
+                    f64::from(i / 4 % 4) * 20.0,
+                    f64::from(i / 16) * 20.0,
+                ];
+                (lo, lo.map(|v| v + 5.0))
+            })
+            .collect();
+        let bvh = Bvh::build(&boxes);
+        let group: Vec<WalkRay> = (0..GROUP)
+            .map(|k| WalkRay::new([-5.0, -3.0, -4.0], [1.0, 0.6 + 0.02 * k as f64, 0.8], 0.0, 500.0))
+            .collect();
+        let bounds = Interval::of(&group).expect("one origin and the same signs make a group");
+        for n in &bvh.nodes {
+            let (g_near, g_far) = bounds.lanes(n);
+            for r in &group {
+                let (near, far) = r.lanes(n);
+                for l in 0..WIDTH {
+                    assert!(g_near[l] <= near[l] && far[l] <= g_far[l]);
+                }
+            }
+        }
+        let mut apart = group.clone();
+        apart[3] = WalkRay::new([-5.0, -3.0, -4.5], [1.0, 0.6, 0.8], 0.0, 500.0);
+        assert!(Interval::of(&apart).is_none(), "two origins");
+    }
+}
