@@ -40,11 +40,11 @@ impl Bounds {
         (self.lo, self.hi)
     }
 
-    /// The first time in `[t_lo, t_hi]` at which the ray `o + t·d` (with `inv_d` = 1/d per
-    /// axis) is inside both boxes, if any: the world box first (cheap), then the oriented one.
+    /// The first time in `[t_lo, t_hi]` at which the ray `o + t·d` is inside the oriented
+    /// box, if any. (The world box needs no test here: it is what the hierarchy's lanes
+    /// hold, and the ray has entered it to be offered the instance.)
     #[inline]
-    pub fn entry(&self, o: [f64; 3], d: [f64; 3], inv_d: [f64; 3], t_lo: f64, t_hi: f64) -> Option<f64> {
-        let t_lo = slab(o, inv_d, self.lo, self.hi, t_lo, t_hi)?;
+    pub fn entry(&self, o: [f64; 3], d: [f64; 3], t_lo: f64, t_hi: f64) -> Option<f64> {
         let rel = [0, 1, 2].map(|a| o[a] - self.pos[a]);
         let dot = |r: [f64; 3], v: [f64; 3]| r[0] * v[0] + r[1] * v[1] + r[2] * v[2];
         let (o_local, d_local) = (self.to_local.map(|r| dot(r, rel)), self.to_local.map(|r| dot(r, d)));
@@ -143,9 +143,8 @@ mod tests {
                 if (0..3).all(|a| local[a] >= 0.0 && local[a] <= f64::from(size[a])) {
                     inside += 1;
                     let ray = Ray::new(p, [0; 3].map(|_| rng.unit() - 0.5)).unwrap();
-                    let inv_d = ray.dir().map(|v| 1.0 / v);
                     assert_eq!(
-                        b.entry(ray.origin(), ray.dir(), inv_d, 0.0, 1.0),
+                        b.entry(ray.origin(), ray.dir(), 0.0, 1.0),
                         Some(0.0),
                         "{p:?} outside {b:?}"
                     );

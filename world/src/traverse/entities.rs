@@ -14,11 +14,14 @@
 //! leaves the world. The nearest hit wins; among entity hits at the same `t`, the lowest
 //! id. An entity hit reports entity-local voxel and normal.
 //!
-//! Each instance found is first tested against its padded world box and oriented box
-//! ([`Bounds`]), which needs no transform and rejects most. The rest are tested in the
-//! order the ray enters their boxes, so that the first hit usually ends the search: once
-//! a box is entered after the best hit, so is every later one. Neither the boxes, the
-//! hierarchy nor the order changes the result, only the work.
+//! The hierarchy's walk has tested each instance found against its padded world box; it is
+//! then tested against its padded oriented box ([`Bounds`]), which rejects about half. The
+//! rest are tested in the order the ray enters their boxes, so that the first hit usually
+//! ends the search: once a box is entered after the best hit, so is every later one.
+//! Neither the boxes, the hierarchy nor the order changes the result, only the work.
+//!
+//! [`EntityView::resolve_many`] does the same for a slice of rays, walking the hierarchy
+//! for all of them as batches ([`crate::entity::bvh::batch`]).
 
 use super::ray::{End, Hit, Ray, Visit, walk};
 use crate::entity::bvh::batch::{BATCH, Scratch, WalkRay};
@@ -232,7 +235,6 @@ struct Crossed<'v, 'a> {
     view: &'v EntityView<'a>,
     o: [f64; 3],
     d: [f64; 3],
-    inv_d: [f64; 3],
     t_entry: f64,
     t_end: f64,
     list: SmallVec<[(f64, u32, usize); 8]>,
@@ -240,26 +242,25 @@ struct Crossed<'v, 'a> {
 
 impl<'v, 'a> Crossed<'v, 'a> {
     fn new(view: &'v EntityView<'a>, ray: &Ray, t_entry: f64, t_end: f64) -> Self {
-        let d = ray.dir();
         Crossed {
             view,
             o: ray.origin(),
-            d,
-            inv_d: d.map(|v| 1.0 / v),
+            d: ray.dir(),
             t_entry,
             t_end,
             list: SmallVec::new(),
         }
     }
 
-    /// Keeps instance `k` if the ray enters its boxes within the span.
+    /// Keeps instance `k` (whose world box the ray enters) if the ray enters its oriented
+    /// box within the span.
     #[inline]
     fn offer(&mut self, k: u32) {
         let k = k as usize;
         let (Some(b), Some(r)) = (self.view.set.bounds.get(k), self.view.set.records.get(k)) else {
             return;
         };
-        if let Some(t) = b.entry(self.o, self.d, self.inv_d, self.t_entry, self.t_end) {
+        if let Some(t) = b.entry(self.o, self.d, self.t_entry, self.t_end) {
             self.list.push((t, r[4] & 0x3FFF, k));
         }
     }
