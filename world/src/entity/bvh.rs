@@ -520,7 +520,8 @@ mod tests {
     use crate::entity::bounds::slab;
     use proptest::prelude::*;
 
-    fn boxes_strategy() -> impl Strategy<Value = Vec<Aabb>> {
+    /// Up to 200 boxes of up to 12 voxels scattered over 100³.
+    pub(super) fn boxes_strategy() -> impl Strategy<Value = Vec<Aabb>> {
         prop::collection::vec(
             (
                 prop::array::uniform3(0.0f64..100.0),
@@ -632,19 +633,20 @@ mod tests {
         }
     }
 
+    /// `n`³ cubes of edge `edge`, `spacing` apart, box `i` at `(i % n, i / n % n, i / n²)`.
+    pub(super) fn grid_boxes(n: u32, spacing: f64, edge: f64) -> Vec<Aabb> {
+        (0..n * n * n)
+            .map(|i| {
+                let lo = [i % n, i / n % n, i / n / n].map(|c| f64::from(c) * spacing);
+                (lo, lo.map(|v| v + edge))
+            })
+            .collect()
+    }
+
     /// Scattered boxes give a hierarchy that a short ray walks in a few nodes, not all.
     #[test]
     fn a_ray_finds_just_the_boxes_it_crosses_among_many() {
-        let boxes: Vec<Aabb> = (0..1000)
-            .map(|i| {
-                let lo = [
-                    f64::from(i % 10) * 50.0,
-                    f64::from(i / 10 % 10) * 50.0,
-                    f64::from(i / 100) * 50.0,
-                ];
-                (lo, lo.map(|v| v + 3.0))
-            })
-            .collect();
+        let boxes = grid_boxes(10, 50.0, 3.0);
         let bvh = Bvh::build(&boxes);
         assert!(bvh.node_count() < 600, "{} nodes", bvh.node_count());
         let mut met = Vec::new();

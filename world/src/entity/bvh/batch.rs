@@ -256,23 +256,8 @@ impl Bvh {
 mod tests {
     use super::*;
     use crate::entity::bvh::Aabb;
+    use crate::entity::bvh::tests::{boxes_strategy, grid_boxes};
     use proptest::prelude::*;
-
-    /// Boxes of up to 12 voxels scattered over 100³.
-    fn boxes() -> impl Strategy<Value = Vec<Aabb>> {
-        prop::collection::vec(
-            (
-                prop::array::uniform3(0.0f64..100.0),
-                prop::array::uniform3(0.0f64..12.0),
-            ),
-            1..300,
-        )
-        .prop_map(|v| {
-            v.into_iter()
-                .map(|(lo, e)| (lo, std::array::from_fn(|k| lo[k] + e[k])))
-                .collect()
-        })
-    }
 
     /// Rays in runs: some runs share an origin and turn a little from ray to ray (camera
     /// rays, walked as groups), the rest start anywhere in any direction, axis-parallel
@@ -310,7 +295,7 @@ mod tests {
     proptest! {
         /// A batch finds, for every ray, exactly the primitives the ray's own walk finds.
         #[test]
-        fn a_batch_finds_what_each_rays_walk_finds(boxes in boxes(), rays in rays()) {
+        fn a_batch_finds_what_each_rays_walk_finds(boxes in boxes_strategy(), rays in rays()) {
             let bvh = Bvh::build(&boxes);
             let mut each = Vec::new();
             for (i, r) in rays.iter().enumerate() {
@@ -362,17 +347,7 @@ mod tests {
     /// group enters every box one of its rays enters.
     #[test]
     fn a_groups_interval_holds_its_rays() {
-        let boxes: Vec<Aabb> = (0..64)
-            .map(|i| {
-                let lo = [
-                    f64::from(i % 4) * 20.0,
-                    f64::from(i / 4 % 4) * 20.0,
-                    f64::from(i / 16) * 20.0,
-                ];
-                (lo, lo.map(|v| v + 5.0))
-            })
-            .collect();
-        let bvh = Bvh::build(&boxes);
+        let bvh = Bvh::build(&grid_boxes(4, 20.0, 5.0));
         let group: Vec<WalkRay> = (0..GROUP)
             .map(|k| WalkRay::new([-5.0, -3.0, -4.0], [1.0, 0.6 + 0.02 * k as f64, 0.8], 0.0, 500.0))
             .collect();
