@@ -303,7 +303,8 @@ fn report_instances(world: &World) -> Result<()> {
 /// five alternated.
 fn report_walk(plain: &World, crowded: &World, sets: [&[Ray]; 2]) -> Result<()> {
     use naadf_world::entity::bvh::Bvh;
-    use naadf_world::entity::bvh::batch::{Scratch, WalkRay};
+    use naadf_world::entity::bvh::WalkRay;
+    use naadf_world::entity::bvh::batch::Scratch;
     let bvh = Bvh::build(&naadf_world::entity::instance_boxes(crowded.entity_instances()));
     let dims = plain.size().voxels();
     let [plain, crowded] = [Tracer::new(plain, Method::Naadf)?, Tracer::new(crowded, Method::Naadf)?];

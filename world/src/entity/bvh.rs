@@ -19,14 +19,14 @@
 //! one would enter.
 
 pub mod batch;
+mod node;
 
-use batch::WalkRay;
+pub use node::{FAR, WIDTH, WalkRay};
+use node::{Node, lanes};
 
 /// An axis-aligned box `(lo, hi)`.
 pub type Aabb = ([f64; 3], [f64; 3]);
 
-/// Children per node.
-pub const WIDTH: usize = 4;
 /// Words of a packed node: six axis rows of four `f32`, then four child references.
 pub const NODE_WORDS: usize = 7 * WIDTH;
 /// A child reference's flag for an instance (the low bits are its slot).
@@ -46,9 +46,6 @@ const _: () = assert!(3 * (MAX_DEPTH + 1) < STACK);
 const SAH_DEPTH: usize = 24;
 /// Bins per axis of the SAH sweep.
 const BINS: usize = 16;
-/// Where unused child slots sit (beyond any ray's reach in the world), and the inverse
-/// direction component of an axis a ray does not move along.
-pub const FAR: f32 = 1e30;
 /// Padding of an instance's world and oriented boxes (`entity::bounds`), in voxels:
 /// far above the rounding of the rotation, far below a voxel, so that the boxes only ever
 /// let more rays through to the exact test.
@@ -56,14 +53,6 @@ pub const BOUNDS_PAD: f64 = 1.0 / 64.0;
 /// Outward padding of the `f32` boxes, in voxels: far above what `f32` rounding of a
 /// position below 2^15 moves a plane (2^-9 voxel), so the `f32` test stays conservative.
 pub const F32_PAD: f32 = 1.0 / 64.0;
-
-/// One four-wide node: its children's boxes, axis by axis, lane by lane, and references.
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct Node {
-    lo: [[f32; WIDTH]; 3],
-    hi: [[f32; WIDTH]; 3],
-    child: [u32; WIDTH],
-}
 
 const EMPTY_NODE: Node = Node {
     lo: [[FAR; WIDTH]; 3],
@@ -104,22 +93,11 @@ fn centre(b: &Aabb, axis: usize) -> f64 {
     0.5 * (b.0[axis] + b.1[axis])
 }
 
-/// The smaller of two lanes (`minps` on x86, unlike `f32::min`'s NaN rule; no NaN arises).
-#[inline(always)]
-fn lane_min(a: f32, b: f32) -> f32 {
-    if a < b { a } else { b }
-}
-
-#[inline(always)]
-fn lane_max(a: f32, b: f32) -> f32 {
-    if a > b { a } else { b }
-}
-
 impl Bvh {
     /// The hierarchy over `boxes`.
     ///
     /// ```
-    /// use naadf_world::entity::bvh::{Bvh, batch::WalkRay};
+    /// use naadf_world::entity::bvh::{Bvh, WalkRay};
     /// // A row of 100 unit boxes, 10 apart along x.
     /// let boxes: Vec<_> = (0..100).map(|i| {
     ///     let x = 10.0 * f64::from(i);
@@ -260,7 +238,7 @@ impl Bvh {
         while sp > 0 {
             sp -= 1;
             let n = &self.nodes[stack[sp] as usize];
-            let (near, far) = batch::lanes(n, o, inv, t_lo, t_hi);
+            let (near, far) = lanes(n, o, inv, t_lo, t_hi);
             for l in 0..WIDTH {
                 let c = n.child[l];
                 if near[l] > far[l] || c == NO_CHILD {

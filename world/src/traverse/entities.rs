@@ -24,7 +24,8 @@
 //! for all of them as batches ([`crate::entity::bvh::batch`]).
 
 use super::ray::{End, Hit, Ray, Visit, walk};
-use crate::entity::bvh::batch::{BATCH, Scratch, WalkRay};
+use crate::entity::bvh::WalkRay;
+use crate::entity::bvh::batch::{BATCH, Scratch};
 use crate::entity::pack::{InstanceRecord, rotate};
 use crate::entity::set::InstanceSet;
 use crate::entity::{ENTITY_SOLID, TYPE_ALIGN};

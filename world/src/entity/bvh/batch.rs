@@ -19,7 +19,8 @@
 //! box entered every box above it, and the per-ray test at the leaf is the one
 //! [`Bvh::crossing`] makes.
 
-use super::{Bvh, FAR, LEAF, NO_CHILD, Node, STACK, WIDTH, lane_max, lane_min};
+use super::node::{Node, WIDTH, WalkRay, lane_max, lane_min};
+use super::{Bvh, LEAF, NO_CHILD, STACK};
 
 /// Rays a batch holds at most: [`Bvh::crossing_many`] takes longer slices in runs of this
 /// many. (Lists of a few thousand entries per level stay in the processor's caches.)
@@ -28,65 +29,6 @@ pub const BATCH: usize = 1024;
 const _: () = assert!(WIDTH == 4 && BATCH.is_power_of_two() && BATCH < 1 << 16);
 /// Consecutive rays tested as one group when they are coherent.
 pub const GROUP: usize = 16;
-
-/// One ray as a walk reads it, in `f32`: its origin, `1/d` kept finite, and the window of
-/// times to look in, widened by more than its rounding.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-#[repr(C)]
-pub struct WalkRay {
-    o: [f32; 3],
-    inv: [f32; 3],
-    t_lo: f32,
-    t_hi: f32,
-}
-
-impl WalkRay {
-    /// The ray `o + t·d` over the times `[t_lo, t_hi]`.
-    #[inline]
-    pub fn new(o: [f64; 3], d: [f64; 3], t_lo: f64, t_hi: f64) -> Self {
-        WalkRay {
-            o: o.map(|v| v as f32),
-            // In `f32` from the start: the boxes' padding (`F32_PAD`) covers the rounding.
-            // An axis the ray does not move along gets ±FAR, which puts every plane of it
-            // at ± far beyond the ray's reach unless the origin lies on it.
-            inv: d.map(|v| {
-                let i = 1.0 / v as f32;
-                if i.is_finite() { i } else { FAR.copysign(i) }
-            }),
-            t_lo: (t_lo as f32) - 1e-3,
-            t_hi: (t_hi as f32) * (1.0 + 1e-6) + 1e-3,
-        }
-    }
-
-    /// The ray's fields, for a loop that keeps them in registers.
-    #[inline(always)]
-    pub(super) fn parts(&self) -> ([f32; 3], [f32; 3], f32, f32) {
-        (self.o, self.inv, self.t_lo, self.t_hi)
-    }
-
-    /// The times at which the ray enters and leaves each lane's box of `n` (within its
-    /// window); it meets lane `l` unless `near[l] > far[l]`.
-    #[inline(always)]
-    pub(super) fn lanes(&self, n: &Node) -> ([f32; WIDTH], [f32; WIDTH]) {
-        lanes(n, self.o, self.inv, self.t_lo, self.t_hi)
-    }
-}
-
-/// [`WalkRay::lanes`] for a ray given by its fields.
-#[inline(always)]
-pub(super) fn lanes(n: &Node, o: [f32; 3], inv: [f32; 3], t_lo: f32, t_hi: f32) -> ([f32; WIDTH], [f32; WIDTH]) {
-    let mut near = [t_lo; WIDTH];
-    let mut far = [t_hi; WIDTH];
-    for a in 0..3 {
-        for l in 0..WIDTH {
-            let t0 = (n.lo[a][l] - o[a]) * inv[a];
-            let t1 = (n.hi[a][l] - o[a]) * inv[a];
-            near[l] = lane_max(near[l], lane_min(t0, t1));
-            far[l] = lane_min(far[l], lane_max(t0, t1));
-        }
-    }
-    (near, far)
-}
 
 /// What a walk of a batch keeps between calls: one list of rays per child lane and level.
 #[derive(Default)]
@@ -149,7 +91,7 @@ impl Bvh {
     /// [`Bvh::crossing`] would give that ray, in no particular order.
     ///
     /// ```
-    /// use naadf_world::entity::bvh::{Bvh, batch::{Scratch, WalkRay}};
+    /// use naadf_world::entity::bvh::{Bvh, WalkRay, batch::Scratch};
     /// let boxes: Vec<_> = (0..100).map(|i| {
     ///     let x = 10.0 * f64::from(i);
     ///     ([x, 0.0, 0.0], [x + 1.0, 1.0, 1.0])
