@@ -86,7 +86,10 @@ pub fn run(a: Args) -> Result<()> {
             break;
         }
         // Slices of rays, whose instance walks go as batches (`Tracer::trace_many`).
-        let hits: Vec<Option<Hit>> = rays.par_chunks(1024).flat_map_iter(|c| tracer.trace_many(c)).collect();
+        let hits: Vec<Option<Hit>> = rays
+            .par_chunks(naadf_world::entity::bvh::batch::BATCH)
+            .flat_map_iter(|c| tracer.trace_many(c))
+            .collect();
         for h in hits {
             serde_json::to_writer(&mut out, &HitLine::from(h))?;
             out.write_all(b"\n")?;

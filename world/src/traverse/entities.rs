@@ -38,15 +38,19 @@ pub(crate) enum WorldPart {
     /// The final result: no instance can change it (the ray missed the world, ran out of
     /// steps, or asks only whether anything is in the way and hit the world).
     Done(Option<Hit>),
-    /// The world's hit, if any, and the ray's span in the world (from `t_entry` to the hit
-    /// or to where it leaves), over which a nearer instance may lie; `steps` the cells the
-    /// world loop visited.
-    Open {
-        world: Option<Hit>,
-        t_entry: f64,
-        t_end: f64,
-        steps: u32,
-    },
+    /// A nearer instance may lie on the ray's span in the world.
+    Open(OpenPart),
+}
+
+/// The world's hit, if any, and the ray's span in the world (from `t_entry` to the hit or
+/// to where it leaves), over which a nearer instance may lie; `steps` the cells the world
+/// loop visited.
+#[derive(Clone, Copy)]
+pub(crate) struct OpenPart {
+    pub world: Option<Hit>,
+    pub t_entry: f64,
+    pub t_end: f64,
+    pub steps: u32,
 }
 
 thread_local! {
@@ -92,22 +96,14 @@ impl<'a> EntityView<'a> {
     /// The final result of a trace: the world loop's `part`, or a nearer entity hit (the
     /// entity cells visited are added to the steps).
     pub fn resolve(&self, ray: &Ray, part: WorldPart) -> Option<Hit> {
-        let (world, t_entry, t_end, steps) = match part {
+        let open = match part {
             WorldPart::Done(hit) => return hit,
-            WorldPart::Open {
-                world,
-                t_entry,
-                t_end,
-                steps,
-            } => (world, t_entry, t_end, steps),
+            WorldPart::Open(open) => open,
         };
-        let mut crossed = Crossed::new(self, ray, t_entry, t_end);
-        let walk = WalkRay::new(ray.origin(), ray.dir(), t_entry, t_end);
-        self.set.bvh.crossing(&walk, |k| crossed.offer(k));
-        if crossed.list.is_empty() {
-            return world;
-        }
-        self.nearest(ray, world, crossed, steps)
+        let mut found = SmallVec::<[u32; 8]>::new();
+        let walk = WalkRay::new(ray.origin(), ray.dir(), open.t_entry, open.t_end);
+        self.set.bvh.crossing(&walk, |k| found.push(k));
+        self.settle(ray, &open, found)
     }
 
     /// [`EntityView::resolve`] for each ray of `rays` and its world part (`part` of the
@@ -126,15 +122,10 @@ impl<'a> EntityView<'a> {
             for ray in batch {
                 match part(ray) {
                     WorldPart::Done(hit) => out.push(hit),
-                    WorldPart::Open {
-                        world,
-                        t_entry,
-                        t_end,
-                        steps,
-                    } => {
-                        walks.push(WalkRay::new(ray.origin(), ray.dir(), t_entry, t_end));
-                        open.push((out.len(), t_entry, t_end, steps));
-                        out.push(world);
+                    WorldPart::Open(part) => {
+                        walks.push(WalkRay::new(ray.origin(), ray.dir(), part.t_entry, part.t_end));
+                        open.push((out.len(), part));
+                        out.push(part.world);
                     }
                 }
             }
@@ -144,18 +135,24 @@ impl<'a> EntityView<'a> {
             found.sort_unstable();
             // Each open ray's instances, in the order of `open`.
             for run in found.chunk_by(|a, b| a.0 == b.0) {
-                let (at, t_entry, t_end, steps) = open[run[0].0 as usize];
-                let ray = &batch[at - first];
-                let mut crossed = Crossed::new(self, ray, t_entry, t_end);
-                for &(_, k) in run {
-                    crossed.offer(k);
-                }
-                if !crossed.list.is_empty() {
-                    out[at] = self.nearest(ray, out[at], crossed, steps);
-                }
+                let (at, part) = &open[run[0].0 as usize];
+                out[*at] = self.settle(&batch[at - first], part, run.iter().map(|&(_, k)| k));
             }
         }
         out
+    }
+
+    /// The result of a ray whose walk of the hierarchy `found` these instances: the nearest
+    /// of them that it hits, or the world part's hit.
+    fn settle(&self, ray: &Ray, part: &OpenPart, found: impl IntoIterator<Item = u32>) -> Option<Hit> {
+        let mut crossed = Crossed::new(self, ray, part.t_entry, part.t_end);
+        for k in found {
+            crossed.offer(k);
+        }
+        if crossed.list.is_empty() {
+            return part.world;
+        }
+        self.nearest(ray, part.world, crossed, part.steps)
     }
 
     /// The nearest hit among `world` and the instances `crossed` found.

@@ -1,6 +1,6 @@
 //! The dense-grid oracle: Amanatides–Woo over a full decode of the world.
 
-use super::entities::{OwnedEntities, WorldPart};
+use super::entities::{OpenPart, OwnedEntities, WorldPart};
 use super::ray::{End, Hit, Ray, Visit, walk};
 use crate::error::WorldError;
 use crate::world::World;
@@ -57,7 +57,7 @@ impl DenseGrid {
         match &self.entities {
             Some(ents) => ents.view().resolve(ray, part),
             None => match part {
-                WorldPart::Done(hit) | WorldPart::Open { world: hit, .. } => hit,
+                WorldPart::Done(hit) | WorldPart::Open(OpenPart { world: hit, .. }) => hit,
             },
         }
     }
@@ -82,11 +82,11 @@ impl DenseGrid {
             End::Hit(h) => (Some(h), h.t, h.steps),
             End::Left { t, steps } | End::Stopped { t, steps } => (None, t, steps),
         };
-        WorldPart::Open {
+        WorldPart::Open(OpenPart {
             world,
             t_entry: walk.entry_t,
             t_end,
             steps,
-        }
+        })
     }
 }

@@ -1,6 +1,6 @@
 //! Traversal of the chunk → block → voxel hierarchy, with or without AADF jumps.
 
-use super::entities::WorldPart;
+use super::entities::{OpenPart, WorldPart};
 use super::ray::{Hit, Ray};
 use crate::cell::{self, Aadf, CELL_FIELD_BITS, CHUNK_FIELD_BITS, State};
 use crate::world::World;
@@ -74,20 +74,20 @@ fn world_part<const DF: bool, const ANY: bool>(world: &World, ray: &Ray) -> Worl
     let hit = world_loop::<DF, true>(world, ray, &mut span);
     match hit {
         Some(h) if ANY => WorldPart::Done(Some(h)),
-        Some(h) => WorldPart::Open {
+        Some(h) => WorldPart::Open(OpenPart {
             world: hit,
             t_entry: span.0,
             t_end: h.t,
             steps: h.steps,
-        },
+        }),
         // Missed the world, or ran out of steps.
         None if span.1.is_nan() => WorldPart::Done(None),
-        None => WorldPart::Open {
+        None => WorldPart::Open(OpenPart {
             world: None,
             t_entry: span.0,
             t_end: span.1,
             steps: span.2,
-        },
+        }),
     }
 }
 

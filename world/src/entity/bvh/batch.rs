@@ -37,10 +37,14 @@ pub struct Scratch {
     incoherent: Vec<u16>,
 }
 
-/// The box that holds every ray of a group: each field's lowest and highest value.
+/// What bounds every ray of a group: their one origin, each axis's range of `1/d`, and
+/// the union of their windows.
 struct Interval {
-    lo: WalkRay,
-    hi: WalkRay,
+    o: [f32; 3],
+    inv_lo: [f32; 3],
+    inv_hi: [f32; 3],
+    t_lo: f32,
+    t_hi: f32,
 }
 
 impl Interval {
@@ -48,19 +52,25 @@ impl Interval {
     /// keeps them tight enough to be worth testing.
     fn of(group: &[WalkRay]) -> Option<Self> {
         let first = group.first()?;
-        let (mut lo, mut hi) = (*first, *first);
+        let mut b = Interval {
+            o: first.o,
+            inv_lo: first.inv,
+            inv_hi: first.inv,
+            t_lo: first.t_lo,
+            t_hi: first.t_hi,
+        };
         for r in &group[1..] {
             for a in 0..3 {
                 if r.o[a] != first.o[a] || (r.inv[a] > 0.0) != (first.inv[a] > 0.0) {
                     return None;
                 }
-                lo.inv[a] = lane_min(lo.inv[a], r.inv[a]);
-                hi.inv[a] = lane_max(hi.inv[a], r.inv[a]);
+                b.inv_lo[a] = lane_min(b.inv_lo[a], r.inv[a]);
+                b.inv_hi[a] = lane_max(b.inv_hi[a], r.inv[a]);
             }
-            lo.t_lo = lane_min(lo.t_lo, r.t_lo);
-            hi.t_hi = lane_max(hi.t_hi, r.t_hi);
+            b.t_lo = lane_min(b.t_lo, r.t_lo);
+            b.t_hi = lane_max(b.t_hi, r.t_hi);
         }
-        Some(Interval { lo, hi })
+        Some(b)
     }
 
     /// Whether some ray of the group may meet each lane's box of `n`: the lanes' entry and
@@ -68,10 +78,10 @@ impl Interval {
     /// plane's time `(p − o)·inv` is monotone in `inv`, so its bounds are the two ends.
     #[inline(always)]
     fn lanes(&self, n: &Node) -> ([f32; WIDTH], [f32; WIDTH]) {
-        let mut near = [self.lo.t_lo; WIDTH];
-        let mut far = [self.hi.t_hi; WIDTH];
+        let mut near = [self.t_lo; WIDTH];
+        let mut far = [self.t_hi; WIDTH];
         for a in 0..3 {
-            let (o, i0, i1) = (self.lo.o[a], self.lo.inv[a], self.hi.inv[a]);
+            let (o, i0, i1) = (self.o[a], self.inv_lo[a], self.inv_hi[a]);
             for l in 0..WIDTH {
                 let (p0, p1) = (n.lo[a][l] - o, n.hi[a][l] - o);
                 let (a0, b0) = (p0 * i0, p0 * i1);
@@ -110,6 +120,7 @@ impl Bvh {
         if self.nodes.is_empty() {
             return;
         }
+        let avx2 = has_avx2();
         for (b, batch) in rays.chunks(BATCH).enumerate() {
             let base = (b * BATCH) as u32;
             scratch.incoherent.clear();
@@ -126,7 +137,8 @@ impl Bvh {
             }
             if !scratch.incoherent.is_empty() {
                 let ids = std::mem::take(&mut scratch.incoherent);
-                self.list_walk(0, batch, &ids, 0, &mut scratch.levels, &mut |i, k| visit(base + i, k));
+                let rays = Rays { batch, avx2 };
+                self.list_walk(0, &rays, &ids, 0, &mut scratch.levels, &mut |i, k| visit(base + i, k));
                 scratch.incoherent = ids;
             }
         }
@@ -160,12 +172,12 @@ impl Bvh {
         }
     }
 
-    /// Node `at` for the rays `ids` of `batch`, then its children for the rays that enter
+    /// Node `at` for the rays `ids` of the batch, then its children for the rays that enter
     /// them; `levels[depth]` holds the lists this level fills.
     fn list_walk(
         &self,
         at: usize,
-        batch: &[WalkRay],
+        rays: &Rays,
         ids: &[u16],
         depth: usize,
         levels: &mut Vec<[Vec<u16>; WIDTH]>,
@@ -176,7 +188,7 @@ impl Bvh {
             levels.push(std::array::from_fn(|_| vec![0; BATCH]));
         }
         let mut lists = std::mem::take(&mut levels[depth]);
-        let len = sort_into_lanes(n, batch, ids, &mut lists);
+        let len = sort_into_lanes(n, rays, ids, &mut lists);
         for l in 0..WIDTH {
             let c = n.child[l];
             if len[l] == 0 || c == NO_CHILD {
@@ -187,11 +199,67 @@ impl Bvh {
                     visit(u32::from(i), c & !LEAF);
                 }
             } else {
-                self.list_walk(c as usize, batch, &lists[l][..len[l]], depth + 1, levels, visit);
+                self.list_walk(c as usize, rays, &lists[l][..len[l]], depth + 1, levels, visit);
             }
         }
         levels[depth] = lists;
     }
+}
+
+/// The rays of a batch, and whether the processor has AVX2 (looked up once per walk, not
+/// at every node).
+struct Rays<'a> {
+    batch: &'a [WalkRay],
+    avx2: bool,
+}
+
+/// Whether this processor runs the list loop's AVX2 build.
+fn has_avx2() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    return std::is_x86_feature_detected!("avx2");
+    #[cfg(not(target_arch = "x86_64"))]
+    return false;
+}
+
+/// Tests each ray `ids` of the batch against the four boxes of `n` and appends it to the
+/// list of each lane it enters; returns the lists' lengths.
+fn sort_into_lanes(n: &Node, rays: &Rays, ids: &[u16], lists: &mut [Vec<u16>; WIDTH]) -> [usize; WIDTH] {
+    #[cfg(target_arch = "x86_64")]
+    if rays.avx2 {
+        // SAFETY: `avx2` is set only where the processor has AVX2, which is all the
+        // function's attribute enables.
+        return unsafe { sort_into_lanes_avx2(n, rays.batch, ids, lists) };
+    }
+    sort_into_lanes_body(n, rays.batch, ids, lists)
+}
+
+/// [`sort_into_lanes`] compiled for processors with AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn sort_into_lanes_avx2(n: &Node, batch: &[WalkRay], ids: &[u16], lists: &mut [Vec<u16>; WIDTH]) -> [usize; WIDTH] {
+    sort_into_lanes_body(n, batch, ids, lists)
+}
+
+#[inline(always)]
+fn sort_into_lanes_body(n: &Node, batch: &[WalkRay], ids: &[u16], lists: &mut [Vec<u16>; WIDTH]) -> [usize; WIDTH] {
+    // Each ray is written to every list and kept (the list's length moved past it) only by
+    // the lists of lanes it enters: no branch per ray and lane. Indices stay below `BATCH`
+    // (a power of two), which the mask tells the compiler.
+    let [l0, l1, l2, l3] = lists;
+    let (l0, l1, l2, l3) = (&mut l0[..BATCH], &mut l1[..BATCH], &mut l2[..BATCH], &mut l3[..BATCH]);
+    let (mut n0, mut n1, mut n2, mut n3) = (0usize, 0usize, 0usize, 0usize);
+    for &i in ids {
+        let (near, far) = batch[i as usize].lanes(n);
+        l0[n0 & (BATCH - 1)] = i;
+        n0 += usize::from(near[0] <= far[0]);
+        l1[n1 & (BATCH - 1)] = i;
+        n1 += usize::from(near[1] <= far[1]);
+        l2[n2 & (BATCH - 1)] = i;
+        n2 += usize::from(near[2] <= far[2]);
+        l3[n3 & (BATCH - 1)] = i;
+        n3 += usize::from(near[3] <= far[3]);
+    }
+    [n0, n1, n2, n3]
 }
 
 #[cfg(test)]
@@ -274,8 +342,12 @@ mod tests {
         let fresh = || std::array::from_fn(|_| vec![0u16; BATCH]);
         for n in &bvh.nodes {
             let (mut a, mut b) = (fresh(), fresh());
+            let rays = Rays {
+                batch: &batch,
+                avx2: has_avx2(),
+            };
             let (len_a, len_b) = (
-                sort_into_lanes(n, &batch, &ids, &mut a),
+                sort_into_lanes(n, &rays, &ids, &mut a),
                 sort_into_lanes_body(n, &batch, &ids, &mut b),
             );
             assert_eq!(len_a, len_b);
@@ -307,44 +379,4 @@ mod tests {
         apart[3] = WalkRay::new([-5.0, -3.0, -4.5], [1.0, 0.6, 0.8], 0.0, 500.0);
         assert!(Interval::of(&apart).is_none(), "two origins");
     }
-}
-
-/// Tests each ray `ids` of `batch` against the four boxes of `n` and appends it to the list
-/// of each lane it enters; returns the lists' lengths.
-fn sort_into_lanes(n: &Node, batch: &[WalkRay], ids: &[u16], lists: &mut [Vec<u16>; WIDTH]) -> [usize; WIDTH] {
-    #[cfg(target_arch = "x86_64")]
-    if std::is_x86_feature_detected!("avx2") {
-        // SAFETY: the processor has AVX2, which is all the function's attribute enables.
-        return unsafe { sort_into_lanes_avx2(n, batch, ids, lists) };
-    }
-    sort_into_lanes_body(n, batch, ids, lists)
-}
-
-/// [`sort_into_lanes`] compiled for processors with AVX2.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn sort_into_lanes_avx2(n: &Node, batch: &[WalkRay], ids: &[u16], lists: &mut [Vec<u16>; WIDTH]) -> [usize; WIDTH] {
-    sort_into_lanes_body(n, batch, ids, lists)
-}
-
-#[inline(always)]
-fn sort_into_lanes_body(n: &Node, batch: &[WalkRay], ids: &[u16], lists: &mut [Vec<u16>; WIDTH]) -> [usize; WIDTH] {
-    // Each ray is written to every list and kept (the list's length moved past it) only by
-    // the lists of lanes it enters: no branch per ray and lane. Indices stay below `BATCH`
-    // (a power of two), which the mask tells the compiler.
-    let [l0, l1, l2, l3] = lists;
-    let (l0, l1, l2, l3) = (&mut l0[..BATCH], &mut l1[..BATCH], &mut l2[..BATCH], &mut l3[..BATCH]);
-    let (mut n0, mut n1, mut n2, mut n3) = (0usize, 0usize, 0usize, 0usize);
-    for &i in ids {
-        let (near, far) = batch[i as usize].lanes(n);
-        l0[n0 & (BATCH - 1)] = i;
-        n0 += usize::from(near[0] <= far[0]);
-        l1[n1 & (BATCH - 1)] = i;
-        n1 += usize::from(near[1] <= far[1]);
-        l2[n2 & (BATCH - 1)] = i;
-        n2 += usize::from(near[2] <= far[2]);
-        l3[n3 & (BATCH - 1)] = i;
-        n3 += usize::from(near[3] <= far[3]);
-    }
-    [n0, n1, n2, n3].map(|v| v.min(ids.len()))
 }
