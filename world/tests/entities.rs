@@ -324,6 +324,28 @@ fn tracing_slices_of_rays_gives_what_tracing_each_gives() {
     }
 }
 
+/// A tracer for the static world alone sees, with every method and one ray at a time or
+/// in slices, exactly the world without its entities (rebuilt without them), while the
+/// full tracer does hit entities on the same rays.
+#[test]
+fn a_static_only_tracer_sees_the_world_without_its_entities() {
+    let size = WorldSize::new(64, 64, 64).unwrap();
+    let (_, w) = scene(size, 5, 4, 12);
+    let bare = without_entities(&w);
+    let rays = scene_rays(&w, &mut Rng(12), 1500);
+    for method in Method::ALL {
+        let bare_tracer = Tracer::new(&bare, method).unwrap();
+        let oracle: Vec<Option<Hit>> = rays.iter().map(|r| bare_tracer.trace(r)).collect();
+        let full = Tracer::new(&w, method).unwrap();
+        assert!(rays.iter().filter_map(|r| full.trace(r)).any(|h| h.entity.is_some()));
+        let static_only = full.static_only();
+        let each: Vec<Option<Hit>> = rays.iter().map(|r| static_only.trace(r)).collect();
+        assert!(each == oracle, "{method:?}: one by one");
+        let sliced: Vec<Option<Hit>> = rays.chunks(700).flat_map(|c| static_only.trace_many(c)).collect();
+        assert!(sliced == oracle, "{method:?}: in slices");
+    }
+}
+
 /// Batches of small moves keep the hierarchy's shape and refit its boxes; rays through
 /// the moved instances still match brute force after every batch.
 /// Small moves refit the hierarchy derived last; after the third batch no ray is traced,

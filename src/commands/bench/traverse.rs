@@ -70,7 +70,10 @@ struct TraverseReport {
 }
 
 /// Rays a worker traces at a time ([`Tracer::trace_many`]), as a renderer hands them over.
-const SLICE: usize = 4096;
+const SLICE: usize = 1024;
+
+/// Pieces a ray set is cut into for the paired rounds of [`EntityCost`].
+const PIECES: usize = 4;
 
 /// Traces `rays` on the worker threads, a slice at a time.
 fn trace_slices(tracer: &Tracer, rays: &[Ray]) -> Vec<Option<Hit>> {
@@ -115,8 +118,8 @@ pub fn run(a: TraverseArgs) -> Result<()> {
         // The same rays as the plain run, so that the difference is the entities' cost.
         let (report, _) = measure(&crowded, &a, Some(secondary.clone()))?;
         let primary = primary_rays(&fixed_cameras(world.size()), a.width, a.height);
-        let cost = EntityCost::measure(&world, &crowded, [&primary, &secondary], a.rounds)?;
-        report_walk(&world, &crowded, [&primary, &secondary])?;
+        let cost = EntityCost::measure(&crowded, [&primary, &secondary], a.rounds)?;
+        report_walk(&crowded, [&primary, &secondary])?;
         Some((report, cost))
     } else {
         None
@@ -151,8 +154,10 @@ pub fn run(a: TraverseArgs) -> Result<()> {
     Ok(())
 }
 
-/// The ray-throughput cost of entities: the same rays traced through the world without and
-/// with them, in interleaved rounds so that both sides of each ratio see the same machine.
+/// The ray-throughput cost of entities: the same rays traced through the world with them
+/// and through its static world alone ([`Tracer::static_only`]: the world without
+/// entities, byte for byte, in the same memory), in interleaved rounds so that both sides
+/// of each ratio see the same machine.
 #[derive(Serialize)]
 struct EntityCost {
     /// Paired rounds per method.
@@ -166,13 +171,19 @@ struct EntityCost {
 
 impl EntityCost {
     /// Times `naadf` and `nodf` (the grid method is too slow for many rounds) on both worlds.
-    /// Each round traces both ray sets once per world, alternating which world goes first.
-    fn measure(plain: &World, crowded: &World, sets: [&[Ray]; 2], rounds: u32) -> Result<Self> {
+    /// Each round traces both ray sets once per world, a piece at a time: each piece (one
+    /// [`PIECES`]th of a set) is traced through both worlds back to back, alternating which
+    /// goes first, so that both sides of a ratio see the machine within milliseconds of each
+    /// other (neighbours that steal the processor for a while then slow both alike).
+    fn measure(crowded: &World, sets: [&[Ray]; 2], rounds: u32) -> Result<Self> {
         let rounds = rounds.max(1);
         let mut median_percent = BTreeMap::new();
         let mut range_percent = BTreeMap::new();
         for method in [Method::Naadf, Method::Nodf] {
-            let tracers = [Tracer::new(plain, method)?, Tracer::new(crowded, method)?];
+            let tracers = [
+                Tracer::new(crowded, method)?.static_only(),
+                Tracer::new(crowded, method)?,
+            ];
             for (t, rays) in tracers.iter().zip(sets) {
                 trace_all(t, rays);
             }
@@ -181,12 +192,18 @@ impl EntityCost {
             for round in 0..rounds {
                 // secs[world][set]
                 let mut secs = [[0.0; 2]; 2];
-                let order = if round % 2 == 0 { [0, 1] } else { [1, 0] };
-                for w in order {
-                    for (k, rays) in sets.iter().enumerate() {
-                        let t0 = Instant::now();
-                        trace_all(&tracers[w], rays);
-                        secs[w][k] = t0.elapsed().as_secs_f64();
+                for (k, rays) in sets.iter().enumerate() {
+                    for (p, piece) in rays.chunks(rays.len().div_ceil(PIECES).max(1)).enumerate() {
+                        let order = if (round as usize + p).is_multiple_of(2) {
+                            [0, 1]
+                        } else {
+                            [1, 0]
+                        };
+                        for w in order {
+                            let t0 = Instant::now();
+                            trace_all(&tracers[w], piece);
+                            secs[w][k] += t0.elapsed().as_secs_f64();
+                        }
                     }
                 }
                 let cost = |plain: f64, crowded: f64| 100.0 * (1.0 - plain / crowded);
@@ -296,18 +313,21 @@ fn report_instances(world: &World) -> Result<()> {
 }
 
 /// Where the entity cost of a ray comes from: on one thread, over `sets`, the time a ray
-/// takes through `plain` (no entities) and through `crowded`, traced one by one and in
-/// slices ([`Tracer::trace_many`]), against the time the walk through `crowded`'s instance
-/// hierarchy alone takes over the rays' spans (from where each enters the world to its
-/// static hit or where it leaves), ray by ray and as batches; the median of 7 rounds, the
-/// five alternated.
-fn report_walk(plain: &World, crowded: &World, sets: [&[Ray]; 2]) -> Result<()> {
+/// takes through `crowded`'s static world alone ([`Tracer::static_only`]) and through
+/// `crowded`, traced one by one and in slices ([`Tracer::trace_many`]), against the time the
+/// walk through its instance hierarchy alone takes over the rays' spans (from where each
+/// enters the world to its static hit or where it leaves), ray by ray and as batches; the
+/// median of 7 rounds, the five alternated.
+fn report_walk(crowded: &World, sets: [&[Ray]; 2]) -> Result<()> {
     use naadf_world::entity::bvh::Bvh;
     use naadf_world::entity::bvh::WalkRay;
     use naadf_world::entity::bvh::batch::Scratch;
     let bvh = Bvh::build(&naadf_world::entity::instance_boxes(crowded.entity_instances()));
-    let dims = plain.size().voxels();
-    let [plain, crowded] = [Tracer::new(plain, Method::Naadf)?, Tracer::new(crowded, Method::Naadf)?];
+    let dims = crowded.size().voxels();
+    let [plain, crowded] = [
+        Tracer::new(crowded, Method::Naadf)?.static_only(),
+        Tracer::new(crowded, Method::Naadf)?,
+    ];
     let rays: Vec<Ray> = sets.iter().flat_map(|rays| rays.iter().copied()).collect();
     // Each ray's walk over its span; rays that miss the world are left out.
     let walks: Vec<WalkRay> = rays
@@ -343,7 +363,11 @@ fn report_walk(plain: &World, crowded: &World, sets: [&[Ray]; 2]) -> Result<()> 
         }));
         times[2].push(ns_per(walks.len(), &mut || {
             for c in walks.chunks(SLICE) {
-                bvh.crossing_many(c, &mut scratch, |i, k| sink += u64::from(i ^ k));
+                sink += bvh
+                    .crossing_many(c, &mut scratch)
+                    .iter()
+                    .map(|&(i, k)| u64::from(i ^ k))
+                    .sum::<u64>();
             }
         }));
         times[3].push(ns_per(rays.len(), &mut || sink += one_by_one(&crowded)));

@@ -4,6 +4,7 @@
 //! a ray hits, only the work it takes to find out.
 
 use super::pack::{InstanceRecord, conjugate, rotate};
+use crate::traverse::Ray;
 
 /// Where an instance can be hit, for rejecting it cheaply: its world box, and its own
 /// oriented box as the ray test places it, both padded. Every point of its grid lies inside.
@@ -16,6 +17,8 @@ pub(crate) struct Bounds {
     pos: [f64; 3],
     to_local: [[f64; 3]; 3],
     size: [f64; 3],
+    /// The decoded rotation world → entity, as the ray test applies it.
+    inv: [f64; 4],
 }
 
 impl Bounds {
@@ -32,7 +35,19 @@ impl Bounds {
             pos,
             to_local: [0, 1, 2].map(|r| columns.map(|c| c[r])),
             size: rec.size.map(f64::from),
+            inv,
         }
+    }
+
+    /// `ray` in the instance's frame, `o' = R⁻¹(o − pos)`, `d' = R⁻¹ d`, with the decoded
+    /// position and rotation (a rotation, so `t` stays the world distance).
+    #[inline]
+    pub fn local(&self, ray: &Ray) -> Ray {
+        let o = ray.origin();
+        Ray::raw(
+            rotate(self.inv, [0, 1, 2].map(|a| o[a] - self.pos[a])),
+            rotate(self.inv, ray.dir()),
+        )
     }
 
     /// The padded world box.
@@ -104,7 +119,6 @@ mod tests {
     use super::*;
     use crate::entity::pack::quantise_pose;
     use crate::raysets::SplitMix64;
-    use crate::traverse::Ray;
 
     /// Every world point that the ray test maps into an instance's grid (`R⁻¹(p − pos)`
     /// inside `[0, size]`) lies in the instance's bounds, for random sizes and rotations:

@@ -26,7 +26,7 @@
 use super::ray::{End, Hit, Ray, Visit, walk};
 use crate::entity::bvh::WalkRay;
 use crate::entity::bvh::batch::{BATCH, Scratch};
-use crate::entity::pack::{InstanceRecord, rotate};
+use crate::entity::pack::InstanceRecord;
 use crate::entity::set::InstanceSet;
 use crate::entity::{ENTITY_SOLID, TYPE_ALIGN};
 use crate::world::World;
@@ -113,12 +113,12 @@ impl<'a> EntityView<'a> {
         let mut out = Vec::with_capacity(rays.len());
         let mut walks = Vec::with_capacity(BATCH.min(rays.len()));
         let mut open = Vec::with_capacity(BATCH.min(rays.len()));
-        let mut found: Vec<(u32, u32)> = Vec::new();
+        let mut heads = vec![u32::MAX; BATCH];
+        let mut next: Vec<u32> = Vec::new();
         for batch in rays.chunks(BATCH) {
             let first = out.len();
             walks.clear();
             open.clear();
-            found.clear();
             for ray in batch {
                 match part(ray) {
                     WorldPart::Done(hit) => out.push(hit),
@@ -130,14 +130,24 @@ impl<'a> EntityView<'a> {
                 }
             }
             SCRATCH.with_borrow_mut(|scratch| {
-                self.set.bvh.crossing_many(&walks, scratch, |j, k| found.push((j, k)));
+                let found = self.set.bvh.crossing_many(&walks, scratch);
+                // Each open ray's instances: the pairs of ray `j` linked from `head[j]`.
+                let head = &mut heads[..walks.len()];
+                head.fill(u32::MAX);
+                next.resize(found.len(), 0);
+                for (p, &(j, _)) in found.iter().enumerate() {
+                    next[p] = head[j as usize];
+                    head[j as usize] = p as u32;
+                }
+                for (j, &h) in head.iter().enumerate() {
+                    if h == u32::MAX {
+                        continue;
+                    }
+                    let (at, part) = &open[j];
+                    let run = std::iter::successors(Some(h), |&p| Some(next[p as usize]).filter(|&q| q != u32::MAX));
+                    out[*at] = self.settle(&batch[at - first], part, run.map(|p| found[p as usize].1));
+                }
             });
-            found.sort_unstable();
-            // Each open ray's instances, in the order of `open`.
-            for run in found.chunk_by(|a, b| a.0 == b.0) {
-                let (at, part) = &open[run[0].0 as usize];
-                out[*at] = self.settle(&batch[at - first], part, run.iter().map(|&(_, k)| k));
-            }
         }
         out
     }
@@ -172,7 +182,8 @@ impl<'a> EntityView<'a> {
                 break;
             }
             let rec = InstanceRecord::unpack(&self.set.records[k]);
-            if let Some(h) = self.test(ray, &rec, t_entry, limit, equal_ok, &mut steps) {
+            let local = self.set.bounds[k].local(ray);
+            if let Some(h) = self.test(&local, &rec, t_entry, limit, equal_ok, &mut steps) {
                 best = Some(h);
             }
         }
@@ -183,23 +194,19 @@ impl<'a> EntityView<'a> {
     }
 
     /// The first solid voxel of one instance entered at `t` in `[t_lo, limit)` (or
-    /// `[t_lo, limit]` with `equal_ok`).
+    /// `[t_lo, limit]` with `equal_ok`), for the ray `local` in the instance's frame.
     fn test(
         &self,
-        ray: &Ray,
+        local: &Ray,
         rec: &InstanceRecord,
         t_lo: f64,
         limit: f64,
         equal_ok: bool,
         steps: &mut u32,
     ) -> Option<Hit> {
-        let pos = rec.position();
-        let inv = rec.inv_rotation();
-        let o = ray.origin();
-        let local = Ray::raw(rotate(inv, [0, 1, 2].map(|a| o[a] - pos[a])), rotate(inv, ray.dir()));
         let base = rec.voxel_start as usize * TYPE_ALIGN;
         let [sx, sy, _] = rec.size.map(|v| v as usize);
-        let walk = walk(&local, rec.size, |c, t| {
+        let walk = walk(local, rec.size, |c, t| {
             if t > limit || (t == limit && !equal_ok) {
                 return Visit::Stop;
             }

@@ -43,6 +43,11 @@ impl DenseGrid {
         })
     }
 
+    /// The grid without its copy of the entities: rays see the static world alone.
+    pub fn static_only(self) -> Self {
+        DenseGrid { entities: None, ..self }
+    }
+
     /// Material at `p` (inside the grid).
     #[inline]
     pub fn get(&self, p: [u32; 3]) -> u16 {

@@ -54,9 +54,14 @@ enum Probe {
 fn trace<const DF: bool, const ANY: bool>(world: &World, ray: &Ray) -> Option<Hit> {
     // Worlds without entities run a loop with no entity code at all.
     let Some(view) = world.entity_view() else {
-        return world_loop::<DF, false>(world, ray, &mut (0.0, 0.0, 0));
+        return trace_static::<DF>(world, ray);
     };
     view.resolve(ray, world_part::<DF, ANY>(world, ray))
+}
+
+/// Traces `ray` through the static world alone, as if it had no entities.
+pub(crate) fn trace_static<const DF: bool>(world: &World, ray: &Ray) -> Option<Hit> {
+    world_loop::<DF, false>(world, ray, &mut (0.0, 0.0, 0))
 }
 
 /// [`trace`] (without `ANY`) for each of `rays`, the instance test made for all at once.

@@ -54,11 +54,17 @@ impl Method {
 }
 
 /// A ready-to-use tracer for one method (the grid method owns its dense decode).
-pub enum Tracer<'w> {
-    /// See [`Method::Naadf`].
-    Naadf(&'w World),
-    /// See [`Method::Nodf`].
-    Nodf(&'w World),
+pub struct Tracer<'w>(Kind<'w>);
+
+/// What a [`Tracer`] runs.
+enum Kind<'w> {
+    /// The hierarchy ([`Method::Naadf`] with `DF`, [`Method::Nodf`] without); rays meet the
+    /// instances unless `static_only`.
+    Hierarchy {
+        world: &'w World,
+        df: bool,
+        static_only: bool,
+    },
     /// See [`Method::Grid`].
     Grid(DenseGrid),
 }
@@ -67,20 +73,56 @@ impl<'w> Tracer<'w> {
     /// Prepares `method` on `world` (the grid method decodes the world densely, which fails
     /// if the decode would not fit in memory).
     pub fn new(world: &'w World, method: Method) -> Result<Self, crate::WorldError> {
-        Ok(match method {
-            Method::Naadf => Tracer::Naadf(world),
-            Method::Nodf => Tracer::Nodf(world),
-            Method::Grid => Tracer::Grid(DenseGrid::from_world(world)?),
+        let hierarchy = |df| Kind::Hierarchy {
+            world,
+            df,
+            static_only: false,
+        };
+        Ok(Tracer(match method {
+            Method::Naadf => hierarchy(true),
+            Method::Nodf => hierarchy(false),
+            Method::Grid => Kind::Grid(DenseGrid::from_world(world)?),
+        }))
+    }
+
+    /// The same tracer for the static world alone: rays pass through every instance, as
+    /// through the world without entities, whose static buffers are this world's byte for
+    /// byte (docs/NAADF.md §11). Benchmarks pair it with the full tracer to time the
+    /// entities over the same memory (two copies of one world at different addresses
+    /// trace at rates a percent or two apart).
+    ///
+    /// ```
+    /// use naadf_world::{World, preset::Preset, traverse::{Method, Ray, Tracer}};
+    /// let src = Preset::Test.source(None, 1).unwrap();
+    /// let world = World::build(&*src, &|_| {}).unwrap();
+    /// let down = Ray::new([20.5, 63.5, 20.5], [0.0, -1.0, 0.0]).unwrap();
+    /// let full = Tracer::new(&world, Method::Naadf).unwrap();
+    /// let static_only = Tracer::new(&world, Method::Naadf).unwrap().static_only();
+    /// // Without entities, both see the same world.
+    /// assert_eq!(static_only.trace(&down), full.trace(&down));
+    /// ```
+    pub fn static_only(self) -> Self {
+        Tracer(match self.0 {
+            Kind::Hierarchy { world, df, .. } => Kind::Hierarchy {
+                world,
+                df,
+                static_only: true,
+            },
+            Kind::Grid(g) => Kind::Grid(g.static_only()),
         })
     }
 
     /// Traces one ray; `None` is a miss.
     #[inline]
     pub fn trace(&self, ray: &Ray) -> Option<Hit> {
-        match self {
-            Tracer::Naadf(w) => trace_naadf(w, ray),
-            Tracer::Nodf(w) => trace_nodf(w, ray),
-            Tracer::Grid(g) => g.trace(ray),
+        match &self.0 {
+            Kind::Hierarchy { world, df, static_only } => match (df, static_only) {
+                (true, false) => trace_naadf(world, ray),
+                (false, false) => trace_nodf(world, ray),
+                (true, true) => hierarchy::trace_static::<true>(world, ray),
+                (false, true) => hierarchy::trace_static::<false>(world, ray),
+            },
+            Kind::Grid(g) => g.trace(ray),
         }
     }
 
@@ -101,10 +143,17 @@ impl<'w> Tracer<'w> {
     /// assert_eq!(tracer.trace_many(&rays), one_by_one);
     /// ```
     pub fn trace_many(&self, rays: &[Ray]) -> Vec<Option<Hit>> {
-        match self {
-            Tracer::Naadf(w) => hierarchy::trace_many::<true>(w, rays),
-            Tracer::Nodf(w) => hierarchy::trace_many::<false>(w, rays),
-            Tracer::Grid(g) => g.trace_many(rays),
+        match &self.0 {
+            Kind::Hierarchy {
+                world,
+                df,
+                static_only: false,
+            } => match df {
+                true => hierarchy::trace_many::<true>(world, rays),
+                false => hierarchy::trace_many::<false>(world, rays),
+            },
+            Kind::Hierarchy { static_only: true, .. } => rays.iter().map(|r| self.trace(r)).collect(),
+            Kind::Grid(g) => g.trace_many(rays),
         }
     }
 }

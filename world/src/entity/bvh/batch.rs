@@ -35,6 +35,33 @@ pub const GROUP: usize = 16;
 pub struct Scratch {
     levels: Vec<[Vec<u16>; WIDTH]>,
     incoherent: Vec<u16>,
+    met: Vec<(u32, u32)>,
+}
+
+/// The pairs (ray, primitive) a walk has met so far: `buf[..len]`. A pair is written at
+/// `len` in any case and kept by moving `len` past it, so that whether a ray meets a box
+/// costs no branch.
+struct Met<'a> {
+    buf: &'a mut Vec<(u32, u32)>,
+    len: usize,
+}
+
+impl Met<'_> {
+    /// Makes room for `n` more pairs.
+    #[inline(always)]
+    fn room(&mut self, n: usize) {
+        if self.buf.len() < self.len + n {
+            let want = (self.len + n).max(2 * self.buf.len());
+            self.buf.resize(want, (0, 0));
+        }
+    }
+
+    /// Writes `pair` and keeps it if `keep` (after [`Met::room`]).
+    #[inline(always)]
+    fn put(&mut self, pair: (u32, u32), keep: bool) {
+        self.buf[self.len] = pair;
+        self.len += usize::from(keep);
+    }
 }
 
 /// What bounds every ray of a group: their one origin, each axis's range of `1/d`, and
@@ -97,8 +124,8 @@ impl Interval {
 }
 
 impl Bvh {
-    /// Calls `visit(i, k)` once for every ray `i` of `rays` and every primitive `k` that
-    /// [`Bvh::crossing`] would give that ray, in no particular order.
+    /// Every pair `(i, k)` of a ray `i` of `rays` and a primitive `k` that [`Bvh::crossing`]
+    /// would give that ray, in no particular order (held in `scratch` until its next walk).
     ///
     /// ```
     /// use naadf_world::entity::bvh::{Bvh, WalkRay, batch::Scratch};
@@ -111,14 +138,18 @@ impl Bvh {
     /// let rays: Vec<_> = (0..3)
     ///     .map(|i| WalkRay::new([10.0 * f64::from(i) + 0.5, 0.5, -1.0], [0.0, 0.0, 1.0], 0.0, 100.0))
     ///     .collect();
-    /// let mut met = Vec::new();
-    /// bvh.crossing_many(&rays, &mut Scratch::default(), |i, k| met.push((i, k)));
+    /// let mut scratch = Scratch::default();
+    /// let met = bvh.crossing_many(&rays, &mut scratch);
     /// met.sort();
     /// assert_eq!(met, [(0, 0), (1, 1), (2, 2)]);
     /// ```
-    pub fn crossing_many(&self, rays: &[WalkRay], scratch: &mut Scratch, mut visit: impl FnMut(u32, u32)) {
+    pub fn crossing_many<'s>(&self, rays: &[WalkRay], scratch: &'s mut Scratch) -> &'s mut [(u32, u32)] {
+        let mut met = Met {
+            buf: &mut scratch.met,
+            len: 0,
+        };
         if self.nodes.is_empty() {
-            return;
+            return &mut met.buf[..0];
         }
         let avx2 = has_avx2();
         for (b, batch) in rays.chunks(BATCH).enumerate() {
@@ -127,25 +158,29 @@ impl Bvh {
             for (g, group) in batch.chunks(GROUP).enumerate() {
                 let first = (g * GROUP) as u32;
                 match Interval::of(group) {
-                    Some(bounds) if group.len() > 1 => {
-                        self.group_walk(group, &bounds, &mut |i, k| visit(base + first + i, k));
-                    }
+                    Some(bounds) if group.len() > 1 => self.group_walk(group, base + first, &bounds, &mut met),
                     _ => scratch
                         .incoherent
                         .extend(first as u16..(first as usize + group.len()) as u16),
                 }
             }
             if !scratch.incoherent.is_empty() {
-                let ids = std::mem::take(&mut scratch.incoherent);
                 let rays = Rays { batch, avx2 };
-                self.list_walk(0, &rays, &ids, 0, &mut scratch.levels, &mut |i, k| visit(base + i, k));
-                scratch.incoherent = ids;
+                self.list_walk(0, &rays, &scratch.incoherent, 0, &mut scratch.levels, &mut |ids, k| {
+                    met.room(ids.len());
+                    for &i in ids {
+                        met.put((base + u32::from(i), k), true);
+                    }
+                });
             }
         }
+        let len = met.len;
+        &mut met.buf[..len]
     }
 
-    /// One walk for a coherent group; each instance a lane leads to is tested per ray.
-    fn group_walk(&self, group: &[WalkRay], bounds: &Interval, visit: &mut impl FnMut(u32, u32)) {
+    /// One walk for a coherent group (rays `first..` of the walk); each instance a lane leads
+    /// to is tested per ray.
+    fn group_walk(&self, group: &[WalkRay], first: u32, bounds: &Interval, met: &mut Met) {
         let mut stack = [0u32; STACK];
         let mut sp = 1;
         while sp > 0 {
@@ -162,11 +197,10 @@ impl Bvh {
                     sp += 1;
                     continue;
                 }
-                for (i, r) in group.iter().enumerate() {
+                met.room(group.len());
+                for (i, r) in (first..).zip(group) {
                     let (near, far) = r.lanes(n);
-                    if near[l] <= far[l] {
-                        visit(i as u32, c & !LEAF);
-                    }
+                    met.put((i, c & !LEAF), near[l] <= far[l]);
                 }
             }
         }
@@ -181,7 +215,7 @@ impl Bvh {
         ids: &[u16],
         depth: usize,
         levels: &mut Vec<[Vec<u16>; WIDTH]>,
-        visit: &mut impl FnMut(u32, u32),
+        visit: &mut impl FnMut(&[u16], u32),
     ) {
         let n = &self.nodes[at];
         if levels.len() <= depth {
@@ -195,9 +229,7 @@ impl Bvh {
                 continue;
             }
             if c & LEAF != 0 {
-                for &i in &lists[l][..len[l]] {
-                    visit(u32::from(i), c & !LEAF);
-                }
+                visit(&lists[l][..len[l]], c & !LEAF);
             } else {
                 self.list_walk(c as usize, rays, &lists[l][..len[l]], depth + 1, levels, visit);
             }
@@ -311,8 +343,8 @@ mod tests {
             for (i, r) in rays.iter().enumerate() {
                 bvh.crossing(r, |k| each.push((i as u32, k)));
             }
-            let mut batch = Vec::new();
-            bvh.crossing_many(&rays, &mut Scratch::default(), |i, k| batch.push((i, k)));
+            let mut scratch = Scratch::default();
+            let batch = bvh.crossing_many(&rays, &mut scratch);
             each.sort_unstable();
             batch.sort_unstable();
             prop_assert_eq!(batch, each);
