@@ -39,8 +39,9 @@ pub struct TraverseArgs {
     /// vehicles) or anywhere in the air (`air`, the worst case for chunk AADFs).
     #[arg(long, default_value = "surface", value_parser = ["surface", "air"])]
     placement: String,
-    /// Paired rounds (without, then with entities, alternating which goes first) behind
-    /// the entity cost, per traversal method; each round traces both ray sets.
+    /// Paired rounds behind the entity cost, per traversal method: each round traces both
+    /// ray sets without and with the entities, a quarter set at a time, alternating which
+    /// goes first.
     #[arg(long, default_value_t = 15)]
     rounds: u32,
     /// Also write the world with the entities to this file (for `bench gpu` and `render`).
@@ -170,11 +171,12 @@ struct EntityCost {
 }
 
 impl EntityCost {
-    /// Times `naadf` and `nodf` (the grid method is too slow for many rounds) on both worlds.
-    /// Each round traces both ray sets once per world, a piece at a time: each piece (one
-    /// [`PIECES`]th of a set) is traced through both worlds back to back, alternating which
-    /// goes first, so that both sides of a ratio see the machine within milliseconds of each
-    /// other (neighbours that steal the processor for a while then slow both alike).
+    /// Times `naadf` and `nodf` (the grid method is too slow for many rounds), without and
+    /// with the entities. Each round traces both ray sets once per tracer, a piece at a
+    /// time: each piece (one [`PIECES`]th of a set) goes through both back to back,
+    /// alternating which goes first, so that both sides of a ratio see the machine within
+    /// milliseconds of each other (neighbours that steal the processor for a while then slow
+    /// both alike).
     fn measure(crowded: &World, sets: [&[Ray]; 2], rounds: u32) -> Result<Self> {
         let rounds = rounds.max(1);
         let mut median_percent = BTreeMap::new();

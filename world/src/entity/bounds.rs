@@ -13,11 +13,13 @@ pub(crate) struct Bounds {
     /// The world box.
     lo: [f64; 3],
     hi: [f64; 3],
-    /// The grid's frame: its origin corner and the rows of the rotation world → entity.
+    /// The grid's frame: its origin corner and the rows of the rotation world → entity (a
+    /// matrix, cheaper for the box test than the quaternion `inv`).
     pos: [f64; 3],
     to_local: [[f64; 3]; 3],
     size: [f64; 3],
-    /// The decoded rotation world → entity, as the ray test applies it.
+    /// The decoded rotation world → entity, as the exact ray test applies it
+    /// ([`Bounds::local`]), kept so that a tested instance is not decoded per ray.
     inv: [f64; 4],
 }
 

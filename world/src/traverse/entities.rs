@@ -54,8 +54,46 @@ pub(crate) struct OpenPart {
 }
 
 thread_local! {
-    /// The lists a batch walk of the hierarchy fills, kept per thread between batches.
-    static SCRATCH: RefCell<Scratch> = RefCell::default();
+    /// What tracing a slice reuses from one batch to the next, kept per thread.
+    static SCRATCH: RefCell<SliceScratch> = RefCell::default();
+}
+
+/// The buffers a slice's batches reuse: the hierarchy walk's lists, and the pairs it met
+/// linked per ray.
+#[derive(Default)]
+struct SliceScratch {
+    walk: Scratch,
+    by_ray: ByRay,
+}
+
+/// The pairs (ray, instance) a batch walk met, linked per ray: ray `j`'s first pair is
+/// `head[j]`, the one after pair `p` is `next[p]` ([`ByRay::END`] ends a run). Cheaper
+/// than sorting the pairs, which come in no particular order.
+#[derive(Default)]
+struct ByRay {
+    head: Vec<u32>,
+    next: Vec<u32>,
+}
+
+impl ByRay {
+    const END: u32 = u32::MAX;
+
+    /// Links `pairs` for rays `0..rays`.
+    fn link(&mut self, pairs: &[(u32, u32)], rays: usize) {
+        self.head.clear();
+        self.head.resize(rays, Self::END);
+        self.next.resize(pairs.len(), Self::END);
+        for (p, &(j, _)) in pairs.iter().enumerate() {
+            self.next[p] = self.head[j as usize];
+            self.head[j as usize] = p as u32;
+        }
+    }
+
+    /// The indices of ray `j`'s pairs.
+    fn run(&self, j: usize) -> impl Iterator<Item = usize> + '_ {
+        let first = Some(self.head[j]).filter(|&p| p != Self::END);
+        std::iter::successors(first, |&p| Some(self.next[p as usize]).filter(|&q| q != Self::END)).map(|p| p as usize)
+    }
 }
 
 /// What a ray test reads: the instances (records, boxes and hierarchy) and the entity
@@ -113,8 +151,6 @@ impl<'a> EntityView<'a> {
         let mut out = Vec::with_capacity(rays.len());
         let mut walks = Vec::with_capacity(BATCH.min(rays.len()));
         let mut open = Vec::with_capacity(BATCH.min(rays.len()));
-        let mut heads = vec![u32::MAX; BATCH];
-        let mut next: Vec<u32> = Vec::new();
         for batch in rays.chunks(BATCH) {
             let first = out.len();
             walks.clear();
@@ -129,23 +165,14 @@ impl<'a> EntityView<'a> {
                     }
                 }
             }
-            SCRATCH.with_borrow_mut(|scratch| {
-                let found = self.set.bvh.crossing_many(&walks, scratch);
-                // Each open ray's instances: the pairs of ray `j` linked from `head[j]`.
-                let head = &mut heads[..walks.len()];
-                head.fill(u32::MAX);
-                next.resize(found.len(), 0);
-                for (p, &(j, _)) in found.iter().enumerate() {
-                    next[p] = head[j as usize];
-                    head[j as usize] = p as u32;
-                }
-                for (j, &h) in head.iter().enumerate() {
-                    if h == u32::MAX {
-                        continue;
+            SCRATCH.with_borrow_mut(|SliceScratch { walk, by_ray }| {
+                let found = self.set.bvh.crossing_many(&walks, walk);
+                by_ray.link(found, walks.len());
+                for (j, (at, part)) in open.iter().enumerate() {
+                    let mut run = by_ray.run(j).map(|p| found[p].1).peekable();
+                    if run.peek().is_some() {
+                        out[*at] = self.settle(&batch[at - first], part, run);
                     }
-                    let (at, part) = &open[j];
-                    let run = std::iter::successors(Some(h), |&p| Some(next[p as usize]).filter(|&q| q != u32::MAX));
-                    out[*at] = self.settle(&batch[at - first], part, run.map(|p| found[p as usize].1));
                 }
             });
         }

@@ -30,7 +30,8 @@ const _: () = assert!(WIDTH == 4 && BATCH.is_power_of_two() && BATCH < 1 << 16);
 /// Consecutive rays tested as one group when they are coherent.
 pub const GROUP: usize = 16;
 
-/// What a walk of a batch keeps between calls: one list of rays per child lane and level.
+/// What a walk of a batch keeps between calls: one list of rays per child lane and level,
+/// the rays no group holds, and the pairs (ray, primitive) met.
 #[derive(Default)]
 pub struct Scratch {
     levels: Vec<[Vec<u16>; WIDTH]>,
