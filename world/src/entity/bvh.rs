@@ -19,6 +19,7 @@
 //! one would enter.
 
 pub mod batch;
+mod lane_sort;
 mod node;
 
 pub use node::{FAR, WIDTH, WalkRay};

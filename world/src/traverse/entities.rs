@@ -96,6 +96,16 @@ impl ByRay {
     }
 }
 
+/// An open ray of a batch as its instance test needs it: its index in the batch (its slot
+/// in the output holds the world's hit) and its world part's span and steps. Kept apart from
+/// the hit, which most rays never need again, so that a batch's list stays small.
+struct Pending {
+    i: u32,
+    steps: u32,
+    t_entry: f64,
+    t_end: f64,
+}
+
 /// What a ray test reads: the instances (records, boxes and hierarchy) and the entity
 /// types' voxels.
 #[derive(Clone, Copy)]
@@ -155,12 +165,17 @@ impl<'a> EntityView<'a> {
             let first = out.len();
             walks.clear();
             open.clear();
-            for ray in batch {
+            for (i, ray) in batch.iter().enumerate() {
                 match part(ray) {
                     WorldPart::Done(hit) => out.push(hit),
                     WorldPart::Open(part) => {
                         walks.push(WalkRay::new(ray.origin(), ray.dir(), part.t_entry, part.t_end));
-                        open.push((out.len(), part));
+                        open.push(Pending {
+                            i: i as u32,
+                            steps: part.steps,
+                            t_entry: part.t_entry,
+                            t_end: part.t_end,
+                        });
                         out.push(part.world);
                     }
                 }
@@ -168,10 +183,17 @@ impl<'a> EntityView<'a> {
             SCRATCH.with_borrow_mut(|SliceScratch { walk, by_ray }| {
                 let found = self.set.bvh.crossing_many(&walks, walk);
                 by_ray.link(found, walks.len());
-                for (j, (at, part)) in open.iter().enumerate() {
+                for (j, p) in open.iter().enumerate() {
                     let mut run = by_ray.run(j).map(|p| found[p].1).peekable();
                     if run.peek().is_some() {
-                        out[*at] = self.settle(&batch[at - first], part, run);
+                        let at = first + p.i as usize;
+                        let part = OpenPart {
+                            world: out[at],
+                            t_entry: p.t_entry,
+                            t_end: p.t_end,
+                            steps: p.steps,
+                        };
+                        out[at] = self.settle(&batch[p.i as usize], &part, run);
                     }
                 }
             });

@@ -11,14 +11,15 @@
 //!   its own.
 //! - **The other rays** descend together, breadth by node: at each node every ray of the
 //!   node's list is tested against the four boxes and appended, without a branch, to the
-//!   list of each child it enters. The tests of different rays do not wait on each other,
-//!   and the only branches left are per node, not per ray.
+//!   list of each child it enters (`lane_sort`). The tests of different rays do
+//!   not wait on each other, and the only branches left are per node, not per ray.
 //!
 //! Both find, for each ray, exactly the instances whose `f32` lane box the ray enters
 //! within its window: a parent's box holds its children's, so a ray that enters a leaf's
 //! box entered every box above it, and the per-ray test at the leaf is the one
 //! [`Bvh::crossing`] makes.
 
+use super::lane_sort::{Kernel, LIST_SLACK, sort_into_lanes};
 use super::node::{Node, WIDTH, WalkRay, lane_max, lane_min};
 use super::{Bvh, LEAF, NO_CHILD, STACK};
 
@@ -152,7 +153,7 @@ impl Bvh {
         if self.nodes.is_empty() {
             return &mut met.buf[..0];
         }
-        let avx2 = has_avx2();
+        let kernel = Kernel::detect();
         for (b, batch) in rays.chunks(BATCH).enumerate() {
             let base = (b * BATCH) as u32;
             scratch.incoherent.clear();
@@ -166,7 +167,7 @@ impl Bvh {
                 }
             }
             if !scratch.incoherent.is_empty() {
-                let rays = Rays { batch, avx2 };
+                let rays = Rays { batch, kernel };
                 self.list_walk(0, &rays, &scratch.incoherent, 0, &mut scratch.levels, &mut |ids, k| {
                     met.room(ids.len());
                     for &i in ids {
@@ -220,10 +221,10 @@ impl Bvh {
     ) {
         let n = &self.nodes[at];
         if levels.len() <= depth {
-            levels.push(std::array::from_fn(|_| vec![0; BATCH]));
+            levels.push(std::array::from_fn(|_| vec![0; BATCH + LIST_SLACK]));
         }
         let mut lists = std::mem::take(&mut levels[depth]);
-        let len = sort_into_lanes(n, rays, ids, &mut lists);
+        let len = sort_into_lanes(rays.kernel, n, rays.batch, ids, &mut lists);
         for l in 0..WIDTH {
             let c = n.child[l];
             if len[l] == 0 || c == NO_CHILD {
@@ -239,66 +240,15 @@ impl Bvh {
     }
 }
 
-/// The rays of a batch, and whether the processor has AVX2 (looked up once per walk, not
-/// at every node).
+/// The rays of a batch, and the build of the list loop this processor runs.
 struct Rays<'a> {
     batch: &'a [WalkRay],
-    avx2: bool,
-}
-
-/// Whether this processor runs the list loop's AVX2 build.
-fn has_avx2() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    return std::is_x86_feature_detected!("avx2");
-    #[cfg(not(target_arch = "x86_64"))]
-    return false;
-}
-
-/// Tests each ray `ids` of the batch against the four boxes of `n` and appends it to the
-/// list of each lane it enters; returns the lists' lengths.
-fn sort_into_lanes(n: &Node, rays: &Rays, ids: &[u16], lists: &mut [Vec<u16>; WIDTH]) -> [usize; WIDTH] {
-    #[cfg(target_arch = "x86_64")]
-    if rays.avx2 {
-        // SAFETY: `avx2` is set only where the processor has AVX2, which is all the
-        // function's attribute enables.
-        return unsafe { sort_into_lanes_avx2(n, rays.batch, ids, lists) };
-    }
-    sort_into_lanes_body(n, rays.batch, ids, lists)
-}
-
-/// [`sort_into_lanes`] compiled for processors with AVX2.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn sort_into_lanes_avx2(n: &Node, batch: &[WalkRay], ids: &[u16], lists: &mut [Vec<u16>; WIDTH]) -> [usize; WIDTH] {
-    sort_into_lanes_body(n, batch, ids, lists)
-}
-
-#[inline(always)]
-fn sort_into_lanes_body(n: &Node, batch: &[WalkRay], ids: &[u16], lists: &mut [Vec<u16>; WIDTH]) -> [usize; WIDTH] {
-    // Each ray is written to every list and kept (the list's length moved past it) only by
-    // the lists of lanes it enters: no branch per ray and lane. Indices stay below `BATCH`
-    // (a power of two), which the mask tells the compiler.
-    let [l0, l1, l2, l3] = lists;
-    let (l0, l1, l2, l3) = (&mut l0[..BATCH], &mut l1[..BATCH], &mut l2[..BATCH], &mut l3[..BATCH]);
-    let (mut n0, mut n1, mut n2, mut n3) = (0usize, 0usize, 0usize, 0usize);
-    for &i in ids {
-        let (near, far) = batch[i as usize].lanes(n);
-        l0[n0 & (BATCH - 1)] = i;
-        n0 += usize::from(near[0] <= far[0]);
-        l1[n1 & (BATCH - 1)] = i;
-        n1 += usize::from(near[1] <= far[1]);
-        l2[n2 & (BATCH - 1)] = i;
-        n2 += usize::from(near[2] <= far[2]);
-        l3[n3 & (BATCH - 1)] = i;
-        n3 += usize::from(near[3] <= far[3]);
-    }
-    [n0, n1, n2, n3]
+    kernel: Kernel,
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::entity::bvh::Aabb;
     use crate::entity::bvh::tests::{boxes_strategy, grid_boxes};
     use proptest::prelude::*;
 
@@ -349,44 +299,6 @@ mod tests {
             each.sort_unstable();
             batch.sort_unstable();
             prop_assert_eq!(batch, each);
-        }
-    }
-
-    /// The list loop as compiled for this processor (with AVX2 where it has it) sorts rays
-    /// into the same lists as the baseline build.
-    #[test]
-    fn both_builds_of_the_list_loop_agree() {
-        let mut rng = crate::raysets::SplitMix64(5);
-        let boxes: Vec<Aabb> = (0..500)
-            .map(|_| {
-                let lo = [0; 3].map(|_| rng.unit() * 200.0);
-                (lo, lo.map(|v| v + 10.0 * rng.unit()))
-            })
-            .collect();
-        let bvh = Bvh::build(&boxes);
-        let batch: Vec<WalkRay> = (0..BATCH)
-            .map(|_| {
-                let o = [0; 3].map(|_| rng.unit() * 240.0 - 20.0);
-                let d = [0; 3].map(|_| rng.unit() - 0.5);
-                WalkRay::new(o, d, 0.0, 300.0 * rng.unit())
-            })
-            .collect();
-        let ids: Vec<u16> = (0..BATCH as u16).collect();
-        let fresh = || std::array::from_fn(|_| vec![0u16; BATCH]);
-        for n in &bvh.nodes {
-            let (mut a, mut b) = (fresh(), fresh());
-            let rays = Rays {
-                batch: &batch,
-                avx2: has_avx2(),
-            };
-            let (len_a, len_b) = (
-                sort_into_lanes(n, &rays, &ids, &mut a),
-                sort_into_lanes_body(n, &batch, &ids, &mut b),
-            );
-            assert_eq!(len_a, len_b);
-            for l in 0..WIDTH {
-                assert_eq!(a[l][..len_a[l]], b[l][..len_b[l]]);
-            }
         }
     }
 
