@@ -23,11 +23,7 @@ use super::lane_sort::{Kernel, LIST_SLACK, sort_into_lanes};
 use super::node::{Node, WIDTH, WalkRay, lane_max, lane_min};
 use super::{Bvh, LEAF, NO_CHILD, STACK};
 
-/// Rays a batch holds at most: [`Bvh::crossing_many`] takes longer slices in runs of this
-/// many. (Lists of a few thousand entries per level stay in the processor's caches.)
-pub const BATCH: usize = 1024;
-// The list walk writes one list per lane by name.
-const _: () = assert!(WIDTH == 4 && BATCH.is_power_of_two() && BATCH < 1 << 16);
+pub use super::lane_sort::BATCH;
 /// Consecutive rays tested as one group when they are coherent.
 pub const GROUP: usize = 16;
 

@@ -12,8 +12,14 @@
 //!   node of the plain build, whose bookkeeping (four stores and counters per ray) costs as
 //!   much as its arithmetic.
 
-use super::batch::BATCH;
 use super::node::{Node, WIDTH, WalkRay};
+
+/// Rays a batch holds at most: [`super::Bvh::crossing_many`] takes longer slices in runs of
+/// this many, and a list of a node's rays holds at most this many ids. (Lists of a few
+/// thousand entries per level stay in the processor's caches.)
+pub const BATCH: usize = 1024;
+// The plain loop writes one list per lane by name, and ids are `u16`s.
+const _: () = assert!(WIDTH == 4 && BATCH.is_power_of_two() && BATCH < 1 << 16);
 
 /// Entries past [`BATCH`] that a list must hold: the AVX-512 build writes sixteen ids at
 /// its list's end, of which it keeps those that enter.
