@@ -36,7 +36,8 @@ impl NodeHealth {
         self.version.load(Ordering::Relaxed)
     }
 
-    /// Frames rendered and sent back.
+    /// Frames rendered and sent back (a frame is counted as its answer leaves, so a
+    /// requester that has it finds it counted).
     pub fn frames(&self) -> u64 {
         self.frames.load(Ordering::Relaxed)
     }
@@ -168,8 +169,15 @@ where
                 } else {
                     &self.health.failed
                 };
-                registration.answer(&job, world.version(), frame).await?;
+                // Counted before the answer leaves, so that whoever holds the frame finds it
+                // counted; taken back if it could not be sent.
                 counter.fetch_add(1, Ordering::Relaxed);
+                registration
+                    .answer(&job, world.version(), frame)
+                    .await
+                    .inspect_err(|_| {
+                        counter.fetch_sub(1, Ordering::Relaxed);
+                    })?;
             }
         }
     }
