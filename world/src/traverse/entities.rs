@@ -184,7 +184,7 @@ impl<'a> EntityView<'a> {
                 let found = self.set.bvh.crossing_many(&walks, walk);
                 by_ray.link(found, walks.len());
                 for (j, p) in open.iter().enumerate() {
-                    let mut run = by_ray.run(j).map(|p| found[p].1).peekable();
+                    let mut run = by_ray.run(j).map(|pair| found[pair].1).peekable();
                     if run.peek().is_some() {
                         let at = first + p.i as usize;
                         let part = OpenPart {
