@@ -336,13 +336,18 @@ pub(crate) fn walk(ray: &Ray, size: [u32; 3], mut visit: impl FnMut([i64; 3], f6
     let d = ray.dir();
     let step: [i64; 3] = d.map(|v| if v > 0.0 { 1 } else { -1 });
     let next_plane = |c: i64, a: usize| if d[a] > 0.0 { c + 1 } else { c };
-    let mut tmax: [f64; 3] = std::array::from_fn(|a| {
+    // When the ray crosses the next plane of each axis, and the plane after it: the time of
+    // a plane is worked out a step before it is needed, so that its division is not on the
+    // chain of one step waiting for the last.
+    let plane_time = |a: usize, c: i64| {
         if d[a] == 0.0 {
             f64::INFINITY
         } else {
-            ray.t_at(a, next_plane(cell[a], a))
+            ray.t_at(a, next_plane(c, a))
         }
-    });
+    };
+    let mut tmax: [f64; 3] = std::array::from_fn(|a| plane_time(a, cell[a]));
+    let mut tafter: [f64; 3] = std::array::from_fn(|a| plane_time(a, cell[a] + step[a]));
     let size = size.map(i64::from);
     let mut steps = 0u32;
     let end = loop {
@@ -365,7 +370,8 @@ pub(crate) fn walk(ray: &Ray, size: [u32; 3], mut visit: impl FnMut([i64; 3], f6
         if cell[a] < 0 || cell[a] >= size[a] {
             break End::Left { t, steps };
         }
-        tmax[a] = ray.t_at(a, next_plane(cell[a], a));
+        tmax[a] = tafter[a];
+        tafter[a] = plane_time(a, cell[a] + step[a]);
     };
     Some(Walk { entry_t: entry.t, end })
 }
