@@ -229,12 +229,18 @@ impl Bvh {
     /// within [`F32_PAD`] (the caller tests each exactly anyway). Boxes are tested in
     /// `f32`, four at a time. For many rays at once, [`Bvh::crossing_many`] gives the same
     /// answers for less work.
-    pub fn crossing(&self, ray: &WalkRay, mut visit: impl FnMut(u32)) {
+    pub fn crossing(&self, ray: &WalkRay, visit: impl FnMut(u32)) {
         if self.nodes.is_empty() {
             return;
         }
+        self.crossing_below(0, ray, visit);
+    }
+
+    /// [`Bvh::crossing`] below node `at` (whose box the ray enters).
+    fn crossing_below(&self, at: u32, ray: &WalkRay, mut visit: impl FnMut(u32)) {
         let (o, inv, t_lo, t_hi) = ray.parts();
         let mut stack = [0u32; STACK];
+        stack[0] = at;
         let mut sp = 1;
         while sp > 0 {
             sp -= 1;

@@ -12,7 +12,9 @@
 //! - **The other rays** descend together, breadth by node: at each node every ray of the
 //!   node's list is tested against the four boxes and appended, without a branch, to the
 //!   list of each child it enters (`lane_sort`). The tests of different rays do
-//!   not wait on each other, and the only branches left are per node, not per ray.
+//!   not wait on each other, and the only branches left are per node, not per ray. A list
+//!   of at most `SHORT_LIST` rays (half the lists deep in the tree) walks the rest of its
+//!   subtree ray by ray, as [`Bvh::crossing`] does.
 //!
 //! Both find, for each ray, exactly the instances whose `f32` lane box the ray enters
 //! within its window: a parent's box holds its children's, so a ray that enters a leaf's
@@ -26,6 +28,9 @@ use super::{Bvh, LEAF, NO_CHILD, STACK};
 pub use super::lane_sort::BATCH;
 /// Consecutive rays tested as one group when they are coherent.
 pub const GROUP: usize = 16;
+/// A node's list of at most this many rays walks the subtree ray by ray: deep in the tree,
+/// where most lists are this short, sorting them into lanes costs more than it saves.
+const SHORT_LIST: usize = 4;
 
 /// What a walk of a batch keeps between calls: one list of rays per child lane and level,
 /// the rays no group holds, and the pairs (ray, primitive) met.
@@ -215,6 +220,12 @@ impl Bvh {
         levels: &mut Vec<[Vec<u16>; WIDTH]>,
         visit: &mut impl FnMut(&[u16], u32),
     ) {
+        if ids.len() <= SHORT_LIST {
+            for &i in ids {
+                self.crossing_below(at as u32, &rays.batch[usize::from(i)], |k| visit(&[i], k));
+            }
+            return;
+        }
         let n = &self.nodes[at];
         if levels.len() <= depth {
             levels.push(std::array::from_fn(|_| vec![0; BATCH + LIST_SLACK]));
