@@ -29,7 +29,7 @@ pub use super::lane_sort::BATCH;
 /// Consecutive rays tested as one group when they are coherent.
 pub const GROUP: usize = 16;
 /// A node's list of at most this many rays walks the subtree ray by ray: deep in the tree,
-/// where most lists are this short, sorting them into lanes costs more than it saves.
+/// where half the lists are this short, sorting them into lanes costs more than it saves.
 const SHORT_LIST: usize = 4;
 
 /// What a walk of a batch keeps between calls: one list of rays per child lane and level,
