@@ -533,10 +533,19 @@ fn assert_hits(
 
 /// The device world's pipelines follow whether it has instances (shaders/trace.wgsl's
 /// `HAS_INSTANCES`): entities spawned into a world traced without them are hit from the next
-/// sync on, by the same tracer, and once they are despawned the world's hits come back.
+/// sync on, by the same tracer, and once they are despawned the world's hits come back. The
+/// same holds on a device that builds each pipeline's other variant in the background (as
+/// the viewer and render nodes do), whose switches take those builds.
 #[test]
 fn the_instance_walk_follows_the_worlds_instances() {
     let Some(gpu) = gpu() else { return };
+    instance_walk_follows_the_instances(gpu);
+    let background = Gpu::new().expect("a second device");
+    background.prepare_instance_variants();
+    instance_walk_follows_the_instances(&background);
+}
+
+fn instance_walk_follows_the_instances(gpu: &Gpu) {
     let mut world = random_world(size(64, 64, 64), 31).build();
     let mut gw = GpuWorld::new(gpu, &world).unwrap();
     let mut tracer = RayTracer::new(gpu);

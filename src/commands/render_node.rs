@@ -51,6 +51,9 @@ pub fn run(a: Args) -> Result<()> {
         .collect::<Result<_>>()?;
     let retry = super::seconds(a.retry, "--retry")?;
     let mut headless = Headless::new()?;
+    // A long-lived node: a world that gains or loses its instances should not stall a
+    // frame on compiles.
+    headless.gpu.prepare_instance_variants();
     let info = NodeInfo {
         adapter: headless.gpu.describe(),
         modes,

@@ -2,6 +2,7 @@
 
 use crate::frame::FrameError;
 use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 use thiserror::Error;
 
 /// Errors of the GPU client.
@@ -45,6 +46,8 @@ pub struct Gpu {
     pub limits: wgpu::Limits,
     /// The optional features the device was created with (timestamp queries).
     pub features: wgpu::Features,
+    /// See [`Gpu::prepare_instance_variants`].
+    instance_variants: AtomicBool,
 }
 
 impl std::fmt::Debug for Gpu {
@@ -131,8 +134,24 @@ impl Gpu {
             info,
             limits,
             features,
+            instance_variants: AtomicBool::new(false),
         };
         Ok((gpu, surface))
+    }
+
+    /// From now on, each pipeline built for a world with instances (or without) also starts
+    /// building its variant for the other case, on a thread of its own, so that a world
+    /// that gains its first instance slot (a spawn, a preview, another client's marker) or
+    /// loses its last switches pipelines without waiting for a compile. For long-lived
+    /// clients (the viewer, render nodes): it doubles the compile work, which a one-shot
+    /// render would pay for nothing.
+    pub fn prepare_instance_variants(&self) {
+        self.instance_variants.store(true, Ordering::Relaxed);
+    }
+
+    /// Whether [`Gpu::prepare_instance_variants`] was called.
+    pub(crate) fn prepares_instance_variants(&self) -> bool {
+        self.instance_variants.load(Ordering::Relaxed)
     }
 
     /// The adapter in words, e.g. `llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan)`.

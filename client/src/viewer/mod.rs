@@ -260,6 +260,9 @@ impl App {
                 .map_err(|e| ViewerError::Window(e.to_string()))?,
         );
         let (gpu, surface) = Gpu::for_window(window.clone())?;
+        // The first spawn, preview or marker of another client should not freeze the view
+        // while the pipelines with the instance walk compile.
+        gpu.prepare_instance_variants();
         let size = window.inner_size();
         let presenter = Presenter::new(&gpu, surface, (size.width, size.height))?;
         let mut renderers = Renderers::new(&gpu);
