@@ -65,12 +65,40 @@ export class WorldGroup {
   }
 }
 
-/** A pass's pipeline over group 0 and its own group 1 of `group1` bindings, compiled in
+/** A pass's pipeline for a world with instances (`true`) or without: the override
+ * `HAS_INSTANCES` leaves the instance walk out of the second, which SwiftShader, running
+ * invocations in lock step, would otherwise pay for in every frame (docs/WEB.md). */
+export type Variants = (hasInstances: boolean) => Promise<GPUComputePipeline>;
+
+/** The two variants of the pipeline `desc`, each compiled in the background when first
+ * asked for, and the other one right after it, so that a world that gains its first
+ * instance or loses its last does not wait for a compile. */
+export function pipelineVariants(device: GPUDevice, desc: GPUComputePipelineDescriptor): Variants {
+  const made = new Map<boolean, Promise<GPUComputePipeline>>();
+  const make = (has: boolean) => {
+    let p = made.get(has);
+    if (!p) {
+      const constants = { ...desc.compute.constants, HAS_INSTANCES: has ? 1 : 0 };
+      p = device.createComputePipelineAsync({ ...desc, compute: { ...desc.compute, constants } });
+      made.set(has, p);
+    }
+    return p;
+  };
+  return (has) => {
+    const p = make(has);
+    // The other variant only once this one is built, so that it does not slow this one.
+    // (A failed compile is reported by whoever asks for that variant.)
+    p.then(() => make(!has).catch(() => undefined)).catch(() => undefined);
+    return p;
+  };
+}
+
+/** A pass's pipelines over group 0 and its own group 1 of `group1` bindings, compiled in
  * the background (a big pass takes seconds on a software adapter): the compile overlaps
  * the world's download, and a mode never drawn is never compiled. */
 export function passPipeline(device: GPUDevice, world: WorldGroup, label: string, code: string, entryPoint: string, group1: GPUBufferBindingType[]) {
   const layout = device.createBindGroupLayout({ entries: group1.map((t, i) => entry(i, t)) });
-  const pipeline = device.createComputePipelineAsync({
+  const pipeline = pipelineVariants(device, {
     layout: device.createPipelineLayout({ bindGroupLayouts: [world.layout, layout] }),
     compute: { module: device.createShaderModule({ label, code }), entryPoint },
   });

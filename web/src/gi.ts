@@ -9,7 +9,8 @@ import type { Camera } from "./camera";
 import { cameraRays } from "./camera";
 import { toneMapped } from "./colour";
 import type { WorldGroup } from "./compute";
-import { entry, readBack, viewKey, writeStruct } from "./compute";
+import { entry, pipelineVariants, readBack, viewKey, writeStruct } from "./compute";
+import type { Variants } from "./compute";
 import type { GpuWorld } from "./gpu";
 
 /** Where each array of `mem` starts (vec4 words): the cameras at 0, the sample ring last;
@@ -259,7 +260,7 @@ class History {
 /** The GI renderer: one history, kept while the frame size and the world's size stay (the
  * camera may move and the world may change within it). */
 export class GiRenderer {
-  private readonly pipelines: Promise<GPUComputePipeline>[];
+  private readonly pipelines: Variants[];
   private readonly group1: GPUBindGroupLayout;
   /** The frame, light and GI-state parameters (group 1, bindings 0–2). */
   private readonly params: GPUBuffer[];
@@ -277,7 +278,7 @@ export class GiRenderer {
     this.group1 = device.createBindGroupLayout({ entries: types.map((t, i) => entry(i, t)) });
     const layout = device.createPipelineLayout({ bindGroupLayouts: [world.layout, this.group1] });
     const module = device.createShaderModule({ label: "gi.wgsl", code: giWgsl });
-    this.pipelines = GI_PASSES.map((entryPoint) => device.createComputePipelineAsync({ layout, compute: { module, entryPoint } }));
+    this.pipelines = GI_PASSES.map((entryPoint) => pipelineVariants(device, { layout, compute: { module, entryPoint } }));
     const uniform = (label: string, size: number) => device.createBuffer({ label, size, usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST });
     this.params = [uniform("gi frame", FrameInfo.size), uniform("gi light", GI_LIGHT_WORDS.length * 4), uniform("gi state", GiInfo.size)];
     device.queue.writeBuffer(this.params[1], 0, new Uint32Array(GI_LIGHT_WORDS));
@@ -320,7 +321,7 @@ export class GiRenderer {
     );
     device.queue.writeBuffer(this.params[2], 0, hist.info(jit));
 
-    const pipes = await Promise.all(this.pipelines);
+    const pipes = await Promise.all(this.pipelines.map((p) => p(world.hasInstances)));
     const enc = device.createCommandEncoder();
     GI_PASSES.forEach((pass, k) => {
       // The atmosphere table is filled when a history starts.

@@ -17,6 +17,7 @@ import {
   WorldInfo,
 } from "./gen/layout";
 import { WorldGroup, bindBuffers, dispatchPixels, passPipeline, readBack, writeStruct } from "./compute";
+import type { Variants } from "./compute";
 import type { Camera } from "./camera";
 import { cameraRays } from "./camera";
 import type { Mirror, Touched } from "./mirror";
@@ -71,6 +72,8 @@ export class GpuWorld {
   layoutGeneration = 0;
   /** The world's size in chunks. */
   chunks: [number, number, number] = [0, 0, 0];
+  /** Instance slots on the device, the world's and the local ones. */
+  private instanceSlots = 0;
   /** The mirror last uploaded (the page has one). */
   private mirror: Mirror | undefined;
   /** The page's local instances, and their records as on the device. */
@@ -87,6 +90,12 @@ export class GpuWorld {
       device.createBuffer({ label, size, usage: GPUBufferUsage.UNIFORM | GPUBufferUsage.COPY_DST });
     this.info = uniform("world_info", WorldInfo.size);
     this.offsets = uniform("world_offsets", OFFSET_WORDS * 4);
+  }
+
+  /** Whether the device has any instance slot, so that passes walk the instance hierarchy
+   * at all (their pipelines' `HAS_INSTANCES`). */
+  get hasInstances(): boolean {
+    return this.instanceSlots > 0;
   }
 
   /** Uploads everything `mirror` holds, and the local instances, laying the buffer out
@@ -277,6 +286,7 @@ export class GpuWorld {
   private writeInfo(mirror: Mirror): void {
     const [x, y, z] = mirror.size;
     const slots = (mirror.bytes(INSTANCES).length / 4 + this.localRecords.length) / RECORD_WORDS;
+    this.instanceSlots = slots;
     this.chunks = [Math.ceil(x / 16), Math.ceil(y / 16), Math.ceil(z / 16)];
     this.device.queue.writeBuffer(
       this.info,
@@ -299,7 +309,7 @@ const HIERARCHY = GPU_BUFFERS.length;
 
 /** The render pass (albedo, material, normal, steps) into a pixel buffer, read back. */
 class FramePass {
-  private readonly compute: Promise<GPUComputePipeline>;
+  private readonly compute: Variants;
   private readonly group1: GPUBindGroupLayout;
   private readonly view: GPUBuffer;
   private readonly gbuffer: GPUBuffer;
@@ -362,7 +372,7 @@ class FramePass {
         { binding: 2, resource: { buffer: this.gbuffer } },
       ],
     });
-    const enc = await dispatchPixels(device, this.compute, this.world.of(world), frameGroup, width, height);
+    const enc = await dispatchPixels(device, this.compute(world.hasInstances), this.world.of(world), frameGroup, width, height);
     const rgba = new Uint8ClampedArray(await readBack(device, enc, this.pixels!, 0, this.staging!, bytes));
     return new ImageData(rgba, width, height);
   }
@@ -371,7 +381,7 @@ class FramePass {
 /** The progressive path tracer (`pathtrace`): one sample per pixel per frame added to
  * running sums while the view and the world stay the same, shown as sRGB(ACES(mean)). */
 class PathTracer {
-  private readonly pipeline: Promise<GPUComputePipeline>;
+  private readonly pipeline: Variants;
   private readonly group1: GPUBindGroupLayout;
   private readonly light: GPUBuffer;
   private readonly sums: ProgressiveSums;
@@ -398,7 +408,7 @@ class PathTracer {
   async render(world: GpuWorld, camera: Camera, width: number, height: number): Promise<ImageData> {
     const sums = this.sums.next(world, camera, width, height);
     const group = bindBuffers(this.device, this.group1, [this.sums.frame, this.light, sums]);
-    const enc = await dispatchPixels(this.device, this.pipeline, this.world.of(world), group, width, height);
+    const enc = await dispatchPixels(this.device, this.pipeline(world.hasInstances), this.world.of(world), group, width, height);
     return this.sums.finish(enc, width, height);
   }
 }

@@ -8,6 +8,7 @@ import irradianceWgsl from "./gen/irradiance.wgsl?raw";
 import irradianceUpdateWgsl from "./gen/irradiance_update.wgsl?raw";
 import { DEFAULT_SEED, GI_LIGHT_WORDS, IRR, IrradianceInfo, LightInfo } from "./gen/layout";
 import { WorldGroup, bindBuffers, dispatchPixels, passPipeline, submitGroups, writeStruct } from "./compute";
+import type { Variants } from "./compute";
 import type { Camera } from "./camera";
 import type { GpuWorld } from "./gpu";
 import { ProgressiveSums } from "./progressive";
@@ -107,16 +108,16 @@ interface Cache {
 
 /** The `irradiance` renderer: the cache on the device, and the running sums of its samples. */
 export class IrradianceRenderer {
-  private readonly sample: Promise<GPUComputePipeline>;
+  private readonly sample: Variants;
   private readonly sampleLayout: GPUBindGroupLayout;
   /** The update module's passes. `irradiance_invalidate` and `irradiance_update` bind the
    * light, the cache's parameters, the table, the request list and the boxes;
    * `irradiance_args` also the dispatch. */
-  private readonly invalidate: Promise<GPUComputePipeline>;
+  private readonly invalidate: Variants;
   private readonly invalidateLayout: GPUBindGroupLayout;
-  private readonly update: Promise<GPUComputePipeline>;
+  private readonly update: Variants;
   private readonly updateLayout: GPUBindGroupLayout;
-  private readonly args: Promise<GPUComputePipeline>;
+  private readonly args: Variants;
   private readonly argsLayout: GPUBindGroupLayout;
   private readonly light: GPUBuffer;
   /** The cache's parameters of the frame's passes, and of the invalidation (with its boxes). */
@@ -245,7 +246,7 @@ export class IrradianceRenderer {
     this.device.queue.writeBuffer(list, 0, boxes);
     this.device.queue.writeBuffer(this.invalidateInfo, 0, this.infoBytes(cache, boxes.length / 8));
     const group = bindBuffers(this.device, this.invalidateLayout, [this.light, this.invalidateInfo, cache.table, cache.requests, list]);
-    await submitGroups(this.device, this.invalidate, this.world.of(world), group, Math.ceil(cache.slots / 64));
+    await submitGroups(this.device, this.invalidate(world.hasInstances), this.world.of(world), group, Math.ceil(cache.slots / 64));
     list.destroy();
     return cache;
   }
@@ -261,8 +262,8 @@ export class IrradianceRenderer {
     const buffers = [this.light, this.info, cache.table, cache.requests, this.noBoxes, cache.args];
     const sampleGroup = bindBuffers(this.device, this.sampleLayout, [this.sums.frame, this.light, sums, this.info, cache.table, cache.requests]);
     const group0 = this.world.of(world);
-    const enc = await dispatchPixels(this.device, this.sample, group0, sampleGroup, width, height);
-    const [args, update] = await Promise.all([this.args, this.update]);
+    const enc = await dispatchPixels(this.device, this.sample(world.hasInstances), group0, sampleGroup, width, height);
+    const [args, update] = await Promise.all([this.args(world.hasInstances), this.update(world.hasInstances)]);
     let pass = enc.beginComputePass({ label: "irradiance_args" });
     pass.setPipeline(args);
     pass.setBindGroup(0, group0);

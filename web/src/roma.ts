@@ -7,6 +7,7 @@ import romaWgsl from "./gen/roma.wgsl?raw";
 import romaBuildWgsl from "./gen/roma_build.wgsl?raw";
 import { GI_LIGHT_WORDS, ROMA, RomaInfo, RomaJob, RomaWindow } from "./gen/layout";
 import { WorldGroup, bindBuffers, dispatchPixels, passPipeline, submitGroups, writeStruct } from "./compute";
+import type { Variants } from "./compute";
 import type { Camera } from "./camera";
 import type { GpuWorld } from "./gpu";
 import { ProgressiveSums } from "./progressive";
@@ -57,9 +58,9 @@ const within = (t: Vec3, a: Vec3, b: Vec3) => t.every((v, i) => v >= a[i] && v <
 
 /** The `roma` renderer: the maps on the device, and the running sums of its samples. */
 export class RomaRenderer {
-  private readonly sample: Promise<GPUComputePipeline>;
+  private readonly sample: Variants;
   private readonly sampleLayout: GPUBindGroupLayout;
-  private readonly build: Promise<GPUComputePipeline>;
+  private readonly build: Variants;
   private readonly buildLayout: GPUBindGroupLayout;
   private readonly light: GPUBuffer;
   private readonly info: GPUBuffer;
@@ -168,7 +169,7 @@ export class RomaRenderer {
     const jobBuffer = this.device.createBuffer({ label: "roma jobs", size: list.byteLength, usage: GPUBufferUsage.STORAGE | GPUBufferUsage.COPY_DST });
     this.device.queue.writeBuffer(jobBuffer, 0, list);
     const group = bindBuffers(this.device, this.buildLayout, [this.windows, jobBuffer, this.bits]);
-    await submitGroups(this.device, this.build, this.world.of(world), group, jobs.size);
+    await submitGroups(this.device, this.build(world.hasInstances), this.world.of(world), group, jobs.size);
     jobBuffer.destroy();
   }
 
@@ -189,7 +190,7 @@ export class RomaRenderer {
       writeStruct(RomaInfo, { camera: camera.pos, ao_range: ROMA.AO_RANGE, side: ROMA.SIDE, directions: ROMA.DIRECTIONS }),
     );
     const group = bindBuffers(this.device, this.sampleLayout, [this.sums.frame, this.light, sums, this.info, this.windows, this.bits]);
-    const enc = await dispatchPixels(this.device, this.sample, this.world.of(world), group, width, height);
+    const enc = await dispatchPixels(this.device, this.sample(world.hasInstances), this.world.of(world), group, width, height);
     return this.sums.finish(enc, width, height);
   }
 }
