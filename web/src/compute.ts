@@ -75,22 +75,19 @@ export type Variants = (hasInstances: boolean) => Promise<GPUComputePipeline>;
  * instance or loses its last does not wait for a compile. */
 export function pipelineVariants(device: GPUDevice, desc: GPUComputePipelineDescriptor): Variants {
   const made = new Map<boolean, Promise<GPUComputePipeline>>();
-  const make = (has: boolean) => {
+  const make = (has: boolean): Promise<GPUComputePipeline> => {
     let p = made.get(has);
     if (!p) {
       const constants = { ...desc.compute.constants, HAS_INSTANCES: has ? 1 : 0 };
       p = device.createComputePipelineAsync({ ...desc, compute: { ...desc.compute, constants } });
       made.set(has, p);
+      // The other variant only once this one is built, so that it does not slow this one.
+      // (A failed compile is reported by whoever asks for that variant.)
+      p.then(() => make(!has)).catch(() => undefined);
     }
     return p;
   };
-  return (has) => {
-    const p = make(has);
-    // The other variant only once this one is built, so that it does not slow this one.
-    // (A failed compile is reported by whoever asks for that variant.)
-    p.then(() => make(!has).catch(() => undefined)).catch(() => undefined);
-    return p;
-  };
+  return make;
 }
 
 /** A pass's pipelines over group 0 and its own group 1 of `group1` bindings, compiled in

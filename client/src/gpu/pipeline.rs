@@ -79,12 +79,15 @@ impl PassPipelines {
         aadf: bool,
     ) -> Result<wgpu::ComputePipeline, GpuError> {
         let key = (world.split(), lp, aadf, world.has_instances());
+        if let Some(Slot::Ready(p)) = self.cache.get(&key) {
+            return Ok(p.clone());
+        }
+        // Built now, or taken from its background build; then its other variant is started.
         let pipeline = match self.cache.remove(&key) {
-            Some(Slot::Ready(p)) => Ok(p),
             Some(Slot::Building(job)) => job
                 .join()
                 .map_err(|_| GpuError::Validation(format!("building the {} pipeline panicked", self.pass.entry)))?,
-            None => self.build(gpu, world, key)(),
+            _ => self.build(gpu, world, key)(),
         }?;
         self.cache.insert(key, Slot::Ready(pipeline.clone()));
         let other = (key.0, key.1, key.2, !key.3);
