@@ -1033,6 +1033,87 @@ fn the_page_draws_entities_and_follows_their_moves() {
     server.stop();
 }
 
+/// The page builds the instance hierarchy (its TypeScript port of the binned SAH build,
+/// web/src/instances.ts) word for word as the native client does
+/// (`naadf_world::entity::hierarchy_words`): rotated instances of every size over a large
+/// world with empty slots between them, a few instances, one, many at one place (where the
+/// build falls back to the median) and a row along one axis.
+#[test]
+fn the_page_builds_the_instance_hierarchy_the_native_client_builds() {
+    use naadf_world::entity::pack::{InstanceRecord, quantise_pose};
+    use naadf_world::raysets::SplitMix64;
+    let Some((dir, world, mut browser)) = fixture() else {
+        return;
+    };
+    let server = serve_world(dir.path(), &world, &[], &[]);
+    browser.open("a", &format!("{}/", server.url));
+    browser.wait("a", "true", 60_000);
+    let mut rng = SplitMix64(35);
+    let mut unit = move || rng.unit();
+    // An instance's size, position and rotation.
+    type Pose = ([u32; 3], [f64; 3], [f64; 4]);
+    // An instance buffer with a record at each `Some` pose (slot = id) and empty slots at
+    // each `None`.
+    let buffer = |poses: Vec<Option<Pose>>| -> Vec<u32> {
+        poses
+            .into_iter()
+            .enumerate()
+            .flat_map(|(id, pose)| match pose {
+                None => [0; 5],
+                Some((size, pos, rot)) => {
+                    let q = quantise_pose(pos, rot).expect("a pose in range");
+                    InstanceRecord {
+                        id: id as u32,
+                        size,
+                        voxel_start: 3,
+                        pos: q.fixed,
+                        inv_rot: q.inv_rot,
+                    }
+                    .pack()
+                }
+            })
+            .collect()
+    };
+    let mut scattered = Vec::new();
+    for k in 0..1200 {
+        let size = [0; 3].map(|_| 1 + (unit() * 126.0) as u32);
+        let pos = [unit() * 1000.0, unit() * 500.0, unit() * 2000.0];
+        let rot = [0; 4].map(|_| unit() - 0.5);
+        scattered.push((k % 7 != 3).then_some((size, pos, rot)));
+    }
+    let same_place = (0..40)
+        .map(|_| Some(([8, 8, 8], [100.0, 50.0, 100.0], [0.0, 0.0, 0.0, 1.0])))
+        .collect();
+    let row = (0..33)
+        .map(|k| {
+            Some((
+                [4, 4, 4],
+                [10.0 + 6.0 * f64::from(k), 20.0, 30.0],
+                [0.0, 0.3, 0.0, 0.95],
+            ))
+        })
+        .collect();
+    let few = scattered.iter().flatten().take(3).map(|&p| Some(p)).collect();
+    let one = vec![None, scattered[0]];
+    for (name, poses) in [
+        ("scattered", scattered.clone()),
+        ("same place", same_place),
+        ("row", row),
+        ("few", few),
+        ("one", one),
+    ] {
+        let records = buffer(poses);
+        let native = naadf_world::entity::hierarchy_words(&records);
+        assert!(!native.is_empty(), "{name}");
+        let page = browser.eval("a", &format!("return n.hierarchy({})", json!(records)));
+        let page: Vec<u32> = serde_json::from_value(page).unwrap();
+        assert_eq!(page.len(), native.len(), "{name}: nodes");
+        let differing = page.iter().zip(&native).filter(|(a, b)| a != b).count();
+        assert_eq!(differing, 0, "{name}: {differing} of {} words differ", native.len());
+    }
+    server.stop();
+}
+
 /// Captures page `id`'s frame and checks that it equals `naadf render` of the same view,
 /// pixel for pixel; returns the frame.
 fn same_frame_as_native(

@@ -1,10 +1,11 @@
 // The instances as the page finds them: each entity's world box from its record in the
 // instance buffer (slot = entity id, zero slots empty; docs/FORMAT.md §5.8), and the
-// four-wide hierarchy over those boxes that the shaders walk (docs/FORMAT.md §5.10). The
-// native client derives the same packed form in Rust (naadf_world::entity::bvh) with a
-// surface-area build; the page splits at the median, which is simpler and only changes how
-// many boxes a ray tests, never what it hits. It also lays out the page's local instances
-// (docs/FORMAT.md §5.11): solid boxes drawn on this page's GPU only, after the world's.
+// four-wide hierarchy over those boxes that the shaders walk (docs/FORMAT.md §5.10). Both
+// are the native client's (naadf_world::entity::bounds and ::bvh) word for word: the same
+// binned surface-area build in the same f64 arithmetic, which the browser tests check
+// against `naadf_world::entity::hierarchy_words`. It also lays out the page's local
+// instances (docs/FORMAT.md §5.11): solid boxes drawn on this page's GPU only, after the
+// world's.
 import { BVH, ENTITY } from "./gen/layout";
 
 /** Words per instance record. */
@@ -48,24 +49,18 @@ export function localLayout(boxes: LocalBox[], typeBase: number): { types: Uint3
 /** An axis-aligned box `[lo, hi]`. */
 export type Box = [number[], number[]];
 
-/** Decodes a smallest-three quaternion `[x, y, z, w]` (world/src/entity/pack.rs). */
+/** Decodes a smallest-three quaternion `[x, y, z, w]` (world/src/entity/pack.rs), in its
+ * order of operations. */
 function decodeQuat(w0: number, w1: number): number[] {
   const small = [w0 & 0x3fff, (w0 >>> 14) & 0x3fff, (w0 >>> 28) | ((w1 & 0x3ff) << 4)].map((v) => (v - 8192) / 8192);
-  const rest = Math.sqrt(Math.max(0, 1 - small[0] ** 2 - small[1] ** 2 - small[2] ** 2));
+  const sum = small[0] * small[0] + small[1] * small[1] + small[2] * small[2];
+  const rest = Math.sqrt(Math.max(1 - sum, 0));
   small.splice((w1 >>> 10) & 3, 0, rest);
   return small;
 }
 
-/** Rotates `v` by the unit quaternion `q = [x, y, z, w]`. */
-function rotate(q: number[], v: number[]): number[] {
-  const cross = (a: number[], b: number[]) => [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
-  const t = cross(q, v).map((c) => 2 * c);
-  const u = cross(q, t);
-  return [0, 1, 2].map((a) => v[a] + q[3] * t[a] + u[a]);
-}
-
-/** The world box of the instance in `slot` of the instance buffer `words`, padded as the
- * shaders' boxes are (`BVH.PAD`), or undefined for an empty slot. */
+/** The world box of the instance in `slot` of the instance buffer `words`, padded by
+ * `BVH.BOUNDS_PAD` (what the hierarchy is built over), or undefined for an empty slot. */
 export function instanceBox(words: Uint32Array, slot: number): Box | undefined {
   const r = slot * RECORD_WORDS;
   const e = words[r + 4];
@@ -74,86 +69,224 @@ export function instanceBox(words: Uint32Array, slot: number): Box | undefined {
   const size = [(e >>> 14) & 0x7f, (e >>> 21) & 0x7f, ((e >>> 28) & 0xf) | (((dy >>> 29) & 7) << 4)];
   const pos = [dx & 0x1fffff, (dx >>> 21) | (((dy >>> 21) & 0xff) << 11), dy & 0x1fffff].map((v) => v / 128);
   const inv = decodeQuat(dz, dw & 0xfff);
-  const rot = [-inv[0], -inv[1], -inv[2], inv[3]];
+  // The rotation entity → world (the conjugate), applied to each corner `v` as
+  // pack.rs's `rotate` does: `v + w·t + u × t` with `t = 2 (u × v)`, in its operations'
+  // order (scalars, as this runs for every instance on every change).
+  const [ux, uy, uz, w] = [-inv[0], -inv[1], -inv[2], inv[3]];
   const lo = [Infinity, Infinity, Infinity];
   const hi = [-Infinity, -Infinity, -Infinity];
   for (let c = 0; c < 8; c++) {
-    const p = rotate(rot, [0, 1, 2].map((a) => ((c >> a) & 1 ? size[a] : 0)));
+    const vx = c & 1 ? size[0] : 0;
+    const vy = c & 2 ? size[1] : 0;
+    const vz = c & 4 ? size[2] : 0;
+    const tx = 2 * (uy * vz - uz * vy);
+    const ty = 2 * (uz * vx - ux * vz);
+    const tz = 2 * (ux * vy - uy * vx);
+    const p = [vx + w * tx + (uy * tz - uz * ty), vy + w * ty + (uz * tx - ux * tz), vz + w * tz + (ux * ty - uy * tx)];
     for (let a = 0; a < 3; a++) {
-      lo[a] = Math.min(lo[a], pos[a] + p[a] - BVH.PAD);
-      hi[a] = Math.max(hi[a], pos[a] + p[a] + BVH.PAD);
+      lo[a] = Math.min(lo[a], p[a] + pos[a]);
+      hi[a] = Math.max(hi[a], p[a] + pos[a]);
     }
   }
-  return [lo, hi];
+  return [lo.map((v) => v - BVH.BOUNDS_PAD), hi.map((v) => v + BVH.BOUNDS_PAD)];
 }
 
-/** `v` as an f32, rounded up (`up`) or down. */
-function toF32(v: number, up: boolean): number {
-  const f = new Float32Array([v]);
-  const bits = new Int32Array(f.buffer);
-  if (up && f[0] < v) bits[0] += f[0] >= 0 ? 1 : -1;
-  if (!up && f[0] > v) bits[0] += f[0] > 0 ? -1 : 1;
-  return f[0];
+const F32 = new Float32Array(1);
+const F32_BITS = new Int32Array(F32.buffer);
+
+/** `v` as an f32, padded by `BVH.F32_PAD` and rounded outward: up for an upper bound (`up`),
+ * down otherwise. */
+function outward(v: number, up: boolean): number {
+  const p = up ? v + BVH.F32_PAD : v - BVH.F32_PAD;
+  F32[0] = p;
+  const f = F32[0];
+  if (up ? f >= p : f <= p) return f;
+  // One step of the f32 grid toward the side of `p`, as Rust's `next_up` and `next_down`.
+  if (f === 0) {
+    F32_BITS[0] = 1;
+    return up ? F32[0] : -F32[0];
+  }
+  F32_BITS[0] += (f > 0) === up ? 1 : -1;
+  return F32[0];
 }
 
+/** A node of the binary tree the four-wide one is made from: its box (`lo` then `hi`, as
+ * `BoxArray` holds them), and two children or one instance (`prim`). */
 interface Binary {
-  box: Box;
+  box: Float64Array;
   kids?: [Binary, Binary];
-  slot: number;
+  prim: number;
 }
 
-interface Item {
-  slot: number;
-  box: Box;
+/** Boxes as six f64 each (`lo.xyz`, `hi.xyz`), so that a build allocates little. */
+type BoxArray = Float64Array;
+
+/** Empties box `i` of `b`. */
+function clear(b: BoxArray, i: number): void {
+  b.fill(Infinity, 6 * i, 6 * i + 3);
+  b.fill(-Infinity, 6 * i + 3, 6 * i + 6);
 }
 
-const centre = (b: Box, a: number) => (b[0][a] + b[1][a]) / 2;
+/** Grows box `i` of `into` by box `j` of `from`. */
+function grow(into: BoxArray, i: number, from: BoxArray, j: number): void {
+  for (let a = 0; a < 3; a++) {
+    into[6 * i + a] = Math.min(into[6 * i + a], from[6 * j + a]);
+    into[6 * i + 3 + a] = Math.max(into[6 * i + 3 + a], from[6 * j + 3 + a]);
+  }
+}
 
-/** The binary tree over `items`, split at the median of the axis where the centres spread
- * most (ties by slot), down to one instance per leaf: at most 14 levels for 16383. */
-function split(items: Item[]): Binary {
-  const box: Box = [[0, 1, 2].map((a) => Math.min(...items.map((i) => i.box[0][a]))), [0, 1, 2].map((a) => Math.max(...items.map((i) => i.box[1][a])))];
-  if (items.length === 1) return { box, slot: items[0].slot };
-  const spread = (a: number) => {
-    const c = items.map((i) => centre(i.box, a));
-    return Math.max(...c) - Math.min(...c);
+/** Half the surface area of box `i` of `b` (the native build's, in its operations' order). */
+function halfArea(b: BoxArray, i: number): number {
+  const x = Math.max(b[6 * i + 3] - b[6 * i], 0);
+  const y = Math.max(b[6 * i + 4] - b[6 * i + 1], 0);
+  const z = Math.max(b[6 * i + 5] - b[6 * i + 2], 0);
+  return x * y + y * z + z * x;
+}
+
+function binOf(c: number, lo: number, hi: number): number {
+  if (hi <= lo) return 0;
+  return Math.min(Math.floor(((c - lo) / (hi - lo)) * BVH.BINS), BVH.BINS - 1);
+}
+
+/** Builds the hierarchy's binary tree over the primitives' `boxes` as
+ * `naadf_world::entity::bvh` does: the binned SAH down to one primitive per leaf (runs of at
+ * most four, and every run below `BVH.SAH_DEPTH` levels, at the median), reordering the
+ * primitives in place as it does, so that the trees are the same. */
+function buildBinary(boxes: BoxArray): Binary {
+  const n = boxes.length / 6;
+  const centres = new Float64Array(3 * n);
+  for (let p = 0; p < n; p++) for (let a = 0; a < 3; a++) centres[3 * p + a] = 0.5 * (boxes[6 * p + a] + boxes[6 * p + 3 + a]);
+  const prims = Int32Array.from({ length: n }, (_, i) => i);
+  const BINS = BVH.BINS;
+  const bins = new Float64Array(6 * 3 * BINS);
+  const counts = new Int32Array(3 * BINS);
+  const acc = new Float64Array(6);
+  const aboveArea = new Float64Array(BINS);
+  const aboveCount = new Int32Array(BINS);
+  // The range of the centres of `prims[from..to]`: box 0 of `range`.
+  const range = new Float64Array(6);
+  const ranges = (from: number, to: number) => {
+    clear(range, 0);
+    for (let i = from; i < to; i++) {
+      const p = prims[i];
+      for (let a = 0; a < 3; a++) {
+        range[a] = Math.min(range[a], centres[3 * p + a]);
+        range[3 + a] = Math.max(range[3 + a], centres[3 * p + a]);
+      }
+    }
   };
-  const spreads = [0, 1, 2].map(spread);
-  const axis = spreads.indexOf(Math.max(...spreads));
-  const sorted = [...items].sort((p, q) => centre(p.box, axis) - centre(q.box, axis) || p.slot - q.slot);
-  const mid = sorted.length >> 1;
-  return { box, kids: [split(sorted.slice(0, mid)), split(sorted.slice(mid))], slot: 0 };
+  // The cheapest cut of `prims[from..to]` that leaves primitives on both sides.
+  const bestCut = (from: number, to: number) => {
+    ranges(from, to);
+    const lo = [range[0], range[1], range[2]];
+    const hi = [range[3], range[4], range[5]];
+    for (let b = 0; b < 3 * BINS; b++) clear(bins, b);
+    counts.fill(0);
+    for (let i = from; i < to; i++) {
+      const p = prims[i];
+      for (let axis = 0; axis < 3; axis++) {
+        const bin = axis * BINS + binOf(centres[3 * p + axis], lo[axis], hi[axis]);
+        grow(bins, bin, boxes, p);
+        counts[bin] += 1;
+      }
+    }
+    let best: { axis: number; lo: number; hi: number; bin: number; cost: number } | undefined;
+    for (let axis = 0; axis < 3; axis++) {
+      if (hi[axis] <= lo[axis]) continue;
+      clear(acc, 0);
+      let count = 0;
+      for (let k = BINS - 1; k >= 1; k--) {
+        grow(acc, 0, bins, axis * BINS + k);
+        count += counts[axis * BINS + k];
+        aboveArea[k] = halfArea(acc, 0);
+        aboveCount[k] = count;
+      }
+      clear(acc, 0);
+      count = 0;
+      for (let k = 1; k < BINS; k++) {
+        grow(acc, 0, bins, axis * BINS + k - 1);
+        count += counts[axis * BINS + k - 1];
+        if (count === 0 || aboveCount[k] === 0) continue;
+        const cost = halfArea(acc, 0) * count + aboveArea[k] * aboveCount[k];
+        if (!best || cost < best.cost) best = { axis, lo: lo[axis], hi: hi[axis], bin: k, cost };
+      }
+    }
+    return best;
+  };
+  // Orders `prims[from..to]` by centre along the axis where the centres spread most (the
+  // last such axis, as Rust's `max_by`; ties by index) and returns the middle.
+  const median = (from: number, to: number) => {
+    ranges(from, to);
+    let axis = 0;
+    for (let a = 1; a < 3; a++) if (range[3 + a] - range[a] >= range[3 + axis] - range[axis]) axis = a;
+    prims.subarray(from, to).sort((p, q) => centres[3 * p + axis] - centres[3 * q + axis] || p - q);
+    return from + ((to - from) >> 1);
+  };
+  const split = (from: number, to: number, depth: number): Binary => {
+    const box = new Float64Array(6);
+    clear(box, 0);
+    for (let i = from; i < to; i++) grow(box, 0, boxes, prims[i]);
+    if (to - from === 1) return { box, prim: prims[from] };
+    const cut = depth < BVH.SAH_DEPTH && to - from > 4 ? bestCut(from, to) : undefined;
+    let mid: number;
+    if (cut) {
+      const lower = (p: number) => binOf(centres[3 * p + cut.axis], cut.lo, cut.hi) < cut.bin;
+      let [i, j] = [from, to];
+      while (i < j) {
+        if (lower(prims[i])) i += 1;
+        else {
+          j -= 1;
+          [prims[i], prims[j]] = [prims[j], prims[i]];
+        }
+      }
+      mid = i;
+    } else {
+      mid = median(from, to);
+    }
+    return { box, kids: [split(from, mid, depth + 1), split(mid, to, depth + 1)], prim: 0 };
+  };
+  return split(0, n, 0);
 }
 
 /** The packed four-wide hierarchy over the instances of the instance buffer `words`
- * (empty when there is none): each binary node's children and grandchildren become one
- * node's lanes, boxes as f32 axis by axis, then the lanes' references. */
+ * (empty when there is none), as `naadf_world::entity::hierarchy_words` packs it: each
+ * binary node's children and grandchildren become one node's lanes, boxes as f32 axis by
+ * axis, then the lanes' references (`BVH.LEAF | slot` for an instance). */
 export function hierarchyWords(words: Uint32Array): Uint32Array {
-  const items: Item[] = [];
+  const slots: number[] = [];
+  const live: Box[] = [];
   for (let slot = 0; slot < words.length / RECORD_WORDS; slot++) {
     const box = instanceBox(words, slot);
-    if (box) items.push({ slot, box });
+    if (box) {
+      live.push(box);
+      slots.push(slot);
+    }
   }
-  if (items.length === 0) return new Uint32Array(0);
+  if (live.length === 0) return new Uint32Array(0);
+  const boxes = new Float64Array(6 * live.length);
+  live.forEach(([lo, hi], p) => {
+    boxes.set(lo, 6 * p);
+    boxes.set(hi, 6 * p + 3);
+  });
   const nodes: Uint32Array[] = [];
   const widen = (b: Binary): number => {
     const index = nodes.length;
     const node = new Uint32Array(BVH.NODE_WORDS);
-    const boxes = new Float32Array(node.buffer, 0, 24);
-    boxes.fill(BVH.FAR);
+    const rows = new Float32Array(node.buffer, 0, 24);
+    rows.fill(BVH.FAR);
     node.fill(BVH.NONE, 24);
     nodes.push(node);
     const lanes = b.kids ? b.kids.flatMap((k) => (k.kids ? k.kids : [k])) : [b];
     lanes.forEach((c, lane) => {
       for (let a = 0; a < 3; a++) {
-        boxes[8 * a + lane] = toF32(c.box[0][a], false);
-        boxes[8 * a + 4 + lane] = toF32(c.box[1][a], true);
+        rows[8 * a + lane] = outward(c.box[a], false);
+        rows[8 * a + 4 + lane] = outward(c.box[3 + a], true);
       }
-      node[24 + lane] = c.kids ? widen(c) : (BVH.LEAF | c.slot) >>> 0;
+      node[24 + lane] = c.kids ? widen(c) : (BVH.LEAF | slots[c.prim]) >>> 0;
     });
     return index;
   };
-  widen(split(items));
+  widen(buildBinary(boxes));
   const out = new Uint32Array(nodes.length * BVH.NODE_WORDS);
   nodes.forEach((n, i) => out.set(n, i * BVH.NODE_WORDS));
   return out;

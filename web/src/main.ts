@@ -11,6 +11,7 @@ import { PageCache } from "./cache";
 import { digestHex, loadHasher } from "./digest";
 import { GpuWorld, NoWebGpu, Renderer, openDevice } from "./gpu";
 import type { LocalBox } from "./instances";
+import { hierarchyWords } from "./instances";
 import type { IrradianceStats } from "./irradiance";
 import { markerBoxes, markerMaterials } from "./markers";
 import type { Marker } from "./overlay";
@@ -87,6 +88,9 @@ interface PageState {
   edit(ops: string): Promise<number>;
   undo(): Promise<number>;
   redo(): Promise<number>;
+  /** The instance hierarchy the page builds over an instance buffer (the words of its
+   * records), as the shaders read it; tests compare it with the native build's. */
+  hierarchy(records: number[]): number[];
 }
 
 const $ = <T extends HTMLElement>(id: string) => document.getElementById(id) as T;
@@ -132,6 +136,7 @@ const naadf: PageState = {
   edit: () => Promise.reject(new Error("not joined")),
   undo: () => Promise.reject(new Error("not joined")),
   redo: () => Promise.reject(new Error("not joined")),
+  hierarchy: (records) => Array.from(hierarchyWords(Uint32Array.from(records))),
 };
 (window as unknown as { naadf: PageState }).naadf = naadf;
 

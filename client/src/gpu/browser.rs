@@ -163,14 +163,16 @@ fn layout_ts() -> String {
     s.push_str("} as const;\n");
     let _ = writeln!(
         s,
-        "\n/** The instance hierarchy's packed form (naadf_world::entity::bvh): words per node, a leaf's flag, an\n * unused lane, where unused lanes' boxes sit, and the padding of an instance's world box (the\n * record's bounds and the f32 boxes', each {}). */\n\
-         export const BVH = {{ NODE_WORDS: {}, LEAF: {}, NONE: {}, FAR: {:?}, PAD: {:?} }} as const;",
-        bvh::F32_PAD,
+        "\n/** The instance hierarchy (naadf_world::entity::bvh): words per node, a leaf's flag, an unused lane,\n * where unused lanes' boxes sit; the padding of an instance's world box, and the outward padding of the\n * f32 boxes; the build's bins per axis, and its binary levels split by the surface-area heuristic. */\n\
+         export const BVH = {{ NODE_WORDS: {}, LEAF: {}, NONE: {}, FAR: {:?}, BOUNDS_PAD: {:?}, F32_PAD: {:?}, BINS: {}, SAH_DEPTH: {} }} as const;",
         bvh::NODE_WORDS,
         bvh::LEAF,
         bvh::NO_CHILD,
         bvh::FAR,
-        f64::from(bvh::F32_PAD) + bvh::BOUNDS_PAD,
+        bvh::BOUNDS_PAD,
+        f64::from(bvh::F32_PAD),
+        bvh::BINS,
+        bvh::SAH_DEPTH,
     );
     let identity = pack::encode_quat([0.0, 0.0, 0.0, 1.0]);
     let _ = writeln!(

@@ -242,10 +242,10 @@ export const GI = {
   NO_ENTITY: 16383,
 } as const;
 
-/** The instance hierarchy's packed form (naadf_world::entity::bvh): words per node, a leaf's flag, an
- * unused lane, where unused lanes' boxes sit, and the padding of an instance's world box (the
- * record's bounds and the f32 boxes', each 0.015625). */
-export const BVH = { NODE_WORDS: 28, LEAF: 2147483648, NONE: 4294967295, FAR: 1e30, PAD: 0.03125 } as const;
+/** The instance hierarchy (naadf_world::entity::bvh): words per node, a leaf's flag, an unused lane,
+ * where unused lanes' boxes sit; the padding of an instance's world box, and the outward padding of the
+ * f32 boxes; the build's bins per axis, and its binary levels split by the surface-area heuristic. */
+export const BVH = { NODE_WORDS: 28, LEAF: 2147483648, NONE: 4294967295, FAR: 1e30, BOUNDS_PAD: 0.015625, F32_PAD: 0.015625, BINS: 16, SAH_DEPTH: 24 } as const;
 
 /** Entity types and instance records (naadf_world::entity): a solid type voxel's flag, the
  * alignment of a type's voxels, words per record, the id of a local instance, and the packed

@@ -44,9 +44,9 @@ pub const MAX_DEPTH: usize = (SAH_DEPTH + 14) / 2;
 const _: () = assert!(3 * (MAX_DEPTH + 1) < STACK);
 /// Binary levels split by the SAH; deeper runs are split at the median, so that the
 /// binary depth stays below `SAH_DEPTH + log2(16383)` and the stack bound holds.
-const SAH_DEPTH: usize = 24;
+pub const SAH_DEPTH: usize = 24;
 /// Bins per axis of the SAH sweep.
-const BINS: usize = 16;
+pub const BINS: usize = 16;
 /// Padding of an instance's world and oriented boxes (`entity::bounds`), in voxels:
 /// far above the rounding of the rotation, far below a voxel, so that the boxes only ever
 /// let more rays through to the exact test.
