@@ -54,13 +54,26 @@ async fn live_client(url: &str) -> watch::Receiver<u64> {
         .connect()
         .await
         .unwrap();
-    let mut raw = WorldServiceClient::new(channel);
+    // Messages of any size, as the real client takes them (a resync's may pass tonic's
+    // default of 4 MiB).
+    let mut raw = WorldServiceClient::new(channel).max_decoding_message_size(usize::MAX);
     let mut mirror = Mirror::new(None);
     let mut stream = raw.join(mirror.join_request()).await.unwrap().into_inner();
     let (tx, rx) = watch::channel(0);
     tokio::spawn(async move {
-        while let Ok(Some(m)) = stream.message().await {
-            mirror.handle(&m).unwrap();
+        loop {
+            let m = match stream.message().await {
+                Ok(Some(m)) => m,
+                // Dropping `tx` fails the test's wait; say why the stream ended.
+                end => {
+                    eprintln!("the live client's stream ended: {end:?}");
+                    return;
+                }
+            };
+            if let Err(e) = mirror.handle(&m) {
+                eprintln!("the live client's mirror refused a message: {e}");
+                return;
+            }
             if let Some(w) = mirror.world() {
                 tx.send_replace(w.version());
             }
