@@ -1037,10 +1037,14 @@ fn the_page_draws_entities_and_follows_their_moves() {
 /// web/src/instances.ts) word for word as the native client does
 /// (`naadf_world::entity::hierarchy_words`): rotated instances of every size over a large
 /// world with empty slots between them, a few instances, one, many at one place (where the
-/// build falls back to the median) and a row along one axis.
+/// build falls back to the median) and a row along one axis. And after a change of the
+/// records it keeps the hierarchy the native client keeps: refitted after small moves,
+/// built anew after moves anywhere and when the slots change.
 #[test]
 fn the_page_builds_the_instance_hierarchy_the_native_client_builds() {
+    use naadf_world::entity::bvh::Bvh;
     use naadf_world::entity::pack::{InstanceRecord, quantise_pose};
+    use naadf_world::entity::{REFIT_SLACK, hierarchy_words, instance_boxes};
     use naadf_world::raysets::SplitMix64;
     let Some((dir, world, mut browser)) = fixture() else {
         return;
@@ -1110,6 +1114,60 @@ fn the_page_builds_the_instance_hierarchy_the_native_client_builds() {
         assert_eq!(page.len(), native.len(), "{name}: nodes");
         let differing = page.iter().zip(&native).filter(|(a, b)| a != b).count();
         assert_eq!(differing, 0, "{name}: {differing} of {} words differ", native.len());
+    }
+    // The native rule (docs/FORMAT.md §5.10), restated over the hierarchy's public parts:
+    // the same slots refit the hierarchy built for `previous`, kept while its expected
+    // node visits stay within `REFIT_SLACK` of the build's.
+    let slots = |records: &[u32]| -> Vec<u32> {
+        (0..records.len() as u32 / 5)
+            .filter(|&s| records[5 * s as usize + 4] != 0)
+            .collect()
+    };
+    let kept_after = |previous: &[u32], records: &[u32]| -> Vec<u32> {
+        let mut bvh = Bvh::build(&instance_boxes(previous));
+        let built = bvh.expected_visits();
+        if slots(previous) != slots(records) {
+            return hierarchy_words(records);
+        }
+        bvh.refit(&instance_boxes(records));
+        if bvh.expected_visits() > REFIT_SLACK * built {
+            return hierarchy_words(records);
+        }
+        bvh.words(&slots(records))
+    };
+    let moved = |to: &dyn Fn(usize, [f64; 3]) -> [f64; 3]| -> Vec<Option<Pose>> {
+        let poses = scattered.iter().enumerate();
+        poses
+            .map(|(k, p)| p.map(|(size, pos, rot)| (size, to(k, pos), rot)))
+            .collect()
+    };
+    let before = buffer(scattered.clone());
+    let small = buffer(moved(&|k, p| {
+        [p[0] + 0.25 * (k % 5) as f64, p[1] + 0.5 * (k % 3) as f64, p[2]]
+    }));
+    let anywhere = buffer(moved(&|k, p| {
+        [(p[0] + 290.0 * (k % 7) as f64) % 1000.0, p[1], (p[2] * 3.0) % 2000.0]
+    }));
+    let mut fewer = scattered.clone();
+    fewer[10] = None;
+    let fewer = buffer(fewer);
+    for (name, records, refitted) in [
+        ("small moves", &small, true),
+        ("moves anywhere", &anywhere, false),
+        ("a slot emptied", &fewer, false),
+    ] {
+        let native = kept_after(&before, records);
+        // Each case takes the branch it is named for.
+        assert_eq!(native != hierarchy_words(records), refitted, "{name}");
+        let page = browser.eval(
+            "a",
+            &format!("return n.hierarchyAfter({}, {})", json!(before), json!(records)),
+        );
+        let page: Vec<u32> = serde_json::from_value(page).unwrap();
+        assert!(
+            page == native,
+            "{name}: the page keeps another hierarchy than the native client"
+        );
     }
     server.stop();
 }

@@ -23,7 +23,7 @@ import { cameraRays } from "./camera";
 import type { Mirror, Touched } from "./mirror";
 import { ChunkPrints } from "./changes";
 import { ENTITY } from "./gen/layout";
-import { RECORD_WORDS, hierarchyWords, instanceBox, localLayout } from "./instances";
+import { InstanceHierarchy, RECORD_WORDS, instanceBox, localLayout } from "./instances";
 import type { LocalBox } from "./instances";
 import { overlappedChunks } from "./changes";
 import type { ChunkChanges } from "./changes";
@@ -78,6 +78,8 @@ export class GpuWorld {
   private mirror: Mirror | undefined;
   /** The page's local instances, and their records as on the device. */
   private locals: LocalBox[] = [];
+  /** The instance hierarchy, refitted or rebuilt as the records change. */
+  private instanceHierarchy = new InstanceHierarchy();
   private localRecords: Uint32Array = new Uint32Array(0);
   /** The chunks' fingerprints, once a renderer asked which chunks change (`trackChanges`). */
   private prints: ChunkPrints | undefined;
@@ -240,7 +242,7 @@ export class GpuWorld {
       all.set(local, records.length);
       records = all;
     }
-    const words = hierarchyWords(records);
+    const words = this.instanceHierarchy.update(records);
     return new Uint8Array(words.buffer, words.byteOffset, words.byteLength);
   }
 

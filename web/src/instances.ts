@@ -248,11 +248,9 @@ function buildBinary(boxes: BoxArray): Binary {
   return split(0, n, 0);
 }
 
-/** The packed four-wide hierarchy over the instances of the instance buffer `words`
- * (empty when there is none), as `naadf_world::entity::hierarchy_words` packs it: each
- * binary node's children and grandchildren become one node's lanes, boxes as f32 axis by
- * axis, then the lanes' references (`BVH.LEAF | slot` for an instance). */
-export function hierarchyWords(words: Uint32Array): Uint32Array {
+/** The live instances of the instance buffer `words`: their slots and their boxes (as
+ * `BoxArray` holds them), in slot order. */
+function liveBoxes(words: Uint32Array): { slots: number[]; boxes: BoxArray } {
   const slots: number[] = [];
   const live: Box[] = [];
   for (let slot = 0; slot < words.length / RECORD_WORDS; slot++) {
@@ -262,12 +260,32 @@ export function hierarchyWords(words: Uint32Array): Uint32Array {
       slots.push(slot);
     }
   }
-  if (live.length === 0) return new Uint32Array(0);
   const boxes = new Float64Array(6 * live.length);
   live.forEach(([lo, hi], p) => {
     boxes.set(lo, 6 * p);
     boxes.set(hi, 6 * p + 3);
   });
+  return { slots, boxes };
+}
+
+/** Gives every node of `tree` the box of its primitives in `boxes` (a refit: the same
+ * shape, new boxes). */
+function refit(tree: Binary, boxes: BoxArray): void {
+  clear(tree.box, 0);
+  if (!tree.kids) {
+    grow(tree.box, 0, boxes, tree.prim);
+    return;
+  }
+  for (const kid of tree.kids) {
+    refit(kid, boxes);
+    grow(tree.box, 0, kid.box, 0);
+  }
+}
+
+/** The packed four-wide form of `tree` (leaves' primitives as their `slots`): each binary
+ * node's children and grandchildren become one node's lanes, boxes as f32 axis by axis,
+ * then the lanes' references (`BVH.LEAF | slot` for an instance). */
+function packed(tree: Binary, slots: number[]): Uint32Array {
   const nodes: Uint32Array[] = [];
   const widen = (b: Binary): number => {
     const index = nodes.length;
@@ -286,8 +304,71 @@ export function hierarchyWords(words: Uint32Array): Uint32Array {
     });
     return index;
   };
-  widen(buildBinary(boxes));
+  widen(tree);
   const out = new Uint32Array(nodes.length * BVH.NODE_WORDS);
   nodes.forEach((n, i) => out.set(n, i * BVH.NODE_WORDS));
   return out;
+}
+
+/** The surface-area estimate of the nodes a ray meeting the root visits, from the packed
+ * form, as `Bvh::expected_visits` works it out (in its order of operations): 1 plus the
+ * inner lanes' areas over the root's. */
+function expectedVisits(words: Uint32Array): number {
+  const rows = new Float32Array(words.buffer, words.byteOffset, words.length);
+  const lane = new Float64Array(6);
+  const root = new Float64Array(6);
+  clear(root, 0);
+  let inner = 0;
+  for (let n = 0; n < words.length / BVH.NODE_WORDS; n++) {
+    const at = n * BVH.NODE_WORDS;
+    for (let l = 0; l < 4; l++) {
+      const child = words[at + 24 + l];
+      if (child === BVH.NONE) continue;
+      for (let a = 0; a < 3; a++) {
+        lane[a] = rows[at + 8 * a + l];
+        lane[3 + a] = rows[at + 8 * a + 4 + l];
+      }
+      if (n === 0) grow(root, 0, lane, 0);
+      if (!(child & BVH.LEAF)) inner += halfArea(lane, 0);
+    }
+  }
+  return 1 + inner / halfArea(root, 0);
+}
+
+/** The packed four-wide hierarchy over the instances of the instance buffer `words`
+ * (empty when there is none), built afresh as `naadf_world::entity::hierarchy_words`
+ * builds it. */
+export function hierarchyWords(words: Uint32Array): Uint32Array {
+  return new InstanceHierarchy().update(words);
+}
+
+/** The hierarchy over an instance buffer, kept from one change of the buffer to the next
+ * as the native client keeps it (docs/FORMAT.md §5.10): refitted while the same slots hold
+ * instances and its expected node visits stay within `BVH.REFIT_SLACK` times its build's,
+ * built anew otherwise. */
+export class InstanceHierarchy {
+  private slots: number[] = [];
+  private tree: Binary | undefined;
+  private builtVisits = 0;
+
+  /** The packed hierarchy for the instance buffer `words`, which replaces the last one. */
+  update(words: Uint32Array): Uint32Array {
+    const { slots, boxes } = liveBoxes(words);
+    if (slots.length === 0) {
+      this.tree = undefined;
+      this.slots = [];
+      return new Uint32Array(0);
+    }
+    const same = this.tree !== undefined && slots.length === this.slots.length && slots.every((s, i) => s === this.slots[i]);
+    if (same && this.tree) {
+      refit(this.tree, boxes);
+      const out = packed(this.tree, slots);
+      if (expectedVisits(out) <= BVH.REFIT_SLACK * this.builtVisits) return out;
+    }
+    this.tree = buildBinary(boxes);
+    this.slots = slots;
+    const out = packed(this.tree, slots);
+    this.builtVisits = expectedVisits(out);
+    return out;
+  }
 }

@@ -11,7 +11,7 @@ import { PageCache } from "./cache";
 import { digestHex, loadHasher } from "./digest";
 import { GpuWorld, NoWebGpu, Renderer, openDevice } from "./gpu";
 import type { LocalBox } from "./instances";
-import { hierarchyWords } from "./instances";
+import { InstanceHierarchy, hierarchyWords } from "./instances";
 import type { IrradianceStats } from "./irradiance";
 import { markerBoxes, markerMaterials } from "./markers";
 import type { Marker } from "./overlay";
@@ -91,6 +91,9 @@ interface PageState {
   /** The instance hierarchy the page builds over an instance buffer (the words of its
    * records), as the shaders read it; tests compare it with the native build's. */
   hierarchy(records: number[]): number[];
+  /** The hierarchy the page keeps for `records` after it held one for `previous`
+   * (refitted or built anew, as the native client decides). */
+  hierarchyAfter(previous: number[], records: number[]): number[];
 }
 
 const $ = <T extends HTMLElement>(id: string) => document.getElementById(id) as T;
@@ -137,6 +140,11 @@ const naadf: PageState = {
   undo: () => Promise.reject(new Error("not joined")),
   redo: () => Promise.reject(new Error("not joined")),
   hierarchy: (records) => Array.from(hierarchyWords(Uint32Array.from(records))),
+  hierarchyAfter: (previous, records) => {
+    const kept = new InstanceHierarchy();
+    kept.update(Uint32Array.from(previous));
+    return Array.from(kept.update(Uint32Array.from(records)));
+  },
 };
 (window as unknown as { naadf: PageState }).naadf = naadf;
 

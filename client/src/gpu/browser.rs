@@ -163,8 +163,8 @@ fn layout_ts() -> String {
     s.push_str("} as const;\n");
     let _ = writeln!(
         s,
-        "\n/** The instance hierarchy (naadf_world::entity::bvh): words per node, a leaf's flag, an unused lane,\n * where unused lanes' boxes sit; the padding of an instance's world box, and the outward padding of the\n * f32 boxes; the build's bins per axis, and its binary levels split by the surface-area heuristic. */\n\
-         export const BVH = {{ NODE_WORDS: {}, LEAF: {}, NONE: {}, FAR: {:?}, BOUNDS_PAD: {:?}, F32_PAD: {:?}, BINS: {}, SAH_DEPTH: {} }} as const;",
+        "\n/** The instance hierarchy (naadf_world::entity::bvh): words per node, a leaf's flag, an unused lane,\n * where unused lanes' boxes sit; the padding of an instance's world box, and the outward padding of the\n * f32 boxes; the build's bins per axis, and its binary levels split by the surface-area heuristic; how far\n * a refit's expected node visits may grow over its build's before it is built anew. */\n\
+         export const BVH = {{ NODE_WORDS: {}, LEAF: {}, NONE: {}, FAR: {:?}, BOUNDS_PAD: {:?}, F32_PAD: {:?}, BINS: {}, SAH_DEPTH: {}, REFIT_SLACK: {:?} }} as const;",
         bvh::NODE_WORDS,
         bvh::LEAF,
         bvh::NO_CHILD,
@@ -173,6 +173,7 @@ fn layout_ts() -> String {
         f64::from(bvh::F32_PAD),
         bvh::BINS,
         bvh::SAH_DEPTH,
+        entity::REFIT_SLACK,
     );
     let identity = pack::encode_quat([0.0, 0.0, 0.0, 1.0]);
     let _ = writeln!(

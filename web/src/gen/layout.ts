@@ -244,8 +244,9 @@ export const GI = {
 
 /** The instance hierarchy (naadf_world::entity::bvh): words per node, a leaf's flag, an unused lane,
  * where unused lanes' boxes sit; the padding of an instance's world box, and the outward padding of the
- * f32 boxes; the build's bins per axis, and its binary levels split by the surface-area heuristic. */
-export const BVH = { NODE_WORDS: 28, LEAF: 2147483648, NONE: 4294967295, FAR: 1e30, BOUNDS_PAD: 0.015625, F32_PAD: 0.015625, BINS: 16, SAH_DEPTH: 24 } as const;
+ * f32 boxes; the build's bins per axis, and its binary levels split by the surface-area heuristic; how far
+ * a refit's expected node visits may grow over its build's before it is built anew. */
+export const BVH = { NODE_WORDS: 28, LEAF: 2147483648, NONE: 4294967295, FAR: 1e30, BOUNDS_PAD: 0.015625, F32_PAD: 0.015625, BINS: 16, SAH_DEPTH: 24, REFIT_SLACK: 1.25 } as const;
 
 /** Entity types and instance records (naadf_world::entity): a solid type voxel's flag, the
  * alignment of a type's voxels, words per record, the id of a local instance, and the packed

@@ -32,6 +32,8 @@ pub mod local;
 pub mod pack;
 pub(crate) mod set;
 
+pub use set::REFIT_SLACK;
+
 use crate::aadf::grid_aadf;
 use crate::cell::CHUNK_FIELD_BITS;
 use crate::error::WorldError;
