@@ -154,8 +154,11 @@ function binOf(c: number, lo: number, hi: number): number {
  * primitives in place as it does, so that the trees are the same. */
 function buildBinary(boxes: BoxArray): Binary {
   const n = boxes.length / 6;
-  const centres = new Float64Array(3 * n);
-  for (let p = 0; p < n; p++) for (let a = 0; a < 3; a++) centres[3 * p + a] = 0.5 * (boxes[6 * p + a] + boxes[6 * p + 3 + a]);
+  // Each primitive's centre, as a box of one point (so that `bound` takes centres too).
+  const centres = new Float64Array(6 * n);
+  for (let p = 0; p < n; p++) {
+    for (let a = 0; a < 3; a++) centres[6 * p + a] = centres[6 * p + 3 + a] = 0.5 * (boxes[6 * p + a] + boxes[6 * p + 3 + a]);
+  }
   const prims = Int32Array.from({ length: n }, (_, i) => i);
   const BINS = BVH.BINS;
   const bins = new Float64Array(6 * 3 * BINS);
@@ -163,29 +166,24 @@ function buildBinary(boxes: BoxArray): Binary {
   const acc = new Float64Array(6);
   const aboveArea = new Float64Array(BINS);
   const aboveCount = new Int32Array(BINS);
-  // The range of the centres of `prims[from..to]`: box 0 of `range`.
-  const range = new Float64Array(6);
-  const ranges = (from: number, to: number) => {
-    clear(range, 0);
-    for (let i = from; i < to; i++) {
-      const p = prims[i];
-      for (let a = 0; a < 3; a++) {
-        range[a] = Math.min(range[a], centres[3 * p + a]);
-        range[3 + a] = Math.max(range[3 + a], centres[3 * p + a]);
-      }
-    }
+  // Box 0 of `into` made the bound of the boxes in `of` of the primitives `prims[from..to]`.
+  const bound = (into: BoxArray, of: BoxArray, from: number, to: number) => {
+    clear(into, 0);
+    for (let i = from; i < to; i++) grow(into, 0, of, prims[i]);
   };
+  // The range of the centres of a run.
+  const range = new Float64Array(6);
   // The cheapest cut of `prims[from..to]` that leaves primitives on both sides.
   const bestCut = (from: number, to: number) => {
-    ranges(from, to);
-    const lo = [range[0], range[1], range[2]];
-    const hi = [range[3], range[4], range[5]];
+    bound(range, centres, from, to);
+    const lo = range.slice(0, 3);
+    const hi = range.slice(3, 6);
     for (let b = 0; b < 3 * BINS; b++) clear(bins, b);
     counts.fill(0);
     for (let i = from; i < to; i++) {
       const p = prims[i];
       for (let axis = 0; axis < 3; axis++) {
-        const bin = axis * BINS + binOf(centres[3 * p + axis], lo[axis], hi[axis]);
+        const bin = axis * BINS + binOf(centres[6 * p + axis], lo[axis], hi[axis]);
         grow(bins, bin, boxes, p);
         counts[bin] += 1;
       }
@@ -216,21 +214,20 @@ function buildBinary(boxes: BoxArray): Binary {
   // Orders `prims[from..to]` by centre along the axis where the centres spread most (the
   // last such axis, as Rust's `max_by`; ties by index) and returns the middle.
   const median = (from: number, to: number) => {
-    ranges(from, to);
+    bound(range, centres, from, to);
     let axis = 0;
     for (let a = 1; a < 3; a++) if (range[3 + a] - range[a] >= range[3 + axis] - range[axis]) axis = a;
-    prims.subarray(from, to).sort((p, q) => centres[3 * p + axis] - centres[3 * q + axis] || p - q);
+    prims.subarray(from, to).sort((p, q) => centres[6 * p + axis] - centres[6 * q + axis] || p - q);
     return from + ((to - from) >> 1);
   };
   const split = (from: number, to: number, depth: number): Binary => {
     const box = new Float64Array(6);
-    clear(box, 0);
-    for (let i = from; i < to; i++) grow(box, 0, boxes, prims[i]);
+    bound(box, boxes, from, to);
     if (to - from === 1) return { box, prim: prims[from] };
     const cut = depth < BVH.SAH_DEPTH && to - from > 4 ? bestCut(from, to) : undefined;
     let mid: number;
     if (cut) {
-      const lower = (p: number) => binOf(centres[3 * p + cut.axis], cut.lo, cut.hi) < cut.bin;
+      const lower = (p: number) => binOf(centres[6 * p + cut.axis], cut.lo, cut.hi) < cut.bin;
       let [i, j] = [from, to];
       while (i < j) {
         if (lower(prims[i])) i += 1;
@@ -359,8 +356,8 @@ export class InstanceHierarchy {
       this.slots = [];
       return new Uint32Array(0);
     }
-    const same = this.tree !== undefined && slots.length === this.slots.length && slots.every((s, i) => s === this.slots[i]);
-    if (same && this.tree) {
+    const sameSlots = slots.length === this.slots.length && slots.every((s, i) => s === this.slots[i]);
+    if (this.tree && sameSlots) {
       refit(this.tree, boxes);
       const out = packed(this.tree, slots);
       if (expectedVisits(out) <= BVH.REFIT_SLACK * this.builtVisits) return out;
