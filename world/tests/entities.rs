@@ -226,10 +226,10 @@ fn check_ray(w: &World, world_only: &DenseGrid, grid: &DenseGrid, ray: &Ray) -> 
 }
 
 /// Rays through an entity scene: random ones through the world; rays aimed at each
-/// entity from near and far; fans of rays from one origin toward each entity (neighbouring
-/// camera rays, which a batch walks as one group); and adversarial ones, from inside an
-/// instance's grid, moving within a face plane of its world box (grazing it), or along one
-/// of the box's edges.
+/// entity from near and far, and from up to 10^8.5 voxels away; fans of rays from one
+/// origin toward each entity (neighbouring camera rays, which a batch walks as one group);
+/// and adversarial ones, from inside an instance's grid, moving within a face plane of its
+/// world box (grazing it), or along one of the box's edges.
 fn scene_rays(w: &World, rng: &mut Rng, random: usize) -> Vec<Ray> {
     let mut out = rays(w.size().voxels(), rng, random);
     for (_, pose) in w.entity_table().instances.clone() {
@@ -237,6 +237,14 @@ fn scene_rays(w: &World, rng: &mut Rng, random: usize) -> Vec<Ray> {
             let target = [0, 1, 2].map(|a| pose.pos[a] + rng.unit() * 8.0 - 2.0);
             let from = [0, 1, 2].map(|a| target[a] + (rng.unit() * 2.0 - 1.0) * 40.0);
             out.extend(Ray::new(from, [0, 1, 2].map(|a| target[a] - from[a])));
+        }
+        // From far away: origins may lie up to 2^30 voxels out, far beyond where `f32`
+        // (the hierarchy's walk) holds a position to a voxel.
+        for k in 0..12 {
+            let target = [0, 1, 2].map(|a| pose.pos[a] + rng.unit() * 8.0 - 2.0);
+            let d = [0, 1, 2].map(|_| rng.unit() * 2.0 - 1.0);
+            let far = 10f64.powf(3.0 + f64::from(k) * 0.5);
+            out.extend(Ray::new([0, 1, 2].map(|a| target[a] - d[a] * far), d));
         }
         let from = [0, 1, 2].map(|a| pose.pos[a] + (rng.unit() * 2.0 - 1.0) * 30.0);
         for k in 0..48 {

@@ -8,6 +8,10 @@ pub const WIDTH: usize = 4;
 /// direction component of an axis a ray does not move along.
 pub const FAR: f32 = 1e30;
 
+/// How far from the origin a walk's ray may start as it is given (see [`WalkRay::new`]):
+/// `f32` rounding moves a position there by at most 2^-9 voxel, far inside [`super::F32_PAD`].
+const NEAR_ORIGIN: f64 = (1u32 << 15) as f64;
+
 /// One four-wide node: its children's boxes, axis by axis, lane by lane, and references.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) struct Node {
@@ -40,8 +44,20 @@ pub struct WalkRay {
 
 impl WalkRay {
     /// The ray `o + t·d` over the times `[t_lo, t_hi]`.
+    ///
+    /// An origin beyond ±2^15 on some axis (a ray may start up to 2^30 voxels away) would
+    /// lose more than [`super::F32_PAD`] in `f32`; such a ray is walked from the start of its
+    /// window instead, `o + t_lo·d` worked out in `f64`, with its times counted from there.
+    /// The window of a ray that meets an instance lies in the world, below 2^14 on every
+    /// axis, so that start is as precise as a near origin. (Near origins stay, so that camera
+    /// rays keep their one origin and walk as coherent groups.)
     #[inline]
     pub fn new(o: [f64; 3], d: [f64; 3], t_lo: f64, t_hi: f64) -> Self {
+        let (o, t_lo, t_hi) = if o.iter().all(|v| v.abs() < NEAR_ORIGIN) {
+            (o, t_lo, t_hi)
+        } else {
+            (std::array::from_fn(|a| o[a] + t_lo * d[a]), 0.0, t_hi - t_lo)
+        };
         WalkRay {
             o: o.map(|v| v as f32),
             // In `f32` from the start: the boxes' padding (`F32_PAD`) covers the rounding.
