@@ -7,8 +7,10 @@
 //! - **Coherent groups** ([`GROUP`] consecutive rays from one origin, moving the same way on
 //!   every axis, such as neighbouring camera rays) walk the tree once per group, each node
 //!   tested against the interval that bounds the group's rays: a group may enter a node
-//!   only if that interval enters it. At an instance, each ray of the group is tested on
-//!   its own.
+//!   only if that interval enters it. Two neighbouring groups that share their origin and
+//!   signs walk it once together, bounded by the union of their intervals, and gather the
+//!   instance lanes that walk reaches; each group then tests its own interval against
+//!   those, and at an instance its group enters, each ray is tested on its own.
 //! - **The other rays** descend together, breadth by node: at each node every ray of the
 //!   node's list is tested against the four boxes and appended, without a branch, to the
 //!   list of each child it enters (`lane_sort`). The tests of different rays do
@@ -23,7 +25,8 @@
 
 use super::lane_sort::{Kernel, LIST_SLACK, sort_into_lanes};
 use super::node::{Node, WIDTH, WalkRay, lane_max, lane_min};
-use super::{Bvh, LEAF, NO_CHILD, STACK};
+use super::{Bvh, EMPTY_NODE, LEAF, NO_CHILD, STACK};
+use smallvec::SmallVec;
 
 pub use super::lane_sort::BATCH;
 /// Consecutive rays tested as one group when they are coherent.
@@ -38,6 +41,7 @@ const SHORT_LIST: usize = 4;
 pub struct Scratch {
     levels: Vec<[Vec<u16>; WIDTH]>,
     incoherent: Vec<u16>,
+    packs: Vec<Node>,
     met: Vec<(u32, u32)>,
 }
 
@@ -67,8 +71,35 @@ impl Met<'_> {
     }
 }
 
+/// Neighbouring coherent runs that walk the tree together when they share an origin and
+/// signs: the walk's node tests are shared, and each run still tests its own rays only
+/// against the instances its own bounds reach.
+const RUNS: usize = 2;
+
+/// A coherent run of consecutive rays of a batch: the first one's index in the walk, the
+/// rays, and their bounds.
+struct Run<'a> {
+    first: u32,
+    rays: &'a [WalkRay],
+    bounds: Interval,
+}
+
+impl Run<'_> {
+    /// The bounds of every ray of `runs`, if there are several runs and they share an origin
+    /// and signs.
+    fn joined(runs: &[Run]) -> Option<Interval> {
+        let (first, rest) = runs.split_first()?;
+        if rest.is_empty() {
+            return None;
+        }
+        rest.iter()
+            .try_fold(first.bounds.clone(), |all, run| all.joined(&run.bounds))
+    }
+}
+
 /// What bounds every ray of a group: their one origin, each axis's range of `1/d`, and
 /// the union of their windows.
+#[derive(Clone)]
 struct Interval {
     o: [f32; 3],
     inv_lo: [f32; 3],
@@ -101,6 +132,22 @@ impl Interval {
             b.t_hi = lane_max(b.t_hi, r.t_hi);
         }
         Some(b)
+    }
+
+    /// The bounds of both groups, if they share an origin and signs.
+    fn joined(&self, b: &Interval) -> Option<Interval> {
+        for a in 0..3 {
+            if self.o[a] != b.o[a] || (self.inv_lo[a] > 0.0) != (b.inv_lo[a] > 0.0) {
+                return None;
+            }
+        }
+        Some(Interval {
+            o: self.o,
+            inv_lo: std::array::from_fn(|a| lane_min(self.inv_lo[a], b.inv_lo[a])),
+            inv_hi: std::array::from_fn(|a| lane_max(self.inv_hi[a], b.inv_hi[a])),
+            t_lo: lane_min(self.t_lo, b.t_lo),
+            t_hi: lane_max(self.t_hi, b.t_hi),
+        })
     }
 
     /// Whether some ray of the group may meet each lane's box of `n`: the lanes' entry and
@@ -158,13 +205,26 @@ impl Bvh {
         for (b, batch) in rays.chunks(BATCH).enumerate() {
             let base = (b * BATCH) as u32;
             scratch.incoherent.clear();
-            for (g, group) in batch.chunks(GROUP).enumerate() {
-                let first = (g * GROUP) as u32;
-                match Interval::of(group) {
-                    Some(bounds) if group.len() > 1 => self.group_walk(group, base + first, &bounds, &mut met),
-                    _ => scratch
-                        .incoherent
-                        .extend(first as u16..(first as usize + group.len()) as u16),
+            for (s, pair) in batch.chunks(GROUP * RUNS).enumerate() {
+                let mut runs: SmallVec<[Run; RUNS]> = SmallVec::new();
+                for (g, rays) in pair.chunks(GROUP).enumerate() {
+                    let first = s * GROUP * RUNS + g * GROUP;
+                    match Interval::of(rays).filter(|_| rays.len() > 1) {
+                        Some(bounds) => runs.push(Run {
+                            first: base + first as u32,
+                            rays,
+                            bounds,
+                        }),
+                        None => scratch.incoherent.extend(first as u16..(first + rays.len()) as u16),
+                    }
+                }
+                match Run::joined(&runs) {
+                    Some(shared) => self.runs_walk(&runs, &shared, &mut scratch.packs, &mut met),
+                    None => {
+                        for run in &runs {
+                            self.runs_walk(std::slice::from_ref(run), &run.bounds, &mut scratch.packs, &mut met);
+                        }
+                    }
                 }
             }
             if !scratch.incoherent.is_empty() {
@@ -181,9 +241,35 @@ impl Bvh {
         &mut met.buf[..len]
     }
 
-    /// One walk for a coherent group (rays `first..` of the walk); each instance a lane leads
-    /// to is tested per ray.
-    fn group_walk(&self, group: &[WalkRay], first: u32, bounds: &Interval, met: &mut Met) {
+    /// One walk for coherent runs that share an origin and signs, bounded by `shared`, which
+    /// bounds all their rays: the leaf lanes it reaches are gathered four to a node, then
+    /// each run's bounds are tested against those, and each ray of a run against the lanes
+    /// its run enters.
+    fn runs_walk(&self, runs: &[Run], shared: &Interval, packs: &mut Vec<Node>, met: &mut Met) {
+        self.leaf_packs(shared, packs);
+        for run in runs {
+            for p in packs.iter() {
+                let (near, far) = run.bounds.lanes(p);
+                for l in 0..WIDTH {
+                    let c = p.child[l];
+                    if near[l] > far[l] || c == NO_CHILD {
+                        continue;
+                    }
+                    met.room(run.rays.len());
+                    for (i, r) in (run.first..).zip(run.rays) {
+                        let (near, far) = r.lanes(p);
+                        met.put((i, c & !LEAF), near[l] <= far[l]);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Every leaf lane that a walk bounded by `bounds` reaches, copied four to a node into
+    /// `packs` (the same `f32` box, so a ray's test of it is the one its own walk makes).
+    fn leaf_packs(&self, bounds: &Interval, packs: &mut Vec<Node>) {
+        packs.clear();
+        let mut filled = WIDTH;
         let mut stack = [0u32; STACK];
         let mut sp = 1;
         while sp > 0 {
@@ -200,11 +286,17 @@ impl Bvh {
                     sp += 1;
                     continue;
                 }
-                met.room(group.len());
-                for (i, r) in (first..).zip(group) {
-                    let (near, far) = r.lanes(n);
-                    met.put((i, c & !LEAF), near[l] <= far[l]);
+                if filled == WIDTH {
+                    packs.push(EMPTY_NODE);
+                    filled = 0;
                 }
+                let p = packs.last_mut().expect("a pack was pushed");
+                for a in 0..3 {
+                    p.lo[a][filled] = n.lo[a][l];
+                    p.hi[a][filled] = n.hi[a][l];
+                }
+                p.child[filled] = c;
+                filled += 1;
             }
         }
     }
@@ -330,5 +422,61 @@ mod tests {
         let mut apart = group.clone();
         apart[3] = WalkRay::new([-5.0, -3.0, -4.5], [1.0, 0.6, 0.8], 0.0, 500.0);
         assert!(Interval::of(&apart).is_none(), "two origins");
+    }
+
+    /// Camera rays: neighbouring coherent runs walk the tree together (their joined bounds
+    /// hold every ray of both), runs that part in origin or signs walk alone, and either way
+    /// each ray meets exactly what its own walk meets.
+    #[test]
+    fn neighbouring_runs_walk_together_and_find_what_each_ray_finds() {
+        let bvh = Bvh::build(&grid_boxes(6, 15.0, 4.0));
+        // Four rows of a 64-pixel image from one camera; the columns cross x = 0, where the
+        // sign of `d.x` changes, and the last row comes from another camera.
+        let rays: Vec<WalkRay> = (0..256)
+            .map(|k| {
+                let (row, col) = (k / 64, k % 64);
+                let o = if row == 3 {
+                    [40.0, 100.0, -30.0]
+                } else {
+                    [40.0, 40.0, -30.0]
+                };
+                let d = [(f64::from(col) - 40.0) / 64.0, (f64::from(row) - 1.5) / 8.0, 1.0];
+                WalkRay::new(o, d, 0.0, 150.0)
+            })
+            .collect();
+        let runs = |starts: &[usize]| -> Vec<Run> {
+            starts
+                .iter()
+                .map(|&k| Run {
+                    first: k as u32,
+                    rays: &rays[k..k + GROUP],
+                    bounds: Interval::of(&rays[k..k + GROUP]).expect("a coherent run"),
+                })
+                .collect()
+        };
+        let shared = Run::joined(&runs(&[0, 16])).expect("one origin, the same signs");
+        for n in &bvh.nodes {
+            let (s_near, s_far) = shared.lanes(n);
+            for r in &rays[0..32] {
+                let (near, far) = r.lanes(n);
+                for l in 0..WIDTH {
+                    assert!(s_near[l] <= near[l] && far[l] <= s_far[l]);
+                }
+            }
+        }
+        assert!(Run::joined(&runs(&[0])).is_none(), "one run walks alone");
+        assert!(Run::joined(&runs(&[176, 240])).is_none(), "another origin");
+        assert!(Run::joined(&runs(&[0, 48])).is_none(), "other signs");
+        assert!(Interval::of(&rays[32..48]).is_none(), "signs change in this run");
+        let mut each = Vec::new();
+        for (i, r) in rays.iter().enumerate() {
+            bvh.crossing(r, |k| each.push((i as u32, k)));
+        }
+        let mut scratch = Scratch::default();
+        let batch = bvh.crossing_many(&rays, &mut scratch);
+        each.sort_unstable();
+        batch.sort_unstable();
+        assert!(each.len() > 50, "the rays meet boxes");
+        assert_eq!(batch, &each[..]);
     }
 }
