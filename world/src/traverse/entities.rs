@@ -182,6 +182,12 @@ impl<'a> EntityView<'a> {
             }
             SCRATCH.with_borrow_mut(|SliceScratch { walk, by_ray }| {
                 let found = self.set.bvh.crossing_many(&walks, walk);
+                // The bounds and records of the instances met: fetched all at once here, their
+                // cache misses overlap, where the tests below would wait for each in turn.
+                for &(_, k) in found.iter() {
+                    prefetch(&self.set.bounds[k as usize]);
+                    prefetch(&self.set.records[k as usize]);
+                }
                 by_ray.link(found, walks.len());
                 for (j, p) in open.iter().enumerate() {
                     let mut run = by_ray.run(j).map(|pair| found[pair].1).peekable();
@@ -318,6 +324,24 @@ impl<'v, 'a> Crossed<'v, 'a> {
             self.list.push((t, r[4] & 0x3FFF, k));
         }
     }
+}
+
+/// Asks the processor to bring every cache line of `value` towards its first-level cache,
+/// without waiting for them (a hint: it changes no result, only when memory is read).
+#[inline(always)]
+fn prefetch<T>(value: &T) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+        let first = (value as *const T).cast::<i8>();
+        let last = size_of::<T>().saturating_sub(1);
+        for offset in (0..last).step_by(64).chain([last]) {
+            // SAFETY: the address lies inside `value`; a prefetch never faults or writes.
+            unsafe { _mm_prefetch::<_MM_HINT_T0>(first.add(offset)) };
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = value;
 }
 
 impl World {
