@@ -384,19 +384,37 @@ mod tests {
         prop::collection::vec(run, 1..80).prop_map(|runs| runs.concat())
     }
 
+    /// Pairs (ray, primitive).
+    type Pairs = Vec<(u32, u32)>;
+
+    /// The pairs each ray's own walk finds, and those a batch walk of all finds, sorted.
+    fn each_and_batch(bvh: &Bvh, rays: &[WalkRay]) -> (Pairs, Pairs) {
+        let mut each = Vec::new();
+        for (i, r) in rays.iter().enumerate() {
+            bvh.crossing(r, |k| each.push((i as u32, k)));
+        }
+        let mut batch = bvh.crossing_many(rays, &mut Scratch::default()).to_vec();
+        each.sort_unstable();
+        batch.sort_unstable();
+        (each, batch)
+    }
+
+    /// Whether `bounds` holds every ray of `rays` at every lane of every node of `bvh`.
+    fn holds(bounds: &Interval, rays: &[WalkRay], bvh: &Bvh) -> bool {
+        bvh.nodes.iter().all(|n| {
+            let (b_near, b_far) = bounds.lanes(n);
+            rays.iter().all(|r| {
+                let (near, far) = r.lanes(n);
+                (0..WIDTH).all(|l| b_near[l] <= near[l] && far[l] <= b_far[l])
+            })
+        })
+    }
+
     proptest! {
         /// A batch finds, for every ray, exactly the primitives the ray's own walk finds.
         #[test]
         fn a_batch_finds_what_each_rays_walk_finds(boxes in boxes_strategy(), rays in rays()) {
-            let bvh = Bvh::build(&boxes);
-            let mut each = Vec::new();
-            for (i, r) in rays.iter().enumerate() {
-                bvh.crossing(r, |k| each.push((i as u32, k)));
-            }
-            let mut scratch = Scratch::default();
-            let batch = bvh.crossing_many(&rays, &mut scratch);
-            each.sort_unstable();
-            batch.sort_unstable();
+            let (each, batch) = each_and_batch(&Bvh::build(&boxes), &rays);
             prop_assert_eq!(batch, each);
         }
     }
@@ -410,15 +428,7 @@ mod tests {
             .map(|k| WalkRay::new([-5.0, -3.0, -4.0], [1.0, 0.6 + 0.02 * k as f64, 0.8], 0.0, 500.0))
             .collect();
         let bounds = Interval::of(&group).expect("one origin and the same signs make a group");
-        for n in &bvh.nodes {
-            let (g_near, g_far) = bounds.lanes(n);
-            for r in &group {
-                let (near, far) = r.lanes(n);
-                for l in 0..WIDTH {
-                    assert!(g_near[l] <= near[l] && far[l] <= g_far[l]);
-                }
-            }
-        }
+        assert!(holds(&bounds, &group, &bvh));
         let mut apart = group.clone();
         apart[3] = WalkRay::new([-5.0, -3.0, -4.5], [1.0, 0.6, 0.8], 0.0, 500.0);
         assert!(Interval::of(&apart).is_none(), "two origins");
@@ -455,28 +465,17 @@ mod tests {
                 .collect()
         };
         let shared = Run::joined(&runs(&[0, 16])).expect("one origin, the same signs");
-        for n in &bvh.nodes {
-            let (s_near, s_far) = shared.lanes(n);
-            for r in &rays[0..32] {
-                let (near, far) = r.lanes(n);
-                for l in 0..WIDTH {
-                    assert!(s_near[l] <= near[l] && far[l] <= s_far[l]);
-                }
-            }
-        }
+        assert!(holds(&shared, &rays[0..32], &bvh));
+        assert!(
+            !holds(&runs(&[0])[0].bounds, &rays[0..32], &bvh),
+            "one run's bounds hold less"
+        );
         assert!(Run::joined(&runs(&[0])).is_none(), "one run walks alone");
         assert!(Run::joined(&runs(&[176, 240])).is_none(), "another origin");
         assert!(Run::joined(&runs(&[0, 48])).is_none(), "other signs");
         assert!(Interval::of(&rays[32..48]).is_none(), "signs change in this run");
-        let mut each = Vec::new();
-        for (i, r) in rays.iter().enumerate() {
-            bvh.crossing(r, |k| each.push((i as u32, k)));
-        }
-        let mut scratch = Scratch::default();
-        let batch = bvh.crossing_many(&rays, &mut scratch);
-        each.sort_unstable();
-        batch.sort_unstable();
+        let (each, batch) = each_and_batch(&bvh, &rays);
         assert!(each.len() > 50, "the rays meet boxes");
-        assert_eq!(batch, &each[..]);
+        assert_eq!(batch, each);
     }
 }
