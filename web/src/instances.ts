@@ -279,6 +279,9 @@ function refit(tree: Binary, boxes: BoxArray): void {
   }
 }
 
+/** Words of a packed node before its child references: six axis rows of four f32 lanes. */
+const ROWS = 24;
+
 /** The packed four-wide form of `tree` (leaves' primitives as their `slots`): each binary
  * node's children and grandchildren become one node's lanes, boxes as f32 axis by axis,
  * then the lanes' references (`BVH.LEAF | slot` for an instance). */
@@ -287,9 +290,9 @@ function packed(tree: Binary, slots: number[]): Uint32Array {
   const widen = (b: Binary): number => {
     const index = nodes.length;
     const node = new Uint32Array(BVH.NODE_WORDS);
-    const rows = new Float32Array(node.buffer, 0, 24);
+    const rows = new Float32Array(node.buffer, 0, ROWS);
     rows.fill(BVH.FAR);
-    node.fill(BVH.NONE, 24);
+    node.fill(BVH.NONE, ROWS);
     nodes.push(node);
     const lanes = b.kids ? b.kids.flatMap((k) => (k.kids ? k.kids : [k])) : [b];
     lanes.forEach((c, lane) => {
@@ -297,7 +300,7 @@ function packed(tree: Binary, slots: number[]): Uint32Array {
         rows[8 * a + lane] = outward(c.box[a], false);
         rows[8 * a + 4 + lane] = outward(c.box[3 + a], true);
       }
-      node[24 + lane] = c.kids ? widen(c) : (BVH.LEAF | slots[c.prim]) >>> 0;
+      node[ROWS + lane] = c.kids ? widen(c) : (BVH.LEAF | slots[c.prim]) >>> 0;
     });
     return index;
   };
@@ -319,7 +322,7 @@ function expectedVisits(words: Uint32Array): number {
   for (let n = 0; n < words.length / BVH.NODE_WORDS; n++) {
     const at = n * BVH.NODE_WORDS;
     for (let l = 0; l < 4; l++) {
-      const child = words[at + 24 + l];
+      const child = words[at + ROWS + l];
       if (child === BVH.NONE) continue;
       for (let a = 0; a < 3; a++) {
         lane[a] = rows[at + 8 * a + l];
